@@ -1,0 +1,94 @@
+"""Command-line interface: a thin argparse layer over the library.
+
+Subcommands: ``modes`` (natural frequencies), ``run`` (a sweep from a TOML file), ``simulate``
+(one full trajectory), ``plot`` (draw a saved Dataset). Every model parameter is an option
+named like the parameter, with dashes (``--force-amplitude``, ``--EI1``, ``--thickness2``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+from impactbeams.params import MATERIAL_KEYS, MATERIAL_UNITS, UNITS, ParameterError, Params
+
+_ALIASES = {"force_amplitude": ["--force"]}
+
+
+def add_parameter_options(parser: argparse.ArgumentParser) -> None:
+    """Add ``--params FILE`` and one option per model parameter (SI units)."""
+    group = parser.add_argument_group("model parameters (SI units; override --params)")
+    group.add_argument("--params", metavar="FILE.toml",
+                       help="TOML file with a [params] table (unspecified keys take defaults)")
+    names = dict(UNITS)
+    names.update({k + i: MATERIAL_UNITS[k] for k in MATERIAL_KEYS for i in ("1", "2")})
+    for name, unit in names.items():
+        flags = ["--" + name.replace("_", "-"), *_ALIASES.get(name, [])]
+        group.add_argument(*flags, dest=name, type=float, metavar="VALUE", help=f"({unit})")
+
+
+def params_from_args(args: argparse.Namespace) -> Params:
+    """The parameters of --params (or the defaults) with the command-line overrides applied."""
+    params = Params.from_toml(args.params) if args.params else Params()
+    names = list(UNITS) + [k + i for k in MATERIAL_KEYS for i in ("1", "2")]
+    overrides = {n: getattr(args, n) for n in names if getattr(args, n, None) is not None}
+    return params.replace(**overrides) if overrides else params
+
+
+def _modes(args: argparse.Namespace) -> None:
+    from impactbeams.modes import contact_frequencies, free_modes
+
+    p = params_from_args(args)
+    result = {
+        "free": {"beam1": free_modes(p.EI1, p.rhoA1, p.l1, args.n).omega.tolist(),
+                 "beam2": free_modes(p.EI2, p.rhoA2, p.l2, args.n).omega.tolist()},
+        "contact": contact_frequencies(p, args.n).tolist(),
+    }
+    if args.json:
+        print(json.dumps(result))
+        return
+    print("natural frequencies (rad/s)")
+    print(f"{'mode':>4} {'beam 1 free':>16} {'beam 2 free':>16} {'contact':>16}")
+    for i in range(args.n):
+        row = (result["free"]["beam1"][i], result["free"]["beam2"][i], result["contact"][i])
+        print(f"{i + 1:>4} " + " ".join(f"{w:16.6f}" for w in row))
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{value} is not allowed: must be an integer >= 1")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``impactbeams`` argument parser with all subcommands."""
+    parser = argparse.ArgumentParser(prog="impactbeams", description=__doc__.split("\n")[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    modes = commands.add_parser("modes", help="print natural frequencies of both phases (rad/s)")
+    modes.add_argument("--n", type=_positive_int, default=5, help="number of modes (default 5)")
+    modes.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_parameter_options(modes)
+    modes.set_defaults(handler=_modes)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``impactbeams`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        args.handler(args)
+    except ParameterError as error:
+        print(f"impactbeams: error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("impactbeams: interrupted", file=sys.stderr)
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,168 @@
+"""Certified location of the first root of a phase's event function.
+
+Both switching conditions are roots of a linear functional of the modal state,
+
+    e(t) = const + sine_amp sin(Omega t) + sum_j weights_j q_j(t),
+
+the gap ``g`` in the free phase (const = Delta, sine_amp = -c_1 F0, weights = tip values) and
+the contact force ``R`` in the contact phase. ``first_root`` walks forward with steps that are
+certified root-free by a bound ``M2 >= |e''|`` on the step (from each mode's amplitude and
+drive): ``e(t + s) >= e + e' s - M2 s^2 / 2 > 0``. Near a grazing minimum these steps shrink
+like ``sqrt(e / M2)``, not like ``e / |e'|``, so a minimum that stays open is passed in a
+logarithmic number of steps and one that closes, however briefly, is found. When the linear
+estimate says a crossing is near, a probe beyond it brackets the root; a bracket on which
+``e`` is certified monotone holds exactly one root, which safeguarded Newton then resolves to
+a few ulps of time.
+"""
+
+import math
+
+import numpy as np
+
+from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.propagation import advance
+
+_EPS = np.finfo(np.float64).eps
+NO_EVENT = np.nan
+
+
+@kernel
+def event_value(q, v, t, weights, const, sine_amp, forcing_frequency):
+    """Return e(t) and e'(t) for modal displacements q and velocities v at time t."""
+    value = const + sine_amp * math.sin(forcing_frequency * t)
+    slope = sine_amp * forcing_frequency * math.cos(forcing_frequency * t)
+    for j in range(q.size):
+        value += weights[j] * q[j]
+        slope += weights[j] * v[j]
+    return value, slope
+
+
+@kernel
+def curvature_bound(q, v, omega, zeta, force, weights, sine_amp, forcing_frequency, span):
+    """Bound on |e''| over [t, t + span] from the state (q, v) at t.
+
+    Per mode: free part |q_h''| <= omega^2 R with R the damped amplitude; driven part from
+    rest |x''| <= |f| (1 + 2 sigma span omega / omega_d + omega^2 min(span^2 / 2, span / omega_d)).
+    """
+    bound = abs(sine_amp) * forcing_frequency * forcing_frequency
+    root = math.sqrt(1.0 - zeta * zeta)
+    for j in range(q.size):
+        w = omega[j]
+        sigma, wd = zeta * w, w * root
+        amplitude = math.hypot(q[j], (v[j] + sigma * q[j]) / wd)
+        driven = abs(force[j]) * (1.0 + 2.0 * sigma * span / root
+                                  + w * w * min(0.5 * span * span, span / wd))
+        bound += abs(weights[j]) * (w * w * amplitude + driven)
+    return bound
+
+
+@kernel
+def amplitude_bound(q, v, t, omega, zeta, force, forcing_frequency, span):
+    """Bound on max |q_j| over [t, t + span] for every mode, summed with |weights| by caller.
+
+    Returns per-mode bounds: the smaller of (free amplitude + growth of the driven part from
+    rest, |f| span / omega_d) and (steady-state amplitude + amplitude of the transient).
+    """
+    bounds = np.empty(q.size)
+    root = math.sqrt(1.0 - zeta * zeta)
+    for j in range(q.size):
+        w = omega[j]
+        sigma, wd = zeta * w, w * root
+        f = force[j]
+        grow = math.hypot(q[j], (v[j] + sigma * q[j]) / wd) + abs(f) * span / wd
+        if f == 0.0:
+            bounds[j] = grow
+            continue
+        # steady state P = Im(f e^(i Omega t) / D), D = omega^2 - Omega^2 + 2 i sigma Omega
+        D = complex(w * w - forcing_frequency**2, 2.0 * sigma * forcing_frequency)
+        if D == 0:
+            bounds[j] = grow
+            continue
+        P = f * complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t)) / D
+        dq, dv = q[j] - P.imag, v[j] - forcing_frequency * P.real
+        steady = abs(f) / abs(D) + math.hypot(dq, (dv + sigma * dq) / wd)
+        bounds[j] = min(grow, steady)
+    return bounds
+
+
+@kernel
+def certified_step(value, slope, curvature):
+    """Largest s with value + slope s - curvature s^2 / 2 > 0 (value > 0), cancellation-free."""
+    if curvature <= 0.0:
+        return math.inf if slope >= 0.0 else value / -slope
+    discriminant = math.sqrt(slope * slope + 2.0 * curvature * value)
+    if slope >= 0.0:
+        return (slope + discriminant) / curvature
+    return 2.0 * value / (discriminant - slope)
+
+
+@kernel
+def _newton_in_bracket(q_s, v_s, t_s, lo, hi, omega, zeta, force, weights, const, sine_amp,
+                       forcing_frequency, q, v):
+    """The single root of a monotone e on [lo, hi] (e(lo) > 0 >= e(hi)), safeguarded Newton."""
+    t = 0.5 * (lo + hi)
+    for _ in range(200):
+        advance(q_s, v_s, t_s, t - t_s, omega, zeta, force, forcing_frequency, q, v)
+        value, slope = event_value(q, v, t, weights, const, sine_amp, forcing_frequency)
+        if value > 0.0:
+            lo = t
+        else:
+            hi = t
+        if value == 0.0 or hi - lo <= 4.0 * _EPS * hi:
+            return hi
+        step = t - value / slope if slope != 0.0 else lo - 1.0
+        if not lo < step < hi:
+            step = 0.5 * (lo + hi)
+        if abs(step - t) <= 2.0 * _EPS * abs(t):  # converged to within an ulp
+            return hi if value <= 0.0 else min(hi, t + 4.0 * _EPS * abs(t))
+        t = step
+    return hi
+
+
+@kernel
+def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_amp,
+               forcing_frequency, q, v):
+    """First time in (t_s, t_end] where e(t) reaches 0 from above, or NaN if none.
+
+    q_s, v_s: modal state at t_s (s); omega, zeta, force, forcing_frequency: the phase's
+    oscillators (see ``advance``); weights, const, sine_amp: the event function. ``q``, ``v``
+    are work arrays. A value within round-off of 0 counts as a root (grazing at round-off).
+    """
+    span_cap = 1.0 / np.min(omega)
+    if forcing_frequency > 0.0:
+        span_cap = min(span_cap, 1.0 / forcing_frequency)
+    # whole-phase lower bound: no root at all if the event function can never reach 0
+    bounds = amplitude_bound(q_s, v_s, t_s, omega, zeta, force, forcing_frequency, t_end - t_s)
+    floor = const - abs(sine_amp)
+    for j in range(bounds.size):
+        floor -= abs(weights[j]) * bounds[j]
+    if floor > 0.0:
+        return NO_EVENT
+    t = t_s
+    q[:] = q_s
+    v[:] = v_s
+    value, slope = event_value(q, v, t, weights, const, sine_amp, forcing_frequency)
+    while True:
+        if value <= 0.0:
+            return t
+        curvature = curvature_bound(q, v, omega, zeta, force, weights, sine_amp,
+                                    forcing_frequency, span_cap)
+        step = min(certified_step(value, slope, curvature), span_cap)
+        if step <= 4.0 * _EPS * max(abs(t), span_cap):
+            return t  # the event function is at round-off level: touching
+        if slope < 0.0:  # approaching: try to bracket a crossing beyond the linear estimate
+            reach = min(2.0 * value / -slope, span_cap, t_end - t)
+            if reach > step and slope + curvature * reach < 0.0:  # e monotone on the bracket
+                t_probe = t + reach
+                advance(q_s, v_s, t_s, t_probe - t_s, omega, zeta, force, forcing_frequency,
+                        q, v)
+                probe, _ = event_value(q, v, t_probe, weights, const, sine_amp,
+                                       forcing_frequency)
+                if probe <= 0.0:
+                    return _newton_in_bracket(q_s, v_s, t_s, t, t_probe, omega, zeta, force,
+                                              weights, const, sine_amp, forcing_frequency, q, v)
+        if t + step >= t_end:
+            return NO_EVENT
+        t += step
+        advance(q_s, v_s, t_s, t - t_s, omega, zeta, force, forcing_frequency, q, v)
+        value, slope = event_value(q, v, t, weights, const, sine_amp, forcing_frequency)

@@ -1,0 +1,216 @@
+"""Natural frequencies and mode shapes of both phases (SciPy, evaluated once per geometry).
+
+Every shape here is a clamped cantilever shape with zero bending moment at the tip,
+
+    psi(xi) = tau (cosh xi - cos xi) - (sinh xi - sin xi),   xi = k x,  b = k l,
+    tau = (sinh b + sin b) / (cosh b + cos b),
+
+written with decaying exponentials only, ``psi = A e^(xi - b) + B e^-xi + C cos xi + D sin xi``,
+so that it keeps all its digits at any ``b`` (the textbook form cancels ``e^b`` terms and loses
+every digit past mode 7 or so; Goncalves, Brennan & Elliott, J. Sound Vib. 2007).
+
+* Free phase: ``b`` is a root of ``cos b cosh b + 1 = 0``; the tip shear vanishes too.
+* Contact phase: each beam carries ``C_i psi(k_i x)`` with ``omega = a_1 k_1^2 = a_2 k_2^2``;
+  ``(C_1, C_2)`` is the null vector of the 2x2 tip system (equal tip displacements, tip shears
+  that cancel). The roots are found in brackets given by interlacing: the contact phase is the
+  free phase with one added constraint (tied tips), so the k-th contact frequency lies between
+  the k-th and (k+1)-th of the merged, sorted free frequencies of both beams, where the tip
+  receptance equation is monotone. No root is missed, close or double roots included.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.optimize import brentq
+
+from impactbeams.params import Params
+
+_RTOL = 4 * np.finfo(float).eps
+_COINCIDENT = 1e-12  # relative distance below which two free frequencies are one double pole
+
+
+def psi(b: np.ndarray, xi: np.ndarray, derivative: int = 0) -> np.ndarray:
+    """d^n psi / d xi^n (n = ``derivative``, 0..3) of the shape with tip parameter ``b``.
+
+    ``b`` and ``xi`` broadcast against each other; 0 <= xi <= b. Dimensionless.
+    """
+    b, xi = np.broadcast_arrays(np.asarray(b, dtype=float), np.asarray(xi, dtype=float))
+    e = np.exp(-b)
+    s, c = np.sin(b), np.cos(b)
+    denominator = 1.0 + e * e + 2.0 * c * e  # 2 (cosh b + cos b) e^-b > 0
+    tau = (1.0 - e * e + 2.0 * s * e) / denominator
+    grow = (s - c - e) / denominator * np.exp(xi - b)  # (tau - 1)/2 e^xi, bounded
+    decay = (tau + 1.0) / 2.0 * np.exp(-xi) * (-1.0) ** derivative
+    # -tau cos xi + sin xi, differentiated n times: a rotation by n quarter turns
+    phase = xi + derivative * np.pi / 2
+    return grow + decay - tau * np.cos(phase) + np.sin(phase)
+
+
+def psi_tip(b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """psi(b), psi'(b) and psi'''(b) (psi''(b) = 0), cancellation-free."""
+    b = np.asarray(b, dtype=float)
+    c, th, sech = np.cos(b), np.tanh(b), 1.0 / np.cosh(b)
+    denominator = 1.0 + c * sech
+    value = 2.0 * (np.sin(b) - c * th) / denominator
+    third = -2.0 * (sech + c) / denominator
+    return value, psi(b, b, 1), third
+
+
+def psi_norm_squared(b: np.ndarray) -> np.ndarray:
+    """Integral of psi^2 over [0, b], from the boundary-term identity valid for psi'''' = psi."""
+    value, slope, third = psi_tip(b)
+    return b / 4.0 * (value**2 - 2.0 * slope * third) + 0.75 * value * third
+
+
+def cantilever_roots(n: int) -> np.ndarray:
+    """First ``n`` roots b = k l of cos b cosh b + 1 = 0 (1.8751040687, 4.6940911330, ...)."""
+    # cos b + sech b changes sign exactly once on each [(j - 1) pi, j pi]
+    f = lambda b: np.cos(b) + 1.0 / np.cosh(b)  # noqa: E731
+    return np.array([brentq(f, max(j - 1, 0.5) * np.pi if j > 1 else 1.0, j * np.pi,
+                            xtol=1e-300, rtol=_RTOL) for j in range(1, n + 1)])
+
+
+@dataclasses.dataclass(frozen=True)
+class BeamShapes:
+    """Shapes ``Y_n(x) = amplitude_n psi(k_n x)`` of ``n`` modes on one beam.
+
+    ``k``: wave numbers (1/m); ``amplitude``: scale factors (m^-1/2 kg^-1/2 mass-normalised);
+    ``length``: beam length (m).
+    """
+
+    k: np.ndarray
+    amplitude: np.ndarray
+    length: float
+
+    def __call__(self, x: np.ndarray, derivative: int = 0) -> np.ndarray:
+        """d^n Y / dx^n at positions ``x`` (m), shape (modes, len(x))."""
+        x = np.atleast_1d(np.asarray(x, dtype=float))
+        k = self.k[:, None]
+        values = psi(k * self.length, k * x[None, :], derivative)
+        return self.amplitude[:, None] * k**derivative * values
+
+    def tip(self, derivative: int = 0) -> np.ndarray:
+        """d^n Y / dx^n at the tip x = length, one value per mode."""
+        if derivative == 2:
+            return np.zeros_like(self.k)
+        b = self.k * self.length
+        value, slope, third = psi_tip(b)
+        psi_n = {0: value, 1: slope, 3: third}[derivative]
+        return self.amplitude * self.k**derivative * psi_n
+
+
+@dataclasses.dataclass(frozen=True)
+class FreeModes:
+    """Cantilever modes of one beam alone: ``omega`` (rad/s) and mass-normalised shapes."""
+
+    omega: np.ndarray
+    shapes: BeamShapes
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactModes:
+    """Modes of the two beams with tied tips: ``omega`` (rad/s), shapes on beam 1 and 2.
+
+    Mass-normalised in <u, v> = rhoA_1 int u_1 v_1 + rhoA_2 int u_2 v_2.
+    """
+
+    omega: np.ndarray
+    beam1: BeamShapes
+    beam2: BeamShapes
+
+
+def free_modes(EI: float, rhoA: float, length: float, n: int) -> FreeModes:
+    """First ``n`` cantilever modes of a beam (EI in N m^2, rhoA in kg/m, length in m)."""
+    b = cantilever_roots(n)
+    k = b / length
+    norm = np.sqrt(rhoA / k * psi_norm_squared(b))
+    sign = np.sign(psi_tip(b)[0])  # tip displacement positive
+    return FreeModes(np.sqrt(EI / rhoA) * k**2, BeamShapes(k, sign / norm, length))
+
+
+def _merged_free_frequencies(params: Params, n: int) -> np.ndarray:
+    """The n + 1 lowest cantilever frequencies of both beams together, sorted (rad/s)."""
+    a1, a2 = params.wave_constant
+    b = cantilever_roots(n + 1)
+    merged = np.concatenate([a1 * (b / params.l1) ** 2, a2 * (b / params.l2) ** 2])
+    return np.sort(merged)[: n + 1]
+
+
+def _contact_secular(omega: float, params: Params) -> float:
+    """(f_1 + f_2) E_1 A_1 E_2 A_2: zero at contact frequencies, smooth, no poles.
+
+    f_i = N_i / (E_i A_i) is beam i's tip receptance, E_i = EI_i k_i^3,
+    A_i = sech b_i + cos b_i (zero at cantilever frequencies), N_i = sin b_i - cos b_i tanh b_i.
+    """
+    a1, a2 = params.wave_constant
+    k1, k2 = np.sqrt(omega / a1), np.sqrt(omega / a2)
+    b1, b2 = k1 * params.l1, k2 * params.l2
+    E1, E2 = params.EI1 * k1**3, params.EI2 * k2**3
+    A1, A2 = 1 / np.cosh(b1) + np.cos(b1), 1 / np.cosh(b2) + np.cos(b2)
+    N1, N2 = np.sin(b1) - np.cos(b1) * np.tanh(b1), np.sin(b2) - np.cos(b2) * np.tanh(b2)
+    return (E1 * A1 * N2 + E2 * A2 * N1) / (E1 + E2)
+
+
+def contact_frequencies(params: Params, n: int) -> np.ndarray:
+    """First ``n`` natural frequencies of the contact phase (rad/s), one per interlacing bracket.
+
+    Coincident free frequencies (equal tip-to-tip beams) are themselves contact frequencies;
+    next to such a double pole the secular function has a simple zero at the bracket end, so
+    that end is moved inside by a relative 1e-9 of the bracket width before root finding.
+    """
+    poles = _merged_free_frequencies(params, n + 1)
+    coincident = np.diff(poles) <= _COINCIDENT * poles[1:]
+    roots = np.empty(n)
+    for j in range(n):
+        lo, hi = poles[j], poles[j + 1]
+        if coincident[j]:
+            roots[j] = 0.5 * (lo + hi)
+            continue
+        inset = 1e-9 * (hi - lo)
+        lo_eval = lo + inset if j > 0 and coincident[j - 1] else lo
+        hi_eval = hi - inset if coincident[j + 1] else hi
+        f_lo = _contact_secular(lo_eval, params)
+        f_hi = _contact_secular(hi_eval, params)
+        if np.sign(f_lo) == np.sign(f_hi):
+            raise RuntimeError(
+                f"contact root {j + 1} not bracketed in [{lo!r}, {hi!r}] rad/s "
+                f"(secular values {f_lo!r}, {f_hi!r}): please report these parameters")
+        roots[j] = brentq(_contact_secular, lo_eval, hi_eval, args=(params,), xtol=1e-300,
+                          rtol=_RTOL)
+    return roots
+
+
+def _tip_null_vector(omega: float, params: Params) -> np.ndarray:
+    """Amplitudes (C_1, C_2) of the contact shape on each beam at frequency ``omega``.
+
+    They make the tip displacements equal, C_1 psi_1(b_1) = C_2 psi_2(b_2), and the tip shears
+    cancel, EI_1 k_1^3 C_1 psi_1'''(b_1) + EI_2 k_2^3 C_2 psi_2'''(b_2) = 0: the right singular
+    vector of the smallest singular value of that 2x2 system.
+    """
+    a1, a2 = params.wave_constant
+    k1, k2 = np.sqrt(omega / a1), np.sqrt(omega / a2)
+    w1, _, v1 = psi_tip(k1 * params.l1)
+    w2, _, v2 = psi_tip(k2 * params.l2)
+    E1, E2 = params.EI1 * k1**3, params.EI2 * k2**3
+    scale = max(E1, E2)  # both rows O(1): psi and psi''' are bounded at the tip
+    system = np.array([[w1, -w2], [E1 * v1 / scale, E2 * v2 / scale]])
+    return np.linalg.svd(system)[2][-1]
+
+
+def contact_modes(params: Params, n: int) -> ContactModes:
+    """First ``n`` mass-normalised modes of the contact phase (tied tips)."""
+    omega = contact_frequencies(params, n)
+    a1, a2 = params.wave_constant
+    k1, k2 = np.sqrt(omega / a1), np.sqrt(omega / a2)
+    C = np.array([_tip_null_vector(w, params) for w in omega])
+    C1, C2 = C[:, 0], C[:, 1]
+    mass = (params.rhoA1 / k1 * C1**2 * psi_norm_squared(k1 * params.l1)
+            + params.rhoA2 / k2 * C2**2 * psi_norm_squared(k2 * params.l2))
+    tip = C1 * psi_tip(k1 * params.l1)[0]
+    # sign: tip displacement positive; for tip-node modes, beam 1's amplitude positive
+    reference = np.where(np.abs(tip) > 1e-8 * np.hypot(C1, C2), tip, C1)
+    scale = np.sign(reference) / np.sqrt(mass)
+    return ContactModes(omega, BeamShapes(k1, C1 * scale, params.l1),
+                        BeamShapes(k2, C2 * scale, params.l2))
