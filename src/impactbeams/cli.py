@@ -11,6 +11,7 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from impactbeams.params import MATERIAL_KEYS, MATERIAL_UNITS, UNITS, ParameterError, Params
 
@@ -56,6 +57,35 @@ def _modes(args: argparse.Namespace) -> None:
         print(f"{i + 1:>4} " + " ".join(f"{w:16.6f}" for w in row))
 
 
+def _run(args: argparse.Namespace) -> None:
+    from impactbeams.sweep import load_sweep, run_sweep
+
+    sweep = load_sweep(args.sweep)
+    output = args.output or str(Path("results") / (Path(args.sweep).stem + ".nc"))
+    print(f"{sweep.source}: {' x '.join(map(str, sweep.shape))} = {sweep.size} cells over "
+          f"{', '.join(a.name for a in sweep.axes)}; t_max = {sweep.t_max} s, "
+          f"{sweep.n_modes} modes per beam -> {output}", file=sys.stderr)
+    try:
+        run_sweep(sweep, output=output, threads=args.threads, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"\nimpactbeams: interrupted; finished chunks are kept in {output}.partial/ "
+              "and the same command resumes from them", file=sys.stderr)
+        raise
+    print(f"wrote {output}", file=sys.stderr)
+
+
+def _plot(args: argparse.Namespace) -> None:
+    import xarray as xr
+
+    from impactbeams.plotting import plot_dataset
+
+    if not Path(args.dataset).exists():
+        raise ParameterError(f"file {args.dataset!r} does not exist")
+    with xr.open_dataset(args.dataset) as dataset:
+        plot_dataset(dataset.load(), args.output)
+    print(f"wrote {args.output}", file=sys.stderr)
+
+
 def _positive_int(text: str) -> int:
     value = int(text)
     if value < 1:
@@ -72,6 +102,19 @@ def build_parser() -> argparse.ArgumentParser:
     modes.add_argument("--json", action="store_true", help="print JSON instead of a table")
     add_parameter_options(modes)
     modes.set_defaults(handler=_modes)
+
+    run = commands.add_parser("run", help="run a sweep defined in a TOML file (see sweeps/)")
+    run.add_argument("sweep", metavar="SWEEP.toml")
+    run.add_argument("-o", "--output", metavar="OUT.nc",
+                     help="netCDF result (default results/<sweep name>.nc)")
+    run.add_argument("--threads", type=_positive_int, help="Numba threads (default: all cores)")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(handler=_run)
+
+    plot = commands.add_parser("plot", help="draw a saved sweep map or simulated run")
+    plot.add_argument("dataset", metavar="IN.nc")
+    plot.add_argument("-o", "--output", required=True, metavar="OUT.png")
+    plot.set_defaults(handler=_plot)
     return parser
 
 

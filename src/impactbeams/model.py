@@ -49,51 +49,86 @@ def unit_tip_shape(length: float, x: np.ndarray) -> np.ndarray:
 
 
 @dataclasses.dataclass(frozen=True)
+class FreePhase:
+    """Free-phase coordinates of both beams: beam 1's ``n`` modes, then beam 2's.
+
+    Closed forms only (no quadrature), so that a first-impact map pays for nothing else.
+
+    Attributes (SI units):
+        beam1, beam2: cantilever modes of each beam.
+        omega: natural frequencies (rad/s).
+        tip1, tip2: tip displacement of each coordinate's shape on beam 1 / beam 2 (zero for
+            the other beam's modes).
+        unit1, unit2: <u_1, Y_n>, <u_2, Y_n> = Y_n(l_i) / (c_i omega_n^2) (kg^1/2).
+        drive: b_n with q_n'' + omega_n^2 q_n = b_n F''(t): Y_1n(l1) / omega_1n^2, 0 on beam 2.
+        static_shift: <s, Y_n> = c_1 unit1 - c_2 unit2.
+    """
+
+    beam1: FreeModes
+    beam2: FreeModes
+    omega: np.ndarray
+    tip1: np.ndarray
+    tip2: np.ndarray
+    unit1: np.ndarray
+    unit2: np.ndarray
+    drive: np.ndarray
+    static_shift: np.ndarray
+
+
+def build_free_phase(params: Params, n_modes: int) -> FreePhase:
+    """Free-phase modal data with ``n_modes`` cantilever modes per beam."""
+    n = _check_n_modes(n_modes)
+    p = params
+    c1, c2 = p.tip_compliance
+    beam1 = free_modes(p.EI1, p.rhoA1, p.l1, n)
+    beam2 = free_modes(p.EI2, p.rhoA2, p.l2, n)
+    zeros = np.zeros(n)
+    omega = np.concatenate([beam1.omega, beam2.omega])
+    tip1 = np.concatenate([beam1.shapes.tip(), zeros])
+    tip2 = np.concatenate([zeros, beam2.shapes.tip()])
+    unit1, unit2 = tip1 / (c1 * omega**2), tip2 / (c2 * omega**2)
+    return FreePhase(beam1, beam2, omega, tip1, tip2, unit1, unit2,
+                     drive=tip1 / omega**2, static_shift=c1 * unit1 - c2 * unit2)
+
+
+@dataclasses.dataclass(frozen=True)
 class ModalModel:
     """Modal bases of both phases and their projections for one geometry.
 
-    Free coordinates are ordered beam 1 modes then beam 2 modes (``2 n_modes``); the contact
-    phase has ``2 n_modes`` modes too (same number of degrees of freedom: by interlacing they
-    span the same frequency band).
+    The contact phase has ``2 n_modes`` modes, as many degrees of freedom as the free phase:
+    by interlacing they span the same frequency band.
 
     Attributes (SI units):
         params: the geometry (forcing values in it are not used here).
-        beam1, beam2: free cantilever modes of each beam.
+        n_modes: free modes per beam.
+        free: the free phase (see :class:`FreePhase`).
         contact: contact-phase modes.
-        free_omega, contact_omega: natural frequencies (rad/s) in phase order.
-        free_tip1, free_tip2: tip displacement of each free coordinate's shape on beam 1 / 2
-            (zero for the other beam's modes).
         contact_tip: common tip displacement of the contact shapes.
         contact_shear2: EI_2 Z_2m'''(l_2), tip shear (contact force) per contact coordinate (N).
-        overlap: <Z_m, Y_n>, shape (contact, free).
-        free_unit1, free_unit2: <u_1, Y_n>, <u_2, Y_n> (kg^1/2).
+        overlap: <Z_m, Y_n>, shape (contact, free), by quadrature.
         contact_unit1, contact_unit2: <u_1, Z_m> on beam 1 only, <u_2, Z_m> on beam 2 only.
-        free_static_shift: <s, Y_n>; contact_static_shift: <s, Z_m>.
-        free_drive, contact_drive: b_n such that q_n'' + omega_n^2 q_n = b_n F''(t) (m kg^1/2/N):
-            free ``Y_1n(l1) / omega_1n^2`` (beam 1), 0 (beam 2); contact
-            ``c1 c2 / (c1 + c2) (<u_1, Z_m> + <u_2, Z_m>)``.
+        contact_static_shift: <s, Z_m> = c_1 contact_unit1 - c_2 contact_unit2.
+        contact_drive: kappa_m with r_m'' + omega_m^2 r_m = kappa_m F''(t):
+            c1 c2 / (c1 + c2) (<u_1, Z_m> + <u_2, Z_m>).
     """
 
     params: Params
     n_modes: int
-    beam1: FreeModes
-    beam2: FreeModes
+    free: FreePhase
     contact: ContactModes
-    free_omega: np.ndarray
-    contact_omega: np.ndarray
-    free_tip1: np.ndarray
-    free_tip2: np.ndarray
     contact_tip: np.ndarray
     contact_shear2: np.ndarray
     overlap: np.ndarray
-    free_unit1: np.ndarray
-    free_unit2: np.ndarray
     contact_unit1: np.ndarray
     contact_unit2: np.ndarray
-    free_static_shift: np.ndarray
     contact_static_shift: np.ndarray
-    free_drive: np.ndarray
     contact_drive: np.ndarray
+
+
+def _check_n_modes(n_modes: int) -> int:
+    if not isinstance(n_modes, (int, np.integer)) or isinstance(n_modes, bool) or n_modes < 1:
+        raise ValueError(f"n_modes = {n_modes!r} is not allowed: must be an integer >= 1")
+    return int(n_modes)
 
 
 def _free_on_beam(shapes: BeamShapes, n_before: int, n_after: int, x: np.ndarray) -> np.ndarray:
@@ -103,49 +138,32 @@ def _free_on_beam(shapes: BeamShapes, n_before: int, n_after: int, x: np.ndarray
 
 
 def build_model(params: Params, n_modes: int) -> ModalModel:
-    """Precompute the modal model with ``n_modes`` free modes per beam, ``2 n_modes`` contact."""
-    if not isinstance(n_modes, (int, np.integer)) or isinstance(n_modes, bool) or n_modes < 1:
-        raise ValueError(f"n_modes = {n_modes!r} is not allowed: must be an integer >= 1")
-    n = int(n_modes)
+    """Precompute both phases: ``n_modes`` free modes per beam, ``2 n_modes`` contact modes."""
+    free = build_free_phase(params, n_modes)
+    n = free.beam1.omega.size
     p = params
     c1, c2 = p.tip_compliance
-    beam1 = free_modes(p.EI1, p.rhoA1, p.l1, n)
-    beam2 = free_modes(p.EI2, p.rhoA2, p.l2, n)
     contact = contact_modes(p, 2 * n)
-    k_max = max(beam1.shapes.k[-1], beam2.shapes.k[-1], contact.beam1.k[-1], contact.beam2.k[-1])
+    k_max = max(free.beam1.shapes.k[-1], free.beam2.shapes.k[-1], contact.beam1.k[-1],
+                contact.beam2.k[-1])
     x1, w1 = quadrature(p.l1, k_max)
     x2, w2 = quadrature(p.l2, k_max)
-    m1, m2 = p.rhoA1 * w1, p.rhoA2 * w2  # mass-weighted quadrature weights
-    free1 = _free_on_beam(beam1.shapes, 0, n, x1)  # free coordinates on beam 1
-    free2 = _free_on_beam(beam2.shapes, n, 0, x2)
     z1, z2 = contact.beam1(x1), contact.beam2(x2)
-    zeros = np.zeros(n)
-    free_tip1 = np.concatenate([beam1.shapes.tip(), zeros])
-    free_tip2 = np.concatenate([zeros, beam2.shapes.tip()])
-    free_unit1 = free_tip1 / (c1 * np.concatenate([beam1.omega, beam2.omega]) ** 2)
-    free_unit2 = free_tip2 / (c2 * np.concatenate([beam1.omega, beam2.omega]) ** 2)
+    free1 = _free_on_beam(free.beam1.shapes, 0, n, x1)
+    free2 = _free_on_beam(free.beam2.shapes, n, 0, x2)
     contact_tip = contact.beam1.tip()
     contact_unit1 = (p.EI1 * contact.beam1.tip(3) + contact_tip / c1) / contact.omega**2
     contact_unit2 = (p.EI2 * contact.beam2.tip(3) + contact_tip / c2) / contact.omega**2
     return ModalModel(
         params=p,
         n_modes=n,
-        beam1=beam1,
-        beam2=beam2,
+        free=free,
         contact=contact,
-        free_omega=np.concatenate([beam1.omega, beam2.omega]),
-        contact_omega=contact.omega,
-        free_tip1=free_tip1,
-        free_tip2=free_tip2,
         contact_tip=contact_tip,
         contact_shear2=p.EI2 * contact.beam2.tip(3),
-        overlap=(z1 * m1) @ free1.T + (z2 * m2) @ free2.T,
-        free_unit1=free_unit1,
-        free_unit2=free_unit2,
+        overlap=(z1 * p.rhoA1 * w1) @ free1.T + (z2 * p.rhoA2 * w2) @ free2.T,
         contact_unit1=contact_unit1,
         contact_unit2=contact_unit2,
-        free_static_shift=c1 * free_unit1 - c2 * free_unit2,
         contact_static_shift=c1 * contact_unit1 - c2 * contact_unit2,
-        free_drive=np.concatenate([beam1.shapes.tip() / beam1.omega**2, zeros]),
         contact_drive=c1 * c2 / (c1 + c2) * (contact_unit1 + contact_unit2),
     )

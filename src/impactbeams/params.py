@@ -183,7 +183,12 @@ class Params:
     @classmethod
     def from_toml(cls, path: str | Path) -> Params:
         """Read the ``[params]`` table of a TOML file; unspecified keys take the defaults."""
-        return cls.from_mapping(read_toml(path).get("params", {}), source=f"[params] of {path}")
+        data = read_toml(path)
+        for key in data:
+            if key != "params":
+                raise ParameterError(f"unknown key {key!r} in {path}: a parameters file has "
+                                     "only a [params] table")
+        return cls.from_mapping(data.get("params", {}), source=f"[params] of {path}")
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:

@@ -43,6 +43,89 @@ VARIABLES: dict[str, Variable] = {
         "time spent in the contact phase divided by t_max (full dynamics)"),
 }
 
+# simulate(): one trajectory on an output grid ("time") and its impacts ("impact")
+VARIABLES.update({
+    "time": Variable(("time",), "s", "time", "output time"),
+    "impact": Variable(("impact",), "1", "impact number",
+                       "index of the contact phase, in order of onset (from 0)"),
+    "x1": Variable(("x1",), "m", "position along beam 1", "distance from the clamped end"),
+    "x2": Variable(("x2",), "m", "position along beam 2", "distance from the clamped end"),
+    "tip_deflection_1": Variable(
+        ("time",), "m", "tip deflection of beam 1", "y1(l1, t), upward positive"),
+    "tip_deflection_2": Variable(
+        ("time",), "m", "tip deflection of beam 2 minus the clearance",
+        "y2(l2, t) - Delta, upward positive (as in the paper's Fig. 3a); in contact it equals "
+        "tip_deflection_1"),
+    "tip_velocity_1": Variable(("time",), "m s-1", "tip velocity of beam 1", "dy1(l1, t)/dt"),
+    "tip_velocity_2": Variable(("time",), "m s-1", "tip velocity of beam 2", "dy2(l2, t)/dt"),
+    "gap": Variable(
+        ("time",), "m", "gap between the tips",
+        "g = Delta + y1(l1) - y2(l2); 0 in contact; just after a release it is the free "
+        "basis' representation of the contact field (a truncation error of the modal model)"),
+    "contact_force": Variable(
+        ("time",), "N", "contact force",
+        "R(t) = EI2 d3y2/dx3 (l2, t) in contact, 0 out of contact"),
+    "in_contact": Variable(
+        ("time",), "1", "contact flag", "1 in the contact phase, 0 in the free phase"),
+    "energy": Variable(
+        ("time",), "J", "total mechanical energy",
+        "kinetic plus strain energy of the deflection fields of both beams"),
+    "kinetic_energy": Variable(
+        ("time",), "J", "kinetic energy", "kinetic energy of the deflection fields"),
+    "unresolved_kinetic_energy": Variable(
+        ("time",), "J", "kinetic energy outside the modal basis",
+        "1/2 |(1 - P) y_s_t|^2: kinetic energy of the part of the quasi-static velocity field "
+        "that the phase's modes do not represent; within a phase energy - "
+        "unresolved_kinetic_energy changes exactly by work_of_force - damping_dissipation"),
+    "work_of_force": Variable(
+        ("time",), "J", "work done by the tip force",
+        "integral from 0 to t of F(s) (-dy1(l1, s)/ds) ds (F downward, y upward)"),
+    "damping_dissipation": Variable(
+        ("time",), "J", "energy dissipated by modal damping",
+        "integral from 0 to t of the modal damping power (0 without damping)"),
+    "deflection_1": Variable(("time", "x1"), "m", "deflection of beam 1", "y1(x1, t)"),
+    "deflection_2": Variable(("time", "x2"), "m", "deflection of beam 2", "y2(x2, t)"),
+    "impact_onset_time": Variable(
+        ("impact",), "s", "impact onset time", "time at which the gap closes (contact onset)"),
+    "impact_duration": Variable(
+        ("impact",), "s", "impact duration",
+        "release time minus onset time (0 for an instantaneous impact, whose force is not "
+        "positive right after onset); NaN if still in contact at the end of the run"),
+    "impact_impulse": Variable(
+        ("impact",), "N s", "impact impulse",
+        "integral of the contact force over the contact phase (up to the end of the run)"),
+    "impact_peak_force": Variable(
+        ("impact",), "N", "peak impact force", "largest contact force during the contact phase"),
+    "restitution_coefficient": Variable(
+        ("impact",), "1", "coefficient of restitution",
+        "e = -(dg/dt just after release) / (dg/dt just before onset); NaN if not released"),
+    "impact_sustained": Variable(
+        ("impact",), "1", "sustained-contact flag",
+        "1 if the contact followed an instantaneous impact whose released state closed again "
+        "within half a period of the fastest free mode (an accumulation), so that it was kept "
+        "until the force, rising from <= 0, fell back to 0 or peaked below 0"),
+    "impact_velocity": Variable(
+        ("impact",), "m s-1", "gap rate at onset", "dg/dt just before the onset (<= 0)"),
+    "separation_velocity": Variable(
+        ("impact",), "m s-1", "gap rate at separation",
+        "dg/dt just after the release, in the free basis (the tips move together just before)"),
+    "impact_energy_loss": Variable(
+        ("impact",), "J", "energy lost at onset",
+        "total mechanical energy just before minus just after the onset projection"),
+    "impact_kinetic_energy_loss": Variable(
+        ("impact",), "J", "kinetic energy lost at onset",
+        "kinetic energy just before minus just after the onset projection"),
+    "release_energy_change": Variable(
+        ("impact",), "J", "energy change at release",
+        "total mechanical energy just after minus just before the release projection (a "
+        "truncation effect: the highest contact modes are not spanned by the free modes)"),
+    "release_gap": Variable(
+        ("impact",), "m", "gap just after release",
+        "gap of the released state in the free basis (0 in the exact model)"),
+    "release_contact_force": Variable(
+        ("impact",), "N", "contact force at release", "R at the located release (0 to round-off)"),
+})
+
 
 def attributes(name: str) -> dict[str, str]:
     """CF attributes (units, long_name, description) of a registered variable."""

@@ -1,0 +1,383 @@
+"""Event-driven impact dynamics: exact propagation within phases, certified switching events.
+
+Plain-array interface, packed by :mod:`impactbeams.simulate`. Both phases have ``N = 2 n``
+modal coordinates; ``tables[phase]`` (phase ``FREE = 0``, ``CONTACT = 1``) has the rows
+
+* ``ROW_OMEGA``: natural frequencies (rad/s);
+* ``ROW_DRIVE``: b with ``q'' + 2 zeta omega q' + omega^2 q = b F''(t)`` (m kg^1/2 / N); it is
+  also ``-<y_s_t, mode> / F'``, the quasi-static velocity field seen by each mode;
+* ``ROW_FORCE``: ``-Omega^2 F0 b``, the amplitude of the modal drive ``f sin(Omega t)``;
+* ``ROW_EVENT``: weights of the phase's event function (gap ``g`` in m, contact force ``R``
+  in N) on the modal coordinates;
+* ``ROW_TIP1``: tip displacement of each mode's shape on beam 1 (m per unit coordinate).
+
+``phase_scalars[phase]`` = (event constant, event sine amplitude, ``Q1' / F'``): the event
+function is ``e(t) = const + sine_amp sin(Omega t) + weights . q(t)`` and beam 1's tip load
+rate is ``Q1' = F'`` (free) or ``c2 F' / (c1 + c2)`` (contact).
+
+``settings`` = (clearance m, c1 m/N, c2 m/N, F0 N, Omega rad/s, zeta, t_max s, search span s,
+accumulation time s).
+Switching (MODEL.md) uses ``overlap[m, n] = <Z_m, Y_n>`` and the static shifts
+``shifts[FREE] = <s, Y_n>``, ``shifts[CONTACT] = <s, Z_m>``:
+
+* onset at t: ``r = overlap q - R_qs(t) shifts[CONTACT]``,
+  ``r' = overlap q' - R_qs'(t) shifts[CONTACT]``;
+* release at t: ``q = overlap^T r + R_qs(t) shifts[FREE]``, likewise for the velocities;
+
+with ``R_qs = (c1 F - clearance) / (c1 + c2)`` the quasi-static contact force.
+"""
+
+import math
+
+import numpy as np
+
+from impactbeams.kernels.events import event_value, first_root
+from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.propagation import advance
+
+FREE, CONTACT = 0, 1
+ROW_OMEGA, ROW_DRIVE, ROW_FORCE, ROW_EVENT, ROW_TIP1 = 0, 1, 2, 3, 4
+SCALAR_CONST, SCALAR_SINE, SCALAR_LOAD_RATE = 0, 1, 2
+(SET_CLEARANCE, SET_C1, SET_C2, SET_F0, SET_OMEGA, SET_ZETA, SET_T_MAX, SET_SEARCH_SPAN,
+ SET_ACCUMULATION) = range(9)
+
+COMPLETE, EVENT_LIMIT, STUCK = 0, 1, 2
+STATUS_NAMES = ("complete", "event_limit", "stuck")
+# Consecutive zero-length phases allowed before the run is declared stuck. A chattering
+# sequence that converges (alternating projections) ends well before; a persistent conflict
+# between the two truncated phases would repeat forever at one instant.
+ZENO_LIMIT = 64
+
+_EPS = np.finfo(np.float64).eps
+_GAUSS_NODES = np.array([
+    -0.9815606342467192, -0.9041172563704749, -0.7699026741943047, -0.5873179542866175,
+    -0.3678314989981802, -0.1252334085114689, 0.1252334085114689, 0.3678314989981802,
+    0.5873179542866175, 0.7699026741943047, 0.9041172563704749, 0.9815606342467192])
+_GAUSS_WEIGHTS = np.array([
+    0.0471753363865118, 0.1069393259953184, 0.1600783285433462, 0.2031674267230659,
+    0.2334925365383548, 0.2491470458134028, 0.2491470458134028, 0.2334925365383548,
+    0.2031674267230659, 0.1600783285433462, 0.1069393259953184, 0.0471753363865118])
+_GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+
+
+@kernel
+def quasi_static_force(t, settings):
+    """R_qs(t) = (c1 F(t) - clearance) / (c1 + c2) (N) and its rate R_qs'(t) (N/s)."""
+    c1, c2 = settings[SET_C1], settings[SET_C2]
+    f0, big_omega = settings[SET_F0], settings[SET_OMEGA]
+    total = c1 + c2
+    value = (c1 * f0 * math.sin(big_omega * t) - settings[SET_CLEARANCE]) / total
+    return value, c1 * f0 * big_omega * math.cos(big_omega * t) / total
+
+
+@kernel
+def switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new):
+    """Project the state (q, v) of the other phase at time t onto ``to_phase``'s modes."""
+    r_qs, r_qs_rate = quasi_static_force(t, settings)
+    if to_phase == CONTACT:
+        q_new[:] = overlap @ q - r_qs * shifts[CONTACT]
+        v_new[:] = overlap @ v - r_qs_rate * shifts[CONTACT]
+    else:
+        q_new[:] = overlap.T @ q + r_qs * shifts[FREE]
+        v_new[:] = overlap.T @ v + r_qs_rate * shifts[FREE]
+
+
+@kernel
+def propagate(table, q_s, v_s, t_s, t, settings, q, v):
+    """State at time t (s) of the phase with ``table`` from (q_s, v_s) at t_s, in closed form."""
+    advance(q_s, v_s, t_s, t - t_s, table[ROW_OMEGA], settings[SET_ZETA], table[ROW_FORCE],
+            settings[SET_OMEGA], q, v)
+
+
+@kernel
+def find_event(table, scalars, q_s, v_s, t_s, settings, q, v):
+    """First root in (t_s, t_max] of the phase's event function, NaN if none.
+
+    The certified search restarts from the exactly propagated state every ``search span``
+    seconds (settings); the root does not depend on that span beyond round-off.
+    """
+    t_max, span = settings[SET_T_MAX], settings[SET_SEARCH_SPAN]
+    q_a, v_a = q_s.copy(), v_s.copy()
+    t_a = t_s
+    while t_a < t_max:
+        t_b = min(t_a + span, t_max)
+        root = first_root(q_a, v_a, t_a, t_b, table[ROW_OMEGA], settings[SET_ZETA],
+                          table[ROW_FORCE], table[ROW_EVENT], scalars[SCALAR_CONST],
+                          scalars[SCALAR_SINE], settings[SET_OMEGA], q, v)
+        if not math.isnan(root):
+            return root
+        propagate(table, q_s, v_s, t_s, t_b, settings, q_a, v_a)
+        t_a = t_b
+    return np.nan
+
+
+@kernel
+def rate_root(table, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v):
+    """First time in (t_s, t_end] where ``sign * e'`` reaches 0 from above; NaN if none.
+
+    ``e' = sine_amp Omega cos(Omega t) + weights . q'(t)``. The velocities p = q' obey the
+    differentiated modal equations ``p'' + 2 zeta omega p' + omega^2 p = f Omega cos(Omega t)``:
+    the same oscillators driven by ``f Omega sin(Omega tau)`` in the shifted time
+    ``tau = t + pi / (2 Omega)``, so ``first_root`` applies unchanged.
+    """
+    big_omega, zeta = settings[SET_OMEGA], settings[SET_ZETA]
+    omega, force = table[ROW_OMEGA], table[ROW_FORCE]
+    shift = 0.5 * math.pi / big_omega if big_omega > 0.0 else 0.0
+    acceleration = (force * math.sin(big_omega * t_s) - 2.0 * zeta * omega * v_s
+                    - omega * omega * q_s)
+    root = first_root(v_s, acceleration, t_s + shift, t_end + shift, omega, zeta,
+                      force * big_omega, sign * table[ROW_EVENT], 0.0,
+                      sign * scalars[SCALAR_SINE] * big_omega, big_omega, q, v)
+    return root - shift
+
+
+@kernel
+def _step_until(table, scalars, q_s, v_s, t_s, t, positive_rate, settings, q, v):
+    """First time from t on, in growing steps of a few ulps, where e > 0 (or e' > 0).
+
+    Moves a search off a root it has just located, where e (or e') is 0 to round-off.
+    """
+    step = 4.0 * _EPS * max(abs(t), 1e-300)
+    for _ in range(64):
+        propagate(table, q_s, v_s, t_s, t, settings, q, v)
+        value, slope = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
+                                   scalars[SCALAR_SINE], settings[SET_OMEGA])
+        if (slope if positive_rate else value) > 0.0:
+            break
+        t += step
+        step *= 2.0
+    return t
+
+
+@kernel
+def find_switch(table, scalars, q_s, v_s, t_s, wait_rising, wait_falling, settings, q, v):
+    """First time (s) from t_s at which e <= 0 while not rising (e' <= 0); NaN if none.
+
+    e > 0 at the start: its first root (``find_event``). e <= 0 at the start: t_s, except
+
+    * rising (e' > 0) and ``wait_rising``: follow e until it has risen through 0 and falls back
+      to it, or until it peaks below 0 (e' = 0), whichever comes first;
+    * falling and ``wait_falling``: follow e to its minimum, then as when rising.
+    """
+    t_max = settings[SET_T_MAX]
+    value, slope = event_value(q_s, v_s, t_s, table[ROW_EVENT], scalars[SCALAR_CONST],
+                               scalars[SCALAR_SINE], settings[SET_OMEGA])
+    if value > 0.0:
+        return find_event(table, scalars, q_s, v_s, t_s, settings, q, v)
+    q_a, v_a, t_a = q_s.copy(), v_s.copy(), t_s
+    if slope <= 0.0:
+        if not wait_falling:
+            return t_s
+        t_min = rate_root(table, scalars, -1.0, q_s, v_s, t_s, t_max, settings, q, v)
+        if math.isnan(t_min):
+            return np.nan
+        t_a = _step_until(table, scalars, q_s, v_s, t_s, t_min, True, settings, q_a, v_a)
+        value, _ = event_value(q_a, v_a, t_a, table[ROW_EVENT], scalars[SCALAR_CONST],
+                               scalars[SCALAR_SINE], settings[SET_OMEGA])
+        if value > 0.0:
+            return find_event(table, scalars, q_a, v_a, t_a, settings, q, v)
+    elif not wait_rising:
+        return t_s
+    t_peak = rate_root(table, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v)
+    t_limit = t_max if math.isnan(t_peak) else t_peak
+    t_up = first_root(q_a, v_a, t_a, t_limit, table[ROW_OMEGA], settings[SET_ZETA],
+                      table[ROW_FORCE], -table[ROW_EVENT], -scalars[SCALAR_CONST],
+                      -scalars[SCALAR_SINE], settings[SET_OMEGA], q, v)
+    if math.isnan(t_up) or t_up >= t_limit:
+        return t_peak
+    t_up = _step_until(table, scalars, q_a, v_a, t_a, t_up, False, settings, q, v)
+    q_up, v_up = q.copy(), v.copy()
+    return find_event(table, scalars, q_up, v_up, t_up, settings, q, v)
+
+
+@kernel
+def run_events(tables, phase_scalars, overlap, shifts, settings, q0, v0, seg_time, seg_phase,
+               seg_sustained, seg_q, seg_v, end_q, end_v):
+    """Integrate from the free-phase state (q0, v0) at t = 0 to t_max, event by event.
+
+    Segment k starts at ``seg_time[k]`` in phase ``seg_phase[k]`` with state
+    ``seg_q[k], seg_v[k]`` and ends (next event, or t_max for the last one) in state
+    ``end_q[k], end_v[k]`` before any projection. At most ``seg_time.size`` segments.
+
+    Onset: the gap is <= 0 while closing; release: the contact force is <= 0 while falling
+    (``find_switch``). The two truncated bases do not agree exactly at a switch, so:
+
+    * a free phase that starts with a gap <= 0 but opening (the released state's truncation
+      error) waits for the gap;
+    * a contact that starts with a force <= 0 is an instantaneous impact (released at once),
+      except after an accumulation: an onset within ``accumulation time`` (settings) of the
+      release of an instantaneous impact starts a sustained contact (``seg_sustained[k]``)
+      that waits for a rising force;
+    * if even a sustained contact is released at once (force <= 0 and falling: a conflict,
+      both bases call for the other phase), the free phase that follows waits for the gap's
+      minimum: separation wins, as the force is tensile; the gap is then < 0 briefly, by
+      about the release's truncation error.
+
+    Returns (number of segments, status, end time of the last segment in s). Status:
+    ``COMPLETE`` (t_max reached), ``EVENT_LIMIT`` (arrays full: the run stops at the last
+    recorded event) or ``STUCK`` (more than ``ZENO_LIMIT`` zero-length phases in a row).
+    """
+    n_coords = q0.size
+    q, v = q0.copy(), v0.copy()
+    q_end, v_end = np.empty(n_coords), np.empty(n_coords)
+    phase, t, zero_run, instant_release = FREE, 0.0, 0, -math.inf
+    sustained = conflict = False
+    for k in range(seg_time.size):
+        seg_time[k], seg_phase[k], seg_sustained[k] = t, phase, sustained
+        seg_q[k, :] = q
+        seg_v[k, :] = v
+        table, scalars = tables[phase], phase_scalars[phase]
+        free = phase == FREE
+        t_event = find_switch(table, scalars, q, v, t, free or sustained, free and conflict,
+                              settings, q_end, v_end)
+        t_stop = settings[SET_T_MAX] if math.isnan(t_event) else t_event
+        propagate(table, q, v, t, t_stop, settings, q_end, v_end)
+        end_q[k, :] = q_end
+        end_v[k, :] = v_end
+        if math.isnan(t_event):
+            return k + 1, COMPLETE, t_stop
+        instant = t_event <= t + 4.0 * _EPS * max(t, 1.0)
+        zero_run = zero_run + 1 if instant else 0
+        if zero_run > ZENO_LIMIT:
+            return k + 1, STUCK, t_stop
+        if free:
+            phase = CONTACT
+            sustained = t_event - instant_release <= settings[SET_ACCUMULATION]
+        else:
+            phase = FREE
+            instant_release = t_event if instant else -math.inf
+            conflict = instant and sustained
+            sustained = False
+        switch_state(q_end, v_end, t_event, phase, overlap, shifts, settings, q, v)
+        t = t_event
+    return seg_time.size, EVENT_LIMIT, t
+
+
+@kernel
+def _segment_index(seg_time, count, t, start):
+    """Index of the last segment (from ``start``) that begins at or before time t."""
+    k = start
+    while k + 1 < count and seg_time[k + 1] <= t:
+        k += 1
+    return k
+
+
+@kernel
+def sample_states(tables, settings, seg_time, seg_phase, seg_q, seg_v, count, times, q_out,
+                  v_out, phase_out):
+    """Modal state and phase at each of the ascending ``times`` (s), in closed form.
+
+    At an event time the state after the switch is returned.
+    """
+    k = 0
+    for i in range(times.size):
+        k = _segment_index(seg_time, count, times[i], k)
+        phase = seg_phase[k]
+        phase_out[i] = phase
+        propagate(tables[phase], seg_q[k], seg_v[k], seg_time[k], times[i], settings,
+                  q_out[i], v_out[i])
+
+
+@kernel
+def _power(table, scalars, settings, q_s, v_s, t_s, t, q, v):
+    """Power of F (W) and damping dissipation rate (W) at time t within one segment."""
+    propagate(table, q_s, v_s, t_s, t, settings, q, v)
+    f0, big_omega, zeta = settings[SET_F0], settings[SET_OMEGA], settings[SET_ZETA]
+    force = f0 * math.sin(big_omega * t)
+    force_rate = f0 * big_omega * math.cos(big_omega * t)
+    tip_rate = -settings[SET_C1] * scalars[SCALAR_LOAD_RATE] * force_rate
+    dissipation = 0.0
+    omega, drive, tip1 = table[ROW_OMEGA], table[ROW_DRIVE], table[ROW_TIP1]
+    for j in range(q.size):
+        tip_rate += tip1[j] * v[j]
+        dissipation += 2.0 * zeta * omega[j] * v[j] * (v[j] - force_rate * drive[j])
+    return -force * tip_rate, dissipation
+
+
+@kernel
+def _integrate_power(table, scalars, settings, q_s, v_s, t_s, a, b, q, v):
+    """Integrals (J) of the power of F and of the dissipation over [a, b] in one segment.
+
+    Composite 12-point Gauss-Legendre with panels no longer than half the shortest period
+    (of the modes and of the forcing): relative error below 1e-18 per panel.
+    """
+    if b <= a:
+        return 0.0, 0.0
+    fastest = max(np.max(table[ROW_OMEGA]), settings[SET_OMEGA])
+    n_panels = max(1, int(math.ceil((b - a) * fastest / math.pi)))
+    width = (b - a) / n_panels
+    work, dissipated = 0.0, 0.0
+    for p in range(n_panels):
+        middle = a + (p + 0.5) * width
+        for j in range(_GAUSS_NODES.size):
+            t = middle + 0.5 * width * _GAUSS_NODES[j]
+            power, loss = _power(table, scalars, settings, q_s, v_s, t_s, t, q, v)
+            work += 0.5 * width * _GAUSS_WEIGHTS[j] * power
+            dissipated += 0.5 * width * _GAUSS_WEIGHTS[j] * loss
+    return work, dissipated
+
+
+@kernel
+def work_of_force(tables, phase_scalars, settings, seg_time, seg_phase, seg_q, seg_v, count,
+                  t_end, times, work_out, dissipation_out):
+    """Work done by F and energy dissipated by damping from t = 0 to each of ``times`` (J).
+
+    ``times`` ascending in [0, t_end]; ``t_end`` is where the last segment stops.
+    """
+    n_coords = seg_q.shape[1]
+    q, v = np.empty(n_coords), np.empty(n_coords)
+    work, dissipated, t_done, i = 0.0, 0.0, 0.0, 0
+    for k in range(count):
+        table, scalars = tables[seg_phase[k]], phase_scalars[seg_phase[k]]
+        seg_end = seg_time[k + 1] if k + 1 < count else t_end
+        while i < times.size and (times[i] < seg_end or k + 1 == count):
+            dw, dd = _integrate_power(table, scalars, settings, seg_q[k], seg_v[k],
+                                      seg_time[k], t_done, times[i], q, v)
+            work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, times[i])
+            work_out[i], dissipation_out[i] = work, dissipated
+            i += 1
+        dw, dd = _integrate_power(table, scalars, settings, seg_q[k], seg_v[k], seg_time[k],
+                                  t_done, seg_end, q, v)
+        work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, seg_end)
+
+
+@kernel
+def _contact_force(table, scalars, settings, q_s, v_s, t_s, t, q, v):
+    """Contact force R(t) (N) within a contact segment."""
+    propagate(table, q_s, v_s, t_s, t, settings, q, v)
+    value, _ = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
+                           scalars[SCALAR_SINE], settings[SET_OMEGA])
+    return value
+
+
+@kernel
+def peak_force(table, scalars, settings, q_s, v_s, t_s, t_e):
+    """Largest contact force (N) over the contact segment [t_s, t_e] and its time (s).
+
+    R is sampled eight times per period of the fastest mode, then the best sample is refined
+    by golden-section search on its two neighbouring intervals (to a few ulps of time).
+    """
+    q, v = np.empty(q_s.size), np.empty(q_s.size)
+    fastest = max(np.max(table[ROW_OMEGA]), settings[SET_OMEGA])
+    n_steps = max(2, int(math.ceil((t_e - t_s) * fastest * 4.0 / math.pi)))
+    step = (t_e - t_s) / n_steps
+    best_t, best = t_s, _contact_force(table, scalars, settings, q_s, v_s, t_s, t_s, q, v)
+    for i in range(1, n_steps + 1):
+        t = t_s + i * step
+        value = _contact_force(table, scalars, settings, q_s, v_s, t_s, t, q, v)
+        if value > best:
+            best_t, best = t, value
+    lo, hi = max(t_s, best_t - step), min(t_e, best_t + step)
+    while hi - lo > 4.0 * _EPS * max(abs(hi), 1.0):
+        a = hi - _GOLDEN * (hi - lo)
+        b = lo + _GOLDEN * (hi - lo)
+        if (_contact_force(table, scalars, settings, q_s, v_s, t_s, a, q, v)
+                >= _contact_force(table, scalars, settings, q_s, v_s, t_s, b, q, v)):
+            hi = b
+        else:
+            lo = a
+    t_mid = 0.5 * (lo + hi)
+    value = _contact_force(table, scalars, settings, q_s, v_s, t_s, t_mid, q, v)
+    if value > best:
+        return value, t_mid
+    return best, best_t

@@ -1,0 +1,79 @@
+"""Independent reference computations used by several test modules (numpy/scipy only)."""
+
+import numpy as np
+from numpy.polynomial.legendre import leggauss
+
+
+def gauss_rule(length: float, panels: int = 800, order: int = 16):
+    """A quadrature independent of the package's (finer, higher order) on [0, length]."""
+    x, w = leggauss(order)
+    edges = np.linspace(0.0, length, panels + 1)
+    a, b = edges[:-1, None], edges[1:, None]
+    return ((a + b) / 2 + (b - a) / 2 * x).ravel(), ((b - a) / 2 * w).ravel()
+
+
+def free_tip_gap(free, compliance, clearance, force_amplitude, omega, uplift1=0.0, uplift2=0.0,
+                 dtype=np.longdouble):
+    """The free-phase gap g(t) from the textbook undamped solution, in extended precision.
+
+    q_n = q0 cos(w t) + v0 / w sin(w t) + f D(t), with the driven response from rest
+    D = (sin(Omega t) - Omega / w sin(w t)) / (w^2 - Omega^2) rewritten by sum-to-product as
+    -(t cos((w + Omega) t / 2) sinc((Omega - w) t / 2) - sin(w t) / w) / (w + Omega), exact at
+    and near resonance. Real trigonometry in long double (``dtype``): a different formula and
+    precision from the package's complex exponential-integrator form.
+    """
+    ld = dtype
+    w = free.omega.astype(ld)
+    weights = (free.tip1 - free.tip2).astype(ld)
+    b = free.drive.astype(ld)
+    Om, F0 = ld(omega), ld(force_amplitude)
+    f = -Om**2 * F0 * b
+    q0 = ld(uplift1) * free.unit1.astype(ld) + ld(uplift2) * free.unit2.astype(ld)
+    v0 = F0 * Om * b
+
+    def gap(t):
+        t = np.asarray(t, dtype=ld)[..., None]
+        half = (Om - w) * t / 2
+        sinc = np.where(half == 0, ld(1), np.sin(half) / np.where(half == 0, ld(1), half))
+        driven = -(t * np.cos((w + Om) * t / 2) * sinc - np.sin(w * t) / w) / (w + Om)
+        q = q0 * np.cos(w * t) + v0 / w * np.sin(w * t) + f * driven
+        return ld(clearance) - ld(compliance) * F0 * np.sin(Om * t[..., 0]) + (q * weights).sum(-1)
+
+    return gap
+
+
+def bisect_root(gap, lo, hi):
+    """Root of gap on [lo, hi] with gap(lo) > 0 >= gap(hi), bisected to the last double ulp."""
+    lo, hi = float(lo), float(hi)
+    while True:
+        mid = 0.5 * (lo + hi)
+        if mid <= lo or mid >= hi:
+            return hi
+        if gap(mid) > 0:
+            lo = mid
+        else:
+            hi = mid
+
+
+def left_bracket(gap, t_below, step):
+    """A time before t_below where gap > 0, walking left with doubling steps."""
+    lo = t_below - step
+    while gap(lo) <= 0:
+        step *= 2
+        lo = t_below - step
+    return lo
+
+
+def reference_first_impact(gap, t_max, omega_max, samples_per_period=16, scan=None):
+    """First root of gap in (0, t_max] by dense sampling and bisection, NaN if none seen.
+
+    ``scan`` (default ``gap``) is a cheaper version of gap used for the dense sampling only.
+    """
+    n = int(np.ceil(t_max * omega_max / (2 * np.pi) * samples_per_period)) + 1
+    t = np.linspace(0.0, t_max, n)
+    values = (scan or gap)(t)
+    below = np.nonzero(values <= 0)[0]
+    if below.size == 0:
+        return np.nan
+    k = below[0]
+    return bisect_root(gap, t[k - 1], t[k])

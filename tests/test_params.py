@@ -1,0 +1,85 @@
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from impactbeams.params import STRIP_THICKNESS, ParameterError, Params
+
+
+def test_defaults_are_the_papers_beams():
+    p = Params()
+    a1, a2 = p.wave_constant
+    assert a1 == pytest.approx(0.7, rel=1e-14) and a2 == pytest.approx(0.7, rel=1e-14)
+    assert STRIP_THICKNESS == pytest.approx(0.469e-3, rel=1e-3)  # MODEL.md: about 0.469 mm
+    assert (p.l1, p.l2, p.clearance, p.force_amplitude, p.omega) == (0.1, 0.12, 1.1e-5, 1e-3, 50)
+    assert p.damping_ratio == 0 and p.uplift1 == 0 and p.uplift2 == 0
+
+
+def test_material_keys_give_strip_stiffness():
+    p = Params.from_mapping({"E1": 70e9, "rho1": 2700.0, "width1": 0.01, "thickness1": 1e-3})
+    assert p.EI1 == pytest.approx(70e9 * 0.01 * 1e-9 / 12, rel=1e-15)
+    assert p.rhoA1 == pytest.approx(2700 * 0.01 * 1e-3, rel=1e-15)
+    assert p.EI2 == Params().EI2  # beam 2 untouched
+
+
+@pytest.mark.parametrize(
+    ("changes", "fragment"),
+    [
+        ({"l1": -0.1}, "l1 = -0.1 is not allowed: must be > 0 (m)"),
+        ({"EI2": 0.0}, "EI2 = 0.0 is not allowed: must be > 0 (N m^2)"),
+        ({"rhoA1": -1.0}, "rhoA1 = -1.0"),
+        ({"clearance": 0.0}, "clearance = 0.0 is not allowed: must be > 0 (m)"),
+        ({"clearance": math.nan}, "clearance = nan is not allowed: must be a finite real number"),
+        ({"omega": math.inf}, "omega = inf"),
+        ({"force_amplitude": -1e-3}, "force_amplitude = -0.001 is not allowed: must be >= 0"),
+        ({"damping_ratio": 1.0}, "damping_ratio = 1.0 is not allowed: must satisfy 0 <="),
+        ({"uplift2": 2e-5}, "initial gap clearance + uplift1 - uplift2"),
+        ({"l2": "0.1"}, "l2 = '0.1' is not allowed: must be a finite real number"),
+        ({"thickness2": -1e-3}, "thickness2 = -0.001 is not allowed: must be > 0 (m)"),
+    ],
+)
+def test_bad_values_name_parameter_value_and_rule(changes, fragment):
+    with pytest.raises(ParameterError, match=None) as error:
+        Params.from_mapping(changes)
+    assert fragment in str(error.value)
+
+
+def test_unknown_and_conflicting_keys():
+    with pytest.raises(ParameterError, match="unknown parameter 'clerance'"):
+        Params.from_mapping({"clerance": 1e-5})
+    with pytest.raises(ParameterError, match="both EI1 and material keys E1"):
+        Params.from_mapping({"EI1": 1.0, "E1": 1e9})
+
+
+def test_toml_file(tmp_path):
+    path = tmp_path / "p.toml"
+    path.write_text("[params]\nclearance = 2e-5\nomega = 40\nthickness2 = 5e-4\n")
+    p = Params.from_toml(path)
+    assert (p.clearance, p.omega) == (2e-5, 40.0)
+    assert p.rhoA2 == pytest.approx(7850 * 5e-3 * 5e-4, rel=1e-15)
+    path.write_text("[params]\nforce = 1e-3\n")
+    with pytest.raises(ParameterError, match="unknown parameter 'force' in \\[params\\] of"):
+        Params.from_toml(path)
+    path.write_text("[params\n")
+    with pytest.raises(ParameterError, match="is not valid TOML"):
+        Params.from_toml(path)
+    with pytest.raises(ParameterError, match="does not exist"):
+        Params.from_toml(tmp_path / "missing.toml")
+
+
+def test_replace_with_material_key_drops_direct_stiffness():
+    p = Params(EI1=1.0).replace(thickness1=1e-3)
+    assert p.EI1 == pytest.approx(210e9 * 5e-3 * 1e-9 / 12, rel=1e-15)
+
+
+@settings(max_examples=50, deadline=None)
+@given(clearance=st.floats(1e-12, 1e-2), uplift1=st.floats(-1e-3, 1e-3),
+       zeta=st.floats(0, 0.99))
+def test_valid_values_round_trip(clearance, uplift1, zeta):
+    if clearance + uplift1 <= 0:
+        with pytest.raises(ParameterError):
+            Params(clearance=clearance, uplift1=uplift1)
+        return
+    p = Params(clearance=clearance, uplift1=uplift1, damping_ratio=zeta)
+    assert Params.from_mapping(p.as_dict()) == p
