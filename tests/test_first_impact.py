@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-from references import bisect_root, free_tip_gap, left_bracket, reference_first_impact
 from scipy.optimize import minimize_scalar
 
 from impactbeams.kernels.first_impact import (
@@ -12,6 +11,7 @@ from impactbeams.kernels.first_impact import (
 )
 from impactbeams.model import build_free_phase
 from impactbeams.params import Params
+from references import bisect_root, free_tip_gap, left_bracket, reference_first_impact
 
 T_MAX = 1.0
 N_MODES = 5
@@ -122,8 +122,8 @@ def test_damped_cells_against_solve_ivp_events(free):
             drive = -omega**2 * force * b * np.sin(omega * t)
             return np.concatenate([v, drive - 2 * zeta * w * v - w**2 * q])
 
-        def gap(t, y, force=force, omega=omega, clearance=clearance):
-            return clearance - c1 * force * np.sin(omega * t) + weights @ y[:w.size]
+        def gap(t, y, force=force, omega=omega, clearance=clearance, n=w.size):
+            return clearance - c1 * force * np.sin(omega * t) + weights @ y[:n]
 
         gap.terminal, gap.direction = True, -1
         y0 = np.concatenate([uplift1 * free.unit1, force * omega * b])

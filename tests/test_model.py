@@ -2,9 +2,9 @@
 
 import numpy as np
 import pytest
-from references import gauss_rule
 
 from impactbeams.model import build_free_phase, build_model, unit_tip_shape
+from references import gauss_rule
 
 
 def test_unit_projections_against_quadrature(model50, default_params):

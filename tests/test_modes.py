@@ -12,7 +12,6 @@ from impactbeams.modes import (
     psi_norm_squared,
 )
 from impactbeams.params import Params
-
 from references import gauss_rule
 
 # Roots to 10 decimals as tabulated (Blevins, Formulas for Natural Frequency and Mode Shape).
