@@ -66,7 +66,8 @@ def _run(args: argparse.Namespace) -> None:
           f"{', '.join(a.name for a in sweep.axes)}; t_max = {sweep.t_max} s, "
           f"{sweep.n_modes} modes per beam -> {output}", file=sys.stderr)
     try:
-        run_sweep(sweep, output=output, threads=args.threads, progress=not args.quiet)
+        run_sweep(sweep, output=output, threads=args.threads, progress=not args.quiet,
+                  chunk_cells=args.chunk_cells)
     except KeyboardInterrupt:
         print(f"\nimpactbeams: interrupted; finished chunks are kept in {output}.partial/ "
               "and the same command resumes from them", file=sys.stderr)
@@ -108,6 +109,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("-o", "--output", metavar="OUT.nc",
                      help="netCDF result (default results/<sweep name>.nc)")
     run.add_argument("--threads", type=_positive_int, help="Numba threads (default: all cores)")
+    run.add_argument("--chunk-cells", type=_positive_int,
+                     help="cells per saved chunk (default: about 1%% of the grid, 4096..65536)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(handler=_run)
 

@@ -30,7 +30,7 @@ import os
 import shutil
 import sys
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -114,6 +114,11 @@ class Sweep:
                 "observables": list(self.observables), "params": dict(self.fixed),
                 "axes": {a.name: {"min": a.min, "max": a.max, "num": a.num, "scale": a.scale}
                          for a in self.axes}}
+
+    @property
+    def base(self) -> Params:
+        """The fixed parameters (defaults for the rest), before any axis is applied."""
+        return Params.from_mapping(self.fixed, source=f"[params] of {self.source}")
 
     def fingerprint(self) -> str:
         """Hash of the definition and package version: a resumed run must match it."""
@@ -235,7 +240,7 @@ class _Plan:
 def _plan(sweep: Sweep) -> _Plan:
     from impactbeams.model import build_free_phase
 
-    base = Params.from_mapping(sweep.fixed, source=f"[params] of {sweep.source}")
+    base = sweep.base
     geometry_axes = tuple(k for k, a in enumerate(sweep.axes) if a.name not in CELL_PARAMETERS)
     tables, compliance = [], []
     for combo in itertools.product(*(range(sweep.axes[k].num) for k in geometry_axes)):
@@ -263,15 +268,46 @@ def _chunk_cells(sweep: Sweep, plan: _Plan, start: int, stop: int) -> np.ndarray
     return cells
 
 
-def _compute_chunk(sweep: Sweep, plan: _Plan, cells: np.ndarray,
-                   parallel: bool) -> dict[str, np.ndarray]:
+_PLANS: dict[str, _Plan] = {}
+
+
+def _cached_plan(sweep: Sweep) -> _Plan:
+    """The sweep's plan, built once per process (workers reuse it across chunks)."""
+    key = sweep.fingerprint()
+    if key not in _PLANS:
+        _PLANS.clear()  # one sweep at a time: keep memory bounded
+        _PLANS[key] = _plan(sweep)
+    return _PLANS[key]
+
+
+def compute_chunk(sweep: Sweep, start: int, stop: int,
+                  parallel: bool = True) -> dict[str, np.ndarray]:
+    """Observables of the flat cells ``start..stop`` of ``sweep`` (one array per observable).
+
+    Self-contained, so that any process (a Dask worker, say) can compute any chunk.
+    """
     from impactbeams.kernels import first_impact
 
+    plan = _cached_plan(sweep)
+    cells = _chunk_cells(sweep, plan, start, stop)
     kernel = (first_impact.first_impact_map_parallel if parallel
               else first_impact.first_impact_map_serial)
     out = np.empty(cells.shape[0])
     kernel(cells, plan.tables, plan.compliance, sweep.t_max, out)
     return {FIRST_IMPACT: out}
+
+
+Chunk = tuple[int, int, int]  # (chunk number, first flat cell, end flat cell)
+ChunkRunner = Callable[[Sweep, list[Chunk]], Iterator[tuple[int, dict[str, np.ndarray]]]]
+
+
+def local_runner(parallel: bool = True) -> ChunkRunner:
+    """Compute chunks one after the other in this process, each over all Numba threads."""
+    def run(sweep: Sweep, chunks: list[Chunk]) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
+        for chunk, start, stop in chunks:
+            yield chunk, compute_chunk(sweep, start, stop, parallel)
+
+    return run
 
 
 class _ChunkStore:
@@ -364,16 +400,19 @@ def default_chunk_cells(size: int) -> int:
 
 def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | None = None,
               progress: bool = True, parallel: bool = True, chunk_cells: int | None = None,
-              on_chunk: Callable[[int], None] | None = None) -> xr.Dataset:
+              on_chunk: Callable[[int], None] | None = None,
+              runner: ChunkRunner | None = None) -> xr.Dataset:
     """Compute a sweep and return its Dataset; with ``output``, also write it as netCDF.
 
     ``threads``: Numba threads (default: all). With ``output``, finished chunks are kept
     under ``OUTPUT.partial/`` until the file is complete, and a re-run resumes from them.
     ``on_chunk`` is called with each finished chunk number (for tests and monitoring).
+    ``runner`` computes the chunks (default: :func:`local_runner`; see
+    :mod:`impactbeams.distributed` for a Dask cluster); chunks may finish in any order.
     """
-    import numba
-
     if threads is not None:
+        import numba
+
         require("threads", threads, isinstance(threads, int) and 1 <= threads
                 <= numba.config.NUMBA_NUM_THREADS,
                 f"must be an integer from 1 to {numba.config.NUMBA_NUM_THREADS}")
@@ -386,23 +425,28 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
         if finished is not None:
             return finished
         store = _ChunkStore(output, sweep.fingerprint())
-    plan = _plan(sweep)
+    bounds = chunk_bounds(sweep.size, chunk_cells)
     results = {name: np.full(sweep.size, np.nan) for name in sweep.observables}
     bar = Progress(sweep.size, enabled=progress)
-    for chunk, (start, stop) in enumerate(chunk_bounds(sweep.size, chunk_cells)):
-        values = store.load(chunk) if store else None
-        computed = values is None
-        if computed:
-            cells = _chunk_cells(sweep, plan, start, stop)
-            values = _compute_chunk(sweep, plan, cells, parallel)
-            if store:
-                store.save(chunk, values)
+    pending = []
+    for chunk, (start, stop) in enumerate(bounds):
+        saved = store.load(chunk) if store else None
+        if saved is None:
+            pending.append((chunk, start, stop))
+            continue
+        for name in sweep.observables:
+            results[name][start:stop] = saved[name]
+        bar.update(stop - start, computed=False)
+    for chunk, values in (runner or local_runner(parallel))(sweep, pending):
+        if store:
+            store.save(chunk, values)
+        start, stop = bounds[chunk]
         for name in sweep.observables:
             results[name][start:stop] = values[name]
-        bar.update(stop - start, computed)
+        bar.update(stop - start)
         if on_chunk:
             on_chunk(chunk)
-    dataset = _dataset(sweep, plan.base, results)
+    dataset = _dataset(sweep, sweep.base, results)
     if output is not None:
         write_netcdf(dataset, output)
         store.remove()

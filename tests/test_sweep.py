@@ -1,0 +1,224 @@
+"""Sweep files, validation, resumable chunked runs, netCDF output and the CLI."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import netCDF4
+import numpy as np
+import pytest
+import xarray as xr
+
+from impactbeams.cli import main
+from impactbeams.model import build_free_phase
+from impactbeams.params import ParameterError, Params
+from impactbeams.sweep import load_sweep, run_sweep, sweep_from_mapping
+from references import free_tip_gap, reference_first_impact
+
+SWEEPS = Path(__file__).parents[1] / "sweeps"
+
+SMALL = {
+    "t_max": 0.3,
+    "n_modes": 4,
+    "params": {"clearance": 1.1e-5},
+    "axes": {
+        "omega": {"min": 20.0, "max": 400.0, "num": 13},
+        "force_amplitude": {"min": 1e-5, "max": 1e-3, "num": 7, "scale": "log"},
+    },
+}
+
+
+def small(**changes):
+    return sweep_from_mapping({**SMALL, **changes}, source="test sweep")
+
+
+@pytest.mark.parametrize("path", sorted(SWEEPS.glob("*.toml")), ids=lambda p: p.name)
+def test_shipped_sweeps_are_valid(path):
+    sweep = load_sweep(path)
+    assert sweep.size >= 1e4 and len(sweep.axes) >= 2
+
+
+@pytest.mark.parametrize(
+    ("changes", "fragment"),
+    [
+        ({"tmax": 1.0}, "'tmax' in test sweep = 'tmax' is not allowed: unknown key"),
+        ({"t_max": -1.0}, "t_max in test sweep = -1.0 is not allowed: must be > 0 (s)"),
+        ({"n_modes": 0}, "n_modes in test sweep = 0 is not allowed"),
+        ({"observables": ["impact_time"]}, "'impact_time' is not allowed: unknown observable"),
+        ({"params": {"clearence": 1e-5}}, "unknown parameter 'clearence' in [params]"),
+        ({"params": {"clearance": -1e-5}}, "clearance = -1e-05 is not allowed: must be > 0"),
+        ({"axes": {}}, "a sweep needs at least one [axes.NAME] table"),
+        ({"axes": {"omegaa": {"min": 1, "max": 2, "num": 3}}}, "omegaa' is not allowed"),
+        ({"axes": {"omega": {"min": 5, "max": 2, "num": 3}}}, "empty or reversed"),
+        ({"axes": {"omega": {"min": 2, "max": 2, "num": 3}}}, "empty or reversed"),
+        (
+            {"axes": {"omega": {"min": 1, "max": 2, "num": 0}}},
+            "num in [axes.omega] of test sweep = 0 is not allowed",
+        ),
+        ({"axes": {"omega": {"min": 1, "max": 2, "num": 3, "scale": "log2"}}}, "'log2'"),
+        ({"axes": {"omega": {"min": 0, "max": 2, "num": 3, "scale": "log"}}}, "needs min > 0"),
+        ({"axes": {"omega": {"min": 1, "max": 2, "num": 3, "step": 1}}}, "'step' in [axes"),
+        ({"axes": {"omega": {"min": 1, "num": 3}}}, "max in [axes.omega] of test sweep"),
+        (
+            {"axes": {"clearance": {"min": -1e-5, "max": 1e-5, "num": 3}}},
+            "axis 'clearance' of test sweep reaches a non-physical point: clearance = -1e-05",
+        ),
+        ({"axes": {"damping_ratio": {"min": 0.5, "max": 1.0, "num": 3}}}, "damping_ratio = 1.0"),
+        ({"axes": {"uplift2": {"min": 0.0, "max": 2e-5, "num": 5}}}, "initial gap clearance"),
+    ],
+)
+def test_bad_sweeps_are_rejected_naming_key_and_value(changes, fragment):
+    with pytest.raises(ParameterError) as error:
+        small(**changes)
+    assert fragment in str(error.value)
+
+
+def test_map_cells_equal_independent_per_point_computation():
+    sweep = small()
+    ds = run_sweep(sweep, progress=False)
+    assert ds.first_impact_time.dims == ("omega", "force_amplitude")
+    free = build_free_phase(Params(), 4)
+    c1 = Params().tip_compliance[0]
+    rng = np.random.default_rng(0)
+    for i, j in rng.integers(0, [13, 7], size=(12, 2)):
+        omega = float(ds.omega[i])
+        force = float(ds.force_amplitude[j])
+        args = (free, c1, 1.1e-5, force, omega)
+        ref = reference_first_impact(
+            free_tip_gap(*args), 0.3, free.omega.max(), scan=free_tip_gap(*args, dtype=np.float64)
+        )
+        got = float(ds.first_impact_time[i, j])
+        assert np.isnan(ref) == np.isnan(got)
+        assert np.isnan(ref) or abs(got - ref) <= 1e-12 * ref
+        assert int(ds.impacted[i, j]) == int(np.isfinite(ref))
+
+
+def test_geometry_axis_equals_separate_fixed_geometry_runs():
+    sweep = small(
+        axes={"omega": SMALL["axes"]["omega"], "l2": {"min": 0.08, "max": 0.14, "num": 3}},
+        params={"clearance": 1.1e-5, "uplift2": 4e-6, "force_amplitude": 3e-4},
+    )
+    ds = run_sweep(sweep, progress=False)
+    for k, l2 in enumerate(ds.l2.values):
+        one = small(
+            axes={"omega": SMALL["axes"]["omega"]},
+            params={"clearance": 1.1e-5, "uplift2": 4e-6, "force_amplitude": 3e-4, "l2": float(l2)},
+        )
+        alone = run_sweep(one, progress=False)
+        assert np.array_equal(ds.first_impact_time[:, k], alone.first_impact_time, equal_nan=True)
+    assert "l2" not in ds.attrs and ds.attrs["l1"] == 0.1
+
+
+def test_parallel_serial_and_chunking_give_bitwise_identical_maps():
+    sweep = small()
+    a = run_sweep(sweep, progress=False, parallel=True)
+    b = run_sweep(sweep, progress=False, parallel=False, chunk_cells=10)
+    assert np.array_equal(a.first_impact_time, b.first_impact_time, equal_nan=True)
+
+
+def test_interrupted_run_resumes_to_the_same_result(tmp_path):
+    sweep = small()
+    out = tmp_path / "map.nc"
+
+    def stop_after_three(chunk):
+        if chunk == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(sweep, output=out, progress=False, chunk_cells=10, on_chunk=stop_after_three)
+    partial = tmp_path / "map.nc.partial"
+    assert not out.exists()
+    assert len(list(partial.glob("chunk_*.npz"))) == 3
+    computed = []
+    resumed = run_sweep(sweep, output=out, progress=False, chunk_cells=10, on_chunk=computed.append)
+    fresh = run_sweep(sweep, progress=False)
+    assert np.array_equal(resumed.first_impact_time, fresh.first_impact_time, equal_nan=True)
+    assert out.exists() and not partial.exists()
+    # a finished output of the same sweep is returned as it is; another sweep is refused
+    assert run_sweep(sweep, output=out, progress=False).attrs == resumed.attrs
+    with pytest.raises(ParameterError, match="exists and holds a different result"):
+        run_sweep(small(t_max=0.2), output=out, progress=False)
+
+
+def test_killed_process_loses_no_finished_chunk(tmp_path):
+    """SIGKILL mid-run: saved chunks stay readable, no result file appears, and the same
+    command resumes to the result of an uninterrupted run."""
+    sweep_file = tmp_path / "s.toml"
+    sweep_file.write_text(
+        "t_max = 3.0\nn_modes = 5\n[axes.omega]\nmin = 300.0\nmax = 500.0\nnum = 60\n"
+        "[axes.force_amplitude]\nmin = 1e-5\nmax = 2e-4\nnum = 60\n"
+    )
+    out = tmp_path / "s.nc"
+    command = [
+        sys.executable,
+        "-m",
+        "impactbeams.cli",
+        "run",
+        str(sweep_file),
+        "-o",
+        str(out),
+        "--chunk-cells",
+        "20",
+        "--threads",
+        "1",
+        "--quiet",
+    ]
+    process = subprocess.Popen(command, stderr=subprocess.DEVNULL)
+    partial = tmp_path / "s.nc.partial"
+    deadline = time.monotonic() + 120
+    while len(list(partial.glob("chunk_*.npz"))) < 5 and process.poll() is None:
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    assert process.returncode == -signal.SIGKILL  # ~1 s of work left when killed
+    assert not out.exists()
+    for chunk in partial.glob("chunk_*.npz"):
+        assert np.load(chunk)["first_impact_time"].shape == (20,)
+    assert subprocess.run(command, stderr=subprocess.DEVNULL).returncode == 0
+    fresh = run_sweep(load_sweep(sweep_file), progress=False)
+    with xr.open_dataset(out) as resumed:
+        assert np.array_equal(resumed.first_impact_time, fresh.first_impact_time, equal_nan=True)
+
+
+def test_netcdf_file_is_self_describing(tmp_path):
+    out = tmp_path / "map.nc"
+    ds = run_sweep(small(), output=out, progress=False)
+    with netCDF4.Dataset(out) as nc:
+        assert nc.Conventions == "CF-1.8"
+        assert "impactbeams" in nc.history and nc.t_max == 0.3 and nc.n_modes == 4
+        assert nc["omega"].units == "rad/s" and nc["force_amplitude"].units == "N"
+        assert nc["first_impact_time"].units == "s"
+        assert nc.clearance == 1.1e-5 and nc.EI1 == Params().EI1
+    with xr.open_dataset(out) as back:
+        assert np.array_equal(back.first_impact_time, ds.first_impact_time, equal_nan=True)
+        assert back.force_amplitude.attrs["scale"] == "log"
+
+
+def test_cli_run_and_plot(tmp_path, capsys):
+    sweep_file = tmp_path / "s.toml"
+    sweep_file.write_text(
+        "t_max = 0.2\n[axes.omega]\nmin = 20.0\nmax = 300.0\nnum = 8\n"
+        '[axes.clearance]\nmin = 1e-6\nmax = 3e-5\nnum = 6\nscale = "log"\n'
+    )
+    out, png = tmp_path / "s.nc", tmp_path / "s.png"
+    assert main(["run", str(sweep_file), "-o", str(out)]) == 0
+    assert "100.0%" in capsys.readouterr().err
+    assert main(["plot", str(out), "-o", str(png)]) == 0
+    assert png.stat().st_size > 10_000
+    sweep_file.write_text("[axes.omega]\nmin = 20.0\nmax = 10.0\nnum = 8\n")
+    assert main(["run", str(sweep_file), "-o", str(out)]) == 2
+    assert "empty or reversed" in capsys.readouterr().err
+    assert main(["plot", str(tmp_path / "none.nc"), "-o", str(png)]) == 2
+
+
+def test_plot_rejects_a_cube(tmp_path):
+    from impactbeams.plotting import plot_dataset
+
+    cube = small(axes={**SMALL["axes"], "clearance": {"min": 1e-5, "max": 2e-5, "num": 2}})
+    ds = run_sweep(cube, progress=False)
+    with pytest.raises(ParameterError, match="needs a 2-D sweep"):
+        plot_dataset(ds, tmp_path / "c.png")
