@@ -38,59 +38,55 @@ def event_value(q, v, t, weights, const, sine_amp, forcing_frequency):
 
 
 @kernel
-def curvature_bound(q, v, omega, zeta, force, weights, sine_amp, forcing_frequency, span):
-    """Bound on |e''| over [t, t + span] from the state (q, v) at t.
+def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
+    """Split one mode into a steady state at Omega and a free transient, for bounds.
 
-    Per mode: free part |q_h''| <= omega^2 R with R the damped amplitude; driven part from
-    rest |x''| <= |f| (1 + 2 sigma span omega / omega_d + omega^2 min(span^2 / 2, span / omega_d)).
+    Returns ``(steady, amplitude, curvature)``: the steady state's phasor ``f / D`` (0 if not
+    used), a bound on the rest's |q| and one on the rest's |q''| over [t, t + span], with
+    ``D = omega^2 - Omega^2 + 2 i sigma Omega``. The transient has constant or decaying
+    amplitude R, so |q| <= R and |q''| <= omega^2 R for any span. A mode at (or too near)
+    resonance is bounded instead by its free amplitude plus the growth of its driven part
+    from rest: |x| <= |f| span / omega_d, |x''| <= |f| (1 + 2 sigma span omega / omega_d +
+    omega^2 min(span^2 / 2, span / omega_d)).
     """
-    bound = abs(sine_amp) * forcing_frequency * forcing_frequency
     root = math.sqrt(1.0 - zeta * zeta)
-    for j in range(q.size):
-        w = omega[j]
-        sigma, wd = zeta * w, w * root
-        amplitude = math.hypot(q[j], (v[j] + sigma * q[j]) / wd)
-        driven = abs(force[j]) * (1.0 + 2.0 * sigma * span / root
-                                  + w * w * min(0.5 * span * span, span / wd))
-        bound += abs(weights[j]) * (w * w * amplitude + driven)
-    return bound
+    sigma, wd = zeta * w, w * root
+    free = math.hypot(q, (v + sigma * q) / wd)
+    grow = free + abs(f) * span / wd
+    grow_curvature = w * w * free + abs(f) * (
+        1.0 + 2.0 * sigma * span / root + w * w * min(0.5 * span * span, span / wd))
+    D = complex(w * w - forcing_frequency**2, 2.0 * sigma * forcing_frequency)
+    if f == 0.0 or D == 0:
+        return 0j, grow, grow_curvature
+    steady = f / D
+    P = steady * rotation
+    dq, dv = q - P.imag, v - forcing_frequency * P.real
+    transient = math.hypot(dq, (dv + sigma * dq) / wd)
+    if abs(steady) + transient >= grow:
+        return 0j, grow, grow_curvature
+    return steady, transient, w * w * transient
 
 
 @kernel
-def phase_floor(q, v, t, span, omega, zeta, force, weights, const, sine_amp,
-                forcing_frequency):
-    """Lower bound of e over [t, t + span] from the state (q, v) at t.
+def phase_bounds(q, v, t, span, omega, zeta, force, weights, const, sine_amp,
+                 forcing_frequency):
+    """Lower bound of e, and a bound on |e''|, over [t, t + span] from the state at t.
 
-    Each mode is its steady state ``Im(f / D e^(i Omega t))``, ``D = omega^2 - Omega^2 +
-    2 i sigma Omega``, plus a free transient of constant or decaying amplitude. The steady
-    states all oscillate at Omega, so they are summed coherently with the forcing term into one
-    phasor: above a resonance they largely cancel the quasi-static term, which a mode-by-mode
-    bound would miss. A mode at (or too near) resonance is bounded instead by its free
-    amplitude plus the growth of its driven part from rest, ``|f| span / omega_d``.
+    The steady states of all modes oscillate at Omega, so they are summed coherently with
+    the forcing term into one phasor: above a resonance they largely cancel the quasi-static
+    term, which a mode-by-mode bound would miss.
     """
+    rotation = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
     coherent = complex(sine_amp, 0.0)
     floor = const
-    root = math.sqrt(1.0 - zeta * zeta)
-    rotation = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
+    curvature = 0.0
     for j in range(q.size):
-        w = omega[j]
-        sigma, wd = zeta * w, w * root
-        f = force[j]
-        grow = math.hypot(q[j], (v[j] + sigma * q[j]) / wd) + abs(f) * span / wd
-        D = complex(w * w - forcing_frequency**2, 2.0 * sigma * forcing_frequency)
-        if f == 0.0 or D == 0:
-            floor -= abs(weights[j]) * grow
-            continue
-        steady = f / D  # phasor of the steady state at Omega
-        P = steady * rotation
-        dq, dv = q[j] - P.imag, v[j] - forcing_frequency * P.real
-        transient = math.hypot(dq, (dv + sigma * dq) / wd)
-        if abs(steady) + transient >= grow:
-            floor -= abs(weights[j]) * grow
-            continue
+        steady, amplitude, mode_curvature = _mode_split(q[j], v[j], omega[j], zeta, force[j],
+                                                        forcing_frequency, rotation, span)
         coherent += weights[j] * steady
-        floor -= abs(weights[j]) * transient
-    return floor - abs(coherent)
+        floor -= abs(weights[j]) * amplitude
+        curvature += abs(weights[j]) * mode_curvature
+    return floor - abs(coherent), curvature + forcing_frequency**2 * abs(coherent)
 
 
 @kernel
@@ -136,11 +132,10 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
     oscillators (see ``advance``); weights, const, sine_amp: the event function. ``q``, ``v``
     are work arrays. A value within round-off of 0 counts as a root (grazing at round-off).
     """
-    span_cap = 1.0 / np.min(omega)
-    if forcing_frequency > 0.0:
-        span_cap = min(span_cap, 1.0 / forcing_frequency)
-    if phase_floor(q_s, v_s, t_s, t_end - t_s, omega, zeta, force, weights, const, sine_amp,
-                   forcing_frequency) > 0.0:
+    span_cap = 2.0 * math.pi / np.min(omega)  # bounds hold over a step of at most this span
+    floor, _ = phase_bounds(q_s, v_s, t_s, t_end - t_s, omega, zeta, force, weights, const,
+                            sine_amp, forcing_frequency)
+    if floor > 0.0:
         return NO_EVENT  # the event function cannot reach 0 in this phase
     t = t_s
     q[:] = q_s
@@ -149,8 +144,8 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
     while True:
         if value <= 0.0:
             return t
-        curvature = curvature_bound(q, v, omega, zeta, force, weights, sine_amp,
-                                    forcing_frequency, span_cap)
+        _, curvature = phase_bounds(q, v, t, span_cap, omega, zeta, force, weights, const,
+                                    sine_amp, forcing_frequency)
         step = min(certified_step(value, slope, curvature), span_cap)
         if step <= 4.0 * _EPS * max(abs(t), span_cap):
             return t  # the event function is at round-off level: touching
