@@ -340,9 +340,11 @@ class _ChunkStore:
 
     def save(self, chunk: int, values: dict[str, np.ndarray]) -> None:
         """Save a finished chunk (write to a temporary name, then rename)."""
-        temporary = self._path(chunk).with_suffix(".tmp.npz")
-        np.savez(temporary, **values)
-        os.replace(temporary, self._path(chunk))
+        path = self._path(chunk)
+        temporary = path.with_name(f".{path.name}.tmp")  # never matches chunk_*.npz
+        with open(temporary, "wb") as stream:
+            np.savez(stream, **values)
+        os.replace(temporary, path)
 
     def remove(self) -> None:
         """Delete the partial results once the final file is written."""
