@@ -4,7 +4,9 @@ The physics follows Dzyubak & Bhaskar (2017) as corrected in MODEL.md. Heavy mod
 first use, so ``import impactbeams`` stays fast and compiles nothing.
 """
 
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
+from typing import Any
 
 from impactbeams.params import ParameterError, Params
 
@@ -13,4 +15,19 @@ try:
 except PackageNotFoundError:  # running from a source tree without installation
     __version__ = "0+unknown"
 
-__all__ = ["ParameterError", "Params", "__version__"]
+_LAZY = {
+    "build_model": "impactbeams.model",
+    "build_free_phase": "impactbeams.model",
+    "load_sweep": "impactbeams.sweep",
+    "run_sweep": "impactbeams.sweep",
+    "simulate": "impactbeams.simulate",
+    "plot_dataset": "impactbeams.plotting",
+}
+
+__all__ = ["ParameterError", "Params", "__version__", *_LAZY]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'impactbeams' has no attribute {name!r}")
