@@ -8,12 +8,17 @@ named like the parameter, with dashes (``--force-amplitude``, ``--EI1``, ``--thi
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from impactbeams.params import MATERIAL_KEYS, MATERIAL_UNITS, UNITS, ParameterError, Params
+
+if TYPE_CHECKING:
+    from impactbeams.sweep import ChunkRunner
 
 _ALIASES = {"force_amplitude": ["--force"]}
 
@@ -66,13 +71,30 @@ def _run(args: argparse.Namespace) -> None:
           f"{', '.join(a.name for a in sweep.axes)}; t_max = {sweep.t_max} s, "
           f"{sweep.n_modes} modes per beam -> {output}", file=sys.stderr)
     try:
-        run_sweep(sweep, output=output, threads=args.threads, progress=not args.quiet,
-                  chunk_cells=args.chunk_cells)
+        with _cluster_runner(args) as runner:
+            run_sweep(sweep, output=output, threads=None if runner else args.threads,
+                      progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner)
     except KeyboardInterrupt:
         print(f"\nimpactbeams: interrupted; finished chunks are kept in {output}.partial/ "
               "and the same command resumes from them", file=sys.stderr)
         raise
     print(f"wrote {output}", file=sys.stderr)
+
+
+@contextlib.contextmanager
+def _cluster_runner(args: argparse.Namespace) -> Iterator[ChunkRunner | None]:
+    """A Dask chunk runner for --scheduler / --local-cluster (closed on exit), else None."""
+    if args.scheduler is None and args.local_cluster is None:
+        yield None
+        return
+    from impactbeams.distributed import dask_client, dask_runner, require_dask
+
+    try:
+        require_dask()
+    except ImportError as error:
+        raise ParameterError(str(error)) from None
+    with dask_client(args.scheduler, args.local_cluster) as client:
+        yield dask_runner(client, threads_per_task=args.threads)
 
 
 def _plot(args: argparse.Namespace) -> None:
@@ -85,6 +107,27 @@ def _plot(args: argparse.Namespace) -> None:
     with xr.open_dataset(args.dataset) as dataset:
         plot_dataset(dataset.load(), args.output)
     print(f"wrote {args.output}", file=sys.stderr)
+
+
+def _simulate(args: argparse.Namespace) -> None:
+    from impactbeams.io import write_netcdf
+    from impactbeams.simulate import simulate
+
+    output = Path(args.output)
+    if output.suffix != ".nc":
+        raise ParameterError(f"--output {args.output!r} is not allowed: must end in .nc")
+    dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
+                       dt_output=args.dt_output, fields=args.fields)
+    write_netcdf(dataset, output)
+    print(f"wrote {output}: {dataset.impact.size} impacts, status {dataset.attrs['status']}",
+          file=sys.stderr)
+
+
+def _positive_float(text: str) -> float:
+    value = float(text)
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"{text} is not allowed: must be a finite number > 0")
+    return value
 
 
 def _positive_int(text: str) -> int:
@@ -104,14 +147,35 @@ def build_parser() -> argparse.ArgumentParser:
     add_parameter_options(modes)
     modes.set_defaults(handler=_modes)
 
+    simulate = commands.add_parser("simulate", help="simulate one trajectory, write netCDF")
+    simulate.add_argument("--t-max", type=_positive_float, required=True, metavar="SECONDS",
+                          help="end time (s)")
+    simulate.add_argument("--n-modes", type=_positive_int, default=5,
+                          help="free modes per beam (default 5)")
+    simulate.add_argument("--dt-output", type=_positive_float, default=1e-4, metavar="SECONDS",
+                          help="output time step (s, default 1e-4)")
+    simulate.add_argument("--fields", action="store_true",
+                          help="also store the deflection fields y_i(x, t)")
+    simulate.add_argument("-o", "--output", required=True, metavar="RUN.nc")
+    add_parameter_options(simulate)
+    simulate.set_defaults(handler=_simulate)
+
     run = commands.add_parser("run", help="run a sweep defined in a TOML file (see sweeps/)")
     run.add_argument("sweep", metavar="SWEEP.toml")
     run.add_argument("-o", "--output", metavar="OUT.nc",
                      help="netCDF result (default results/<sweep name>.nc)")
-    run.add_argument("--threads", type=_positive_int, help="Numba threads (default: all cores)")
+    run.add_argument("--threads", type=_positive_int,
+                     help="Numba threads (default: all cores); on a cluster, per task "
+                     "(default: cores per host / Dask threads per host)")
     run.add_argument("--chunk-cells", type=_positive_int,
                      help="cells per saved chunk (default: about 1%% of the grid, 4096..65536)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    cluster = run.add_mutually_exclusive_group()
+    cluster.add_argument("--scheduler", metavar="ADDRESS",
+                         help="run the chunks on the Dask cluster at ADDRESS, e.g. "
+                         "tcp://host:8786 (needs impactbeams[distributed])")
+    cluster.add_argument("--local-cluster", type=_positive_int, metavar="N",
+                         help="run the chunks on a Dask LocalCluster of N worker processes")
     run.set_defaults(handler=_run)
 
     plot = commands.add_parser("plot", help="draw a saved sweep map or simulated run")

@@ -58,7 +58,7 @@ class _Basis:
 
 
 @dataclasses.dataclass(frozen=True)
-class _Packed:
+class Packed:
     """The modal model and forcing packed for the kernels."""
 
     model: ModalModel
@@ -69,7 +69,8 @@ class _Packed:
     settings: np.ndarray
 
 
-def _pack(model: ModalModel, t_max: float, search_span: float) -> _Packed:
+def pack_model(model: ModalModel, t_max: float, search_span: float) -> Packed:
+    """Pack ``model`` and its forcing for the kernels; ``t_max``, ``search_span`` in s."""
     p = model.params
     c1, c2 = p.tip_compliance
     free, total = model.free, c1 + c2
@@ -90,7 +91,7 @@ def _pack(model: ModalModel, t_max: float, search_span: float) -> _Packed:
     settings = np.array([p.clearance, c1, c2, p.force_amplitude, p.omega, p.damping_ratio,
                          t_max, search_span, accumulation])
     shifts = np.array([free.static_shift, model.contact_static_shift])
-    return _Packed(model, bases, tables, phase_scalars, shifts, settings)
+    return Packed(model, bases, tables, phase_scalars, shifts, settings)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -120,14 +121,14 @@ class Trajectory:
         return np.append(self.time[1:], self.t_end)
 
 
-def _initial_state(packed: _Packed) -> tuple[np.ndarray, np.ndarray]:
+def _initial_state(packed: Packed) -> tuple[np.ndarray, np.ndarray]:
     """At rest in the uplift shapes: q = delta_1 <u_1, Y> + delta_2 <u_2, Y>, q' = F0 Omega b."""
     p, free = packed.model.params, packed.model.free
     return (p.uplift1 * free.unit1 + p.uplift2 * free.unit2,
             p.force_amplitude * p.omega * free.drive)
 
 
-def run(packed: _Packed, max_events: int) -> Trajectory:
+def run(packed: Packed, max_events: int) -> Trajectory:
     """Run the event kernel; grow its arrays (rerunning from t = 0) up to ``max_events``."""
     q0, v0 = _initial_state(packed)
     capacity = min(_INITIAL_CAPACITY, max_events)
@@ -147,7 +148,7 @@ def run(packed: _Packed, max_events: int) -> Trajectory:
                       end_q[:count], end_v[:count], dyn.STATUS_NAMES[status], float(t_end))
 
 
-def _loads(packed: _Packed, phase: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, ...]:
+def _loads(packed: Packed, phase: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, ...]:
     """Tip loads Q1, Q2 (N) and their rates (N/s) at times t in the given phases."""
     p = packed.model.params
     c1, c2 = p.tip_compliance
@@ -159,13 +160,13 @@ def _loads(packed: _Packed, phase: np.ndarray, t: np.ndarray) -> tuple[np.ndarra
     return force - r_qs, r_qs, force_rate - r_qs_rate, r_qs_rate
 
 
-def _per_phase(packed: _Packed, phase: np.ndarray, name: str) -> np.ndarray:
+def _per_phase(packed: Packed, phase: np.ndarray, name: str) -> np.ndarray:
     """Rows of basis attribute ``name`` matching each phase entry, shape (len(phase), N)."""
     rows = np.array([getattr(b, name) for b in packed.bases])
     return rows[phase]
 
 
-def observables(packed: _Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
+def observables(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
                 v: np.ndarray) -> dict[str, np.ndarray]:
     """Tip deflections and velocities (m, m/s), gap (m), contact force (N) and energies (J).
 
@@ -203,7 +204,7 @@ def observables(packed: _Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray
     }
 
 
-def sample(packed: _Packed, trajectory: Trajectory, times: np.ndarray,
+def sample(packed: Packed, trajectory: Trajectory, times: np.ndarray,
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Phase and modal state (q, q') at ascending ``times`` within [0, t_end] (s)."""
     n_coords = trajectory.q.shape[1]
@@ -214,7 +215,7 @@ def sample(packed: _Packed, trajectory: Trajectory, times: np.ndarray,
     return phase, q, v
 
 
-def _time_series(packed: _Packed, trajectory: Trajectory, times: np.ndarray,
+def _time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray,
                  ) -> dict[str, np.ndarray]:
     """Observables, contact flag, work of F and damping loss at ``times``; NaN past t_end."""
     inside = times <= trajectory.t_end
@@ -237,7 +238,7 @@ def _time_series(packed: _Packed, trajectory: Trajectory, times: np.ndarray,
     return out
 
 
-def _segment_observables(packed: _Packed, trajectory: Trajectory, k: np.ndarray, end: bool,
+def _segment_observables(packed: Packed, trajectory: Trajectory, k: np.ndarray, end: bool,
                          ) -> dict[str, np.ndarray]:
     """Observables at the start (after projection) or end (before) of segments ``k``."""
     t = trajectory.segment_end[k] if end else trajectory.time[k]
@@ -257,7 +258,7 @@ def _sine_integral(omega: float, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
     return 2.0 * np.sin(0.5 * omega * (t0 + t1)) * np.sin(0.5 * omega * (t1 - t0)) / omega
 
 
-def _impulses(packed: _Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarray:
+def _impulses(packed: Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarray:
     """Integral of R over contact segments ``k`` (N s), in closed form.
 
     From r'' + 2 zeta omega r' + omega^2 r = f sin(Omega t):
@@ -276,7 +277,7 @@ def _impulses(packed: _Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndar
     return quasi_static + modal @ shear
 
 
-def _impact_table(packed: _Packed, trajectory: Trajectory) -> dict[str, np.ndarray]:
+def _impact_table(packed: Packed, trajectory: Trajectory) -> dict[str, np.ndarray]:
     """Per-impact quantities: one entry per contact phase (zero-duration ones included)."""
     k = np.flatnonzero(trajectory.phase == dyn.CONTACT)
     released = k + 1 < trajectory.time.size
@@ -310,7 +311,7 @@ def _impact_table(packed: _Packed, trajectory: Trajectory) -> dict[str, np.ndarr
     }
 
 
-def _fields(packed: _Packed, trajectory: Trajectory, times: np.ndarray, n_points: int,
+def _fields(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_points: int,
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Deflection fields y_1(x_1, t), y_2(x_2, t) (m) on uniform grids of ``n_points``."""
     model = packed.model
@@ -345,7 +346,7 @@ def _output_times(t_max: float, dt_output: float, times: np.ndarray | None) -> n
     if not (math.isfinite(dt_output) and dt_output > 0):
         raise ValueError(f"dt_output = {dt_output!r} is not allowed: must be > 0 (s)")
     count = int(math.floor(t_max / dt_output * (1 + 1e-12))) + 1
-    return np.arange(count) * dt_output
+    return np.minimum(np.arange(count) * dt_output, t_max)
 
 
 def simulate(params: Params, t_max: float, n_modes: int = 5, dt_output: float = 1e-4,
@@ -361,6 +362,7 @@ def simulate(params: Params, t_max: float, n_modes: int = 5, dt_output: float = 
         fields: also return the deflection fields ``deflection_1(time, x1)``,
             ``deflection_2(time, x2)`` on ``n_points`` uniform points per beam.
         times: explicit ascending output times (s) in [0, t_max], instead of ``dt_output``.
+        n_points: points per beam of the deflection fields (uniform, clamp to tip).
         max_events: cap on the number of phases (events + 1); a run that reaches it stops
             there with ``attrs["status"] = "event_limit"`` (and a RuntimeWarning).
         search_span: the event search restarts from the exactly propagated state every this
@@ -378,7 +380,7 @@ def simulate(params: Params, t_max: float, n_modes: int = 5, dt_output: float = 
     if not span > 0:
         raise ValueError(f"search_span = {search_span!r} is not allowed: must be > 0 (s)")
     out_times = _output_times(float(t_max), dt_output, times)
-    packed = _pack(build_model(params, n_modes), float(t_max), span)
+    packed = pack_model(build_model(params, n_modes), float(t_max), span)
     trajectory = run(packed, max_events)
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
@@ -394,7 +396,7 @@ def simulate(params: Params, t_max: float, n_modes: int = 5, dt_output: float = 
     return dataset
 
 
-def _dataset(packed: _Packed, trajectory: Trajectory, times: np.ndarray) -> xr.Dataset:
+def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray) -> xr.Dataset:
     series = _time_series(packed, trajectory, times)
     series["tip_deflection_2"] = series["tip_deflection_2"] - packed.model.params.clearance
     impacts = _impact_table(packed, trajectory)
@@ -410,7 +412,7 @@ def _global_attributes(params: Params, n_modes: int, t_max: float, trajectory: T
                        ) -> dict[str, object]:
     from impactbeams import __version__
 
-    stamp = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    stamp = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     return {
         **params.as_dict(),
         "n_modes": n_modes,

@@ -38,6 +38,7 @@ import numpy as np
 import xarray as xr
 
 from impactbeams import __version__
+from impactbeams.io import write_netcdf
 from impactbeams.params import (
     LONG_NAMES,
     MATERIAL_KEYS,
@@ -464,18 +465,6 @@ def _finished_output(output: Path, sweep: Sweep) -> xr.Dataset | None:
             return existing.load()
     raise ParameterError(f"{output} exists and holds a different result: delete it or choose "
                          "another output")
-
-
-def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
-    """Write ``dataset`` to netCDF4 through a temporary file, never leaving a partial file."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        dataset.to_netcdf(temporary, engine="netcdf4", format="NETCDF4")
-        os.replace(temporary, path)
-    finally:
-        temporary.unlink(missing_ok=True)
 
 
 def _dataset(sweep: Sweep, base: Params, results: dict[str, np.ndarray]) -> xr.Dataset:
