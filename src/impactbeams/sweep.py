@@ -60,6 +60,7 @@ CELL_PARAMETERS = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2"
 _TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes")
 _AXIS_KEYS = ("min", "max", "num", "scale")
 _MAX_MODES = 200
+MAX_SEGMENTS = 100_000  # phases per cell in a full-dynamics sweep; more: dynamics_status = 1
 
 
 def parameter_names() -> dict[str, str]:
@@ -230,28 +231,59 @@ def _cell_grids(sweep: Sweep, base: Params) -> dict[str, np.ndarray]:
 
 @dataclasses.dataclass(frozen=True)
 class _Plan:
-    """What the kernels need: per-geometry free tables and how cells map to geometries."""
+    """What the kernels need per geometry, and how cells map to geometries.
+
+    Free-phase tables always (the first-impact kernel); the contact phase and projections only
+    when a full-dynamics observable is asked for (see kernels.observables for the layout).
+    """
 
     base: Params
     tables: np.ndarray  # (geometries, len(TABLE_ROWS), 2 n_modes)
     compliance: np.ndarray  # (geometries,) c_1 in m/N
     geometry_axes: tuple[int, ...]  # positions of the axes that change the geometry
+    dynamics: tuple[np.ndarray, ...] | None  # (tables, overlaps, shifts, units, geometry)
+
+
+def _geometries(sweep: Sweep) -> Iterator[Params]:
+    """The parameters of every distinct geometry of the grid, in flat geometry-index order."""
+    geometry_axes = [k for k, a in enumerate(sweep.axes) if a.name not in CELL_PARAMETERS]
+    for combo in itertools.product(*(range(sweep.axes[k].num) for k in geometry_axes)):
+        changes = {sweep.axes[k].name: float(sweep.axes[k].values[i])
+                   for k, i in zip(geometry_axes, combo, strict=True)}
+        yield sweep.base.replace(**changes) if changes else sweep.base
+
+
+def _dynamics_tables(params: Params, n_modes: int) -> tuple[np.ndarray, ...]:
+    """One geometry's arrays for kernels.observables (both phases, projections)."""
+    from impactbeams.model import build_model
+
+    model = build_model(params, n_modes)
+    free = model.free
+    c1, c2 = params.tip_compliance
+    tables = np.array([[free.omega, free.drive, free.drive, free.tip1 - free.tip2, free.tip1],
+                       [model.contact.omega, model.contact_drive, model.contact_drive,
+                        model.contact_shear2, model.contact_tip]])
+    shifts = np.array([free.static_shift, model.contact_static_shift])
+    # an instantaneous impact re-closing within half a period of the fastest free mode is the
+    # truncated bases disagreeing, not a new impact (as in simulate; see dynamics.run_events)
+    geometry = np.array([c1, c2, np.pi / np.max(free.omega)])
+    return tables, model.overlap, shifts, np.array([free.unit1, free.unit2]), geometry
 
 
 def _plan(sweep: Sweep) -> _Plan:
     from impactbeams.model import build_free_phase
 
-    base = sweep.base
-    geometry_axes = tuple(k for k, a in enumerate(sweep.axes) if a.name not in CELL_PARAMETERS)
-    tables, compliance = [], []
-    for combo in itertools.product(*(range(sweep.axes[k].num) for k in geometry_axes)):
-        changes = {sweep.axes[k].name: float(sweep.axes[k].values[i])
-                   for k, i in zip(geometry_axes, combo, strict=True)}
-        params = base.replace(**changes) if changes else base
+    tables, compliance, dynamics = [], [], []
+    needs_dynamics = any(name in DYNAMICS_OBSERVABLES for name in sweep.observables)
+    for params in _geometries(sweep):
         free = build_free_phase(params, sweep.n_modes)
         tables.append([free.omega, free.tip1 - free.tip2, free.drive, free.unit1, free.unit2])
         compliance.append(params.tip_compliance[0])
-    return _Plan(base, np.array(tables), np.array(compliance), geometry_axes)
+        if needs_dynamics:
+            dynamics.append(_dynamics_tables(params, sweep.n_modes))
+    geometry_axes = tuple(k for k, a in enumerate(sweep.axes) if a.name not in CELL_PARAMETERS)
+    stacked = tuple(np.array(arrays) for arrays in zip(*dynamics, strict=True)) or None
+    return _Plan(sweep.base, np.array(tables), np.array(compliance), geometry_axes, stacked)
 
 
 def _chunk_cells(sweep: Sweep, plan: _Plan, start: int, stop: int) -> np.ndarray:
@@ -285,17 +317,27 @@ def compute_chunk(sweep: Sweep, start: int, stop: int,
                   parallel: bool = True) -> dict[str, np.ndarray]:
     """Observables of the flat cells ``start..stop`` of ``sweep`` (one array per observable).
 
-    Self-contained, so that any process (a Dask worker, say) can compute any chunk.
+    Self-contained, so that any process (a Dask worker, say) can compute any chunk. A
+    first-impact-only sweep runs the free phase alone; any other observable runs the full
+    dynamics of every cell over [0, t_max] (and gives the first impact time from it too).
     """
-    from impactbeams.kernels import first_impact
+    from impactbeams.kernels import first_impact, observables
 
     plan = _cached_plan(sweep)
     cells = _chunk_cells(sweep, plan, start, stop)
-    kernel = (first_impact.first_impact_map_parallel if parallel
-              else first_impact.first_impact_map_serial)
-    out = np.empty(cells.shape[0])
-    kernel(cells, plan.tables, plan.compliance, sweep.t_max, out)
-    return {FIRST_IMPACT: out}
+    if plan.dynamics is None:
+        kernel = (first_impact.first_impact_map_parallel if parallel
+                  else first_impact.first_impact_map_serial)
+        out = np.empty(cells.shape[0])
+        kernel(cells, plan.tables, plan.compliance, sweep.t_max, out)
+        return {FIRST_IMPACT: out}
+    kernel = (observables.observables_map_parallel if parallel
+              else observables.observables_map_serial)
+    out = np.empty((cells.shape[0], len(observables.OUT_COLUMNS)))
+    kernel(cells, *plan.dynamics, sweep.t_max, MAX_SEGMENTS, out)
+    columns = dict(zip(observables.OUT_COLUMNS, out.T, strict=True))
+    wanted = [*sweep.observables, "dynamics_status"]
+    return {name: np.ascontiguousarray(columns[name]) for name in wanted}
 
 
 Chunk = tuple[int, int, int]  # (chunk number, first flat cell, end flat cell)
@@ -429,7 +471,7 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
             return finished
         store = _ChunkStore(output, sweep.fingerprint())
     bounds = chunk_bounds(sweep.size, chunk_cells)
-    results = {name: np.full(sweep.size, np.nan) for name in sweep.observables}
+    results = {name: np.full(sweep.size, np.nan) for name in _stored(sweep)}
     bar = Progress(sweep.size, enabled=progress)
     pending = []
     for chunk, (start, stop) in enumerate(bounds):
@@ -437,14 +479,14 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
         if saved is None:
             pending.append((chunk, start, stop))
             continue
-        for name in sweep.observables:
+        for name in results:
             results[name][start:stop] = saved[name]
         bar.update(stop - start, computed=False)
     for chunk, values in (runner or local_runner(parallel))(sweep, pending):
         if store:
             store.save(chunk, values)
         start, stop = bounds[chunk]
-        for name in sweep.observables:
+        for name in results:
             results[name][start:stop] = values[name]
         bar.update(stop - start)
         if on_chunk:
@@ -454,6 +496,12 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
         write_netcdf(dataset, output)
         store.remove()
     return dataset
+
+
+def _stored(sweep: Sweep) -> list[str]:
+    """Arrays a chunk yields: the observables, plus the run status of full-dynamics cells."""
+    dynamics = any(name in DYNAMICS_OBSERVABLES for name in sweep.observables)
+    return [*sweep.observables, *(["dynamics_status"] if dynamics else [])]
 
 
 def _finished_output(output: Path, sweep: Sweep) -> xr.Dataset | None:
@@ -478,6 +526,10 @@ def _dataset(sweep: Sweep, base: Params, results: dict[str, np.ndarray]) -> xr.D
     dims = [axis.name for axis in sweep.axes]
     data_vars = {name: (dims, values.reshape(sweep.shape), attributes(name))
                  for name, values in results.items()}
+    for name, dtype in (("dynamics_status", np.int8), ("impact_count", np.int32)):
+        if name in results:  # counts and codes: stored as integers
+            data_vars[name] = (dims, results[name].astype(dtype).reshape(sweep.shape),
+                               attributes(name))
     if FIRST_IMPACT in results:
         impacted = np.isfinite(results[FIRST_IMPACT]).astype(np.int8).reshape(sweep.shape)
         data_vars["impacted"] = (dims, impacted, attributes("impacted"))

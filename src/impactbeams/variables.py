@@ -36,8 +36,14 @@ VARIABLES: dict[str, Variable] = {
         "largest contact force R over [0, t_max]; 0 where no impact (full dynamics)"),
     "mean_restitution": Variable(
         ("*",), "1", "mean coefficient of restitution",
-        "mean of e = -(dg/dt at separation) / (dg/dt at onset) over completed impacts; "
-        "NaN where no impact has separated (full dynamics)"),
+        "approach-speed-weighted mean of e = -(dg/dt at separation) / (dg/dt at onset): "
+        "sum of separation speeds over sum of approach speeds, over impacts that closed and "
+        "separated (impacts with a near-zero approach speed, whose own e is a truncation "
+        "artefact, barely count); NaN where none did (full dynamics)"),
+    "dynamics_status": Variable(
+        ("*",), "1", "status of the full-dynamics run",
+        "0: reached t_max; 1: stopped at the cap on phases per cell; 2: stuck (a run of "
+        "zero-length phases); observables then cover the part before the stop"),
     "contact_fraction": Variable(
         ("*",), "1", "fraction of time in contact",
         "time spent in the contact phase divided by t_max (full dynamics)"),
