@@ -68,25 +68,54 @@ def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
 
 
 @kernel
-def phase_bounds(q, v, t, span, omega, zeta, force, weights, const, sine_amp,
-                 forcing_frequency):
-    """Lower bound of e, and a bound on |e''|, over [t, t + span] from the state at t.
+def phase_bounds(q, v, t, span, omega, zeta, force, weights, sine_amp, forcing_frequency):
+    """Split e over [t, t + span] into an exact sinusoid at Omega and a bounded rest.
 
-    The steady states of all modes oscillate at Omega, so they are summed coherently with
-    the forcing term into one phasor: above a resonance they largely cancel the quasi-static
-    term, which a mode-by-mode bound would miss.
+    Returns ``(coherent, band, curvature, any_span)``: over the window,
+    ``e(t + s) >= const + Im(coherent e^(i Omega (t + s))) - band`` and ``|e''| <=
+    curvature``. The steady states of all modes oscillate at Omega, so they are summed
+    coherently with the forcing term into one phasor: above a resonance they largely cancel the
+    quasi-static term, which a mode-by-mode bound would miss. ``any_span`` is True when no mode
+    needed the span-limited growth bound, so that the split holds for every s >= 0.
     """
     rotation = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
     coherent = complex(sine_amp, 0.0)
-    floor = const
-    curvature = 0.0
+    band = curvature = 0.0
+    any_span = True
     for j in range(q.size):
         steady, amplitude, mode_curvature = _mode_split(q[j], v[j], omega[j], zeta, force[j],
                                                         forcing_frequency, rotation, span)
+        if steady == 0 and force[j] != 0.0:
+            any_span = False
         coherent += weights[j] * steady
-        floor -= abs(weights[j]) * amplitude
+        band += abs(weights[j]) * amplitude
         curvature += abs(weights[j]) * mode_curvature
-    return floor - abs(coherent), curvature + forcing_frequency**2 * abs(coherent)
+    return coherent, band, curvature + forcing_frequency**2 * abs(coherent), any_span
+
+
+@kernel
+def band_step(margin, coherent, t, forcing_frequency):
+    """Largest s with margin + Im(coherent e^(i Omega (t + s'))) > 0 for all s' in [0, s).
+
+    The sinusoid |K| sin(theta), theta = Omega t + arg K, drops to the level -margin at the
+    next theta = pi - asin(c) (mod 2 pi), c = -margin / |K|. Shortened by a relative 1e-9 so
+    that rounding cannot carry it past that point.
+    """
+    amplitude = abs(coherent)
+    if margin - amplitude > 0.0:
+        return math.inf
+    if forcing_frequency == 0.0 or margin + amplitude <= 0.0:
+        return math.inf if margin + coherent.imag > 0.0 else 0.0
+    level = -margin / amplitude
+    theta = forcing_frequency * t + math.atan2(coherent.imag, coherent.real)
+    if math.sin(theta) <= level:
+        return 0.0
+    crossing = math.pi - math.asin(level)
+    turns = math.ceil((theta - crossing) / (2.0 * math.pi))
+    target = crossing + 2.0 * math.pi * turns
+    if target <= theta:
+        target += 2.0 * math.pi
+    return (target - theta) / forcing_frequency * (1.0 - 1e-9)
 
 
 @kernel
@@ -101,10 +130,15 @@ def certified_step(value, slope, curvature):
 
 
 @kernel
-def _newton_in_bracket(q_s, v_s, t_s, lo, hi, omega, zeta, force, weights, const, sine_amp,
-                       forcing_frequency, q, v):
-    """The single root of a monotone e on [lo, hi] (e(lo) > 0 >= e(hi)), safeguarded Newton."""
-    t = 0.5 * (lo + hi)
+def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, omega, zeta, force, weights, const,
+                       sine_amp, forcing_frequency, q, v):
+    """The single root of a monotone e on [lo, hi] (e(lo) > 0 >= e(hi)).
+
+    Safeguarded Newton, started from the secant point of the bracket.
+    """
+    t = lo + (hi - lo) * e_lo / (e_lo - e_hi)
+    if not lo < t < hi:
+        t = 0.5 * (lo + hi)
     for _ in range(200):
         advance(q_s, v_s, t_s, t - t_s, omega, zeta, force, forcing_frequency, q, v)
         value, slope = event_value(q, v, t, weights, const, sine_amp, forcing_frequency)
@@ -133,10 +167,15 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
     are work arrays. A value within round-off of 0 counts as a root (grazing at round-off).
     """
     span_cap = 2.0 * math.pi / np.min(omega)  # bounds hold over a step of at most this span
-    floor, _ = phase_bounds(q_s, v_s, t_s, t_end - t_s, omega, zeta, force, weights, const,
-                            sine_amp, forcing_frequency)
-    if floor > 0.0:
+    coherent, band, curvature, any_span = phase_bounds(q_s, v_s, t_s, t_end - t_s, omega,
+                                                       zeta, force, weights, sine_amp,
+                                                       forcing_frequency)
+    if const - band - abs(coherent) > 0.0:
         return NO_EVENT  # the event function cannot reach 0 in this phase
+    # With every mode split into steady state + free transient, the bounds hold for the whole
+    # phase (transient amplitudes do not grow): computed once. Otherwise (a mode at or near
+    # resonance) they are recomputed over each step's window.
+    per_step = not any_span
     t = t_s
     q[:] = q_s
     v[:] = v_s
@@ -144,9 +183,14 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
     while True:
         if value <= 0.0:
             return t
-        _, curvature = phase_bounds(q, v, t, span_cap, omega, zeta, force, weights, const,
-                                    sine_amp, forcing_frequency)
+        if per_step:
+            coherent, band, curvature, any_span = phase_bounds(q, v, t, span_cap, omega, zeta,
+                                                               force, weights, sine_amp,
+                                                               forcing_frequency)
         step = min(certified_step(value, slope, curvature), span_cap)
+        # the exact sinusoid at Omega minus the bounded rest may certify a longer step
+        skip = band_step(const - band, coherent, t, forcing_frequency)
+        step = max(step, skip if any_span else min(skip, span_cap))
         if step <= 4.0 * _EPS * max(abs(t), span_cap):
             return t  # the event function is at round-off level: touching
         if slope < 0.0:  # approaching: try to bracket a crossing beyond the linear estimate
@@ -158,8 +202,9 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
                 probe, _ = event_value(q, v, t_probe, weights, const, sine_amp,
                                        forcing_frequency)
                 if probe <= 0.0:
-                    return _newton_in_bracket(q_s, v_s, t_s, t, t_probe, omega, zeta, force,
-                                              weights, const, sine_amp, forcing_frequency, q, v)
+                    return _newton_in_bracket(q_s, v_s, t_s, t, t_probe, value, probe, omega,
+                                              zeta, force, weights, const, sine_amp,
+                                              forcing_frequency, q, v)
         if t + step >= t_end:
             return NO_EVENT
         t += step
