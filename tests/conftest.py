@@ -6,6 +6,14 @@ import os
 # competing with Numba's; set before NumPy loads its BLAS.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+from impactbeams.kernels import source_digest  # noqa: E402  (imports no Numba)
+
+# Numba's cache checks a kernel only against its own file, not the kernels it calls: key the
+# cache by all kernel sources, so that tests never run stale code (CI sets its own clean dir).
+# Set before Numba loads; subprocesses (CLI, Dask workers) inherit it.
+os.environ.setdefault("NUMBA_CACHE_DIR", os.path.join(
+    os.path.dirname(os.path.dirname(__file__)), ".numba-cache", source_digest()))
+
 import pytest  # noqa: E402
 
 from impactbeams.model import build_model  # noqa: E402

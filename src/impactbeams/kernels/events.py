@@ -38,6 +38,17 @@ def event_value(q, v, t, weights, const, sine_amp, forcing_frequency):
 
 
 @kernel
+def event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp, forcing_frequency):
+    """e''(t) from the modal equations: q'' = f sin(Omega t) - 2 zeta omega q' - omega^2 q."""
+    drive = math.sin(forcing_frequency * t)
+    value = -sine_amp * forcing_frequency**2 * drive
+    for j in range(q.size):
+        w = omega[j]
+        value += weights[j] * (force[j] * drive - 2.0 * zeta * w * v[j] - w * w * q[j])
+    return value
+
+
+@kernel
 def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
     """Split one mode into a steady state at Omega and a free transient, for bounds.
 
@@ -71,16 +82,18 @@ def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
 def phase_bounds(q, v, t, span, omega, zeta, force, weights, sine_amp, forcing_frequency):
     """Split e over [t, t + span] into an exact sinusoid at Omega and a bounded rest.
 
-    Returns ``(coherent, band, curvature, any_span)``: over the window,
-    ``e(t + s) >= const + Im(coherent e^(i Omega (t + s))) - band`` and ``|e''| <=
-    curvature``. The steady states of all modes oscillate at Omega, so they are summed
-    coherently with the forcing term into one phasor: above a resonance they largely cancel the
-    quasi-static term, which a mode-by-mode bound would miss. ``any_span`` is True when no mode
+    Returns ``(coherent, band, curvature, jerk, any_span)``: over the window,
+    ``e(t + s) >= const + Im(coherent e^(i Omega (t + s))) - band``, ``|e''| <= curvature``
+    and, when ``any_span``, ``|e'''| <= jerk`` (each time derivative of a transient of
+    amplitude R is at most omega R, since |lambda| = omega). The steady states of all modes
+    oscillate at Omega, so they are summed coherently with the forcing term into one phasor:
+    above a resonance they largely cancel the quasi-static term, which a mode-by-mode bound
+    would miss. ``any_span`` is True when no mode
     needed the span-limited growth bound, so that the split holds for every s >= 0.
     """
     rotation = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
     coherent = complex(sine_amp, 0.0)
-    band = curvature = 0.0
+    band = curvature = jerk = 0.0
     any_span = True
     for j in range(q.size):
         steady, amplitude, mode_curvature = _mode_split(q[j], v[j], omega[j], zeta, force[j],
@@ -90,7 +103,10 @@ def phase_bounds(q, v, t, span, omega, zeta, force, weights, sine_amp, forcing_f
         coherent += weights[j] * steady
         band += abs(weights[j]) * amplitude
         curvature += abs(weights[j]) * mode_curvature
-    return coherent, band, curvature + forcing_frequency**2 * abs(coherent), any_span
+        jerk += abs(weights[j]) * omega[j] * mode_curvature
+    forced = abs(coherent)
+    return (coherent, band, curvature + forcing_frequency**2 * forced,
+            jerk + forcing_frequency**3 * forced, any_span)
 
 
 @kernel
@@ -119,14 +135,40 @@ def band_step(margin, coherent, t, forcing_frequency):
 
 
 @kernel
+def _first_positive_root(a, b, c):
+    """First s > 0 where a + b s + c s^2 reaches 0 (a > 0), inf if never; cancellation-free."""
+    if c == 0.0:
+        return a / -b if b < 0.0 else math.inf
+    discriminant = b * b - 4.0 * a * c
+    if discriminant < 0.0:
+        return math.inf  # c > 0: the parabola stays above 0
+    if b < 0.0:
+        return 2.0 * a / (math.sqrt(discriminant) - b)
+    return math.inf if c > 0.0 else (b + math.sqrt(discriminant)) / (-2.0 * c)
+
+
+@kernel
 def certified_step(value, slope, curvature):
-    """Largest s with value + slope s - curvature s^2 / 2 > 0 (value > 0), cancellation-free."""
-    if curvature <= 0.0:
-        return math.inf if slope >= 0.0 else value / -slope
-    discriminant = math.sqrt(slope * slope + 2.0 * curvature * value)
-    if slope >= 0.0:
-        return (slope + discriminant) / curvature
-    return 2.0 * value / (discriminant - slope)
+    """Largest s with value + slope s - curvature s^2 / 2 > 0 (value > 0)."""
+    return _first_positive_root(value, slope, -0.5 * curvature)
+
+
+@kernel
+def cubic_step(value, slope, acceleration, jerk, start):
+    """A step s >= start with value + slope u + acceleration u^2 / 2 - jerk u^3 / 6 > 0.
+
+    Certified on windows [0, w], w = 2 start, 4 start, ..., where the cubic term is at most
+    jerk w u^2 / 6, which leaves a parabola.
+    """
+    step = start
+    window = 2.0 * start
+    for _ in range(6):
+        root = _first_positive_root(value, slope, 0.5 * acceleration - jerk * window / 6.0)
+        if root < window:
+            return max(step, root)
+        step = window
+        window *= 2.0
+    return step
 
 
 @kernel
@@ -167,9 +209,9 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
     are work arrays. A value within round-off of 0 counts as a root (grazing at round-off).
     """
     span_cap = 2.0 * math.pi / np.min(omega)  # bounds hold over a step of at most this span
-    coherent, band, curvature, any_span = phase_bounds(q_s, v_s, t_s, t_end - t_s, omega,
-                                                       zeta, force, weights, sine_amp,
-                                                       forcing_frequency)
+    coherent, band, curvature, jerk, any_span = phase_bounds(q_s, v_s, t_s, t_end - t_s,
+                                                             omega, zeta, force, weights,
+                                                             sine_amp, forcing_frequency)
     if const - band - abs(coherent) > 0.0:
         return NO_EVENT  # the event function cannot reach 0 in this phase
     # With every mode split into steady state + free transient, the bounds hold for the whole
@@ -184,10 +226,13 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
         if value <= 0.0:
             return t
         if per_step:
-            coherent, band, curvature, any_span = phase_bounds(q, v, t, span_cap, omega, zeta,
-                                                               force, weights, sine_amp,
-                                                               forcing_frequency)
+            coherent, band, curvature, jerk, any_span = phase_bounds(
+                q, v, t, span_cap, omega, zeta, force, weights, sine_amp, forcing_frequency)
         step = min(certified_step(value, slope, curvature), span_cap)
+        if not per_step:  # third order with the exact local e'': wide steps through minima
+            acceleration = event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp,
+                                              forcing_frequency)
+            step = min(cubic_step(value, slope, acceleration, jerk, step), span_cap)
         # the exact sinusoid at Omega minus the bounded rest may certify a longer step
         skip = band_step(const - band, coherent, t, forcing_frequency)
         step = max(step, skip if any_span else min(skip, span_cap))
