@@ -31,6 +31,12 @@ _RTOL = 4 * np.finfo(float).eps
 _COINCIDENT = 1e-12  # relative distance below which two free frequencies are one double pole
 
 
+def sech(b: np.ndarray) -> np.ndarray:
+    """1 / cosh(b) for b >= 0, as 2 e^-b / (1 + e^-2b): no overflow at any b."""
+    e = np.exp(-np.asarray(b, dtype=float))
+    return 2.0 * e / (1.0 + e * e)
+
+
 def psi(b: np.ndarray, xi: np.ndarray, derivative: int = 0) -> np.ndarray:
     """d^n psi / d xi^n (n = ``derivative``, 0..3) of the shape with tip parameter ``b``.
 
@@ -51,10 +57,10 @@ def psi(b: np.ndarray, xi: np.ndarray, derivative: int = 0) -> np.ndarray:
 def psi_tip(b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """psi(b), psi'(b) and psi'''(b) (psi''(b) = 0), cancellation-free."""
     b = np.asarray(b, dtype=float)
-    c, th, sech = np.cos(b), np.tanh(b), 1.0 / np.cosh(b)
-    denominator = 1.0 + c * sech
+    c, th, s = np.cos(b), np.tanh(b), sech(b)
+    denominator = 1.0 + c * s
     value = 2.0 * (np.sin(b) - c * th) / denominator
-    third = -2.0 * (sech + c) / denominator
+    third = -2.0 * (s + c) / denominator
     return value, psi(b, b, 1), third
 
 
@@ -67,7 +73,7 @@ def psi_norm_squared(b: np.ndarray) -> np.ndarray:
 def cantilever_roots(n: int) -> np.ndarray:
     """First ``n`` roots b = k l of cos b cosh b + 1 = 0 (1.8751040687, 4.6940911330, ...)."""
     # cos b + sech b changes sign exactly once on each [(j - 1) pi, j pi]
-    f = lambda b: np.cos(b) + 1.0 / np.cosh(b)  # noqa: E731
+    f = lambda b: np.cos(b) + sech(b)  # noqa: E731
     return np.array([brentq(f, max(j - 1, 0.5) * np.pi if j > 1 else 1.0, j * np.pi,
                             xtol=1e-300, rtol=_RTOL) for j in range(1, n + 1)])
 
@@ -148,7 +154,7 @@ def _contact_secular(omega: float, params: Params) -> float:
     k1, k2 = np.sqrt(omega / a1), np.sqrt(omega / a2)
     b1, b2 = k1 * params.l1, k2 * params.l2
     E1, E2 = params.EI1 * k1**3, params.EI2 * k2**3
-    A1, A2 = 1 / np.cosh(b1) + np.cos(b1), 1 / np.cosh(b2) + np.cos(b2)
+    A1, A2 = sech(b1) + np.cos(b1), sech(b2) + np.cos(b2)
     N1, N2 = np.sin(b1) - np.cos(b1) * np.tanh(b1), np.sin(b2) - np.cos(b2) * np.tanh(b2)
     return (E1 * A1 * N2 + E2 * A2 * N1) / (E1 + E2)
 

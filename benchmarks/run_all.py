@@ -1,0 +1,338 @@
+"""Run the whole benchmark suite; write JSON, PNG plots and a README into docs/benchmarks/.
+
+    python benchmarks/run_all.py            # full size (tens of minutes on 2 cores)
+    python benchmarks/run_all.py --quick    # small sizes, a couple of minutes
+
+Steps: ``bench_sweep.py`` (the Fig. 5a map: compile and run time, 1 and 2 threads), the
+work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics)
+and the scaling series (``scaling.py``). Results go to ``work_precision.json``,
+``dynamics.json``, ``scaling.json`` (plus ``sweep.json``/``sweep.md`` from bench_sweep); the
+plots are drawn from those JSON files only; ``README.md`` holds the headline table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+
+import scaling  # noqa: E402
+import work_precision as wp  # noqa: E402
+
+SMALL_SWEEP = """t_max = 1.0
+n_modes = 5
+[params]
+clearance = 1.1e-5
+[axes.omega]
+min = 10.0
+max = 400.0
+num = 100
+[axes.force_amplitude]
+min = 1e-6
+max = 1e-3
+num = 100
+scale = "log"
+"""
+
+TARGETS = {"solve_ivp": 1000.0, "numpy": 10.0}
+
+
+def log(message: str) -> None:
+    """Progress on stderr, with a timestamp."""
+    print(f"[{time.strftime('%H:%M:%S')}] {message}", file=sys.stderr, flush=True)
+
+
+def machine() -> dict[str, str]:
+    """Where and when the numbers were measured."""
+    import numba
+    import numpy
+    import scipy
+
+    from impactbeams import __version__
+
+    return {"machine": f"{platform.machine()}, {os.cpu_count()} cores",
+            "python": platform.python_version(), "numpy": numpy.__version__,
+            "scipy": scipy.__version__, "numba": numba.__version__, "impactbeams": __version__,
+            "date": time.strftime("%Y-%m-%d %H:%M")}
+
+
+def run_bench_sweep(quick: bool) -> None:
+    """The existing Fig. 5a benchmark (1e6 cells; 1e4 cells with --quick)."""
+    command = [sys.executable, str(HERE / "bench_sweep.py")]
+    with tempfile.TemporaryDirectory() as tmp:
+        if quick:
+            path = Path(tmp) / "small.toml"
+            path.write_text(SMALL_SWEEP)
+            command += ["--sweep", str(path), "--repeats", "1"]
+        subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+
+
+# ---------------------------------------------------------------------------------------------
+# Plots (from the saved JSON only)
+
+
+def _floor(values, floor=1e-18):
+    return [max(v, floor) for v in values]
+
+
+def _wp_panel(ax, points, reference, title, key="max", time_key="seconds_per_cell",
+              same_n=None):
+    """One work-precision panel; with ``same_n``, only points with that many modes (a
+    reference that solves the n-mode equations says nothing about other n)."""
+    import matplotlib.pyplot as plt
+
+    families = sorted({p["method"] for p in points if "ivp cells" not in p["method"]})
+    colors = dict(zip(families, plt.rcParams["axes.prop_cycle"].by_key()["color"],
+                      strict=False))
+    for family in families:
+        rows = [p for p in points if p["method"] == family
+                and (same_n is None or p["n_modes"] == same_n)]
+        errors = [p["errors"][reference] for p in rows]
+        x = _floor([e[key] for e in errors])
+        y = [p[time_key] for p in rows]
+        ax.plot(x, y, "-", color=colors[family], alpha=0.5)
+        for xi, yi, e, p in zip(x, y, errors, rows, strict=True):
+            bad = e.get("missed", 0) + e.get("spurious", 0) + abs(e.get("count_diff", 0))
+            ax.plot(xi, yi, "o", color=colors[family], mfc="none" if bad else colors[family])
+            label = p["setting"].split("=")[1]
+            ax.annotate(label + (f" [{bad}]" if bad else ""), (xi, yi), fontsize=6,
+                        xytext=(3, 3), textcoords="offset points")
+        ax.plot([], [], "o-", color=colors[family], label=family)
+    ax.set(xscale="log", yscale="log", title=title)
+    ax.grid(True, which="major", alpha=0.3)
+    ax.legend(fontsize=7)
+
+
+def plot_first_impact(results: dict, path: Path) -> None:
+    """Run time per cell against max |t* error|, three panels (grid x 2 refs, grazing)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(16, 5), constrained_layout=True)
+    panels = [("grid", "many_modes", "map grid vs many-mode reference (truncation)"),
+              ("grid", "exact_n", "map grid vs exact same-n solution (integration)"),
+              ("grazing", "exact_n", "grazing cells vs exact same-n solution")]
+    n = results["config"]["n_default"]
+    for ax, (cells, ref, title) in zip(axes, panels, strict=True):
+        _wp_panel(ax, results[cells]["points"], ref, title,
+                  same_n=n if ref == "exact_n" else None)
+        ax.set(xlabel="max |t* - t*_ref| (s) [hollow: missed/spurious impacts]",
+               ylabel="run time per cell (s, 1 thread)")
+    fig.suptitle("First impact: work-precision (labels: setting [missed + spurious])")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_dynamics(results: dict, path: Path) -> None:
+    """Run time against max onset-time error of the impact sequence, two references."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5), constrained_layout=True)
+    for ax, ref, title in zip(axes, ("tight_ivp", "many_modes"),
+                              ("vs tight DOP853, same modes", "vs many-mode simulate"),
+                              strict=True):
+        _wp_panel(ax, results["points"], ref, title, key="onset_max", time_key="seconds",
+                  same_n=results["config"]["n_default"] if ref == "tight_ivp" else None)
+        ax.set(xlabel="max onset-time error (s) [label: |impact-count difference|]",
+               ylabel="run time (s)")
+    fig.suptitle(f"Full dynamics, Fig. 3 case, t_max = {results['config']['t_max']} s")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_scaling(results: dict, path: Path) -> None:
+    """Run time against grid size, t_max and modes; 1 vs 2 threads."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 4, figsize=(18, 4.2), constrained_layout=True)
+    for ax, key, label in zip(axes[:3], ("grid_size", "t_max", "n_modes"),
+                              ("cells", "t_max (s)", "modes per beam"), strict=True):
+        rows = results[key]
+        x = [r["cells"] if key == "grid_size" else r[key] for r in rows]
+        ax.loglog(x, [r["seconds"] for r in rows], "o-")
+        ax.set(xlabel=label, ylabel="run time (s)", title=f"time vs {label}")
+        ax.grid(True, alpha=0.3)
+    threads = results["threads"]
+    axes[3].bar([str(r["threads"]) for r in threads], [r["cells_per_second"] for r in threads])
+    axes[3].set(xlabel="threads", ylabel="cells per second",
+                title=f"{threads[0]['cells']:,} cells")
+    compile_ = results["compile"]
+    fig.suptitle(f"First-impact map scaling (compile apart: {compile_['cold_s']:.1f} s cold, "
+                 f"{compile_['warm_cache_s']:.2f} s from cache)")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+# ---------------------------------------------------------------------------------------------
+# Headline table
+
+
+def _speedups(first: dict) -> dict[str, dict]:
+    """Matched-error speed-ups on the map grid, per baseline family and reference."""
+    return {(m["baseline"], m["reference"]): m for m in first["grid"]["matched"]}
+
+
+def _default_errors(cells: dict, n_default: int) -> dict:
+    point = next(p for p in cells["points"] if p["method"] == "impactbeams"
+                 and p["n_modes"] == n_default)
+    return point["errors"]
+
+
+def _baseline_misses(cells: dict) -> dict[str, int]:
+    """Fewest missed + spurious impacts of each baseline family over its settings."""
+    out = {}
+    for p in cells["points"]:
+        if p["method"].startswith("impactbeams"):
+            continue
+        e = p["errors"]["exact_n"]
+        out.setdefault(p["method"], []).append(e["missed"] + e["spurious"])
+    return {k: (min(v), max(v)) for k, v in out.items()}
+
+
+def headline(first: dict, dynamics: dict, scale: dict, quick: bool) -> str:
+    """The README: headline table, targets, how to regenerate."""
+    n = first["config"]["n_default"]
+    speed = _speedups(first)
+    grid_err, graze_err = (_default_errors(first[k], n) for k in ("grid", "grazing"))
+    lines = ["| quantity | value |", "|---|---|"]
+    for row in scale["threads"]:
+        lines.append(f"| cells per second, {row['threads']} thread(s), {row['cells']:,}-cell "
+                     f"map, t_max = 1 s, {n} modes | {row['cells_per_second']:,.0f} |")
+    verdicts = []
+    for (family, ref), m in sorted(speed.items()):
+        bound = ">= " if m["lower_bound"] else ""
+        lines.append(f"| speed-up over {family} at matched error ({ref} reference; its "
+                     f"{m['setting']}) | {bound}{m['speedup']:,.0f}x |")
+        goal = TARGETS["solve_ivp" if family.startswith("solve_ivp") else "numpy"]
+        verdicts.append(f"{family} ({ref}): {m['speedup']:,.0f}x vs target {goal:g}x: "
+                        f"{'met' if m['speedup'] >= goal else 'NOT met'}")
+    for name, errors in (("map grid", grid_err), ("grazing cells", graze_err)):
+        for ref in ("exact_n", "many_modes"):
+            e = errors[ref]
+            lines.append(f"| worst t* error of impactbeams ({n} modes), {name}, vs {ref} | "
+                         f"{e['max']:.2e} s; missed {e['missed']}, spurious {e['spurious']} |")
+    misses = _baseline_misses(first["grazing"])
+    counts = ", ".join(f"{k}: {a}..{b}" for k, (a, b) in misses.items())
+    lines.append(f"| baselines' missed + spurious impacts on the grazing cells, exact_n "
+                 f"(best..worst setting) | {counts} |")
+    tight = next(p for p in dynamics["points"] if p["method"] == "impactbeams"
+                 and p["n_modes"] == dynamics["config"]["n_default"])["errors"]["tight_ivp"]
+    lines.append(f"| full dynamics ({dynamics['config']['t_max']} s, {n} modes): impactbeams vs "
+                 f"tight DOP853 | onsets {tight['onset_max']:.1e} s, peak forces "
+                 f"{tight['peak_rel_max']:.1e} rel., impact count diff {tight['count_diff']} |")
+    lines.append(f"| compile time (apart from run time) | {scale['compile']['cold_s']:.1f} s cold, "
+                 f"{scale['compile']['warm_cache_s']:.2f} s from the Numba cache |")
+    size = "QUICK (small sizes: numbers indicative only)" if quick else "full size"
+    run = {k: v for k, v in first["run"].items() if k != "quick"}
+    return README.format(size=size, table="\n".join(lines),
+                         verdicts="\n".join(f"- {v}" for v in verdicts), **run)
+
+
+README = """# Benchmarks: run time against error
+
+Regenerate everything here (JSON, PNG and this file) with one command from the repository root:
+
+    python benchmarks/run_all.py            # full size; add --quick for a small, fast run
+
+This run: {size}; {machine}, Python {python}, NumPy {numpy}, SciPy {scipy}, Numba {numba},
+impactbeams {impactbeams}, {date}. The machine may have been shared: timings are noisy.
+
+{table}
+
+Targets at matched error (first-impact map grid):
+
+{verdicts}
+
+## What is measured
+
+* **impactbeams' accuracy knob is the number of modes only.** Its first-impact kernel has no
+  tolerance: propagation is exact (closed form), steps are certified root-free, the root is
+  resolved by Newton to a few ulps. Against the exact solution of the same n-mode equations
+  (`exact_n`) its error is round-off; against a many-mode reference (`many_modes`) its error is
+  the modal truncation of n modes, which every method on those equations shares.
+* **Baselines** (`benchmarks/baselines.py`) solve the same modal equations independently:
+  `solve_ivp` RK45 / DOP853 with a terminal gap event (direction -1) per cell, rtol as the
+  knob; and vectorised NumPy (textbook closed form on a dense grid for a block of cells, first
+  sign change, vectorised bisection), sampling density (samples per period of the fastest mode)
+  as the knob. solve_ivp runs on a random subsample of cells (`ivp_cells` in the JSON); its
+  cost per cell is the subsample mean and the map cost is extrapolated from it.
+* **References**: `many_modes` = impactbeams with many modes (its distance from half as many
+  modes is reported as `reference_self_distance`); `exact_n` = long-double textbook closed form
+  (`tests/references.py`), earliest root found by a dense scan or by any method, each re-located
+  by long-double bisection and kept only where the long-double gap closes.
+* **Errors**: max / p95 / median of |t* - t*_ref| over cells where both impact; missed and
+  spurious impacts counted apart. A baseline setting matches impactbeams' error when it has no
+  more missed + spurious impacts and at most twice its max and median errors; otherwise the
+  ratio against its most accurate setting is a lower bound (">=").
+* **Grazing cells**: clearance set to the deepest dip of the response times 1 -+ depth, depth
+  1e-9 .. 1e-2 (half just closing, half just open).
+* **Full dynamics**: `simulate()` (model build included in its time) against `solve_ivp` on the
+  same two-phase modal equations with event-driven switching and the projections of `model.py`;
+  impacts matched by index. Against many modes the impact sequence does not converge (modal
+  non-convergence, see `docs/modal_convergence.md` and `docs/limits.md`).
+
+Files: `work_precision.json`, `dynamics.json`, `scaling.json`, `sweep.json` / `sweep.md`;
+plots `work_precision_first_impact.png`, `work_precision_dynamics.png`, `scaling.png`.
+"""
+
+
+def main() -> None:
+    """Run the suite and write its results."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes (minutes)")
+    parser.add_argument("--out", default=str(ROOT / "docs" / "benchmarks"))
+    parser.add_argument("--skip-bench-sweep", action="store_true")
+    parser.add_argument("--report-only", action="store_true",
+                        help="redraw plots and README from the JSON already in --out")
+    args = parser.parse_args()
+    out = Path(args.out)
+    if args.report_only:
+        report(out)
+        return
+    out.mkdir(parents=True, exist_ok=True)
+    if not args.skip_bench_sweep:
+        log("bench_sweep.py")
+        run_bench_sweep(args.quick)
+    log("work-precision: first impact")
+    first = wp.first_impact_study(wp.QUICK if args.quick else wp.FirstImpactConfig(), log)
+    log("work-precision: full dynamics")
+    dynamics = wp.dynamics_study(wp.QUICK_DYNAMICS if args.quick else wp.DynamicsConfig(), log)
+    log("scaling")
+    scale = scaling.scaling_study(scaling.QUICK if args.quick else scaling.ScalingConfig(), log)
+    about = {"quick": args.quick, **machine()}
+    for name, data in (("work_precision", first), ("dynamics", dynamics), ("scaling", scale)):
+        (out / f"{name}.json").write_text(json.dumps({**data, "run": about}, indent=1) + "\n")
+    report(out)
+
+
+def report(out: Path) -> None:
+    """Plots and README from the saved JSON files in ``out`` (no computation)."""
+    first, dynamics, scale = (json.loads((out / f"{name}.json").read_text())
+                              for name in ("work_precision", "dynamics", "scaling"))
+    plot_first_impact(first, out / "work_precision_first_impact.png")
+    plot_dynamics(dynamics, out / "work_precision_dynamics.png")
+    plot_scaling(scale, out / "scaling.png")
+    (out / "README.md").write_text(headline(first, dynamics, scale, first["run"]["quick"]))
+    log(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
