@@ -1,0 +1,194 @@
+"""Sweeps on a Dask LocalCluster (loopback): same bits as a local run, lost workers, resume."""
+
+import contextlib
+import os
+import signal
+import sys
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from impactbeams.cli import main
+from impactbeams.distributed import dask_client, dask_runner, default_threads_per_task
+from impactbeams.sweep import run_sweep, sweep_from_mapping
+
+GRID = {  # 40 x 30 cells, a fraction of a second of serial work
+    "t_max": 0.3,
+    "n_modes": 4,
+    "params": {"clearance": 1.1e-5},
+    "axes": {
+        "omega": {"min": 20.0, "max": 400.0, "num": 40},
+        "force_amplitude": {"min": 1e-5, "max": 1e-3, "num": 30, "scale": "log"},
+    },
+}
+SLOW_GRID = {  # 250000 cells, about 2 s of serial work: 16 chunks of ~0.1 s
+    "t_max": 1.0,
+    "n_modes": 20,
+    "params": {"clearance": 1.1e-5},
+    "axes": {
+        "omega": {"min": 10.0, "max": 400.0, "num": 500},
+        "force_amplitude": {"min": 1e-5, "max": 1e-3, "num": 500},
+    },
+}
+
+
+def _children():
+    """Child processes, without multiprocessing's resource tracker (it lives as long as we do)."""
+    import psutil
+
+    children = set()
+    for child in psutil.Process().children(recursive=True):
+        with contextlib.suppress(psutil.Error):
+            if "resource_tracker" not in " ".join(child.cmdline()):
+                children.add(child.pid)
+    return children
+
+
+@contextlib.contextmanager
+def no_process_left():
+    """Check on exit that every child process started inside has ended."""
+    before = _children()
+    yield
+    deadline = time.monotonic() + 15
+    while _children() - before and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not _children() - before, "worker processes left behind"
+
+
+@contextlib.contextmanager
+def local_cluster(workers=2):
+    """A client of a fresh LocalCluster of loopback workers, all gone on exit."""
+    with no_process_left(), dask_client(local_workers=workers) as client:
+        yield client
+
+
+@pytest.fixture(scope="module")
+def client():
+    with local_cluster() as client:
+        yield client
+
+
+def assert_same_map(a, b):
+    assert np.array_equal(a.first_impact_time, b.first_impact_time, equal_nan=True)
+    assert np.array_equal(a.impacted, b.impacted)
+
+
+@pytest.mark.parametrize("threads_per_task", [None, 2], ids=["serial-kernel", "parallel-kernel"])
+def test_distributed_map_is_bitwise_equal_to_local(client, threads_per_task, tmp_path):
+    sweep = sweep_from_mapping(GRID, source="grid")
+    local = run_sweep(sweep, progress=False)
+    seen = []
+    out = tmp_path / "map.nc"
+    runner = dask_runner(client, threads_per_task=threads_per_task)
+    remote = run_sweep(sweep, output=out, progress=False, chunk_cells=100, runner=runner,
+                       on_chunk=seen.append)
+    assert sorted(seen) == list(range(12))  # every chunk exactly once
+    assert_same_map(remote, local)
+    assert out.exists() and not (tmp_path / "map.nc.partial").exists()
+    assert default_threads_per_task(client) == max(1, os.cpu_count() // 2)
+
+
+def test_interrupted_client_resumes_from_saved_chunks(client, tmp_path):
+    sweep = sweep_from_mapping(GRID, source="grid")
+    out = tmp_path / "map.nc"
+    done = []
+
+    def stop_after_three(chunk):
+        done.append(chunk)
+        if len(done) == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(sweep, output=out, progress=False, chunk_cells=100,
+                  runner=dask_runner(client), on_chunk=stop_after_three)
+    partial = tmp_path / "map.nc.partial"
+    assert sorted(int(p.stem[6:]) for p in partial.glob("chunk_*.npz")) == sorted(done)
+    computed = []
+    resumed = run_sweep(sweep, output=out, progress=False, chunk_cells=100,
+                        runner=dask_runner(client), on_chunk=computed.append)
+    assert sorted(computed) == sorted(set(range(12)) - set(done))
+    assert_same_map(resumed, run_sweep(sweep, progress=False))
+    assert not partial.exists()
+
+
+def test_workers_of_another_version_are_refused(client, monkeypatch):
+    import impactbeams.distributed
+
+    monkeypatch.setattr(impactbeams.distributed, "__version__", "0.0.0")  # client side only
+    sweep = sweep_from_mapping(GRID, source="grid")
+    with pytest.raises(RuntimeError, match="install the same version on every worker"):
+        run_sweep(sweep, progress=False, runner=dask_runner(client))
+
+
+def test_killed_worker_loses_and_doubles_no_chunk(tmp_path):
+    """SIGKILL one of two workers while it computes a chunk: the scheduler reruns that chunk
+    elsewhere, every chunk arrives once, and the map equals the local one."""
+    sweep = sweep_from_mapping(SLOW_GRID, source="slow grid")
+    seen, killed = [], {}
+    with local_cluster() as client:
+
+        def kill_a_computing_worker(chunk):
+            seen.append(chunk)
+            if len(seen) != 3:
+                return
+            executing = client.run(lambda dask_worker: [t.key for t in dask_worker.state.executing])
+            victim, keys = next((w, keys) for w, keys in executing.items() if keys)
+            killed["worker"], killed["keys"] = victim, keys
+            os.kill(client.run(os.getpid, workers=[victim])[victim], signal.SIGKILL)
+
+        remote = run_sweep(sweep, output=tmp_path / "s.nc", progress=False, chunk_cells=15625,
+                           runner=dask_runner(client), on_chunk=kill_a_computing_worker)
+        assert killed["worker"] not in client.nthreads()  # it died; the nanny may start anew
+    lost = {int(key.split("-")[2]) for key in killed["keys"]}  # chunk numbers from task keys
+    assert lost and lost <= set(seen[3:])  # the interrupted chunk arrived later, recomputed
+    assert sorted(seen) == list(range(16))  # every chunk once: none lost, none doubled
+    assert_same_map(remote, run_sweep(sweep, progress=False))
+
+
+def test_cli_runs_on_a_local_cluster_and_at_a_scheduler_address(client, tmp_path, capsys):
+    sweep_file = tmp_path / "s.toml"
+    sweep_file.write_text(
+        "t_max = 0.2\n[axes.omega]\nmin = 20.0\nmax = 300.0\nnum = 8\n"
+        '[axes.clearance]\nmin = 1e-6\nmax = 3e-5\nnum = 6\nscale = "log"\n'
+    )
+    run = ["run", str(sweep_file), "--chunk-cells", "10"]
+    assert main([*run, "-o", str(tmp_path / "local.nc")]) == 0
+    address = client.scheduler.address  # an existing cluster, as with `dask scheduler`
+    for name, option in [("new", ["--local-cluster", "2"]), ("at", ["--scheduler", address])]:
+        out = tmp_path / f"{name}.nc"
+        with no_process_left():
+            assert main([*run, "-o", str(out), *option]) == 0
+        assert "100.0%" in capsys.readouterr().err
+        with xr.open_dataset(out) as remote, xr.open_dataset(tmp_path / "local.nc") as local:
+            assert_same_map(remote, local)
+
+
+def test_cli_cluster_options_are_exclusive(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["run", "s.toml", "--scheduler", "tcp://127.0.0.1:8786", "--local-cluster", "2"])
+    assert exit_.value.code == 2
+    assert "not allowed with argument" in capsys.readouterr().err
+
+
+def test_unreachable_scheduler_is_reported(tmp_path, capsys):
+    import dask
+
+    sweep_file = tmp_path / "s.toml"
+    sweep_file.write_text("[axes.omega]\nmin = 20.0\nmax = 300.0\nnum = 8\n")
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        code = main(["run", str(sweep_file), "--scheduler", "tcp://127.0.0.1:9"])
+    assert code == 2
+    assert "scheduler = 'tcp://127.0.0.1:9': cannot connect" in capsys.readouterr().err
+
+
+def test_missing_dask_gives_an_install_hint(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
+    with pytest.raises(ImportError, match=r"pip install 'impactbeams\[distributed\]'"):
+        with dask_client(local_workers=1):
+            pass
+    sweep_file = tmp_path / "s.toml"
+    sweep_file.write_text("[axes.omega]\nmin = 20.0\nmax = 300.0\nnum = 8\n")
+    assert main(["run", str(sweep_file), "-o", str(tmp_path / "s.nc"), "--local-cluster", "1"]) == 2
+    assert "impactbeams[distributed]" in capsys.readouterr().err
