@@ -354,21 +354,32 @@ def local_runner(parallel: bool = True) -> ChunkRunner:
 
 
 class _ChunkStore:
-    """Finished chunks of one sweep, saved one file each, atomically, next to the output."""
+    """Finished chunks of one sweep, saved one file each, atomically, next to the output.
 
-    def __init__(self, output: Path, fingerprint: str) -> None:
+    The store records the sweep's fingerprint and the chunk size: chunks are numbered, so a
+    resumed run must split the grid the same way (it adopts the recorded size).
+    """
+
+    def __init__(self, output: Path, fingerprint: str, chunk_cells: int | None,
+                 default_chunk_cells: int) -> None:
         self.directory = output.with_name(output.name + ".partial")
-        self.fingerprint = fingerprint
         stamp = self.directory / "fingerprint"
-        if self.directory.exists():
-            found = stamp.read_text().strip() if stamp.exists() else "(none)"
-            if found != fingerprint:
-                raise ParameterError(
-                    f"{self.directory} holds a partial run of a different sweep (fingerprint "
-                    f"{found}, this sweep {fingerprint}): delete it or choose another output")
-        else:
+        if not self.directory.exists():
             self.directory.mkdir(parents=True)
-            _atomic_write_text(stamp, fingerprint)
+            self.chunk_cells = chunk_cells or default_chunk_cells
+            _atomic_write_text(stamp, f"{fingerprint} {self.chunk_cells}")
+            return
+        found, _, size = (stamp.read_text().strip() if stamp.exists() else "(none)").partition(" ")
+        if found != fingerprint or not size.isdigit():
+            raise ParameterError(
+                f"{self.directory} holds a partial run of a different sweep (fingerprint "
+                f"{found}, this sweep {fingerprint}): delete it or choose another output")
+        if chunk_cells is not None and chunk_cells != int(size):
+            raise ParameterError(
+                f"chunk_cells = {chunk_cells} is not allowed: the partial run in "
+                f"{self.directory} was split into chunks of {size} cells; resume with that "
+                "size (or without choosing one)")
+        self.chunk_cells = int(size)
 
     def _path(self, chunk: int) -> Path:
         return self.directory / f"chunk_{chunk:06d}.npz"
@@ -462,15 +473,16 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
                 <= numba.config.NUMBA_NUM_THREADS,
                 f"must be an integer from 1 to {numba.config.NUMBA_NUM_THREADS}")
         numba.set_num_threads(threads)
-    chunk_cells = chunk_cells or default_chunk_cells(sweep.size)
     store = None
     if output is not None:
         output = Path(output)
         finished = _finished_output(output, sweep)
         if finished is not None:
             return finished
-        store = _ChunkStore(output, sweep.fingerprint())
-    bounds = chunk_bounds(sweep.size, chunk_cells)
+        store = _ChunkStore(output, sweep.fingerprint(), chunk_cells,
+                            default_chunk_cells(sweep.size))
+        chunk_cells = store.chunk_cells
+    bounds = chunk_bounds(sweep.size, chunk_cells or default_chunk_cells(sweep.size))
     results = {name: np.full(sweep.size, np.nan) for name in _stored(sweep)}
     bar = Progress(sweep.size, enabled=progress)
     pending = []
