@@ -26,31 +26,50 @@ TABLE_ROWS = ("omega", "gap_weight", "drive", "unit1", "unit2")
 
 
 @kernel
-def first_impact_time(cell, table, compliance, t_max):
-    """Time (s) of the first gap closure in (0, t_max] for one cell, NaN if none."""
+def first_impact_time(cell, table, compliance, t_max, work):
+    """Time (s) of the first gap closure in (0, t_max] for one cell, NaN if none.
+
+    ``work``: scratch array of shape (8, modes), reused across cells (no heap allocation per
+    cell: allocations serialise threads).
+    """
     clearance, force_amplitude, forcing_frequency = cell[0], cell[1], cell[2]
     uplift1, uplift2, zeta = cell[3], cell[4], cell[5]
-    omega, weights, drive = table[0], table[1], table[2]
-    q_all = uplift1 * table[3] + uplift2 * table[4]
-    v_all = force_amplitude * forcing_frequency * drive
-    f_all = -forcing_frequency * forcing_frequency * force_amplitude * drive
-    active = np.nonzero((q_all != 0.0) | (v_all != 0.0) | (f_all != 0.0))[0]
-    if active.size == 0 and force_amplitude == 0.0:
+    q_s, v_s, omega, force, weights, q, v = work[0], work[1], work[2], work[3], work[4], \
+        work[5], work[6]
+    # keep only the modes that move: beam 2 rests unless uplifted, so its modes drop out
+    active = 0
+    for j in range(table.shape[1]):
+        q0 = uplift1 * table[3, j] + uplift2 * table[4, j]
+        v0 = force_amplitude * forcing_frequency * table[2, j]
+        f = -forcing_frequency * forcing_frequency * force_amplitude * table[2, j]
+        if q0 != 0.0 or v0 != 0.0 or f != 0.0 or (j == table.shape[1] - 1 and active == 0):
+            q_s[active], v_s[active], force[active] = q0, v0, f
+            omega[active], weights[active] = table[0, j], table[1, j]
+            active += 1
+    if force_amplitude == 0.0 and q_s[0] == 0.0 and v_s[0] == 0.0 and active == 1:
         return np.nan  # nothing moves: the gap stays open
-    if active.size == 0:  # only the quasi-static term moves; keep one idle mode for the bounds
-        active = np.zeros(1, dtype=np.int64)
-    q = np.empty(active.size)
-    v = np.empty(active.size)
-    return first_root(q_all[active], v_all[active], 0.0, t_max, omega[active], zeta,
-                      f_all[active], weights[active], clearance, -compliance * force_amplitude,
-                      forcing_frequency, q, v)
+    return first_root(q_s[:active], v_s[:active], 0.0, t_max, omega[:active], zeta,
+                      force[:active], weights[:active], clearance,
+                      -compliance * force_amplitude, forcing_frequency, q[:active], v[:active])
+
+
+_BLOCK = 256  # cells per unit of parallel work: scratch allocated once per block
 
 
 def _first_impact_map(cells, tables, compliance, t_max, out):
-    """Fill out[i] with the first impact time of cells[i]; each iteration owns out[i]."""
-    for i in prange(cells.shape[0]):
-        g = int(cells[i, 6])
-        out[i] = first_impact_time(cells[i], tables[g], compliance[g], t_max)
+    """Fill out[i] with the first impact time of cells[i]; each iteration owns its cells.
+
+    Block b takes cells b, b + n_blocks, b + 2 n_blocks, ...: interleaved, so that the costly
+    regions of a grid (near resonances and the no-impact boundary) are shared evenly between
+    the threads of prange's static schedule.
+    """
+    n_cells = cells.shape[0]
+    n_blocks = (n_cells + _BLOCK - 1) // _BLOCK
+    for block in prange(n_blocks):
+        work = np.empty((8, tables.shape[2]))
+        for i in range(block, n_cells, n_blocks):
+            g = int(cells[i, 6])
+            out[i] = first_impact_time(cells[i], tables[g], compliance[g], t_max, work)
 
 
 first_impact_map_parallel, first_impact_map_serial = parallel_kernel(_first_impact_map)
