@@ -4,10 +4,11 @@
     python benchmarks/run_all.py --quick    # small sizes, a couple of minutes
 
 Steps: ``bench_sweep.py`` (the Fig. 5a map: compile and run time, 1 and 2 threads), the
-work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics)
-and the scaling series (``scaling.py``). Results go to ``work_precision.json``,
-``dynamics.json``, ``scaling.json`` (plus ``sweep.json``/``sweep.md`` from bench_sweep); the
-plots are drawn from those JSON files only; ``README.md`` holds the headline table.
+work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics),
+the scaling series (``scaling.py``) and ``bench_distributed.py`` (Dask overhead, if
+installed). Results go to ``work_precision.json``, ``dynamics.json``, ``scaling.json`` (plus
+``sweep.json``/``sweep.md`` from bench_sweep, ``distributed.json``/``.md``); the plots are
+drawn from those JSON files only; ``README.md`` holds the headline table.
 """
 
 from __future__ import annotations
@@ -75,6 +76,19 @@ def run_bench_sweep(quick: bool) -> None:
             path.write_text(SMALL_SWEEP)
             command += ["--sweep", str(path), "--repeats", "1"]
         subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+
+
+def run_bench_distributed(quick: bool) -> None:
+    """The Dask overhead benchmark (its own JSON and markdown), if Dask is installed."""
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        log("dask.distributed not installed: skipping bench_distributed.py")
+        return
+    command = [sys.executable, str(HERE / "bench_distributed.py")]
+    if quick:
+        command += ["--num", "100", "--repeats", "1"]
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -300,6 +314,7 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="small sizes (minutes)")
     parser.add_argument("--out", default=str(ROOT / "docs" / "benchmarks"))
     parser.add_argument("--skip-bench-sweep", action="store_true")
+    parser.add_argument("--skip-distributed", action="store_true")
     parser.add_argument("--report-only", action="store_true",
                         help="redraw plots and README from the JSON already in --out")
     args = parser.parse_args()
@@ -317,6 +332,9 @@ def main() -> None:
     dynamics = wp.dynamics_study(wp.QUICK_DYNAMICS if args.quick else wp.DynamicsConfig(), log)
     log("scaling")
     scale = scaling.scaling_study(scaling.QUICK if args.quick else scaling.ScalingConfig(), log)
+    if not args.skip_distributed:
+        log("bench_distributed.py")
+        run_bench_distributed(args.quick)
     about = {"quick": args.quick, **machine()}
     for name, data in (("work_precision", first), ("dynamics", dynamics), ("scaling", scale)):
         (out / f"{name}.json").write_text(json.dumps({**data, "run": about}, indent=1) + "\n")
