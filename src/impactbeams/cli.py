@@ -69,7 +69,8 @@ def _run(args: argparse.Namespace) -> None:
     output = args.output or str(Path("results") / (Path(args.sweep).stem + ".nc"))
     print(f"{sweep.source}: {' x '.join(map(str, sweep.shape))} = {sweep.size} cells over "
           f"{', '.join(a.name for a in sweep.axes)}; t_max = {sweep.t_max} s, "
-          f"{sweep.n_modes} modes per beam -> {output}", file=sys.stderr)
+          f"{sweep.n_modes} modes per beam -> {output}\n(the first chunk also compiles the "
+          "kernels, about 10 s on a fresh install; they are cached after that)", file=sys.stderr)
     try:
         with _cluster_runner(args) as runner:
             run_sweep(sweep, output=output, threads=None if runner else args.threads,

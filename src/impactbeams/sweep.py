@@ -412,7 +412,11 @@ def _atomic_write_text(path: Path, text: str) -> None:
 
 
 class Progress:
-    """Progress bar with ETA on stderr; one line per 10% when stderr is not a terminal."""
+    """Progress bar with ETA on stderr; one line per 10% when stderr is not a terminal.
+
+    The rate behind the ETA is measured from the end of the first computed chunk, which also
+    pays for compiling the kernels (until then the ETA shows as unknown).
+    """
 
     def __init__(self, total: int, enabled: bool = True, stream: Any = None) -> None:
         self.total, self.done, self.enabled = total, 0, enabled
@@ -420,22 +424,25 @@ class Progress:
         self.interactive = self.stream.isatty()
         self.start = time.perf_counter()
         self.reported_decile = -1
-        self.skipped = 0
+        self.warm: tuple[float, int] | None = None  # (time, cells done) after the first chunk
 
     def update(self, cells: int, computed: bool = True) -> None:
         """Record ``cells`` more finished cells (``computed=False``: loaded from a resume)."""
         self.done += cells
-        if not computed:
-            self.skipped += cells
+        now = time.perf_counter()
+        eta = float("nan")
+        if computed and self.warm is None:
+            self.warm = (now, self.done)
+        elif computed and now > self.warm[0]:
+            rate = (self.done - self.warm[1]) / (now - self.warm[0])
+            eta = (self.total - self.done) / rate
         if not self.enabled:
             return
         fraction = self.done / self.total
-        elapsed = time.perf_counter() - self.start
-        rate = (self.done - self.skipped) / elapsed if elapsed > 0 else 0.0
-        eta = (self.total - self.done) / rate if rate > 0 else float("nan")
         bar = "#" * int(30 * fraction)
+        eta_text = "   ?  " if eta != eta else f"{eta:6.1f}"
         line = (f"[{bar:<30}] {100 * fraction:5.1f}% {self.done}/{self.total} cells "
-                f"{elapsed:6.1f} s elapsed, ETA {eta:6.1f} s")
+                f"{now - self.start:6.1f} s elapsed, ETA {eta_text} s")
         if self.interactive:
             self.stream.write("\r" + line + ("\n" if self.done == self.total else ""))
         elif int(10 * fraction) > self.reported_decile:
