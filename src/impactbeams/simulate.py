@@ -69,29 +69,41 @@ class Packed:
     settings: np.ndarray
 
 
-def pack_model(model: ModalModel, t_max: float, search_span: float) -> Packed:
-    """Pack ``model`` and its forcing for the kernels; ``t_max``, ``search_span`` in s."""
-    p = model.params
-    c1, c2 = p.tip_compliance
-    free, total = model.free, c1 + c2
-    bases = (
+def _bases(model: ModalModel) -> tuple[_Basis, _Basis]:
+    free = model.free
+    return (
         _Basis(free.omega, free.drive, free.tip1, free.tip2, free.unit1, free.unit2,
                free.tip1 - free.tip2),
         _Basis(model.contact.omega, model.contact_drive, model.contact_tip, model.contact_tip,
                model.contact_unit1, model.contact_unit2, model.contact_shear2),
     )
-    force_factor = -p.omega**2 * p.force_amplitude
-    tables = np.array([[b.omega, b.drive, force_factor * b.drive, b.event, b.tip1]
-                       for b in bases])
-    phase_scalars = np.array([[p.clearance, -c1 * p.force_amplitude, 1.0],
-                              [-p.clearance / total, c1 * p.force_amplitude / total, c2 / total]])
+
+
+def phase_tables(model: ModalModel) -> tuple[np.ndarray, np.ndarray, float]:
+    """The dynamics kernel's per-geometry arrays: (tables, shifts, accumulation time in s).
+
+    ``tables[phase]`` has the rows of :mod:`impactbeams.kernels.dynamics`, with ``ROW_FORCE``
+    holding the drive b: multiply it by ``-Omega^2 F0`` for a given forcing.
+    """
+    tables = np.array([[b.omega, b.drive, b.drive, b.event, b.tip1] for b in _bases(model)])
+    shifts = np.array([model.free.static_shift, model.contact_static_shift])
     # an instantaneous impact re-closing within half a period of the fastest free mode is
     # the truncated bases disagreeing, not a new impact: see dynamics.run_events
-    accumulation = math.pi / np.max(free.omega)
+    return tables, shifts, math.pi / np.max(model.free.omega)
+
+
+def pack_model(model: ModalModel, t_max: float, search_span: float) -> Packed:
+    """Pack ``model`` and its forcing for the kernels; ``t_max``, ``search_span`` in s."""
+    p = model.params
+    c1, c2 = p.tip_compliance
+    total = c1 + c2
+    tables, shifts, accumulation = phase_tables(model)
+    tables[:, dyn.ROW_FORCE] *= -p.omega**2 * p.force_amplitude
+    phase_scalars = np.array([[p.clearance, -c1 * p.force_amplitude, 1.0],
+                              [-p.clearance / total, c1 * p.force_amplitude / total, c2 / total]])
     settings = np.array([p.clearance, c1, c2, p.force_amplitude, p.omega, p.damping_ratio,
                          t_max, search_span, accumulation])
-    shifts = np.array([free.static_shift, model.contact_static_shift])
-    return Packed(model, bases, tables, phase_scalars, shifts, settings)
+    return Packed(model, _bases(model), tables, phase_scalars, shifts, settings)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -256,18 +256,13 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
 def _dynamics_tables(params: Params, n_modes: int) -> tuple[np.ndarray, ...]:
     """One geometry's arrays for kernels.observables (both phases, projections)."""
     from impactbeams.model import build_model
+    from impactbeams.simulate import phase_tables
 
     model = build_model(params, n_modes)
-    free = model.free
-    c1, c2 = params.tip_compliance
-    tables = np.array([[free.omega, free.drive, free.drive, free.tip1 - free.tip2, free.tip1],
-                       [model.contact.omega, model.contact_drive, model.contact_drive,
-                        model.contact_shear2, model.contact_tip]])
-    shifts = np.array([free.static_shift, model.contact_static_shift])
-    # an instantaneous impact re-closing within half a period of the fastest free mode is the
-    # truncated bases disagreeing, not a new impact (as in simulate; see dynamics.run_events)
-    geometry = np.array([c1, c2, np.pi / np.max(free.omega)])
-    return tables, model.overlap, shifts, np.array([free.unit1, free.unit2]), geometry
+    tables, shifts, accumulation = phase_tables(model)
+    geometry = np.array([*params.tip_compliance, accumulation])
+    units = np.array([model.free.unit1, model.free.unit2])
+    return tables, model.overlap, shifts, units, geometry
 
 
 def _plan(sweep: Sweep) -> _Plan:
