@@ -405,7 +405,7 @@ def sequence_errors(onset: np.ndarray, peak: np.ndarray, ref_onset: np.ndarray,
 def _simulate_impacts(params: Params, t_max: float, n_modes: int,
                       repeats: int) -> tuple[dict, float]:
     """impactbeams' impact table (onset s, peak N) and best wall time (s) of ``simulate``."""
-    from impactbeams.simulate import simulate
+    from impactbeams.trajectory import simulate
 
     simulate(params, t_max, n_modes=n_modes, dt_output=t_max)  # compile / load kernels
     best, ds = np.inf, None

@@ -19,7 +19,7 @@ import xarray as xr
 
 from impactbeams.params import Params
 from impactbeams.plotting import trajectories as plots
-from impactbeams.simulate import simulate
+from impactbeams.trajectory import simulate
 
 PAPER = Params()  # F0 = 1e-3 N, Omega = 50 rad/s, Delta = 1.1e-5 m, l1 = 0.1, l2 = 0.12
 SECTION_PERIODS = 480  # 60 s of forcing at Omega = 50 rad/s

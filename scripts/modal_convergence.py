@@ -16,7 +16,7 @@ import numpy as np
 import xarray as xr
 
 from impactbeams.params import Params
-from impactbeams.simulate import simulate
+from impactbeams.trajectory import simulate
 
 MODES = (4, 5, 10, 20, 50)
 T_MAX = 0.6

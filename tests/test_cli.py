@@ -43,3 +43,15 @@ def test_console_script_entry_point():
     result = subprocess.run([sys.executable, "-m", "impactbeams.cli", "modes", "--n", "0"],
                             capture_output=True, text=True)
     assert result.returncode == 2 and "must be an integer >= 1" in result.stderr
+
+
+def test_public_api_names_stay_functions_after_their_modules_load():
+    """The lazy top-level names must not be shadowed by submodules of the same name."""
+    import importlib
+
+    import impactbeams
+
+    for name, module in impactbeams._LAZY.items():
+        importlib.import_module(module)
+        assert callable(getattr(impactbeams, name)), name
+        assert not isinstance(getattr(impactbeams, name), type(importlib)), name

@@ -1,4 +1,4 @@
-"""Full impact dynamics: kernels.dynamics and impactbeams.simulate.
+"""Full impact dynamics: kernels.dynamics and impactbeams.trajectory.
 
 Reference runs are computed once per module (fixtures); the kernels compile on first use.
 """
@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 from impactbeams.kernels import dynamics as dyn
 from impactbeams.model import build_model, quadrature, unit_tip_shape
 from impactbeams.params import Params
-from impactbeams.simulate import observables, pack_model, run, sample, simulate
+from impactbeams.trajectory import observables, pack_model, run, sample, simulate
 from impactbeams.variables import VARIABLES, validate
 
 sys.path.insert(0, str(Path(__file__).parent))

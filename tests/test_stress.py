@@ -22,7 +22,7 @@ from impactbeams.kernels.propagation import advance
 from impactbeams.model import build_free_phase, build_model
 from impactbeams.modes import contact_frequencies, contact_modes
 from impactbeams.params import Params
-from impactbeams.simulate import observables, pack_model, run, sample
+from impactbeams.trajectory import observables, pack_model, run, sample
 from references import (
     free_tip_gap,
     gauss_rule,

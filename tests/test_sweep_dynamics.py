@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from impactbeams.params import Params
-from impactbeams.simulate import simulate
 from impactbeams.sweep import DYNAMICS_OBSERVABLES, FIRST_IMPACT, run_sweep, sweep_from_mapping
+from impactbeams.trajectory import simulate
 
 T_MAX = 0.2
 DEFINITION = {

@@ -20,7 +20,7 @@ _LAZY = {
     "build_free_phase": "impactbeams.model",
     "load_sweep": "impactbeams.sweep",
     "run_sweep": "impactbeams.sweep",
-    "simulate": "impactbeams.simulate",
+    "simulate": "impactbeams.trajectory",
     "plot_dataset": "impactbeams.plotting",
 }
 

@@ -112,7 +112,7 @@ def _plot(args: argparse.Namespace) -> None:
 
 def _simulate(args: argparse.Namespace) -> None:
     from impactbeams.io import write_netcdf
-    from impactbeams.simulate import simulate
+    from impactbeams.trajectory import simulate
 
     output = Path(args.output)
     if output.suffix != ".nc":

@@ -256,7 +256,7 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
 def _dynamics_tables(params: Params, n_modes: int) -> tuple[np.ndarray, ...]:
     """One geometry's arrays for kernels.observables (both phases, projections)."""
     from impactbeams.model import build_model
-    from impactbeams.simulate import phase_tables
+    from impactbeams.trajectory import phase_tables
 
     model = build_model(params, n_modes)
     tables, shifts, accumulation = phase_tables(model)

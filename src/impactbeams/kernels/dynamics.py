@@ -1,6 +1,6 @@
 """Event-driven impact dynamics: exact propagation within phases, certified switching events.
 
-Plain-array interface, packed by :mod:`impactbeams.simulate`. Both phases have ``N = 2 n``
+Plain-array interface, packed by :mod:`impactbeams.trajectory`. Both phases have ``N = 2 n``
 modal coordinates; ``tables[phase]`` (phase ``FREE = 0``, ``CONTACT = 1``) has the rows
 
 * ``ROW_OMEGA``: natural frequencies (rad/s);

@@ -433,6 +433,6 @@ def _global_attributes(params: Params, n_modes: int, t_max: float, trajectory: T
         "t_end": trajectory.t_end,
         "n_phases": trajectory.time.size,
         "Conventions": "CF-1.8",
-        "title": "impact dynamics of two cantilevers with clearance (impactbeams.simulate)",
+        "title": "impact dynamics of two cantilevers with clearance (impactbeams.trajectory)",
         "history": f"{stamp} impactbeams {__version__} simulate",
     }
