@@ -87,8 +87,9 @@ def phase_energy_drift(params, t_max, n_modes, count=20_001):
     phase, q, v = sample(packed, traj, times)
     obs = observables(packed, phase, times, q, v)
     work, loss = np.empty(times.size), np.empty(times.size)
-    dyn.work_of_force(packed.tables, packed.phase_scalars, packed.settings, traj.time, traj.phase,
-                      traj.q, traj.v, traj.time.size, traj.t_end, times, work, loss)
+    dyn.work_of_force(packed.tables, packed.forces, packed.phase_scalars, packed.settings,
+                      traj.time, traj.phase, traj.q, traj.v, traj.time.size, traj.t_end, times,
+                      work, loss)
     balance = obs["energy"] - obs["unresolved_kinetic_energy"] - work + loss
     segment = np.searchsorted(traj.time, times, side="right") - 1
     start = balance[np.searchsorted(times, traj.time)][segment]
@@ -111,7 +112,8 @@ def test_propagation_at_and_near_resonance_against_long_double(horizon, detune):
     w, f = 246.12, 3.0
     big = w * (1 + detune)
     q, v = np.empty(1), np.empty(1)
-    advance(np.zeros(1), np.zeros(1), 0.0, horizon, np.array([w]), 0.0, np.array([f]), big, q, v)
+    advance(np.zeros(1), np.zeros(1), 0.0, horizon, np.array([w]), np.zeros(1),
+            np.array([complex(f)]), big, q, v)
     wl, bl, t = LD(w), LD(big), LD(horizon)
     half = (bl - wl) * t / 2
     sinc = LD(1) if half == 0 else np.sin(half) / half

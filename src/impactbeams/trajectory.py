@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 from impactbeams.kernels import dynamics as dyn
+from impactbeams.kernels.propagation import drive_amplitudes
 from impactbeams.model import ModalModel, build_model, unit_tip_shape
 from impactbeams.params import Params
 from impactbeams.variables import attributes
@@ -64,6 +65,7 @@ class Packed:
     model: ModalModel
     bases: tuple[_Basis, _Basis]
     tables: np.ndarray
+    forces: np.ndarray
     phase_scalars: np.ndarray
     shifts: np.ndarray
     settings: np.ndarray
@@ -82,10 +84,11 @@ def _bases(model: ModalModel) -> tuple[_Basis, _Basis]:
 def phase_tables(model: ModalModel) -> tuple[np.ndarray, np.ndarray, float]:
     """The dynamics kernel's per-geometry arrays: (tables, shifts, accumulation time in s).
 
-    ``tables[phase]`` has the rows of :mod:`impactbeams.kernels.dynamics`, with ``ROW_FORCE``
-    holding the drive b: multiply it by ``-Omega^2 F0`` for a given forcing.
+    ``tables[phase]`` has the rows of :mod:`impactbeams.kernels.dynamics`, with zero damping
+    ratios (``ROW_ZETA``): set them for a given damping.
     """
-    tables = np.array([[b.omega, b.drive, b.drive, b.event, b.tip1] for b in _bases(model)])
+    tables = np.array([[b.omega, 0.0 * b.omega, b.drive, b.event, b.tip1]
+                       for b in _bases(model)])
     shifts = np.array([model.free.static_shift, model.contact_static_shift])
     # an instantaneous impact re-closing within half a period of the fastest free mode is
     # the truncated bases disagreeing, not a new impact: see dynamics.run_events
@@ -98,12 +101,15 @@ def pack_model(model: ModalModel, t_max: float, search_span: float) -> Packed:
     c1, c2 = p.tip_compliance
     total = c1 + c2
     tables, shifts, accumulation = phase_tables(model)
-    tables[:, dyn.ROW_FORCE] *= -p.omega**2 * p.force_amplitude
+    tables[:, dyn.ROW_ZETA] = p.damping_ratio
+    forces = np.array([drive_amplitudes(table[dyn.ROW_DRIVE], table[dyn.ROW_OMEGA],
+                                        table[dyn.ROW_ZETA], p.force_amplitude, p.omega)
+                       for table in tables])
     phase_scalars = np.array([[p.clearance, -c1 * p.force_amplitude, 1.0],
                               [-p.clearance / total, c1 * p.force_amplitude / total, c2 / total]])
-    settings = np.array([p.clearance, c1, c2, p.force_amplitude, p.omega, p.damping_ratio,
-                         t_max, search_span, accumulation])
-    return Packed(model, _bases(model), tables, phase_scalars, shifts, settings)
+    settings = np.array([p.clearance, c1, c2, p.force_amplitude, p.omega, t_max, search_span,
+                         accumulation])
+    return Packed(model, _bases(model), tables, forces, phase_scalars, shifts, settings)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -149,7 +155,7 @@ def run(packed: Packed, max_events: int) -> Trajectory:
         phase = np.empty(capacity, dtype=np.int64)
         sustained = np.empty(capacity, dtype=np.bool_)
         q, v, end_q, end_v = (np.empty((capacity, q0.size)) for _ in range(4))
-        count, status, t_end = dyn.run_events(packed.tables, packed.phase_scalars,
+        count, status, t_end = dyn.run_events(packed.tables, packed.forces, packed.phase_scalars,
                                               packed.model.overlap, packed.shifts,
                                               packed.settings, q0, v0, time, phase,
                                               sustained, q, v, end_q, end_v)
@@ -222,8 +228,9 @@ def sample(packed: Packed, trajectory: Trajectory, times: np.ndarray,
     n_coords = trajectory.q.shape[1]
     q, v = np.empty((times.size, n_coords)), np.empty((times.size, n_coords))
     phase = np.empty(times.size, dtype=np.int64)
-    dyn.sample_states(packed.tables, packed.settings, trajectory.time, trajectory.phase,
-                      trajectory.q, trajectory.v, trajectory.time.size, times, q, v, phase)
+    dyn.sample_states(packed.tables, packed.forces, packed.settings, trajectory.time,
+                      trajectory.phase, trajectory.q, trajectory.v, trajectory.time.size, times,
+                      q, v, phase)
     return phase, q, v
 
 
@@ -243,9 +250,9 @@ def _time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray,
             out[name][index] = values
         out["in_contact"][index] = phase
     work, dissipation = np.empty(reached.size), np.empty(reached.size)
-    dyn.work_of_force(packed.tables, packed.phase_scalars, packed.settings, trajectory.time,
-                      trajectory.phase, trajectory.q, trajectory.v, trajectory.time.size,
-                      trajectory.t_end, times[reached], work, dissipation)
+    dyn.work_of_force(packed.tables, packed.forces, packed.phase_scalars, packed.settings,
+                      trajectory.time, trajectory.phase, trajectory.q, trajectory.v,
+                      trajectory.time.size, trajectory.t_end, times[reached], work, dissipation)
     out["work_of_force"][reached], out["damping_dissipation"][reached] = work, dissipation
     return out
 
@@ -263,28 +270,34 @@ def _gap_rate(obs: dict[str, np.ndarray]) -> np.ndarray:
     return obs["tip_velocity_1"] - obs["tip_velocity_2"]
 
 
-def _sine_integral(omega: float, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
-    """Integral of sin(Omega t) over [t0, t1] (s), without cancellation; 0 when Omega = 0."""
+def _harmonic_integrals(omega: float, t0: np.ndarray, t1: np.ndarray,
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """Integrals of sin(Omega t) and cos(Omega t) over [t0, t1] (s), without cancellation.
+
+    The sine integral is 0 when Omega = 0 (so is the sine), the cosine integral t1 - t0.
+    """
     if omega == 0.0:
-        return np.zeros_like(t0)
-    return 2.0 * np.sin(0.5 * omega * (t0 + t1)) * np.sin(0.5 * omega * (t1 - t0)) / omega
+        return np.zeros_like(t0), t1 - t0
+    middle, half_width = 0.5 * omega * (t0 + t1), np.sin(0.5 * omega * (t1 - t0))
+    return (2.0 * np.sin(middle) * half_width / omega,
+            2.0 * np.cos(middle) * half_width / omega)
 
 
 def _impulses(packed: Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarray:
     """Integral of R over contact segments ``k`` (N s), in closed form.
 
-    From r'' + 2 zeta omega r' + omega^2 r = f sin(Omega t):
-    omega^2 int r = f int sin - [r' + 2 zeta omega r], and R = R_qs + shear . r.
+    From r'' + 2 zeta omega r' + omega^2 r = Im(A e^(i Omega t)):
+    omega^2 int r = Re A int sin + Im A int cos - [r' + 2 zeta omega r], R = R_qs + shear . r.
     """
     p = packed.model.params
     c1, c2 = p.tip_compliance
     t0, t1 = trajectory.time[k], trajectory.segment_end[k]
-    sine = _sine_integral(p.omega, t0, t1)
-    table = packed.tables[dyn.CONTACT]
-    omega, force, shear = table[dyn.ROW_OMEGA], table[dyn.ROW_FORCE], table[dyn.ROW_EVENT]
+    sine, cosine = _harmonic_integrals(p.omega, t0, t1)
+    table, force = packed.tables[dyn.CONTACT], packed.forces[dyn.CONTACT]
+    omega, zeta, shear = table[dyn.ROW_OMEGA], table[dyn.ROW_ZETA], table[dyn.ROW_EVENT]
     jump = (trajectory.end_v[k] - trajectory.v[k]
-            + 2.0 * p.damping_ratio * omega * (trajectory.end_q[k] - trajectory.q[k]))
-    modal = (force * sine[:, None] - jump) / omega**2
+            + 2.0 * zeta * omega * (trajectory.end_q[k] - trajectory.q[k]))
+    modal = (force.real * sine[:, None] + force.imag * cosine[:, None] - jump) / omega**2
     quasi_static = (c1 * p.force_amplitude * sine - p.clearance * (t1 - t0)) / (c1 + c2)
     return quasi_static + modal @ shear
 
@@ -301,7 +314,8 @@ def _impact_table(packed: Packed, trajectory: Trajectory) -> dict[str, np.ndarra
     nan = np.full(k.size, np.nan)
     onset_rate, separation_rate = _gap_rate(before), _gap_rate(separated)
     peaks = np.array([
-        dyn.peak_force(packed.tables[dyn.CONTACT], packed.phase_scalars[dyn.CONTACT],
+        dyn.peak_force(packed.tables[dyn.CONTACT], packed.forces[dyn.CONTACT],
+                       packed.phase_scalars[dyn.CONTACT],
                        packed.settings, trajectory.q[j], trajectory.v[j], trajectory.time[j],
                        trajectory.segment_end[j])[0] for j in k])
     return {

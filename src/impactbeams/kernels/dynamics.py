@@ -4,18 +4,22 @@ Plain-array interface, packed by :mod:`impactbeams.trajectory`. Both phases have
 modal coordinates; ``tables[phase]`` (phase ``FREE = 0``, ``CONTACT = 1``) has the rows
 
 * ``ROW_OMEGA``: natural frequencies (rad/s);
-* ``ROW_DRIVE``: b with ``q'' + 2 zeta omega q' + omega^2 q = b F''(t)`` (m kg^1/2 / N); it is
-  also ``-<y_s_t, mode> / F'``, the quasi-static velocity field seen by each mode;
-* ``ROW_FORCE``: ``-Omega^2 F0 b``, the amplitude of the modal drive ``f sin(Omega t)``;
+* ``ROW_ZETA``: modal damping ratios;
+* ``ROW_DRIVE``: b with ``q'' + 2 zeta omega q' + omega^2 q = b (F'' + 2 zeta omega F')``
+  (m kg^1/2 / N): each mode's whole coordinate ``q - F' b`` is damped; b is also
+  ``-<y_s_t, mode> / F'``, the quasi-static velocity field seen by each mode;
 * ``ROW_EVENT``: weights of the phase's event function (gap ``g`` in m, contact force ``R``
   in N) on the modal coordinates;
 * ``ROW_TIP1``: tip displacement of each mode's shape on beam 1 (m per unit coordinate).
+
+``forces[phase]``: the complex amplitude ``A = F0 Omega b (-Omega + 2 i zeta omega)`` of each
+mode's drive ``Im(A e^(i Omega t))``.
 
 ``phase_scalars[phase]`` = (event constant, event sine amplitude, ``Q1' / F'``): the event
 function is ``e(t) = const + sine_amp sin(Omega t) + weights . q(t)`` and beam 1's tip load
 rate is ``Q1' = F'`` (free) or ``c2 F' / (c1 + c2)`` (contact).
 
-``settings`` = (clearance m, c1 m/N, c2 m/N, F0 N, Omega rad/s, zeta, t_max s, search span s,
+``settings`` = (clearance m, c1 m/N, c2 m/N, F0 N, Omega rad/s, t_max s, search span s,
 accumulation time s).
 Switching (MODEL.md) uses ``overlap[m, n] = <Z_m, Y_n>`` and the static shifts
 ``shifts[FREE] = <s, Y_n>``, ``shifts[CONTACT] = <s, Z_m>``:
@@ -36,10 +40,10 @@ from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.propagation import advance
 
 FREE, CONTACT = 0, 1
-ROW_OMEGA, ROW_DRIVE, ROW_FORCE, ROW_EVENT, ROW_TIP1 = 0, 1, 2, 3, 4
+ROW_OMEGA, ROW_ZETA, ROW_DRIVE, ROW_EVENT, ROW_TIP1 = 0, 1, 2, 3, 4
 SCALAR_CONST, SCALAR_SINE, SCALAR_LOAD_RATE = 0, 1, 2
-(SET_CLEARANCE, SET_C1, SET_C2, SET_F0, SET_OMEGA, SET_ZETA, SET_T_MAX, SET_SEARCH_SPAN,
- SET_ACCUMULATION) = range(9)
+(SET_CLEARANCE, SET_C1, SET_C2, SET_F0, SET_OMEGA, SET_T_MAX, SET_SEARCH_SPAN,
+ SET_ACCUMULATION) = range(8)
 
 COMPLETE, EVENT_LIMIT, STUCK = 0, 1, 2
 STATUS_NAMES = ("complete", "event_limit", "stuck")
@@ -83,14 +87,14 @@ def switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new):
 
 
 @kernel
-def propagate(table, q_s, v_s, t_s, t, settings, q, v):
-    """State at time t (s) of the phase with ``table`` from (q_s, v_s) at t_s, in closed form."""
-    advance(q_s, v_s, t_s, t - t_s, table[ROW_OMEGA], settings[SET_ZETA], table[ROW_FORCE],
+def propagate(table, force, q_s, v_s, t_s, t, settings, q, v):
+    """State at time t (s) of the phase with ``table``, ``force`` from (q_s, v_s) at t_s."""
+    advance(q_s, v_s, t_s, t - t_s, table[ROW_OMEGA], table[ROW_ZETA], force,
             settings[SET_OMEGA], q, v)
 
 
 @kernel
-def find_event(table, scalars, q_s, v_s, t_s, settings, q, v):
+def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v):
     """First root in (t_s, t_max] of the phase's event function, NaN if none.
 
     The certified search restarts from the exactly propagated state every ``search span``
@@ -101,30 +105,30 @@ def find_event(table, scalars, q_s, v_s, t_s, settings, q, v):
     t_a = t_s
     while t_a < t_max:
         t_b = min(t_a + span, t_max)
-        root = first_root(q_a, v_a, t_a, t_b, table[ROW_OMEGA], settings[SET_ZETA],
-                          table[ROW_FORCE], table[ROW_EVENT], scalars[SCALAR_CONST],
-                          scalars[SCALAR_SINE], settings[SET_OMEGA], q, v)
+        root = first_root(q_a, v_a, t_a, t_b, table[ROW_OMEGA], table[ROW_ZETA], force,
+                          table[ROW_EVENT], scalars[SCALAR_CONST], scalars[SCALAR_SINE],
+                          settings[SET_OMEGA], q, v)
         if not math.isnan(root):
             return root
-        propagate(table, q_s, v_s, t_s, t_b, settings, q_a, v_a)
+        propagate(table, force, q_s, v_s, t_s, t_b, settings, q_a, v_a)
         t_a = t_b
     return np.nan
 
 
 @kernel
-def rate_root(table, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v):
+def rate_root(table, force, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v):
     """First time in (t_s, t_end] where ``sign * e'`` reaches 0 from above; NaN if none.
 
     ``e' = sine_amp Omega cos(Omega t) + weights . q'(t)``. The velocities p = q' obey the
-    differentiated modal equations ``p'' + 2 zeta omega p' + omega^2 p = f Omega cos(Omega t)``:
-    the same oscillators driven by ``f Omega sin(Omega tau)`` in the shifted time
+    differentiated modal equations, driven by ``Im(i Omega A e^(i Omega t))``: the same
+    oscillators driven by ``Im(Omega A e^(i Omega tau))`` in the shifted time
     ``tau = t + pi / (2 Omega)``, so ``first_root`` applies unchanged.
     """
-    big_omega, zeta = settings[SET_OMEGA], settings[SET_ZETA]
-    omega, force = table[ROW_OMEGA], table[ROW_FORCE]
+    big_omega = settings[SET_OMEGA]
+    omega, zeta = table[ROW_OMEGA], table[ROW_ZETA]
     shift = 0.5 * math.pi / big_omega if big_omega > 0.0 else 0.0
-    acceleration = (force * math.sin(big_omega * t_s) - 2.0 * zeta * omega * v_s
-                    - omega * omega * q_s)
+    acceleration = (force.real * math.sin(big_omega * t_s) + force.imag * math.cos(big_omega * t_s)
+                    - 2.0 * zeta * omega * v_s - omega * omega * q_s)
     root = first_root(v_s, acceleration, t_s + shift, t_end + shift, omega, zeta,
                       force * big_omega, sign * table[ROW_EVENT], 0.0,
                       sign * scalars[SCALAR_SINE] * big_omega, big_omega, q, v)
@@ -132,14 +136,14 @@ def rate_root(table, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v):
 
 
 @kernel
-def _step_until(table, scalars, q_s, v_s, t_s, t, positive_rate, settings, q, v):
+def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings, q, v):
     """First time from t on, in growing steps of a few ulps, where e > 0 (or e' > 0).
 
     Moves a search off a root it has just located, where e (or e') is 0 to round-off.
     """
     step = 4.0 * _EPS * max(abs(t), 1e-300)
     for _ in range(64):
-        propagate(table, q_s, v_s, t_s, t, settings, q, v)
+        propagate(table, force, q_s, v_s, t_s, t, settings, q, v)
         value, slope = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
                                    scalars[SCALAR_SINE], settings[SET_OMEGA])
         if (slope if positive_rate else value) > 0.0:
@@ -150,7 +154,8 @@ def _step_until(table, scalars, q_s, v_s, t_s, t, positive_rate, settings, q, v)
 
 
 @kernel
-def find_switch(table, scalars, q_s, v_s, t_s, wait_rising, wait_falling, settings, q, v):
+def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling, settings, q,
+                v):
     """First time (s) from t_s at which e <= 0 while not rising (e' <= 0); NaN if none.
 
     e > 0 at the start: its first root (``find_event``). e <= 0 at the start: t_s, except
@@ -163,36 +168,37 @@ def find_switch(table, scalars, q_s, v_s, t_s, wait_rising, wait_falling, settin
     value, slope = event_value(q_s, v_s, t_s, table[ROW_EVENT], scalars[SCALAR_CONST],
                                scalars[SCALAR_SINE], settings[SET_OMEGA])
     if value > 0.0:
-        return find_event(table, scalars, q_s, v_s, t_s, settings, q, v)
+        return find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v)
     q_a, v_a, t_a = q_s.copy(), v_s.copy(), t_s
     if slope <= 0.0:
         if not wait_falling:
             return t_s
-        t_min = rate_root(table, scalars, -1.0, q_s, v_s, t_s, t_max, settings, q, v)
+        t_min = rate_root(table, force, scalars, -1.0, q_s, v_s, t_s, t_max, settings, q, v)
         if math.isnan(t_min):
             return np.nan
-        t_a = _step_until(table, scalars, q_s, v_s, t_s, t_min, True, settings, q_a, v_a)
+        t_a = _step_until(table, force, scalars, q_s, v_s, t_s, t_min, True, settings, q_a,
+                          v_a)
         value, _ = event_value(q_a, v_a, t_a, table[ROW_EVENT], scalars[SCALAR_CONST],
                                scalars[SCALAR_SINE], settings[SET_OMEGA])
         if value > 0.0:
-            return find_event(table, scalars, q_a, v_a, t_a, settings, q, v)
+            return find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v)
     elif not wait_rising:
         return t_s
-    t_peak = rate_root(table, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v)
+    t_peak = rate_root(table, force, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v)
     t_limit = t_max if math.isnan(t_peak) else t_peak
-    t_up = first_root(q_a, v_a, t_a, t_limit, table[ROW_OMEGA], settings[SET_ZETA],
-                      table[ROW_FORCE], -table[ROW_EVENT], -scalars[SCALAR_CONST],
-                      -scalars[SCALAR_SINE], settings[SET_OMEGA], q, v)
+    t_up = first_root(q_a, v_a, t_a, t_limit, table[ROW_OMEGA], table[ROW_ZETA], force,
+                      -table[ROW_EVENT], -scalars[SCALAR_CONST], -scalars[SCALAR_SINE],
+                      settings[SET_OMEGA], q, v)
     if math.isnan(t_up) or t_up >= t_limit:
         return t_peak
-    t_up = _step_until(table, scalars, q_a, v_a, t_a, t_up, False, settings, q, v)
+    t_up = _step_until(table, force, scalars, q_a, v_a, t_a, t_up, False, settings, q, v)
     q_up, v_up = q.copy(), v.copy()
-    return find_event(table, scalars, q_up, v_up, t_up, settings, q, v)
+    return find_event(table, force, scalars, q_up, v_up, t_up, settings, q, v)
 
 
 @kernel
-def run_events(tables, phase_scalars, overlap, shifts, settings, q0, v0, seg_time, seg_phase,
-               seg_sustained, seg_q, seg_v, end_q, end_v):
+def run_events(tables, forces, phase_scalars, overlap, shifts, settings, q0, v0, seg_time,
+               seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
     """Integrate from the free-phase state (q0, v0) at t = 0 to t_max, event by event.
 
     Segment k starts at ``seg_time[k]`` in phase ``seg_phase[k]`` with state
@@ -226,12 +232,12 @@ def run_events(tables, phase_scalars, overlap, shifts, settings, q0, v0, seg_tim
         seg_time[k], seg_phase[k], seg_sustained[k] = t, phase, sustained
         seg_q[k, :] = q
         seg_v[k, :] = v
-        table, scalars = tables[phase], phase_scalars[phase]
+        table, force, scalars = tables[phase], forces[phase], phase_scalars[phase]
         free = phase == FREE
-        t_event = find_switch(table, scalars, q, v, t, free or sustained, free and conflict,
-                              settings, q_end, v_end)
+        t_event = find_switch(table, force, scalars, q, v, t, free or sustained,
+                              free and conflict, settings, q_end, v_end)
         t_stop = settings[SET_T_MAX] if math.isnan(t_event) else t_event
-        propagate(table, q, v, t, t_stop, settings, q_end, v_end)
+        propagate(table, force, q, v, t, t_stop, settings, q_end, v_end)
         end_q[k, :] = q_end
         end_v[k, :] = v_end
         if math.isnan(t_event):
@@ -263,8 +269,8 @@ def _segment_index(seg_time, count, t, start):
 
 
 @kernel
-def sample_states(tables, settings, seg_time, seg_phase, seg_q, seg_v, count, times, q_out,
-                  v_out, phase_out):
+def sample_states(tables, forces, settings, seg_time, seg_phase, seg_q, seg_v, count, times,
+                  q_out, v_out, phase_out):
     """Modal state and phase at each of the ascending ``times`` (s), in closed form.
 
     At an event time the state after the switch is returned.
@@ -274,28 +280,32 @@ def sample_states(tables, settings, seg_time, seg_phase, seg_q, seg_v, count, ti
         k = _segment_index(seg_time, count, times[i], k)
         phase = seg_phase[k]
         phase_out[i] = phase
-        propagate(tables[phase], seg_q[k], seg_v[k], seg_time[k], times[i], settings,
-                  q_out[i], v_out[i])
+        propagate(tables[phase], forces[phase], seg_q[k], seg_v[k], seg_time[k], times[i],
+                  settings, q_out[i], v_out[i])
 
 
 @kernel
-def _power(table, scalars, settings, q_s, v_s, t_s, t, q, v):
-    """Power of F (W) and damping dissipation rate (W) at time t within one segment."""
-    propagate(table, q_s, v_s, t_s, t, settings, q, v)
-    f0, big_omega, zeta = settings[SET_F0], settings[SET_OMEGA], settings[SET_ZETA]
+def _power(table, force_drive, scalars, settings, q_s, v_s, t_s, t, q, v):
+    """Power of F (W) and damping dissipation rate (W) at time t within one segment.
+
+    The damping acts on each mode's whole coordinate, whose rate is ``q' - F' b``.
+    """
+    propagate(table, force_drive, q_s, v_s, t_s, t, settings, q, v)
+    f0, big_omega = settings[SET_F0], settings[SET_OMEGA]
     force = f0 * math.sin(big_omega * t)
     force_rate = f0 * big_omega * math.cos(big_omega * t)
     tip_rate = -settings[SET_C1] * scalars[SCALAR_LOAD_RATE] * force_rate
     dissipation = 0.0
-    omega, drive, tip1 = table[ROW_OMEGA], table[ROW_DRIVE], table[ROW_TIP1]
+    omega, zeta, drive, tip1 = table[ROW_OMEGA], table[ROW_ZETA], table[ROW_DRIVE], table[ROW_TIP1]
     for j in range(q.size):
         tip_rate += tip1[j] * v[j]
-        dissipation += 2.0 * zeta * omega[j] * v[j] * (v[j] - force_rate * drive[j])
+        modal_rate = v[j] - force_rate * drive[j]
+        dissipation += 2.0 * zeta[j] * omega[j] * modal_rate * modal_rate
     return -force * tip_rate, dissipation
 
 
 @kernel
-def _integrate_power(table, scalars, settings, q_s, v_s, t_s, a, b, q, v):
+def _integrate_power(table, force, scalars, settings, q_s, v_s, t_s, a, b, q, v):
     """Integrals (J) of the power of F and of the dissipation over [a, b] in one segment.
 
     Composite 12-point Gauss-Legendre with panels no longer than half the shortest period
@@ -311,15 +321,15 @@ def _integrate_power(table, scalars, settings, q_s, v_s, t_s, a, b, q, v):
         middle = a + (p + 0.5) * width
         for j in range(_GAUSS_NODES.size):
             t = middle + 0.5 * width * _GAUSS_NODES[j]
-            power, loss = _power(table, scalars, settings, q_s, v_s, t_s, t, q, v)
+            power, loss = _power(table, force, scalars, settings, q_s, v_s, t_s, t, q, v)
             work += 0.5 * width * _GAUSS_WEIGHTS[j] * power
             dissipated += 0.5 * width * _GAUSS_WEIGHTS[j] * loss
     return work, dissipated
 
 
 @kernel
-def work_of_force(tables, phase_scalars, settings, seg_time, seg_phase, seg_q, seg_v, count,
-                  t_end, times, work_out, dissipation_out):
+def work_of_force(tables, forces, phase_scalars, settings, seg_time, seg_phase, seg_q, seg_v,
+                  count, t_end, times, work_out, dissipation_out):
     """Work done by F and energy dissipated by damping from t = 0 to each of ``times`` (J).
 
     ``times`` ascending in [0, t_end]; ``t_end`` is where the last segment stops.
@@ -329,29 +339,30 @@ def work_of_force(tables, phase_scalars, settings, seg_time, seg_phase, seg_q, s
     work, dissipated, t_done, i = 0.0, 0.0, 0.0, 0
     for k in range(count):
         table, scalars = tables[seg_phase[k]], phase_scalars[seg_phase[k]]
+        force = forces[seg_phase[k]]
         seg_end = seg_time[k + 1] if k + 1 < count else t_end
         while i < times.size and (times[i] < seg_end or k + 1 == count):
-            dw, dd = _integrate_power(table, scalars, settings, seg_q[k], seg_v[k],
+            dw, dd = _integrate_power(table, force, scalars, settings, seg_q[k], seg_v[k],
                                       seg_time[k], t_done, times[i], q, v)
             work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, times[i])
             work_out[i], dissipation_out[i] = work, dissipated
             i += 1
-        dw, dd = _integrate_power(table, scalars, settings, seg_q[k], seg_v[k], seg_time[k],
-                                  t_done, seg_end, q, v)
+        dw, dd = _integrate_power(table, force, scalars, settings, seg_q[k], seg_v[k],
+                                  seg_time[k], t_done, seg_end, q, v)
         work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, seg_end)
 
 
 @kernel
-def _contact_force(table, scalars, settings, q_s, v_s, t_s, t, q, v):
+def _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t, q, v):
     """Contact force R(t) (N) within a contact segment."""
-    propagate(table, q_s, v_s, t_s, t, settings, q, v)
+    propagate(table, force, q_s, v_s, t_s, t, settings, q, v)
     value, _ = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
                            scalars[SCALAR_SINE], settings[SET_OMEGA])
     return value
 
 
 @kernel
-def peak_force(table, scalars, settings, q_s, v_s, t_s, t_e):
+def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
     """Largest contact force (N) over the contact segment [t_s, t_e] and its time (s).
 
     R is sampled eight times per period of the fastest mode, then the best sample is refined
@@ -361,23 +372,23 @@ def peak_force(table, scalars, settings, q_s, v_s, t_s, t_e):
     fastest = max(np.max(table[ROW_OMEGA]), settings[SET_OMEGA])
     n_steps = max(2, int(math.ceil((t_e - t_s) * fastest * 4.0 / math.pi)))
     step = (t_e - t_s) / n_steps
-    best_t, best = t_s, _contact_force(table, scalars, settings, q_s, v_s, t_s, t_s, q, v)
+    best_t, best = t_s, _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t_s, q, v)
     for i in range(1, n_steps + 1):
         t = t_s + i * step
-        value = _contact_force(table, scalars, settings, q_s, v_s, t_s, t, q, v)
+        value = _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t, q, v)
         if value > best:
             best_t, best = t, value
     lo, hi = max(t_s, best_t - step), min(t_e, best_t + step)
     while hi - lo > 4.0 * _EPS * max(abs(hi), 1.0):
         a = hi - _GOLDEN * (hi - lo)
         b = lo + _GOLDEN * (hi - lo)
-        if (_contact_force(table, scalars, settings, q_s, v_s, t_s, a, q, v)
-                >= _contact_force(table, scalars, settings, q_s, v_s, t_s, b, q, v)):
+        if (_contact_force(table, force, scalars, settings, q_s, v_s, t_s, a, q, v)
+                >= _contact_force(table, force, scalars, settings, q_s, v_s, t_s, b, q, v)):
             hi = b
         else:
             lo = a
     t_mid = 0.5 * (lo + hi)
-    value = _contact_force(table, scalars, settings, q_s, v_s, t_s, t_mid, q, v)
+    value = _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t_mid, q, v)
     if value > best:
         return value, t_mid
     return best, best_t

@@ -39,12 +39,14 @@ def event_value(q, v, t, weights, const, sine_amp, forcing_frequency):
 
 @kernel
 def event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp, forcing_frequency):
-    """e''(t) from the modal equations: q'' = f sin(Omega t) - 2 zeta omega q' - omega^2 q."""
-    drive = math.sin(forcing_frequency * t)
-    value = -sine_amp * forcing_frequency**2 * drive
+    """e''(t) from the modal equations: q'' = Im(A e^(i Omega t)) - 2 zeta omega q' - omega^2 q."""
+    sine = math.sin(forcing_frequency * t)
+    cosine = math.cos(forcing_frequency * t)
+    value = -sine_amp * forcing_frequency**2 * sine
     for j in range(q.size):
         w = omega[j]
-        value += weights[j] * (force[j] * drive - 2.0 * zeta * w * v[j] - w * w * q[j])
+        drive = force[j].real * sine + force[j].imag * cosine
+        value += weights[j] * (drive - 2.0 * zeta[j] * w * v[j] - w * w * q[j])
     return value
 
 
@@ -52,13 +54,13 @@ def event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp, forcing_f
 def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
     """Split one mode into a steady state at Omega and a free transient, for bounds.
 
-    Returns ``(steady, amplitude, curvature)``: the steady state's phasor ``f / D`` (0 if not
+    Returns ``(steady, amplitude, curvature)``: the steady state's phasor ``A / D`` (0 if not
     used), a bound on the rest's |q| and one on the rest's |q''| over [t, t + span], with
-    ``D = omega^2 - Omega^2 + 2 i sigma Omega``. The transient has constant or decaying
-    amplitude R, so |q| <= R and |q''| <= omega^2 R for any span. A mode at (or too near)
-    resonance is bounded instead by its free amplitude plus the growth of its driven part
-    from rest: |x| <= |f| span / omega_d, |x''| <= |f| (1 + 2 sigma span omega / omega_d +
-    omega^2 min(span^2 / 2, span / omega_d)).
+    ``D = omega^2 - Omega^2 + 2 i sigma Omega`` and the drive Im(A e^(i Omega t)), |drive| <=
+    |A|. The transient has constant or decaying amplitude R, so |q| <= R and |q''| <=
+    omega^2 R for any span. A mode at (or too near) resonance is bounded instead by its free
+    amplitude plus the growth of its driven part from rest: |x| <= |A| span / omega_d,
+    |x''| <= |A| (1 + 2 sigma span omega / omega_d + omega^2 min(span^2 / 2, span / omega_d)).
     """
     root = math.sqrt(1.0 - zeta * zeta)
     sigma, wd = zeta * w, w * root
@@ -67,7 +69,7 @@ def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
     grow_curvature = w * w * free + abs(f) * (
         1.0 + 2.0 * sigma * span / root + w * w * min(0.5 * span * span, span / wd))
     D = complex(w * w - forcing_frequency**2, 2.0 * sigma * forcing_frequency)
-    if f == 0.0 or D == 0:
+    if f == 0 or D == 0:
         return 0j, grow, grow_curvature
     steady = f / D
     P = steady * rotation
@@ -96,9 +98,10 @@ def phase_bounds(q, v, t, span, omega, zeta, force, weights, sine_amp, forcing_f
     band = curvature = jerk = 0.0
     any_span = True
     for j in range(q.size):
-        steady, amplitude, mode_curvature = _mode_split(q[j], v[j], omega[j], zeta, force[j],
-                                                        forcing_frequency, rotation, span)
-        if steady == 0 and force[j] != 0.0:
+        steady, amplitude, mode_curvature = _mode_split(q[j], v[j], omega[j], zeta[j],
+                                                        force[j], forcing_frequency, rotation,
+                                                        span)
+        if steady == 0 and force[j] != 0:
             any_span = False
         coherent += weights[j] * steady
         band += abs(weights[j]) * amplitude
@@ -204,9 +207,10 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
                forcing_frequency, q, v):
     """First time in (t_s, t_end] where e(t) reaches 0 from above, or NaN if none.
 
-    q_s, v_s: modal state at t_s (s); omega, zeta, force, forcing_frequency: the phase's
-    oscillators (see ``advance``); weights, const, sine_amp: the event function. ``q``, ``v``
-    are work arrays. A value within round-off of 0 counts as a root (grazing at round-off).
+    q_s, v_s: modal state at t_s (s); omega, zeta (per mode), force (complex drive amplitudes),
+    forcing_frequency: the phase's oscillators (see ``advance``); weights, const, sine_amp:
+    the event function. ``q``, ``v`` are work arrays. A value within round-off of 0 counts as
+    a root (grazing at round-off).
     """
     span_cap = 2.0 * math.pi / np.min(omega)  # bounds hold over a step of at most this span
     coherent, band, curvature, jerk, any_span = phase_bounds(q_s, v_s, t_s, t_end - t_s,

@@ -1,14 +1,15 @@
 """Exact (closed-form) propagation of harmonically driven modal oscillators.
 
-Each modal coordinate obeys ``q'' + 2 zeta omega q' + omega^2 q = f sin(Omega t)``. Over a step
-``h`` from ``t0`` the solution is the free response plus the Duhamel integral, written with
-``lambda = -zeta omega + i omega_d`` and the exponential-integrator function
-``phi1(z) = (e^z - 1) / z``:
+Each modal coordinate obeys ``q'' + 2 zeta omega q' + omega^2 q = Im(A e^(i Omega t))``: a drive
+with a sine part ``Re A`` and a cosine part ``Im A`` (the cosine part comes from damping the
+quasi-static velocity, see docs/model.md). Over a step ``h`` from ``t0`` the solution is the
+free response plus the Duhamel integral, written with ``lambda = -zeta omega + i omega_d`` and
+the exponential-integrator function ``phi1(z) = (e^z - 1) / z``:
 
     E_pm(h) = int_0^h e^(lambda (h - s)) e^(+-i Omega s) ds = h e^(lambda h) phi1(mu_pm h),
     mu_pm = +-i Omega - lambda,
-    x(h)  = f / (2 omega_d) Re[e^(-i Omega t0) E_m - e^(i Omega t0) E_p],
-    x'(h) = f / (2 omega_d) Re[lambda (e^(-i Omega t0) E_m - e^(i Omega t0) E_p)].
+    K     = conj(A) e^(-i Omega t0) E_m - A e^(i Omega t0) E_p,
+    x(h)  = Re[K] / (2 omega_d),   x'(h) = Re[lambda K] / (2 omega_d).
 
 ``phi1`` is evaluated with ``expm1`` near 0, so the response is exact at resonance
 ``Omega = omega_d`` and loses no digits within 1e-12 of it (no 0/0). Units: seconds, rad/s,
@@ -16,6 +17,8 @@ modal coordinates in m kg^1/2.
 """
 
 import math
+
+import numpy as np
 
 from impactbeams.kernels.jit import kernel
 
@@ -48,17 +51,17 @@ def advance(q0, v0, t0, h, omega, zeta, force, forcing_frequency, q, v):
     """Advance every mode by ``h`` (s) from time ``t0`` (s), writing into ``q`` and ``v``.
 
     q0, v0: modal displacements and velocities at t0; omega: natural frequencies (rad/s);
-    zeta: damping ratio (0 <= zeta < 1); force: amplitude f of the f sin(Omega t) drive of
-    each mode; forcing_frequency: Omega (rad/s). ``q``/``v`` may alias ``q0``/``v0``.
+    zeta: damping ratio of each mode (0 <= zeta < 1); force: complex amplitude A of each
+    mode's drive Im(A e^(i Omega t)); forcing_frequency: Omega (rad/s). ``q``/``v`` may alias
+    ``q0``/``v0``.
     """
-    root = math.sqrt(1.0 - zeta * zeta)
     phase_plus = complex(math.cos(forcing_frequency * t0), math.sin(forcing_frequency * t0))
     phase_minus = phase_plus.conjugate()
     step_plus = complex(math.cos(forcing_frequency * h), math.sin(forcing_frequency * h))
     step_minus = step_plus.conjugate()
     for j in range(omega.size):
         w = omega[j]
-        sigma, wd = zeta * w, w * root
+        sigma, wd = zeta[j] * w, w * math.sqrt(1.0 - zeta[j] * zeta[j])
         decay = math.exp(-sigma * h)
         c, s = math.cos(wd * h), math.sin(wd * h)
         qj, vj = q0[j], v0[j]
@@ -72,7 +75,34 @@ def advance(q0, v0, t0, h, omega, zeta, force, forcing_frequency, q, v):
         growth = decay * complex(c, s)
         e_plus = duhamel(lam, complex(sigma, forcing_frequency - wd), growth, step_plus, h)
         e_minus = duhamel(lam, complex(sigma, -forcing_frequency - wd), growth, step_minus, h)
-        combined = phase_minus * e_minus - phase_plus * e_plus
-        scale = f / (2.0 * wd)
-        q[j] = q_free + scale * combined.real
-        v[j] = v_free + scale * (lam * combined).real
+        if f.imag == 0.0:  # a sine drive: the real form, fewer roundings
+            combined = phase_minus * e_minus - phase_plus * e_plus
+            scale = f.real / (2.0 * wd)
+            q[j] = q_free + scale * combined.real
+            v[j] = v_free + scale * (lam * combined).real
+        else:
+            combined = f.conjugate() * phase_minus * e_minus - f * phase_plus * e_plus
+            q[j] = q_free + combined.real / (2.0 * wd)
+            v[j] = v_free + (lam * combined).real / (2.0 * wd)
+
+
+@kernel
+def drive_amplitude(drive, omega, zeta, force_amplitude, forcing_frequency):
+    """Complex amplitude A of a mode's drive ``b (F'' + 2 zeta omega F')``, as Im(A e^(i Omega t)).
+
+    F = F0 sin(Omega t) (N); ``drive`` is b (m kg^1/2 / N), ``omega`` the mode's natural
+    frequency (rad/s), ``zeta`` its damping ratio: A = F0 Omega b (-Omega + 2 i zeta omega).
+    """
+    rate = force_amplitude * forcing_frequency * drive
+    return complex(-forcing_frequency * forcing_frequency * force_amplitude * drive,
+                   2.0 * zeta * omega * rate)
+
+
+@kernel
+def drive_amplitudes(drive, omega, zeta, force_amplitude, forcing_frequency):
+    """``drive_amplitude`` of every mode (arrays ``drive``, ``omega``, ``zeta``)."""
+    out = np.empty(drive.size, dtype=np.complex128)
+    for j in range(drive.size):
+        out[j] = drive_amplitude(drive[j], omega[j], zeta[j], force_amplitude,
+                                 forcing_frequency)
+    return out
