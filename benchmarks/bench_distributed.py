@@ -32,7 +32,6 @@ import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
 from impactbeams import __version__  # noqa: E402
-from impactbeams.distributed import dask_client, dask_runner  # noqa: E402
 from impactbeams.sweep import (  # noqa: E402
     compute_chunk,
     default_chunk_cells,
@@ -40,6 +39,7 @@ from impactbeams.sweep import (  # noqa: E402
     run_sweep,
     sweep_from_mapping,
 )
+from impactbeams.sweep.dask_runner import dask_client, dask_runner  # noqa: E402
 
 THRESHOLD = 0.10  # the chunk size reported is the smallest with overhead below this
 

@@ -11,8 +11,8 @@ import pytest
 import xarray as xr
 
 from impactbeams.cli import main
-from impactbeams.distributed import dask_client, dask_runner, default_threads_per_task
 from impactbeams.sweep import run_sweep, sweep_from_mapping
+from impactbeams.sweep.dask_runner import dask_client, dask_runner, default_threads_per_task
 
 GRID = {  # 40 x 30 cells, a fraction of a second of serial work
     "t_max": 0.3,
@@ -114,9 +114,9 @@ def test_interrupted_client_resumes_from_saved_chunks(client, tmp_path):
 
 
 def test_workers_of_another_version_are_refused(client, monkeypatch):
-    import impactbeams.distributed
+    import impactbeams.sweep.dask_runner as dask_runner_module
 
-    monkeypatch.setattr(impactbeams.distributed, "__version__", "0.0.0")  # client side only
+    monkeypatch.setattr(dask_runner_module, "__version__", "0.0.0")  # client side only
     sweep = sweep_from_mapping(GRID, source="grid")
     with pytest.raises(RuntimeError, match="install the same version on every worker"):
         run_sweep(sweep, progress=False, runner=dask_runner(client))

@@ -15,7 +15,8 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from impactbeams.params import MATERIAL_KEYS, MATERIAL_UNITS, UNITS, ParameterError, Params
+from impactbeams.params import ParameterError, Params
+from impactbeams.variables import PARAMETERS
 
 if TYPE_CHECKING:
     from impactbeams.sweep import ChunkRunner
@@ -28,18 +29,16 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("model parameters (SI units; override --params)")
     group.add_argument("--params", metavar="FILE.toml",
                        help="TOML file with a [params] table (unspecified keys take defaults)")
-    names = dict(UNITS)
-    names.update({k + i: MATERIAL_UNITS[k] for k in MATERIAL_KEYS for i in ("1", "2")})
-    for name, unit in names.items():
+    for name, parameter in PARAMETERS.items():
         flags = ["--" + name.replace("_", "-"), *_ALIASES.get(name, [])]
-        group.add_argument(*flags, dest=name, type=float, metavar="VALUE", help=f"({unit})")
+        group.add_argument(*flags, dest=name, type=float, metavar="VALUE",
+                           help=f"({parameter.units})")
 
 
 def params_from_args(args: argparse.Namespace) -> Params:
     """The parameters of --params (or the defaults) with the command-line overrides applied."""
     params = Params.from_toml(args.params) if args.params else Params()
-    names = list(UNITS) + [k + i for k in MATERIAL_KEYS for i in ("1", "2")]
-    overrides = {n: getattr(args, n) for n in names if getattr(args, n, None) is not None}
+    overrides = {n: getattr(args, n) for n in PARAMETERS if getattr(args, n, None) is not None}
     return params.replace(**overrides) if overrides else params
 
 
@@ -88,7 +87,7 @@ def _cluster_runner(args: argparse.Namespace) -> Iterator[ChunkRunner | None]:
     if args.scheduler is None and args.local_cluster is None:
         yield None
         return
-    from impactbeams.distributed import dask_client, dask_runner, require_dask
+    from impactbeams.sweep.dask_runner import dask_client, dask_runner, require_dask
 
     try:
         require_dask()

@@ -31,6 +31,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from impactbeams.variables import PARAMETERS
+
 STEEL_E = 210e9  # Pa
 STEEL_RHO = 7850.0  # kg/m^3
 STRIP_WIDTH = 5e-3  # m
@@ -40,24 +42,6 @@ STRIP_THICKNESS = PAPER_A / math.sqrt(STEEL_E / (12.0 * STEEL_RHO))  # m, gives 
 MATERIAL_KEYS = ("E", "rho", "width", "thickness")
 MATERIAL_DEFAULTS = {"E": STEEL_E, "rho": STEEL_RHO, "width": STRIP_WIDTH,
                      "thickness": STRIP_THICKNESS}
-MATERIAL_UNITS = {"E": "Pa", "rho": "kg/m^3", "width": "m", "thickness": "m"}
-
-UNITS = {
-    "l1": "m", "l2": "m", "EI1": "N m^2", "EI2": "N m^2", "rhoA1": "kg/m", "rhoA2": "kg/m",
-    "clearance": "m", "force_amplitude": "N", "omega": "rad/s", "uplift1": "m", "uplift2": "m",
-    "damping_ratio": "1",
-}
-LONG_NAMES = {
-    "l1": "length of beam 1", "l2": "length of beam 2",
-    "EI1": "bending stiffness of beam 1", "EI2": "bending stiffness of beam 2",
-    "rhoA1": "mass per unit length of beam 1", "rhoA2": "mass per unit length of beam 2",
-    "clearance": "clearance between the tips at rest (Delta)",
-    "force_amplitude": "amplitude of the tip force on beam 1 (F0)",
-    "omega": "forcing frequency (Omega)",
-    "uplift1": "initial tip uplift of beam 1 (delta_1)",
-    "uplift2": "initial tip uplift of beam 2 (delta_2)",
-    "damping_ratio": "modal damping ratio (zeta)",
-}
 
 
 class ParameterError(ValueError):
@@ -111,13 +95,15 @@ class Params:
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
-            value = require_finite(field.name, getattr(self, field.name), UNITS[field.name])
+            value = require_finite(field.name, getattr(self, field.name),
+                                   PARAMETERS[field.name].units)
             object.__setattr__(self, field.name, value)
         for name in ("l1", "l2", "EI1", "EI2", "rhoA1", "rhoA2", "clearance"):
-            require(name, getattr(self, name), getattr(self, name) > 0, "must be > 0", UNITS[name])
+            require(name, getattr(self, name), getattr(self, name) > 0, "must be > 0",
+                    PARAMETERS[name].units)
         for name in ("force_amplitude", "omega"):
             require(name, getattr(self, name), getattr(self, name) >= 0, "must be >= 0",
-                    UNITS[name])
+                    PARAMETERS[name].units)
         require("damping_ratio", self.damping_ratio, 0 <= self.damping_ratio < 1,
                 "must satisfy 0 <= damping_ratio < 1 (underdamped modes)")
         gap = self.initial_gap
@@ -158,11 +144,10 @@ class Params:
         ``source`` names where the mapping came from, for error messages.
         """
         values = dict(mapping)
-        known = set(UNITS) | {k + i for k in MATERIAL_KEYS for i in ("1", "2")}
         for key in values:
-            if key not in known:
-                raise ParameterError(
-                    f"unknown parameter {key!r} in {source}; allowed: {', '.join(sorted(known))}")
+            if key not in PARAMETERS:
+                raise ParameterError(f"unknown parameter {key!r} in {source}; allowed: "
+                                     f"{', '.join(sorted(PARAMETERS))}")
         for i in ("1", "2"):
             material = {k: values.pop(k + i) for k in MATERIAL_KEYS if k + i in values}
             if not material:
@@ -173,7 +158,7 @@ class Params:
                     f"{source} gives both {', '.join(direct)} and material keys "
                     f"{', '.join(k + i for k in material)} for beam {i}: give one or the other")
             for key, value in material.items():
-                unit = MATERIAL_UNITS[key]
+                unit = PARAMETERS[key + i].units
                 require(key + i, value, require_finite(key + i, value, unit) > 0, "must be > 0",
                         unit)
             EI, rhoA = _strip_stiffness({**MATERIAL_DEFAULTS, **material})

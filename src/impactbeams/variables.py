@@ -1,13 +1,52 @@
-"""Registry of output variables: one place for names, dimensions, units and descriptions.
+"""The one registry of names: data variables, parameters and global attributes.
 
-Used both to build Datasets (:func:`attributes`) and to check them (:func:`validate`).
+Parameters appear as coordinates (swept) or attributes (fixed). Used both to build Datasets
+(:func:`attributes`, :func:`parameter_attributes`, :func:`global_attributes`) and to check
+them (:func:`validate`). Imports nothing heavy: :mod:`impactbeams.params` takes its units
+from here.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import datetime
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
-import xarray as xr
+if TYPE_CHECKING:
+    import xarray as xr
+
+CONVENTIONS = "CF-1.8"
+REFERENCES = "Dzyubak & Bhaskar, Procedia Engineering 199 (2017) 589-594"
+
+
+@dataclasses.dataclass(frozen=True)
+class Parameter:
+    """A model parameter: its CF ``units`` and ``long_name`` (as a coordinate or attribute)."""
+
+    units: str
+    long_name: str
+
+
+_BEAM_PARAMETERS = {"l": ("m", "length"), "EI": ("N m^2", "bending stiffness"),
+                    "rhoA": ("kg/m", "mass per unit length")}
+# material alternative to EI/rhoA (see impactbeams.params)
+_MATERIAL_PARAMETERS = {"E": ("Pa", "Young's modulus"), "rho": ("kg/m^3", "density"),
+                        "width": ("m", "strip width"), "thickness": ("m", "strip thickness")}
+
+# every parameter that can be given, fixed or swept, in the order of options and messages
+PARAMETERS: dict[str, Parameter] = {
+    **{key + i: Parameter(unit, f"{name} of beam {i}")
+       for key, (unit, name) in _BEAM_PARAMETERS.items() for i in ("1", "2")},
+    "clearance": Parameter("m", "clearance between the tips at rest (Delta)"),
+    "force_amplitude": Parameter("N", "amplitude of the tip force on beam 1 (F0)"),
+    "omega": Parameter("rad/s", "forcing frequency (Omega)"),
+    "uplift1": Parameter("m", "initial tip uplift of beam 1 (delta_1)"),
+    "uplift2": Parameter("m", "initial tip uplift of beam 2 (delta_2)"),
+    "damping_ratio": Parameter("1", "modal damping ratio (zeta)"),
+    **{key + i: Parameter(unit, f"{name} of beam {i}")
+       for key, (unit, name) in _MATERIAL_PARAMETERS.items() for i in ("1", "2")},
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -138,6 +177,33 @@ def attributes(name: str) -> dict[str, str]:
     variable = VARIABLES[name]
     return {"units": variable.units, "long_name": variable.long_name,
             "description": variable.description}
+
+
+def parameter_attributes(name: str) -> dict[str, str]:
+    """CF attributes (units, long_name) of a parameter used as a coordinate."""
+    parameter = PARAMETERS[name]
+    return {"units": parameter.units, "long_name": parameter.long_name}
+
+
+def global_attributes(title: str, action: str, parameters: Mapping[str, Any],
+                      **run: Any) -> dict[str, Any]:
+    """Global attributes of a Dataset: CF conventions, provenance and every input parameter.
+
+    ``action`` completes the ``history`` line (timestamp, package version, what was run);
+    ``parameters`` are the model parameters by name (SI units), ``run`` the run's settings.
+    """
+    from impactbeams import __version__
+
+    now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return {
+        "Conventions": CONVENTIONS,
+        "title": title,
+        "history": f"{now}: impactbeams {__version__} {action}",
+        "source": f"impactbeams {__version__}",
+        "references": REFERENCES,
+        **run,
+        **parameters,
+    }
 
 
 def validate(dataset: xr.Dataset) -> None:

@@ -4,14 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import matplotlib.colors
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
-
-from impactbeams.params import ParameterError  # noqa: E402
+from impactbeams.params import ParameterError
 
 
 def _label(coordinate: xr.DataArray) -> str:
@@ -33,7 +31,8 @@ def plot_map(dataset: xr.Dataset, path: str | Path, variable: str = "first_impac
     x_name, y_name = field.dims
     x, y = dataset[x_name], dataset[y_name]
     values = field.transpose(y_name, x_name).values
-    figure, axes = plt.subplots(figsize=(7, 5), constrained_layout=True)
+    figure = Figure(figsize=(7, 5), layout="constrained")
+    axes = figure.subplots()
     finite = values[np.isfinite(values)]
     if finite.size:
         # times before impact span decades: log-spaced levels when they are all positive
@@ -61,4 +60,3 @@ def plot_map(dataset: xr.Dataset, path: str | Path, variable: str = "first_impac
     t_max = dataset.attrs.get("t_max")
     axes.set_title(f"{field.attrs['long_name']}; hatched: no impact by t_max = {t_max} s")
     figure.savefig(path, dpi=150)
-    plt.close(figure)

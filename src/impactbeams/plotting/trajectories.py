@@ -8,12 +8,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
+import numpy as np
+import xarray as xr
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 _MICRO = 1e6  # m -> um
 _MILLI = 1e3  # N -> mN, s -> ms
@@ -25,12 +23,11 @@ def _title(dataset: xr.Dataset) -> str:
             f"rad/s, Delta = {a.get('clearance', np.nan):g} m, {a.get('n_modes', '?')} modes")
 
 
-def _save(figure: plt.Figure, path: str | Path) -> None:
+def _save(figure: Figure, path: str | Path) -> None:
     figure.savefig(path, dpi=150)
-    plt.close(figure)
 
 
-def plot_tips(axis: plt.Axes, dataset: xr.Dataset) -> None:
+def plot_tips(axis: Axes, dataset: xr.Dataset) -> None:
     """Tip deflections y1(l1) and y2(l2) - Delta (um) against time (s), as the paper's Fig. 3a."""
     t = dataset.time.values
     axis.plot(t, dataset.tip_deflection_1 * _MICRO, lw=0.7, label="y1(l1)")
@@ -41,7 +38,8 @@ def plot_tips(axis: plt.Axes, dataset: xr.Dataset) -> None:
 
 def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
     """Tips, contact force, restitution per impact and energy of one run, into ``path``."""
-    figure, axes = plt.subplots(4, 1, figsize=(8, 10), sharex=True, constrained_layout=True)
+    figure = Figure(figsize=(8, 10), layout="constrained")
+    axes = figure.subplots(4, 1, sharex=True)
     t = dataset.time.values
     plot_tips(axes[0], dataset)
     axes[1].plot(t, dataset.contact_force * _MILLI, lw=0.7, color="C3")
@@ -62,7 +60,7 @@ def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
 
 def plot_surfaces(dataset: xr.Dataset, path: str | Path) -> None:
     """Deflection surfaces y_i(x_i, t) of both beams (the paper's Fig. 2); needs the fields."""
-    figure = plt.figure(figsize=(11, 4.5), constrained_layout=True)
+    figure = Figure(figsize=(11, 4.5), layout="constrained")
     for i, beam in enumerate(("1", "2")):
         axis = figure.add_subplot(1, 2, i + 1, projection="3d")
         field = dataset["deflection_" + beam]
@@ -79,7 +77,8 @@ def plot_surfaces(dataset: xr.Dataset, path: str | Path) -> None:
 
 def plot_paper_fig3(dataset: xr.Dataset, path: str | Path) -> None:
     """Tips (a), coefficient of restitution (b) and impact force (c), as the paper's Fig. 3."""
-    figure, axes = plt.subplots(3, 1, figsize=(8, 8), constrained_layout=True)
+    figure = Figure(figsize=(8, 8), layout="constrained")
+    axes = figure.subplots(3, 1)
     plot_tips(axes[0], dataset)
     axes[0].set_xlabel("t (s)")
     released = np.isfinite(dataset.restitution_coefficient.values)
@@ -99,7 +98,8 @@ def plot_paper_fig3(dataset: xr.Dataset, path: str | Path) -> None:
 def plot_divergence(datasets: Sequence[xr.Dataset], labels: Sequence[str],
                     path: str | Path) -> None:
     """Tips of nearby trajectories on common axes (the paper's Fig. 4), and their distance."""
-    figure, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True, constrained_layout=True)
+    figure = Figure(figsize=(8, 8), layout="constrained")
+    axes = figure.subplots(3, 1, sharex=True)
     for dataset, label in zip(datasets, labels, strict=True):
         axes[0].plot(dataset.time, dataset.tip_deflection_1 * _MICRO, lw=0.6, label=label)
         axes[1].plot(dataset.time, dataset.tip_deflection_2 * _MICRO, lw=0.6, label=label)
@@ -119,7 +119,8 @@ def plot_phase_portrait(dense: xr.Dataset, section: xr.Dataset, path: str | Path
 
     ``section`` must be sampled once per forcing period (its ``time`` a multiple of 2 pi/Omega).
     """
-    figure, axes = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True)
+    figure = Figure(figsize=(11, 4.8), layout="constrained")
+    axes = figure.subplots(1, 2)
     axes[0].plot(dense.tip_deflection_1 * _MICRO, dense.tip_velocity_1 * _MILLI, lw=0.3)
     axes[0].set_title(f"phase plane, {float(dense.time[0]):g} s <= t <= "
                       f"{float(dense.time[-1]):g} s")

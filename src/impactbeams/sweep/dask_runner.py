@@ -1,14 +1,16 @@
 """Run sweeps on a Dask cluster (``dask.distributed``): one task per chunk, saved as it arrives.
 
 :func:`dask_runner` is a :data:`~impactbeams.sweep.ChunkRunner` for
-:func:`~impactbeams.sweep.run_sweep`: every pending chunk becomes one task computing
-:func:`~impactbeams.sweep.compute_chunk` on a worker, and results come back in the order they
-finish. The client saves each one at once under ``OUT.nc.partial/`` (as a local run does), so
-an interrupted client loses no finished chunk and the same command resumes. A task whose worker
-dies is rerun elsewhere by the scheduler (up to ``distributed.scheduler.allowed-failures``
-times); each task is yielded once, and saving a chunk again would write the same bytes.
+:func:`~impactbeams.sweep.run_sweep`: the sweep's plan (the modes of every geometry) is built
+once, as a task whose result stays on the cluster, and every pending chunk becomes one task
+computing :func:`~impactbeams.sweep.compute_chunk` with it on a worker; results come back in
+the order they finish. The client saves each one at once under ``OUT.nc.partial/`` (as a
+local run does), so an interrupted client loses no finished chunk and the same command
+resumes. A task whose worker dies is rerun elsewhere by the scheduler (up to
+``distributed.scheduler.allowed-failures`` times); each task is yielded once, and saving a
+chunk again would write the same bytes.
 
-Threads: a task runs ``threads_per_task`` Numba threads, by default
+Threads: a task runs ``threads_per_task`` Numba threads (restored when it ends), by default
 ``max(1, cores // dask_threads)`` per host (smallest over hosts), so Dask threads times Numba
 threads equals the cores and nothing is oversubscribed. With one Numba thread a task runs the
 serial kernel, which gives the same bits as the parallel one.
@@ -30,7 +32,9 @@ import numpy as np
 
 from impactbeams import __version__
 from impactbeams.params import ParameterError, require
-from impactbeams.sweep import Chunk, ChunkRunner, Sweep, compute_chunk
+from impactbeams.sweep.definition import Sweep
+from impactbeams.sweep.plan import Plan, build_plan, compute_chunk
+from impactbeams.sweep.run import Chunk, ChunkRunner, numba_threads
 
 if TYPE_CHECKING:
     from distributed import Client, Future
@@ -111,13 +115,15 @@ def _threads_rule(workers: dict[str, tuple[str, int, str]], nthreads: dict[str, 
     return min((max(1, cores // threads) for cores, threads in hosts.values()), default=1)
 
 
-def _chunk_task(sweep: Sweep, start: int, stop: int, threads: int) -> dict[str, np.ndarray]:
+def _chunk_task(sweep: Sweep, plan: Plan, start: int, stop: int,
+                threads: int) -> dict[str, np.ndarray]:
     """Run on a worker: one chunk over ``threads`` Numba threads (the serial kernel for 1)."""
-    if threads > 1:
-        import numba
+    if threads == 1:
+        return compute_chunk(sweep, start, stop, parallel=False, plan=plan)
+    import numba
 
-        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-    return compute_chunk(sweep, start, stop, parallel=threads > 1)
+    with numba_threads(min(threads, numba.config.NUMBA_NUM_THREADS)):
+        return compute_chunk(sweep, start, stop, parallel=True, plan=plan)
 
 
 def dask_runner(client: Client, threads_per_task: int | None = None,
@@ -134,10 +140,14 @@ def dask_runner(client: Client, threads_per_task: int | None = None,
                 "must be an integer >= 1")
 
     def run(sweep: Sweep, chunks: list[Chunk]) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
+        if not chunks:
+            return
         workers, nthreads = _workers(client), client.nthreads()
         threads = threads_per_task or _threads_rule(workers, nthreads)
         limit = window or WINDOW_PER_THREAD * max(1, sum(nthreads.values()))
         token = uuid.uuid4().hex[:8]  # unique keys: a rerun never reuses an old result
+        # one plan per run, kept on the cluster while chunks need it (rebuilt if its worker dies)
+        plan = client.submit(build_plan, sweep, key=f"impactbeams-plan-{token}")
         todo = iter(chunks)
         in_flight: dict[str, tuple[int, Future]] = {}
         finished = distributed.as_completed(with_results=True)
@@ -146,7 +156,7 @@ def dask_runner(client: Client, threads_per_task: int | None = None,
             chunk = next(todo, None)
             if chunk is not None:
                 number, start, stop = chunk
-                future = client.submit(_chunk_task, sweep, start, stop, threads,
+                future = client.submit(_chunk_task, sweep, plan, start, stop, threads,
                                        key=f"impactbeams-chunk-{number}-{token}")
                 in_flight[future.key] = (number, future)
                 finished.add(future)
@@ -162,5 +172,6 @@ def dask_runner(client: Client, threads_per_task: int | None = None,
             finished.clear()
             if in_flight:
                 client.cancel([future for _, future in in_flight.values()])
+            plan.release()
 
     return run

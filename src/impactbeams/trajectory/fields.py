@@ -1,0 +1,62 @@
+"""Time series on the output grid (tips, work, damping loss) and deflection surfaces."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from impactbeams.kernels import dynamics as dyn
+from impactbeams.model import unit_tip_shape
+from impactbeams.packing import Packed
+from impactbeams.trajectory.observables import loads, observables
+from impactbeams.trajectory.phases import Trajectory, sample
+
+_CHUNK = 1 << 15  # output times per sampling call: bounds memory at ~N * 0.5 MB
+
+
+def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray,
+                 ) -> dict[str, np.ndarray]:
+    """Observables, contact flag, work of F and damping loss at ``times``; NaN past t_end."""
+    inside = times <= trajectory.t_end
+    names = ("tip_deflection_1", "tip_deflection_2", "tip_velocity_1", "tip_velocity_2", "gap",
+             "contact_force", "kinetic_energy", "energy", "unresolved_kinetic_energy",
+             "in_contact", "work_of_force", "damping_dissipation")
+    out = {name: np.full(times.size, np.nan) for name in names}
+    reached = np.flatnonzero(inside)
+    for start in range(0, reached.size, _CHUNK):
+        index = reached[start:start + _CHUNK]
+        phase, q, v = sample(packed, trajectory, times[index])
+        for name, values in observables(packed, phase, times[index], q, v).items():
+            out[name][index] = values
+        out["in_contact"][index] = phase
+    work, dissipation = np.empty(reached.size), np.empty(reached.size)
+    dyn.work_of_force(packed.tables, packed.forces, packed.phase_scalars, packed.settings,
+                      trajectory.time, trajectory.phase, trajectory.q, trajectory.v,
+                      trajectory.time.size, trajectory.t_end, times[reached], work, dissipation)
+    out["work_of_force"][reached], out["damping_dissipation"][reached] = work, dissipation
+    return out
+
+
+def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_points: int,
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Deflection fields y_1(x_1, t), y_2(x_2, t) (m) on uniform grids of ``n_points``."""
+    model = packed.model
+    p, n = model.params, model.n_modes
+    c1, c2 = p.tip_compliance
+    x1, x2 = np.linspace(0.0, p.l1, n_points), np.linspace(0.0, p.l2, n_points)
+    shapes1 = (np.vstack([model.free.beam1.shapes(x1), np.zeros((n, n_points))]),
+               model.contact.beam1(x1))
+    shapes2 = (np.vstack([np.zeros((n, n_points)), model.free.beam2.shapes(x2)]),
+               model.contact.beam2(x2))
+    y1 = np.full((times.size, n_points), np.nan)
+    y2 = np.full((times.size, n_points), np.nan)
+    reached = np.flatnonzero(times <= trajectory.t_end)
+    for start in range(0, reached.size, _CHUNK):
+        index = reached[start:start + _CHUNK]
+        phase, q, _ = sample(packed, trajectory, times[index])
+        q1, q2, _, _ = loads(packed, phase, times[index])
+        for ph in (dyn.FREE, dyn.CONTACT):
+            rows = index[phase == ph]
+            qs = q[phase == ph]
+            y1[rows] = -c1 * q1[phase == ph, None] * unit_tip_shape(p.l1, x1) + qs @ shapes1[ph]
+            y2[rows] = -c2 * q2[phase == ph, None] * unit_tip_shape(p.l2, x2) + qs @ shapes2[ph]
+    return x1, x2, y1, y2

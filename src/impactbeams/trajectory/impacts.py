@@ -1,0 +1,93 @@
+"""The per-impact table of a trajectory: one entry per contact phase.
+
+Onset time, duration, impulse, peak force, restitution, and the energy changes at the switches.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from impactbeams.kernels import dynamics as dyn
+from impactbeams.packing import Packed
+from impactbeams.trajectory.observables import observables
+from impactbeams.trajectory.phases import Trajectory
+
+
+def _segment_observables(packed: Packed, trajectory: Trajectory, k: np.ndarray, end: bool,
+                         ) -> dict[str, np.ndarray]:
+    """Observables at the start (after projection) or end (before) of segments ``k``."""
+    t = trajectory.segment_end[k] if end else trajectory.time[k]
+    q = trajectory.end_q[k] if end else trajectory.q[k]
+    v = trajectory.end_v[k] if end else trajectory.v[k]
+    return observables(packed, trajectory.phase[k], t, q, v)
+
+
+def _gap_rate(obs: dict[str, np.ndarray]) -> np.ndarray:
+    return obs["tip_velocity_1"] - obs["tip_velocity_2"]
+
+
+def _harmonic_integrals(omega: float, t0: np.ndarray, t1: np.ndarray,
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """Integrals of sin(Omega t) and cos(Omega t) over [t0, t1] (s), without cancellation.
+
+    The sine integral is 0 when Omega = 0 (so is the sine), the cosine integral t1 - t0.
+    """
+    if omega == 0.0:
+        return np.zeros_like(t0), t1 - t0
+    middle, half_width = 0.5 * omega * (t0 + t1), np.sin(0.5 * omega * (t1 - t0))
+    return (2.0 * np.sin(middle) * half_width / omega,
+            2.0 * np.cos(middle) * half_width / omega)
+
+
+def _impulses(packed: Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarray:
+    """Integral of R over contact segments ``k`` (N s), in closed form.
+
+    From r'' + 2 zeta omega r' + omega^2 r = Im(A e^(i Omega t)):
+    omega^2 int r = Re A int sin + Im A int cos - [r' + 2 zeta omega r], R = R_qs + shear . r.
+    """
+    p = packed.model.params
+    c1, c2 = p.tip_compliance
+    t0, t1 = trajectory.time[k], trajectory.segment_end[k]
+    sine, cosine = _harmonic_integrals(p.omega, t0, t1)
+    table, force = packed.tables[dyn.CONTACT], packed.forces[dyn.CONTACT]
+    omega, zeta, shear = table[dyn.ROW_OMEGA], table[dyn.ROW_ZETA], table[dyn.ROW_EVENT]
+    jump = (trajectory.end_v[k] - trajectory.v[k]
+            + 2.0 * zeta * omega * (trajectory.end_q[k] - trajectory.q[k]))
+    modal = (force.real * sine[:, None] + force.imag * cosine[:, None] - jump) / omega**2
+    quasi_static = (c1 * p.force_amplitude * sine - p.clearance * (t1 - t0)) / (c1 + c2)
+    return quasi_static + modal @ shear
+
+
+def impact_table(packed: Packed, trajectory: Trajectory) -> dict[str, np.ndarray]:
+    """Per-impact quantities: one entry per contact phase (zero-duration ones included)."""
+    k = np.flatnonzero(trajectory.phase == dyn.CONTACT)
+    released = k + 1 < trajectory.time.size
+    before = _segment_observables(packed, trajectory, k - 1, end=True)
+    after = _segment_observables(packed, trajectory, k, end=False)
+    at_release = _segment_observables(packed, trajectory, k, end=True)
+    separated = _segment_observables(packed, trajectory,
+                                     np.minimum(k + 1, trajectory.time.size - 1), end=False)
+    nan = np.full(k.size, np.nan)
+    onset_rate, separation_rate = _gap_rate(before), _gap_rate(separated)
+    peaks = np.array([
+        dyn.peak_force(packed.tables[dyn.CONTACT], packed.forces[dyn.CONTACT],
+                       packed.phase_scalars[dyn.CONTACT],
+                       packed.settings, trajectory.q[j], trajectory.v[j], trajectory.time[j],
+                       trajectory.segment_end[j])[0] for j in k])
+    return {
+        "impact_onset_time": trajectory.time[k],
+        "impact_duration": np.where(released, trajectory.segment_end[k] - trajectory.time[k],
+                                    nan),
+        "impact_impulse": _impulses(packed, trajectory, k),
+        "impact_peak_force": peaks.reshape(k.size),
+        "restitution_coefficient": np.where(released, -separation_rate / onset_rate, nan),
+        "impact_sustained": trajectory.sustained[k].astype(np.int8),
+        "impact_velocity": onset_rate,
+        "separation_velocity": np.where(released, separation_rate, nan),
+        "impact_energy_loss": before["energy"] - after["energy"],
+        "impact_kinetic_energy_loss": before["kinetic_energy"] - after["kinetic_energy"],
+        "release_energy_change": np.where(released, separated["energy"] - at_release["energy"],
+                                          nan),
+        "release_gap": np.where(released, separated["gap"], nan),
+        "release_contact_force": np.where(released, at_release["contact_force"], nan),
+    }

@@ -1,0 +1,98 @@
+"""simulate(): the public entry for one trajectory, its output times and its Dataset."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import xarray as xr
+
+from impactbeams.model import build_model
+from impactbeams.packing import Packed, pack_model
+from impactbeams.params import Params
+from impactbeams.trajectory.fields import deflections, time_series
+from impactbeams.trajectory.impacts import impact_table
+from impactbeams.trajectory.phases import Trajectory, run
+from impactbeams.variables import attributes, global_attributes
+
+
+def _output_times(t_max: float, dt_output: float, times: np.ndarray | None) -> np.ndarray:
+    if times is not None:
+        times = np.asarray(times, dtype=float)
+        if times.ndim != 1 or np.any(np.diff(times) < 0) or np.any((times < 0) | (times > t_max)):
+            raise ValueError("times must be a 1-D ascending array within [0, t_max]")
+        return times
+    if not (math.isfinite(dt_output) and dt_output > 0):
+        raise ValueError(f"dt_output = {dt_output!r} is not allowed: must be > 0 (s)")
+    count = int(math.floor(t_max / dt_output * (1 + 1e-12))) + 1
+    return np.minimum(np.arange(count) * dt_output, t_max)
+
+
+def simulate(params: Params, t_max: float, n_modes: int = 5, dt_output: float = 1e-4,
+             fields: bool = False, *, times: np.ndarray | None = None, n_points: int = 41,
+             max_events: int = 200_000, search_span: float | None = None) -> xr.Dataset:
+    """Simulate the impacting beams from t = 0 to ``t_max`` (s); return an xarray Dataset.
+
+    Args:
+        params: model parameters (SI units).
+        t_max: end time (s), > 0.
+        n_modes: free modes per beam (the contact phase has 2 n_modes).
+        dt_output: spacing (s) of the output grid 0, dt, 2 dt, ... <= t_max.
+        fields: also return the deflection fields ``deflection_1(time, x1)``,
+            ``deflection_2(time, x2)`` on ``n_points`` uniform points per beam.
+        times: explicit ascending output times (s) in [0, t_max], instead of ``dt_output``.
+        n_points: points per beam of the deflection fields (uniform, clamp to tip).
+        max_events: cap on the number of phases (events + 1); a run that reaches it stops
+            there with ``attrs["status"] = "event_limit"`` (and a RuntimeWarning).
+        search_span: the event search restarts from the exactly propagated state every this
+            many seconds (default t_max). Results do not depend on it beyond round-off; it is
+            here to test that.
+
+    The output grid never influences the dynamics: events are located by the kernel on its
+    own, and the outputs are evaluated from the exact segment states.
+    """
+    if not (isinstance(t_max, (int, float)) and math.isfinite(t_max) and t_max > 0):
+        raise ValueError(f"t_max = {t_max!r} is not allowed: must be a finite number > 0 (s)")
+    if max_events < 1:
+        raise ValueError(f"max_events = {max_events!r} is not allowed: must be >= 1")
+    span = float(t_max if search_span is None else search_span)
+    if not span > 0:
+        raise ValueError(f"search_span = {search_span!r} is not allowed: must be > 0 (s)")
+    out_times = _output_times(float(t_max), dt_output, times)
+    packed = pack_model(build_model(params, n_modes), float(t_max), span)
+    trajectory = run(packed, max_events)
+    if trajectory.status != "complete":
+        warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
+                      f"{t_max!r} s: status {trajectory.status!r}", RuntimeWarning, stacklevel=2)
+    dataset = _dataset(packed, trajectory, out_times)
+    if fields:
+        x1, x2, y1, y2 = deflections(packed, trajectory, out_times, n_points)
+        dataset = dataset.assign_coords(x1=("x1", x1, attributes("x1")),
+                                        x2=("x2", x2, attributes("x2")))
+        dataset["deflection_1"] = (("time", "x1"), y1, attributes("deflection_1"))
+        dataset["deflection_2"] = (("time", "x2"), y2, attributes("deflection_2"))
+    dataset.attrs.update(_global_attributes(params, n_modes, float(t_max), trajectory))
+    return dataset
+
+
+def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray) -> xr.Dataset:
+    series = time_series(packed, trajectory, times)
+    series["tip_deflection_2"] = series["tip_deflection_2"] - packed.model.params.clearance
+    impacts = impact_table(packed, trajectory)
+    data = {name: ("time", values, attributes(name)) for name, values in series.items()}
+    data.update({name: ("impact", values, attributes(name)) for name, values in impacts.items()})
+    coords = {"time": ("time", times, attributes("time")),
+              "impact": ("impact", np.arange(impacts["impact_onset_time"].size),
+                         attributes("impact"))}
+    return xr.Dataset(data, coords=coords)
+
+
+def _global_attributes(params: Params, n_modes: int, t_max: float, trajectory: Trajectory,
+                       ) -> dict[str, object]:
+    run = {"t_max": t_max, "t_max_units": "s", "n_modes": n_modes,
+           "status": trajectory.status, "t_end": trajectory.t_end,
+           "n_phases": trajectory.time.size}
+    return global_attributes(
+        "impact dynamics of two cantilevers with clearance (impactbeams.simulate)", "simulate",
+        params.as_dict(), **run)
