@@ -4,12 +4,9 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from impactbeams.kernels.first_impact import (
-    TABLE_ROWS,
-    first_impact_map_parallel,
-    first_impact_map_serial,
-)
+from impactbeams.kernels.first_impact import first_impact_map_parallel, first_impact_map_serial
 from impactbeams.model import build_free_phase
+from impactbeams.packing import free_tables, geometry_row
 from impactbeams.params import Params
 from references import bisect_root, free_tip_gap, left_bracket, reference_first_impact
 
@@ -23,9 +20,8 @@ def free():
 
 
 def pack(free, cells):
-    table = np.array([free.omega, free.tip1 - free.tip2, free.drive, free.unit1, free.unit2])
-    assert table.shape[0] == len(TABLE_ROWS)
-    return (np.asarray(cells, dtype=float), table[None], np.array([Params().tip_compliance[0]]))
+    return (np.asarray(cells, dtype=float), free_tables(free)[None],
+            geometry_row(Params(), free)[None])
 
 
 def run_cells(free, rows, parallel=True):

@@ -17,10 +17,13 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from impactbeams.kernels import dynamics as dyn
-from impactbeams.kernels.first_impact import CELL_COLUMNS, first_impact_map_serial
+from impactbeams.kernels.first_impact import first_impact_map_serial
+from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.reductions import work_of_force
 from impactbeams.model import build_free_phase, build_model
 from impactbeams.modes import contact_frequencies, contact_modes
+from impactbeams.packing import free_tables, geometry_row
 from impactbeams.params import Params
 from impactbeams.trajectory import observables, pack_model, run, sample
 from references import (
@@ -43,11 +46,11 @@ CLAMPED_PINNED_1 = 3.9266023120  # first root of tan b = tanh b (Blevins, 10 dec
 def first_impacts(params, n_modes, rows, t_max):
     """First-impact kernel on cells (clearance, F0, Omega, uplift1, uplift2) of params."""
     free = build_free_phase(params, n_modes)
-    table = np.array([[free.omega, free.tip1 - free.tip2, free.drive, free.unit1, free.unit2]])
     cells = np.array([[*row[:5], 0.0, 0.0] for row in rows], dtype=float)  # undamped, geometry 0
     assert cells.shape[1] == len(CELL_COLUMNS)
     out = np.empty(len(cells))
-    first_impact_map_serial(cells, table, np.array([params.tip_compliance[0]]), t_max, out)
+    first_impact_map_serial(cells, free_tables(free)[None], geometry_row(params, free)[None],
+                            t_max, out)
     return out
 
 
@@ -87,7 +90,7 @@ def phase_energy_drift(params, t_max, n_modes, count=20_001):
     phase, q, v = sample(packed, traj, times)
     obs = observables(packed, phase, times, q, v)
     work, loss = np.empty(times.size), np.empty(times.size)
-    dyn.work_of_force(packed.tables, packed.forces, packed.phase_scalars, packed.settings,
+    work_of_force(packed.tables, packed.forces, packed.phase_scalars, packed.settings,
                       traj.time, traj.phase, traj.q, traj.v, traj.time.size, traj.t_end, times,
                       work, loss)
     balance = obs["energy"] - obs["unresolved_kinetic_energy"] - work + loss

@@ -1,26 +1,13 @@
-"""Event-driven impact dynamics: exact propagation within phases, certified switching events.
+"""Event-driven impact dynamics: the phase state machine.
 
-Plain-array interface, packed by :mod:`impactbeams.trajectory`. Both phases have ``N = 2 n``
-modal coordinates; ``tables[phase]`` (phase ``FREE = 0``, ``CONTACT = 1``) has the rows
+Exact propagation within phases, certified switching events, and the states at any time.
 
-* ``ROW_OMEGA``: natural frequencies (rad/s);
-* ``ROW_ZETA``: modal damping ratios;
-* ``ROW_DRIVE``: b with ``q'' + 2 zeta omega q' + omega^2 q = b (F'' + 2 zeta omega F')``
-  (m kg^1/2 / N): each mode's whole coordinate ``q - F' b`` is damped; b is also
-  ``-<y_s_t, mode> / F'``, the quasi-static velocity field seen by each mode;
-* ``ROW_EVENT``: weights of the phase's event function (gap ``g`` in m, contact force ``R``
-  in N) on the modal coordinates;
-* ``ROW_TIP1``: tip displacement of each mode's shape on beam 1 (m per unit coordinate).
+Plain-array interface, packed by :mod:`impactbeams.packing`; every array is named in
+:mod:`impactbeams.kernels.layout`: ``tables[phase]`` (rows ``TABLE_ROWS``), ``forces[phase]``
+(complex drive amplitudes), ``phase_scalars[phase]`` (``PHASE_SCALARS``) and ``settings``
+(``SETTINGS``). Both phases have ``N = 2 n`` modal coordinates. Reductions over a run (work,
+dissipation, peak force) are in :mod:`impactbeams.kernels.reductions`.
 
-``forces[phase]``: the complex amplitude ``A = F0 Omega b (-Omega + 2 i zeta omega)`` of each
-mode's drive ``Im(A e^(i Omega t))``.
-
-``phase_scalars[phase]`` = (event constant, event sine amplitude, ``Q1' / F'``): the event
-function is ``e(t) = const + sine_amp sin(Omega t) + weights . q(t)`` and beam 1's tip load
-rate is ``Q1' = F'`` (free) or ``c2 F' / (c1 + c2)`` (contact).
-
-``settings`` = (clearance m, c1 m/N, c2 m/N, F0 N, Omega rad/s, t_max s, search span s,
-accumulation time s).
 Switching (MODEL.md) uses ``overlap[m, n] = <Z_m, Y_n>`` and the static shifts
 ``shifts[FREE] = <s, Y_n>``, ``shifts[CONTACT] = <s, Z_m>``:
 
@@ -37,13 +24,24 @@ import numpy as np
 
 from impactbeams.kernels.events import event_value, first_root
 from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.layout import (
+    CONTACT,
+    FREE,
+    ROW_EVENT,
+    ROW_OMEGA,
+    ROW_ZETA,
+    SCALAR_CONST,
+    SCALAR_SINE,
+    SET_ACCUMULATION,
+    SET_C1,
+    SET_C2,
+    SET_CLEARANCE,
+    SET_F0,
+    SET_OMEGA,
+    SET_SEARCH_SPAN,
+    SET_T_MAX,
+)
 from impactbeams.kernels.propagation import advance
-
-FREE, CONTACT = 0, 1
-ROW_OMEGA, ROW_ZETA, ROW_DRIVE, ROW_EVENT, ROW_TIP1 = 0, 1, 2, 3, 4
-SCALAR_CONST, SCALAR_SINE, SCALAR_LOAD_RATE = 0, 1, 2
-(SET_CLEARANCE, SET_C1, SET_C2, SET_F0, SET_OMEGA, SET_T_MAX, SET_SEARCH_SPAN,
- SET_ACCUMULATION) = range(8)
 
 COMPLETE, EVENT_LIMIT, STUCK = 0, 1, 2
 STATUS_NAMES = ("complete", "event_limit", "stuck")
@@ -53,15 +51,6 @@ STATUS_NAMES = ("complete", "event_limit", "stuck")
 ZENO_LIMIT = 64
 
 _EPS = np.finfo(np.float64).eps
-_GAUSS_NODES = np.array([
-    -0.9815606342467192, -0.9041172563704749, -0.7699026741943047, -0.5873179542866175,
-    -0.3678314989981802, -0.1252334085114689, 0.1252334085114689, 0.3678314989981802,
-    0.5873179542866175, 0.7699026741943047, 0.9041172563704749, 0.9815606342467192])
-_GAUSS_WEIGHTS = np.array([
-    0.0471753363865118, 0.1069393259953184, 0.1600783285433462, 0.2031674267230659,
-    0.2334925365383548, 0.2491470458134028, 0.2491470458134028, 0.2334925365383548,
-    0.2031674267230659, 0.1600783285433462, 0.1069393259953184, 0.0471753363865118])
-_GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
 
 @kernel
@@ -282,113 +271,3 @@ def sample_states(tables, forces, settings, seg_time, seg_phase, seg_q, seg_v, c
         phase_out[i] = phase
         propagate(tables[phase], forces[phase], seg_q[k], seg_v[k], seg_time[k], times[i],
                   settings, q_out[i], v_out[i])
-
-
-@kernel
-def _power(table, force_drive, scalars, settings, q_s, v_s, t_s, t, q, v):
-    """Power of F (W) and damping dissipation rate (W) at time t within one segment.
-
-    The damping acts on each mode's whole coordinate, whose rate is ``q' - F' b``.
-    """
-    propagate(table, force_drive, q_s, v_s, t_s, t, settings, q, v)
-    f0, big_omega = settings[SET_F0], settings[SET_OMEGA]
-    force = f0 * math.sin(big_omega * t)
-    force_rate = f0 * big_omega * math.cos(big_omega * t)
-    tip_rate = -settings[SET_C1] * scalars[SCALAR_LOAD_RATE] * force_rate
-    dissipation = 0.0
-    omega, zeta, drive, tip1 = table[ROW_OMEGA], table[ROW_ZETA], table[ROW_DRIVE], table[ROW_TIP1]
-    for j in range(q.size):
-        tip_rate += tip1[j] * v[j]
-        modal_rate = v[j] - force_rate * drive[j]
-        dissipation += 2.0 * zeta[j] * omega[j] * modal_rate * modal_rate
-    return -force * tip_rate, dissipation
-
-
-@kernel
-def _integrate_power(table, force, scalars, settings, q_s, v_s, t_s, a, b, q, v):
-    """Integrals (J) of the power of F and of the dissipation over [a, b] in one segment.
-
-    Composite 12-point Gauss-Legendre with panels no longer than half the shortest period
-    (of the modes and of the forcing): relative error below 1e-18 per panel.
-    """
-    if b <= a:
-        return 0.0, 0.0
-    fastest = max(np.max(table[ROW_OMEGA]), settings[SET_OMEGA])
-    n_panels = max(1, int(math.ceil((b - a) * fastest / math.pi)))
-    width = (b - a) / n_panels
-    work, dissipated = 0.0, 0.0
-    for p in range(n_panels):
-        middle = a + (p + 0.5) * width
-        for j in range(_GAUSS_NODES.size):
-            t = middle + 0.5 * width * _GAUSS_NODES[j]
-            power, loss = _power(table, force, scalars, settings, q_s, v_s, t_s, t, q, v)
-            work += 0.5 * width * _GAUSS_WEIGHTS[j] * power
-            dissipated += 0.5 * width * _GAUSS_WEIGHTS[j] * loss
-    return work, dissipated
-
-
-@kernel
-def work_of_force(tables, forces, phase_scalars, settings, seg_time, seg_phase, seg_q, seg_v,
-                  count, t_end, times, work_out, dissipation_out):
-    """Work done by F and energy dissipated by damping from t = 0 to each of ``times`` (J).
-
-    ``times`` ascending in [0, t_end]; ``t_end`` is where the last segment stops.
-    """
-    n_coords = seg_q.shape[1]
-    q, v = np.empty(n_coords), np.empty(n_coords)
-    work, dissipated, t_done, i = 0.0, 0.0, 0.0, 0
-    for k in range(count):
-        table, scalars = tables[seg_phase[k]], phase_scalars[seg_phase[k]]
-        force = forces[seg_phase[k]]
-        seg_end = seg_time[k + 1] if k + 1 < count else t_end
-        while i < times.size and (times[i] < seg_end or k + 1 == count):
-            dw, dd = _integrate_power(table, force, scalars, settings, seg_q[k], seg_v[k],
-                                      seg_time[k], t_done, times[i], q, v)
-            work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, times[i])
-            work_out[i], dissipation_out[i] = work, dissipated
-            i += 1
-        dw, dd = _integrate_power(table, force, scalars, settings, seg_q[k], seg_v[k],
-                                  seg_time[k], t_done, seg_end, q, v)
-        work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, seg_end)
-
-
-@kernel
-def _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t, q, v):
-    """Contact force R(t) (N) within a contact segment."""
-    propagate(table, force, q_s, v_s, t_s, t, settings, q, v)
-    value, _ = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
-                           scalars[SCALAR_SINE], settings[SET_OMEGA])
-    return value
-
-
-@kernel
-def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
-    """Largest contact force (N) over the contact segment [t_s, t_e] and its time (s).
-
-    R is sampled eight times per period of the fastest mode, then the best sample is refined
-    by golden-section search on its two neighbouring intervals (to a few ulps of time).
-    """
-    q, v = np.empty(q_s.size), np.empty(q_s.size)
-    fastest = max(np.max(table[ROW_OMEGA]), settings[SET_OMEGA])
-    n_steps = max(2, int(math.ceil((t_e - t_s) * fastest * 4.0 / math.pi)))
-    step = (t_e - t_s) / n_steps
-    best_t, best = t_s, _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t_s, q, v)
-    for i in range(1, n_steps + 1):
-        t = t_s + i * step
-        value = _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t, q, v)
-        if value > best:
-            best_t, best = t, value
-    lo, hi = max(t_s, best_t - step), min(t_e, best_t + step)
-    while hi - lo > 4.0 * _EPS * max(abs(hi), 1.0):
-        a = hi - _GOLDEN * (hi - lo)
-        b = lo + _GOLDEN * (hi - lo)
-        if (_contact_force(table, force, scalars, settings, q_s, v_s, t_s, a, q, v)
-                >= _contact_force(table, force, scalars, settings, q_s, v_s, t_s, b, q, v)):
-            hi = b
-        else:
-            lo = a
-    t_mid = 0.5 * (lo + hi)
-    value = _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t_mid, q, v)
-    if value > best:
-        return value, t_mid
-    return best, best_t

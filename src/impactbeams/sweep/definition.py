@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from impactbeams import __version__
+from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.params import ParameterError, Params, read_toml, require
 from impactbeams.variables import PARAMETERS
 
@@ -33,9 +34,8 @@ FIRST_IMPACT = "first_impact_time"
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
 OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES)
-# parameters that change a cell but not its geometry (its modes): one packed column each
-CELL_PARAMETERS = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2",
-                   "damping_ratio")
+# parameters that change a cell but not its geometry (its modes): the packed cell columns
+CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
 _TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes")
 _AXIS_KEYS = ("min", "max", "num", "scale")
 _MAX_MODES = 200

@@ -13,6 +13,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from impactbeams.kernels import layout
 from impactbeams.params import Params
 from impactbeams.sweep.definition import CELL_PARAMETERS, FIRST_IMPACT, Sweep
 
@@ -23,17 +24,18 @@ MAX_SEGMENTS = 100_000  # phases per cell in a full-dynamics sweep; more: dynami
 class Plan:
     """What the kernels need per geometry, and how cells map to geometries.
 
-    Free-phase tables always (the first-impact kernel); the contact phase and projections only
-    when a full-dynamics observable is asked for (see kernels.observables for the layout).
-    ``fingerprint`` is the sweep's: a plan serves only the sweep it was built for.
+    ``tables``: the free phase of every geometry (first-impact map), or both phases with the
+    ``overlaps`` and ``shifts`` of the switching projections when a full-dynamics observable
+    is asked for (see kernels.layout). ``fingerprint`` is the sweep's: a plan serves only the
+    sweep it was built for.
     """
 
     fingerprint: str
     base: Params
-    tables: np.ndarray  # (geometries, len(TABLE_ROWS), 2 n_modes)
-    compliance: np.ndarray  # (geometries,) c_1 in m/N
+    tables: np.ndarray  # (geometries, phases, len(TABLE_ROWS), 2 n_modes)
+    geometry: np.ndarray  # (geometries, len(GEOMETRY))
     geometry_axes: tuple[int, ...]  # positions of the axes that change the geometry
-    dynamics: tuple[np.ndarray, ...] | None  # (tables, overlaps, shifts, units, geometry)
+    switching: tuple[np.ndarray, np.ndarray] | None  # (overlaps, shifts) of a dynamics map
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:
@@ -45,48 +47,43 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
         yield sweep.base.replace(**changes) if changes else sweep.base
 
 
-def _dynamics_tables(params: Params, n_modes: int) -> tuple[np.ndarray, ...]:
-    """One geometry's arrays for kernels.observables (both phases, projections)."""
-    from impactbeams.model import build_model
-    from impactbeams.packing import phase_tables
+def _geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
+    """One geometry's packed arrays: (tables, geometry row[, overlap, shifts])."""
+    from impactbeams import packing
+    from impactbeams.model import build_free_phase, build_model
 
-    model = build_model(params, n_modes)
-    tables, shifts, accumulation = phase_tables(model)
-    geometry = np.array([*params.tip_compliance, accumulation])
-    units = np.array([model.free.unit1, model.free.unit2])
-    return tables, model.overlap, shifts, units, geometry
+    if not sweep.needs_dynamics:
+        free = build_free_phase(params, sweep.n_modes)
+        return packing.free_tables(free), packing.geometry_row(params, free)
+    model = build_model(params, sweep.n_modes)
+    tables, shifts = packing.phase_tables(model)
+    return tables, packing.geometry_row(params, model.free), model.overlap, shifts
 
 
 def build_plan(sweep: Sweep) -> Plan:
     """The modes of every geometry of ``sweep``, packed for the kernels (SciPy work)."""
-    from impactbeams.model import build_free_phase
-
-    tables, compliance, dynamics = [], [], []
-    for params in _geometries(sweep):
-        free = build_free_phase(params, sweep.n_modes)
-        tables.append([free.omega, free.tip1 - free.tip2, free.drive, free.unit1, free.unit2])
-        compliance.append(params.tip_compliance[0])
-        if sweep.needs_dynamics:
-            dynamics.append(_dynamics_tables(params, sweep.n_modes))
+    per_geometry = [_geometry_arrays(params, sweep) for params in _geometries(sweep)]
+    tables, geometry, *switching = (np.array(arrays) for arrays in zip(*per_geometry,
+                                                                        strict=True))
     geometry_axes = tuple(k for k, a in enumerate(sweep.axes) if a.name not in CELL_PARAMETERS)
-    stacked = tuple(np.array(arrays) for arrays in zip(*dynamics, strict=True)) or None
-    return Plan(sweep.fingerprint(), sweep.base, np.array(tables), np.array(compliance),
-                geometry_axes, stacked)
+    return Plan(sweep.fingerprint(), sweep.base, tables, geometry, geometry_axes,
+                tuple(switching) or None)
 
 
 def chunk_cells(sweep: Sweep, plan: Plan, start: int, stop: int) -> np.ndarray:
-    """The packed cell rows (see kernels.first_impact.CELL_COLUMNS) of flat cells start..stop."""
+    """The packed cell rows (kernels.layout.CELL_COLUMNS) of flat cells start..stop."""
+    from impactbeams import packing
+
     index = np.unravel_index(np.arange(start, stop), sweep.shape)
-    cells = np.empty((stop - start, len(CELL_PARAMETERS) + 1))
-    for column, name in enumerate(CELL_PARAMETERS):
-        cells[:, column] = getattr(plan.base, name)
-        for k, axis in enumerate(sweep.axes):
-            if axis.name == name:
-                cells[:, column] = axis.values[index[k]]
+    columns = {name: getattr(plan.base, name) for name in CELL_PARAMETERS}
+    for k, axis in enumerate(sweep.axes):
+        if axis.name in columns:
+            columns[axis.name] = axis.values[index[k]]
     geometry_shape = tuple(sweep.axes[k].num for k in plan.geometry_axes)
     geometry_index = tuple(index[k] for k in plan.geometry_axes)
-    cells[:, -1] = np.ravel_multi_index(geometry_index, geometry_shape) if geometry_shape else 0
-    return cells
+    columns["geometry"] = (np.ravel_multi_index(geometry_index, geometry_shape)
+                           if geometry_shape else 0)
+    return packing.cell_rows(columns, stop - start)
 
 
 def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
@@ -105,15 +102,15 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     if plan.fingerprint != sweep.fingerprint():
         raise ValueError("the plan was built for another sweep")
     cells = chunk_cells(sweep, plan, start, stop)
-    if plan.dynamics is None:
+    if plan.switching is None:
         kernel = (first_impact.first_impact_map_parallel if parallel
                   else first_impact.first_impact_map_serial)
         out = np.empty(cells.shape[0])
-        kernel(cells, plan.tables, plan.compliance, sweep.t_max, out)
+        kernel(cells, plan.tables, plan.geometry, sweep.t_max, out)
         return {FIRST_IMPACT: out}
     kernel = (observables.observables_map_parallel if parallel
               else observables.observables_map_serial)
-    out = np.empty((cells.shape[0], len(observables.OUT_COLUMNS)))
-    kernel(cells, *plan.dynamics, sweep.t_max, MAX_SEGMENTS, out)
-    columns = dict(zip(observables.OUT_COLUMNS, out.T, strict=True))
+    out = np.empty((cells.shape[0], len(layout.OUT_COLUMNS)))
+    kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max, MAX_SEGMENTS, out)
+    columns = dict(zip(layout.OUT_COLUMNS, out.T, strict=True))
     return {name: np.ascontiguousarray(columns[name]) for name in sweep.stored}

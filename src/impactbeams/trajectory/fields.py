@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from impactbeams.kernels import dynamics as dyn
+from impactbeams.kernels.layout import CONTACT, FREE
+from impactbeams.kernels.reductions import work_of_force
 from impactbeams.model import unit_tip_shape
 from impactbeams.packing import Packed
 from impactbeams.trajectory.observables import loads, observables
@@ -29,9 +30,9 @@ def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray,
             out[name][index] = values
         out["in_contact"][index] = phase
     work, dissipation = np.empty(reached.size), np.empty(reached.size)
-    dyn.work_of_force(packed.tables, packed.forces, packed.phase_scalars, packed.settings,
-                      trajectory.time, trajectory.phase, trajectory.q, trajectory.v,
-                      trajectory.time.size, trajectory.t_end, times[reached], work, dissipation)
+    work_of_force(packed.tables, packed.forces, packed.phase_scalars, packed.settings,
+                  trajectory.time, trajectory.phase, trajectory.q, trajectory.v,
+                  trajectory.time.size, trajectory.t_end, times[reached], work, dissipation)
     out["work_of_force"][reached], out["damping_dissipation"][reached] = work, dissipation
     return out
 
@@ -54,7 +55,7 @@ def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_poi
         index = reached[start:start + _CHUNK]
         phase, q, _ = sample(packed, trajectory, times[index])
         q1, q2, _, _ = loads(packed, phase, times[index])
-        for ph in (dyn.FREE, dyn.CONTACT):
+        for ph in (FREE, CONTACT):
             rows = index[phase == ph]
             qs = q[phase == ph]
             y1[rows] = -c1 * q1[phase == ph, None] * unit_tip_shape(p.l1, x1) + qs @ shapes1[ph]

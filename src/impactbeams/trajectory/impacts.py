@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from impactbeams.kernels import dynamics as dyn
+from impactbeams.kernels.layout import CONTACT, ROW_EVENT, ROW_OMEGA, ROW_ZETA
+from impactbeams.kernels.reductions import peak_force
 from impactbeams.packing import Packed
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory
@@ -49,8 +50,8 @@ def _impulses(packed: Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarr
     c1, c2 = p.tip_compliance
     t0, t1 = trajectory.time[k], trajectory.segment_end[k]
     sine, cosine = _harmonic_integrals(p.omega, t0, t1)
-    table, force = packed.tables[dyn.CONTACT], packed.forces[dyn.CONTACT]
-    omega, zeta, shear = table[dyn.ROW_OMEGA], table[dyn.ROW_ZETA], table[dyn.ROW_EVENT]
+    table, force = packed.tables[CONTACT], packed.forces[CONTACT]
+    omega, zeta, shear = table[ROW_OMEGA], table[ROW_ZETA], table[ROW_EVENT]
     jump = (trajectory.end_v[k] - trajectory.v[k]
             + 2.0 * zeta * omega * (trajectory.end_q[k] - trajectory.q[k]))
     modal = (force.real * sine[:, None] + force.imag * cosine[:, None] - jump) / omega**2
@@ -60,7 +61,7 @@ def _impulses(packed: Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarr
 
 def impact_table(packed: Packed, trajectory: Trajectory) -> dict[str, np.ndarray]:
     """Per-impact quantities: one entry per contact phase (zero-duration ones included)."""
-    k = np.flatnonzero(trajectory.phase == dyn.CONTACT)
+    k = np.flatnonzero(trajectory.phase == CONTACT)
     released = k + 1 < trajectory.time.size
     before = _segment_observables(packed, trajectory, k - 1, end=True)
     after = _segment_observables(packed, trajectory, k, end=False)
@@ -70,10 +71,9 @@ def impact_table(packed: Packed, trajectory: Trajectory) -> dict[str, np.ndarray
     nan = np.full(k.size, np.nan)
     onset_rate, separation_rate = _gap_rate(before), _gap_rate(separated)
     peaks = np.array([
-        dyn.peak_force(packed.tables[dyn.CONTACT], packed.forces[dyn.CONTACT],
-                       packed.phase_scalars[dyn.CONTACT],
-                       packed.settings, trajectory.q[j], trajectory.v[j], trajectory.time[j],
-                       trajectory.segment_end[j])[0] for j in k])
+        peak_force(packed.tables[CONTACT], packed.forces[CONTACT], packed.phase_scalars[CONTACT],
+                   packed.settings, trajectory.q[j], trajectory.v[j], trajectory.time[j],
+                   trajectory.segment_end[j])[0] for j in k])
     return {
         "impact_onset_time": trajectory.time[k],
         "impact_duration": np.where(released, trajectory.segment_end[k] - trajectory.time[k],

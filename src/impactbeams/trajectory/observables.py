@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from impactbeams.kernels import dynamics as dyn
+from impactbeams.kernels.layout import CONTACT
 from impactbeams.packing import Packed
 
 
@@ -33,7 +33,7 @@ def loads(packed: Packed, phase: np.ndarray, t: np.ndarray) -> tuple[np.ndarray,
     c1, c2 = p.tip_compliance
     force = p.force_amplitude * np.sin(p.omega * t)
     force_rate = p.force_amplitude * p.omega * np.cos(p.omega * t)
-    contact = phase == dyn.CONTACT
+    contact = phase == CONTACT
     r_qs = np.where(contact, (c1 * force - p.clearance) / (c1 + c2), 0.0)
     r_qs_rate = np.where(contact, c1 * force_rate / (c1 + c2), 0.0)
     return force - r_qs, r_qs, force_rate - r_qs_rate, r_qs_rate
@@ -68,7 +68,7 @@ def observables(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
     strain = (0.5 * (c1 * q1**2 + c2 * q2**2) - q1 * np.einsum("kn,kn->k", tip1, q)
               - q2 * np.einsum("kn,kn->k", tip2, q) + 0.5 * np.einsum("kn,kn->k", omega**2, q**2))
     event = per_phase(packed, phase, "event")
-    force = np.where(phase == dyn.CONTACT, q2 + np.einsum("kn,kn->k", event, q), 0.0)
+    force = np.where(phase == CONTACT, q2 + np.einsum("kn,kn->k", event, q), 0.0)
     return {
         "tip_deflection_1": y1,
         "tip_deflection_2": y2,

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 from impactbeams.kernels import dynamics as dyn
-from impactbeams.packing import Packed, initial_state
+from impactbeams.packing import Packed
 
 _INITIAL_CAPACITY = 4096  # segments; doubled (rerun from t = 0) until max_events
 
@@ -41,17 +41,16 @@ class Trajectory:
 
 def run(packed: Packed, max_events: int) -> Trajectory:
     """Run the event kernel; grow its arrays (rerunning from t = 0) up to ``max_events``."""
-    q0, v0 = initial_state(packed)
     capacity = min(_INITIAL_CAPACITY, max_events)
     while True:
         time = np.empty(capacity)
         phase = np.empty(capacity, dtype=np.int64)
         sustained = np.empty(capacity, dtype=np.bool_)
-        q, v, end_q, end_v = (np.empty((capacity, q0.size)) for _ in range(4))
+        q, v, end_q, end_v = (np.empty((capacity, packed.q0.size)) for _ in range(4))
         count, status, t_end = dyn.run_events(packed.tables, packed.forces, packed.phase_scalars,
                                               packed.model.overlap, packed.shifts,
-                                              packed.settings, q0, v0, time, phase,
-                                              sustained, q, v, end_q, end_v)
+                                              packed.settings, packed.q0, packed.v0, time,
+                                              phase, sustained, q, v, end_q, end_v)
         if status != dyn.EVENT_LIMIT or capacity >= max_events:
             break
         capacity = min(2 * capacity, max_events)

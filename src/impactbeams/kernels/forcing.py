@@ -1,0 +1,108 @@
+"""A run's inputs that depend on its cell (forcing, damping, clearance, uplifts): one formula each.
+
+Called by :mod:`impactbeams.packing` for one run (:func:`run_inputs` on a cell row packed from
+the parameters) and by the map kernels for each cell of a grid, so that a sweep cell and a
+simulated run with the same parameters get the same bits. Arrays and fields are named in
+:mod:`impactbeams.kernels.layout`; SI units.
+"""
+
+import numpy as np
+
+from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.layout import (
+    CELL_CLEARANCE,
+    CELL_F0,
+    CELL_OMEGA,
+    CELL_UPLIFT1,
+    CELL_UPLIFT2,
+    CELL_ZETA,
+    CONTACT,
+    FREE,
+    GEO_ACCUMULATION,
+    GEO_C1,
+    GEO_C2,
+    PHASE_SCALARS,
+    ROW_DRIVE,
+    ROW_OMEGA,
+    ROW_UNIT1,
+    ROW_UNIT2,
+    ROW_ZETA,
+    SCALAR_CONST,
+    SCALAR_LOAD_RATE,
+    SCALAR_SINE,
+    SET_ACCUMULATION,
+    SET_C1,
+    SET_C2,
+    SET_CLEARANCE,
+    SET_F0,
+    SET_OMEGA,
+    SET_SEARCH_SPAN,
+    SET_T_MAX,
+    SETTINGS,
+)
+from impactbeams.kernels.propagation import drive_amplitudes
+
+
+@kernel
+def rest_state(cell, unit1, unit2, drive):
+    """Initial modal state (q, q') at rest in the uplift shapes (MODEL.md).
+
+    ``q = delta_1 <u_1, Y> + delta_2 <u_2, Y>``, ``q' = F0 Omega b``; ``unit1``, ``unit2``,
+    ``drive`` are free-phase table rows, or one mode's entries of them.
+    """
+    return (cell[CELL_UPLIFT1] * unit1 + cell[CELL_UPLIFT2] * unit2,
+            cell[CELL_F0] * cell[CELL_OMEGA] * drive)
+
+
+@kernel
+def phase_scalars(cell, geometry):
+    """``PHASE_SCALARS`` of both phases: the event functions' constants and load rates.
+
+    Free: ``g = clearance - c1 F + ...``; contact: ``R = (c1 F - clearance) / (c1 + c2) + ...``.
+    """
+    clearance, f0 = cell[CELL_CLEARANCE], cell[CELL_F0]
+    c1, c2 = geometry[GEO_C1], geometry[GEO_C2]
+    total = c1 + c2
+    out = np.empty((2, len(PHASE_SCALARS)))
+    out[FREE, SCALAR_CONST] = clearance
+    out[FREE, SCALAR_SINE] = -c1 * f0
+    out[FREE, SCALAR_LOAD_RATE] = 1.0
+    out[CONTACT, SCALAR_CONST] = -clearance / total
+    out[CONTACT, SCALAR_SINE] = c1 * f0 / total
+    out[CONTACT, SCALAR_LOAD_RATE] = c2 / total
+    return out
+
+
+@kernel
+def settings(cell, geometry, t_max, search_span):
+    """The run's ``SETTINGS`` (t_max, search_span in s)."""
+    out = np.empty(len(SETTINGS))
+    out[SET_CLEARANCE] = cell[CELL_CLEARANCE]
+    out[SET_C1] = geometry[GEO_C1]
+    out[SET_C2] = geometry[GEO_C2]
+    out[SET_F0] = cell[CELL_F0]
+    out[SET_OMEGA] = cell[CELL_OMEGA]
+    out[SET_T_MAX] = t_max
+    out[SET_SEARCH_SPAN] = search_span
+    out[SET_ACCUMULATION] = geometry[GEO_ACCUMULATION]
+    return out
+
+
+@kernel
+def run_inputs(cell, tables, geometry, t_max, search_span):
+    """Everything the dynamics kernel needs for one run of ``cell`` in its geometry.
+
+    Returns (tables with the cell's damping ratios, complex drive amplitudes ``forces``,
+    phase scalars, settings, q0, q0'); ``tables`` of the geometry is left unchanged.
+    """
+    damped = tables.copy()
+    forces = np.empty((tables.shape[0], tables.shape[2]), dtype=np.complex128)
+    for phase in range(tables.shape[0]):
+        damped[phase, ROW_ZETA] = cell[CELL_ZETA]
+        forces[phase] = drive_amplitudes(damped[phase, ROW_DRIVE], damped[phase, ROW_OMEGA],
+                                         damped[phase, ROW_ZETA], cell[CELL_F0],
+                                         cell[CELL_OMEGA])
+    q0, v0 = rest_state(cell, tables[FREE, ROW_UNIT1], tables[FREE, ROW_UNIT2],
+                        tables[FREE, ROW_DRIVE])
+    return (damped, forces, phase_scalars(cell, geometry),
+            settings(cell, geometry, t_max, search_span), q0, v0)

@@ -1,0 +1,86 @@
+"""Named rows, columns and fields of every kernel array: the contract between packing and kernels.
+
+:mod:`impactbeams.packing` fills the arrays by these names and the kernels read them by these
+names; nobody writes a bare offset. Each index is looked up in its tuple of names, so the two
+cannot drift apart. Units: SI throughout.
+
+Phase tables, ``tables[phase, row, mode]`` (one geometry; ``FREE = 0``, ``CONTACT = 1``; a
+first-impact map packs the free phase alone), rows ``TABLE_ROWS``:
+
+* ``omega``: natural frequencies (rad/s);
+* ``zeta``: modal damping ratios (0 in a geometry's tables; a run sets them);
+* ``drive``: b with ``q'' + 2 zeta omega q' + omega^2 q = b (F'' + 2 zeta omega F')``
+  (m kg^1/2 / N); also ``-<y_s_t, mode> / F'``, the quasi-static velocity seen by each mode;
+* ``event``: weights of the phase's event function on the modal coordinates (free: the gap
+  ``Y_1n(l1) - Y_2n(l2)`` in m; contact: the contact force in N);
+* ``tip1``: tip displacement of each shape on beam 1 (m per unit coordinate);
+* ``unit1``, ``unit2``: ``<u_1, mode>``, ``<u_2, mode>``, projections of the unit-tip-load
+  shapes (the uplift and quasi-static shapes).
+
+``forces[phase, mode]``: complex amplitude A of each mode's drive ``Im(A e^(i Omega t))``.
+
+``phase_scalars[phase]``, fields ``PHASE_SCALARS``: the event function is
+``e(t) = event_const + event_sine sin(Omega t) + event . q(t)``; ``load_rate`` is beam 1's tip
+load rate per unit ``F'`` (1 free, ``c2 / (c1 + c2)`` in contact).
+
+``settings``, fields ``SETTINGS``: clearance (m), tip compliances c1, c2 (m/N), force
+amplitude F0 (N), forcing frequency Omega (rad/s), end time t_max (s), search span (s; the event
+search restarts from the exactly propagated state this often), accumulation time (s; see
+:func:`impactbeams.kernels.dynamics.run_events`).
+
+``geometry[g]``, fields ``GEOMETRY``: c1, c2 (m/N) and the accumulation time (s) of
+geometry g of a map. ``cells[i]``, columns ``CELL_COLUMNS``: one map cell's parameters and the
+index of its geometry. ``out[i]``, columns ``OUT_COLUMNS``: a dynamics map's observables.
+"""
+
+FREE, CONTACT = 0, 1
+
+TABLE_ROWS = ("omega", "zeta", "drive", "event", "tip1", "unit1", "unit2")
+ROW_OMEGA = TABLE_ROWS.index("omega")
+ROW_ZETA = TABLE_ROWS.index("zeta")
+ROW_DRIVE = TABLE_ROWS.index("drive")
+ROW_EVENT = TABLE_ROWS.index("event")
+ROW_TIP1 = TABLE_ROWS.index("tip1")
+ROW_UNIT1 = TABLE_ROWS.index("unit1")
+ROW_UNIT2 = TABLE_ROWS.index("unit2")
+
+PHASE_SCALARS = ("event_const", "event_sine", "load_rate")
+SCALAR_CONST = PHASE_SCALARS.index("event_const")
+SCALAR_SINE = PHASE_SCALARS.index("event_sine")
+SCALAR_LOAD_RATE = PHASE_SCALARS.index("load_rate")
+
+SETTINGS = ("clearance", "c1", "c2", "force_amplitude", "omega", "t_max", "search_span",
+            "accumulation")
+SET_CLEARANCE = SETTINGS.index("clearance")
+SET_C1 = SETTINGS.index("c1")
+SET_C2 = SETTINGS.index("c2")
+SET_F0 = SETTINGS.index("force_amplitude")
+SET_OMEGA = SETTINGS.index("omega")
+SET_T_MAX = SETTINGS.index("t_max")
+SET_SEARCH_SPAN = SETTINGS.index("search_span")
+SET_ACCUMULATION = SETTINGS.index("accumulation")
+
+GEOMETRY = ("c1", "c2", "accumulation")
+GEO_C1 = GEOMETRY.index("c1")
+GEO_C2 = GEOMETRY.index("c2")
+GEO_ACCUMULATION = GEOMETRY.index("accumulation")
+
+# the cell parameters are named as in impactbeams.params; the last column is the geometry
+CELL_COLUMNS = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "damping_ratio",
+                "geometry")
+CELL_CLEARANCE = CELL_COLUMNS.index("clearance")
+CELL_F0 = CELL_COLUMNS.index("force_amplitude")
+CELL_OMEGA = CELL_COLUMNS.index("omega")
+CELL_UPLIFT1 = CELL_COLUMNS.index("uplift1")
+CELL_UPLIFT2 = CELL_COLUMNS.index("uplift2")
+CELL_ZETA = CELL_COLUMNS.index("damping_ratio")
+CELL_GEOMETRY = CELL_COLUMNS.index("geometry")
+
+OUT_COLUMNS = ("first_impact_time", "impact_count", "max_contact_force", "mean_restitution",
+               "contact_fraction", "dynamics_status")
+OUT_FIRST_IMPACT = OUT_COLUMNS.index("first_impact_time")
+OUT_IMPACTS = OUT_COLUMNS.index("impact_count")
+OUT_MAX_FORCE = OUT_COLUMNS.index("max_contact_force")
+OUT_RESTITUTION = OUT_COLUMNS.index("mean_restitution")
+OUT_CONTACT_FRACTION = OUT_COLUMNS.index("contact_fraction")
+OUT_STATUS = OUT_COLUMNS.index("dynamics_status")
