@@ -15,7 +15,15 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from impactbeams.params import MATERIAL_KEYS, MATERIAL_UNITS, UNITS, ParameterError, Params
+from impactbeams.params import (
+    DAMPING_LAW,
+    LONG_NAMES,
+    MATERIAL_KEYS,
+    MATERIAL_UNITS,
+    UNITS,
+    ParameterError,
+    Params,
+)
 
 if TYPE_CHECKING:
     from impactbeams.sweep import ChunkRunner
@@ -32,7 +40,11 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
     names.update({k + i: MATERIAL_UNITS[k] for k in MATERIAL_KEYS for i in ("1", "2")})
     for name, unit in names.items():
         flags = ["--" + name.replace("_", "-"), *_ALIASES.get(name, [])]
-        group.add_argument(*flags, dest=name, type=float, metavar="VALUE", help=f"({unit})")
+        description = LONG_NAMES.get(name, "")
+        if name == "damping_ratio":
+            description += ", " + DAMPING_LAW
+        group.add_argument(*flags, dest=name, type=float, metavar="VALUE",
+                           help=f"{description} ({unit})")
 
 
 def params_from_args(args: argparse.Namespace) -> Params:

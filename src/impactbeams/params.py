@@ -18,7 +18,8 @@ name               unit    meaning
 ``omega``          rad/s   forcing frequency Omega
 ``uplift1``,       m       initial tip uplifts delta_1, delta_2 (static tip-load shape)
 ``uplift2``
-``damping_ratio``  1       modal damping ratio zeta of every mode, 0 <= zeta < 1
+``damping_ratio``  1       modal damping ratio zeta, 0 <= zeta < 1: damps each cantilever
+                           mode's whole coordinate <y, Y_n> (see ``DAMPING_LAW``)
 =================  ======  ==========================================================
 """
 
@@ -58,6 +59,10 @@ LONG_NAMES = {
     "uplift2": "initial tip uplift of beam 2 (delta_2)",
     "damping_ratio": "modal damping ratio (zeta)",
 }
+DAMPING_LAW = ("modal: each cantilever mode's whole coordinate eta_n = <y, Y_n> obeys "
+               "eta'' + 2 zeta omega_n eta' + omega_n^2 eta = generalised force, quasi-static "
+               "part included (mass- or stiffness-proportional and modal damping all give this; "
+               "docs/model.md)")
 
 
 class ParameterError(ValueError):

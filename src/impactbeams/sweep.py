@@ -40,6 +40,7 @@ import xarray as xr
 from impactbeams import __version__
 from impactbeams.io import write_netcdf
 from impactbeams.params import (
+    DAMPING_LAW,
     LONG_NAMES,
     MATERIAL_KEYS,
     MATERIAL_UNITS,
@@ -566,6 +567,7 @@ def _dataset(sweep: Sweep, base: Params, results: dict[str, np.ndarray]) -> xr.D
         "swept_parameters": " ".join(dims),
         "sweep_definition": json.dumps(sweep.definition(), sort_keys=True),
         "sweep_fingerprint": sweep.fingerprint(),
+        "damping_law": DAMPING_LAW,
         **fixed,
     }
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)

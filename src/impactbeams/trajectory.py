@@ -34,7 +34,7 @@ import xarray as xr
 from impactbeams.kernels import dynamics as dyn
 from impactbeams.kernels.propagation import drive_amplitudes
 from impactbeams.model import ModalModel, build_model, unit_tip_shape
-from impactbeams.params import Params
+from impactbeams.params import DAMPING_LAW, Params
 from impactbeams.variables import attributes
 
 _CHUNK = 1 << 15  # output times per sampling call: bounds memory at ~N * 0.5 MB
@@ -446,6 +446,7 @@ def _global_attributes(params: Params, n_modes: int, t_max: float, trajectory: T
         "status": trajectory.status,
         "t_end": trajectory.t_end,
         "n_phases": trajectory.time.size,
+        "damping_law": DAMPING_LAW,
         "Conventions": "CF-1.8",
         "title": "impact dynamics of two cantilevers with clearance (impactbeams.trajectory)",
         "history": f"{stamp} impactbeams {__version__} simulate",
