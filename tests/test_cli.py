@@ -29,6 +29,16 @@ def test_modes_json_matches_the_library(capsys, tmp_path):
     assert result["free"]["beam1"] == free_modes(p.EI1, p.rhoA1, p.l1, 4).omega.tolist()
     assert result["free"]["beam2"] == free_modes(p.EI2, p.rhoA2, p.l2, 4).omega.tolist()
     assert result["contact"] == contact_frequencies(p, 4).tolist()
+    # and the options reached the model: closed forms omega_n = sqrt(EI / rhoA) (b_n / l)^2
+    # with the steel strip's EI = E b h^3 / 12, rhoA = rho b h (beam 1 h = 0.6 mm; beam 2
+    # EI2 = 0.02 given, default h = a / sqrt(E / (12 rho)) with a = 0.7)
+    roots = np.array([*CANTILEVER_ROOTS, 10.9955407349])
+    E, rho, b = 210e9, 7850.0, 5e-3
+    beam1 = np.sqrt(E * b * 6e-4**3 / 12 / (rho * b * 6e-4)) * (roots / 0.1) ** 2
+    h2 = 0.7 / np.sqrt(E / (12 * rho))
+    beam2 = np.sqrt(0.02 / (rho * b * h2)) * (roots / 0.15) ** 2
+    assert result["free"]["beam1"] == pytest.approx(beam1, rel=1e-9)  # 10-digit roots
+    assert result["free"]["beam2"] == pytest.approx(beam2, rel=1e-9)
 
 
 def test_modes_table(capsys):
