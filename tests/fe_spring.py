@@ -213,8 +213,9 @@ def fe_spring_contacts(
     if t_out is not None:
         t_out = np.asarray(t_out, dtype=float)
         energy, gap, force = (np.full(t_out.shape, np.nan) for _ in range(3))
-        for seg_contact, ta, tb, qa, va in segments:
-            mask = (t_out >= ta) & (t_out < tb)
+        for i, (seg_contact, ta, tb, qa, va) in enumerate(segments):
+            last = i == len(segments) - 1
+            mask = (t_out >= ta) & ((t_out < tb) | (last & (t_out <= tb)))
             if not mask.any():
                 continue
             modal = sys.contact if seg_contact else sys.free
