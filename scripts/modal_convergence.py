@@ -100,10 +100,10 @@ onset projection over the kinetic energy just before it. Run times include the o
   the closing speed: {", ".join(f"n = {n}: {d:.1e}" for n, d in speed_gap.items())}.
   (The tests check the first impact against the finite-element reference to 2e-10 s.)
 * Everything that happens at or after the first onset does not converge: the onset projection
-  keeps more kinetic energy as modes are added (MODEL.md: the loss of the truncated modal
-  model shrinks with N), contacts get shorter, impacts more numerous, and the contact force
-  and coefficient of restitution change with n. This is the "modal non-convergence" of
-  Szalai (2014) and Melcher, Champneys & Wagg (2013).
+  keeps more kinetic energy as modes are added ([the model](model.md#switching): the loss
+  of the truncated modal model shrinks with N), contacts get shorter, impacts more numerous,
+  and the contact force and coefficient of restitution change with n. This is the "modal
+  non-convergence" of Szalai (2014) and Melcher, Champneys & Wagg (2013).
 * The paper states that the solutions with 4 and 5 modes are "almost identical". Measured
   here, 4 and 5 modes agree on the first impact time to
   {abs(rows[0]["first onset (s)"] - rows[1]["first onset (s)"]):.1e} s but not on the impact

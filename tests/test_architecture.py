@@ -51,16 +51,16 @@ def _imports(path: Path) -> list[tuple[str, list[str]]]:
 
 
 def _internal_parts(path: Path) -> list[str]:
-    """The package parts ``path`` imports (``impactbeams`` alone gives only ``__version__``)."""
+    """The package parts ``path`` imports (the root's ``__version__`` is metadata, no part)."""
     parts = []
     for module, names in _imports(path):
         pieces = module.split(".")
         if pieces[0] != "impactbeams":
             continue
-        if len(pieces) == 1:
-            assert names == ["__version__"], f"{path}: imports {names} from the package root"
-            continue
-        parts.append(pieces[1])
+        if len(pieces) > 1:
+            parts.append(pieces[1])
+        else:  # from impactbeams import packing, __version__
+            parts.extend(name for name in names if name != "__version__")
     return parts
 
 

@@ -1,14 +1,22 @@
 """The ``impactbeams`` command: modes, parameter options and error reporting."""
 
+import importlib.util
 import json
+import shutil
 import subprocess
 import sys
+from importlib.metadata import entry_points
+from pathlib import Path
 
+import numpy as np
 import pytest
+import xarray as xr
 
 from impactbeams.cli import main
+from impactbeams.model import build_free_phase
 from impactbeams.modes import contact_frequencies, free_modes
 from impactbeams.params import Params
+from references import free_tip_gap, reference_first_impact
 
 
 def test_modes_json_matches_the_library(capsys, tmp_path):
@@ -21,6 +29,16 @@ def test_modes_json_matches_the_library(capsys, tmp_path):
     assert result["free"]["beam1"] == free_modes(p.EI1, p.rhoA1, p.l1, 4).omega.tolist()
     assert result["free"]["beam2"] == free_modes(p.EI2, p.rhoA2, p.l2, 4).omega.tolist()
     assert result["contact"] == contact_frequencies(p, 4).tolist()
+    # and the options reached the model: closed forms omega_n = sqrt(EI / rhoA) (b_n / l)^2
+    # with the steel strip's EI = E b h^3 / 12, rhoA = rho b h (beam 1 h = 0.6 mm; beam 2
+    # EI2 = 0.02 given, default h = a / sqrt(E / (12 rho)) with a = 0.7)
+    roots = np.array([*CANTILEVER_ROOTS, 10.9955407349])
+    E, rho, b = 210e9, 7850.0, 5e-3
+    beam1 = np.sqrt(E * b * 6e-4**3 / 12 / (rho * b * 6e-4)) * (roots / 0.1) ** 2
+    h2 = 0.7 / np.sqrt(E / (12 * rho))
+    beam2 = np.sqrt(0.02 / (rho * b * h2)) * (roots / 0.15) ** 2
+    assert result["free"]["beam1"] == pytest.approx(beam1, rel=1e-9)  # 10-digit roots
+    assert result["free"]["beam2"] == pytest.approx(beam2, rel=1e-9)
 
 
 def test_modes_table(capsys):
@@ -39,10 +57,90 @@ def test_errors_exit_2_with_a_clear_message(capsys, argv, message):
     assert message in capsys.readouterr().err
 
 
-def test_console_script_entry_point():
-    result = subprocess.run([sys.executable, "-m", "impactbeams.cli", "modes", "--n", "0"],
-                            capture_output=True, text=True)
+def console_script():
+    """The installed ``impactbeams`` executable: the one beside this interpreter (its venv),
+    else the first on PATH. ``python -m impactbeams`` only if the package has a __main__."""
+    beside = Path(sys.executable).with_name("impactbeams")
+    found = str(beside) if beside.is_file() else shutil.which("impactbeams")
+    if found is not None:
+        return [found]
+    if importlib.util.find_spec("impactbeams.__main__") is not None:
+        return [sys.executable, "-m", "impactbeams"]
+    pytest.fail("the impactbeams console script is not installed: pip install -e '.[test]'")
+
+
+def run_console(*args, cwd=None):
+    return subprocess.run([*console_script(), *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=600)  # a loaded CI machine; a fresh cache compiles kernels
+
+
+def test_console_script_is_declared_for_cli_main():
+    (entry,) = entry_points(group="console_scripts", name="impactbeams")
+    assert entry.value == "impactbeams.cli:main"
+
+
+# cantilever roots b_n of cos b cosh b = -1 (10 digits, tables) and MODEL.md's contact values
+CANTILEVER_ROOTS = (1.8751040687, 4.6940911330, 7.8547574382)
+CONTACT = ("208.046", "844.946", "1364.32")
+
+
+def test_console_script_prints_the_known_frequencies():
+    result = run_console("modes", "--n", "3", "--json")
+    assert result.returncode == 0, result.stderr
+    modes = json.loads(result.stdout)
+    p = Params()  # default steel strip: a = 0.7 m^2/s on both beams
+    for beam, length in (("beam1", p.l1), ("beam2", p.l2)):
+        closed_form = [0.7 * (b / length) ** 2 for b in CANTILEVER_ROOTS]
+        # roots to 10 digits: 1e-10 relative in b, 2e-10 in omega
+        assert modes["free"][beam] == pytest.approx(closed_form, rel=1e-9)
+    assert modes["free"]["beam1"] == pytest.approx([246.121, 1542.41, 4318.81], abs=0.005)
+    assert modes["free"]["beam2"] == pytest.approx([170.917, 1071.12, 2999.17], abs=0.005)
+    for value, text in zip(modes["contact"], CONTACT, strict=True):
+        decimals = len(text.split(".")[1])  # MODEL.md rounds: half a unit of the last digit
+        assert abs(value - float(text)) <= 0.5 * 10.0**-decimals, (value, text)
+
+
+def test_console_script_reports_bad_options_with_exit_code_2():
+    result = run_console("modes", "--n", "0")
     assert result.returncode == 2 and "must be an integer >= 1" in result.stderr
+    result = run_console("modes", "--clearance=-1e-5")
+    assert result.returncode == 2
+    assert "clearance = -1e-05 is not allowed: must be > 0 (m)" in result.stderr
+
+
+def test_console_script_runs_a_sweep_and_writes_netcdf(tmp_path):
+    """``impactbeams run`` on a 2 x 2 sweep: exit code 0, a CF netCDF file whose cells equal the
+    textbook free-phase solution's first impacts (references.py, long double)."""
+    sweep_file = tmp_path / "tiny.toml"
+    sweep_file.write_text(
+        "t_max = 0.3\nn_modes = 4\n[params]\nclearance = 1.1e-5\n"
+        "[axes.omega]\nmin = 50.0\nmax = 200.0\nnum = 2\n"
+        "[axes.force_amplitude]\nmin = 1e-4\nmax = 1e-3\nnum = 2\n")
+    out = tmp_path / "tiny.nc"
+    result = run_console("run", str(sweep_file), "-o", str(out), "--quiet", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert f"wrote {out}" in result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tiny.nc", "tiny.toml"]
+    free = build_free_phase(Params(), 4)
+    c1 = Params().tip_compliance[0]
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["Conventions"] == "CF-1.8" and ds.attrs["t_max"] == 0.3
+        assert ds.first_impact_time.dims == ("omega", "force_amplitude")
+        assert ds.first_impact_time.attrs["units"] == "s"
+        np.testing.assert_array_equal(ds.omega.values, [50.0, 200.0])
+        np.testing.assert_array_equal(ds.force_amplitude.values, [1e-4, 1e-3])
+        for i, omega in enumerate(ds.omega.values):
+            for j, force in enumerate(ds.force_amplitude.values):
+                args = (free, c1, 1.1e-5, float(force), float(omega))
+                reference = reference_first_impact(
+                    free_tip_gap(*args), 0.3, free.omega.max(),
+                    scan=free_tip_gap(*args, dtype=np.float64))
+                got = float(ds.first_impact_time[i, j])
+                assert np.isnan(got) == np.isnan(reference)
+                # both locate the root to the last ulp or so (see test_sweep)
+                assert np.isnan(reference) or abs(got - reference) <= 1e-12 * reference
+                assert int(ds.impacted[i, j]) == int(np.isfinite(reference))
+        assert int(ds.impacted.sum()) >= 1  # not a map of NaN only
 
 
 def test_public_api_names_stay_functions_after_their_modules_load():

@@ -7,7 +7,7 @@ within twice that estimate of the fine mesh (plus a round-off floor of 1e-12 rel
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import fe_reference as fe
@@ -45,7 +45,14 @@ def test_frequencies_match_finite_elements(geometry):
     check_geometry(Params(**geometry))
 
 
-@settings(max_examples=12, deadline=None)
+# derandomize: the same 12 examples on every run and machine (CI cannot flake, a failure
+# reproduces); the corners of the ranges always run as explicit examples
+@settings(max_examples=12, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@example(length_ratio=0.3, stiffness_ratio=1e-2)
+@example(length_ratio=0.3, stiffness_ratio=1e2)
+@example(length_ratio=3.0, stiffness_ratio=1e-2)
+@example(length_ratio=3.0, stiffness_ratio=1e2)
 @given(length_ratio=st.floats(0.3, 3.0), stiffness_ratio=st.floats(1e-2, 1e2))
 def test_random_geometries_match_finite_elements(length_ratio, stiffness_ratio):
     p = Params()

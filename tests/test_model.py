@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from impactbeams.model import build_free_phase, build_model, unit_tip_shape
 from references import gauss_rule
@@ -89,12 +90,82 @@ def test_static_expansions_converge_to_closed_form_compliances(default_params):
     assert series == pytest.approx(c1 * c2 / (c1 + c2), rel=1e-5)
 
 
-def test_static_shift_projections(model50, default_params):
-    c1, c2 = default_params.tip_compliance
-    free = model50.free
-    assert np.array_equal(free.static_shift, c1 * free.unit1 - c2 * free.unit2)
-    assert np.array_equal(model50.contact_static_shift,
-                          c1 * model50.contact_unit1 - c2 * model50.contact_unit2)
+def _static_difference_field(p, x1, x2):
+    """s = c_1 u_1 on beam 1 (+) -c_2 u_2 on beam 2 (MODEL.md: y_s(contact) - y_s(free) = R s)."""
+    c1, c2 = p.tip_compliance
+    return c1 * (3 * p.l1 * x1**2 - x1**3) / (2 * p.l1**3), \
+        -c2 * (3 * p.l2 * x2**2 - x2**3) / (2 * p.l2**3)
+
+
+def test_static_shift_equals_quadrature_of_the_static_field(model50, default_params):
+    """<s, mode> by direct Gauss quadrature of rhoA int s Y dx (16 points x 800 panels, another
+    rule than the package's), for both phases; the package uses the boundary identity."""
+    p = default_params
+    x1, w1 = gauss_rule(p.l1)
+    x2, w2 = gauss_rule(p.l2)
+    s1, s2 = _static_difference_field(p, x1, x2)
+    free, n = model50.free, model50.n_modes
+    quad_free = np.concatenate([p.rhoA1 * free.beam1.shapes(x1) @ (w1 * s1),
+                                p.rhoA2 * free.beam2.shapes(x2) @ (w2 * s2)])
+    quad_contact = (p.rhoA1 * model50.contact.beam1(x1) @ (w1 * s1)
+                    + p.rhoA2 * model50.contact.beam2(x2) @ (w2 * s2))
+    assert quad_free.shape == free.static_shift.shape == (2 * n,)
+    # quadrature error ~1e-30 for these smooth integrands (mode 50: ~50 half-waves on 800
+    # panels); what is left is round-off of sums of O(1e4) terms: measured < 2e-16 of the max
+    for quadrature, projection in ((quad_free, free.static_shift),
+                                   (quad_contact, model50.contact_static_shift)):
+        assert np.abs(quadrature - projection).max() < 1e-14 * np.abs(projection).max()
+    # the signs must be right mode by mode, not only in size: beam 1 up, beam 2 down
+    assert np.all(np.sign(free.static_shift[:n]) == np.sign(free.tip1[:n]))
+    assert np.all(np.sign(free.static_shift[n:]) == -np.sign(free.tip2[n:]))
+
+
+def test_free_static_shift_against_textbook_shapes(model50, default_params):
+    """First free modes from the textbook form cosh - cos - sigma (sinh - sin), which is
+    normalised by int phi^2 = l (Blevins), with their own roots of cos b cosh b = -1: shapes,
+    roots and normalisation all independent of the package's decaying-exponential form."""
+    p = default_params
+    n = model50.n_modes
+    for beam, (rhoA, length, offset) in enumerate(((p.rhoA1, p.l1, 0), (p.rhoA2, p.l2, n))):
+        x, w = gauss_rule(length, panels=200)
+        s = _static_difference_field(p, x, x)[beam]
+        for j in (1, 2, 3):
+            b = brentq(lambda b: np.cos(b) * np.cosh(b) + 1, (j - 1) * np.pi + 0.5, j * np.pi,
+                       xtol=1e-15, rtol=1e-15)
+            k = b / length
+            sigma = (np.sinh(b) - np.sin(b)) / (np.cosh(b) + np.cos(b))
+            phi = np.cosh(k * x) - np.cos(k * x) - sigma * (np.sinh(k * x) - np.sin(k * x))
+            shape = (-1) ** (j + 1) * phi / np.sqrt(rhoA * length)  # tip deflection positive
+            projection = rhoA * np.sum(w * s * shape)
+            # the textbook form cancels e^(kx) terms: absolute error ~eps e^b (6e-13 for
+            # b = 7.85), relative to <s, Y_3> ~ 3e-3 <s, Y_1>: measured 1e-11, allowed 1e-10
+            assert projection == pytest.approx(model50.free.static_shift[offset + j - 1],
+                                               rel=1e-10)
+
+
+def test_static_series_converge_to_the_norm_of_the_static_field(default_params):
+    """Parseval: sum_n <s, Y_n>^2 -> <s, s> = 33/140 (rhoA1 c1^2 l1 + rhoA2 c2^2 l2), int u^2
+    over [0, l] being 33 l / 140. Free modes: <s, Y_n> ~ n^-4, tail ~ n^-7. Contact modes:
+    s has untied tips (c1 vs -c2), so <s, Z_m> ~ m^-1 and the tail falls like 1/m."""
+    p = default_params
+    c1, c2 = p.tip_compliance
+    norm = 33 / 140 * (p.rhoA1 * c1**2 * p.l1 + p.rhoA2 * c2**2 * p.l2)
+    free_tails = np.array([norm - np.sum(build_free_phase(p, n).static_shift**2)
+                           for n in (10, 25, 50)]) / norm
+    # free: positive tails falling like n^-7 (measured 2.2e-10 at n = 10, 3.8e-13 at 25:
+    # ratio 600 = 2.5^7), then round-off of a sum of O(1e-6) terms
+    assert 0 < free_tails[0] < 1e-9 and 0 < free_tails[1] < free_tails[0] / 300
+    assert abs(free_tails[2]) < 1e-14
+    contact_tails = np.array([norm - np.sum(build_model(p, n).contact_static_shift**2)
+                              for n in (25, 50, 100)]) / norm
+    # contact: the tail halves when the modes double (measured ratios 1.986, 2.0003) and is the
+    # 1/m tail of the right limit: Richardson's 2 S(2N) - S(N) from 50 and 100 modes per beam
+    # is within 2e-5 of <s, s> (measured 2.7e-6; a wrong factor on either part of s moves it
+    # by O(1); wrong signs are caught by the quadrature test above)
+    assert np.all(contact_tails > 0)
+    ratios = contact_tails[:-1] / contact_tails[1:]
+    assert np.all((ratios > 1.9) & (ratios < 2.1)), ratios
+    assert abs(2 * contact_tails[2] - contact_tails[1]) < 2e-5
 
 
 def test_bad_mode_count():

@@ -119,6 +119,12 @@ def test_parallel_serial_and_chunking_give_bitwise_identical_maps():
     assert np.array_equal(a.first_impact_time, b.first_impact_time, equal_nan=True)
 
 
+def _refusing_runner(sweep, chunks):
+    """A chunk runner for runs that must compute nothing: fails if asked for any chunk."""
+    assert not chunks, f"chunks {[c[0] for c in chunks]} were recomputed"
+    yield from ()
+
+
 def test_interrupted_run_resumes_to_the_same_result(tmp_path):
     sweep = small()
     out = tmp_path / "map.nc"
@@ -134,54 +140,100 @@ def test_interrupted_run_resumes_to_the_same_result(tmp_path):
     assert len(list(partial.glob("chunk_*.npz"))) == 3
     computed = []
     resumed = run_sweep(sweep, output=out, progress=False, chunk_cells=10, on_chunk=computed.append)
+    assert computed == list(range(3, 10))  # 91 cells in chunks of 10: only the unsaved ones
     fresh = run_sweep(sweep, progress=False)
     assert np.array_equal(resumed.first_impact_time, fresh.first_impact_time, equal_nan=True)
     assert out.exists() and not partial.exists()
-    # a finished output of the same sweep is returned as it is; another sweep is refused
-    assert run_sweep(sweep, output=out, progress=False).attrs == resumed.attrs
+    # a finished output of the same sweep is returned as it is: nothing computed (the runner
+    # refuses any chunk, on_chunk is never called) and the file is not rewritten (same inode,
+    # modification time to the nanosecond and bytes)
+    before, content = out.stat(), out.read_bytes()
+    again = run_sweep(sweep, output=out, progress=False, on_chunk=computed.append,
+                      runner=_refusing_runner)
+    after = out.stat()
+    assert computed == list(range(3, 10))
+    assert (after.st_ino, after.st_mtime_ns, after.st_size) == (
+        before.st_ino, before.st_mtime_ns, before.st_size)
+    assert out.read_bytes() == content
+    assert again.attrs == resumed.attrs
+    assert np.array_equal(again.first_impact_time, fresh.first_impact_time, equal_nan=True)
+    # another sweep is refused, and leaves the file alone too
     with pytest.raises(ParameterError, match="exists and holds a different result"):
-        run_sweep(small(t_max=0.2), output=out, progress=False)
+        run_sweep(small(t_max=0.2), output=out, progress=False, runner=_refusing_runner)
+    assert out.stat().st_mtime_ns == before.st_mtime_ns and out.read_bytes() == content
+
+
+# Generous: a loaded 2-core CI machine runs these subprocesses several times slower, and the
+# first one may compile the kernels; every wait polls for an event and ends as soon as it occurs.
+PROCESS_DEADLINE = 600.0
+
+
+def _wait_for(condition, what, process=None, log=None, deadline=PROCESS_DEADLINE):
+    """Poll ``condition()`` until true; fail clearly on timeout or if ``process`` exits first."""
+    end = time.monotonic() + deadline
+    while not condition():
+        if process is not None and process.poll() is not None:
+            output = log.read_text() if log is not None and log.exists() else ""
+            pytest.fail(f"the process exited with code {process.returncode} before {what}; "
+                        f"its stderr:\n{output}")
+        if time.monotonic() > end:
+            if process is not None:
+                process.kill()
+                process.wait()
+            pytest.fail(f"no {what} within {deadline} s")
+        time.sleep(0.02)
 
 
 def test_killed_process_loses_no_finished_chunk(tmp_path):
     """SIGKILL mid-run: saved chunks stay readable, no result file appears, and the same
-    command resumes to the result of an uninterrupted run."""
+    command resumes from them (a marked value in a saved chunk reaches the result: it was
+    loaded, not recomputed); all other cells equal an uninterrupted run."""
     sweep_file = tmp_path / "s.toml"
-    sweep_file.write_text(
+    sweep_file.write_text(  # 3600 cells in 180 chunks: killed after 3, the run is 2 % done
         "t_max = 3.0\nn_modes = 5\n[axes.omega]\nmin = 300.0\nmax = 500.0\nnum = 60\n"
         "[axes.force_amplitude]\nmin = 1e-5\nmax = 2e-4\nnum = 60\n"
     )
     out = tmp_path / "s.nc"
-    command = [
-        sys.executable,
-        "-m",
-        "impactbeams.cli",
-        "run",
-        str(sweep_file),
-        "-o",
-        str(out),
-        "--chunk-cells",
-        "20",
-        "--threads",
-        "1",
-        "--quiet",
-    ]
-    process = subprocess.Popen(command, stderr=subprocess.DEVNULL)
+    command = [sys.executable, "-m", "impactbeams.cli", "run", str(sweep_file), "-o", str(out),
+               "--chunk-cells", "20", "--threads", "1", "--quiet"]
     partial = tmp_path / "s.nc.partial"
-    deadline = time.monotonic() + 120
-    while len(list(partial.glob("chunk_*.npz"))) < 5 and process.poll() is None:
-        assert time.monotonic() < deadline
-        time.sleep(0.05)
-    os.kill(process.pid, signal.SIGKILL)
-    process.wait()
-    assert process.returncode == -signal.SIGKILL  # ~1 s of work left when killed
+    log = tmp_path / "stderr.txt"
+    with open(log, "w") as stderr:
+        process = subprocess.Popen(command, stderr=stderr)
+        try:
+            _wait_for(lambda: len(list(partial.glob("chunk_*.npz"))) >= 3,
+                      "3 saved chunks", process, log)
+            os.kill(process.pid, signal.SIGKILL)
+        finally:
+            process.kill()  # no-op when it is dead already; never leave it running
+            process.wait()
+    assert process.returncode == -signal.SIGKILL, (
+        f"the run ended by itself (code {process.returncode}) before it was killed")
     assert not out.exists()
-    for chunk in partial.glob("chunk_*.npz"):
+    saved = sorted(partial.glob("chunk_*.npz"))
+    assert 3 <= len(saved) < 180
+    for chunk in saved:
         assert np.load(chunk)["first_impact_time"].shape == (20,)
-    assert subprocess.run(command, stderr=subprocess.DEVNULL).returncode == 0
-    fresh = run_sweep(load_sweep(sweep_file), progress=False)
+    # mark one saved chunk: a value no computation gives (t_max is 3 s)
+    number = int(saved[0].stem[6:])
+    with np.load(saved[0]) as data:
+        values = {name: data[name].copy() for name in data.files}
+    values["first_impact_time"][0] = 99.0
+    marked = saved[0].with_name("marked.tmp")
+    with open(marked, "wb") as stream:
+        np.savez(stream, **values)
+    os.replace(marked, saved[0])
+    resumed_run = subprocess.run(command, capture_output=True, text=True,
+                                 timeout=PROCESS_DEADLINE)
+    assert resumed_run.returncode == 0, resumed_run.stderr
+    assert not partial.exists()
+    fresh = run_sweep(load_sweep(sweep_file), progress=False).first_impact_time.values.ravel()
     with xr.open_dataset(out) as resumed:
-        assert np.array_equal(resumed.first_impact_time, fresh.first_impact_time, equal_nan=True)
+        got = resumed.first_impact_time.values.ravel()
+    assert got[20 * number] == 99.0  # the saved chunk was used as it was
+    expected = fresh.copy()
+    expected[20 * number] = 99.0
+    assert np.array_equal(got, expected, equal_nan=True)
 
 
 def test_netcdf_file_is_self_describing(tmp_path):

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from impactbeams.params import ParameterError, Params
-from impactbeams.variables import PARAMETERS
+from impactbeams.variables import DAMPING_LAW, PARAMETERS
 
 if TYPE_CHECKING:
     from impactbeams.sweep import ChunkRunner
@@ -31,8 +31,11 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
                        help="TOML file with a [params] table (unspecified keys take defaults)")
     for name, parameter in PARAMETERS.items():
         flags = ["--" + name.replace("_", "-"), *_ALIASES.get(name, [])]
+        description = parameter.long_name
+        if name == "damping_ratio":
+            description += ", " + DAMPING_LAW
         group.add_argument(*flags, dest=name, type=float, metavar="VALUE",
-                           help=f"({parameter.units})")
+                           help=f"{description} ({parameter.units})")
 
 
 def params_from_args(args: argparse.Namespace) -> Params:

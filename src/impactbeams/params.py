@@ -18,7 +18,8 @@ name               unit    meaning
 ``omega``          rad/s   forcing frequency Omega
 ``uplift1``,       m       initial tip uplifts delta_1, delta_2 (static tip-load shape)
 ``uplift2``
-``damping_ratio``  1       modal damping ratio zeta of every mode, 0 <= zeta < 1
+``damping_ratio``  1       modal damping ratio zeta, 0 <= zeta < 1: damps each cantilever
+                           mode's whole coordinate <y, Y_n> (``variables.DAMPING_LAW``)
 =================  ======  ==========================================================
 """
 

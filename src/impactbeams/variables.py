@@ -18,6 +18,10 @@ if TYPE_CHECKING:
 
 CONVENTIONS = "CF-1.8"
 REFERENCES = "Dzyubak & Bhaskar, Procedia Engineering 199 (2017) 589-594"
+DAMPING_LAW = ("modal: each cantilever mode's whole coordinate eta_n = <y, Y_n> obeys "
+               "eta'' + 2 zeta omega_n eta' + omega_n^2 eta = generalised force, quasi-static "
+               "part included (mass- or stiffness-proportional and modal damping all give this; "
+               "docs/model.md)")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -187,7 +191,7 @@ def parameter_attributes(name: str) -> dict[str, str]:
 
 def global_attributes(title: str, action: str, parameters: Mapping[str, Any],
                       **run: Any) -> dict[str, Any]:
-    """Global attributes of a Dataset: CF conventions, provenance and every input parameter.
+    """Global attributes of a Dataset: CF conventions, provenance, damping law, parameters.
 
     ``action`` completes the ``history`` line (timestamp, package version, what was run);
     ``parameters`` are the model parameters by name (SI units), ``run`` the run's settings.
@@ -201,6 +205,7 @@ def global_attributes(title: str, action: str, parameters: Mapping[str, Any],
         "history": f"{now}: impactbeams {__version__} {action}",
         "source": f"impactbeams {__version__}",
         "references": REFERENCES,
+        "damping_law": DAMPING_LAW,
         **run,
         **parameters,
     }
