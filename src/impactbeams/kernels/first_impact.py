@@ -35,7 +35,7 @@ from impactbeams.kernels.propagation import drive_amplitude
 
 # rows of the per-mode scratch of the moving modes (private to this kernel)
 _WORK_ROWS = ("q_s", "v_s", "omega", "zeta", "weights", "q", "v")
-_Q_S, _V_S, _OMEGA, _ZETA, _WEIGHTS, _Q, _V = (_WORK_ROWS.index(name) for name in _WORK_ROWS)
+_Q_S, _V_S, _OMEGA, _ZETA, _WEIGHTS, _Q, _V = range(len(_WORK_ROWS))
 
 
 @kernel

@@ -1,8 +1,8 @@
 """Named rows, columns and fields of every kernel array: the contract between packing and kernels.
 
 :mod:`impactbeams.packing` fills the arrays by these names and the kernels read them by these
-names; nobody writes a bare offset. Each index is looked up in its tuple of names, so the two
-cannot drift apart. Units: SI throughout.
+names; nobody writes a bare offset. Each group of indices is unpacked next to its tuple of
+names. Units: SI throughout.
 
 Phase tables, ``tables[phase, row, mode]`` (one geometry; ``FREE = 0``, ``CONTACT = 1``; a
 first-impact map packs the free phase alone), rows ``TABLE_ROWS``:
@@ -35,52 +35,28 @@ index of its geometry. ``out[i]``, columns ``OUT_COLUMNS``: a dynamics map's obs
 
 FREE, CONTACT = 0, 1
 
+# each group unpacks range(len(names)) in the names' order: a missing name fails at import
 TABLE_ROWS = ("omega", "zeta", "drive", "event", "tip1", "unit1", "unit2")
-ROW_OMEGA = TABLE_ROWS.index("omega")
-ROW_ZETA = TABLE_ROWS.index("zeta")
-ROW_DRIVE = TABLE_ROWS.index("drive")
-ROW_EVENT = TABLE_ROWS.index("event")
-ROW_TIP1 = TABLE_ROWS.index("tip1")
-ROW_UNIT1 = TABLE_ROWS.index("unit1")
-ROW_UNIT2 = TABLE_ROWS.index("unit2")
+ROW_OMEGA, ROW_ZETA, ROW_DRIVE, ROW_EVENT, ROW_TIP1, ROW_UNIT1, ROW_UNIT2 = range(len(TABLE_ROWS))
 
 PHASE_SCALARS = ("event_const", "event_sine", "load_rate")
-SCALAR_CONST = PHASE_SCALARS.index("event_const")
-SCALAR_SINE = PHASE_SCALARS.index("event_sine")
-SCALAR_LOAD_RATE = PHASE_SCALARS.index("load_rate")
+SCALAR_CONST, SCALAR_SINE, SCALAR_LOAD_RATE = range(len(PHASE_SCALARS))
 
 SETTINGS = ("clearance", "c1", "c2", "force_amplitude", "omega", "t_max", "search_span",
             "accumulation")
-SET_CLEARANCE = SETTINGS.index("clearance")
-SET_C1 = SETTINGS.index("c1")
-SET_C2 = SETTINGS.index("c2")
-SET_F0 = SETTINGS.index("force_amplitude")
-SET_OMEGA = SETTINGS.index("omega")
-SET_T_MAX = SETTINGS.index("t_max")
-SET_SEARCH_SPAN = SETTINGS.index("search_span")
-SET_ACCUMULATION = SETTINGS.index("accumulation")
+(SET_CLEARANCE, SET_C1, SET_C2, SET_F0, SET_OMEGA, SET_T_MAX, SET_SEARCH_SPAN,
+ SET_ACCUMULATION) = range(len(SETTINGS))
 
 GEOMETRY = ("c1", "c2", "accumulation")
-GEO_C1 = GEOMETRY.index("c1")
-GEO_C2 = GEOMETRY.index("c2")
-GEO_ACCUMULATION = GEOMETRY.index("accumulation")
+GEO_C1, GEO_C2, GEO_ACCUMULATION = range(len(GEOMETRY))
 
 # the cell parameters are named as in impactbeams.params; the last column is the geometry
 CELL_COLUMNS = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "damping_ratio",
                 "geometry")
-CELL_CLEARANCE = CELL_COLUMNS.index("clearance")
-CELL_F0 = CELL_COLUMNS.index("force_amplitude")
-CELL_OMEGA = CELL_COLUMNS.index("omega")
-CELL_UPLIFT1 = CELL_COLUMNS.index("uplift1")
-CELL_UPLIFT2 = CELL_COLUMNS.index("uplift2")
-CELL_ZETA = CELL_COLUMNS.index("damping_ratio")
-CELL_GEOMETRY = CELL_COLUMNS.index("geometry")
+(CELL_CLEARANCE, CELL_F0, CELL_OMEGA, CELL_UPLIFT1, CELL_UPLIFT2, CELL_ZETA,
+ CELL_GEOMETRY) = range(len(CELL_COLUMNS))
 
 OUT_COLUMNS = ("first_impact_time", "impact_count", "max_contact_force", "mean_restitution",
                "contact_fraction", "dynamics_status")
-OUT_FIRST_IMPACT = OUT_COLUMNS.index("first_impact_time")
-OUT_IMPACTS = OUT_COLUMNS.index("impact_count")
-OUT_MAX_FORCE = OUT_COLUMNS.index("max_contact_force")
-OUT_RESTITUTION = OUT_COLUMNS.index("mean_restitution")
-OUT_CONTACT_FRACTION = OUT_COLUMNS.index("contact_fraction")
-OUT_STATUS = OUT_COLUMNS.index("dynamics_status")
+(OUT_FIRST_IMPACT, OUT_IMPACTS, OUT_MAX_FORCE, OUT_RESTITUTION, OUT_CONTACT_FRACTION,
+ OUT_STATUS) = range(len(OUT_COLUMNS))
