@@ -105,7 +105,7 @@ class Packed:
     forces: np.ndarray
     phase_scalars: np.ndarray
     shifts: np.ndarray
-    settings: np.ndarray
+    settings: np.void  # a record of kernels.layout.SETTINGS_DTYPE
     q0: np.ndarray
     v0: np.ndarray
 
@@ -117,4 +117,4 @@ def pack_model(model: ModalModel, t_max: float, search_span: float) -> Packed:
     cell = cell_rows({**p.as_dict(), "geometry": 0.0}, 1)[0]
     damped, forces, scalars, settings, q0, v0 = run_inputs(
         cell, tables, geometry_row(p, model.free), t_max, search_span)
-    return Packed(model, bases(model), damped, forces, scalars, shifts, settings, q0, v0)
+    return Packed(model, bases(model), damped, forces, scalars, shifts, settings[0], q0, v0)

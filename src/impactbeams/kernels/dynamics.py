@@ -32,14 +32,6 @@ from impactbeams.kernels.layout import (
     ROW_ZETA,
     SCALAR_CONST,
     SCALAR_SINE,
-    SET_ACCUMULATION,
-    SET_C1,
-    SET_C2,
-    SET_CLEARANCE,
-    SET_F0,
-    SET_OMEGA,
-    SET_SEARCH_SPAN,
-    SET_T_MAX,
 )
 from impactbeams.kernels.propagation import advance
 
@@ -56,10 +48,10 @@ _EPS = np.finfo(np.float64).eps
 @kernel
 def quasi_static_force(t, settings):
     """R_qs(t) = (c1 F(t) - clearance) / (c1 + c2) (N) and its rate R_qs'(t) (N/s)."""
-    c1, c2 = settings[SET_C1], settings[SET_C2]
-    f0, big_omega = settings[SET_F0], settings[SET_OMEGA]
+    c1, c2 = settings.c1, settings.c2
+    f0, big_omega = settings.force_amplitude, settings.forcing_frequency
     total = c1 + c2
-    value = (c1 * f0 * math.sin(big_omega * t) - settings[SET_CLEARANCE]) / total
+    value = (c1 * f0 * math.sin(big_omega * t) - settings.clearance) / total
     return value, c1 * f0 * big_omega * math.cos(big_omega * t) / total
 
 
@@ -79,7 +71,7 @@ def switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new):
 def propagate(table, force, q_s, v_s, t_s, t, settings, q, v):
     """State at time t (s) of the phase with ``table``, ``force`` from (q_s, v_s) at t_s."""
     advance(q_s, v_s, t_s, t - t_s, table[ROW_OMEGA], table[ROW_ZETA], force,
-            settings[SET_OMEGA], q, v)
+            settings.forcing_frequency, q, v)
 
 
 @kernel
@@ -89,14 +81,14 @@ def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v):
     The certified search restarts from the exactly propagated state every ``search span``
     seconds (settings); the root does not depend on that span beyond round-off.
     """
-    t_max, span = settings[SET_T_MAX], settings[SET_SEARCH_SPAN]
+    t_max, span = settings.t_max, settings.search_span
     q_a, v_a = q_s.copy(), v_s.copy()
     t_a = t_s
     while t_a < t_max:
         t_b = min(t_a + span, t_max)
         root = first_root(q_a, v_a, t_a, t_b, table[ROW_OMEGA], table[ROW_ZETA], force,
                           table[ROW_EVENT], scalars[SCALAR_CONST], scalars[SCALAR_SINE],
-                          settings[SET_OMEGA], q, v)
+                          settings.forcing_frequency, q, v)
         if not math.isnan(root):
             return root
         propagate(table, force, q_s, v_s, t_s, t_b, settings, q_a, v_a)
@@ -113,7 +105,7 @@ def rate_root(table, force, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v)
     oscillators driven by ``Im(Omega A e^(i Omega tau))`` in the shifted time
     ``tau = t + pi / (2 Omega)``, so ``first_root`` applies unchanged.
     """
-    big_omega = settings[SET_OMEGA]
+    big_omega = settings.forcing_frequency
     omega, zeta = table[ROW_OMEGA], table[ROW_ZETA]
     shift = 0.5 * math.pi / big_omega if big_omega > 0.0 else 0.0
     acceleration = (force.real * math.sin(big_omega * t_s) + force.imag * math.cos(big_omega * t_s)
@@ -134,7 +126,7 @@ def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings
     for _ in range(64):
         propagate(table, force, q_s, v_s, t_s, t, settings, q, v)
         value, slope = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
-                                   scalars[SCALAR_SINE], settings[SET_OMEGA])
+                                   scalars[SCALAR_SINE], settings.forcing_frequency)
         if (slope if positive_rate else value) > 0.0:
             break
         t += step
@@ -153,9 +145,9 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
       to it, or until it peaks below 0 (e' = 0), whichever comes first;
     * falling and ``wait_falling``: follow e to its minimum, then as when rising.
     """
-    t_max = settings[SET_T_MAX]
+    t_max = settings.t_max
     value, slope = event_value(q_s, v_s, t_s, table[ROW_EVENT], scalars[SCALAR_CONST],
-                               scalars[SCALAR_SINE], settings[SET_OMEGA])
+                               scalars[SCALAR_SINE], settings.forcing_frequency)
     if value > 0.0:
         return find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v)
     q_a, v_a, t_a = q_s.copy(), v_s.copy(), t_s
@@ -168,7 +160,7 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
         t_a = _step_until(table, force, scalars, q_s, v_s, t_s, t_min, True, settings, q_a,
                           v_a)
         value, _ = event_value(q_a, v_a, t_a, table[ROW_EVENT], scalars[SCALAR_CONST],
-                               scalars[SCALAR_SINE], settings[SET_OMEGA])
+                               scalars[SCALAR_SINE], settings.forcing_frequency)
         if value > 0.0:
             return find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v)
     elif not wait_rising:
@@ -177,7 +169,7 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     t_limit = t_max if math.isnan(t_peak) else t_peak
     t_up = first_root(q_a, v_a, t_a, t_limit, table[ROW_OMEGA], table[ROW_ZETA], force,
                       -table[ROW_EVENT], -scalars[SCALAR_CONST], -scalars[SCALAR_SINE],
-                      settings[SET_OMEGA], q, v)
+                      settings.forcing_frequency, q, v)
     if math.isnan(t_up) or t_up >= t_limit:
         return t_peak
     t_up = _step_until(table, force, scalars, q_a, v_a, t_a, t_up, False, settings, q, v)
@@ -225,7 +217,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, settings, q0, v0,
         free = phase == FREE
         t_event = find_switch(table, force, scalars, q, v, t, free or sustained,
                               free and conflict, settings, q_end, v_end)
-        t_stop = settings[SET_T_MAX] if math.isnan(t_event) else t_event
+        t_stop = settings.t_max if math.isnan(t_event) else t_event
         propagate(table, force, q, v, t, t_stop, settings, q_end, v_end)
         end_q[k, :] = q_end
         end_v[k, :] = v_end
@@ -237,7 +229,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, settings, q0, v0,
             return k + 1, STUCK, t_stop
         if free:
             phase = CONTACT
-            sustained = t_event - instant_release <= settings[SET_ACCUMULATION]
+            sustained = t_event - instant_release <= settings.accumulation
         else:
             phase = FREE
             instant_release = t_event if instant else -math.inf

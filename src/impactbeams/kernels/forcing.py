@@ -30,15 +30,7 @@ from impactbeams.kernels.layout import (
     SCALAR_CONST,
     SCALAR_LOAD_RATE,
     SCALAR_SINE,
-    SET_ACCUMULATION,
-    SET_C1,
-    SET_C2,
-    SET_CLEARANCE,
-    SET_F0,
-    SET_OMEGA,
-    SET_SEARCH_SPAN,
-    SET_T_MAX,
-    SETTINGS,
+    SETTINGS_DTYPE,
 )
 from impactbeams.kernels.propagation import drive_amplitudes
 
@@ -75,16 +67,20 @@ def phase_scalars(cell, geometry):
 
 @kernel
 def settings(cell, geometry, t_max, search_span):
-    """The run's ``SETTINGS`` (t_max, search_span in s)."""
-    out = np.empty(len(SETTINGS))
-    out[SET_CLEARANCE] = cell[CELL_CLEARANCE]
-    out[SET_C1] = geometry[GEO_C1]
-    out[SET_C2] = geometry[GEO_C2]
-    out[SET_F0] = cell[CELL_F0]
-    out[SET_OMEGA] = cell[CELL_OMEGA]
-    out[SET_T_MAX] = t_max
-    out[SET_SEARCH_SPAN] = search_span
-    out[SET_ACCUMULATION] = geometry[GEO_ACCUMULATION]
+    """The run's settings as a one-element array of ``SETTINGS_DTYPE`` (t_max, search_span in s).
+
+    The kernels take its element, a record read by field name.
+    """
+    out = np.empty(1, dtype=SETTINGS_DTYPE)
+    record = out[0]
+    record.clearance = cell[CELL_CLEARANCE]
+    record.c1 = geometry[GEO_C1]
+    record.c2 = geometry[GEO_C2]
+    record.force_amplitude = cell[CELL_F0]
+    record.forcing_frequency = cell[CELL_OMEGA]
+    record.t_max = t_max
+    record.search_span = search_span
+    record.accumulation = geometry[GEO_ACCUMULATION]
     return out
 
 

@@ -23,15 +23,18 @@ first-impact map packs the free phase alone), rows ``TABLE_ROWS``:
 ``e(t) = event_const + event_sine sin(Omega t) + event . q(t)``; ``load_rate`` is beam 1's tip
 load rate per unit ``F'`` (1 free, ``c2 / (c1 + c2)`` in contact).
 
-``settings``, fields ``SETTINGS``: clearance (m), tip compliances c1, c2 (m/N), force
-amplitude F0 (N), forcing frequency Omega (rad/s), end time t_max (s), search span (s; the event
-search restarts from the exactly propagated state this often), accumulation time (s; see
+``settings``, a record of ``SETTINGS_DTYPE``, fields ``SETTINGS``: clearance (m), tip
+compliances c1, c2 (m/N), force amplitude F0 (N), forcing frequency Omega (rad/s), end time
+t_max (s), search span (s; the event search restarts from the exactly propagated state this
+often), accumulation time (s; see
 :func:`impactbeams.kernels.dynamics.run_events`).
 
 ``geometry[g]``, fields ``GEOMETRY``: c1, c2 (m/N) and the accumulation time (s) of
 geometry g of a map. ``cells[i]``, columns ``CELL_COLUMNS``: one map cell's parameters and the
 index of its geometry. ``out[i]``, columns ``OUT_COLUMNS``: a dynamics map's observables.
 """
+
+import numpy as np
 
 FREE, CONTACT = 0, 1
 
@@ -42,10 +45,10 @@ ROW_OMEGA, ROW_ZETA, ROW_DRIVE, ROW_EVENT, ROW_TIP1, ROW_UNIT1, ROW_UNIT2 = rang
 PHASE_SCALARS = ("event_const", "event_sine", "load_rate")
 SCALAR_CONST, SCALAR_SINE, SCALAR_LOAD_RATE = range(len(PHASE_SCALARS))
 
-SETTINGS = ("clearance", "c1", "c2", "force_amplitude", "omega", "t_max", "search_span",
-            "accumulation")
-(SET_CLEARANCE, SET_C1, SET_C2, SET_F0, SET_OMEGA, SET_T_MAX, SET_SEARCH_SPAN,
- SET_ACCUMULATION) = range(len(SETTINGS))
+# a structured record (fields read by name in the kernels, ``settings.t_max``)
+SETTINGS = ("clearance", "c1", "c2", "force_amplitude", "forcing_frequency", "t_max",
+            "search_span", "accumulation")
+SETTINGS_DTYPE = np.dtype([(name, np.float64) for name in SETTINGS])
 
 GEOMETRY = ("c1", "c2", "accumulation")
 GEO_C1, GEO_C2, GEO_ACCUMULATION = range(len(GEOMETRY))

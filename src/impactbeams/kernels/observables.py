@@ -22,7 +22,9 @@ from impactbeams.kernels.reductions import summarize_run
 @kernel
 def cell_observables(cell, tables, overlap, shifts, geometry, t_max, max_segments, out):
     """Run one cell's dynamics (at most ``max_segments`` phases) and write its OUT_COLUMNS."""
-    damped, forces, scalars, settings, q0, v0 = run_inputs(cell, tables, geometry, t_max, t_max)
+    damped, forces, scalars, settings_array, q0, v0 = run_inputs(cell, tables, geometry, t_max,
+                                                                 t_max)
+    settings = settings_array[0]
     n = q0.size
     seg_time = np.empty(max_segments)
     seg_phase = np.empty(max_segments, dtype=np.int64)

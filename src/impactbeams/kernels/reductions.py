@@ -31,10 +31,6 @@ from impactbeams.kernels.layout import (
     SCALAR_CONST,
     SCALAR_LOAD_RATE,
     SCALAR_SINE,
-    SET_C1,
-    SET_F0,
-    SET_OMEGA,
-    SET_T_MAX,
 )
 
 _EPS = np.finfo(np.float64).eps
@@ -56,10 +52,10 @@ def _power(table, force_drive, scalars, settings, q_s, v_s, t_s, t, q, v):
     The damping acts on each mode's whole coordinate, whose rate is ``q' - F' b``.
     """
     propagate(table, force_drive, q_s, v_s, t_s, t, settings, q, v)
-    f0, big_omega = settings[SET_F0], settings[SET_OMEGA]
+    f0, big_omega = settings.force_amplitude, settings.forcing_frequency
     force = f0 * math.sin(big_omega * t)
     force_rate = f0 * big_omega * math.cos(big_omega * t)
-    tip_rate = -settings[SET_C1] * scalars[SCALAR_LOAD_RATE] * force_rate
+    tip_rate = -settings.c1 * scalars[SCALAR_LOAD_RATE] * force_rate
     dissipation = 0.0
     omega, zeta, drive, tip1 = table[ROW_OMEGA], table[ROW_ZETA], table[ROW_DRIVE], table[ROW_TIP1]
     for j in range(q.size):
@@ -78,7 +74,7 @@ def _integrate_power(table, force, scalars, settings, q_s, v_s, t_s, a, b, q, v)
     """
     if b <= a:
         return 0.0, 0.0
-    fastest = max(np.max(table[ROW_OMEGA]), settings[SET_OMEGA])
+    fastest = max(np.max(table[ROW_OMEGA]), settings.forcing_frequency)
     n_panels = max(1, int(math.ceil((b - a) * fastest / math.pi)))
     width = (b - a) / n_panels
     work, dissipated = 0.0, 0.0
@@ -122,7 +118,7 @@ def _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t, q, v):
     """Contact force R(t) (N) within a contact segment."""
     propagate(table, force, q_s, v_s, t_s, t, settings, q, v)
     value, _ = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
-                           scalars[SCALAR_SINE], settings[SET_OMEGA])
+                           scalars[SCALAR_SINE], settings.forcing_frequency)
     return value
 
 
@@ -134,7 +130,7 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
     by golden-section search on its two neighbouring intervals (to a few ulps of time).
     """
     q, v = np.empty(q_s.size), np.empty(q_s.size)
-    fastest = max(np.max(table[ROW_OMEGA]), settings[SET_OMEGA])
+    fastest = max(np.max(table[ROW_OMEGA]), settings.forcing_frequency)
     n_steps = max(2, int(math.ceil((t_e - t_s) * fastest * 4.0 / math.pi)))
     step = (t_e - t_s) / n_steps
     best_t, best = t_s, _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t_s, q, v)
@@ -178,7 +174,7 @@ def summarize_run(tables, forces, phase_scalars, settings, seg_time, seg_phase, 
     """
     impacts, in_contact, largest = 0, 0.0, 0.0
     separation_sum, approach_sum = 0.0, 0.0
-    forcing_frequency = settings[SET_OMEGA]
+    forcing_frequency = settings.forcing_frequency
     for k in range(count):
         if seg_phase[k] != CONTACT:
             continue
@@ -204,5 +200,5 @@ def summarize_run(tables, forces, phase_scalars, settings, seg_time, seg_phase, 
     # with a near-zero approach speed (whose own ratio e is a truncation artefact, any size)
     # barely count
     out[OUT_RESTITUTION] = separation_sum / approach_sum if approach_sum > 0.0 else np.nan
-    out[OUT_CONTACT_FRACTION] = in_contact / settings[SET_T_MAX]
+    out[OUT_CONTACT_FRACTION] = in_contact / settings.t_max
     out[OUT_STATUS] = status
