@@ -47,6 +47,7 @@ import references  # noqa: E402
 from baselines import ModalGap, numpy_first_impact, solve_ivp_first_impact  # noqa: E402
 from impactbeams.kernels.first_impact import first_impact_map_serial  # noqa: E402
 from impactbeams.model import build_free_phase  # noqa: E402
+from impactbeams.packing import free_tables, geometry_row  # noqa: E402
 from impactbeams.params import Params  # noqa: E402
 from impactbeams.sweep import sweep_from_mapping  # noqa: E402
 
@@ -110,13 +111,12 @@ def time_impactbeams(params: Params, n_modes: int, cells: np.ndarray, t_max: flo
     of a map. Kernels are compiled before timing.
     """
     free = build_free_phase(params, n_modes)
-    tables = np.array([[free.omega, free.tip1 - free.tip2, free.drive, free.unit1, free.unit2]])
-    compliance = np.array([params.tip_compliance[0]])
+    tables, geometry = free_tables(free)[None], geometry_row(params, free)[None]
     packed = np.column_stack([cells, np.zeros(len(cells))])  # geometry 0
 
     def run() -> np.ndarray:
         out = np.empty(len(cells))
-        first_impact_map_serial(packed, tables, compliance, t_max, out)
+        first_impact_map_serial(packed, tables, geometry, t_max, out)
         return out
 
     run()  # compile or load the kernel
