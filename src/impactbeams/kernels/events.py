@@ -2,17 +2,18 @@
 
 Both switching conditions are roots of a linear functional of the modal state,
 
-    e(t) = const + sine_amp sin(Omega t) + sum_j weights_j q_j(t),
+    e(t) = const + Im(sine_amp e^(i Omega t)) + sum_j weights_j q_j(t),
 
 the gap ``g`` in the free phase (const = Delta, sine_amp = -c_1 F0, weights = tip values) and
-the contact force ``R`` in the contact phase. ``first_root`` walks forward with steps that are
-certified root-free by a bound ``M2 >= |e''|`` on the step (from each mode's amplitude and
-drive): ``e(t + s) >= e + e' s - M2 s^2 / 2 > 0``. Near a grazing minimum these steps shrink
-like ``sqrt(e / M2)``, not like ``e / |e'|``, so a minimum that stays open is passed in a
-logarithmic number of steps and one that closes, however briefly, is found. When the linear
-estimate says a crossing is near, a probe beyond it brackets the root; a bracket on which
-``e`` is certified monotone holds exactly one root, which safeguarded Newton then resolves to
-a few ulps of time.
+the contact force ``R`` in the contact phase. ``sine_amp`` is a real number (a sine) or a
+complex one (a sine and a cosine part, as a spring law's dashpot gives). ``first_root`` walks
+forward with steps that are certified root-free by a bound ``M2 >= |e''|`` on the step (from
+each mode's amplitude and drive): ``e(t + s) >= e + e' s - M2 s^2 / 2 > 0``. Near a grazing
+minimum these steps shrink like ``sqrt(e / M2)``, not like ``e / |e'|``, so a minimum that stays
+open is passed in a logarithmic number of steps and one that closes, however briefly, is found.
+When the linear estimate says a crossing is near, a probe beyond it brackets the root; a bracket
+on which ``e`` is certified monotone holds exactly one root, which safeguarded Newton then
+resolves to a few ulps of time.
 """
 
 import math
@@ -29,8 +30,10 @@ NO_EVENT = np.nan
 @kernel
 def event_value(q, v, t, weights, const, sine_amp, forcing_frequency):
     """Return e(t) and e'(t) for modal displacements q and velocities v at time t."""
-    value = const + sine_amp * math.sin(forcing_frequency * t)
-    slope = sine_amp * forcing_frequency * math.cos(forcing_frequency * t)
+    sine, cosine = math.sin(forcing_frequency * t), math.cos(forcing_frequency * t)
+    value = const + sine_amp.real * sine + sine_amp.imag * cosine
+    slope = (sine_amp.real * forcing_frequency * cosine
+             - sine_amp.imag * forcing_frequency * sine)
     for j in range(q.size):
         value += weights[j] * q[j]
         slope += weights[j] * v[j]
@@ -42,7 +45,8 @@ def event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp, forcing_f
     """e''(t) from the modal equations: q'' = Im(A e^(i Omega t)) - 2 zeta omega q' - omega^2 q."""
     sine = math.sin(forcing_frequency * t)
     cosine = math.cos(forcing_frequency * t)
-    value = -sine_amp * forcing_frequency**2 * sine
+    value = (-sine_amp.real * forcing_frequency**2 * sine
+             - sine_amp.imag * forcing_frequency**2 * cosine)
     for j in range(q.size):
         w = omega[j]
         drive = force[j].real * sine + force[j].imag * cosine
@@ -94,7 +98,7 @@ def phase_bounds(q, v, t, span, omega, zeta, force, weights, sine_amp, forcing_f
     needed the span-limited growth bound, so that the split holds for every s >= 0.
     """
     rotation = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
-    coherent = complex(sine_amp, 0.0)
+    coherent = complex(sine_amp.real, sine_amp.imag)
     band = curvature = jerk = 0.0
     any_span = True
     for j in range(q.size):

@@ -1,0 +1,174 @@
+"""The compliant (spring) tip contact: its contact phase as exactly solvable oscillators.
+
+Law (docs/model.md, "Compliant contact"): while the tips overlap, a spring k (N/m) and a
+dashpot c (N s/m) push them apart, R = -k g - c g' as long as that is > 0. The free-phase
+coordinates q (n cantilever modes per beam) are kept in both phases: with the gap weights
+w = (Y_1n(l1), -Y_2n(l2)) and g = clearance - c1 F(t) + w . q, contact adds the rank-one terms
+
+    q'' + (C + c_e w w^T) q' + (K + k_e w w^T) q = h(t) - k_e clearance w
+                                                   + c1 (k_e F + c_e F') w,
+
+with K = diag(omega^2), C = diag(2 zeta omega) (modal damping of the free modes' whole
+coordinates, as in the free phase) and h the free phase's modal drive. The truncated modes
+miss the tip flexibility r_N = c1 + c2 - sum_n w_n^2 / omega_n^2: in series with the spring it
+gives k_e = k / (1 + k r_N) and, for the dashpot (low-frequency limit of the series element),
+c_e = c / (1 + k r_N)^2.
+
+The contact phase is solved once per (geometry, n_modes, zeta, k, c) by the complex modes of
+its first-order form (undamped: the real eigenproblem of K + k_e w w^T, exact). Each mode
+pair j (eigenvalue lambda_j with Im > 0) becomes one real damped oscillator
+
+    y_j = 2 Re(rho_j z_j) - y_eq_j,   y_j'' + 2 zeta_j |lambda_j| y_j' + |lambda_j|^2 y_j
+                                      = Im(A_j e^(i Omega t)),
+
+with rho_j the phase of the mode's contact-force weight, so that the contact force is
+R(t) = const + Im(S e^(i Omega t)) + sum_j |r_j| y_j: the form the package's exact propagator
+and certified event search already handle. The maps between (q, q') and (y, y') are affine,
+with offsets harmonic in time; they are the identity on the physical state (no projection, no
+loss at a switch).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import scipy.linalg
+
+from impactbeams.model import FreePhase
+
+# A contact mode pair counts as underdamped while |Im lambda| exceeds this fraction of |lambda|
+_OVERDAMPED = 1e-6
+
+
+def residual_flexibility(free: FreePhase, tip_compliance: tuple[float, float]) -> float:
+    """r_N = sum_i (c_i - sum_n Y_in(l_i)^2 / omega_in^2) (m/N): what the modes miss at the tips."""
+    weights = free.tip1 - free.tip2
+    return float(sum(tip_compliance) - np.sum(weights**2 / free.omega**2))
+
+
+def hertz_stiffness(tip_radius: float, force: float, youngs_modulus1: float = 210e9,
+                    poisson1: float = 0.3, youngs_modulus2: float = 210e9,
+                    poisson2: float = 0.3) -> float:
+    """Linearised Hertz stiffness (N/m) of a sphere (radius m) on a flat at a force (N).
+
+    F = 4/3 E* sqrt(R) d^(3/2) gives dF/dd = (6 E*^2 R F)^(1/3) with the contact modulus
+    1 / E* = (1 - nu1^2) / E1 + (1 - nu2^2) / E2 (Pa).
+    """
+    contact_modulus = 1.0 / ((1 - poisson1**2) / youngs_modulus1
+                             + (1 - poisson2**2) / youngs_modulus2)
+    return (6.0 * contact_modulus**2 * tip_radius * force) ** (1.0 / 3.0)
+
+
+def resolution_modes(free: FreePhase, stiffness: float) -> int:
+    """n* of each beam, the larger: modes whose modal tip stiffness omega^2 / Y(l)^2 < k.
+
+    A contact is resolved when the modes reach well past the contact frequency; the
+    recommended n_modes is at least 4 n* (docs/model.md, "Resolution").
+    """
+    n = free.omega.size // 2
+    weights = free.tip1 - free.tip2
+    below = free.omega**2 / weights**2 < stiffness
+    return int(max(np.sum(below[:n]), np.sum(below[n:])))
+
+
+@dataclasses.dataclass(frozen=True)
+class SpringContact:
+    """The spring law's contact phase for one geometry (SI units).
+
+    Attributes:
+        stiffness, damping: k (N/m) and c (N s/m) of the law.
+        effective_stiffness, effective_damping: k_e, c_e after the static correction.
+        residual: r_N (m/N).
+        eigenvalues: lambda_j (1/s) of the contact phase's first-order form, Im > 0.
+        right: (2 M, M) complex, x = (q, q') = 2 Re(right z).
+        left: (M, 2 M) complex, z = left x.
+        phase: rho_j (unit modulus); force_weights: |r_j| (N per unit y_j), with
+            R_modal = -k_e w . q - c_e w . q' = sum_j 2 Re(r_j z_j).
+    """
+
+    stiffness: float
+    damping: float
+    effective_stiffness: float
+    effective_damping: float
+    residual: float
+    eigenvalues: np.ndarray
+    right: np.ndarray
+    left: np.ndarray
+    phase: np.ndarray
+    force_weights: np.ndarray
+
+    @property
+    def frequencies(self) -> np.ndarray:
+        """Natural frequencies |lambda_j| of the contact oscillators (rad/s)."""
+        return np.abs(self.eigenvalues)
+
+    @property
+    def damping_ratios(self) -> np.ndarray:
+        """Damping ratios -Re(lambda_j) / |lambda_j| of the contact oscillators."""
+        return -self.eigenvalues.real / np.abs(self.eigenvalues)
+
+
+def _undamped_modes(stiffness_matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Undamped: lambda = i omega, right = (V; i V Omega), left = (V^T, -i V^T / omega) / 2."""
+    squared, vectors = scipy.linalg.eigh(stiffness_matrix)
+    omega = np.sqrt(squared)
+    right = np.vstack([vectors, 1j * vectors * omega]).astype(complex)
+    left = 0.5 * np.hstack([vectors.T, -1j * vectors.T / omega[:, None]])
+    return 1j * omega, right, left
+
+
+def _damped_modes(stiffness_matrix: np.ndarray, damping_matrix: np.ndarray,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Complex modes of (q, q')' = [[0, I], [-K, -C]] (q, q'), balanced.
+
+    Solved in the undamped modes p = V^T q with the scaled state s = (Omega p, p'), where the
+    first-order matrix [[0, Omega], [-Omega, -V^T C V]] has entries of one size.
+    """
+    squared, vectors = scipy.linalg.eigh(stiffness_matrix)
+    omega = np.sqrt(squared)
+    m = omega.size
+    block = np.block([[np.zeros((m, m)), np.diag(omega)],
+                      [-np.diag(omega), -vectors.T @ damping_matrix @ vectors]])
+    values, modes = scipy.linalg.eig(block)
+    rising = np.abs(values.imag) > _OVERDAMPED * np.abs(values)
+    if np.count_nonzero(rising) != 2 * m:
+        raise ValueError("the contact phase has overdamped modes (real eigenvalues): lower "
+                         "contact_damping (or damping_ratio) so that every contact mode "
+                         "oscillates")
+    keep = np.flatnonzero(values.imag > 0)
+    keep = keep[np.argsort(np.abs(values[keep]))]
+    inverse = np.linalg.inv(modes)[keep]
+    # x = (q, q') = T s with T = blockdiag(V Omega^-1, V); s = T^-1 x = (Omega V^T q, V^T q')
+    right = np.vstack([vectors @ (modes[:m, keep] / omega[:, None]), vectors @ modes[m:, keep]])
+    left = np.hstack([inverse[:, :m] @ (omega[:, None] * vectors.T), inverse[:, m:] @ vectors.T])
+    return values[keep], right, left
+
+
+def spring_contact(free: FreePhase, tip_compliance: tuple[float, float], damping_ratio: float,
+                   stiffness: float, damping: float = 0.0) -> SpringContact:
+    """The contact phase of the spring law (k = ``stiffness`` N/m, c = ``damping`` N s/m)."""
+    residual = residual_flexibility(free, tip_compliance)
+    k_e = stiffness / (1.0 + stiffness * residual)
+    c_e = damping / (1.0 + stiffness * residual) ** 2
+    w = free.tip1 - free.tip2
+    stiffness_matrix = np.diag(free.omega**2) + k_e * np.outer(w, w)
+    damping_matrix = np.diag(2.0 * damping_ratio * free.omega) + c_e * np.outer(w, w)
+    if damping_ratio == 0.0 and damping == 0.0:
+        eigenvalues, right, left = _undamped_modes(stiffness_matrix)
+    else:
+        eigenvalues, right, left = _damped_modes(stiffness_matrix, damping_matrix)
+    m = w.size
+    # R_modal = -k_e w.q - c_e w.q' = sum_j 2 Re(r_j z_j)
+    force_weight = -(k_e * w @ right[:m] + c_e * w @ right[m:])
+    magnitude = np.abs(force_weight)
+    phase = np.where(magnitude > 0.0, force_weight / np.where(magnitude > 0, magnitude, 1.0),
+                     1.0 + 0j)
+    return SpringContact(float(stiffness), float(damping), float(k_e), float(c_e), residual,
+                         eigenvalues, right, left, phase, magnitude)
+
+
+def resolved(free: FreePhase, stiffness: float) -> bool:
+    """Whether n_modes per beam reaches the resolution rule n_modes >= 4 n* (docs/model.md)."""
+    return free.omega.size // 2 >= 4 * resolution_modes(free, stiffness)
+

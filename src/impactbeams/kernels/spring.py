@@ -1,0 +1,98 @@
+"""The compliant (spring) contact law's contact phase: per-cell oscillators and switch maps.
+
+Plain arrays, packed from :class:`impactbeams.compliant.SpringContact` (see that module for the
+derivation). With M free coordinates x = (q, q') (2 M values) and the contact phase's complex
+modes z (M, one of each conjugate pair):
+
+* ``spring_modes[g]`` (complex, rows ``SPRING_MODE_ROWS``): eigenvalues lambda_j (1/s) and
+  phases rho_j (|rho_j| = 1) of the contact oscillators y_j = 2 Re(rho_j z_j) - y_eq_j;
+* ``spring_left[g]`` (M, 2 M): z = left x; ``spring_right[g]`` (2 M, M): x = 2 Re(right z);
+* ``spring_drives`` (complex, rows ``SPRING_DRIVE_ROWS``, per cell): the modal drive of z,
+  z_j' = lambda_j z_j + P_j e^(i Omega t) + N_j e^(-i Omega t) + C_j, and y_eq_j.
+
+Every switch between the phases is the identity on (q, q'): these maps change coordinates only.
+"""
+
+import math
+
+import numpy as np
+
+from impactbeams.kernels.jit import kernel
+
+SPRING_MODE_ROWS = ("eigenvalue", "phase")
+MODE_EIGENVALUE = SPRING_MODE_ROWS.index("eigenvalue")
+MODE_PHASE = SPRING_MODE_ROWS.index("phase")
+
+SPRING_DRIVE_ROWS = ("rising", "falling", "constant", "equilibrium")
+DRIVE_RISING = SPRING_DRIVE_ROWS.index("rising")
+DRIVE_FALLING = SPRING_DRIVE_ROWS.index("falling")
+DRIVE_CONSTANT = SPRING_DRIVE_ROWS.index("constant")
+DRIVE_EQUILIBRIUM = SPRING_DRIVE_ROWS.index("equilibrium")
+
+
+@kernel
+def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency):
+    """The modes' drive phasors and the oscillators' drives for one cell.
+
+    ``contact_drive`` (complex, M): amplitude A' of the contact phase's modal drive
+    Im(A' e^(i Omega t)); ``constant_drive`` (M): its constant part (N-ish modal units).
+    Returns ``(drives, forces)``: ``drives`` with rows ``SPRING_DRIVE_ROWS`` (the last,
+    y_eq_j, real), and the drive amplitudes A_j of the oscillators,
+    y_j'' + 2 zeta_j |lambda_j| y_j' + |lambda_j|^2 y_j = Im(A_j e^(i Omega t)).
+    """
+    m = left.shape[0]
+    drives = np.empty((len(SPRING_DRIVE_ROWS), m), dtype=np.complex128)
+    velocity_rows = np.ascontiguousarray(left[:, m:])
+    rising = velocity_rows @ contact_drive / 2j
+    falling = -(velocity_rows @ np.conj(contact_drive)) / 2j
+    constant = velocity_rows @ constant_drive.astype(np.complex128)
+    forces = np.empty(m, dtype=np.complex128)
+    for j in range(m):
+        lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
+        up = rho * (1j * forcing_frequency - lam.conjugate()) * rising[j]
+        down = rho * (-1j * forcing_frequency - lam.conjugate()) * falling[j]
+        forces[j] = 2j * (up + down.conjugate())
+        offset = -2.0 * (rho * lam.conjugate() * constant[j]).real
+        drives[DRIVE_RISING, j] = rising[j]
+        drives[DRIVE_FALLING, j] = falling[j]
+        drives[DRIVE_CONSTANT, j] = constant[j]
+        drives[DRIVE_EQUILIBRIUM, j] = offset / (lam.real**2 + lam.imag**2)
+    return drives, forces
+
+
+@kernel
+def _mode_drive(drives, j, t, forcing_frequency):
+    """The drive gamma_j(t) of complex mode j at time t (s)."""
+    turn = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
+    return (drives[DRIVE_RISING, j] * turn + drives[DRIVE_FALLING, j] * turn.conjugate()
+            + drives[DRIVE_CONSTANT, j])
+
+
+@kernel
+def to_contact(q, v, t, left, modes, drives, forcing_frequency, y, y_rate):
+    """Contact oscillators (y, y') at time t of the free coordinates (q, q')."""
+    m = q.size
+    for j in range(m):
+        z = 0j
+        for n in range(m):
+            z += left[j, n] * q[n] + left[j, m + n] * v[n]
+        lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
+        y[j] = 2.0 * (rho * z).real - drives[DRIVE_EQUILIBRIUM, j].real
+        y_rate[j] = 2.0 * (rho * (lam * z + _mode_drive(drives, j, t, forcing_frequency))).real
+
+
+@kernel
+def to_free(y, y_rate, t, right, modes, drives, forcing_frequency, q, v):
+    """Free coordinates (q, q') at time t of the contact oscillators (y, y')."""
+    m = y.size
+    q[:] = 0.0
+    v[:] = 0.0
+    for j in range(m):
+        lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
+        a = 0.5 * (y[j] + drives[DRIVE_EQUILIBRIUM, j].real)
+        forced = (rho * _mode_drive(drives, j, t, forcing_frequency)).real
+        b = (lam.real * a - 0.5 * y_rate[j] + forced) / lam.imag
+        z = rho.conjugate() * complex(a, b)
+        for n in range(m):
+            q[n] += 2.0 * (right[n, j] * z).real
+            v[n] += 2.0 * (right[m + n, j] * z).real
