@@ -2,8 +2,9 @@
 
 The package is layered, every import pointing down: orchestration (``cli``; ``sweep``,
 ``trajectory``; ``plotting`` from saved Datasets) on top, one packing layer, the physics
-(``model``, ``modes``, ``params``), the registries (``variables``, ``io``), and the kernels at
-the ground, which see nothing but NumPy, Numba and the standard library's ``math``.
+(``compliant``, ``model``, ``modes``, ``params``), the registries (``variables``, ``io``),
+and the kernels at the ground, which see nothing but NumPy, Numba and the standard library's
+``math``.
 """
 
 import ast
@@ -20,9 +21,10 @@ FLOORS = {
     "params": 2,
     "modes": 3,
     "model": 4,
-    "packing": 5,
-    "sweep": 6, "trajectory": 6, "plotting": 6,
-    "cli": 7,
+    "compliant": 5,
+    "packing": 6,
+    "sweep": 7, "trajectory": 7, "plotting": 7,
+    "cli": 8,
 }
 # What kernels may import from outside the package: NumPy and Numba, ``math``, and the standard
 # library modules jit.py (``types``) and __init__.py (``hashlib``, ``pathlib``) need.
