@@ -15,7 +15,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from impactbeams.params import ParameterError, Params
+from impactbeams.params import CONTACT_LAWS, ParameterError, Params
 from impactbeams.variables import DAMPING_LAW, PARAMETERS
 
 if TYPE_CHECKING:
@@ -34,6 +34,10 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
         description = parameter.long_name
         if name == "damping_ratio":
             description += ", " + DAMPING_LAW
+        if name == "contact_law":
+            group.add_argument(*flags, dest=name, choices=CONTACT_LAWS,
+                               help=f"{description} (default: spring)")
+            continue
         group.add_argument(*flags, dest=name, type=float, metavar="VALUE",
                            help=f"{description} ({parameter.units})")
 

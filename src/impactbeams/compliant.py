@@ -36,7 +36,9 @@ import numpy as np
 import scipy.linalg
 
 from impactbeams.model import FreePhase
+from impactbeams.params import Params
 
+MAX_MODES = 200  # per beam, the package's limit
 # A contact mode pair counts as underdamped while |Im lambda| exceeds this fraction of |lambda|
 _OVERDAMPED = 1e-6
 
@@ -45,19 +47,6 @@ def residual_flexibility(free: FreePhase, tip_compliance: tuple[float, float]) -
     """r_N = sum_i (c_i - sum_n Y_in(l_i)^2 / omega_in^2) (m/N): what the modes miss at the tips."""
     weights = free.tip1 - free.tip2
     return float(sum(tip_compliance) - np.sum(weights**2 / free.omega**2))
-
-
-def hertz_stiffness(tip_radius: float, force: float, youngs_modulus1: float = 210e9,
-                    poisson1: float = 0.3, youngs_modulus2: float = 210e9,
-                    poisson2: float = 0.3) -> float:
-    """Linearised Hertz stiffness (N/m) of a sphere (radius m) on a flat at a force (N).
-
-    F = 4/3 E* sqrt(R) d^(3/2) gives dF/dd = (6 E*^2 R F)^(1/3) with the contact modulus
-    1 / E* = (1 - nu1^2) / E1 + (1 - nu2^2) / E2 (Pa).
-    """
-    contact_modulus = 1.0 / ((1 - poisson1**2) / youngs_modulus1
-                             + (1 - poisson2**2) / youngs_modulus2)
-    return (6.0 * contact_modulus**2 * tip_radius * force) ** (1.0 / 3.0)
 
 
 def resolution_modes(free: FreePhase, stiffness: float) -> int:
@@ -168,7 +157,9 @@ def spring_contact(free: FreePhase, tip_compliance: tuple[float, float], damping
                          eigenvalues, right, left, phase, magnitude)
 
 
-def resolved(free: FreePhase, stiffness: float) -> bool:
-    """Whether n_modes per beam reaches the resolution rule n_modes >= 4 n* (docs/model.md)."""
-    return free.omega.size // 2 >= 4 * resolution_modes(free, stiffness)
+def recommended_modes(params: Params) -> int:
+    """n_modes per beam that resolves the spring contact of ``params``: 4 n*, at least 5."""
+    from impactbeams.model import build_free_phase
 
+    free = build_free_phase(params, MAX_MODES)
+    return int(min(MAX_MODES, max(5, 4 * resolution_modes(free, params.contact_stiffness))))

@@ -3,7 +3,7 @@
 The kernels (:mod:`impactbeams.kernels`) take plain arrays in SI units, named in
 :mod:`impactbeams.kernels.layout`; this module is the one place that fills them: a geometry's
 phase tables and geometry row, the cell rows of a grid or of one run, and a run's complete
-inputs (:func:`pack_model`). What depends on a cell's forcing, damping and uplifts is computed
+inputs (:func:`pack_run`). What depends on a cell's forcing, damping and uplifts is computed
 by :func:`impactbeams.kernels.forcing.run_inputs`, the same function the map kernels call per
 cell, so a simulated run and a sweep cell with the same parameters get the same bits.
 """
@@ -21,6 +21,7 @@ from impactbeams.kernels import layout
 from impactbeams.kernels.forcing import run_inputs
 
 if TYPE_CHECKING:
+    from impactbeams.compliant import SpringContact
     from impactbeams.model import FreePhase, ModalModel
     from impactbeams.params import Params
 
@@ -71,20 +72,86 @@ def free_tables(free: FreePhase) -> np.ndarray:
 
 
 def phase_tables(model: ModalModel) -> tuple[np.ndarray, np.ndarray]:
-    """The dynamics kernel's per-geometry arrays: (tables of both phases, static shifts)."""
+    """The tied law's per-geometry arrays: (tables of both phases, static shifts)."""
     tables = np.array([phase_table(basis) for basis in bases(model)])
     return tables, np.array([model.free.static_shift, model.contact_static_shift])
 
 
-def geometry_row(params: Params, free: FreePhase) -> np.ndarray:
-    """A geometry's ``layout.GEOMETRY`` fields: tip compliances (m/N), accumulation time (s).
+def spring_table(spring: SpringContact) -> np.ndarray:
+    """The spring law's contact table: its oscillators and the contact force weights."""
+    zeros = np.zeros(spring.eigenvalues.size)
+    rows = {"omega": spring.frequencies, "zeta": spring.damping_ratios, "drive": zeros,
+            "event": spring.force_weights, "tip1": zeros, "unit1": zeros, "unit2": zeros}
+    return np.array([rows[name] for name in layout.TABLE_ROWS])
 
-    An instantaneous impact re-closing within half a period of the fastest free mode is the
-    truncated bases disagreeing, not a new impact (see dynamics.run_events).
+
+def geometry_row(params: Params, free: FreePhase, spring: SpringContact | None = None,
+                 ) -> np.ndarray:
+    """A geometry's ``layout.GEOMETRY`` fields (SI units).
+
+    Tip compliances, the accumulation time (an instantaneous impact re-closing within half a
+    period of the fastest free mode is the truncated bases disagreeing, not a new impact: see
+    dynamics.run_events), the contact law and the spring law's effective k_e, c_e.
     """
     fields = {"c1": params.tip_compliance[0], "c2": params.tip_compliance[1],
-              "accumulation": math.pi / np.max(free.omega)}
+              "accumulation": math.pi / np.max(free.omega),
+              "contact_law": layout.CONTACT_LAWS.index(params.contact_law),
+              "contact_stiffness": spring.effective_stiffness if spring else 0.0,
+              "contact_damping": spring.effective_damping if spring else 0.0}
     return np.array([fields[name] for name in layout.GEOMETRY])
+
+
+@dataclasses.dataclass(frozen=True)
+class Dynamics:
+    """One geometry's modes and arrays for the dynamics kernels, for its contact law.
+
+    ``model``: the tied law's modal model (contact modes, projections), else None; ``spring``:
+    the spring law's contact phase, else None. ``bases``: the coordinates in which sampled
+    states come back (the spring law's are the free ones in both phases). ``overlap``,
+    ``shifts`` (tied) and ``spring_arrays`` = (left, right, modes) (spring) are empty for the
+    other law.
+    """
+
+    params: Params
+    free: FreePhase
+    model: ModalModel | None
+    spring: SpringContact | None
+    bases: tuple[Basis, Basis]
+    tables: np.ndarray
+    geometry: np.ndarray
+    overlap: np.ndarray
+    shifts: np.ndarray
+    spring_arrays: tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def _no_spring() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return (np.zeros((0, 0), complex), np.zeros((0, 0), complex),
+            np.zeros((len(layout.SPRING_MODE_ROWS), 0), complex))
+
+
+def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
+    """The dynamics kernels' arrays of one geometry (``n_modes`` per beam) and contact law.
+
+    In the spring law the contact phase depends on the damping ratio, the contact stiffness
+    and the dashpot, which therefore belong to the geometry.
+    """
+    from impactbeams.compliant import spring_contact
+    from impactbeams.model import build_free_phase, build_model
+
+    if params.contact_law == "tied":
+        model = build_model(params, n_modes)
+        tables, shifts = phase_tables(model)
+        return Dynamics(params, model.free, model, None, bases(model), tables,
+                        geometry_row(params, model.free), model.overlap, shifts,
+                        _no_spring())
+    free = build_free_phase(params, n_modes)
+    spring = spring_contact(free, params.tip_compliance, params.damping_ratio,
+                            params.contact_stiffness, params.contact_damping)
+    tables = np.array([phase_table(free_basis(free)), spring_table(spring)])
+    modes = np.array([spring.eigenvalues, spring.phase])
+    return Dynamics(params, free, None, spring, (free_basis(free), free_basis(free)), tables,
+                    geometry_row(params, free, spring), np.zeros((0, 0)),
+                    np.zeros((2, 0)), (spring.left, spring.right, modes))
 
 
 def cell_rows(columns: Mapping[str, np.ndarray | float], size: int) -> np.ndarray:
@@ -97,24 +164,46 @@ def cell_rows(columns: Mapping[str, np.ndarray | float], size: int) -> np.ndarra
 
 @dataclasses.dataclass(frozen=True)
 class Packed:
-    """The modal model and forcing of one run, packed for the kernels (see kernels.layout)."""
+    """One run's inputs, packed for the kernels (see kernels.layout).
 
-    model: ModalModel
-    bases: tuple[Basis, Basis]
+    The geometry's arrays (``dynamics``) and what depends on the run's forcing, damping and
+    uplifts.
+    """
+
+    dynamics: Dynamics
     tables: np.ndarray
     forces: np.ndarray
     phase_scalars: np.ndarray
-    shifts: np.ndarray
+    drives: np.ndarray
     settings: np.void  # a record of kernels.layout.SETTINGS_DTYPE
     q0: np.ndarray
     v0: np.ndarray
 
+    @property
+    def params(self) -> Params:
+        """The run's parameters."""
+        return self.dynamics.params
 
-def pack_model(model: ModalModel, t_max: float, search_span: float) -> Packed:
-    """Pack ``model`` and its forcing for the kernels; ``t_max``, ``search_span`` in s."""
-    p = model.params
-    tables, shifts = phase_tables(model)
-    cell = cell_rows({**p.as_dict(), "geometry": 0.0}, 1)[0]
-    damped, forces, scalars, settings, q0, v0 = run_inputs(
-        cell, tables, geometry_row(p, model.free), t_max, search_span)
-    return Packed(model, bases(model), damped, forces, scalars, shifts, settings[0], q0, v0)
+    @property
+    def bases(self) -> tuple[Basis, Basis]:
+        """The coordinates of sampled states in each phase."""
+        return self.dynamics.bases
+
+    @property
+    def spring_law(self) -> bool:
+        """Whether the run uses the spring contact law."""
+        return self.dynamics.spring is not None
+
+    def switching(self) -> tuple:
+        """The state machine's switching arrays: overlap, shifts, spring arrays, drives."""
+        d = self.dynamics
+        return d.overlap, d.shifts, d.spring_arrays, self.drives
+
+
+def pack_run(params: Params, n_modes: int, t_max: float, search_span: float) -> Packed:
+    """Pack one run of ``params`` with ``n_modes`` per beam; ``t_max``, ``search_span`` in s."""
+    dynamics = dynamics_arrays(params, n_modes)
+    cell = cell_rows({**params.as_dict(), "geometry": 0.0}, 1)[0]
+    damped, forces, scalars, settings, q0, v0, drives = run_inputs(
+        cell, dynamics.tables, dynamics.geometry, dynamics.spring_arrays, t_max, search_span)
+    return Packed(dynamics, damped, forces, scalars, drives, settings[0], q0, v0)

@@ -20,6 +20,10 @@ name               unit    meaning
 ``uplift2``
 ``damping_ratio``  1       modal damping ratio zeta, 0 <= zeta < 1: damps each cantilever
                            mode's whole coordinate <y, Y_n> (``variables.DAMPING_LAW``)
+``contact_law``    -       "spring" (compliant, default) or "tied" (the paper's law)
+``contact_stiffness`` N/m  k of the spring law (default: Hertz, steel sphere of radius 1 mm
+                           on steel, linearised at 1 mN: ``hertz_stiffness``)
+``contact_damping`` N s/m  c of the spring law's dashpot (default 0)
 =================  ======  ==========================================================
 """
 
@@ -36,6 +40,7 @@ from impactbeams.variables import PARAMETERS
 
 STEEL_E = 210e9  # Pa
 STEEL_RHO = 7850.0  # kg/m^3
+STEEL_POISSON = 0.3
 STRIP_WIDTH = 5e-3  # m
 PAPER_A = 0.7  # m^2/s, a = sqrt(EI / rhoA) of both beams in the paper
 STRIP_THICKNESS = PAPER_A / math.sqrt(STEEL_E / (12.0 * STEEL_RHO))  # m, gives a = 0.7
@@ -72,6 +77,28 @@ def require_finite(name: str, value: Any, unit: str = "") -> float:
     return float(value)
 
 
+def hertz_stiffness(tip_radius: float, force: float, youngs_modulus1: float = STEEL_E,
+                    poisson1: float = STEEL_POISSON, youngs_modulus2: float = STEEL_E,
+                    poisson2: float = STEEL_POISSON) -> float:
+    """Linearised Hertz stiffness (N/m) of a sphere (radius in m) on a flat at a force (N).
+
+    F = 4/3 E* sqrt(R) d^(3/2) gives dF/dd = (6 E*^2 R F)^(1/3), with the contact modulus
+    1 / E* = (1 - nu1^2) / E1 + (1 - nu2^2) / E2 (Pa).
+    """
+    for name, value in (("tip_radius", tip_radius), ("force", force)):
+        require(name, value, require_finite(name, value) > 0, "must be > 0")
+    contact_modulus = 1.0 / ((1 - poisson1**2) / youngs_modulus1
+                             + (1 - poisson2**2) / youngs_modulus2)
+    return (6.0 * contact_modulus**2 * tip_radius * force) ** (1.0 / 3.0)
+
+
+CONTACT_LAWS = ("spring", "tied")
+DEFAULT_TIP_RADIUS = 1e-3  # m, of the default contact stiffness
+DEFAULT_CONTACT_FORCE = 1e-3  # N, force scale of the default contact stiffness
+DEFAULT_CONTACT_STIFFNESS = hertz_stiffness(DEFAULT_TIP_RADIUS, DEFAULT_CONTACT_FORCE)
+MAX_CONTACT_STIFFNESS = 1e12  # N/m: beyond it the contact frequencies leave double precision
+
+
 @dataclasses.dataclass(frozen=True)
 class Params:
     """Parameters of the two-beam impact model (SI units, see the module docstring).
@@ -93,12 +120,24 @@ class Params:
     uplift1: float = 0.0
     uplift2: float = 0.0
     damping_ratio: float = 0.0
+    contact_law: str = "spring"
+    contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS
+    contact_damping: float = 0.0
 
     def __post_init__(self) -> None:
+        require("contact_law", self.contact_law, self.contact_law in CONTACT_LAWS,
+                f"must be one of {', '.join(map(repr, CONTACT_LAWS))}")
         for field in dataclasses.fields(self):
+            if field.name == "contact_law":
+                continue
             value = require_finite(field.name, getattr(self, field.name),
                                    PARAMETERS[field.name].units)
             object.__setattr__(self, field.name, value)
+        require("contact_stiffness", self.contact_stiffness,
+                0 < self.contact_stiffness <= MAX_CONTACT_STIFFNESS,
+                f"must be > 0 and <= {MAX_CONTACT_STIFFNESS:g}", "N/m")
+        require("contact_damping", self.contact_damping, self.contact_damping >= 0,
+                "must be >= 0", "N s/m")
         for name in ("l1", "l2", "EI1", "EI2", "rhoA1", "rhoA2", "clearance"):
             require(name, getattr(self, name), getattr(self, name) > 0, "must be > 0",
                     PARAMETERS[name].units)
@@ -126,7 +165,7 @@ class Params:
         """a_i = sqrt(EI_i / rhoA_i) of the two beams (m^2/s)."""
         return math.sqrt(self.EI1 / self.rhoA1), math.sqrt(self.EI2 / self.rhoA2)
 
-    def as_dict(self) -> dict[str, float]:
+    def as_dict(self) -> dict[str, float | str]:
         """All parameters by name, in the resolved EI/rhoA form."""
         return dataclasses.asdict(self)
 

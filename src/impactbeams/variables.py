@@ -48,6 +48,10 @@ PARAMETERS: dict[str, Parameter] = {
     "uplift1": Parameter("m", "initial tip uplift of beam 1 (delta_1)"),
     "uplift2": Parameter("m", "initial tip uplift of beam 2 (delta_2)"),
     "damping_ratio": Parameter("1", "modal damping ratio (zeta)"),
+    "contact_law": Parameter("1", "tip contact law: spring (compliant, converges in n_modes) or "
+                                  "tied (the paper's, does not converge after the first impact)"),
+    "contact_stiffness": Parameter("N/m", "stiffness k of the tip contact spring"),
+    "contact_damping": Parameter("N s/m", "damping c of the tip contact dashpot"),
     **{key + i: Parameter(unit, f"{name} of beam {i}")
        for key, (unit, name) in _MATERIAL_PARAMETERS.items() for i in ("1", "2")},
 }

@@ -8,7 +8,10 @@ Plain-array interface, packed by :mod:`impactbeams.packing`; every array is name
 (``SETTINGS``). Both phases have ``N = 2 n`` modal coordinates. Reductions over a run (work,
 dissipation, peak force) are in :mod:`impactbeams.kernels.reductions`.
 
-Switching (MODEL.md) uses ``overlap[m, n] = <Z_m, Y_n>`` and the static shifts
+The contact law is ``settings.contact_law``. Spring law: the contact phase's coordinates are
+the oscillators of :mod:`impactbeams.kernels.spring`, and a switch is a change of coordinates
+that keeps (q, q') (``spring = (left, right, modes)``, ``drives``). Tied law: switching
+(docs/model.md) uses ``overlap[m, n] = <Z_m, Y_n>`` and the static shifts
 ``shifts[FREE] = <s, Y_n>``, ``shifts[CONTACT] = <s, Z_m>``:
 
 * onset at t: ``r = overlap q - R_qs(t) shifts[CONTACT]``,
@@ -31,9 +34,12 @@ from impactbeams.kernels.layout import (
     ROW_OMEGA,
     ROW_ZETA,
     SCALAR_CONST,
+    SCALAR_COSINE,
     SCALAR_SINE,
+    SPRING,
 )
 from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.spring import to_contact, to_free
 
 COMPLETE, EVENT_LIMIT, STUCK = 0, 1, 2
 STATUS_NAMES = ("complete", "event_limit", "stuck")
@@ -56,8 +62,24 @@ def quasi_static_force(t, settings):
 
 
 @kernel
-def switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new):
-    """Project the state (q, v) of the other phase at time t onto ``to_phase``'s modes."""
+def event_sine(scalars):
+    """The phase's event function harmonic part as a complex amplitude (sine + i cosine)."""
+    return complex(scalars[SCALAR_SINE], scalars[SCALAR_COSINE])
+
+
+@kernel
+def switch_state(q, v, t, to_phase, overlap, shifts, spring, drives, settings, q_new, v_new):
+    """The state (q, v) of the other phase at time t in ``to_phase``'s coordinates.
+
+    Tied law: projection onto the new phase's modes. Spring law: the same physical state.
+    """
+    if settings.contact_law == SPRING:
+        left, right, modes = spring
+        if to_phase == CONTACT:
+            to_contact(q, v, t, left, modes, drives, settings.forcing_frequency, q_new, v_new)
+        else:
+            to_free(q, v, t, right, modes, drives, settings.forcing_frequency, q_new, v_new)
+        return
     r_qs, r_qs_rate = quasi_static_force(t, settings)
     if to_phase == CONTACT:
         q_new[:] = overlap @ q - r_qs * shifts[CONTACT]
@@ -87,7 +109,7 @@ def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v):
     while t_a < t_max:
         t_b = min(t_a + span, t_max)
         root = first_root(q_a, v_a, t_a, t_b, table[ROW_OMEGA], table[ROW_ZETA], force,
-                          table[ROW_EVENT], scalars[SCALAR_CONST], scalars[SCALAR_SINE],
+                          table[ROW_EVENT], scalars[SCALAR_CONST], event_sine(scalars),
                           settings.forcing_frequency, q, v)
         if not math.isnan(root):
             return root
@@ -112,7 +134,7 @@ def rate_root(table, force, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v)
                     - 2.0 * zeta * omega * v_s - omega * omega * q_s)
     root = first_root(v_s, acceleration, t_s + shift, t_end + shift, omega, zeta,
                       force * big_omega, sign * table[ROW_EVENT], 0.0,
-                      sign * scalars[SCALAR_SINE] * big_omega, big_omega, q, v)
+                      sign * event_sine(scalars) * big_omega, big_omega, q, v)
     return root - shift
 
 
@@ -126,7 +148,7 @@ def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings
     for _ in range(64):
         propagate(table, force, q_s, v_s, t_s, t, settings, q, v)
         value, slope = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
-                                   scalars[SCALAR_SINE], settings.forcing_frequency)
+                                   event_sine(scalars), settings.forcing_frequency)
         if (slope if positive_rate else value) > 0.0:
             break
         t += step
@@ -147,7 +169,7 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     """
     t_max = settings.t_max
     value, slope = event_value(q_s, v_s, t_s, table[ROW_EVENT], scalars[SCALAR_CONST],
-                               scalars[SCALAR_SINE], settings.forcing_frequency)
+                               event_sine(scalars), settings.forcing_frequency)
     if value > 0.0:
         return find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v)
     q_a, v_a, t_a = q_s.copy(), v_s.copy(), t_s
@@ -160,7 +182,7 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
         t_a = _step_until(table, force, scalars, q_s, v_s, t_s, t_min, True, settings, q_a,
                           v_a)
         value, _ = event_value(q_a, v_a, t_a, table[ROW_EVENT], scalars[SCALAR_CONST],
-                               scalars[SCALAR_SINE], settings.forcing_frequency)
+                               event_sine(scalars), settings.forcing_frequency)
         if value > 0.0:
             return find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v)
     elif not wait_rising:
@@ -168,7 +190,7 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     t_peak = rate_root(table, force, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v)
     t_limit = t_max if math.isnan(t_peak) else t_peak
     t_up = first_root(q_a, v_a, t_a, t_limit, table[ROW_OMEGA], table[ROW_ZETA], force,
-                      -table[ROW_EVENT], -scalars[SCALAR_CONST], -scalars[SCALAR_SINE],
+                      -table[ROW_EVENT], -scalars[SCALAR_CONST], -event_sine(scalars),
                       settings.forcing_frequency, q, v)
     if math.isnan(t_up) or t_up >= t_limit:
         return t_peak
@@ -178,8 +200,8 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
 
 
 @kernel
-def run_events(tables, forces, phase_scalars, overlap, shifts, settings, q0, v0, seg_time,
-               seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
+def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings, q0, v0,
+               seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
     """Integrate from the free-phase state (q0, v0) at t = 0 to t_max, event by event.
 
     Segment k starts at ``seg_time[k]`` in phase ``seg_phase[k]`` with state
@@ -187,7 +209,8 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, settings, q0, v0,
     ``end_q[k], end_v[k]`` before any projection. At most ``seg_time.size`` segments.
 
     Onset: the gap is <= 0 while closing; release: the contact force is <= 0 while falling
-    (``find_switch``). The two truncated bases do not agree exactly at a switch, so:
+    (``find_switch``). A spring contact starts at zero force (rising: it waits for the force).
+    In the tied law the two truncated bases do not agree exactly at a switch, so:
 
     * a free phase that starts with a gap <= 0 but opening (the released state's truncation
       error) waits for the gap;
@@ -209,13 +232,14 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, settings, q0, v0,
     q_end, v_end = np.empty(n_coords), np.empty(n_coords)
     phase, t, zero_run, instant_release = FREE, 0.0, 0, -math.inf
     sustained = conflict = False
+    spring_law = settings.contact_law == SPRING
     for k in range(seg_time.size):
         seg_time[k], seg_phase[k], seg_sustained[k] = t, phase, sustained
         seg_q[k, :] = q
         seg_v[k, :] = v
         table, force, scalars = tables[phase], forces[phase], phase_scalars[phase]
         free = phase == FREE
-        t_event = find_switch(table, force, scalars, q, v, t, free or sustained,
+        t_event = find_switch(table, force, scalars, q, v, t, free or sustained or spring_law,
                               free and conflict, settings, q_end, v_end)
         t_stop = settings.t_max if math.isnan(t_event) else t_event
         propagate(table, force, q, v, t, t_stop, settings, q_end, v_end)
@@ -235,7 +259,8 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, settings, q0, v0,
             instant_release = t_event if instant else -math.inf
             conflict = instant and sustained
             sustained = False
-        switch_state(q_end, v_end, t_event, phase, overlap, shifts, settings, q, v)
+        switch_state(q_end, v_end, t_event, phase, overlap, shifts, spring, drives, settings,
+                     q, v)
         t = t_event
     return seg_time.size, EVENT_LIMIT, t
 
@@ -250,16 +275,25 @@ def _segment_index(seg_time, count, t, start):
 
 
 @kernel
-def sample_states(tables, forces, settings, seg_time, seg_phase, seg_q, seg_v, count, times,
-                  q_out, v_out, phase_out):
+def sample_states(tables, forces, spring, drives, settings, seg_time, seg_phase, seg_q, seg_v,
+                  count, times, q_out, v_out, phase_out):
     """Modal state and phase at each of the ascending ``times`` (s), in closed form.
 
-    At an event time the state after the switch is returned.
+    At an event time the state after the switch is returned. In the spring law every state is
+    returned in the free coordinates (q, q'); in the tied law in its phase's coordinates.
     """
     k = 0
+    n_coords = seg_q.shape[1]
+    y, y_rate = np.empty(n_coords), np.empty(n_coords)
     for i in range(times.size):
         k = _segment_index(seg_time, count, times[i], k)
         phase = seg_phase[k]
         phase_out[i] = phase
-        propagate(tables[phase], forces[phase], seg_q[k], seg_v[k], seg_time[k], times[i],
-                  settings, q_out[i], v_out[i])
+        if phase == CONTACT and settings.contact_law == SPRING:
+            propagate(tables[phase], forces[phase], seg_q[k], seg_v[k], seg_time[k], times[i],
+                      settings, y, y_rate)
+            to_free(y, y_rate, times[i], spring[1], spring[2], drives,
+                    settings.forcing_frequency, q_out[i], v_out[i])
+        else:
+            propagate(tables[phase], forces[phase], seg_q[k], seg_v[k], seg_time[k], times[i],
+                      settings, q_out[i], v_out[i])

@@ -17,22 +17,31 @@ from impactbeams.kernels.layout import (
     CELL_UPLIFT2,
     CELL_ZETA,
     CONTACT,
+    DRIVE_EQUILIBRIUM,
     FREE,
     GEO_ACCUMULATION,
     GEO_C1,
     GEO_C2,
+    GEO_DAMPING,
+    GEO_LAW,
+    GEO_STIFFNESS,
     PHASE_SCALARS,
     ROW_DRIVE,
+    ROW_EVENT,
     ROW_OMEGA,
     ROW_UNIT1,
     ROW_UNIT2,
     ROW_ZETA,
     SCALAR_CONST,
+    SCALAR_COSINE,
     SCALAR_LOAD_RATE,
     SCALAR_SINE,
     SETTINGS_DTYPE,
+    SPRING,
+    SPRING_DRIVE_ROWS,
 )
 from impactbeams.kernels.propagation import drive_amplitudes
+from impactbeams.kernels.spring import spring_drives
 
 
 @kernel
@@ -58,9 +67,11 @@ def phase_scalars(cell, geometry):
     out = np.empty((2, len(PHASE_SCALARS)))
     out[FREE, SCALAR_CONST] = clearance
     out[FREE, SCALAR_SINE] = -c1 * f0
+    out[FREE, SCALAR_COSINE] = 0.0
     out[FREE, SCALAR_LOAD_RATE] = 1.0
     out[CONTACT, SCALAR_CONST] = -clearance / total
     out[CONTACT, SCALAR_SINE] = c1 * f0 / total
+    out[CONTACT, SCALAR_COSINE] = 0.0
     out[CONTACT, SCALAR_LOAD_RATE] = c2 / total
     return out
 
@@ -81,24 +92,66 @@ def settings(cell, geometry, t_max, search_span):
     record.t_max = t_max
     record.search_span = search_span
     record.accumulation = geometry[GEO_ACCUMULATION]
+    record.contact_law = geometry[GEO_LAW]
+    record.contact_stiffness = geometry[GEO_STIFFNESS]
+    record.contact_damping = geometry[GEO_DAMPING]
     return out
 
 
 @kernel
-def run_inputs(cell, tables, geometry, t_max, search_span):
+def spring_contact_inputs(cell, tables, geometry, spring, forces, scalars):
+    """The spring law's per-run contact phase: oscillator drives, event scalars, mode drives.
+
+    Writes the oscillators' drive amplitudes into ``forces[CONTACT]`` and the contact force's
+    constant and harmonic parts into ``scalars[CONTACT]``; returns the complex modes' drives
+    (rows ``SPRING_DRIVE_ROWS``). With the gap weights w, the contact phase's modal drive is
+    the free one plus ``c1 F0 (k_e + i c_e Omega) w`` (harmonic) and ``-k_e clearance w``.
+    """
+    left, _, modes = spring
+    weights = tables[FREE, ROW_EVENT]
+    stiffness, damping = geometry[GEO_STIFFNESS], geometry[GEO_DAMPING]
+    forcing_frequency = cell[CELL_OMEGA]
+    harmonic = geometry[GEO_C1] * cell[CELL_F0] * complex(stiffness, damping * forcing_frequency)
+    drives, oscillator_forces = spring_drives(
+        left, modes, forces[FREE] + harmonic * weights, -stiffness * cell[CELL_CLEARANCE] * weights,
+        forcing_frequency)
+    forces[CONTACT] = oscillator_forces
+    force_weights = tables[CONTACT, ROW_EVENT]
+    constant = -stiffness * cell[CELL_CLEARANCE]
+    for j in range(force_weights.size):
+        constant += force_weights[j] * drives[DRIVE_EQUILIBRIUM, j].real
+    scalars[CONTACT, SCALAR_CONST] = constant
+    scalars[CONTACT, SCALAR_SINE] = harmonic.real
+    scalars[CONTACT, SCALAR_COSINE] = harmonic.imag
+    scalars[CONTACT, SCALAR_LOAD_RATE] = 1.0
+    return drives
+
+
+@kernel
+def run_inputs(cell, tables, geometry, spring, t_max, search_span):
     """Everything the dynamics kernel needs for one run of ``cell`` in its geometry.
 
     Returns (tables with the cell's damping ratios, complex drive amplitudes ``forces``,
-    phase scalars, settings, q0, q0'); ``tables`` of the geometry is left unchanged.
+    phase scalars, settings, q0, q0', the spring law's mode drives); ``tables`` of the
+    geometry is left unchanged. In the spring law the contact oscillators' damping ratios come
+    with the geometry's ``spring`` modes (solved for the cell's damping ratio).
     """
+    spring_law = geometry[GEO_LAW] == SPRING
     damped = tables.copy()
     forces = np.empty((tables.shape[0], tables.shape[2]), dtype=np.complex128)
+    scalars = phase_scalars(cell, geometry)
     for phase in range(tables.shape[0]):
+        if phase == CONTACT and spring_law:
+            continue
         damped[phase, ROW_ZETA] = cell[CELL_ZETA]
         forces[phase] = drive_amplitudes(damped[phase, ROW_DRIVE], damped[phase, ROW_OMEGA],
                                          damped[phase, ROW_ZETA], cell[CELL_F0],
                                          cell[CELL_OMEGA])
+    if spring_law:
+        drives = spring_contact_inputs(cell, damped, geometry, spring, forces, scalars)
+    else:
+        drives = np.empty((len(SPRING_DRIVE_ROWS), 0), dtype=np.complex128)
     q0, v0 = rest_state(cell, tables[FREE, ROW_UNIT1], tables[FREE, ROW_UNIT2],
                         tables[FREE, ROW_DRIVE])
-    return (damped, forces, phase_scalars(cell, geometry),
-            settings(cell, geometry, t_max, search_span), q0, v0)
+    return (damped, forces, scalars, settings(cell, geometry, t_max, search_span), q0, v0,
+            drives)

@@ -20,14 +20,24 @@ first-impact map packs the free phase alone), rows ``TABLE_ROWS``:
 ``forces[phase, mode]``: complex amplitude A of each mode's drive ``Im(A e^(i Omega t))``.
 
 ``phase_scalars[phase]``, fields ``PHASE_SCALARS``: the event function is
-``e(t) = event_const + event_sine sin(Omega t) + event . q(t)``; ``load_rate`` is beam 1's tip
-load rate per unit ``F'`` (1 free, ``c2 / (c1 + c2)`` in contact).
+``e(t) = event_const + event_sine sin(Omega t) + event_cosine cos(Omega t) + event . q(t)``;
+``load_rate`` is beam 1's tip load rate per unit ``F'`` (1 free, ``c2 / (c1 + c2)`` in tied
+contact, 1 in spring contact, where the free phase's quasi-static part is kept).
 
 ``settings``, a record of ``SETTINGS_DTYPE``, fields ``SETTINGS``: clearance (m), tip
 compliances c1, c2 (m/N), force amplitude F0 (N), forcing frequency Omega (rad/s), end time
 t_max (s), search span (s; the event search restarts from the exactly propagated state this
 often), accumulation time (s; see
-:func:`impactbeams.kernels.dynamics.run_events`).
+:func:`impactbeams.kernels.dynamics.run_events`), contact law (``CONTACT_LAWS`` index), and the
+spring law's effective stiffness k_e (N/m) and dashpot c_e (N s/m) after the static correction.
+
+Contact laws: ``TIED`` (the paper's: tips tied in contact, contact modes of the tied pair,
+projections at switches: ``overlap``, ``shifts``) and ``SPRING`` (compliant: the free
+coordinates kept, the contact phase as the oscillators of :mod:`impactbeams.kernels.spring`:
+``spring = (left, right, modes)`` per geometry and ``drives`` per run, rows
+``SPRING_MODE_ROWS`` and ``SPRING_DRIVE_ROWS``). In the spring law the contact table has the
+oscillators' frequencies and damping ratios, the contact force weights as ``event`` and zeros in
+the other rows.
 
 ``geometry[g]``, fields ``GEOMETRY``: c1, c2 (m/N) and the accumulation time (s) of
 geometry g of a map. ``cells[i]``, columns ``CELL_COLUMNS``: one map cell's parameters and the
@@ -42,16 +52,24 @@ FREE, CONTACT = 0, 1
 TABLE_ROWS = ("omega", "zeta", "drive", "event", "tip1", "unit1", "unit2")
 ROW_OMEGA, ROW_ZETA, ROW_DRIVE, ROW_EVENT, ROW_TIP1, ROW_UNIT1, ROW_UNIT2 = range(len(TABLE_ROWS))
 
-PHASE_SCALARS = ("event_const", "event_sine", "load_rate")
-SCALAR_CONST, SCALAR_SINE, SCALAR_LOAD_RATE = range(len(PHASE_SCALARS))
+PHASE_SCALARS = ("event_const", "event_sine", "event_cosine", "load_rate")
+SCALAR_CONST, SCALAR_SINE, SCALAR_COSINE, SCALAR_LOAD_RATE = range(len(PHASE_SCALARS))
+
+CONTACT_LAWS = ("tied", "spring")
+TIED, SPRING = range(len(CONTACT_LAWS))
+
+SPRING_MODE_ROWS = ("eigenvalue", "phase")
+MODE_EIGENVALUE, MODE_PHASE = range(len(SPRING_MODE_ROWS))
+SPRING_DRIVE_ROWS = ("rising", "falling", "constant", "equilibrium")
+DRIVE_RISING, DRIVE_FALLING, DRIVE_CONSTANT, DRIVE_EQUILIBRIUM = range(len(SPRING_DRIVE_ROWS))
 
 # a structured record (fields read by name in the kernels, ``settings.t_max``)
 SETTINGS = ("clearance", "c1", "c2", "force_amplitude", "forcing_frequency", "t_max",
-            "search_span", "accumulation")
+            "search_span", "accumulation", "contact_law", "contact_stiffness", "contact_damping")
 SETTINGS_DTYPE = np.dtype([(name, np.float64) for name in SETTINGS])
 
-GEOMETRY = ("c1", "c2", "accumulation")
-GEO_C1, GEO_C2, GEO_ACCUMULATION = range(len(GEOMETRY))
+GEOMETRY = ("c1", "c2", "accumulation", "contact_law", "contact_stiffness", "contact_damping")
+GEO_C1, GEO_C2, GEO_ACCUMULATION, GEO_LAW, GEO_STIFFNESS, GEO_DAMPING = range(len(GEOMETRY))
 
 # the cell parameters are named as in impactbeams.params; the last column is the geometry
 CELL_COLUMNS = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "damping_ratio",

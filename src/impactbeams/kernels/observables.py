@@ -2,11 +2,13 @@
 
 Plain-array interface, packed by :mod:`impactbeams.packing` per geometry g (names in
 :mod:`impactbeams.kernels.layout`): ``tables[g]`` the phase tables of both phases,
-``overlaps[g]`` = <Z_m, Y_n>, ``shifts[g]`` the static shifts of both phases, ``geometry[g]``
-with fields ``GEOMETRY``; ``cells[i]`` with columns ``CELL_COLUMNS``. Each cell's run inputs
-come from :func:`~impactbeams.kernels.forcing.run_inputs` (as for one simulated run), its
-observables (``OUT_COLUMNS``) from :func:`~impactbeams.kernels.reductions.summarize_run`; a
-status other than 0 (complete) means they cover [0, t_end] only.
+``overlaps[g]`` = <Z_m, Y_n>, ``shifts[g]`` the static shifts of both phases (tied law),
+``spring_left[g]``, ``spring_right[g]``, ``spring_modes[g]`` (spring law; see
+:mod:`impactbeams.kernels.spring`), ``geometry[g]`` with fields ``GEOMETRY``; ``cells[i]`` with
+columns ``CELL_COLUMNS``. Each cell's run inputs come from
+:func:`~impactbeams.kernels.forcing.run_inputs` (as for one simulated run), its observables
+(``OUT_COLUMNS``) from :func:`~impactbeams.kernels.reductions.summarize_run`; a status other
+than 0 (complete) means they cover [0, t_end] only.
 """
 
 import numpy as np
@@ -20,10 +22,10 @@ from impactbeams.kernels.reductions import summarize_run
 
 
 @kernel
-def cell_observables(cell, tables, overlap, shifts, geometry, t_max, max_segments, out):
+def cell_observables(cell, tables, overlap, shifts, spring, geometry, t_max, max_segments, out):
     """Run one cell's dynamics (at most ``max_segments`` phases) and write its OUT_COLUMNS."""
-    damped, forces, scalars, settings_array, q0, v0 = run_inputs(cell, tables, geometry, t_max,
-                                                                 t_max)
+    damped, forces, scalars, settings_array, q0, v0, drives = run_inputs(
+        cell, tables, geometry, spring, t_max, t_max)
     settings = settings_array[0]
     n = q0.size
     seg_time = np.empty(max_segments)
@@ -31,19 +33,21 @@ def cell_observables(cell, tables, overlap, shifts, geometry, t_max, max_segment
     seg_sustained = np.empty(max_segments, dtype=np.bool_)
     seg_q, seg_v = np.empty((max_segments, n)), np.empty((max_segments, n))
     end_q, end_v = np.empty((max_segments, n)), np.empty((max_segments, n))
-    count, status, t_end = run_events(damped, forces, scalars, overlap, shifts, settings, q0,
-                                      v0, seg_time, seg_phase, seg_sustained, seg_q, seg_v,
-                                      end_q, end_v)
+    count, status, t_end = run_events(damped, forces, scalars, overlap, shifts, spring, drives,
+                                      settings, q0, v0, seg_time, seg_phase, seg_sustained,
+                                      seg_q, seg_v, end_q, end_v)
     summarize_run(damped, forces, scalars, settings, seg_time, seg_phase, seg_q, seg_v, end_q,
                   end_v, count, status, t_end, out)
 
 
-def _observables_map(cells, tables, overlaps, shifts, geometry, t_max, max_segments, out):
+def _observables_map(cells, tables, overlaps, shifts, spring_left, spring_right, spring_modes,
+                     geometry, t_max, max_segments, out):
     """Fill out[i, :] with the observables of cells[i]; each iteration owns row i."""
     for i in prange(cells.shape[0]):
         g = int(cells[i, CELL_GEOMETRY])
-        cell_observables(cells[i], tables[g], overlaps[g], shifts[g], geometry[g], t_max,
-                         max_segments, out[i])
+        spring = (spring_left[g], spring_right[g], spring_modes[g])
+        cell_observables(cells[i], tables[g], overlaps[g], shifts[g], spring, geometry[g],
+                         t_max, max_segments, out[i])
 
 
 observables_map_parallel, observables_map_serial = parallel_kernel(_observables_map)

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from impactbeams.kernels.dynamics import propagate
+from impactbeams.kernels.dynamics import event_sine, propagate
 from impactbeams.kernels.events import event_value
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.layout import (
@@ -30,8 +30,9 @@ from impactbeams.kernels.layout import (
     ROW_ZETA,
     SCALAR_CONST,
     SCALAR_LOAD_RATE,
-    SCALAR_SINE,
+    SPRING,
 )
+from impactbeams.kernels.spring import to_free
 
 _EPS = np.finfo(np.float64).eps
 _GAUSS_NODES = np.array([
@@ -46,12 +47,22 @@ _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
 
 @kernel
-def _power(table, force_drive, scalars, settings, q_s, v_s, t_s, t, q, v):
+def _power(tables, forces, phase_scalars, spring, drives, settings, phase, q_s, v_s, t_s, t, q,
+           v, free_q, free_v):
     """Power of F (W) and damping dissipation rate (W) at time t within one segment.
 
-    The damping acts on each mode's whole coordinate, whose rate is ``q' - F' b``.
+    The damping acts on each mode's whole coordinate, whose rate is ``q' - F' b``. In a spring
+    contact the state is taken back to the free coordinates, and the dashpot dissipates
+    ``c_e g'^2`` on top.
     """
-    propagate(table, force_drive, q_s, v_s, t_s, t, settings, q, v)
+    table, scalars = tables[phase], phase_scalars[phase]
+    propagate(table, forces[phase], q_s, v_s, t_s, t, settings, q, v)
+    spring_contact = phase == CONTACT and settings.contact_law == SPRING
+    if spring_contact:
+        to_free(q, v, t, spring[1], spring[2], drives, settings.forcing_frequency, free_q,
+                free_v)
+        q, v = free_q, free_v
+        table, scalars = tables[FREE], phase_scalars[FREE]
     f0, big_omega = settings.force_amplitude, settings.forcing_frequency
     force = f0 * math.sin(big_omega * t)
     force_rate = f0 * big_omega * math.cos(big_omega * t)
@@ -62,11 +73,16 @@ def _power(table, force_drive, scalars, settings, q_s, v_s, t_s, t, q, v):
         tip_rate += tip1[j] * v[j]
         modal_rate = v[j] - force_rate * drive[j]
         dissipation += 2.0 * zeta[j] * omega[j] * modal_rate * modal_rate
+    if spring_contact:
+        _, gap_rate = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
+                                  event_sine(scalars), big_omega)
+        dissipation += settings.contact_damping * gap_rate * gap_rate
     return -force * tip_rate, dissipation
 
 
 @kernel
-def _integrate_power(table, force, scalars, settings, q_s, v_s, t_s, a, b, q, v):
+def _integrate_power(tables, forces, phase_scalars, spring, drives, settings, phase, q_s, v_s,
+                     t_s, a, b, work_arrays):
     """Integrals (J) of the power of F and of the dissipation over [a, b] in one segment.
 
     Composite 12-point Gauss-Legendre with panels no longer than half the shortest period
@@ -74,7 +90,8 @@ def _integrate_power(table, force, scalars, settings, q_s, v_s, t_s, a, b, q, v)
     """
     if b <= a:
         return 0.0, 0.0
-    fastest = max(np.max(table[ROW_OMEGA]), settings.forcing_frequency)
+    q, v, free_q, free_v = work_arrays[0], work_arrays[1], work_arrays[2], work_arrays[3]
+    fastest = max(np.max(tables[phase, ROW_OMEGA]), settings.forcing_frequency)
     n_panels = max(1, int(math.ceil((b - a) * fastest / math.pi)))
     width = (b - a) / n_panels
     work, dissipated = 0.0, 0.0
@@ -82,34 +99,35 @@ def _integrate_power(table, force, scalars, settings, q_s, v_s, t_s, a, b, q, v)
         middle = a + (p + 0.5) * width
         for j in range(_GAUSS_NODES.size):
             t = middle + 0.5 * width * _GAUSS_NODES[j]
-            power, loss = _power(table, force, scalars, settings, q_s, v_s, t_s, t, q, v)
+            power, loss = _power(tables, forces, phase_scalars, spring, drives, settings,
+                                 phase, q_s, v_s, t_s, t, q, v, free_q, free_v)
             work += 0.5 * width * _GAUSS_WEIGHTS[j] * power
             dissipated += 0.5 * width * _GAUSS_WEIGHTS[j] * loss
     return work, dissipated
 
 
 @kernel
-def work_of_force(tables, forces, phase_scalars, settings, seg_time, seg_phase, seg_q, seg_v,
-                  count, t_end, times, work_out, dissipation_out):
+def work_of_force(tables, forces, phase_scalars, spring, drives, settings, seg_time, seg_phase,
+                  seg_q, seg_v, count, t_end, times, work_out, dissipation_out):
     """Work done by F and energy dissipated by damping from t = 0 to each of ``times`` (J).
 
     ``times`` ascending in [0, t_end]; ``t_end`` is where the last segment stops.
     """
-    n_coords = seg_q.shape[1]
-    q, v = np.empty(n_coords), np.empty(n_coords)
+    work_arrays = np.empty((4, seg_q.shape[1]))
     work, dissipated, t_done, i = 0.0, 0.0, 0.0, 0
     for k in range(count):
-        table, scalars = tables[seg_phase[k]], phase_scalars[seg_phase[k]]
-        force = forces[seg_phase[k]]
+        phase = seg_phase[k]
         seg_end = seg_time[k + 1] if k + 1 < count else t_end
         while i < times.size and (times[i] < seg_end or k + 1 == count):
-            dw, dd = _integrate_power(table, force, scalars, settings, seg_q[k], seg_v[k],
-                                      seg_time[k], t_done, times[i], q, v)
+            dw, dd = _integrate_power(tables, forces, phase_scalars, spring, drives, settings,
+                                      phase, seg_q[k], seg_v[k], seg_time[k], t_done, times[i],
+                                      work_arrays)
             work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, times[i])
             work_out[i], dissipation_out[i] = work, dissipated
             i += 1
-        dw, dd = _integrate_power(table, force, scalars, settings, seg_q[k], seg_v[k],
-                                  seg_time[k], t_done, seg_end, q, v)
+        dw, dd = _integrate_power(tables, forces, phase_scalars, spring, drives, settings,
+                                  phase, seg_q[k], seg_v[k], seg_time[k], t_done, seg_end,
+                                  work_arrays)
         work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, seg_end)
 
 
@@ -118,7 +136,7 @@ def _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t, q, v):
     """Contact force R(t) (N) within a contact segment."""
     propagate(table, force, q_s, v_s, t_s, t, settings, q, v)
     value, _ = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
-                           scalars[SCALAR_SINE], settings.forcing_frequency)
+                           event_sine(scalars), settings.forcing_frequency)
     return value
 
 
@@ -159,7 +177,7 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
 def _gap_rate(table, scalars, q, v, t, forcing_frequency):
     """dg/dt (m/s) of the free phase at time t from its modal state."""
     _, slope = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
-                           scalars[SCALAR_SINE], forcing_frequency)
+                           event_sine(scalars), forcing_frequency)
     return slope
 
 

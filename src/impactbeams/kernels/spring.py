@@ -4,10 +4,10 @@ Plain arrays, packed from :class:`impactbeams.compliant.SpringContact` (see that
 derivation). With M free coordinates x = (q, q') (2 M values) and the contact phase's complex
 modes z (M, one of each conjugate pair):
 
-* ``spring_modes[g]`` (complex, rows ``SPRING_MODE_ROWS``): eigenvalues lambda_j (1/s) and
+* ``modes`` (complex, rows ``layout.SPRING_MODE_ROWS``): eigenvalues lambda_j (1/s) and
   phases rho_j (|rho_j| = 1) of the contact oscillators y_j = 2 Re(rho_j z_j) - y_eq_j;
-* ``spring_left[g]`` (M, 2 M): z = left x; ``spring_right[g]`` (2 M, M): x = 2 Re(right z);
-* ``spring_drives`` (complex, rows ``SPRING_DRIVE_ROWS``, per cell): the modal drive of z,
+* ``left`` (M, 2 M): z = left x; ``right`` (2 M, M): x = 2 Re(right z);
+* ``drives`` (complex, rows ``layout.SPRING_DRIVE_ROWS``, per run): the modal drive of z,
   z_j' = lambda_j z_j + P_j e^(i Omega t) + N_j e^(-i Omega t) + C_j, and y_eq_j.
 
 Every switch between the phases is the identity on (q, q'): these maps change coordinates only.
@@ -18,16 +18,15 @@ import math
 import numpy as np
 
 from impactbeams.kernels.jit import kernel
-
-SPRING_MODE_ROWS = ("eigenvalue", "phase")
-MODE_EIGENVALUE = SPRING_MODE_ROWS.index("eigenvalue")
-MODE_PHASE = SPRING_MODE_ROWS.index("phase")
-
-SPRING_DRIVE_ROWS = ("rising", "falling", "constant", "equilibrium")
-DRIVE_RISING = SPRING_DRIVE_ROWS.index("rising")
-DRIVE_FALLING = SPRING_DRIVE_ROWS.index("falling")
-DRIVE_CONSTANT = SPRING_DRIVE_ROWS.index("constant")
-DRIVE_EQUILIBRIUM = SPRING_DRIVE_ROWS.index("equilibrium")
+from impactbeams.kernels.layout import (
+    DRIVE_CONSTANT,
+    DRIVE_EQUILIBRIUM,
+    DRIVE_FALLING,
+    DRIVE_RISING,
+    MODE_EIGENVALUE,
+    MODE_PHASE,
+    SPRING_DRIVE_ROWS,
+)
 
 
 @kernel

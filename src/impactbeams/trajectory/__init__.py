@@ -9,9 +9,9 @@ and :mod:`~impactbeams.trajectory.impacts` (the per-impact table) reduce them;
 :mod:`~impactbeams.trajectory.simulation` holds :func:`simulate` and builds the Dataset.
 """
 
-from impactbeams.packing import Packed, pack_model
+from impactbeams.packing import Packed, pack_run
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory, run, sample
 from impactbeams.trajectory.simulation import simulate
 
-__all__ = ["Packed", "Trajectory", "observables", "pack_model", "run", "sample", "simulate"]
+__all__ = ["Packed", "Trajectory", "observables", "pack_run", "run", "sample", "simulate"]

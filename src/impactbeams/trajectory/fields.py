@@ -30,7 +30,8 @@ def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray,
             out[name][index] = values
         out["in_contact"][index] = phase
     work, dissipation = np.empty(reached.size), np.empty(reached.size)
-    work_of_force(packed.tables, packed.forces, packed.phase_scalars, packed.settings,
+    work_of_force(packed.tables, packed.forces, packed.phase_scalars,
+                  packed.dynamics.spring_arrays, packed.drives, packed.settings,
                   trajectory.time, trajectory.phase, trajectory.q, trajectory.v,
                   trajectory.time.size, trajectory.t_end, times[reached], work, dissipation)
     out["work_of_force"][reached], out["damping_dissipation"][reached] = work, dissipation
@@ -40,14 +41,15 @@ def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray,
 def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_points: int,
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Deflection fields y_1(x_1, t), y_2(x_2, t) (m) on uniform grids of ``n_points``."""
-    model = packed.model
-    p, n = model.params, model.n_modes
+    p, free, model = packed.params, packed.dynamics.free, packed.dynamics.model
+    n = free.omega.size // 2
     c1, c2 = p.tip_compliance
     x1, x2 = np.linspace(0.0, p.l1, n_points), np.linspace(0.0, p.l2, n_points)
-    shapes1 = (np.vstack([model.free.beam1.shapes(x1), np.zeros((n, n_points))]),
-               model.contact.beam1(x1))
-    shapes2 = (np.vstack([np.zeros((n, n_points)), model.free.beam2.shapes(x2)]),
-               model.contact.beam2(x2))
+    free1 = np.vstack([free.beam1.shapes(x1), np.zeros((n, n_points))])
+    free2 = np.vstack([np.zeros((n, n_points)), free.beam2.shapes(x2)])
+    # the spring law's states come back in the free coordinates in both phases
+    shapes1 = (free1, free1 if model is None else model.contact.beam1(x1))
+    shapes2 = (free2, free2 if model is None else model.contact.beam2(x2))
     y1 = np.full((times.size, n_points), np.nan)
     y2 = np.full((times.size, n_points), np.nan)
     reached = np.flatnonzero(times <= trajectory.t_end)

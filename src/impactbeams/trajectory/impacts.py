@@ -7,11 +7,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from impactbeams.kernels.layout import CONTACT, ROW_EVENT, ROW_OMEGA, ROW_ZETA
+from impactbeams.kernels.layout import (
+    CONTACT,
+    ROW_EVENT,
+    ROW_OMEGA,
+    ROW_ZETA,
+    SCALAR_CONST,
+    SCALAR_COSINE,
+    SCALAR_SINE,
+)
 from impactbeams.kernels.reductions import peak_force
 from impactbeams.packing import Packed
 from impactbeams.trajectory.observables import observables
-from impactbeams.trajectory.phases import Trajectory
+from impactbeams.trajectory.phases import Trajectory, free_states
 
 
 def _segment_observables(packed: Packed, trajectory: Trajectory, k: np.ndarray, end: bool,
@@ -20,6 +28,7 @@ def _segment_observables(packed: Packed, trajectory: Trajectory, k: np.ndarray, 
     t = trajectory.segment_end[k] if end else trajectory.time[k]
     q = trajectory.end_q[k] if end else trajectory.q[k]
     v = trajectory.end_v[k] if end else trajectory.v[k]
+    q, v = free_states(packed, trajectory.phase[k], t, q, v)
     return observables(packed, trajectory.phase[k], t, q, v)
 
 
@@ -44,9 +53,11 @@ def _impulses(packed: Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarr
     """Integral of R over contact segments ``k`` (N s), in closed form.
 
     From r'' + 2 zeta omega r' + omega^2 r = Im(A e^(i Omega t)):
-    omega^2 int r = Re A int sin + Im A int cos - [r' + 2 zeta omega r], R = R_qs + shear . r.
+    omega^2 int r = Re A int sin + Im A int cos - [r' + 2 zeta omega r], R = R_qs + shear . r
+    (tied law; the spring law's oscillators likewise, with R = const + Im(S e^(i Omega t))
+    + weights . y).
     """
-    p = packed.model.params
+    p = packed.params
     c1, c2 = p.tip_compliance
     t0, t1 = trajectory.time[k], trajectory.segment_end[k]
     sine, cosine = _harmonic_integrals(p.omega, t0, t1)
@@ -55,7 +66,12 @@ def _impulses(packed: Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarr
     jump = (trajectory.end_v[k] - trajectory.v[k]
             + 2.0 * zeta * omega * (trajectory.end_q[k] - trajectory.q[k]))
     modal = (force.real * sine[:, None] + force.imag * cosine[:, None] - jump) / omega**2
-    quasi_static = (c1 * p.force_amplitude * sine - p.clearance * (t1 - t0)) / (c1 + c2)
+    if packed.spring_law:
+        scalars = packed.phase_scalars[CONTACT]
+        quasi_static = (scalars[SCALAR_CONST] * (t1 - t0) + scalars[SCALAR_SINE] * sine
+                        + scalars[SCALAR_COSINE] * cosine)
+    else:
+        quasi_static = (c1 * p.force_amplitude * sine - p.clearance * (t1 - t0)) / (c1 + c2)
     return quasi_static + modal @ shear
 
 

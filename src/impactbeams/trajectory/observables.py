@@ -3,7 +3,9 @@
 Everything linear or quadratic in the modal state is evaluated from the exact segment states,
 with the tip-load formulas of MODEL.md: in both phases the fields are
 ``y_i = -c_i Q_i(t) u_i + sum_n Y_in q_n`` with tip loads ``Q1 = F, Q2 = 0`` (free) or
-``Q1 = F - R_qs, Q2 = R_qs`` (contact).
+``Q1 = F - R_qs, Q2 = R_qs`` (tied contact). The spring law keeps the free phase's coordinates
+and quasi-static part in contact, where the spring adds ``R = -k_e g - c_e g'`` and the energy
+``k_e g^2 / 2``.
 
 Energy of the fields (``a(u, v) = sum_i EI_i int u_i'' v_i''``; quasi-static shapes carry
 ``a(y_s, Y_n) = -sum_i Q_i Y_n(l_i)``, ``a(y_s, y_s) = sum_i c_i Q_i^2``):
@@ -28,12 +30,16 @@ from impactbeams.packing import Packed
 
 
 def loads(packed: Packed, phase: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Tip loads Q1, Q2 (N) and their rates (N/s) at times t in the given phases."""
-    p = packed.model.params
+    """Tip loads Q1, Q2 (N) and their rates (N/s) in the quasi-static parts at times t.
+
+    Tied law: the contact phase's quasi-static part carries the quasi-static contact force;
+    spring law: both phases keep the free one (Q1 = F, Q2 = 0).
+    """
+    p = packed.params
     c1, c2 = p.tip_compliance
     force = p.force_amplitude * np.sin(p.omega * t)
     force_rate = p.force_amplitude * p.omega * np.cos(p.omega * t)
-    contact = phase == CONTACT
+    contact = (phase == CONTACT) & (not packed.spring_law)
     r_qs = np.where(contact, (c1 * force - p.clearance) / (c1 + c2), 0.0)
     r_qs_rate = np.where(contact, c1 * force_rate / (c1 + c2), 0.0)
     return force - r_qs, r_qs, force_rate - r_qs_rate, r_qs_rate
@@ -52,7 +58,7 @@ def observables(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
     ``phase``, ``t`` (s): shape (k,); ``q``, ``v``: modal states, shape (k, N). Tip 2 is
     y2(l2) itself here (not minus the clearance).
     """
-    p = packed.model.params
+    p = packed.params
     c1, c2 = p.tip_compliance
     q1, q2, q1_rate, q2_rate = loads(packed, phase, t)
     tip1, tip2 = per_phase(packed, phase, "tip1"), per_phase(packed, phase, "tip2")
@@ -67,14 +73,24 @@ def observables(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
                + 0.5 * np.einsum("kn,kn->k", v, v))
     strain = (0.5 * (c1 * q1**2 + c2 * q2**2) - q1 * np.einsum("kn,kn->k", tip1, q)
               - q2 * np.einsum("kn,kn->k", tip2, q) + 0.5 * np.einsum("kn,kn->k", omega**2, q**2))
-    event = per_phase(packed, phase, "event")
-    force = np.where(phase == CONTACT, q2 + np.einsum("kn,kn->k", event, q), 0.0)
+    tip_velocity_1 = -c1 * q1_rate + np.einsum("kn,kn->k", tip1, v)
+    tip_velocity_2 = -c2 * q2_rate + np.einsum("kn,kn->k", tip2, v)
+    gap = p.clearance + y1 - y2
+    contact = phase == CONTACT
+    if packed.spring_law:  # R = -k_e g - c_e g', and the spring's energy k_e g^2 / 2
+        spring = packed.dynamics.spring
+        force = np.where(contact, -spring.effective_stiffness * gap
+                         - spring.effective_damping * (tip_velocity_1 - tip_velocity_2), 0.0)
+        strain = strain + np.where(contact, 0.5 * spring.effective_stiffness * gap**2, 0.0)
+    else:
+        event = per_phase(packed, phase, "event")
+        force = np.where(contact, q2 + np.einsum("kn,kn->k", event, q), 0.0)
     return {
         "tip_deflection_1": y1,
         "tip_deflection_2": y2,
-        "tip_velocity_1": -c1 * q1_rate + np.einsum("kn,kn->k", tip1, v),
-        "tip_velocity_2": -c2 * q2_rate + np.einsum("kn,kn->k", tip2, v),
-        "gap": p.clearance + y1 - y2,
+        "tip_velocity_1": tip_velocity_1,
+        "tip_velocity_2": tip_velocity_2,
+        "gap": gap,
         "contact_force": force,
         "kinetic_energy": kinetic,
         "energy": kinetic + strain,

@@ -7,6 +7,8 @@ import dataclasses
 import numpy as np
 
 from impactbeams.kernels import dynamics as dyn
+from impactbeams.kernels.layout import CONTACT
+from impactbeams.kernels.spring import to_free
 from impactbeams.packing import Packed
 
 _INITIAL_CAPACITY = 4096  # segments; doubled (rerun from t = 0) until max_events
@@ -48,9 +50,9 @@ def run(packed: Packed, max_events: int) -> Trajectory:
         sustained = np.empty(capacity, dtype=np.bool_)
         q, v, end_q, end_v = (np.empty((capacity, packed.q0.size)) for _ in range(4))
         count, status, t_end = dyn.run_events(packed.tables, packed.forces, packed.phase_scalars,
-                                              packed.model.overlap, packed.shifts,
-                                              packed.settings, packed.q0, packed.v0, time,
-                                              phase, sustained, q, v, end_q, end_v)
+                                              *packed.switching(), packed.settings, packed.q0,
+                                              packed.v0, time, phase, sustained, q, v, end_q,
+                                              end_v)
         if status != dyn.EVENT_LIMIT or capacity >= max_events:
             break
         capacity = min(2 * capacity, max_events)
@@ -60,11 +62,32 @@ def run(packed: Packed, max_events: int) -> Trajectory:
 
 def sample(packed: Packed, trajectory: Trajectory, times: np.ndarray,
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Phase and modal state (q, q') at ascending ``times`` within [0, t_end] (s)."""
+    """Phase and modal state (q, q') at ascending ``times`` within [0, t_end] (s).
+
+    The states are in the coordinates of ``packed.bases`` (the spring law's: free ones).
+    """
     n_coords = trajectory.q.shape[1]
     q, v = np.empty((times.size, n_coords)), np.empty((times.size, n_coords))
     phase = np.empty(times.size, dtype=np.int64)
-    dyn.sample_states(packed.tables, packed.forces, packed.settings, trajectory.time,
+    dyn.sample_states(packed.tables, packed.forces, packed.dynamics.spring_arrays,
+                      packed.drives, packed.settings, trajectory.time,
                       trajectory.phase, trajectory.q, trajectory.v, trajectory.time.size, times,
                       q, v, phase)
     return phase, q, v
+
+
+def free_states(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray, v: np.ndarray,
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Recorded segment states (q, q') in the coordinates of ``packed.bases``.
+
+    Only the spring law's contact states change: its contact oscillators back to (q, q').
+    """
+    if not packed.spring_law:
+        return q, v
+    q, v = q.copy(), v.copy()
+    left, right, modes = packed.dynamics.spring_arrays
+    for i in np.flatnonzero(phase == CONTACT):
+        y, y_rate = q[i].copy(), v[i].copy()
+        to_free(y, y_rate, float(t[i]), right, modes, packed.drives,
+                packed.settings["forcing_frequency"], q[i], v[i])
+    return q, v

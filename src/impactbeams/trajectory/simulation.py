@@ -8,8 +8,8 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from impactbeams.model import build_model
-from impactbeams.packing import Packed, pack_model
+from impactbeams.compliant import recommended_modes
+from impactbeams.packing import Packed, pack_run
 from impactbeams.params import Params
 from impactbeams.trajectory.fields import deflections, time_series
 from impactbeams.trajectory.impacts import impact_table
@@ -29,7 +29,7 @@ def _output_times(t_max: float, dt_output: float, times: np.ndarray | None) -> n
     return np.minimum(np.arange(count) * dt_output, t_max)
 
 
-def simulate(params: Params, t_max: float, n_modes: int = 5, dt_output: float = 1e-4,
+def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output: float = 1e-4,
              fields: bool = False, *, times: np.ndarray | None = None, n_points: int = 41,
              max_events: int = 200_000, search_span: float | None = None) -> xr.Dataset:
     """Simulate the impacting beams from t = 0 to ``t_max`` (s); return an xarray Dataset.
@@ -37,7 +37,10 @@ def simulate(params: Params, t_max: float, n_modes: int = 5, dt_output: float = 
     Args:
         params: model parameters (SI units).
         t_max: end time (s), > 0.
-        n_modes: free modes per beam (the contact phase has 2 n_modes).
+        n_modes: free modes per beam. Default: 5 for the tied law (the contact phase has
+            2 n_modes modes); for the spring law the number that resolves the contact,
+            4 n* (docs/model.md, "Resolution"), at least 5. A spring-law run with fewer gets
+            a warning and ``attrs["contact_resolved"] = 0``.
         dt_output: spacing (s) of the output grid 0, dt, 2 dt, ... <= t_max.
         fields: also return the deflection fields ``deflection_1(time, x1)``,
             ``deflection_2(time, x2)`` on ``n_points`` uniform points per beam.
@@ -60,7 +63,14 @@ def simulate(params: Params, t_max: float, n_modes: int = 5, dt_output: float = 
     if not span > 0:
         raise ValueError(f"search_span = {search_span!r} is not allowed: must be > 0 (s)")
     out_times = _output_times(float(t_max), dt_output, times)
-    packed = pack_model(build_model(params, n_modes), float(t_max), span)
+    resolution = recommended_modes(params) if params.contact_law == "spring" else 5
+    if n_modes is None:
+        n_modes = resolution
+    elif n_modes < resolution and params.contact_law == "spring":
+        warnings.warn(f"n_modes = {n_modes} does not resolve the spring contact of stiffness "
+                      f"{params.contact_stiffness:g} N/m: use n_modes >= {resolution} "
+                      "(docs/model.md, Resolution)", RuntimeWarning, stacklevel=2)
+    packed = pack_run(params, n_modes, float(t_max), span)
     trajectory = run(packed, max_events)
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
@@ -73,12 +83,14 @@ def simulate(params: Params, t_max: float, n_modes: int = 5, dt_output: float = 
         dataset["deflection_1"] = (("time", "x1"), y1, attributes("deflection_1"))
         dataset["deflection_2"] = (("time", "x2"), y2, attributes("deflection_2"))
     dataset.attrs.update(_global_attributes(params, n_modes, float(t_max), trajectory))
+    if params.contact_law == "spring":
+        dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
     return dataset
 
 
 def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray) -> xr.Dataset:
     series = time_series(packed, trajectory, times)
-    series["tip_deflection_2"] = series["tip_deflection_2"] - packed.model.params.clearance
+    series["tip_deflection_2"] = series["tip_deflection_2"] - packed.params.clearance
     impacts = impact_table(packed, trajectory)
     data = {name: ("time", values, attributes(name)) for name, values in series.items()}
     data.update({name: ("impact", values, attributes(name)) for name, values in impacts.items()})
@@ -96,3 +108,12 @@ def _global_attributes(params: Params, n_modes: int, t_max: float, trajectory: T
     return global_attributes(
         "impact dynamics of two cantilevers with clearance (impactbeams.simulate)", "simulate",
         params.as_dict(), **run)
+
+
+def _contact_attributes(packed: Packed, resolved: bool, resolution: int) -> dict[str, object]:
+    """The spring law's effective contact (static correction) and its resolution."""
+    spring = packed.dynamics.spring
+    return {"contact_stiffness_effective": spring.effective_stiffness,
+            "contact_damping_effective": spring.effective_damping,
+            "residual_flexibility": spring.residual,
+            "contact_resolved": int(resolved), "contact_resolution_modes": resolution}
