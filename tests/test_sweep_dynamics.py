@@ -8,30 +8,42 @@ from impactbeams.sweep import DYNAMICS_OBSERVABLES, FIRST_IMPACT, run_sweep, swe
 from impactbeams.trajectory import simulate
 
 T_MAX = 0.2
-DEFINITION = {
-    "t_max": T_MAX, "n_modes": 5, "params": {"clearance": 1.1e-5},
-    "axes": {"omega": {"min": 40.0, "max": 260.0, "num": 3},
-             "force_amplitude": {"min": 2e-4, "max": 1e-3, "num": 2}},
-}
+# both contact laws: the tied one at the paper's 5 modes, the spring one resolved (k = 1e4 N/m
+# needs 12 modes per beam, see docs/model.md)
+LAWS = {"tied": ({"contact_law": "tied"}, 5),
+        "spring": ({"contact_law": "spring", "contact_stiffness": 1e4}, 12)}
+
+
+@pytest.fixture(scope="module", params=list(LAWS))
+def law(request):
+    return request.param
+
+
+def definition(law):
+    params, n_modes = LAWS[law]
+    return {"t_max": T_MAX, "n_modes": n_modes, "params": {"clearance": 1.1e-5, **params},
+            "axes": {"omega": {"min": 40.0, "max": 260.0, "num": 3},
+                     "force_amplitude": {"min": 2e-4, "max": 1e-3, "num": 2}}}
 
 
 @pytest.fixture(scope="module")
-def dynamics_map():
-    sweep = sweep_from_mapping({**DEFINITION, "observables": [FIRST_IMPACT,
-                                                              *DYNAMICS_OBSERVABLES]})
+def dynamics_map(law):
+    sweep = sweep_from_mapping({**definition(law), "observables": [FIRST_IMPACT,
+                                                                   *DYNAMICS_OBSERVABLES]})
     return run_sweep(sweep, progress=False)
 
 
-def test_observables_equal_simulate_impact_table(dynamics_map):
+def test_observables_equal_simulate_impact_table(dynamics_map, law):
     """Same kernel events, different reductions (the sweep's in Numba, simulate's in NumPy):
     counts, contact time and peak forces agree to round-off."""
     ds = dynamics_map
     assert np.all(ds.dynamics_status == 0)
     for i in range(ds.omega.size):
         for j in range(ds.force_amplitude.size):
+            fixed, n_modes = LAWS[law]
             params = Params(clearance=1.1e-5, omega=float(ds.omega[i]),
-                            force_amplitude=float(ds.force_amplitude[j]))
-            run = simulate(params, T_MAX, n_modes=5)
+                            force_amplitude=float(ds.force_amplitude[j]), **fixed)
+            run = simulate(params, T_MAX, n_modes=n_modes)
             cell = ds.isel(omega=i, force_amplitude=j)
             assert int(cell.impact_count) == run.impact.size
             if run.impact.size == 0:
@@ -49,17 +61,17 @@ def test_observables_equal_simulate_impact_table(dynamics_map):
             assert float(cell.mean_restitution) == pytest.approx(float(weighted), rel=1e-12)
 
 
-def test_first_impact_agrees_with_the_free_phase_kernel(dynamics_map):
+def test_first_impact_agrees_with_the_free_phase_kernel(dynamics_map, law):
     """The free-phase-only map and the full dynamics locate the same first root; their step
     sequences differ (beam 2's modes enter the dynamics kernel's step cap): 4 ulps."""
-    alone = run_sweep(sweep_from_mapping(DEFINITION), progress=False)
+    alone = run_sweep(sweep_from_mapping(definition(law)), progress=False)
     a, b = dynamics_map.first_impact_time.values, alone.first_impact_time.values
     assert np.array_equal(np.isnan(a), np.isnan(b))
     assert np.nanmax(np.abs(a - b) / b) <= 4 * np.finfo(float).eps
 
 
-def test_dynamics_map_parallel_equals_serial(dynamics_map):
-    sweep = sweep_from_mapping({**DEFINITION, "observables": list(DYNAMICS_OBSERVABLES)})
+def test_dynamics_map_parallel_equals_serial(dynamics_map, law):
+    sweep = sweep_from_mapping({**definition(law), "observables": list(DYNAMICS_OBSERVABLES)})
     serial = run_sweep(sweep, progress=False, parallel=False, chunk_cells=2)
     for name in DYNAMICS_OBSERVABLES:
         assert np.array_equal(serial[name], dynamics_map[name], equal_nan=True)

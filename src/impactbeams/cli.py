@@ -157,8 +157,9 @@ def build_parser() -> argparse.ArgumentParser:
     simulate = commands.add_parser("simulate", help="simulate one trajectory, write netCDF")
     simulate.add_argument("--t-max", type=_positive_float, required=True, metavar="SECONDS",
                           help="end time (s)")
-    simulate.add_argument("--n-modes", type=_positive_int, default=5,
-                          help="free modes per beam (default 5)")
+    simulate.add_argument("--n-modes", type=_positive_int, default=None,
+                          help="free modes per beam (default: 5 for the tied law; for the "
+                               "spring law the number that resolves the contact, 4 n*)")
     simulate.add_argument("--dt-output", type=_positive_float, default=1e-4, metavar="SECONDS",
                           help="output time step (s, default 1e-4)")
     simulate.add_argument("--fields", action="store_true",

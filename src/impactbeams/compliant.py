@@ -31,22 +31,31 @@ loss at a switch).
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 
 from impactbeams.model import FreePhase
 from impactbeams.params import Params
 
 MAX_MODES = 200  # per beam, the package's limit
+# frequencies of the two beams closer than this (relative) count as equal in the rank-one
+# update: the error it makes in their pair is below it, far better than a dense solver's
+_DEFLATE = 1e-13
 # A contact mode pair counts as underdamped while |Im lambda| exceeds this fraction of |lambda|
 _OVERDAMPED = 1e-6
 
 
-def residual_flexibility(free: FreePhase, tip_compliance: tuple[float, float]) -> float:
-    """r_N = sum_i (c_i - sum_n Y_in(l_i)^2 / omega_in^2) (m/N): what the modes miss at the tips."""
-    weights = free.tip1 - free.tip2
-    return float(sum(tip_compliance) - np.sum(weights**2 / free.omega**2))
+def residual_flexibilities(free: FreePhase, tip_compliance: tuple[float, float],
+                           ) -> tuple[float, float]:
+    """r_i = c_i - sum_n Y_in(l_i)^2 / omega_in^2 (m/N): what each beam's modes miss at its tip.
+
+    Their sum is r_N, the flexibility the truncated modes miss between the tips.
+    """
+    return (float(tip_compliance[0] - np.sum(free.tip1**2 / free.omega**2)),
+            float(tip_compliance[1] - np.sum(free.tip2**2 / free.omega**2)))
 
 
 def resolution_modes(free: FreePhase, stiffness: float) -> int:
@@ -68,7 +77,7 @@ class SpringContact:
     Attributes:
         stiffness, damping: k (N/m) and c (N s/m) of the law.
         effective_stiffness, effective_damping: k_e, c_e after the static correction.
-        residual: r_N (m/N).
+        residual: r_N (m/N); residual1, residual2: each beam's share (c_i minus its modes').
         eigenvalues: lambda_j (1/s) of the contact phase's first-order form, Im > 0.
         right: (2 M, M) complex, x = (q, q') = 2 Re(right z).
         left: (M, 2 M) complex, z = left x.
@@ -81,6 +90,8 @@ class SpringContact:
     effective_stiffness: float
     effective_damping: float
     residual: float
+    residual1: float
+    residual2: float
     eigenvalues: np.ndarray
     right: np.ndarray
     left: np.ndarray
@@ -98,24 +109,81 @@ class SpringContact:
         return -self.eigenvalues.real / np.abs(self.eigenvalues)
 
 
-def _undamped_modes(stiffness_matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def rank_one_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies and orthonormal modes of diag(omega^2) + stiffness w w^T, to full accuracy.
+
+    The low contact frequencies must be exact to their last digits, not to eps times the
+    largest (as a dense solver gives): the secular equation of the rank-one update is solved
+    per root by LAPACK's dlasd4, and the modes are built from the Loewner-corrected weights
+    (Gu & Eisenstat), which makes them orthogonal. (Nearly) equal frequencies of the two beams
+    are first deflated by rotations: one mode of each such pair keeps its frequency.
+    Returns ``(frequencies, modes)``, the modes as columns, frequencies ascending.
+    """
+    order = np.argsort(omega)
+    d, z = omega[order].astype(float), np.sqrt(stiffness) * weights[order]
+    m = d.size
+    basis = np.eye(m)
+    deflated = np.zeros(m, dtype=bool)
+    tiny = np.finfo(float).eps * np.linalg.norm(z)
+    last = -1
+    for j in range(m):
+        if abs(z[j]) <= tiny:
+            deflated[j], z[j] = True, 0.0
+        elif last >= 0 and d[j] - d[last] <= _DEFLATE * d[j]:  # rotate z onto the earlier one
+            r = math.hypot(z[last], z[j])
+            c, s = z[last] / r, z[j] / r
+            basis[:, [last, j]] = basis[:, [last, j]] @ np.array([[c, -s], [s, c]])
+            z[last], z[j], deflated[j] = r, 0.0, True
+            d[j] = d[last]
+        else:
+            last = j
+    active = np.flatnonzero(~deflated)
+    da, za = d[active], z[active]
+    n = active.size
+    sigma, gap = np.empty(n), np.empty((n, n))  # gap[i, j] = d_j^2 - sigma_i^2
+    for i in range(n):
+        delta, sigma[i], work, info = scipy.linalg.lapack.dlasd4(i, da, za, 1.0)
+        if info != 0:
+            raise ArithmeticError(f"dlasd4 failed (info {info}) on contact mode {i}")
+        gap[i] = delta * work
+    # Loewner: the weights for which the computed roots are exact
+    corrected = np.empty(n)
+    for j in range(n):  # d_i^2 - d_j^2 as a product: no cancellation for close frequencies
+        below = -gap[:j, j] / ((da[:j] - da[j]) * (da[:j] + da[j]))
+        above = -gap[j:n - 1, j] / ((da[j + 1:] - da[j]) * (da[j + 1:] + da[j]))
+        corrected[j] = math.copysign(math.sqrt(-gap[n - 1, j] * np.prod(below) * np.prod(above)),
+                                     za[j])
+    vectors = corrected[None, :] / gap
+    vectors /= np.linalg.norm(vectors, axis=1)[:, None]
+    frequencies = np.concatenate([sigma, d[deflated]])
+    modes = np.zeros((m, m))
+    modes[active, :n] = vectors.T
+    modes[np.flatnonzero(deflated), n + np.arange(np.count_nonzero(deflated))] = 1.0
+    modes = basis @ modes
+    arrange = np.argsort(frequencies)
+    full = np.empty((m, m))
+    full[order] = modes[:, arrange]
+    return frequencies[arrange], full
+
+
+def _undamped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Undamped: lambda = i omega, right = (V; i V Omega), left = (V^T, -i V^T / omega) / 2."""
-    squared, vectors = scipy.linalg.eigh(stiffness_matrix)
-    omega = np.sqrt(squared)
-    right = np.vstack([vectors, 1j * vectors * omega]).astype(complex)
-    left = 0.5 * np.hstack([vectors.T, -1j * vectors.T / omega[:, None]])
-    return 1j * omega, right, left
+    frequencies, vectors = rank_one_modes(omega, stiffness, weights)
+    right = np.vstack([vectors, 1j * vectors * frequencies]).astype(complex)
+    left = 0.5 * np.hstack([vectors.T, -1j * vectors.T / frequencies[:, None]])
+    return 1j * frequencies, right, left
 
 
-def _damped_modes(stiffness_matrix: np.ndarray, damping_matrix: np.ndarray,
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _damped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
+                  damping_matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Complex modes of (q, q')' = [[0, I], [-K, -C]] (q, q'), balanced.
 
     Solved in the undamped modes p = V^T q with the scaled state s = (Omega p, p'), where the
     first-order matrix [[0, Omega], [-Omega, -V^T C V]] has entries of one size.
     """
-    squared, vectors = scipy.linalg.eigh(stiffness_matrix)
-    omega = np.sqrt(squared)
+    omega, vectors = rank_one_modes(omega, stiffness, weights)
     m = omega.size
     block = np.block([[np.zeros((m, m)), np.diag(omega)],
                       [-np.diag(omega), -vectors.T @ damping_matrix @ vectors]])
@@ -137,16 +205,16 @@ def _damped_modes(stiffness_matrix: np.ndarray, damping_matrix: np.ndarray,
 def spring_contact(free: FreePhase, tip_compliance: tuple[float, float], damping_ratio: float,
                    stiffness: float, damping: float = 0.0) -> SpringContact:
     """The contact phase of the spring law (k = ``stiffness`` N/m, c = ``damping`` N s/m)."""
-    residual = residual_flexibility(free, tip_compliance)
+    residual1, residual2 = residual_flexibilities(free, tip_compliance)
+    residual = residual1 + residual2
     k_e = stiffness / (1.0 + stiffness * residual)
     c_e = damping / (1.0 + stiffness * residual) ** 2
     w = free.tip1 - free.tip2
-    stiffness_matrix = np.diag(free.omega**2) + k_e * np.outer(w, w)
-    damping_matrix = np.diag(2.0 * damping_ratio * free.omega) + c_e * np.outer(w, w)
     if damping_ratio == 0.0 and damping == 0.0:
-        eigenvalues, right, left = _undamped_modes(stiffness_matrix)
+        eigenvalues, right, left = _undamped_modes(free.omega, k_e, w)
     else:
-        eigenvalues, right, left = _damped_modes(stiffness_matrix, damping_matrix)
+        damping_matrix = np.diag(2.0 * damping_ratio * free.omega) + c_e * np.outer(w, w)
+        eigenvalues, right, left = _damped_modes(free.omega, k_e, w, damping_matrix)
     m = w.size
     # R_modal = -k_e w.q - c_e w.q' = sum_j 2 Re(r_j z_j)
     force_weight = -(k_e * w @ right[:m] + c_e * w @ right[m:])
@@ -154,7 +222,7 @@ def spring_contact(free: FreePhase, tip_compliance: tuple[float, float], damping
     phase = np.where(magnitude > 0.0, force_weight / np.where(magnitude > 0, magnitude, 1.0),
                      1.0 + 0j)
     return SpringContact(float(stiffness), float(damping), float(k_e), float(c_e), residual,
-                         eigenvalues, right, left, phase, magnitude)
+                         residual1, residual2, eigenvalues, right, left, phase, magnitude)
 
 
 def recommended_modes(params: Params) -> int:

@@ -97,7 +97,8 @@ def geometry_row(params: Params, free: FreePhase, spring: SpringContact | None =
               "accumulation": math.pi / np.max(free.omega),
               "contact_law": layout.CONTACT_LAWS.index(params.contact_law),
               "contact_stiffness": spring.effective_stiffness if spring else 0.0,
-              "contact_damping": spring.effective_damping if spring else 0.0}
+              "contact_damping": spring.effective_damping if spring else 0.0,
+              "residual1": spring.residual1 if spring else 0.0}
     return np.array([fields[name] for name in layout.GEOMETRY])
 
 

@@ -200,6 +200,39 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
 
 
 @kernel
+def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings, q, v):
+    """Spring law with a dashpot, free phase entered with the tips still overlapping.
+
+    The dashpot released them early (R = -k_e g - c_e g' fell to 0 with g < 0). Returns
+    ``(t, opened)``: the time that force rises through 0 again while g < 0 (the next onset,
+    ``opened`` False), or the time the gap opens first (``opened`` True: the free phase goes on
+    from there as a new segment, so that the spring's relaxation, which ends there, is
+    integrated on its own). The force is tracked through y = k_e q + c_e q', oscillators
+    with the same frequencies and the drive (k_e + i c_e Omega) A, so that ``-R = k_e g +
+    c_e g' = k_e clearance + Im((k_e + i c_e Omega) S e^(i Omega t)) + weights . y``.
+    """
+    stiffness, damping = settings.contact_stiffness, settings.contact_damping
+    big_omega = settings.forcing_frequency
+    omega, zeta = table[ROW_OMEGA], table[ROW_ZETA]
+    impedance = complex(stiffness, damping * big_omega)
+    sine, cosine = math.sin(big_omega * t_s), math.cos(big_omega * t_s)
+    acceleration = (force.real * sine + force.imag * cosine - 2.0 * zeta * omega * v_s
+                    - omega * omega * q_s)
+    y, y_rate = stiffness * q_s + damping * v_s, stiffness * v_s + damping * acceleration
+    force_scalars = scalars.copy()
+    force_scalars[SCALAR_CONST] = stiffness * scalars[SCALAR_CONST]
+    harmonic = impedance * event_sine(scalars)
+    force_scalars[SCALAR_SINE], force_scalars[SCALAR_COSINE] = harmonic.real, harmonic.imag
+    t_onset = find_switch(table, impedance * force, force_scalars, y, y_rate, t_s, True, False,
+                          settings, q, v)
+    t_open = first_root(q_s, v_s, t_s, settings.t_max, omega, zeta, force, -table[ROW_EVENT],
+                        -scalars[SCALAR_CONST], -event_sine(scalars), big_omega, q, v)
+    if math.isnan(t_open) or t_onset <= t_open:
+        return t_onset, False
+    return t_open, True
+
+
+@kernel
 def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings, q0, v0,
                seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
     """Integrate from the free-phase state (q0, v0) at t = 0 to t_max, event by event.
@@ -233,20 +266,35 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
     phase, t, zero_run, instant_release = FREE, 0.0, 0, -math.inf
     sustained = conflict = False
     spring_law = settings.contact_law == SPRING
+    opened = False  # the previous segment ended where an early-released gap opened
     for k in range(seg_time.size):
         seg_time[k], seg_phase[k], seg_sustained[k] = t, phase, sustained
         seg_q[k, :] = q
         seg_v[k, :] = v
         table, force, scalars = tables[phase], forces[phase], phase_scalars[phase]
         free = phase == FREE
-        t_event = find_switch(table, force, scalars, q, v, t, free or sustained or spring_law,
-                              free and conflict, settings, q_end, v_end)
+        value, _ = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
+                               event_sine(scalars), settings.forcing_frequency)
+        reopening = opened
+        opened = False
+        if (spring_law and free and settings.contact_damping > 0.0 and value < 0.0
+                and not reopening):
+            t_event, opened = _reonset_after_early_release(table, force, scalars, q, v, t,
+                                                           settings, q_end, v_end)
+        else:
+            t_event = find_switch(table, force, scalars, q, v, t, free or sustained or spring_law,
+                                  free and conflict, settings, q_end, v_end)
         t_stop = settings.t_max if math.isnan(t_event) else t_event
         propagate(table, force, q, v, t, t_stop, settings, q_end, v_end)
         end_q[k, :] = q_end
         end_v[k, :] = v_end
         if math.isnan(t_event):
             return k + 1, COMPLETE, t_stop
+        if opened:  # the same free phase goes on from the opening of the gap
+            q[:] = q_end
+            v[:] = v_end
+            t = t_event
+            continue
         instant = t_event <= t + 4.0 * _EPS * max(t, 1.0)
         zero_run = zero_run + 1 if instant else 0
         if zero_run > ZENO_LIMIT:

@@ -24,6 +24,7 @@ from impactbeams.kernels.layout import (
     GEO_C2,
     GEO_DAMPING,
     GEO_LAW,
+    GEO_RESIDUAL1,
     GEO_STIFFNESS,
     PHASE_SCALARS,
     ROW_DRIVE,
@@ -95,6 +96,7 @@ def settings(cell, geometry, t_max, search_span):
     record.contact_law = geometry[GEO_LAW]
     record.contact_stiffness = geometry[GEO_STIFFNESS]
     record.contact_damping = geometry[GEO_DAMPING]
+    record.residual1 = geometry[GEO_RESIDUAL1]
     return out
 
 

@@ -29,7 +29,8 @@ compliances c1, c2 (m/N), force amplitude F0 (N), forcing frequency Omega (rad/s
 t_max (s), search span (s; the event search restarts from the exactly propagated state this
 often), accumulation time (s; see
 :func:`impactbeams.kernels.dynamics.run_events`), contact law (``CONTACT_LAWS`` index), and the
-spring law's effective stiffness k_e (N/m) and dashpot c_e (N s/m) after the static correction.
+spring law's effective stiffness k_e (N/m) and dashpot c_e (N s/m) after the static correction,
+and beam 1's residual tip flexibility r_1 (m/N: what its modes miss of c1).
 
 Contact laws: ``TIED`` (the paper's: tips tied in contact, contact modes of the tied pair,
 projections at switches: ``overlap``, ``shifts``) and ``SPRING`` (compliant: the free
@@ -65,11 +66,14 @@ DRIVE_RISING, DRIVE_FALLING, DRIVE_CONSTANT, DRIVE_EQUILIBRIUM = range(len(SPRIN
 
 # a structured record (fields read by name in the kernels, ``settings.t_max``)
 SETTINGS = ("clearance", "c1", "c2", "force_amplitude", "forcing_frequency", "t_max",
-            "search_span", "accumulation", "contact_law", "contact_stiffness", "contact_damping")
+            "search_span", "accumulation", "contact_law", "contact_stiffness", "contact_damping",
+            "residual1")
 SETTINGS_DTYPE = np.dtype([(name, np.float64) for name in SETTINGS])
 
-GEOMETRY = ("c1", "c2", "accumulation", "contact_law", "contact_stiffness", "contact_damping")
-GEO_C1, GEO_C2, GEO_ACCUMULATION, GEO_LAW, GEO_STIFFNESS, GEO_DAMPING = range(len(GEOMETRY))
+GEOMETRY = ("c1", "c2", "accumulation", "contact_law", "contact_stiffness", "contact_damping",
+            "residual1")
+(GEO_C1, GEO_C2, GEO_ACCUMULATION, GEO_LAW, GEO_STIFFNESS, GEO_DAMPING,
+ GEO_RESIDUAL1) = range(len(GEOMETRY))
 
 # the cell parameters are named as in impactbeams.params; the last column is the geometry
 CELL_COLUMNS = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "damping_ratio",

@@ -26,18 +26,18 @@ def cell_observables(cell, tables, overlap, shifts, spring, geometry, t_max, max
     """Run one cell's dynamics (at most ``max_segments`` phases) and write its OUT_COLUMNS."""
     damped, forces, scalars, settings_array, q0, v0, drives = run_inputs(
         cell, tables, geometry, spring, t_max, t_max)
-    settings = settings_array[0]
     n = q0.size
     seg_time = np.empty(max_segments)
     seg_phase = np.empty(max_segments, dtype=np.int64)
     seg_sustained = np.empty(max_segments, dtype=np.bool_)
     seg_q, seg_v = np.empty((max_segments, n)), np.empty((max_segments, n))
     end_q, end_v = np.empty((max_segments, n)), np.empty((max_segments, n))
+    # the settings record is a view: index it at each use so that its array stays alive
     count, status, t_end = run_events(damped, forces, scalars, overlap, shifts, spring, drives,
-                                      settings, q0, v0, seg_time, seg_phase, seg_sustained,
-                                      seg_q, seg_v, end_q, end_v)
-    summarize_run(damped, forces, scalars, settings, seg_time, seg_phase, seg_q, seg_v, end_q,
-                  end_v, count, status, t_end, out)
+                                      settings_array[0], q0, v0, seg_time, seg_phase,
+                                      seg_sustained, seg_q, seg_v, end_q, end_v)
+    summarize_run(damped, forces, scalars, settings_array[0], seg_time, seg_phase, seg_q, seg_v,
+                  end_q, end_v, count, status, t_end, out)
 
 
 def _observables_map(cells, tables, overlaps, shifts, spring_left, spring_right, spring_modes,

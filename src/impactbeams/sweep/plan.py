@@ -25,8 +25,9 @@ class Plan:
     """What the kernels need per geometry, and how cells map to geometries.
 
     ``tables``: the free phase of every geometry (first-impact map), or both phases with the
-    ``overlaps`` and ``shifts`` of the switching projections when a full-dynamics observable
-    is asked for (see kernels.layout). ``fingerprint`` is the sweep's: a plan serves only the
+    switching arrays (``overlaps``, ``shifts`` of the tied law's projections; the spring law's
+    ``left``, ``right``, ``modes``) when a full-dynamics observable is asked for (see
+    kernels.layout). ``fingerprint`` is the sweep's: a plan serves only the
     sweep it was built for.
     """
 
@@ -35,29 +36,41 @@ class Plan:
     tables: np.ndarray  # (geometries, phases, len(TABLE_ROWS), 2 n_modes)
     geometry: np.ndarray  # (geometries, len(GEOMETRY))
     geometry_axes: tuple[int, ...]  # positions of the axes that change the geometry
-    switching: tuple[np.ndarray, np.ndarray] | None  # (overlaps, shifts) of a dynamics map
+    switching: tuple[np.ndarray, ...] | None  # a dynamics map's switching arrays
+
+
+def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
+    """Positions of the axes that change the modes: all but the cell parameters' axes.
+
+    A spring-law dynamics map solves its contact phase for the damping ratio, so there the
+    damping ratio changes the modes too.
+    """
+    per_cell = set(CELL_PARAMETERS)
+    if sweep.needs_dynamics and sweep.base.contact_law == "spring":
+        per_cell.discard("damping_ratio")
+    return tuple(k for k, a in enumerate(sweep.axes) if a.name not in per_cell)
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:
     """The parameters of every distinct geometry of the grid, in flat geometry-index order."""
-    geometry_axes = [k for k, a in enumerate(sweep.axes) if a.name not in CELL_PARAMETERS]
-    for combo in itertools.product(*(range(sweep.axes[k].num) for k in geometry_axes)):
+    axes = geometry_axes(sweep)
+    for combo in itertools.product(*(range(sweep.axes[k].num) for k in axes)):
         changes = {sweep.axes[k].name: float(sweep.axes[k].values[i])
-                   for k, i in zip(geometry_axes, combo, strict=True)}
+                   for k, i in zip(axes, combo, strict=True)}
         yield sweep.base.replace(**changes) if changes else sweep.base
 
 
 def _geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
-    """One geometry's packed arrays: (tables, geometry row[, overlap, shifts])."""
+    """One geometry's packed arrays: (tables, geometry row[, switching arrays])."""
     from impactbeams import packing
-    from impactbeams.model import build_free_phase, build_model
+    from impactbeams.model import build_free_phase
 
     if not sweep.needs_dynamics:
         free = build_free_phase(params, sweep.n_modes)
         return packing.free_tables(free), packing.geometry_row(params, free)
-    model = build_model(params, sweep.n_modes)
-    tables, shifts = packing.phase_tables(model)
-    return tables, packing.geometry_row(params, model.free), model.overlap, shifts
+    dynamics = packing.dynamics_arrays(params, sweep.n_modes)
+    return (dynamics.tables, dynamics.geometry, dynamics.overlap, dynamics.shifts,
+            *dynamics.spring_arrays)
 
 
 def build_plan(sweep: Sweep) -> Plan:
@@ -65,8 +78,7 @@ def build_plan(sweep: Sweep) -> Plan:
     per_geometry = [_geometry_arrays(params, sweep) for params in _geometries(sweep)]
     tables, geometry, *switching = (np.array(arrays) for arrays in zip(*per_geometry,
                                                                         strict=True))
-    geometry_axes = tuple(k for k, a in enumerate(sweep.axes) if a.name not in CELL_PARAMETERS)
-    return Plan(sweep.fingerprint(), sweep.base, tables, geometry, geometry_axes,
+    return Plan(sweep.fingerprint(), sweep.base, tables, geometry, geometry_axes(sweep),
                 tuple(switching) or None)
 
 

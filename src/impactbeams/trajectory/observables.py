@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from impactbeams.kernels.layout import CONTACT
+from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, ROW_OMEGA, ROW_ZETA
 from impactbeams.packing import Packed
 
 
@@ -75,13 +75,16 @@ def observables(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
               - q2 * np.einsum("kn,kn->k", tip2, q) + 0.5 * np.einsum("kn,kn->k", omega**2, q**2))
     tip_velocity_1 = -c1 * q1_rate + np.einsum("kn,kn->k", tip1, v)
     tip_velocity_2 = -c2 * q2_rate + np.einsum("kn,kn->k", tip2, v)
-    gap = p.clearance + y1 - y2
     contact = phase == CONTACT
-    if packed.spring_law:  # R = -k_e g - c_e g', and the spring's energy k_e g^2 / 2
+    if packed.spring_law:
+        force, force_rate, spring_energy = _spring_contact(
+            packed, contact, t, q, v, p.clearance + y1 - y2, tip_velocity_1 - tip_velocity_2)
         spring = packed.dynamics.spring
-        force = np.where(contact, -spring.effective_stiffness * gap
-                         - spring.effective_damping * (tip_velocity_1 - tip_velocity_2), 0.0)
-        strain = strain + np.where(contact, 0.5 * spring.effective_stiffness * gap**2, 0.0)
+        # the flexibility the modes miss responds statically to R: it moves the tips too
+        y1, y2 = y1 + spring.residual1 * force, y2 - spring.residual2 * force
+        tip_velocity_1 = tip_velocity_1 + spring.residual1 * force_rate
+        tip_velocity_2 = tip_velocity_2 - spring.residual2 * force_rate
+        strain = strain + spring_energy
     else:
         event = per_phase(packed, phase, "event")
         force = np.where(contact, q2 + np.einsum("kn,kn->k", event, q), 0.0)
@@ -90,10 +93,39 @@ def observables(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
         "tip_deflection_2": y2,
         "tip_velocity_1": tip_velocity_1,
         "tip_velocity_2": tip_velocity_2,
-        "gap": gap,
+        "gap": p.clearance + y1 - y2,
         "contact_force": force,
         "kinetic_energy": kinetic,
         "energy": kinetic + strain,
         "unresolved_kinetic_energy": static_kinetic
         - 0.5 * np.einsum("kn,kn->k", static_projection, static_projection),
     }
+
+
+def _spring_contact(packed: Packed, contact: np.ndarray, t: np.ndarray, q: np.ndarray,
+                    v: np.ndarray, gap: np.ndarray, gap_rate: np.ndarray,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The spring law's contact force R (N), its rate (N/s) and energy (J); 0 out of contact.
+
+    ``gap``, ``gap_rate``: the modal gap g and g' (m, m/s), on which R = -k_e g - c_e g' acts.
+    The energy, ``k_e g^2 / 2 - r_1 F R``, is the spring's (its static correction included;
+    held while the tips overlap, also after an early release by the dashpot) plus the work of
+    F through beam 1's residual flexibility under R, so that energy, work of F and dissipation
+    balance exactly.
+    """
+    p, spring = packed.params, packed.dynamics.spring
+    table = packed.tables[FREE]
+    omega, zeta, weights = table[ROW_OMEGA], table[ROW_ZETA], table[ROW_EVENT]
+    force = np.where(contact, -spring.effective_stiffness * gap
+                     - spring.effective_damping * gap_rate, 0.0)
+    drive = np.imag(packed.forces[FREE] * np.exp(1j * p.omega * t)[:, None])
+    acceleration = (drive - 2.0 * zeta * omega * v - omega**2 * q + force[:, None] * weights)
+    gap_acceleration = (p.tip_compliance[0] * p.force_amplitude * p.omega**2
+                        * np.sin(p.omega * t) + acceleration @ weights)
+    force_rate = np.where(contact, -spring.effective_stiffness * gap_rate
+                          - spring.effective_damping * gap_acceleration, 0.0)
+    tip_force = p.force_amplitude * np.sin(p.omega * t)
+    # the spring holds its energy while the tips overlap, also after an early release
+    energy = (np.where(contact | (gap < 0.0), 0.5 * spring.effective_stiffness * gap**2, 0.0)
+              - spring.residual1 * tip_force * force)
+    return force, force_rate, energy
