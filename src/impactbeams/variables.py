@@ -179,6 +179,33 @@ VARIABLES.update({
         ("impact",), "N", "contact force at release", "R at the located release (0 to round-off)"),
 })
 
+# simulate(): impact episodes, clusters of contacts (trajectory.episodes)
+VARIABLES.update({
+    "episode": Variable(("episode",), "1", "episode number",
+                        "index of the impact episode (a cluster of contacts), from 0"),
+    "episode_onset_time": Variable(("episode",), "s", "episode onset time",
+                                   "onset of the episode's first contact"),
+    "episode_duration": Variable(
+        ("episode",), "s", "episode duration",
+        "first onset to last release; NaN if the last contact is still open at the end"),
+    "episode_contact_count": Variable(("episode",), "1", "contacts in the episode",
+                                      "number of (micro-)contacts of the episode"),
+    "episode_impulse": Variable(("episode",), "N s", "episode impulse",
+                                "integral of the contact force over the episode's contacts"),
+    "episode_peak_force": Variable(("episode",), "N", "episode peak force",
+                                   "largest contact force of the episode"),
+    "episode_dissipated_energy": Variable(
+        ("episode",), "J", "energy dissipated in the episode",
+        "modal damping and dashpot dissipation from the first onset to the last release"),
+    "episode_restitution": Variable(
+        ("episode",), "1", "kinematic restitution of the episode",
+        "-(dg/dt after the last release) / (dg/dt before the first onset)"),
+    "episode_energetic_restitution": Variable(
+        ("episode",), "1", "energetic restitution of the episode",
+        "sqrt(work of R while the tips separate / work of R while they approach), over the "
+        "episode's contacts (Stronge's energetic coefficient; quadrature, ~1e-6 relative)"),
+})
+
 
 def attributes(name: str) -> dict[str, str]:
     """CF attributes (units, long_name, description) of a registered variable."""

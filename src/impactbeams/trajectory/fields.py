@@ -14,13 +14,16 @@ from impactbeams.trajectory.phases import Trajectory, sample
 _CHUNK = 1 << 15  # output times per sampling call: bounds memory at ~N * 0.5 MB
 
 
-def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray,
-                 ) -> dict[str, np.ndarray]:
-    """Observables, contact flag, work of F and damping loss at ``times``; NaN past t_end."""
+def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray, energy: bool = True,
+                ) -> dict[str, np.ndarray]:
+    """Observables and contact flag at ``times``; NaN past t_end.
+
+    With ``energy``, also the work of F and the damping dissipation.
+    """
     inside = times <= trajectory.t_end
-    names = ("tip_deflection_1", "tip_deflection_2", "tip_velocity_1", "tip_velocity_2", "gap",
+    names = ["tip_deflection_1", "tip_deflection_2", "tip_velocity_1", "tip_velocity_2", "gap",
              "contact_force", "kinetic_energy", "energy", "unresolved_kinetic_energy",
-             "in_contact", "work_of_force", "damping_dissipation")
+             "in_contact"] + (["work_of_force", "damping_dissipation"] if energy else [])
     out = {name: np.full(times.size, np.nan) for name in names}
     reached = np.flatnonzero(inside)
     for start in range(0, reached.size, _CHUNK):
@@ -29,6 +32,8 @@ def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray,
         for name, values in observables(packed, phase, times[index], q, v).items():
             out[name][index] = values
         out["in_contact"][index] = phase
+    if not energy:
+        return out
     work, dissipation = np.empty(reached.size), np.empty(reached.size)
     work_of_force(packed.tables, packed.forces, packed.phase_scalars,
                   packed.dynamics.spring_arrays, packed.drives, packed.settings,

@@ -11,6 +11,7 @@ import xarray as xr
 from impactbeams.compliant import recommended_modes
 from impactbeams.packing import Packed, pack_run
 from impactbeams.params import Params
+from impactbeams.trajectory.episodes import default_separation, episode_table
 from impactbeams.trajectory.fields import deflections, time_series
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory, run
@@ -31,7 +32,8 @@ def _output_times(t_max: float, dt_output: float, times: np.ndarray | None) -> n
 
 def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output: float = 1e-4,
              fields: bool = False, *, times: np.ndarray | None = None, n_points: int = 41,
-             max_events: int = 200_000, search_span: float | None = None) -> xr.Dataset:
+             max_events: int = 200_000, search_span: float | None = None,
+             episode_separation: float | None = None, energy: bool = True) -> xr.Dataset:
     """Simulate the impacting beams from t = 0 to ``t_max`` (s); return an xarray Dataset.
 
     Args:
@@ -51,6 +53,12 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         search_span: the event search restarts from the exactly propagated state every this
             many seconds (default t_max). Results do not depend on it beyond round-off; it is
             here to test that.
+        episode_separation: contacts closer than this (s, free interval from release to the
+            next onset) form one impact episode; default a quarter period of the slowest free
+            mode (see :mod:`impactbeams.trajectory.episodes`).
+        energy: also compute the work of F, the damping dissipation and the episodes' energy
+            figures (quadratures at the fastest mode's time scale: with many modes they cost
+            far more than the dynamics; pass False when only motions and forces are needed).
 
     The output grid never influences the dynamics: events are located by the kernel on its
     own, and the outputs are evaluated from the exact segment states.
@@ -75,7 +83,9 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
                       f"{t_max!r} s: status {trajectory.status!r}", RuntimeWarning, stacklevel=2)
-    dataset = _dataset(packed, trajectory, out_times)
+    if episode_separation is None:
+        episode_separation = default_separation(packed)
+    dataset = _dataset(packed, trajectory, out_times, float(episode_separation), energy)
     if fields:
         x1, x2, y1, y2 = deflections(packed, trajectory, out_times, n_points)
         dataset = dataset.assign_coords(x1=("x1", x1, attributes("x1")),
@@ -88,16 +98,24 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     return dataset
 
 
-def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray) -> xr.Dataset:
-    series = time_series(packed, trajectory, times)
+def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray, separation: float,
+             energy: bool) -> xr.Dataset:
+    series = time_series(packed, trajectory, times, energy)
     series["tip_deflection_2"] = series["tip_deflection_2"] - packed.params.clearance
     impacts = impact_table(packed, trajectory)
     data = {name: ("time", values, attributes(name)) for name, values in series.items()}
     data.update({name: ("impact", values, attributes(name)) for name, values in impacts.items()})
+    episodes = episode_table(packed, trajectory, impacts, separation, energy)
+    data.update({name: ("episode", values, attributes(name))
+                 for name, values in episodes.items()})
     coords = {"time": ("time", times, attributes("time")),
               "impact": ("impact", np.arange(impacts["impact_onset_time"].size),
-                         attributes("impact"))}
-    return xr.Dataset(data, coords=coords)
+                         attributes("impact")),
+              "episode": ("episode", np.arange(episodes["episode_onset_time"].size),
+                          attributes("episode"))}
+    dataset = xr.Dataset(data, coords=coords)
+    dataset.attrs["episode_separation"] = separation
+    return dataset
 
 
 def _global_attributes(params: Params, n_modes: int, t_max: float, trajectory: Trajectory,
