@@ -51,7 +51,7 @@ def unforced_long():
 
 @pytest.fixture(scope="module")
 def forced_run():
-    return simulate(FORCED, 0.6)
+    return simulate(FORCED, 0.6, energy_balance=True)
 
 
 # --- energy -----------------------------------------------------------------------------------
@@ -140,7 +140,7 @@ def test_energy_balance_within_every_phase(params):
     t_max = 0.6
     packed, traj = trajectory(params, t_max)
     times = energy_check_times(traj, t_max, 60_001)
-    dataset = simulate(params, t_max, times=times)
+    dataset = simulate(params, t_max, times=times, energy_balance=True)
     k = segment_of(traj, times)
     start = np.searchsorted(times, traj.time)  # index of each segment's start in times
     balanced = (dataset.energy - dataset.unresolved_kinetic_energy
@@ -374,7 +374,7 @@ beam1_first = build_model(FORCED, 1).free.omega[0]
 ], ids=["resonance", "near_resonance", "contact_resonance", "equal_beams", "tiny_clearance",
         "chattering"])
 def test_stress_cases_run_clean(params, t_max):
-    ds = simulate(params, t_max)
+    ds = simulate(params, t_max, energy_balance=True)
     _assert_clean(ds)
     assert ds.impact.size > 0
 

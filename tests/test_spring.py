@@ -183,7 +183,8 @@ def test_dashpot_and_modal_damping_dissipate_what_the_energy_loses(forced):
     never decreases (the dashpot's c_e g'^2 and the modal damping are sums of squares)."""
     params = Params(force_amplitude=1e-3 if forced else 0.0, uplift1=0.0 if forced else 3e-5,
                     contact_stiffness=1e5, contact_damping=2.0, damping_ratio=0.01)
-    ds = simulate(params, 0.15, n_modes=recommended_modes(params), dt_output=1e-5)
+    ds = simulate(params, 0.15, n_modes=recommended_modes(params), dt_output=1e-5,
+                  energy_balance=True)
     assert ds.impact.size > 10
     balance = (ds.energy - ds.unresolved_kinetic_energy - ds.work_of_force
                + ds.damping_dissipation).values

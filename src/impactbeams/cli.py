@@ -124,7 +124,8 @@ def _simulate(args: argparse.Namespace) -> None:
     if output.suffix != ".nc":
         raise ParameterError(f"--output {args.output!r} is not allowed: must end in .nc")
     dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
-                       dt_output=args.dt_output, fields=args.fields)
+                       dt_output=args.dt_output, fields=args.fields,
+                       energy_balance=args.energy_balance)
     write_netcdf(dataset, output)
     print(f"wrote {output}: {dataset.impact.size} impacts, status {dataset.attrs['status']}",
           file=sys.stderr)
@@ -162,6 +163,9 @@ def build_parser() -> argparse.ArgumentParser:
                                "spring law the number that resolves the contact, 4 n*)")
     simulate.add_argument("--dt-output", type=_positive_float, default=1e-4, metavar="SECONDS",
                           help="output time step (s, default 1e-4)")
+    simulate.add_argument("--energy-balance", action="store_true",
+                          help="also store the work of F and the dissipation (costly with many "
+                               "modes)")
     simulate.add_argument("--fields", action="store_true",
                           help="also store the deflection fields y_i(x, t)")
     simulate.add_argument("-o", "--output", required=True, metavar="RUN.nc")

@@ -24,6 +24,15 @@ DAMPING_LAW = ("modal: each cantilever mode's whole coordinate eta_n = <y, Y_n> 
                "docs/model.md)")
 
 
+CONTACT_LAW_NOTES = {
+    "spring": "compliant tip contact R = -k g - c g' while positive, free coordinates kept in "
+              "both phases, static correction of the missed modes; converges in n_modes "
+              "(docs/model.md, Compliant contact)",
+    "tied": "the paper's tied tips with projections at the switches; results after the first "
+            "impact do not converge in n_modes (docs/model.md)",
+}
+
+
 @dataclasses.dataclass(frozen=True)
 class Parameter:
     """A model parameter: its CF ``units`` and ``long_name`` (as a coordinate or attribute)."""
@@ -237,6 +246,8 @@ def global_attributes(title: str, action: str, parameters: Mapping[str, Any],
         "source": f"impactbeams {__version__}",
         "references": REFERENCES,
         "damping_law": DAMPING_LAW,
+        **({"contact_law_note": CONTACT_LAW_NOTES[parameters["contact_law"]]}
+           if "contact_law" in parameters else {}),
         **run,
         **parameters,
     }

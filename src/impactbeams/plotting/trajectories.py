@@ -50,7 +50,8 @@ def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
     axes[2].set_ylabel("restitution e")
     energy0 = float(dataset.energy[0])
     axes[3].plot(t, (dataset.energy - energy0) * 1e9, lw=0.7, label="E(t) - E(0)")
-    axes[3].plot(t, dataset.work_of_force * 1e9, lw=0.7, label="work of F")
+    if "work_of_force" in dataset:
+        axes[3].plot(t, dataset.work_of_force * 1e9, lw=0.7, label="work of F")
     axes[3].set_ylabel("energy (nJ)")
     axes[3].set_xlabel("time t (s)")
     axes[3].legend(loc="upper left", fontsize="small")

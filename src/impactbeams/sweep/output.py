@@ -9,6 +9,7 @@ import xarray as xr
 
 from impactbeams.params import MATERIAL_KEYS
 from impactbeams.sweep.definition import FIRST_IMPACT, Sweep
+from impactbeams.sweep.plan import contact_resolution
 from impactbeams.variables import attributes, global_attributes, parameter_attributes
 
 _INTEGER_TYPES = {"dynamics_status": np.int8, "impact_count": np.int32}  # codes and counts
@@ -30,6 +31,10 @@ def map_dataset(sweep: Sweep, results: dict[str, np.ndarray]) -> xr.Dataset:
            "observables": " ".join(sweep.observables), "swept_parameters": " ".join(dims),
            "sweep_definition": json.dumps(sweep.definition(), sort_keys=True),
            "sweep_fingerprint": sweep.fingerprint()}
+    resolution = contact_resolution(sweep)
+    if resolution is not None:
+        run.update(contact_resolved=int(sweep.n_modes >= resolution),
+                   contact_resolution_modes=resolution)
     attrs = global_attributes("impactbeams parameter sweep", f"run {sweep.source}",
                               _fixed_parameters(sweep), **run)
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)

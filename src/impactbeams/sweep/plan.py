@@ -51,6 +51,17 @@ def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
     return tuple(k for k, a in enumerate(sweep.axes) if a.name not in per_cell)
 
 
+def contact_resolution(sweep: Sweep) -> int | None:
+    """n_modes that resolves a spring-law dynamics map's stiffest contact; None otherwise."""
+    from impactbeams.compliant import recommended_modes
+
+    if not sweep.needs_dynamics or sweep.base.contact_law != "spring":
+        return None
+    stiffest = max([sweep.base.contact_stiffness, *(axis.max for axis in sweep.axes
+                                                    if axis.name == "contact_stiffness")])
+    return recommended_modes(sweep.base.replace(contact_stiffness=stiffest))
+
+
 def _geometries(sweep: Sweep) -> Iterator[Params]:
     """The parameters of every distinct geometry of the grid, in flat geometry-index order."""
     axes = geometry_axes(sweep)

@@ -8,6 +8,7 @@ finishes, in any order: :func:`local_runner` in this process, or the Dask runner
 from __future__ import annotations
 
 import contextlib
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -18,7 +19,7 @@ from impactbeams.io import write_netcdf
 from impactbeams.params import require
 from impactbeams.sweep.definition import Sweep
 from impactbeams.sweep.output import map_dataset
-from impactbeams.sweep.plan import build_plan, compute_chunk
+from impactbeams.sweep.plan import build_plan, compute_chunk, contact_resolution
 from impactbeams.sweep.progress import Progress
 from impactbeams.sweep.store import ChunkStore, finished_output
 
@@ -78,6 +79,11 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
     ``runner`` computes the chunks (default: :func:`local_runner`; see
     :mod:`impactbeams.sweep.dask_runner` for a Dask cluster); chunks may finish in any order.
     """
+    resolution = contact_resolution(sweep)
+    if resolution is not None and sweep.n_modes < resolution:
+        warnings.warn(f"n_modes = {sweep.n_modes} does not resolve the spring contact of "
+                      f"{sweep.source}: use n_modes >= {resolution} (docs/model.md, "
+                      "Resolution)", RuntimeWarning, stacklevel=2)
     with numba_threads(threads):
         store = None
         if output is not None:

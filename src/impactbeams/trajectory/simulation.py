@@ -33,7 +33,8 @@ def _output_times(t_max: float, dt_output: float, times: np.ndarray | None) -> n
 def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output: float = 1e-4,
              fields: bool = False, *, times: np.ndarray | None = None, n_points: int = 41,
              max_events: int = 200_000, search_span: float | None = None,
-             episode_separation: float | None = None, energy: bool = True) -> xr.Dataset:
+             episode_separation: float | None = None,
+             energy_balance: bool = False) -> xr.Dataset:
     """Simulate the impacting beams from t = 0 to ``t_max`` (s); return an xarray Dataset.
 
     Args:
@@ -56,9 +57,10 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         episode_separation: contacts closer than this (s, free interval from release to the
             next onset) form one impact episode; default a quarter period of the slowest free
             mode (see :mod:`impactbeams.trajectory.episodes`).
-        energy: also compute the work of F, the damping dissipation and the episodes' energy
-            figures (quadratures at the fastest mode's time scale: with many modes they cost
-            far more than the dynamics; pass False when only motions and forces are needed).
+        energy_balance: also compute the work of F and the dissipation (``work_of_force``,
+            ``damping_dissipation``) and the episodes' dissipated energy and energetic
+            restitution: quadratures at the fastest mode's time scale, which with many modes
+            cost far more than the dynamics (the energy itself is always there).
 
     The output grid never influences the dynamics: events are located by the kernel on its
     own, and the outputs are evaluated from the exact segment states.
@@ -85,7 +87,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
                       f"{t_max!r} s: status {trajectory.status!r}", RuntimeWarning, stacklevel=2)
     if episode_separation is None:
         episode_separation = default_separation(packed)
-    dataset = _dataset(packed, trajectory, out_times, float(episode_separation), energy)
+    dataset = _dataset(packed, trajectory, out_times, float(episode_separation),
+                       energy_balance)
     if fields:
         x1, x2, y1, y2 = deflections(packed, trajectory, out_times, n_points)
         dataset = dataset.assign_coords(x1=("x1", x1, attributes("x1")),
