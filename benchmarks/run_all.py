@@ -4,9 +4,10 @@
     python benchmarks/run_all.py --quick    # small sizes, a couple of minutes
 
 Steps: ``bench_sweep.py`` (the Fig. 5a map: compile and run time, 1 and 2 threads), the
-work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics),
-the scaling series (``scaling.py``) and ``bench_distributed.py`` (Dask overhead, if
-installed). Results go to ``work_precision.json``, ``dynamics.json``, ``scaling.json`` (plus
+work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics;
+``spring_precision.py``: full dynamics of the spring law against solve_ivp), the scaling
+series (``scaling.py``) and ``bench_distributed.py`` (Dask overhead, if installed). Results go
+to ``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
 ``sweep.json``/``sweep.md`` from bench_sweep, ``distributed.json``/``.md``); the plots are
 drawn from those JSON files only; ``README.md`` holds the headline table.
 """
@@ -28,6 +29,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
 import scaling  # noqa: E402
+import spring_precision as spring  # noqa: E402
 import work_precision as wp  # noqa: E402
 
 SMALL_SWEEP = """t_max = 1.0
@@ -330,13 +332,17 @@ def main() -> None:
     first = wp.first_impact_study(wp.QUICK if args.quick else wp.FirstImpactConfig(), log)
     log("work-precision: full dynamics")
     dynamics = wp.dynamics_study(wp.QUICK_DYNAMICS if args.quick else wp.DynamicsConfig(), log)
+    log("work-precision: spring law")
+    springs = spring.spring_study(spring.QUICK_SPRING if args.quick else spring.SpringConfig(),
+                                  log)
     log("scaling")
     scale = scaling.scaling_study(scaling.QUICK if args.quick else scaling.ScalingConfig(), log)
     if not args.skip_distributed:
         log("bench_distributed.py")
         run_bench_distributed(args.quick)
     about = {"quick": args.quick, **machine()}
-    for name, data in (("work_precision", first), ("dynamics", dynamics), ("scaling", scale)):
+    for name, data in (("work_precision", first), ("dynamics", dynamics), ("scaling", scale),
+                       ("spring", springs)):
         (out / f"{name}.json").write_text(json.dumps({**data, "run": about}, indent=1) + "\n")
     report(out)
 
@@ -348,7 +354,12 @@ def report(out: Path) -> None:
     plot_first_impact(first, out / "work_precision_first_impact.png")
     plot_dynamics(dynamics, out / "work_precision_dynamics.png")
     plot_scaling(scale, out / "scaling.png")
-    (out / "README.md").write_text(headline(first, dynamics, scale, first["run"]["quick"]))
+    readme = headline(first, dynamics, scale, first["run"]["quick"])
+    if (out / "spring.json").exists():  # the spring law's section
+        springs = json.loads((out / "spring.json").read_text())
+        spring.plot_spring(springs, out / "work_precision_spring.png")
+        readme += "\n" + spring.markdown(springs)
+    (out / "README.md").write_text(readme)
     log(f"wrote {out}")
 
 
