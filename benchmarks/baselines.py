@@ -179,7 +179,7 @@ def solve_ivp_impacts(model, t_max: float, method: str, rtol: float,
     """Impact sequence of the undamped two-phase modal model by ``solve_ivp``.
 
     ``model`` is an :class:`impactbeams.model.ModalModel` (bases, overlaps, static shifts);
-    the switching rules are the plain ones of MODEL.md: onset where the gap
+    the switching rules are the plain ones of docs/model.md: onset where the gap
     ``g = clearance - c1 F + (tip1 - tip2) . q`` falls through 0, release where the contact force
     ``R = R_qs(t) + shear2 . r`` falls through 0, the state projected at every switch
     (``r = overlap q - R_qs shift_c``, ``q = overlap^T r + R_qs shift_f``, likewise for the

@@ -350,7 +350,8 @@ def _assert_clean(ds):
     assert ds.attrs["status"] == "complete"
     for name in ("tip_deflection_1", "tip_deflection_2", "gap", "contact_force", "energy",
                  "work_of_force"):
-        assert np.all(np.isfinite(ds[name].values)), name
+        if name in ds:  # the work of F only with energy_balance=True
+            assert np.all(np.isfinite(ds[name].values)), name
     assert np.all(np.isfinite(ds.impact_onset_time.values))
     # The only penetration is the release projection's truncation error: the free basis
     # represents the released contact field with a gap error (measured <= 3.7e-3 of the tip

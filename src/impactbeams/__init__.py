@@ -1,6 +1,6 @@
 """impactbeams: exact modal dynamics of two impacting cantilevers, and sweeps over it.
 
-The physics follows Dzyubak & Bhaskar (2017) as corrected in MODEL.md. Heavy modules load on
+The physics follows Dzyubak & Bhaskar (2017) as corrected in docs/model.md. Heavy modules load on
 first use, so ``import impactbeams`` stays fast and compiles nothing.
 """
 

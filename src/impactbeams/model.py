@@ -1,6 +1,6 @@
 """Everything the kernels need for one geometry, precomputed once as plain arrays.
 
-Quasi-static parts (MODEL.md) are all multiples of the unit tip-load shapes
+Quasi-static parts (docs/model.md) are all multiples of the unit tip-load shapes
 ``u_i(x) = (3 l_i x^2 - x^3) / (2 l_i^3)`` (unit tip deflection), with ``c_i = l_i^3 / (3 EI_i)``:
 
 * free phase: ``y_1s = -c_1 F(t) u_1``, ``y_2s = 0``;

@@ -47,7 +47,7 @@ from impactbeams.kernels.spring import spring_drives
 
 @kernel
 def rest_state(cell, unit1, unit2, drive):
-    """Initial modal state (q, q') at rest in the uplift shapes (MODEL.md).
+    """Initial modal state (q, q') at rest in the uplift shapes (docs/model.md).
 
     ``q = delta_1 <u_1, Y> + delta_2 <u_2, Y>``, ``q' = F0 Omega b``; ``unit1``, ``unit2``,
     ``drive`` are free-phase table rows, or one mode's entries of them.

@@ -32,6 +32,8 @@ def default_separation(packed: Packed) -> float:
 
 def episode_labels(onset: np.ndarray, release: np.ndarray, separation: float) -> np.ndarray:
     """Episode number of each contact (onset, release times in s; release NaN if open)."""
+    if onset.size == 0:
+        return np.zeros(0, dtype=int)
     free_interval = onset[1:] - release[:-1]
     return np.concatenate([[0], np.cumsum(~(free_interval < separation))]).astype(int)
 

@@ -1,7 +1,7 @@
 """Observables of modal states: tip deflections and velocities, gap, contact force, energies.
 
 Everything linear or quadratic in the modal state is evaluated from the exact segment states,
-with the tip-load formulas of MODEL.md: in both phases the fields are
+with the tip-load formulas of docs/model.md: in both phases the fields are
 ``y_i = -c_i Q_i(t) u_i + sum_n Y_in q_n`` with tip loads ``Q1 = F, Q2 = 0`` (free) or
 ``Q1 = F - R_qs, Q2 = R_qs`` (tied contact). The spring law keeps the free phase's coordinates
 and quasi-static part in contact, where the spring adds ``R = -k_e g - c_e g'`` and the energy
