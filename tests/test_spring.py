@@ -219,3 +219,12 @@ def test_tied_and_spring_are_labelled_in_the_dataset():
 def test_bad_contact_parameters_are_refused(changes, message):
     with pytest.raises(ParameterError, match=message):
         Params(**changes)
+
+
+@pytest.mark.parametrize("axis", [{"values": ["rigid"]}, {"values": ["tied", "tied"]},
+                                  {"min": 0, "max": 1, "num": 2}, {"values": []}])
+def test_bad_contact_law_axes_are_refused(axis):
+    from impactbeams.sweep import sweep_from_mapping
+
+    with pytest.raises(ParameterError, match="contact_law"):
+        sweep_from_mapping({"axes": {"contact_law": axis}, "observables": ["impact_count"]})

@@ -75,3 +75,25 @@ def test_dynamics_map_parallel_equals_serial(dynamics_map, law):
     serial = run_sweep(sweep, progress=False, parallel=False, chunk_cells=2)
     for name in DYNAMICS_OBSERVABLES:
         assert np.array_equal(serial[name], dynamics_map[name], equal_nan=True)
+
+
+def test_contact_law_and_stiffness_axes():
+    """Both laws and two stiffnesses in one map; each cell equals its own simulate() run."""
+    sweep = sweep_from_mapping({
+        "t_max": 0.05, "n_modes": 12, "observables": ["impact_count", "max_contact_force"],
+        "params": {"clearance": 1.1e-5, "omega": 50.0},
+        "axes": {"contact_law": {"values": ["tied", "spring"]},
+                 "contact_stiffness": {"min": 3e3, "max": 1e4, "num": 2}}})
+    ds = run_sweep(sweep)
+    assert list(ds.contact_law.values) == ["tied", "spring"]
+    for law in ("tied", "spring"):
+        for k in ds.contact_stiffness.values:
+            cell = ds.sel(contact_law=law, contact_stiffness=k)
+            run = simulate(Params(clearance=1.1e-5, contact_law=law, contact_stiffness=float(k)),
+                           0.05, n_modes=12)
+            assert int(cell.impact_count) == run.impact.size
+            assert float(cell.max_contact_force) == pytest.approx(
+                float(run.impact_peak_force.max()), rel=1e-14)
+    # the tied law ignores the stiffness: its two columns are the same
+    tied = ds.sel(contact_law="tied")
+    assert np.array_equal(tied.impact_count[0], tied.impact_count[1])

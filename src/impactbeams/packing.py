@@ -109,7 +109,7 @@ class Dynamics:
     ``model``: the tied law's modal model (contact modes, projections), else None; ``spring``:
     the spring law's contact phase, else None. ``bases``: the coordinates in which sampled
     states come back (the spring law's are the free ones in both phases). ``overlap``,
-    ``shifts`` (tied) and ``spring_arrays`` = (left, right, modes) (spring) are empty for the
+    ``shifts`` (tied) and ``spring_arrays`` = (left, right, modes) (spring) are zeros for the
     other law.
     """
 
@@ -125,9 +125,10 @@ class Dynamics:
     spring_arrays: tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
-def _no_spring() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    return (np.zeros((0, 0), complex), np.zeros((0, 0), complex),
-            np.zeros((len(layout.SPRING_MODE_ROWS), 0), complex))
+def _no_spring(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Zero spring arrays of the full size (geometries of both laws stack in one map)."""
+    return (np.zeros((m, 2 * m), complex), np.zeros((2 * m, m), complex),
+            np.zeros((len(layout.SPRING_MODE_ROWS), m), complex))
 
 
 def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
@@ -144,15 +145,16 @@ def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
         tables, shifts = phase_tables(model)
         return Dynamics(params, model.free, model, None, bases(model), tables,
                         geometry_row(params, model.free), model.overlap, shifts,
-                        _no_spring())
+                        _no_spring(model.free.omega.size))
     free = build_free_phase(params, n_modes)
     spring = spring_contact(free, params.tip_compliance, params.damping_ratio,
                             params.contact_stiffness, params.contact_damping)
     tables = np.array([phase_table(free_basis(free)), spring_table(spring)])
     modes = np.array([spring.eigenvalues, spring.phase])
+    m = free.omega.size  # zero tied-law arrays of the full size, as for the spring ones
     return Dynamics(params, free, None, spring, (free_basis(free), free_basis(free)), tables,
-                    geometry_row(params, free, spring), np.zeros((0, 0)),
-                    np.zeros((2, 0)), (spring.left, spring.right, modes))
+                    geometry_row(params, free, spring), np.zeros((m, m)), np.zeros((2, m)),
+                    (spring.left, spring.right, modes))
 
 
 def cell_rows(columns: Mapping[str, np.ndarray | float], size: int) -> np.ndarray:

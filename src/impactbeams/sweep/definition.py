@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -27,7 +28,7 @@ import numpy as np
 
 from impactbeams import __version__
 from impactbeams.kernels.layout import CELL_COLUMNS
-from impactbeams.params import ParameterError, Params, read_toml, require
+from impactbeams.params import CONTACT_LAWS, ParameterError, Params, read_toml, require
 from impactbeams.variables import PARAMETERS
 
 FIRST_IMPACT = "first_impact_time"
@@ -43,21 +44,37 @@ _MAX_MODES = 200
 
 @dataclasses.dataclass(frozen=True)
 class Axis:
-    """One swept parameter: ``num`` values from ``min`` to ``max`` on a linear or log scale."""
+    """One swept parameter: ``num`` values from ``min`` to ``max`` on a linear or log scale.
+
+    The contact law is swept by its names instead (``choices``, scale ``"categorical"``).
+    """
 
     name: str
     min: float
     max: float
     num: int
     scale: str
+    choices: tuple[str, ...] = ()
 
     @property
     def values(self) -> np.ndarray:
         """The axis values, in the parameter's unit."""
+        if self.choices:
+            return np.array(self.choices)
         if self.num == 1:
             return np.array([self.min])
         space = np.geomspace if self.scale == "log" else np.linspace
         return space(self.min, self.max, self.num)
+
+    def value(self, index: int) -> float | str:
+        """The parameter value at ``index`` along the axis (a float, or a law's name)."""
+        return self.choices[index] if self.choices else float(self.values[index])
+
+    def definition(self) -> dict[str, Any]:
+        """The axis as in the TOML file."""
+        if self.choices:
+            return {"values": list(self.choices)}
+        return {"min": self.min, "max": self.max, "num": self.num, "scale": self.scale}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -95,8 +112,7 @@ class Sweep:
         """The sweep as a plain dict in the TOML file's layout (canonical, for hashing)."""
         return {"t_max": self.t_max, "n_modes": self.n_modes,
                 "observables": list(self.observables), "params": dict(self.fixed),
-                "axes": {a.name: {"min": a.min, "max": a.max, "num": a.num, "scale": a.scale}
-                         for a in self.axes}}
+                "axes": {a.name: a.definition() for a in self.axes}}
 
     @property
     def base(self) -> Params:
@@ -148,10 +164,23 @@ def _number(value: Any, name: str) -> float:
     return float(value)
 
 
+def _law_axis(spec: Any, where: str) -> Axis:
+    """``[axes.contact_law]`` with ``values = ["tied", "spring"]`` (a subset, in any order)."""
+    require(where, spec, isinstance(spec, dict) and set(spec) == {"values"},
+            'must be a table with only values = [...], e.g. values = ["tied", "spring"]')
+    laws = spec["values"]
+    require(f"values in {where}", laws, isinstance(laws, list) and laws
+            and all(law in CONTACT_LAWS for law in laws) and len(set(laws)) == len(laws),
+            f"must be a list of distinct contact laws from {', '.join(CONTACT_LAWS)}")
+    return Axis("contact_law", math.nan, math.nan, len(laws), "categorical", tuple(laws))
+
+
 def _axis(name: str, spec: Any, source: str) -> Axis:
     where = f"[axes.{name}] of {source}"
     require(where, name, name in PARAMETERS,
             f"unknown parameter; allowed: {', '.join(PARAMETERS)}")
+    if name == "contact_law":
+        return _law_axis(spec, where)
     require(where, spec, isinstance(spec, dict), "must be a table with min, max, num, scale")
     for key in spec:
         require(f"{key!r} in {where}", key, key in _AXIS_KEYS,
@@ -178,9 +207,9 @@ def _check_grid(sweep: Sweep, base: Params) -> None:
     initial gap clearance + uplift1 - uplift2 > 0, on the whole grid.
     """
     for axis in sweep.axes:
-        for value in axis.values:
+        for index in range(axis.num):
             try:
-                base.replace(**{axis.name: float(value)})
+                base.replace(**{axis.name: axis.value(index)})
             except ParameterError as error:
                 raise ParameterError(f"axis {axis.name!r} of {sweep.source} reaches a "
                                      f"non-physical point: {error}") from None
@@ -188,7 +217,7 @@ def _check_grid(sweep: Sweep, base: Params) -> None:
     gap = grids["clearance"] + grids["uplift1"] - grids["uplift2"]
     if np.any(gap <= 0):
         bad = np.unravel_index(np.argmin(gap), gap.shape)
-        point = {a.name: float(a.values[i]) for a, i in zip(sweep.axes, bad, strict=True)}
+        point = {a.name: a.value(i) for a, i in zip(sweep.axes, bad, strict=True)}
         raise ParameterError(f"the grid of {sweep.source} has points where the initial gap "
                              f"clearance + uplift1 - uplift2 <= 0, e.g. at {point}")
 

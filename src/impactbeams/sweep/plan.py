@@ -46,7 +46,7 @@ def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
     damping ratio changes the modes too.
     """
     per_cell = set(CELL_PARAMETERS)
-    if sweep.needs_dynamics and sweep.base.contact_law == "spring":
+    if sweep.needs_dynamics and "spring" in _laws(sweep):
         per_cell.discard("damping_ratio")
     return tuple(k for k, a in enumerate(sweep.axes) if a.name not in per_cell)
 
@@ -55,18 +55,27 @@ def contact_resolution(sweep: Sweep) -> int | None:
     """n_modes that resolves a spring-law dynamics map's stiffest contact; None otherwise."""
     from impactbeams.compliant import recommended_modes
 
-    if not sweep.needs_dynamics or sweep.base.contact_law != "spring":
+    if not sweep.needs_dynamics or "spring" not in _laws(sweep):
         return None
-    stiffest = max([sweep.base.contact_stiffness, *(axis.max for axis in sweep.axes
-                                                    if axis.name == "contact_stiffness")])
-    return recommended_modes(sweep.base.replace(contact_stiffness=stiffest))
+    swept = [axis.max for axis in sweep.axes if axis.name == "contact_stiffness"]
+    stiffest = swept[0] if swept else sweep.base.contact_stiffness
+    return recommended_modes(sweep.base.replace(contact_law="spring",
+                                                contact_stiffness=stiffest))
+
+
+def _laws(sweep: Sweep) -> set[str]:
+    """The contact laws a sweep runs."""
+    for axis in sweep.axes:
+        if axis.name == "contact_law":
+            return set(axis.choices)
+    return {sweep.base.contact_law}
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:
     """The parameters of every distinct geometry of the grid, in flat geometry-index order."""
     axes = geometry_axes(sweep)
     for combo in itertools.product(*(range(sweep.axes[k].num) for k in axes)):
-        changes = {sweep.axes[k].name: float(sweep.axes[k].values[i])
+        changes = {sweep.axes[k].name: sweep.axes[k].value(i)
                    for k, i in zip(axes, combo, strict=True)}
         yield sweep.base.replace(**changes) if changes else sweep.base
 
