@@ -11,6 +11,7 @@ import argparse
 import contextlib
 import json
 import sys
+import warnings
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -49,19 +50,37 @@ def params_from_args(args: argparse.Namespace) -> Params:
     return params.replace(**overrides) if overrides else params
 
 
+def _contact_frequencies(p: Params, n: int) -> list[float]:
+    """The lowest ``n`` contact-phase frequencies (rad/s) of the parameters' contact law.
+
+    Tied: the roots of eq. (9); spring: the undamped contact oscillators at the n_modes that
+    resolve the contact (at least n).
+    """
+    from impactbeams.compliant import recommended_modes, spring_contact
+    from impactbeams.model import build_free_phase
+    from impactbeams.modes import contact_frequencies
+
+    if p.contact_law == "tied":
+        return contact_frequencies(p, n).tolist()
+    free = build_free_phase(p, max(n, recommended_modes(p)))
+    spring = spring_contact(free, p.tip_compliance, 0.0, p.contact_stiffness)
+    return spring.frequencies[:n].tolist()
+
+
 def _modes(args: argparse.Namespace) -> None:
-    from impactbeams.modes import contact_frequencies, free_modes
+    from impactbeams.modes import free_modes
 
     p = params_from_args(args)
     result = {
         "free": {"beam1": free_modes(p.EI1, p.rhoA1, p.l1, args.n).omega.tolist(),
                  "beam2": free_modes(p.EI2, p.rhoA2, p.l2, args.n).omega.tolist()},
-        "contact": contact_frequencies(p, args.n).tolist(),
+        "contact_law": p.contact_law,
+        "contact": _contact_frequencies(p, args.n),
     }
     if args.json:
         print(json.dumps(result))
         return
-    print("natural frequencies (rad/s)")
+    print(f"natural frequencies (rad/s); contact phase of the {p.contact_law} law")
     print(f"{'mode':>4} {'beam 1 free':>16} {'beam 2 free':>16} {'contact':>16}")
     for i in range(args.n):
         row = (result["free"]["beam1"][i], result["free"]["beam2"][i], result["contact"][i])
@@ -197,12 +216,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message: Warning | str, category: type[Warning], *_: object,
+                  **__: object) -> None:
+    """Warnings as one line, like the errors."""
+    print(f"impactbeams: warning: {message}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``impactbeams`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        args.handler(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            args.handler(args)
     except ParameterError as error:
         print(f"impactbeams: error: {error}", file=sys.stderr)
         return 2

@@ -225,9 +225,17 @@ def spring_contact(free: FreePhase, tip_compliance: tuple[float, float], damping
                          residual1, residual2, eigenvalues, right, left, phase, magnitude)
 
 
-def recommended_modes(params: Params) -> int:
-    """n_modes per beam that resolves the spring contact of ``params``: 4 n*, at least 5."""
+def required_modes(params: Params) -> int:
+    """n_modes per beam that resolves the spring contact of ``params``: 4 n*, at least 5.
+
+    May exceed the package's limit of ``MAX_MODES`` for a very stiff contact.
+    """
     from impactbeams.model import build_free_phase
 
     free = build_free_phase(params, MAX_MODES)
-    return int(min(MAX_MODES, max(5, 4 * resolution_modes(free, params.contact_stiffness))))
+    return int(max(5, 4 * resolution_modes(free, params.contact_stiffness)))
+
+
+def recommended_modes(params: Params) -> int:
+    """The n_modes to use: ``required_modes``, within the limit of ``MAX_MODES``."""
+    return min(MAX_MODES, required_modes(params))

@@ -131,7 +131,9 @@ VARIABLES.update({
         ("time",), "1", "contact flag", "1 in the contact phase, 0 in the free phase"),
     "energy": Variable(
         ("time",), "J", "total mechanical energy",
-        "kinetic plus strain energy of the deflection fields of both beams"),
+        "kinetic plus strain energy of the deflection fields of both beams; with the spring "
+        "law also the spring's k_e g^2 / 2 while the tips overlap and -r_1 F R "
+        "(docs/model.md, Compliant contact)"),
     "kinetic_energy": Variable(
         ("time",), "J", "kinetic energy", "kinetic energy of the deflection fields"),
     "unresolved_kinetic_energy": Variable(
@@ -173,7 +175,8 @@ VARIABLES.update({
         "dg/dt just after the release, in the free basis (the tips move together just before)"),
     "impact_energy_loss": Variable(
         ("impact",), "J", "energy lost at onset",
-        "total mechanical energy just before minus just after the onset projection"),
+        "total mechanical energy just before minus just after the onset (the tied law's "
+        "projection loss; 0 with the spring law, whose switches keep the state)"),
     "impact_kinetic_energy_loss": Variable(
         ("impact",), "J", "kinetic energy lost at onset",
         "kinetic energy just before minus just after the onset projection"),

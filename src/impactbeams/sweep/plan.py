@@ -53,14 +53,13 @@ def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
 
 def contact_resolution(sweep: Sweep) -> int | None:
     """n_modes that resolves a spring-law dynamics map's stiffest contact; None otherwise."""
-    from impactbeams.compliant import recommended_modes
+    from impactbeams.compliant import required_modes
 
     if not sweep.needs_dynamics or "spring" not in _laws(sweep):
         return None
     swept = [axis.max for axis in sweep.axes if axis.name == "contact_stiffness"]
     stiffest = swept[0] if swept else sweep.base.contact_stiffness
-    return recommended_modes(sweep.base.replace(contact_law="spring",
-                                                contact_stiffness=stiffest))
+    return required_modes(sweep.base.replace(contact_law="spring", contact_stiffness=stiffest))
 
 
 def _laws(sweep: Sweep) -> set[str]:

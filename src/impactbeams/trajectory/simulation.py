@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from impactbeams.compliant import recommended_modes
+from impactbeams.compliant import MAX_MODES, required_modes
 from impactbeams.packing import Packed, pack_run
 from impactbeams.params import Params
 from impactbeams.trajectory.episodes import default_separation, episode_table
@@ -73,10 +73,10 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     if not span > 0:
         raise ValueError(f"search_span = {search_span!r} is not allowed: must be > 0 (s)")
     out_times = _output_times(float(t_max), dt_output, times)
-    resolution = recommended_modes(params) if params.contact_law == "spring" else 5
+    resolution = required_modes(params) if params.contact_law == "spring" else 5
     if n_modes is None:
-        n_modes = resolution
-    elif n_modes < resolution and params.contact_law == "spring":
+        n_modes = min(resolution, MAX_MODES)
+    if n_modes < resolution and params.contact_law == "spring":
         warnings.warn(f"n_modes = {n_modes} does not resolve the spring contact of stiffness "
                       f"{params.contact_stiffness:g} N/m: use n_modes >= {resolution} "
                       "(docs/model.md, Resolution)", RuntimeWarning, stacklevel=2)
