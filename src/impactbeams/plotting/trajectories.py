@@ -17,14 +17,31 @@ _MICRO = 1e6  # m -> um
 _MILLI = 1e3  # N -> mN, s -> ms
 
 
-def _title(dataset: xr.Dataset) -> str:
+def _case(dataset: xr.Dataset) -> str:
     a = dataset.attrs
     return (f"F0 = {a.get('force_amplitude', np.nan):g} N, Omega = {a.get('omega', np.nan):g} "
-            f"rad/s, Delta = {a.get('clearance', np.nan):g} m, {a.get('n_modes', '?')} modes")
+            f"rad/s, Delta = {a.get('clearance', np.nan):g} m")
 
 
-def _save(figure: Figure, path: str | Path) -> None:
-    figure.savefig(path, dpi=150)
+def _law(dataset: xr.Dataset) -> str:
+    """Contact law, its stiffness and the number of modes, e.g. for a column title."""
+    a = dataset.attrs
+    modes = f"{a.get('n_modes', '?')} modes"
+    if a.get("contact_law") != "spring":
+        return f"tied law, {modes}" if "contact_law" in a else modes
+    text = f"spring law, k = {a.get('contact_stiffness', np.nan):.3g} N/m"
+    if a.get("contact_damping", 0.0):
+        text += f", c = {a['contact_damping']:g} N s/m"
+    resolved = a.get("contact_resolved", 1)
+    return f"{text}, {modes}" + ("" if resolved else " (unresolved)")
+
+
+def _title(dataset: xr.Dataset) -> str:
+    return f"{_case(dataset)}\n{_law(dataset)}"
+
+
+def _save(figure: Figure, path: str | Path, dpi: float = 150) -> None:
+    figure.savefig(path, dpi=dpi)
 
 
 def plot_tips(axis: Axes, dataset: xr.Dataset) -> None:
@@ -76,23 +93,82 @@ def plot_surfaces(dataset: xr.Dataset, path: str | Path) -> None:
     _save(figure, path)
 
 
+def plot_surfaces_laws(datasets: Sequence[xr.Dataset], path: str | Path,
+                       dpi: float = 90) -> None:
+    """Deflection surfaces of several runs (rows) for both beams (columns); need the fields."""
+    figure = Figure(figsize=(10, 4.2 * len(datasets)), layout="constrained")
+    for row, dataset in enumerate(datasets):
+        for i, beam in enumerate(("1", "2")):
+            axis = figure.add_subplot(len(datasets), 2, 2 * row + i + 1, projection="3d")
+            field = dataset["deflection_" + beam]
+            x, t = np.meshgrid(dataset["x" + beam].values, dataset.time.values)
+            axis.plot_surface(x, t, field.values * _MICRO, cmap="viridis", linewidth=0,
+                              rstride=max(1, t.shape[0] // 100), cstride=1)
+            axis.set_xlabel(f"x{beam} (m)")
+            axis.set_ylabel("t (s)")
+            axis.set_zlabel(f"y{beam} (um)")
+            axis.set_title(f"({'abcdefgh'[2 * row + i]}) beam {beam}; {_law(dataset)}",
+                           fontsize="medium")
+    figure.suptitle(_case(datasets[0]))
+    figure.savefig(path, dpi=dpi)
+
+
 def plot_paper_fig3(dataset: xr.Dataset, path: str | Path) -> None:
     """Tips (a), coefficient of restitution (b) and impact force (c), as the paper's Fig. 3."""
     figure = Figure(figsize=(8, 8), layout="constrained")
     axes = figure.subplots(3, 1)
+    _fig3_panels(axes, dataset)
+    figure.suptitle(_title(dataset))
+    _save(figure, path)
+
+
+def _fig3_panels(axes: Sequence[Axes], dataset: xr.Dataset, episodes: bool = False) -> None:
+    """The three panels of Fig. 3; ``episodes`` adds the episodes' restitution and peaks."""
     plot_tips(axes[0], dataset)
     axes[0].set_xlabel("t (s)")
     released = np.isfinite(dataset.restitution_coefficient.values)
     axes[1].plot(dataset.impact_onset_time.values[released],
-                 dataset.restitution_coefficient.values[released], ".", ms=4, color="C2")
+                 dataset.restitution_coefficient.values[released], ".", ms=4 if not episodes
+                 else 2, color="C2", label="per contact")
     axes[1].set_ylabel("restitution e")
     axes[1].set_xlabel("impact onset time (s)")
     axes[2].plot(dataset.time, dataset.contact_force * _MILLI, lw=0.7, color="C3")
     axes[2].set_ylabel("impact force R (mN)")
     axes[2].set_xlabel("t (s)")
+    if episodes and "episode_restitution" in dataset:
+        axes[1].plot(dataset.episode_onset_time, dataset.episode_restitution, "D", ms=5,
+                     color="C1", mec="k", mew=0.5, label="per episode")
+        values = np.concatenate([dataset.restitution_coefficient.values,
+                                 dataset.episode_restitution.values])
+        values = values[np.isfinite(values)]
+        if values.size and np.all(values > 0):  # spans decades: log scale
+            axes[1].set_yscale("log")
+        else:
+            axes[1].axhline(0.0, color="0.6", lw=0.5)
+        axes[1].legend(loc="best", fontsize="small")
+        axes[2].plot(dataset.impact_onset_time, dataset.impact_peak_force * _MILLI, ".",
+                     ms=2, color="k", label="peak of each contact")
+        axes[2].legend(loc="upper right", fontsize="small")
     for axis, label in zip(axes, "abc", strict=True):
         axis.set_title(f"({label})", loc="left")
-    figure.suptitle(_title(dataset))
+
+
+def plot_paper_fig3_laws(datasets: Sequence[xr.Dataset], path: str | Path) -> None:
+    """Fig. 3 of several runs (e.g. tied and spring law) side by side, one column each.
+
+    Panel (b) shows the restitution of every contact and of every episode, panel (c) the
+    contact force on the output grid and the peak of every contact (short contacts fall
+    between output samples).
+    """
+    figure = Figure(figsize=(6 * len(datasets), 8.5), layout="constrained")
+    axes = figure.subplots(3, len(datasets), squeeze=False)
+    for row in (0, 2):  # tips and forces on common scales; restitution may differ by decades
+        for axis in axes[row, 1:]:
+            axis.sharey(axes[row, 0])
+    for column, dataset in zip(axes.T, datasets, strict=True):
+        _fig3_panels(column, dataset, episodes=True)
+        column[0].set_title(f"(a) {_law(dataset)}", loc="left")
+    figure.suptitle(_case(datasets[0]))
     _save(figure, path)
 
 
@@ -101,18 +177,44 @@ def plot_divergence(datasets: Sequence[xr.Dataset], labels: Sequence[str],
     """Tips of nearby trajectories on common axes (the paper's Fig. 4), and their distance."""
     figure = Figure(figsize=(8, 8), layout="constrained")
     axes = figure.subplots(3, 1, sharex=True)
-    for dataset, label in zip(datasets, labels, strict=True):
+    _divergence_panels(axes, datasets, labels)
+    figure.suptitle(_title(datasets[0]))
+    _save(figure, path)
+
+
+def plot_divergence_laws(groups: Sequence[Sequence[xr.Dataset]], labels: Sequence[str],
+                         path: str | Path) -> None:
+    """Fig. 4 for several laws side by side: ``groups[j]`` are the nearby runs of column j.
+
+    Tips of the first two runs of each group; distances of every other run to the first.
+    """
+    figure = Figure(figsize=(6 * len(groups), 8), layout="constrained")
+    axes = figure.subplots(3, len(groups), sharex=True, sharey="row", squeeze=False)
+    for column, datasets in zip(axes.T, groups, strict=True):
+        _divergence_panels(column, datasets, labels)
+        column[0].set_title(_law(datasets[0]))
+    figure.suptitle(_case(groups[0][0]))
+    _save(figure, path, dpi=110)
+
+
+def _divergence_panels(axes: Sequence[Axes], datasets: Sequence[xr.Dataset],
+                       labels: Sequence[str]) -> None:
+    """Tips of the first two runs; distance of every other run's tip 1 to the first's."""
+    for dataset, label in zip(datasets[:2], labels[:2], strict=True):
         axes[0].plot(dataset.time, dataset.tip_deflection_1 * _MICRO, lw=0.6, label=label)
         axes[1].plot(dataset.time, dataset.tip_deflection_2 * _MICRO, lw=0.6, label=label)
-    distance = np.abs(datasets[0].tip_deflection_1.values - datasets[1].tip_deflection_1.values)
-    axes[2].semilogy(datasets[0].time, np.maximum(distance * _MICRO, 1e-12), lw=0.6)
+    for j, (dataset, label) in enumerate(zip(datasets[1:], labels[1:], strict=True)):
+        distance = np.abs(datasets[0].tip_deflection_1.values - dataset.tip_deflection_1.values)
+        axes[2].semilogy(datasets[0].time, np.maximum(distance * _MICRO, 1e-12), lw=0.4 if
+                         len(datasets) > 2 else 0.6, color=f"C{j + 1}" if len(datasets) > 2
+                         else "C0", label=f"{label} vs {labels[0]}")
     axes[0].set_ylabel("(a) y1(l1) (um)")
     axes[1].set_ylabel("(b) y2(l2) - Delta (um)")
     axes[2].set_ylabel("|difference of y1(l1)| (um)")
     axes[2].set_xlabel("t (s)")
     axes[0].legend(fontsize="small", loc="upper right")
-    figure.suptitle(_title(datasets[0]))
-    _save(figure, path)
+    if len(datasets) > 2:
+        axes[2].legend(fontsize="small", loc="lower right")
 
 
 def plot_phase_portrait(dense: xr.Dataset, section: xr.Dataset, path: str | Path) -> None:
@@ -121,7 +223,26 @@ def plot_phase_portrait(dense: xr.Dataset, section: xr.Dataset, path: str | Path
     ``section`` must be sampled once per forcing period (its ``time`` a multiple of 2 pi/Omega).
     """
     figure = Figure(figsize=(11, 4.8), layout="constrained")
-    axes = figure.subplots(1, 2)
+    _phase_panels(figure.subplots(1, 2), dense, section)
+    figure.suptitle(_title(section))
+    _save(figure, path)
+
+
+def plot_phase_portrait_laws(denses: Sequence[xr.Dataset], sections: Sequence[xr.Dataset],
+                             path: str | Path) -> None:
+    """Phase planes and Poincare sections of several runs, one row each (same axes)."""
+    figure = Figure(figsize=(11, 4.3 * len(denses)), layout="constrained")
+    axes = figure.subplots(len(denses), 2, sharex="col", sharey="col", squeeze=False)
+    for row, dense, section in zip(axes, denses, sections, strict=True):
+        _phase_panels(row, dense, section)
+        for axis in row:
+            axis.set_title(f"{_law(section)}\n{axis.get_title()}", fontsize="medium")
+            axis.tick_params(labelbottom=True)
+    figure.suptitle(_case(sections[0]))
+    _save(figure, path)
+
+
+def _phase_panels(axes: Sequence[Axes], dense: xr.Dataset, section: xr.Dataset) -> None:
     axes[0].plot(dense.tip_deflection_1 * _MICRO, dense.tip_velocity_1 * _MILLI, lw=0.3)
     axes[0].set_title(f"phase plane, {float(dense.time[0]):g} s <= t <= "
                       f"{float(dense.time[-1]):g} s")
@@ -131,5 +252,3 @@ def plot_phase_portrait(dense: xr.Dataset, section: xr.Dataset, path: str | Path
     for axis in axes:
         axis.set_xlabel("y1(l1) (um)")
         axis.set_ylabel("dy1(l1)/dt (mm/s)")
-    figure.suptitle(_title(section))
-    _save(figure, path)
