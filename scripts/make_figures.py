@@ -40,12 +40,12 @@ def _runs() -> dict[str, dict]:
     period = 2 * math.pi / PAPER.omega
     runs = {}
     for law, (params, n_modes) in LAWS.items():
-        common = dict(n_modes=n_modes, energy=False)
+        common = dict(n_modes=n_modes, energy_balance=False)
         runs |= {
             f"fig2_{law}": dict(params=params.replace(force_amplitude=5e-4, omega=40.0),
                                 t_max=0.07, dt_output=1e-4, fields=True, **common),
             f"fig3_{law}": dict(params=params, t_max=0.6, dt_output=2e-5, n_modes=n_modes,
-                                energy=law == "spring"),  # fig3_run draws the spring energy
+                                energy_balance=law == "spring"),  # fig3_run: work of F
             f"fig4_a_{law}": dict(params=params, t_max=3.0, dt_output=1e-4, **common),
             f"fig4_b_{law}": dict(params=params.replace(uplift1=1e-6), t_max=3.0,
                                   dt_output=1e-4, **common),

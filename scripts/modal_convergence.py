@@ -5,7 +5,7 @@
 The paper's Fig. 3 case (F0 = 1e-3 N, Omega = 50 rad/s, Delta = 1.1e-5 m) over 0.1 s (and the
 episode and contact counts over 0.6 s), with 5, 10, 20, 40 and 80 free modes per beam, for the
 spring law at k = 1e4 N/m and at the default (Hertz) k, and for the paper's tied law. Every run
-uses ``energy=False``; about a minute in all on one core.
+uses ``energy_balance=False``; about a minute in all on one core.
 """
 
 from __future__ import annotations
@@ -71,7 +71,7 @@ def _run(params: Params, n_modes: int, t_max: float, **options) -> tuple[xr.Data
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # unresolved spring contacts
-        dataset = simulate(params, t_max, n_modes=n_modes, dt_output=1e-3, energy=False,
+        dataset = simulate(params, t_max, n_modes=n_modes, dt_output=1e-3, energy_balance=False,
                            **options)
     if dataset.attrs["status"] != "complete":
         raise RuntimeError(f"{params.contact_law} n_modes={n_modes}: {dataset.attrs['status']}")
@@ -235,7 +235,7 @@ only that one. The episode and contact counts over the paper's {T_LONG:g} s are 
 Sensitivity check: the same runs with beam 1's tip lifted by uplift1 = {PERTURBATION:g} m at
 t = 0 (a 1e-7 relative change of the clearance). "Leading contacts as with ..." is the number
 of contacts, from the first, whose onset times agree to {MATCH:g} s with the 80-mode run or
-with the perturbed run, over {T_LONG:g} s. Run times are wall-clock with `energy=False`, an
+with the perturbed run, over {T_LONG:g} s. Run times are wall-clock with `energy_balance=False`, an
 output grid of 1 ms and compiled kernels, on a shared 2-core machine.
 
 ## Tables
