@@ -215,13 +215,13 @@ l2 = 0.12 m, default steel strips, no damping) over 0 <= t <= {T_MAX:g} s, with 
 beam (N = {", ".join(map(str, MODES))}), for two contact laws:
 
 * the spring law (the default), no dashpot, at k = 1e4 N/m (the stiffness of the
-  [model page's error table](model.md#compliant-contact-spring-law)) and at the default
+  [model page's error table](model.md#compliant-contact-spring-law-the-default)) and at the default
   k = {k_hertz:.4g} N/m (Hertz, steel sphere of radius 1 mm on steel, linearised at 1 mN);
   the free coordinates are kept in both phases;
 * the paper's tied law, with 2N contact modes.
 
 The resolution rule (`impactbeams.compliant.recommended_modes`: 4 n*, n* the number of modes
-whose modal tip stiffness is below k; [model page](model.md#compliant-contact-spring-law))
+whose modal tip stiffness is below k; [model page](model.md#compliant-contact-spring-law-the-default))
 asks for **N = {resolved[spring_low]} at k = 1e4 N/m** and **N = {resolved[spring_hertz]} at
 k = {k_hertz:.3g} N/m**; columns marked (*) are below it (`simulate` warns). The tied law has no
 such N: it has no limit in N.
@@ -316,7 +316,7 @@ show that its differences do not shrink.
   ({row(spring_hertz, "first episode: impulse (uN s)", 1e6)} uN s) agrees to
   {relative(spring_hertz, "first episode: impulse (uN s)", 40):.0e} between 40 and 80 modes
   (k = 1e4 N/m: {relative(spring_low, "first episode: impulse (uN s)", 40):.0e}), as the
-  [model page](model.md#compliant-contact-spring-law) says of episodes.
+  [model page](model.md#compliant-contact-spring-law-the-default) says of episodes.
 * **Beyond the first episode single trajectories are sensitive** (see the nearby
   trajectories of Fig. 4, `scripts/make_figures.py`). Over {T_LONG:g} s the spring law's
   counts change with N in the resolved range (k = 1e4 N/m: episodes
