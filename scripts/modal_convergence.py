@@ -221,7 +221,8 @@ beam (N = {", ".join(map(str, MODES))}), for two contact laws:
 * the paper's tied law, with 2N contact modes.
 
 The resolution rule (`impactbeams.compliant.recommended_modes`: 4 n*, n* the number of modes
-whose modal tip stiffness is below k; [model page](model.md#compliant-contact-spring-law-the-default))
+whose modal tip stiffness is below k;
+[model page](model.md#compliant-contact-spring-law-the-default))
 asks for **N = {resolved[spring_low]} at k = 1e4 N/m** and **N = {resolved[spring_hertz]} at
 k = {k_hertz:.3g} N/m**; columns marked (*) are below it (`simulate` warns). The tied law has no
 such N: it has no limit in N.
