@@ -128,10 +128,16 @@ def _plot(args: argparse.Namespace) -> None:
 
     from impactbeams.plotting import plot_dataset
 
-    if not Path(args.dataset).exists():
-        raise ParameterError(f"file {args.dataset!r} does not exist")
-    with xr.open_dataset(args.dataset) as dataset:
-        plot_dataset(dataset.load(), args.output)
+    if not Path(args.dataset).is_file():
+        problem = "is a folder" if Path(args.dataset).is_dir() else "does not exist"
+        raise ParameterError(f"file {args.dataset!r} {problem}: give a netCDF file")
+    try:
+        dataset = xr.open_dataset(args.dataset).load()
+    except (OSError, ValueError) as error:
+        raise ParameterError(f"{args.dataset!r} is not a netCDF file of impactbeams: "
+                             f"{str(error).splitlines()[0]}") from None
+    with dataset:
+        plot_dataset(dataset, args.output)
     print(f"wrote {args.output}", file=sys.stderr)
 
 

@@ -76,18 +76,23 @@ def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
     _save(figure, path)
 
 
+def _draw_surface(axis: Axes, dataset: xr.Dataset, beam: str, rows: int) -> None:
+    """Beam ``beam``'s deflection surface, at most about ``rows`` time rows drawn."""
+    field = dataset["deflection_" + beam]
+    x, t = np.meshgrid(dataset["x" + beam].values, dataset.time.values)
+    axis.plot_surface(x, t, field.values * _MICRO, cmap="viridis", linewidth=0,
+                      rstride=max(1, t.shape[0] // rows), cstride=1)
+    axis.set_xlabel(f"x{beam} (m)")
+    axis.set_ylabel("t (s)")
+    axis.set_zlabel(f"y{beam} (um)")
+
+
 def plot_surfaces(dataset: xr.Dataset, path: str | Path) -> None:
     """Deflection surfaces y_i(x_i, t) of both beams (the paper's Fig. 2); needs the fields."""
     figure = Figure(figsize=(11, 4.5), layout="constrained")
     for i, beam in enumerate(("1", "2")):
         axis = figure.add_subplot(1, 2, i + 1, projection="3d")
-        field = dataset["deflection_" + beam]
-        x, t = np.meshgrid(dataset["x" + beam].values, dataset.time.values)
-        axis.plot_surface(x, t, field.values * _MICRO, cmap="viridis", linewidth=0,
-                          rstride=max(1, t.shape[0] // 200), cstride=1)
-        axis.set_xlabel(f"x{beam} (m)")
-        axis.set_ylabel("t (s)")
-        axis.set_zlabel(f"y{beam} (um)")
+        _draw_surface(axis, dataset, beam, 200)
         axis.set_title(f"({'ab'[i]}) beam {beam}")
     figure.suptitle(_title(dataset))
     _save(figure, path)
@@ -100,13 +105,7 @@ def plot_surfaces_laws(datasets: Sequence[xr.Dataset], path: str | Path,
     for row, dataset in enumerate(datasets):
         for i, beam in enumerate(("1", "2")):
             axis = figure.add_subplot(len(datasets), 2, 2 * row + i + 1, projection="3d")
-            field = dataset["deflection_" + beam]
-            x, t = np.meshgrid(dataset["x" + beam].values, dataset.time.values)
-            axis.plot_surface(x, t, field.values * _MICRO, cmap="viridis", linewidth=0,
-                              rstride=max(1, t.shape[0] // 100), cstride=1)
-            axis.set_xlabel(f"x{beam} (m)")
-            axis.set_ylabel("t (s)")
-            axis.set_zlabel(f"y{beam} (um)")
+            _draw_surface(axis, dataset, beam, 100)
             axis.set_title(f"({'abcdefgh'[2 * row + i]}) beam {beam}; {_law(dataset)}",
                            fontsize="medium")
     figure.suptitle(_case(datasets[0]))
