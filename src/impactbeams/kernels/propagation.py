@@ -61,7 +61,8 @@ def advance(q0, v0, t0, h, omega, zeta, force, forcing_frequency, q, v):
     step_minus = step_plus.conjugate()
     for j in range(omega.size):
         w = omega[j]
-        sigma, wd = zeta[j] * w, w * math.sqrt(1.0 - zeta[j] * zeta[j])
+        z = zeta[j]
+        sigma, wd = z * w, w if z == 0.0 else w * math.sqrt(1.0 - z * z)
         decay = math.exp(-sigma * h)
         c, s = math.cos(wd * h), math.sin(wd * h)
         qj, vj = q0[j], v0[j]
