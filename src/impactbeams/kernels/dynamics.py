@@ -235,7 +235,22 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
 @kernel
 def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings, q0, v0,
                seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
-    """Integrate from the free-phase state (q0, v0) at t = 0 to t_max, event by event.
+    """Integrate from the free-phase state (q0, v0) at t = 0 to t_max: ``run_events_from``."""
+    return run_events_from(tables, forces, phase_scalars, overlap, shifts, spring, drives,
+                           settings, 0.0, q0, v0, seg_time, seg_phase, seg_sustained, seg_q,
+                           seg_v, end_q, end_v)
+
+
+@kernel
+def run_events_from(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings,
+                    t0, q0, v0, seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
+    """Integrate from the free-phase state (q0, v0) at time t0 (s) to t_max, event by event.
+
+    t0 is 0, or the start of a recorded free segment that follows a contact of positive
+    length: there the bookkeeping below (instantaneous impacts, accumulations, conflicts,
+    early releases) is at its initial state, so a run resumed from such a segment's
+    ``seg_time, seg_q, seg_v`` records the same segments, bit for bit, as the uninterrupted
+    run (how long runs are computed in windows of bounded memory).
 
     Segment k starts at ``seg_time[k]`` in phase ``seg_phase[k]`` with state
     ``seg_q[k], seg_v[k]`` and ends (next event, or t_max for the last one) in state
@@ -263,7 +278,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
     n_coords = q0.size
     q, v = q0.copy(), v0.copy()
     q_end, v_end = np.empty(n_coords), np.empty(n_coords)
-    phase, t, zero_run, instant_release = FREE, 0.0, 0, -math.inf
+    phase, t, zero_run, instant_release = FREE, t0, 0, -math.inf
     sustained = conflict = False
     spring_law = settings.contact_law == SPRING
     opened = False  # the previous segment ended where an early-released gap opened
