@@ -18,6 +18,7 @@ except PackageNotFoundError:  # running from a source tree without installation
 _LAZY = {
     "build_model": "impactbeams.model",
     "build_free_phase": "impactbeams.model",
+    "LongTime": "impactbeams.longtime",
     "load_sweep": "impactbeams.sweep",
     "run_sweep": "impactbeams.sweep",
     "simulate": "impactbeams.trajectory",

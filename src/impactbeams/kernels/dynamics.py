@@ -52,6 +52,12 @@ _EPS = np.finfo(np.float64).eps
 
 
 @kernel
+def instantaneous(t_start, t_event):
+    """Whether a phase that starts at t_start (s) and ends at t_event (s) has zero length."""
+    return t_event <= t_start + 4.0 * _EPS * max(t_start, 1.0)
+
+
+@kernel
 def quasi_static_force(t, settings):
     """R_qs(t) = (c1 F(t) - clearance) / (c1 + c2) (N) and its rate R_qs'(t) (N/s)."""
     c1, c2 = settings.c1, settings.c2
@@ -310,7 +316,7 @@ def run_events_from(tables, forces, phase_scalars, overlap, shifts, spring, driv
             v[:] = v_end
             t = t_event
             continue
-        instant = t_event <= t + 4.0 * _EPS * max(t, 1.0)
+        instant = instantaneous(t, t_event)
         zero_run = zero_run + 1 if instant else 0
         if zero_run > ZENO_LIMIT:
             return k + 1, STUCK, t_stop

@@ -5,6 +5,10 @@ A sweep file (names as in :mod:`impactbeams.params`)::
     t_max = 1.0                          # s, horizon of every cell
     n_modes = 5                          # free modes per beam (contact phase: 2 n_modes)
     observables = ["first_impact_time"]  # default
+    transient_periods = 500              # long-time observables only (module longtime)
+    sampled_periods = 200
+    period_tolerance = 1e-6
+    max_period = 16
     [params]                             # fixed parameters; the rest take the defaults
     clearance = 1.1e-5
     [axes.omega]                         # one table per swept parameter, in order
@@ -28,16 +32,23 @@ import numpy as np
 
 from impactbeams import __version__
 from impactbeams.kernels.layout import CELL_COLUMNS
+from impactbeams.longtime import LongTime
 from impactbeams.params import CONTACT_LAWS, ParameterError, Params, read_toml, require
 from impactbeams.variables import PARAMETERS
 
 FIRST_IMPACT = "first_impact_time"
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
-OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES)
+# the long run's stroboscopic samples (along a trailing dimension "period") and what they give
+POINCARE_OBSERVABLES = ("poincare_deflection1", "poincare_deflection2", "poincare_velocity1",
+                        "poincare_velocity2")
+LONG_TIME_OBSERVABLES = (*POINCARE_OBSERVABLES, "response_period", "steady_impact_rate",
+                         "steady_episode_rate")
+OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, *LONG_TIME_OBSERVABLES)
 # parameters that change a cell but not its geometry (its modes): the packed cell columns
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
-_TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes")
+LONG_TIME_KEYS = ("transient_periods", "sampled_periods", "period_tolerance", "max_period")
+_TOP_LEVEL = ("t_max", "n_modes", "observables", *LONG_TIME_KEYS, "params", "axes")
 _AXIS_KEYS = ("min", "max", "num", "scale")
 _MAX_MODES = 200
 
@@ -87,6 +98,7 @@ class Sweep:
     fixed: Mapping[str, Any]
     axes: tuple[Axis, ...]
     source: str = "sweep"
+    long_time: LongTime | None = None  # how long-time observables sample the run
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -101,7 +113,18 @@ class Sweep:
     @property
     def needs_dynamics(self) -> bool:
         """Whether any observable needs the full dynamics (not the free phase alone)."""
+        return self.needs_horizon_run or self.long_time is not None
+
+    @property
+    def needs_horizon_run(self) -> bool:
+        """Whether an observable needs the full dynamics over [0, t_max]."""
         return any(name in DYNAMICS_OBSERVABLES for name in self.observables)
+
+    def value_shape(self, name: str) -> tuple[int, ...]:
+        """Shape of one cell's value of stored array ``name``: (sampled periods,) or ()."""
+        if name in POINCARE_OBSERVABLES and self.long_time is not None:
+            return (self.long_time.sampled_periods,)
+        return ()
 
     @property
     def stored(self) -> list[str]:
@@ -110,8 +133,10 @@ class Sweep:
 
     def definition(self) -> dict[str, Any]:
         """The sweep as a plain dict in the TOML file's layout (canonical, for hashing)."""
+        long_time = ({} if self.long_time is None else
+                     {key: getattr(self.long_time, key) for key in LONG_TIME_KEYS})
         return {"t_max": self.t_max, "n_modes": self.n_modes,
-                "observables": list(self.observables), "params": dict(self.fixed),
+                "observables": list(self.observables), **long_time, "params": dict(self.fixed),
                 "axes": {a.name: a.definition() for a in self.axes}}
 
     @property
@@ -153,9 +178,25 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
     require(f"[axes] of {source}", axes_table, isinstance(axes_table, dict) and axes_table,
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
-    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source)
+    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source,
+                  _long_time(data, observables, source))
     _check_grid(sweep, base)
     return sweep
+
+
+def _long_time(data: Mapping[str, Any], observables: tuple[str, ...],
+               source: str) -> LongTime | None:
+    """The long-time settings: given only with a long-time observable, defaults for the rest."""
+    given = {key: data[key] for key in LONG_TIME_KEYS if key in data}
+    if not any(name in LONG_TIME_OBSERVABLES for name in observables):
+        require(f"{', '.join(given)} in {source}", list(given.values()), not given,
+                "only long-time observables use it: "
+                f"{', '.join(LONG_TIME_OBSERVABLES)}")
+        return None
+    try:
+        return LongTime(**given)
+    except ParameterError as error:
+        raise ParameterError(f"{error} (in {source})") from None
 
 
 def _number(value: Any, name: str) -> float:
@@ -213,6 +254,11 @@ def _check_grid(sweep: Sweep, base: Params) -> None:
             except ParameterError as error:
                 raise ParameterError(f"axis {axis.name!r} of {sweep.source} reaches a "
                                      f"non-physical point: {error}") from None
+    if sweep.long_time is not None:
+        omega = _cell_grid(sweep, base, "omega")
+        require(f"omega in {sweep.source}", float(np.min(omega)), bool(np.all(omega > 0)),
+                "long-time observables sample once per forcing period: need omega > 0 on the "
+                "whole grid", "rad/s")
     grids = {name: _cell_grid(sweep, base, name) for name in ("clearance", "uplift1", "uplift2")}
     gap = grids["clearance"] + grids["uplift1"] - grids["uplift2"]
     if np.any(gap <= 0):

@@ -8,11 +8,12 @@ import numpy as np
 import xarray as xr
 
 from impactbeams.params import MATERIAL_KEYS
-from impactbeams.sweep.definition import FIRST_IMPACT, Sweep
+from impactbeams.sweep.definition import FIRST_IMPACT, LONG_TIME_KEYS, Sweep
 from impactbeams.sweep.plan import contact_resolution
 from impactbeams.variables import attributes, global_attributes, parameter_attributes
 
-_INTEGER_TYPES = {"dynamics_status": np.int8, "impact_count": np.int32}  # codes and counts
+_INTEGER_TYPES = {"dynamics_status": np.int8, "impact_count": np.int32,  # codes and counts
+                  "response_period": np.int32}
 
 
 def map_dataset(sweep: Sweep, results: dict[str, np.ndarray]) -> xr.Dataset:
@@ -21,8 +22,10 @@ def map_dataset(sweep: Sweep, results: dict[str, np.ndarray]) -> xr.Dataset:
     coords = {axis.name: (axis.name, axis.values,
                           {**parameter_attributes(axis.name), "scale": axis.scale})
               for axis in sweep.axes}
-    data_vars = {name: (dims, values.astype(_INTEGER_TYPES.get(name, values.dtype))
-                        .reshape(sweep.shape), attributes(name))
+    extra = {name: sweep.value_shape(name) for name in results}
+    data_vars = {name: ([*dims, *(["period"] if extra[name] else [])],
+                        values.astype(_INTEGER_TYPES.get(name, values.dtype))
+                        .reshape(sweep.shape + extra[name]), attributes(name))
                  for name, values in results.items()}
     if FIRST_IMPACT in results:
         impacted = np.isfinite(results[FIRST_IMPACT]).astype(np.int8).reshape(sweep.shape)
@@ -31,6 +34,11 @@ def map_dataset(sweep: Sweep, results: dict[str, np.ndarray]) -> xr.Dataset:
            "observables": " ".join(sweep.observables), "swept_parameters": " ".join(dims),
            "sweep_definition": json.dumps(sweep.definition(), sort_keys=True),
            "sweep_fingerprint": sweep.fingerprint()}
+    if sweep.long_time is not None:
+        long_time = sweep.long_time
+        run.update({key: getattr(long_time, key) for key in LONG_TIME_KEYS})
+        if any(extra.values()):
+            coords["period"] = ("period", long_time.period_numbers(), attributes("period"))
     resolution = contact_resolution(sweep)
     if resolution is not None:
         run.update(contact_resolved=int(sweep.n_modes >= resolution),

@@ -14,10 +14,14 @@ from collections.abc import Iterator
 import numpy as np
 
 from impactbeams.kernels import layout
+from impactbeams.longtime import LongTime
 from impactbeams.params import Params
 from impactbeams.sweep.definition import CELL_PARAMETERS, FIRST_IMPACT, Sweep
 
 MAX_SEGMENTS = 100_000  # phases per cell in a full-dynamics sweep; more: dynamics_status = 1
+# a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
+LONG_RUN_CAPACITY = 2048
+MAX_PHASES_PER_PERIOD = 2000  # cap of a long run, per forcing period; more: dynamics_status = 1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -123,10 +127,12 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
 
     Self-contained, so that any process (a Dask worker, say) can compute any chunk; pass the
     sweep's ``plan`` (:func:`build_plan`) to reuse it across chunks. A first-impact-only sweep
-    runs the free phase alone; any other observable runs the full dynamics of every cell over
-    [0, t_max] (and gives the first impact time from it too).
+    runs the free phase alone; the other observables over [0, t_max] run the full dynamics of
+    every cell over [0, t_max] (and give the first impact time from it too); long-time
+    observables run each cell over its own horizon, (transient + sampled) forcing periods
+    (:mod:`impactbeams.longtime`). ``dynamics_status`` is the worse of the two runs'.
     """
-    from impactbeams.kernels import first_impact, observables
+    from impactbeams.kernels import first_impact
 
     if plan is None:
         plan = build_plan(sweep)
@@ -139,9 +145,40 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
         out = np.empty(cells.shape[0])
         kernel(cells, plan.tables, plan.geometry, sweep.t_max, out)
         return {FIRST_IMPACT: out}
+    values: dict[str, np.ndarray] = {"dynamics_status": np.zeros(cells.shape[0])}
+    if sweep.needs_horizon_run or FIRST_IMPACT in sweep.observables:
+        values.update(_horizon_run(sweep, plan, cells, parallel))
+    if sweep.long_time is not None:
+        long_time = _long_run(sweep.long_time, plan, cells, parallel)
+        long_time["dynamics_status"] = np.maximum(values["dynamics_status"],
+                                                  long_time["dynamics_status"])
+        values.update(long_time)
+    return {name: np.ascontiguousarray(values[name]) for name in sweep.stored}
+
+
+def _horizon_run(sweep: Sweep, plan: Plan, cells: np.ndarray,
+                 parallel: bool) -> dict[str, np.ndarray]:
+    """The ``OUT_COLUMNS`` of every cell's full dynamics over [0, t_max]."""
+    from impactbeams.kernels import observables
+
     kernel = (observables.observables_map_parallel if parallel
               else observables.observables_map_serial)
     out = np.empty((cells.shape[0], len(layout.OUT_COLUMNS)))
     kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max, MAX_SEGMENTS, out)
-    columns = dict(zip(layout.OUT_COLUMNS, out.T, strict=True))
-    return {name: np.ascontiguousarray(columns[name]) for name in sweep.stored}
+    return dict(zip(layout.OUT_COLUMNS, out.T, strict=True))
+
+
+def _long_run(long_time: LongTime, plan: Plan, cells: np.ndarray,
+              parallel: bool) -> dict[str, np.ndarray]:
+    """The long-time observables of every cell (and its run's ``dynamics_status``)."""
+    from impactbeams.kernels import stroboscope
+    from impactbeams.longtime import long_time_values
+
+    kernel = (stroboscope.stroboscope_map_parallel if parallel
+              else stroboscope.stroboscope_map_serial)
+    omega = cells[:, layout.CELL_OMEGA]
+    samples = np.empty((cells.shape[0], long_time.sampled_periods, len(layout.TIP_COLUMNS)))
+    summary = np.empty((cells.shape[0], len(layout.STROBOSCOPE_COLUMNS)))
+    kernel(cells, plan.tables, *plan.switching, plan.geometry, long_time.sample_times(omega),
+           long_time.horizon(omega), LONG_RUN_CAPACITY, MAX_PHASES_PER_PERIOD, samples, summary)
+    return long_time_values(long_time, omega, cells[:, layout.CELL_CLEARANCE], samples, summary)

@@ -108,7 +108,8 @@ def _collect(sweep: Sweep, bounds: list[tuple[int, int]], store: ChunkStore | No
              runner: ChunkRunner, bar: Progress,
              on_chunk: Callable[[int], None] | None) -> dict[str, np.ndarray]:
     """Flat results of every cell: saved chunks loaded, the others computed by ``runner``."""
-    results = {name: np.full(sweep.size, np.nan) for name in sweep.stored}
+    results = {name: np.full((sweep.size, *sweep.value_shape(name)), np.nan)
+               for name in sweep.stored}
     pending = []
     for chunk, (start, stop) in enumerate(bounds):
         saved = store.load(chunk) if store else None

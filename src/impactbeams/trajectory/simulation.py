@@ -9,12 +9,14 @@ import numpy as np
 import xarray as xr
 
 from impactbeams.compliant import MAX_MODES, required_modes
+from impactbeams.longtime import LongTime
 from impactbeams.packing import Packed, pack_run
 from impactbeams.params import Params
 from impactbeams.trajectory.episodes import default_separation, episode_table
 from impactbeams.trajectory.fields import deflections, time_series
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory, run
+from impactbeams.trajectory.poincare import long_time_variables
 from impactbeams.variables import attributes, global_attributes
 
 
@@ -34,7 +36,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
              fields: bool = False, *, times: np.ndarray | None = None, n_points: int = 41,
              max_events: int = 200_000, search_span: float | None = None,
              episode_separation: float | None = None,
-             energy_balance: bool = False) -> xr.Dataset:
+             energy_balance: bool = False, long_time: LongTime | None = None) -> xr.Dataset:
     """Simulate the impacting beams from t = 0 to ``t_max`` (s); return an xarray Dataset.
 
     Args:
@@ -61,6 +63,11 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
             ``damping_dissipation``) and the episodes' dissipated energy and energetic
             restitution: quadratures at the fastest mode's time scale, which with many modes
             cost far more than the dynamics (the energy itself is always there).
+        long_time: also the long-time response (:class:`impactbeams.longtime.LongTime`):
+            stroboscopic tip samples ``poincare_deflection1`` ... ``poincare_velocity2``
+            along the dimension ``period``, ``response_period``, ``steady_impact_rate`` and
+            ``steady_episode_rate`` (with this run's ``episode_separation``). Needs
+            Omega > 0 and t_max at least (transient_periods + sampled_periods) 2 pi / Omega.
 
     The output grid never influences the dynamics: events are located by the kernel on its
     own, and the outputs are evaluated from the exact segment states.
@@ -73,6 +80,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     if not span > 0:
         raise ValueError(f"search_span = {search_span!r} is not allowed: must be > 0 (s)")
     out_times = _output_times(float(t_max), dt_output, times)
+    if long_time is not None:
+        _check_long_time(params, float(t_max), long_time)
     resolution = required_modes(params) if params.contact_law == "spring" else 5
     if n_modes is None:
         n_modes = min(resolution, MAX_MODES)
@@ -95,10 +104,23 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
                                         x2=("x2", x2, attributes("x2")))
         dataset["deflection_1"] = (("time", "x1"), y1, attributes("deflection_1"))
         dataset["deflection_2"] = (("time", "x2"), y2, attributes("deflection_2"))
+    if long_time is not None:
+        dataset = long_time_variables(packed, trajectory, dataset, long_time)
     dataset.attrs.update(_global_attributes(params, n_modes, float(t_max), trajectory))
     if params.contact_law == "spring":
         dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
     return dataset
+
+
+def _check_long_time(params: Params, t_max: float, long_time: LongTime) -> None:
+    """Long-time sampling needs a forcing period and a run that covers the sampled window."""
+    if not params.omega > 0:
+        raise ValueError(f"omega = {params.omega!r} is not allowed with long_time: the samples "
+                         "are taken once per forcing period, need omega > 0 (rad/s)")
+    horizon = float(long_time.horizon(params.omega))
+    if t_max < horizon:
+        raise ValueError(f"t_max = {t_max!r} is not allowed with long_time: need t_max >= "
+                         f"(transient_periods + sampled_periods) 2 pi / omega = {horizon!r} (s)")
 
 
 def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray, separation: float,

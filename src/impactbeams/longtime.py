@@ -1,0 +1,150 @@
+"""Long-time response: stroboscopic sampling, the period of the steady response, steady rates.
+
+Definitions (docs/model.md, "Long-time dynamics"): after ``transient_periods`` forcing periods
+T = 2 pi / Omega, the tips are sampled once per period at forcing phase 0,
+``t_k = (transient_periods + k) T``, k = 0 .. ``sampled_periods`` - 1; the sampled window is
+``[t_0, t_0 + sampled_periods T)``. The period of the steady response is the smallest p <=
+``max_period`` for which the samples repeat with period p within ``period_tolerance`` of
+their scale; 0 if there is none.
+
+The tolerance is relative to the samples' scale, the largest of |y1|, |y2|, |v1| / Omega,
+|v2| / Omega over the window (m: velocities over Omega are displacement amplitudes; for a
+harmonic response sqrt(y^2 + (v / Omega)^2) is its amplitude at any phase). The default,
+1e-6, lies far above the round-off of the samples (exact propagation and event times to a few
+ulps: 1e-12 of the scale and below, see tests/test_longtime.py) and is reached by a decaying
+transient after ln(1e6) = 13.8 of its time constants; a run whose slowest transient (at modal
+damping zeta, 1 / (zeta omega_min), 0.58 s at zeta = 0.01 for the default beams) has not
+decayed that far within the transient reports period 0: lengthen the transient or loosen the
+tolerance. Chaotic and quasi-periodic responses differ from period to period by a fraction of
+their scale, many orders of magnitude above it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from impactbeams.kernels import layout
+from impactbeams.params import require
+
+DEFAULT_PERIOD_TOLERANCE = 1e-6
+LARGEST_MAX_PERIOD = 16  # the default max_period, when the samples allow it
+
+
+@dataclasses.dataclass(frozen=True)
+class LongTime:
+    """How a long run is sampled and its period detected (see the module docstring).
+
+    Attributes:
+        transient_periods: forcing periods discarded before the first sample (>= 0).
+        sampled_periods: number of samples, one per forcing period (>= 2).
+        period_tolerance: relative tolerance of the period detection (0 < tol < 1).
+        max_period: largest period looked for, at most sampled_periods / 2 so that a period
+            is seen to repeat at least once over each of its samples; default the smaller of
+            16 and sampled_periods // 2.
+    """
+
+    transient_periods: int = 500
+    sampled_periods: int = 200
+    period_tolerance: float = DEFAULT_PERIOD_TOLERANCE
+    max_period: int | None = None
+
+    def __post_init__(self) -> None:
+        for name, smallest in (("transient_periods", 0), ("sampled_periods", 2)):
+            value = getattr(self, name)
+            require(name, value, _is_int(value) and value >= smallest,
+                    f"must be an integer >= {smallest}")
+        tolerance = self.period_tolerance
+        require("period_tolerance", tolerance, isinstance(tolerance, (int, float))
+                and not isinstance(tolerance, bool) and 0.0 < tolerance < 1.0,
+                "must be a number between 0 and 1 (relative to the samples' scale)")
+        if self.max_period is None:
+            object.__setattr__(self, "max_period",
+                               min(LARGEST_MAX_PERIOD, self.sampled_periods // 2))
+        require("max_period", self.max_period, _is_int(self.max_period)
+                and 1 <= self.max_period <= self.sampled_periods // 2,
+                f"must be an integer from 1 to sampled_periods // 2 = "
+                f"{self.sampled_periods // 2}")
+
+    def forcing_period(self, omega: float | np.ndarray) -> float | np.ndarray:
+        """T = 2 pi / Omega (s); Omega in rad/s, > 0."""
+        return 2.0 * math.pi / np.asarray(omega, dtype=float)
+
+    def sample_times(self, omega: float | np.ndarray) -> np.ndarray:
+        """Sample times t_k (s), shape ``omega.shape + (sampled_periods,)``."""
+        period = np.asarray(self.forcing_period(omega))[..., None]
+        return (self.transient_periods + np.arange(self.sampled_periods)) * period
+
+    def horizon(self, omega: float | np.ndarray) -> float | np.ndarray:
+        """End of the sampled window (s): (transient_periods + sampled_periods) T."""
+        return (self.transient_periods + self.sampled_periods) * self.forcing_period(omega)
+
+    def window(self, omega: float | np.ndarray) -> float | np.ndarray:
+        """Length of the sampled window (s), sampled_periods T."""
+        return self.sampled_periods * self.forcing_period(omega)
+
+    def period_numbers(self) -> np.ndarray:
+        """Forcing periods from t = 0 to each sample: the ``period`` coordinate."""
+        return self.transient_periods + np.arange(self.sampled_periods)
+
+
+def _is_int(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def response_period(deflection1: np.ndarray, deflection2: np.ndarray, velocity1: np.ndarray,
+                    velocity2: np.ndarray, omega: float | np.ndarray, tolerance: float,
+                    max_period: int) -> np.ndarray:
+    """Period of the sampled response in forcing periods (0 if none up to ``max_period``).
+
+    Tip deflections (m) and velocities (m/s) of shape ``(..., samples)``; ``omega`` (rad/s)
+    broadcasts against ``(...)``. Samples with NaN (a run that stopped early) give 0.
+    """
+    scaled = 1.0 / np.asarray(omega, dtype=float)[..., None]
+    state = np.stack([deflection1, deflection2, velocity1 * scaled, velocity2 * scaled],
+                     axis=-1)  # (..., samples, 4), all in m
+    scale = np.max(np.abs(state), axis=(-2, -1))
+    period = np.zeros(scale.shape, dtype=np.int32)
+    for p in range(max_period, 0, -1):  # smallest last: it wins
+        distance = np.max(np.abs(state[..., p:, :] - state[..., :-p, :]), axis=(-2, -1))
+        period = np.where(distance <= tolerance * scale, p, period)
+    return period
+
+
+def steady_rate(count: float | np.ndarray, start: float | np.ndarray, end: float | np.ndarray,
+                reached: float | np.ndarray) -> float | np.ndarray:
+    """Events per second (1/s) counted over the window [start, end) up to the time reached (s).
+
+    NaN where the run stopped before the window began.
+    """
+    covered = np.minimum(end, reached) - start
+    return np.where(covered > 0, count / np.where(covered > 0, covered, 1.0), np.nan)
+
+
+def long_time_values(long_time: LongTime, omega: np.ndarray, clearance: np.ndarray,
+                     samples: np.ndarray, summary: np.ndarray) -> dict[str, np.ndarray]:
+    """The long-time observables of runs from the stroboscope kernel's output.
+
+    ``omega`` (rad/s), ``clearance`` (m): per run; ``samples``: (runs, sampled_periods,
+    ``TIP_COLUMNS``), y2 itself (the stored ``poincare_deflection2`` is y2 - Delta, as
+    ``tip_deflection_2``); ``summary``: (runs, ``STROBOSCOPE_COLUMNS``). Also the runs'
+    ``dynamics_status``.
+    """
+    y1, y2, v1, v2 = (samples[..., column] for column in (layout.TIP_Y1, layout.TIP_Y2,
+                                                          layout.TIP_V1, layout.TIP_V2))
+    start, end = long_time.sample_times(omega)[..., 0], long_time.horizon(omega)
+    reached = summary[:, layout.STROBE_T_END]
+    return {
+        "poincare_deflection1": y1,
+        "poincare_deflection2": y2 - np.asarray(clearance)[:, None],
+        "poincare_velocity1": v1,
+        "poincare_velocity2": v2,
+        "response_period": response_period(y1, y2, v1, v2, omega, long_time.period_tolerance,
+                                           long_time.max_period),
+        "steady_impact_rate": steady_rate(summary[:, layout.STROBE_ONSETS], start, end, reached),
+        "steady_episode_rate": steady_rate(summary[:, layout.STROBE_EPISODES], start, end,
+                                           reached),
+        "dynamics_status": summary[:, layout.STROBE_STATUS],
+    }
