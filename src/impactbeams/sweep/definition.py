@@ -7,7 +7,7 @@ A sweep file (names as in :mod:`impactbeams.params`)::
     observables = ["first_impact_time"]  # default
     transient_periods = 500              # long-time observables only (module longtime)
     sampled_periods = 200
-    period_tolerance = 1e-6
+    period_tolerance = 1e-4
     max_period = 16
     [params]                             # fixed parameters; the rest take the defaults
     clearance = 1.1e-5

@@ -171,6 +171,8 @@ def _horizon_run(sweep: Sweep, plan: Plan, cells: np.ndarray,
 def _long_run(long_time: LongTime, plan: Plan, cells: np.ndarray,
               parallel: bool) -> dict[str, np.ndarray]:
     """The long-time observables of every cell (and its run's ``dynamics_status``)."""
+    import numba
+
     from impactbeams.kernels import stroboscope
     from impactbeams.longtime import long_time_values
 
@@ -179,6 +181,10 @@ def _long_run(long_time: LongTime, plan: Plan, cells: np.ndarray,
     omega = cells[:, layout.CELL_OMEGA]
     samples = np.empty((cells.shape[0], long_time.sampled_periods, len(layout.TIP_COLUMNS)))
     summary = np.empty((cells.shape[0], len(layout.STROBOSCOPE_COLUMNS)))
-    kernel(cells, plan.tables, *plan.switching, plan.geometry, long_time.sample_times(omega),
-           long_time.horizon(omega), LONG_RUN_CAPACITY, MAX_PHASES_PER_PERIOD, samples, summary)
+    # cells differ in cost by orders of magnitude (a rattle at every period, or no contact at
+    # all): the threads take them one at a time instead of in equal contiguous blocks
+    with numba.parallel_chunksize(1):
+        kernel(cells, plan.tables, *plan.switching, plan.geometry, long_time.sample_times(omega),
+               long_time.horizon(omega), LONG_RUN_CAPACITY, MAX_PHASES_PER_PERIOD, samples,
+               summary)
     return long_time_values(long_time, omega, cells[:, layout.CELL_CLEARANCE], samples, summary)

@@ -61,8 +61,14 @@ def chunk_bounds(size: int, chunk_cells: int) -> list[tuple[int, int]]:
     return [(start, min(start + chunk_cells, size)) for start in range(0, size, chunk_cells)]
 
 
-def default_chunk_cells(size: int) -> int:
-    """About 100 chunks, each between 4096 and 65536 cells (a second or less of work)."""
+def default_chunk_cells(size: int, long_runs: bool = False) -> int:
+    """About 100 chunks, each between 4096 and 65536 cells (a second or less of work).
+
+    ``long_runs``: cells of long-time observables take seconds each: chunks of 16 to 256
+    cells, so that progress shows and an interrupted run loses little.
+    """
+    if long_runs:
+        return int(min(max(size // 100, 16), 256))
     return int(min(max(size // 100, 4096), 65536))
 
 
@@ -92,9 +98,10 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
             if finished is not None:
                 return finished
             store = ChunkStore(output, sweep.fingerprint(), chunk_cells,
-                               default_chunk_cells(sweep.size))
+                               default_chunk_cells(sweep.size, sweep.long_time is not None))
             chunk_cells = store.chunk_cells
-        bounds = chunk_bounds(sweep.size, chunk_cells or default_chunk_cells(sweep.size))
+        bounds = chunk_bounds(sweep.size, chunk_cells or default_chunk_cells(
+            sweep.size, sweep.long_time is not None))
         results = _collect(sweep, bounds, store, runner or local_runner(parallel),
                            Progress(sweep.size, enabled=progress), on_chunk)
     dataset = map_dataset(sweep, results)
