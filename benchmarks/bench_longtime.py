@@ -235,6 +235,19 @@ def markdown(report: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def headline(report: dict) -> str:
+    """Two sentences for docs/benchmarks/README.md, pointing to longtime.md."""
+    one_core = report["diagram_one_core_s"]
+    return (f"## Long-time bifurcation diagram\n\n`{report['sweep']}` "
+            f"({report['diagram_cells']} values of Omega, {report['transient_periods']} + "
+            f"{report['sampled_periods']} forcing periods each, {report['n_modes']} modes per "
+            f"beam): {one_core:,.0f} s on one core, {one_core / 2:,.0f} s on two at ideal "
+            f"scaling (extrapolated from every {report['stride']}-th cell; target "
+            f"{TARGET_S:g} s); {1e3 * report['s_per_period']:.1f} ms per forcing period, "
+            f"{report['s_per_simulated_s']:.2f} s per simulated second. Details and profile: "
+            "[longtime.md](longtime.md).\n")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sweep", default=str(ROOT / "sweeps" / "bifurcation-omega.toml"))

@@ -92,8 +92,11 @@ def _run(args: argparse.Namespace) -> None:
 
     sweep = load_sweep(args.sweep)
     output = args.output or str(Path("results") / (Path(args.sweep).stem + ".nc"))
+    long_time = sweep.long_time
+    horizon = (f"t_max = {sweep.t_max} s" if long_time is None else
+               f"{long_time.transient_periods} + {long_time.sampled_periods} forcing periods")
     print(f"{sweep.source}: {' x '.join(map(str, sweep.shape))} = {sweep.size} cells over "
-          f"{', '.join(a.name for a in sweep.axes)}; t_max = {sweep.t_max} s, "
+          f"{', '.join(a.name for a in sweep.axes)}; {horizon}, "
           f"{sweep.n_modes} modes per beam -> {output}\n(the first chunk also compiles the "
           "kernels, about 10 s on a fresh install; they are cached after that)", file=sys.stderr)
     try:

@@ -239,6 +239,18 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
 
 
 @kernel
+def segment_arrays(capacity, n_coords):
+    """Empty arrays for ``capacity`` segments of ``n_coords`` coordinates (``run_events_from``).
+
+    Returns ``(seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v)``.
+    """
+    return (np.empty(capacity), np.empty(capacity, dtype=np.int64),
+            np.empty(capacity, dtype=np.bool_), np.empty((capacity, n_coords)),
+            np.empty((capacity, n_coords)), np.empty((capacity, n_coords)),
+            np.empty((capacity, n_coords)))
+
+
+@kernel
 def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings, q0, v0,
                seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
     """Integrate from the free-phase state (q0, v0) at t = 0 to t_max: ``run_events_from``."""

@@ -26,6 +26,7 @@ from impactbeams.kernels.dynamics import (
     quasi_static_force,
     run_events_from,
     sample_states,
+    segment_arrays,
 )
 from impactbeams.kernels.events import event_acceleration, event_value
 from impactbeams.kernels.forcing import run_inputs
@@ -167,11 +168,8 @@ def sampled_run(tables, forces, phase_scalars, overlap, shifts, spring, drives, 
     (``STROBOSCOPE_COLUMNS``).
     """
     n_coords = q0.size
-    seg_time = np.empty(capacity)
-    seg_phase = np.empty(capacity, dtype=np.int64)
-    seg_sustained = np.empty(capacity, dtype=np.bool_)
-    seg_q, seg_v = np.empty((capacity, n_coords)), np.empty((capacity, n_coords))
-    end_q, end_v = np.empty((capacity, n_coords)), np.empty((capacity, n_coords))
+    seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v = segment_arrays(
+        capacity, n_coords)
     sample_q, sample_v = np.empty((times.size, n_coords)), np.empty((times.size, n_coords))
     sample_phase = np.empty(times.size, dtype=np.int64)
     residual2 = residual_flexibility2(tables[FREE], settings.c2)
