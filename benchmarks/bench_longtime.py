@@ -10,10 +10,14 @@ transient and 200 sampled, spring law at a resolved n_modes, in under 60 s on 2 
   period in the sampled window.
 * Parallel scaling: the same cells as one sweep on 2 Numba threads (wall time), against the sum
   of their 1-thread times (a shared machine lowers it).
-* Profile, at a few Omega (``--profile``): one event-driven run of ``PROFILE_PERIODS`` forcing
-  periods, split into the event searches of free and contact phases (``find_switch`` replayed
-  from every recorded segment start), the coordinate changes at the switches and one closed-form
-  propagation per segment; and the stroboscopic sampling of 200 states.
+* ``--full``: the whole diagram as one sweep on 2 threads, its wall time and the CPU time of
+  this process (on a shared machine the CPU time says what two free cores would take).
+* The same diagram with a softer contact (``--variant-stiffness``, default k = 1e4 N/m, at its
+  own resolved n_modes): what the contact stiffness costs (modes and micro-contacts).
+* Profile, at a few Omega: one event-driven run of ``PROFILE_PERIODS`` forcing periods, split
+  into the event searches of free and contact phases (``find_switch`` replayed from every
+  recorded segment start), the coordinate changes at the switches and one closed-form
+  propagation per segment; and the stroboscopic sampling of 200 states. Best of 5 each.
 
 Writes docs/benchmarks/longtime.json and docs/benchmarks/longtime.md.
 
@@ -38,7 +42,7 @@ from impactbeams import __version__
 from impactbeams.kernels import dynamics as dyn
 from impactbeams.kernels.layout import CONTACT, FREE
 from impactbeams.packing import pack_run
-from impactbeams.sweep import build_plan, compute_chunk, load_sweep, sweep_from_mapping
+from impactbeams.sweep import build_plan, compute_chunk, load_sweep, run_sweep, sweep_from_mapping
 from impactbeams.sweep.run import numba_threads
 from impactbeams.trajectory.phases import run, sample
 
@@ -135,7 +139,7 @@ def _replay_propagations(tables, forces, seg_time, seg_phase, seg_q, seg_v, sett
     return q[0]
 
 
-def _best(function, *args, repeats: int = 3) -> float:
+def _best(function, *args, repeats: int = 5) -> float:
     """Best wall time (s) of ``function(*args)`` over ``repeats`` calls (after one warm-up)."""
     function(*args)
     best = math.inf
@@ -152,7 +156,7 @@ def profile(sweep, omega: float) -> dict:
     horizon = PROFILE_PERIODS * 2.0 * math.pi / omega
     packed = pack_run(params, sweep.n_modes, horizon, horizon)
     limit = 10**7
-    total = _best(run, packed, limit, repeats=2)
+    total = _best(run, packed, limit)
     trajectory = run(packed, limit)
     arrays = (packed.tables, packed.forces, packed.phase_scalars, trajectory.time,
               trajectory.phase, trajectory.q, trajectory.v, packed.settings)
@@ -178,53 +182,80 @@ def profile(sweep, omega: float) -> dict:
             "search_fraction": (searches["free"] + searches["contact"]) / total}
 
 
+def _summary_rows(study: dict) -> list[str]:
+    """The summary table's rows of one diagram study."""
+    one_core = study["diagram_one_core_s"]
+    return [
+        f"| whole diagram, 1 core (extrapolated) | {one_core:,.0f} s |",
+        f"| whole diagram, 2 cores at ideal scaling | {one_core / 2:,.0f} s "
+        f"(target {TARGET_S:g} s: {one_core / 2 / TARGET_S:.1f}x) |",
+        f"| 2 threads vs 1 on the sampled cells (wall time, shared machine) | "
+        f"{study['parallel_speedup']:.2f}x |",
+        f"| cost per cell: median, max | {study['cell_s_median']:.2f} s, "
+        f"{study['cell_s_max']:.1f} s |",
+        f"| cost per simulated second: mean over the cells | "
+        f"{study['s_per_simulated_s']:.3f} s |",
+        f"| cost per forcing period: mean | {1e3 * study['s_per_period']:.2f} ms |",
+        f"| contact onsets per forcing period (sampled window): mean, max | "
+        f"{study['onsets_per_period_mean']:.1f}, {study['onsets_per_period_max']:.1f} |",
+    ]
+
+
+def _full_rows(full: dict | None) -> list[str]:
+    """The whole diagram's measured run, if it was run."""
+    if full is None:
+        return []
+    return [f"| whole diagram run as one sweep on 2 threads: wall time, CPU time | "
+            f"{full['wall_s']:,.0f} s, {full['cpu_s']:,.0f} s ({full['cores_used']:.2f} cores "
+            "on average) |"]
+
+
 def markdown(report: dict) -> str:
     """The results as the Markdown page docs/benchmarks/longtime.md."""
-    cells = report["cells"]
-    one_core = report["diagram_one_core_s"]
+    variant = report["variant"]
     lines = [
         "# Long-time dynamics: the bifurcation diagram's cost",
         "",
         f"`{report['sweep']}`: {report['diagram_cells']} values of Omega "
         f"({report['omega_range'][0]:g}..{report['omega_range'][1]:g} rad/s), "
         f"{report['transient_periods']} + {report['sampled_periods']} forcing periods each, "
-        f"spring law (k = {report['contact_stiffness']:g} N/m) at {report['n_modes']} modes "
+        f"spring law (k = {report['contact_stiffness']:.3g} N/m) at {report['n_modes']} modes "
         f"per beam; {report['machine']}, {report['date']}, impactbeams {report['impactbeams']}. "
         "Regenerate with `python benchmarks/bench_longtime.py` (the machine was shared with "
         "other jobs: timings are noisy).",
         "",
-        f"Measured: every {report['stride']}-th cell ({len(cells)} cells, a uniform sample of "
-        "the Omega axis), each alone on one thread; the diagram is extrapolated from them.",
+        f"Measured: every {report['stride']}-th cell ({len(report['cells'])} cells, a uniform "
+        "sample of the Omega axis), each alone on one thread; the diagram's cost is "
+        f"extrapolated from them ({report['stride']} times their sum).",
         "",
         "| quantity | value |",
         "|---|---|",
-        f"| whole diagram, 1 core (extrapolated) | {one_core:,.0f} s |",
-        f"| whole diagram, 2 cores at ideal scaling | {one_core / 2:,.0f} s "
-        f"(target {TARGET_S:g} s: {one_core / 2 / TARGET_S:.0f}x over) |",
-        f"| 2 threads vs 1 on the sampled cells (wall time, shared machine) | "
-        f"{report['parallel_speedup']:.2f}x |",
-        f"| cost per cell: median, max | {report['cell_s_median']:.2f} s, "
-        f"{report['cell_s_max']:.1f} s |",
-        f"| cost per simulated second: mean over the cells | "
-        f"{report['s_per_simulated_s']:.2f} s |",
-        f"| cost per forcing period: mean | {1e3 * report['s_per_period']:.2f} ms |",
-        f"| contact onsets per forcing period (sampled window): mean, max | "
-        f"{report['onsets_per_period_mean']:.1f}, {report['onsets_per_period_max']:.1f} |",
+        *_summary_rows(report),
+        *_full_rows(report["full_run"]),
         "",
-        "Per cell (Omega in rad/s, run time in s on one thread):",
+        f"The same diagram with a softer contact, k = {variant['contact_stiffness']:g} N/m, at "
+        f"its resolved {variant['n_modes']} modes per beam:",
+        "",
+        "| quantity | value |",
+        "|---|---|",
+        *_summary_rows(variant),
+        "",
+        f"Per cell at k = {report['contact_stiffness']:.3g} N/m (Omega in rad/s, run time in s "
+        "on one thread):",
         "",
         "| Omega | run time | simulated time | onsets per period | ms per period | period |",
         "|---|---|---|---|---|---|",
     ]
-    for c in cells:
+    for c in report["cells"]:
         lines.append(f"| {c['omega']:.1f} | {c['seconds']:.2f} | {c['horizon']:.2f} s | "
                      f"{c['onsets_per_period']:.1f} | {1e3 * c['seconds'] / c['periods']:.2f} | "
                      f"{c['response_period']} |")
-    lines += ["", f"## Profile of one run ({PROFILE_PERIODS} forcing periods)", "",
-              "| Omega | phases per period | us per phase | event search, free (us/segment) | "
-              "event search, contact (us/segment) | search share | switches share | "
-              "propagation (us/segment) | 200 samples (ms) |",
-              "|---|---|---|---|---|---|---|---|---|"]
+    if report["profile"]:
+        lines += ["", f"## Profile of one run ({PROFILE_PERIODS} forcing periods from rest)", "",
+                  "| Omega | phases per period | us per phase | event search, free "
+                  "(us/segment) | event search, contact (us/segment) | search share | "
+                  "switches share | propagation (us/segment) | 200 samples (ms) |",
+                  "|---|---|---|---|---|---|---|---|---|"]
     for p in report["profile"]:
         lines.append(
             f"| {p['omega']:g} | {p['phases_per_period']:.1f} | {p['run_us_per_phase']:.0f} | "
@@ -236,48 +267,84 @@ def markdown(report: dict) -> str:
 
 
 def headline(report: dict) -> str:
-    """Two sentences for docs/benchmarks/README.md, pointing to longtime.md."""
-    one_core = report["diagram_one_core_s"]
+    """A paragraph for docs/benchmarks/README.md, pointing to longtime.md."""
+    one_core, soft = report["diagram_one_core_s"], report["variant"]
     return (f"## Long-time bifurcation diagram\n\n`{report['sweep']}` "
             f"({report['diagram_cells']} values of Omega, {report['transient_periods']} + "
             f"{report['sampled_periods']} forcing periods each, {report['n_modes']} modes per "
-            f"beam): {one_core:,.0f} s on one core, {one_core / 2:,.0f} s on two at ideal "
-            f"scaling (extrapolated from every {report['stride']}-th cell; target "
-            f"{TARGET_S:g} s); {1e3 * report['s_per_period']:.1f} ms per forcing period, "
-            f"{report['s_per_simulated_s']:.2f} s per simulated second. Details and profile: "
+            f"beam, Hertz contact k = {report['contact_stiffness']:.3g} N/m): "
+            f"{one_core:,.0f} s on one core, {one_core / 2:,.0f} s on two at ideal scaling "
+            f"(extrapolated from every {report['stride']}-th cell; target {TARGET_S:g} s); "
+            f"{1e3 * report['s_per_period']:.1f} ms per forcing period, "
+            f"{report['s_per_simulated_s']:.2f} s per simulated second. With k = "
+            f"{soft['contact_stiffness']:g} N/m at {soft['n_modes']} modes: "
+            f"{soft['diagram_one_core_s']:,.0f} s on one core, "
+            f"{soft['diagram_one_core_s'] / 2:,.0f} s on two. Details and profile: "
             "[longtime.md](longtime.md).\n")
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--sweep", default=str(ROOT / "sweeps" / "bifurcation-omega.toml"))
-    parser.add_argument("--stride", type=int, default=10)
-    parser.add_argument("--no-profile", action="store_true")
-    args = parser.parse_args()
-    sweep = load_sweep(args.sweep)
-    costs = cell_costs(sweep, args.stride)
+def full_run(sweep) -> dict:
+    """Wall and CPU time (s) of the whole diagram as one sweep on 2 threads."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    run_sweep(sweep, threads=min(2, numba.config.NUMBA_NUM_THREADS), progress=False)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    return {"wall_s": wall, "cpu_s": cpu, "cores_used": cpu / wall}
+
+
+def diagram_study(sweep, source: str, stride: int) -> dict:
+    """Cost of one bifurcation diagram: per-cell serial times, extrapolation, 2-thread wall."""
+    costs = cell_costs(sweep, stride)
     serial = sum(c.seconds for c in costs)
-    wall = subset_wall_time(sweep, args.stride, min(2, numba.config.NUMBA_NUM_THREADS))
+    wall = subset_wall_time(sweep, stride, min(2, numba.config.NUMBA_NUM_THREADS))
     seconds = np.array([c.seconds for c in costs])
-    report = {
-        "sweep": Path(args.sweep).name, "diagram_cells": sweep.size, "stride": args.stride,
+    return {
+        "sweep": source, "diagram_cells": sweep.size, "stride": stride,
         "omega_range": [sweep.axes[0].min, sweep.axes[0].max], "n_modes": sweep.n_modes,
         "contact_stiffness": sweep.base.contact_stiffness,
         "transient_periods": sweep.long_time.transient_periods,
         "sampled_periods": sweep.long_time.sampled_periods,
         "cells": [dataclasses.asdict(c) for c in costs],
-        "diagram_one_core_s": args.stride * serial,
+        "diagram_one_core_s": stride * serial,
         "subset_serial_s": serial, "subset_2_threads_s": wall, "parallel_speedup": serial / wall,
         "cell_s_median": float(np.median(seconds)), "cell_s_max": float(seconds.max()),
         "s_per_simulated_s": serial / sum(c.horizon for c in costs),
         "s_per_period": serial / sum(c.periods for c in costs),
         "onsets_per_period_mean": float(np.mean([c.onsets_per_period for c in costs])),
         "onsets_per_period_max": float(np.max([c.onsets_per_period for c in costs])),
+    }
+
+
+def soft_variant(sweep, stiffness: float):
+    """The same diagram with contact stiffness ``stiffness`` (N/m) at its resolved n_modes."""
+    from impactbeams.compliant import recommended_modes
+
+    definition = sweep.definition()
+    definition["params"] = {**definition["params"], "contact_stiffness": stiffness}
+    definition["n_modes"] = recommended_modes(sweep.base.replace(contact_stiffness=stiffness))
+    return sweep_from_mapping(definition, source=f"{sweep.source}, k = {stiffness:g} N/m")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--sweep", default=str(ROOT / "sweeps" / "bifurcation-omega.toml"))
+    parser.add_argument("--stride", type=int, default=10)
+    parser.add_argument("--variant-stiffness", type=float, default=1e4)
+    parser.add_argument("--no-profile", action="store_true")
+    parser.add_argument("--full", action="store_true", help="also run the whole diagram")
+    args = parser.parse_args()
+    sweep = load_sweep(args.sweep)
+    name = Path(args.sweep).name
+    report = diagram_study(sweep, name, args.stride)
+    variant = soft_variant(sweep, args.variant_stiffness)
+    report["variant"] = diagram_study(variant, f"{name} with k = {args.variant_stiffness:g} N/m",
+                                      args.stride)
+    report.update({
+        "full_run": full_run(sweep) if args.full else None,
         "profile": [] if args.no_profile else [profile(sweep, w) for w in PROFILE_OMEGA],
         "machine": f"{platform.machine()}, {os.cpu_count()} cores",
         "impactbeams": __version__, "numba": numba.__version__,
         "date": time.strftime("%Y-%m-%d"),
-    }
+    })
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "longtime.json").write_text(json.dumps(report, indent=1) + "\n")
     (OUT / "longtime.md").write_text(markdown(report))
