@@ -150,10 +150,13 @@ def _simulate(args: argparse.Namespace) -> None:
         raise ParameterError(f"--output {args.output!r} is not allowed: must end in .nc")
     dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
                        dt_output=args.dt_output, fields=args.fields,
-                       energy_balance=args.energy_balance)
+                       energy_balance=args.energy_balance, lyapunov=args.lyapunov,
+                       transient_periods=args.transient_periods)
     write_netcdf(dataset, output)
-    print(f"wrote {output}: {dataset.impact.size} impacts, status {dataset.attrs['status']}",
-          file=sys.stderr)
+    exponent = (f", largest Lyapunov exponent {float(dataset.lyapunov_exponent):.6g} +- "
+                f"{float(dataset.lyapunov_exponent_error):.2g} 1/s" if args.lyapunov else "")
+    print(f"wrote {output}: {dataset.impact.size} impacts, status {dataset.attrs['status']}"
+          f"{exponent}", file=sys.stderr)
 
 
 def _positive_float(text: str) -> float:
@@ -193,6 +196,11 @@ def build_parser() -> argparse.ArgumentParser:
                                "modes)")
     simulate.add_argument("--fields", action="store_true",
                           help="also store the deflection fields y_i(x, t)")
+    simulate.add_argument("--lyapunov", type=_positive_int, default=0, metavar="COUNT",
+                          help="also compute the COUNT leading Lyapunov exponents (1/s) of the "
+                               "run, 1 for the largest (spring law)")
+    simulate.add_argument("--transient-periods", type=int, default=0, metavar="PERIODS",
+                          help="forcing periods left out of the exponents' average (default 0)")
     simulate.add_argument("-o", "--output", required=True, metavar="RUN.nc")
     add_parameter_options(simulate)
     simulate.set_defaults(handler=_simulate)

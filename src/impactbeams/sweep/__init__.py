@@ -10,6 +10,7 @@ from impactbeams.sweep.definition import (
     CELL_PARAMETERS,
     DYNAMICS_OBSERVABLES,
     FIRST_IMPACT,
+    LYAPUNOV,
     OBSERVABLES,
     Axis,
     Sweep,
@@ -28,7 +29,7 @@ from impactbeams.sweep.run import (
     run_sweep,
 )
 
-__all__ = ["CELL_PARAMETERS", "DYNAMICS_OBSERVABLES", "FIRST_IMPACT", "MAX_SEGMENTS",
-           "OBSERVABLES", "Axis", "Chunk", "ChunkRunner", "Plan", "Progress", "Sweep",
-           "build_plan", "chunk_bounds", "compute_chunk", "default_chunk_cells", "load_sweep",
-           "local_runner", "map_dataset", "run_sweep", "sweep_from_mapping"]
+__all__ = ["CELL_PARAMETERS", "DYNAMICS_OBSERVABLES", "FIRST_IMPACT", "LYAPUNOV",
+           "MAX_SEGMENTS", "OBSERVABLES", "Axis", "Chunk", "ChunkRunner", "Plan", "Progress",
+           "Sweep", "build_plan", "chunk_bounds", "compute_chunk", "default_chunk_cells",
+           "load_sweep", "local_runner", "map_dataset", "run_sweep", "sweep_from_mapping"]

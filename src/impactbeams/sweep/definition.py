@@ -5,6 +5,7 @@ A sweep file (names as in :mod:`impactbeams.params`)::
     t_max = 1.0                          # s, horizon of every cell
     n_modes = 5                          # free modes per beam (contact phase: 2 n_modes)
     observables = ["first_impact_time"]  # default
+    transient_periods = 0                # forcing periods left out of long-time observables
     [params]                             # fixed parameters; the rest take the defaults
     clearance = 1.1e-5
     [axes.omega]                         # one table per swept parameter, in order
@@ -34,10 +35,11 @@ from impactbeams.variables import PARAMETERS
 FIRST_IMPACT = "first_impact_time"
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
-OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES)
+LYAPUNOV = "lyapunov_exponent"  # spring law only; its own windowed run (kernels.lyapunov)
+OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV)
 # parameters that change a cell but not its geometry (its modes): the packed cell columns
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
-_TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes")
+_TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes", "transient_periods")
 _AXIS_KEYS = ("min", "max", "num", "scale")
 _MAX_MODES = 200
 
@@ -87,6 +89,7 @@ class Sweep:
     fixed: Mapping[str, Any]
     axes: tuple[Axis, ...]
     source: str = "sweep"
+    transient_periods: int = 0
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -101,7 +104,7 @@ class Sweep:
     @property
     def needs_dynamics(self) -> bool:
         """Whether any observable needs the full dynamics (not the free phase alone)."""
-        return any(name in DYNAMICS_OBSERVABLES for name in self.observables)
+        return any(name in (*DYNAMICS_OBSERVABLES, LYAPUNOV) for name in self.observables)
 
     @property
     def stored(self) -> list[str]:
@@ -110,9 +113,10 @@ class Sweep:
 
     def definition(self) -> dict[str, Any]:
         """The sweep as a plain dict in the TOML file's layout (canonical, for hashing)."""
+        transient = {"transient_periods": self.transient_periods} if self.transient_periods else {}
         return {"t_max": self.t_max, "n_modes": self.n_modes,
                 "observables": list(self.observables), "params": dict(self.fixed),
-                "axes": {a.name: a.definition() for a in self.axes}}
+                "axes": {a.name: a.definition() for a in self.axes}, **transient}
 
     @property
     def base(self) -> Params:
@@ -147,14 +151,19 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
                 f"unknown observable; allowed: {', '.join(OBSERVABLES)}")
     require(f"observables in {source}", list(observables), len(observables) > 0,
             "must name at least one observable")
+    transient = data.get("transient_periods", 0)
+    require(f"transient_periods in {source}", transient,
+            isinstance(transient, int) and not isinstance(transient, bool) and transient >= 0,
+            "must be an integer >= 0 (forcing periods)")
     fixed = dict(data.get("params", {}))
     base = Params.from_mapping(fixed, source=f"[params] of {source}")
     axes_table = data.get("axes", {})
     require(f"[axes] of {source}", axes_table, isinstance(axes_table, dict) and axes_table,
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
-    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source)
+    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source, transient)
     _check_grid(sweep, base)
+    _check_lyapunov(sweep, base)
     return sweep
 
 
@@ -220,6 +229,17 @@ def _check_grid(sweep: Sweep, base: Params) -> None:
         point = {a.name: a.value(i) for a, i in zip(sweep.axes, bad, strict=True)}
         raise ParameterError(f"the grid of {sweep.source} has points where the initial gap "
                              f"clearance + uplift1 - uplift2 <= 0, e.g. at {point}")
+
+
+def _check_lyapunov(sweep: Sweep, base: Params) -> None:
+    """The Lyapunov exponent is defined for the spring law only (docs/model.md)."""
+    if LYAPUNOV not in sweep.observables:
+        return
+    laws = [axis.choices for axis in sweep.axes if axis.name == "contact_law"]
+    require(f"observables in {sweep.source}", LYAPUNOV,
+            set(laws[0] if laws else [base.contact_law]) == {"spring"},
+            "needs the spring contact law on every cell (the tied law's projections and "
+            "instantaneous impacts are not a flow whose linearisation converges in n_modes)")
 
 
 def _cell_grid(sweep: Sweep, base: Params, name: str) -> np.ndarray:
