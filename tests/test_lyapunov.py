@@ -279,3 +279,19 @@ def test_paper_fig4_case_is_chaotic():
     result = exponent({}, 3.0, 4, n_modes=n_modes)
     assert result.values[0] > 10 * result.errors[0] > 0
     assert 100 < result.values[0] < 400  # 1/s: e-folding in a few milliseconds
+
+
+def test_lyapunov_map_parallel_equals_serial_and_transient_is_part_of_the_sweep():
+    definition = {"t_max": 20 * PERIOD, "n_modes": N_MODES, "transient_periods": 5,
+                  "observables": ["lyapunov_exponent"], "params": SOFT,
+                  "axes": {"omega": {"min": 40.0, "max": 60.0, "num": 3}}}
+    sweep = sweep_from_mapping(definition)
+    parallel = run_sweep(sweep, parallel=True)
+    serial = run_sweep(sweep, parallel=False)
+    assert np.array_equal(parallel.lyapunov_exponent, serial.lyapunov_exponent)
+    assert np.all(np.isfinite(parallel.lyapunov_exponent))
+    assert sweep.definition()["transient_periods"] == 5
+    assert sweep.fingerprint() != sweep_from_mapping({**definition,
+                                                      "transient_periods": 0}).fingerprint()
+    with pytest.raises(ValueError, match="transient_periods"):
+        sweep_from_mapping({**definition, "transient_periods": -1})
