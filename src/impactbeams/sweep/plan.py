@@ -76,7 +76,7 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
     for combo in itertools.product(*(range(sweep.axes[k].num) for k in axes)):
         changes = {sweep.axes[k].name: sweep.axes[k].value(i)
                    for k, i in zip(axes, combo, strict=True)}
-        yield sweep.base.replace(**changes) if changes else sweep.base
+        yield sweep.params_at(changes)
 
 
 def _geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
