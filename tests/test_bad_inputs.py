@@ -74,7 +74,7 @@ CASES = {
                              ["argument --clearance: 'abc' is not a number"]),
     "modes-clearance-nan": (["modes", "--clearance", "nan"], {}, ["clearance = nan"]),
     "modes-clearance-large": (["modes", "--clearance", "0.05"], {},
-                              ["clearance = 0.05", f"{MAX_DEFLECTION:g} l1"]),
+                              ["clearance = 0.05", f"{MAX_DEFLECTION:g} (l1 + l2) = 0.044 m"]),
     "modes-EI1-inf": (["modes", "--EI1", "inf"], {}, ["EI1 = inf"]),
     "modes-EI-and-material": (["modes", "--EI1", "1.0", "--E1", "2e11"], {},
                               ["both EI1 and material keys E1"]),

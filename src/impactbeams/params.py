@@ -85,11 +85,12 @@ def require_finite(name: str, value: Any, unit: str = "") -> float:
 
 
 # --- allowed values ------------------------------------------------------------------------
-# Every limit below is explained in docs/limits.md ("Allowed parameter values").
+# Every limit below is explained in docs/limits.md ("Allowed values").
 
-# A tip deflection (clearance, uplift, static deflection under F0) of at most this fraction of
-# the beam's length: small-deflection theory. The tip's axial shortening, (3/5) w^2 / l for the
-# static tip-load shape, which the linear model leaves out, stays below 12 % of w.
+# A tip deflection (uplift, static deflection under F0, each tip's share of the clearance) of
+# at most this fraction of the beam's length: small-deflection theory. The tip's axial
+# shortening, (3/5) w^2 / l for the static tip-load shape, which the linear model leaves out,
+# stays below 12 % of w.
 MAX_DEFLECTION = 0.2
 MAX_MODES = 200  # free modes per beam: the package's limit (docs/limits.md)
 # rad/s: a continuum beam's frequencies stay far below its lattice vibrations (~1e13 rad/s)
@@ -209,31 +210,33 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point) -> None:
     parameter, so a sweep that passes at the corners of its box passes everywhere.
     """
     v = {name: np.asarray(value, dtype=float) for name, value in values.items()}
-    require_all("clearance", v["clearance"], v["clearance"] <= MAX_DEFLECTION * v["l1"], point,
-                 lambda i: _deflection_rule("the clearance", "l1", v["l1"], i))
+    # the tips close the clearance by deflecting, each by at most MAX_DEFLECTION of its length
+    reach = v["l1"] + v["l2"]
+    require_all("clearance", v["clearance"], v["clearance"] <= MAX_DEFLECTION * reach, point,
+                lambda j: _deflection_rule("the clearance", "(l1 + l2)", reach, j))
     for i in ("1", "2"):
         require_all(f"uplift{i}", v[f"uplift{i}"],
-                     np.abs(v[f"uplift{i}"]) <= MAX_DEFLECTION * v[f"l{i}"], point,
-                     lambda j, i=i: _deflection_rule(f"|uplift{i}|", f"l{i}", v[f"l{i}"], j))
+                    np.abs(v[f"uplift{i}"]) <= MAX_DEFLECTION * v[f"l{i}"], point,
+                    lambda j, i=i: _deflection_rule(f"|uplift{i}|", f"l{i}", v[f"l{i}"], j))
     gap = v["clearance"] + v["uplift1"] - v["uplift2"]
-    require_all("uplift2", v["uplift2"], gap > 0, point, lambda i: (
-        f"the initial gap clearance + uplift1 - uplift2 = {value_at(gap, i)!r} m must be > 0 (m)"))
+    require_all("uplift2", v["uplift2"], gap > 0, point, lambda j: (
+        f"the initial gap clearance + uplift1 - uplift2 = {value_at(gap, j)!r} m must be > 0 (m)"))
     compliance = v["l1"] ** 3 / (3.0 * v["EI1"])
     static = v["force_amplitude"] * compliance
     require_all("force_amplitude", v["force_amplitude"], static <= MAX_DEFLECTION * v["l1"],
-                 point, lambda j: _deflection_rule(
-                     f"its static tip deflection F0 l1^3 / (3 EI1) = {value_at(static, j):.3g} m",
-                     "l1", v["l1"], j) + ", i.e. force_amplitude <= "
-                     f"{MAX_DEFLECTION * value_at(v['l1'] / compliance, j):.3g} N for this beam 1")
+                point, lambda j: _deflection_rule(
+                    f"its static tip deflection F0 l1^3 / (3 EI1) = {value_at(static, j):.3g} m",
+                    "l1", v["l1"], j) + ", i.e. force_amplitude <= "
+                f"{MAX_DEFLECTION * value_at(v['l1'] / compliance, j):.3g} N for this beam 1")
     for i in ("1", "2"):
         fundamental = (np.sqrt(v[f"EI{i}"] / v[f"rhoA{i}"])
                        * (FIRST_CANTILEVER_ROOT / v[f"l{i}"]) ** 2)
-        require_all(f"l{i}", v[f"l{i}"], fundamental <= MAX_FREQUENCY, point, lambda j, i=i,
-                     f=fundamental: (
-                         f"beam {i}'s fundamental frequency sqrt(EI{i} / rhoA{i}) (1.875 / l{i})^2"
-                         f" = {value_at(f, j):.3g} rad/s must be <= {MAX_FREQUENCY:g} rad/s: a "
-                         "continuum beam model does not hold at higher frequencies (check "
-                         f"l{i}, EI{i}, rhoA{i} or the material keys)"))
+        require_all(f"l{i}", v[f"l{i}"], fundamental <= MAX_FREQUENCY, point,
+                    lambda j, i=i, f=fundamental: (
+                        f"beam {i}'s fundamental frequency sqrt(EI{i} / rhoA{i}) (1.875 / l{i})^2"
+                        f" = {value_at(f, j):.3g} rad/s must be <= {MAX_FREQUENCY:g} rad/s: a "
+                        "continuum beam model does not hold at higher frequencies (check "
+                        f"l{i}, EI{i}, rhoA{i} or the material keys)"))
 
 
 def value_at(array: Any, index: tuple[int, ...]) -> float:
@@ -250,7 +253,7 @@ def _deflection_rule(what: str, length: str, lengths: np.ndarray, index: tuple[i
 
 
 def require_all(name: str, value: np.ndarray, ok: np.ndarray, point: PointName,
-                 rule: Callable[[tuple[int, ...]], str]) -> None:
+                rule: Callable[[tuple[int, ...]], str]) -> None:
     """Raise ParameterError naming ``name``'s value where ``ok`` fails first."""
     index = _first_failure(ok)
     if index is not None:

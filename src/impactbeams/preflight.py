@@ -34,6 +34,12 @@ if TYPE_CHECKING:
 # forcing's). A phase is rounded to ~0.1 eps omega t per evaluation (docs/limits.md), 2e-7 rad
 # at 1e10 rad; beyond, results lose their digits, and the run would take hours per cell.
 MAX_PHASE = 1e10
+# Rough run costs, seconds per coordinate (2 n_modes) and radian of the fastest oscillation over
+# [0, t_max], per cell and core (docs/limits.md): a first-impact map (Fig. 5a, 1e6 cells in
+# 10.6 s on 2 cores, many cells stopping early) and the full dynamics (simulate, spring law,
+# 20 to 40 modes: 1.5e-8 to 3.8e-8).
+FIRST_IMPACT_RATE = 1.5e-10
+DYNAMICS_RATE = 4e-8
 
 
 def highest_frequency(values: Mapping[str, Any], n_modes: int) -> np.ndarray:
@@ -78,9 +84,10 @@ class Cost:
     seconds: float
 
     def describe(self) -> str:
-        """E.g. ``"about 1.2 GiB of memory and roughly 3 min"``."""
-        return (f"about {format_bytes(self.memory)} of memory and roughly "
-                f"{format_time(self.seconds)}")
+        """E.g. ``"about 1.2 GiB of memory for its arrays and roughly 3 min"``."""
+        duration = (f"roughly {format_time(self.seconds)}" if self.seconds >= 1
+                    else "under a second")
+        return f"about {format_bytes(self.memory)} of memory for its arrays and {duration}"
 
 
 # The share of the physical memory a run may plan to use: the rest is left to the operating

@@ -44,7 +44,14 @@ from impactbeams.params import (
     require_table,
     resolve_materials,
 )
-from impactbeams.preflight import Cost, check_run, highest_frequency, require_memory
+from impactbeams.preflight import (
+    DYNAMICS_RATE,
+    FIRST_IMPACT_RATE,
+    Cost,
+    check_run,
+    highest_frequency,
+    require_memory,
+)
 from impactbeams.variables import PARAMETERS
 
 FIRST_IMPACT = "first_impact_time"
@@ -59,11 +66,6 @@ _AXIS_KEYS = ("min", "max", "num", "scale")
 # computed serially before the map runs, 0.4 ms (5 modes, first impact) to 2 s (200 modes, tied
 # dynamics) each (docs/limits.md).
 MAX_GEOMETRIES = 10_000
-# Rough costs, measured on one core (docs/limits.md): seconds per coordinate and radian of the
-# fastest oscillation over [0, t_max], per cell (the first-impact map of Fig. 5a; the full
-# dynamics of simulate at 20 to 40 modes), and seconds of set-up per geometry.
-FIRST_IMPACT_RATE = 1.5e-10
-DYNAMICS_RATE = 4e-8
 
 
 @dataclasses.dataclass(frozen=True)
@@ -209,7 +211,7 @@ def _number(value: Any, name: str) -> float:
 
 def _observables(value: Any, source: str) -> tuple[str, ...]:
     where = f"observables in {source}"
-    require(where, value, isinstance(value, list) and value,
+    require(where, value, isinstance(value, list) and bool(value),
             f'must be a non-empty list of names, e.g. ["{FIRST_IMPACT}"]')
     for name in value:
         require(where, name, name in OBSERVABLES,
@@ -260,7 +262,7 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
 def _check_conflicts(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: str) -> None:
     """Refuse a parameter given twice: fixed and swept, or a beam by EI/rhoA and by material."""
     swept = {axis.name for axis in axes}
-    for name in swept & set(fixed):
+    for name in sorted(swept & set(fixed)):
         raise ParameterError(f"{name} is given both in [params] ({name} = {fixed[name]!r}) and "
                              f"as [axes.{name}] of {source}: remove one of them")
     given = {**{name: "[params]" for name in fixed}, **{name: "[axes]" for name in swept}}

@@ -12,7 +12,13 @@ import xarray as xr
 from impactbeams.compliant import MAX_MODES, required_modes
 from impactbeams.packing import Packed, pack_run
 from impactbeams.params import Params, require, require_finite
-from impactbeams.preflight import Cost, check_run, highest_frequency, require_memory
+from impactbeams.preflight import (
+    DYNAMICS_RATE,
+    Cost,
+    check_run,
+    highest_frequency,
+    require_memory,
+)
 from impactbeams.trajectory.episodes import default_separation, episode_table
 from impactbeams.trajectory.fields import deflections, time_series
 from impactbeams.trajectory.impacts import impact_table
@@ -23,9 +29,6 @@ from impactbeams.variables import attributes, global_attributes
 # t_max would restart it more than a million times per search (and below eps t_max it cannot
 # advance the time at all).
 MIN_SEARCH_SPAN = 1e-6
-# Rough cost of the full dynamics: seconds per coordinate and radian of the fastest mode over
-# [0, t_max] (measured: simulate at 20 to 40 modes, docs/limits.md).
-DYNAMICS_RATE = 4e-8
 SERIES = 10  # time series always stored (time, tips, gap, force, energies, in_contact)
 ENERGY_SERIES = 2  # work_of_force, damping_dissipation
 
@@ -82,7 +85,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
 
     Args:
         params: model parameters (SI units).
-        t_max: end time (s), > 0.
+        t_max: end time (s), > 0; the fastest mode (or the forcing) may turn through at
+            most ``preflight.MAX_PHASE`` = 1e10 rad by then.
         n_modes: free modes per beam. Default: 5 for the tied law (the contact phase has
             2 n_modes modes); for the spring law the number that resolves the contact,
             4 n* (docs/model.md, "Resolution"), at least 5. A spring-law run with fewer gets
@@ -95,8 +99,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         max_events: cap on the number of phases (events + 1); a run that reaches it stops
             there with ``attrs["status"] = "event_limit"`` (and a RuntimeWarning).
         search_span: the event search restarts from the exactly propagated state every this
-            many seconds (default t_max). Results do not depend on it beyond round-off; it is
-            here to test that.
+            many seconds (default t_max; at least 1e-6 t_max, ``MIN_SEARCH_SPAN``). Results do
+            not depend on it beyond round-off; it is here to test that.
         episode_separation: contacts closer than this (s, free interval from release to the
             next onset) form one impact episode; default a quarter period of the slowest free
             mode (see :mod:`impactbeams.trajectory.episodes`).
@@ -107,6 +111,10 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
 
     The output grid never influences the dynamics: events are located by the kernel on its
     own, and the outputs are evaluated from the exact segment states.
+
+    Every argument is checked before any work: a bad one, or a run that would not fit in
+    memory (:func:`simulation_cost`), raises :class:`~impactbeams.params.ParameterError` naming
+    it, its value and what is allowed (docs/limits.md, "Allowed values").
     """
     run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
                                  search_span, episode_separation, fields, energy_balance)
