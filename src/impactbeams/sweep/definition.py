@@ -333,8 +333,8 @@ def expected_cost(sweep: Sweep, threads: int | None = None) -> Cost:
     """Peak memory and rough wall time of running ``sweep`` on ``threads`` (default: all cores).
 
     Memory: the results (one float64 array of every cell per stored variable and the Dataset's
-    copy: 16 bytes per cell and variable, plus 2 for ``impacted``; measured: 17.7 bytes per
-    cell for a first-impact map of 2e7 cells, netCDF writing included), the
+    copy: 16 bytes per cell and variable, plus 4 for ``impacted`` and its temporaries; the
+    traced peak of a first-impact map, netCDF writing included, is 18.04 bytes per cell), the
     plan (8 x 2N float64 per geometry; a dynamics map 10 (2N)^2, with its stacking copy) and a
     dynamics map's per-thread segment buffers (MAX_SEGMENTS x (4 x 2N + 3) float64). Time:
     ``rate`` x 2N x (fastest frequency x t_max) per cell over the threads, plus the set-up.
@@ -347,7 +347,7 @@ def expected_cost(sweep: Sweep, threads: int | None = None) -> Cost:
     values, _ = _corners(sweep)
     fastest = float(np.max(np.maximum(values["omega"],
                                       highest_frequency(values, sweep.n_modes))))
-    results = sweep.size * (16 * len(sweep.stored) + 2)
+    results = sweep.size * (16 * len(sweep.stored) + 4)
     if sweep.needs_dynamics:
         plan = 2 * geometries * 8 * 10 * coordinates**2
         buffers = threads * MAX_SEGMENTS * (4 * coordinates + 3) * 8

@@ -20,7 +20,7 @@ from impactbeams.preflight import (
     require_memory,
 )
 from impactbeams.trajectory.episodes import default_separation, episode_table
-from impactbeams.trajectory.fields import deflections, time_series
+from impactbeams.trajectory.fields import SAMPLE_CHUNK, deflections, time_series
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory, run
 from impactbeams.variables import attributes, global_attributes
@@ -31,6 +31,9 @@ from impactbeams.variables import attributes, global_attributes
 MIN_SEARCH_SPAN = 1e-6
 SERIES = 10  # time series always stored (time, tips, gap, force, energies, in_contact)
 ENERGY_SERIES = 2  # work_of_force, damping_dissipation
+# float64 arrays of (output times in a sampling chunk) x (coordinates) alive while a chunk is
+# sampled and its observables evaluated: measured peaks 12 to 15 (tests/test_bad_inputs.py)
+SAMPLING_ARRAYS = 20
 
 
 def _output_times(t_max: float, dt_output: float, times: np.ndarray | None) -> np.ndarray:
@@ -65,14 +68,16 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
                     n_points: int, energy_balance: bool, max_events: int) -> Cost:
     """Peak memory and rough time of a simulated run (arguments as in :func:`simulate`).
 
-    Memory: the output series (and fields) twice (arrays and Dataset), and the recorded
-    segments at the ``max_events`` cap (time, phase and four states of 2 n_modes each).
+    Memory: the output series (and fields) twice (arrays and Dataset), the workspace of the
+    sampling (SAMPLING_ARRAYS float64 arrays of a chunk's times by the coordinates) and the
+    recorded segments at the ``max_events`` cap (time, phase and four states of 2 n_modes).
     """
     coordinates = 2 * n_modes
     series = 1 + SERIES + ENERGY_SERIES * energy_balance + 2 * n_points * fields
+    sampling = SAMPLING_ARRAYS * 8 * min(n_times, SAMPLE_CHUNK) * coordinates
     segments = max_events * (4 * coordinates + 3) * 8
     fastest = float(max(highest_frequency(params.numeric(), n_modes), params.omega))
-    return Cost(2 * 8 * series * n_times + segments,
+    return Cost(2 * 8 * series * n_times + sampling + segments,
                 DYNAMICS_RATE * coordinates * fastest * t_max)
 
 
