@@ -115,15 +115,15 @@ class Range:
     why: str = ""
     rule: str = ""
 
-    def sign_holds(self, value: np.ndarray) -> np.ndarray:
-        """Elementwise: the value has the allowed sign."""
+    def sign_holds(self, value: Any) -> Any:
+        """Elementwise: the value (a float or an array) has the allowed sign."""
         if self.sign == "> 0":
             return value > 0
-        return value >= 0 if self.sign == ">= 0" else np.full(np.shape(value), True)
+        return value >= 0 if self.sign == ">= 0" else value == value  # all (NaN: refused before)
 
-    def magnitude_holds(self, value: np.ndarray) -> np.ndarray:
+    def magnitude_holds(self, value: Any) -> Any:
         """Elementwise: |value| within [low, high] (or [low, high))."""
-        size = np.abs(value)
+        size = abs(value)
         below = size < self.high if self.high_open else size <= self.high
         return (size >= self.low) & below
 
@@ -173,12 +173,13 @@ def no_point(index: tuple[int, ...]) -> str:
     return ""
 
 
-def _first_failure(ok: np.ndarray) -> tuple[int, ...] | None:
-    """Index of the first False in ``ok``, or None if all hold."""
-    ok = np.asarray(ok)
+def _first_failure(ok: Any) -> tuple[int, ...] | None:
+    """Index of the first False in ``ok`` (a bool or a boolean array), or None if all hold."""
+    if np.ndim(ok) == 0:  # one set of parameters: the common case, kept cheap
+        return None if ok else ()
     if ok.all():
         return None
-    return tuple(int(i) for i in np.unravel_index(np.argmin(ok), np.shape(ok)))
+    return tuple(int(i) for i in np.unravel_index(np.argmin(ok), ok.shape))
 
 
 def check_range(name: str, value: Any, point: PointName = no_point) -> None:
@@ -187,13 +188,13 @@ def check_range(name: str, value: Any, point: PointName = no_point) -> None:
     ``value``: a float or an array of them (every element is checked, vectorised).
     """
     allowed, unit = RANGES[name], PARAMETERS[name].units
-    values = np.asarray(value, dtype=float)
+    values = float(value) if np.ndim(value) == 0 else np.asarray(value, dtype=float)
     for holds, failed_sign in ((np.isfinite(values), None), (allowed.sign_holds(values), True),
                                (allowed.magnitude_holds(values), False)):
         index = _first_failure(holds)
         if index is None:
             continue
-        bad = values[index].item()
+        bad = value_at(values, index)
         rule = ("must be a finite real number" if failed_sign is None
                 else allowed.describe(failed_sign))
         why = f": {allowed.why}" if allowed.why and not failed_sign else ""
