@@ -99,7 +99,8 @@ VARIABLES: dict[str, Variable] = {
     "dynamics_status": Variable(
         ("*",), "1", "status of the full-dynamics run",
         "0: reached t_max; 1: stopped at the cap on phases per cell; 2: stuck (a run of "
-        "zero-length phases); observables then cover the part before the stop"),
+        "zero-length phases); 3: an event search reached its step cap; observables then "
+        "cover the part before the stop"),
     "contact_fraction": Variable(
         ("*",), "1", "fraction of time in contact",
         "time spent in the contact phase divided by t_max (full dynamics)"),
