@@ -222,7 +222,7 @@ def image_output(path: str | Path, what: str) -> Path:
 
 
 def read_netcdf(path: str | Path, what: str) -> xr.Dataset:
-    """Load a netCDF file written by impactbeams; anything else is a ParameterError."""
+    """Load a netCDF file; a missing, unreadable or non-netCDF file is a ParameterError."""
     import xarray as xr
 
     path = require_input_file(path, what)
@@ -233,11 +233,8 @@ def read_netcdf(path: str | Path, what: str) -> xr.Dataset:
         # xarray's ValueError when no backend recognises the file is long: say it shortly
         detail = ("an unknown format" if "did not find a match" in str(error)
                   else _first_line(error))
-        raise ParameterError(f"{what} file {str(path)!r} is not a readable netCDF file ({detail}): "
-                             "give a file written by impactbeams") from None
-    if not str(loaded.attrs.get("source", "")).startswith("impactbeams"):
-        raise ParameterError(f"{what} file {str(path)!r} is a netCDF file but not one written by "
-                             "impactbeams (no source = 'impactbeams ...' attribute)")
+        raise ParameterError(f"{what} file {str(path)!r} is not a readable netCDF file "
+                             f"({detail}): give a file written by impactbeams") from None
     return loaded
 
 
