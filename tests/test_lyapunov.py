@@ -273,7 +273,7 @@ def test_cli_simulate_reports_the_exponent_and_refuses_the_tied_law(tmp_path, ca
 
 def test_paper_fig4_case_is_chaotic():
     """The paper's Fig. 4 parameters, Hertz spring at the resolving 32 modes, over the figure's
-    horizon: a positive exponent far above its error (238 +- 11 1/s; docs/lyapunov.md)."""
+    horizon: a positive exponent far above its error (247 +- 14 1/s; docs/lyapunov.md)."""
     from impactbeams.compliant import recommended_modes
 
     params = Params()
