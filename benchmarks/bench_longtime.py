@@ -77,8 +77,9 @@ def cell_costs(sweep, stride: int) -> list[CellCost]:
         seconds = time.perf_counter() - start
         omega = float(sweep.axes[0].values[i])
         period = float(long_time.forcing_period(omega))
-        costs.append(CellCost(omega, seconds, float(long_time.horizon(omega)),
-                              long_time.transient_periods + long_time.sampled_periods,
+        costs.append(CellCost(omega, seconds,
+                              float(long_time.horizon(omega, sweep.transient_periods)),
+                              sweep.transient_periods + long_time.sampled_periods,
                               float(values["steady_impact_rate"][0]) * period,
                               int(values["response_period"][0])))
         print(f"Omega {omega:7.1f}: {seconds:7.2f} s, {costs[-1].onsets_per_period:5.1f} "
@@ -301,7 +302,7 @@ def diagram_study(sweep, source: str, stride: int) -> dict:
         "sweep": source, "diagram_cells": sweep.size, "stride": stride,
         "omega_range": [sweep.axes[0].min, sweep.axes[0].max], "n_modes": sweep.n_modes,
         "contact_stiffness": sweep.base.contact_stiffness,
-        "transient_periods": sweep.long_time.transient_periods,
+        "transient_periods": sweep.transient_periods,
         "sampled_periods": sweep.long_time.sampled_periods,
         "cells": [dataclasses.asdict(c) for c in costs],
         "diagram_one_core_s": stride * serial,

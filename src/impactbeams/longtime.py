@@ -1,7 +1,8 @@
 """Long-time response: stroboscopic sampling, the period of the steady response, steady rates.
 
 Definitions (docs/model.md, "Long-time dynamics"): after ``transient_periods`` forcing periods
-T = 2 pi / Omega, the tips are sampled once per period at forcing phase 0,
+T = 2 pi / Omega (the run's transient, shared with the Lyapunov exponent's: the sweep key and
+simulate's keyword), the tips are sampled once per period at forcing phase 0,
 ``t_k = (transient_periods + k) T``, k = 0 .. ``sampled_periods`` - 1; the sampled window is
 ``[t_0, t_0 + sampled_periods T)``. The period of the steady response is the smallest p <=
 ``max_period`` for which the samples repeat with period p within ``period_tolerance`` of
@@ -37,10 +38,9 @@ LARGEST_MAX_PERIOD = 16  # the default max_period, when the samples allow it
 
 @dataclasses.dataclass(frozen=True)
 class LongTime:
-    """How a long run is sampled and its period detected (see the module docstring).
+    """How a long run is sampled after its transient, and its period detected (module doc).
 
     Attributes:
-        transient_periods: forcing periods discarded before the first sample (>= 0).
         sampled_periods: number of samples, one per forcing period (>= 2).
         period_tolerance: relative tolerance of the period detection (0 < tol < 1).
         max_period: largest period looked for, at most sampled_periods / 2 so that a period
@@ -48,16 +48,14 @@ class LongTime:
             16 and sampled_periods // 2.
     """
 
-    transient_periods: int = 500
     sampled_periods: int = 200
     period_tolerance: float = DEFAULT_PERIOD_TOLERANCE
     max_period: int | None = None
 
     def __post_init__(self) -> None:
-        for name, smallest in (("transient_periods", 0), ("sampled_periods", 2)):
-            value = getattr(self, name)
-            require(name, value, _is_int(value) and value >= smallest,
-                    f"must be an integer >= {smallest}")
+        require("sampled_periods", self.sampled_periods,
+                _is_int(self.sampled_periods) and self.sampled_periods >= 2,
+                "must be an integer >= 2")
         tolerance = self.period_tolerance
         require("period_tolerance", tolerance, isinstance(tolerance, (int, float))
                 and not isinstance(tolerance, bool) and 0.0 < tolerance < 1.0,
@@ -74,22 +72,22 @@ class LongTime:
         """T = 2 pi / Omega (s); Omega in rad/s, > 0."""
         return 2.0 * math.pi / np.asarray(omega, dtype=float)
 
-    def sample_times(self, omega: float | np.ndarray) -> np.ndarray:
+    def sample_times(self, omega: float | np.ndarray, transient_periods: int) -> np.ndarray:
         """Sample times t_k (s), shape ``omega.shape + (sampled_periods,)``."""
         period = np.asarray(self.forcing_period(omega))[..., None]
-        return (self.transient_periods + np.arange(self.sampled_periods)) * period
+        return self.period_numbers(transient_periods) * period
 
-    def horizon(self, omega: float | np.ndarray) -> float | np.ndarray:
+    def horizon(self, omega: float | np.ndarray, transient_periods: int) -> float | np.ndarray:
         """End of the sampled window (s): (transient_periods + sampled_periods) T."""
-        return (self.transient_periods + self.sampled_periods) * self.forcing_period(omega)
+        return (transient_periods + self.sampled_periods) * self.forcing_period(omega)
 
     def window(self, omega: float | np.ndarray) -> float | np.ndarray:
         """Length of the sampled window (s), sampled_periods T."""
         return self.sampled_periods * self.forcing_period(omega)
 
-    def period_numbers(self) -> np.ndarray:
+    def period_numbers(self, transient_periods: int) -> np.ndarray:
         """Forcing periods from t = 0 to each sample: the ``period`` coordinate."""
-        return self.transient_periods + np.arange(self.sampled_periods)
+        return transient_periods + np.arange(self.sampled_periods)
 
 
 def _is_int(value: object) -> bool:
@@ -125,8 +123,9 @@ def steady_rate(count: float | np.ndarray, start: float | np.ndarray, end: float
     return np.where(covered > 0, count / np.where(covered > 0, covered, 1.0), np.nan)
 
 
-def long_time_values(long_time: LongTime, omega: np.ndarray, clearance: np.ndarray,
-                     samples: np.ndarray, summary: np.ndarray) -> dict[str, np.ndarray]:
+def long_time_values(long_time: LongTime, transient_periods: int, omega: np.ndarray,
+                     clearance: np.ndarray, samples: np.ndarray,
+                     summary: np.ndarray) -> dict[str, np.ndarray]:
     """The long-time observables of runs from the stroboscope kernel's output.
 
     ``omega`` (rad/s), ``clearance`` (m): per run; ``samples``: (runs, sampled_periods,
@@ -136,7 +135,8 @@ def long_time_values(long_time: LongTime, omega: np.ndarray, clearance: np.ndarr
     """
     y1, y2, v1, v2 = (samples[..., column] for column in (layout.TIP_Y1, layout.TIP_Y2,
                                                           layout.TIP_V1, layout.TIP_V2))
-    start, end = long_time.sample_times(omega)[..., 0], long_time.horizon(omega)
+    start = long_time.sample_times(omega, transient_periods)[..., 0]
+    end = long_time.horizon(omega, transient_periods)
     reached = summary[:, layout.STROBE_T_END]
     return {
         "poincare_deflection1": y1,

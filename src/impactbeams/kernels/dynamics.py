@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from impactbeams.kernels.events import event_value, first_root
+from impactbeams.kernels.events import GAVE_UP, event_value, first_root
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.layout import (
     CONTACT,
@@ -41,8 +41,8 @@ from impactbeams.kernels.layout import (
 from impactbeams.kernels.propagation import advance
 from impactbeams.kernels.spring import to_contact, to_free
 
-COMPLETE, EVENT_LIMIT, STUCK = 0, 1, 2
-STATUS_NAMES = ("complete", "event_limit", "stuck")
+COMPLETE, EVENT_LIMIT, STUCK, SEARCH_LIMIT = 0, 1, 2, 3
+STATUS_NAMES = ("complete", "event_limit", "stuck", "search_limit")
 # Consecutive zero-length phases allowed before the run is declared stuck. A chattering
 # sequence that converges (alternating projections) ends well before; a persistent conflict
 # between the two truncated phases would repeat forever at one instant.
@@ -107,13 +107,17 @@ def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v):
     """First root in (t_s, t_max] of the phase's event function, NaN if none.
 
     The certified search restarts from the exactly propagated state every ``search span``
-    seconds (settings); the root does not depend on that span beyond round-off.
+    seconds (settings); the root does not depend on that span beyond round-off. A span below
+    the resolution of t searches the rest at once (it could not advance t). ``GAVE_UP`` if a
+    search reached its step cap.
     """
     t_max, span = settings.t_max, settings.search_span
     q_a, v_a = q_s.copy(), v_s.copy()
     t_a = t_s
     while t_a < t_max:
         t_b = min(t_a + span, t_max)
+        if t_b <= t_a:
+            t_b = t_max
         root = first_root(q_a, v_a, t_a, t_b, table[ROW_OMEGA], table[ROW_ZETA], force,
                           table[ROW_EVENT], scalars[SCALAR_CONST], event_sine(scalars),
                           settings.forcing_frequency, q, v)
@@ -149,6 +153,8 @@ def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings
     """First time from t on, in growing steps of a few ulps, where e > 0 (or e' > 0).
 
     Moves a search off a root it has just located, where e (or e') is 0 to round-off.
+    ``GAVE_UP`` if it is still not positive after 64 doublings of the step (a span of
+    2^66 eps t: the root was not a crossing).
     """
     step = 4.0 * _EPS * max(abs(t), 1e-300)
     for _ in range(64):
@@ -156,10 +162,10 @@ def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings
         value, slope = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
                                    event_sine(scalars), settings.forcing_frequency)
         if (slope if positive_rate else value) > 0.0:
-            break
+            return t
         t += step
         step *= 2.0
-    return t
+    return GAVE_UP
 
 
 @kernel
@@ -183,10 +189,12 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
         if not wait_falling:
             return t_s
         t_min = rate_root(table, force, scalars, -1.0, q_s, v_s, t_s, t_max, settings, q, v)
-        if math.isnan(t_min):
-            return np.nan
+        if math.isnan(t_min) or t_min == GAVE_UP:
+            return t_min
         t_a = _step_until(table, force, scalars, q_s, v_s, t_s, t_min, True, settings, q_a,
                           v_a)
+        if t_a == GAVE_UP:
+            return GAVE_UP
         value, _ = event_value(q_a, v_a, t_a, table[ROW_EVENT], scalars[SCALAR_CONST],
                                event_sine(scalars), settings.forcing_frequency)
         if value > 0.0:
@@ -194,13 +202,19 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     elif not wait_rising:
         return t_s
     t_peak = rate_root(table, force, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v)
+    if t_peak == GAVE_UP:
+        return GAVE_UP
     t_limit = t_max if math.isnan(t_peak) else t_peak
     t_up = first_root(q_a, v_a, t_a, t_limit, table[ROW_OMEGA], table[ROW_ZETA], force,
                       -table[ROW_EVENT], -scalars[SCALAR_CONST], -event_sine(scalars),
                       settings.forcing_frequency, q, v)
+    if t_up == GAVE_UP:
+        return GAVE_UP
     if math.isnan(t_up) or t_up >= t_limit:
         return t_peak
     t_up = _step_until(table, force, scalars, q_a, v_a, t_a, t_up, False, settings, q, v)
+    if t_up == GAVE_UP:
+        return GAVE_UP
     q_up, v_up = q.copy(), v.copy()
     return find_event(table, force, scalars, q_up, v_up, t_up, settings, q, v)
 
@@ -233,6 +247,8 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
                           settings, q, v)
     t_open = first_root(q_s, v_s, t_s, settings.t_max, omega, zeta, force, -table[ROW_EVENT],
                         -scalars[SCALAR_CONST], -event_sine(scalars), big_omega, q, v)
+    if t_open == GAVE_UP:
+        return GAVE_UP, False
     if math.isnan(t_open) or t_onset <= t_open:
         return t_onset, False
     return t_open, True
@@ -240,7 +256,7 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
 
 @kernel
 def segment_arrays(capacity, n_coords):
-    """Empty arrays for ``capacity`` segments of ``n_coords`` coordinates (``run_events_from``).
+    """Empty arrays for ``capacity`` segments of ``n_coords`` coordinates (``run_events``).
 
     Returns ``(seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v)``.
     """
@@ -252,23 +268,17 @@ def segment_arrays(capacity, n_coords):
 
 @kernel
 def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings, q0, v0,
-               seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
-    """Integrate from the free-phase state (q0, v0) at t = 0 to t_max: ``run_events_from``."""
-    return run_events_from(tables, forces, phase_scalars, overlap, shifts, spring, drives,
-                           settings, 0.0, q0, v0, seg_time, seg_phase, seg_sustained, seg_q,
-                           seg_v, end_q, end_v)
+               seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v, t_start=0.0,
+               phase_start=FREE):
+    """Integrate from the free-phase state (q0, v0) at t = 0 to t_max, event by event.
 
-
-@kernel
-def run_events_from(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings,
-                    t0, q0, v0, seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
-    """Integrate from the free-phase state (q0, v0) at time t0 (s) to t_max, event by event.
-
-    t0 is 0, or the start of a recorded free segment that follows a contact of positive
-    length: there the bookkeeping below (instantaneous impacts, accumulations, conflicts,
-    early releases) is at its initial state, so a run resumed from such a segment's
-    ``seg_time, seg_q, seg_v`` records the same segments, bit for bit, as the uninterrupted
-    run (how long runs are computed in windows of bounded memory).
+    ``t_start``, ``phase_start``: start instead from the state (q0, v0) of that phase (in its
+    coordinates) at that time (s), to run a long horizon in windows of bounded memory. A
+    window starts afresh: in the tied law the accumulation and conflict history of the
+    previous window is not carried over. At the start of a recorded free segment that follows
+    a contact of positive length that history is empty, so a window started there (from its
+    ``seg_time, seg_q, seg_v``) records the same segments, bit for bit, as the uninterrupted
+    run.
 
     Segment k starts at ``seg_time[k]`` in phase ``seg_phase[k]`` with state
     ``seg_q[k], seg_v[k]`` and ends (next event, or t_max for the last one) in state
@@ -291,12 +301,14 @@ def run_events_from(tables, forces, phase_scalars, overlap, shifts, spring, driv
 
     Returns (number of segments, status, end time of the last segment in s). Status:
     ``COMPLETE`` (t_max reached), ``EVENT_LIMIT`` (arrays full: the run stops at the last
-    recorded event) or ``STUCK`` (more than ``ZENO_LIMIT`` zero-length phases in a row).
+    recorded event), ``STUCK`` (more than ``ZENO_LIMIT`` zero-length phases in a row) or
+    ``SEARCH_LIMIT`` (an event search reached its step cap, ``events.step_limit``; the run
+    stops at the start of that segment).
     """
     n_coords = q0.size
     q, v = q0.copy(), v0.copy()
     q_end, v_end = np.empty(n_coords), np.empty(n_coords)
-    phase, t, zero_run, instant_release = FREE, t0, 0, -math.inf
+    phase, t, zero_run, instant_release = phase_start, t_start, 0, -math.inf
     sustained = conflict = False
     spring_law = settings.contact_law == SPRING
     opened = False  # the previous segment ended where an early-released gap opened
@@ -317,6 +329,10 @@ def run_events_from(tables, forces, phase_scalars, overlap, shifts, spring, driv
         else:
             t_event = find_switch(table, force, scalars, q, v, t, free or sustained or spring_law,
                                   free and conflict, settings, q_end, v_end)
+        if t_event == GAVE_UP:  # an event search reached its step cap: stop, undecided
+            end_q[k, :] = q
+            end_v[k, :] = v
+            return k + 1, SEARCH_LIMIT, t
         t_stop = settings.t_max if math.isnan(t_event) else t_event
         propagate(table, force, q, v, t, t_stop, settings, q_end, v_end)
         end_q[k, :] = q_end

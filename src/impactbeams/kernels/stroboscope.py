@@ -1,7 +1,7 @@
 """Stroboscopic (Poincare) samples of a long run, in windows of bounded memory.
 
 A long run (hundreds of forcing periods, thousands of phases) is integrated by
-:func:`~impactbeams.kernels.dynamics.run_events_from` into segment arrays of a fixed capacity.
+:func:`~impactbeams.kernels.dynamics.run_events` into segment arrays of a fixed capacity.
 When they are full, the states at the sample times that the recorded segments cover are taken
 in closed form (:func:`~impactbeams.kernels.dynamics.sample_states`), and the run resumes from
 the start of the last free segment that follows a contact of positive length, which reproduces
@@ -24,7 +24,7 @@ from impactbeams.kernels.dynamics import (
     event_sine,
     instantaneous,
     quasi_static_force,
-    run_events_from,
+    run_events,
     sample_states,
     segment_arrays,
 )
@@ -127,7 +127,7 @@ def tip_motion(tables, forces, phase_scalars, settings, residual2, phase, t, q, 
 def resume_point(seg_time, seg_phase, count):
     """The last recorded segment k >= 1 from which a run can resume exactly, or 0 if none.
 
-    A free segment that follows a contact of positive length (see ``run_events_from``).
+    A free segment that follows a contact of positive length (see ``run_events``).
     """
     for k in range(count - 1, 0, -1):
         if (seg_phase[k] == FREE and seg_phase[k - 1] == CONTACT
@@ -178,10 +178,9 @@ def sampled_run(tables, forces, phase_scalars, overlap, shifts, spring, drives, 
     t0, q, v = 0.0, q0.copy(), v0.copy()
     done, phases, last_release = 0, 0, -math.inf
     while True:
-        count, status, t_end = run_events_from(tables, forces, phase_scalars, overlap, shifts,
-                                               spring, drives, settings, t0, q, v, seg_time,
-                                               seg_phase, seg_sustained, seg_q, seg_v, end_q,
-                                               end_v)
+        count, status, t_end = run_events(tables, forces, phase_scalars, overlap, shifts,
+                                          spring, drives, settings, q, v, seg_time, seg_phase,
+                                          seg_sustained, seg_q, seg_v, end_q, end_v, t0, FREE)
         keep, final = count, True
         if status == EVENT_LIMIT:
             resume = resume_point(seg_time, seg_phase, count)

@@ -11,6 +11,7 @@ from impactbeams.sweep.definition import (
     DYNAMICS_OBSERVABLES,
     FIRST_IMPACT,
     LONG_TIME_OBSERVABLES,
+    LYAPUNOV,
     OBSERVABLES,
     Axis,
     Sweep,
@@ -30,6 +31,7 @@ from impactbeams.sweep.run import (
 )
 
 __all__ = ["CELL_PARAMETERS", "DYNAMICS_OBSERVABLES", "FIRST_IMPACT", "LONG_TIME_OBSERVABLES",
-           "MAX_SEGMENTS", "OBSERVABLES", "Axis", "Chunk", "ChunkRunner", "Plan", "Progress",
-           "Sweep", "build_plan", "chunk_bounds", "compute_chunk", "default_chunk_cells",
-           "load_sweep", "local_runner", "map_dataset", "run_sweep", "sweep_from_mapping"]
+           "LYAPUNOV", "MAX_SEGMENTS", "OBSERVABLES", "Axis", "Chunk", "ChunkRunner", "Plan",
+           "Progress", "Sweep", "build_plan", "chunk_bounds", "compute_chunk",
+           "default_chunk_cells", "load_sweep", "local_runner", "map_dataset", "run_sweep",
+           "sweep_from_mapping"]

@@ -5,9 +5,9 @@ A sweep file (names as in :mod:`impactbeams.params`)::
     t_max = 1.0                          # s, horizon of every cell
     n_modes = 5                          # free modes per beam (contact phase: 2 n_modes)
     observables = ["first_impact_time"]  # default
-    transient_periods = 500              # long-time observables only (module longtime)
-    sampled_periods = 200
-    period_tolerance = 1e-4
+    transient_periods = 0                # forcing periods left out of long-time observables
+    sampled_periods = 200                # stroboscopic samples (long-time observables only)
+    period_tolerance = 1e-4              # of the period detection (module longtime)
     max_period = 16
     [params]                             # fixed parameters; the rest take the defaults
     clearance = 1.1e-5
@@ -24,6 +24,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -33,24 +34,54 @@ import numpy as np
 from impactbeams import __version__
 from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.longtime import LongTime
-from impactbeams.params import CONTACT_LAWS, ParameterError, Params, read_toml, require
+from impactbeams.params import (
+    CONTACT_LAWS,
+    MATERIAL_KEYS,
+    MAX_MODES,
+    ParameterError,
+    Params,
+    PointName,
+    check_joint,
+    check_range,
+    is_real,
+    read_toml,
+    require,
+    require_all,
+    require_table,
+    resolve_materials,
+    value_at,
+)
+from impactbeams.preflight import (
+    DYNAMICS_RATE,
+    FIRST_IMPACT_RATE,
+    MAX_PHASE,
+    Cost,
+    check_run,
+    highest_frequency,
+    require_memory,
+)
 from impactbeams.variables import PARAMETERS
 
 FIRST_IMPACT = "first_impact_time"
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
+LYAPUNOV = "lyapunov_exponent"  # spring law only; its own windowed run (kernels.lyapunov)
 # the long run's stroboscopic samples (along a trailing dimension "period") and what they give
 POINCARE_OBSERVABLES = ("poincare_deflection1", "poincare_deflection2", "poincare_velocity1",
                         "poincare_velocity2")
 LONG_TIME_OBSERVABLES = (*POINCARE_OBSERVABLES, "response_period", "steady_impact_rate",
                          "steady_episode_rate")
-OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, *LONG_TIME_OBSERVABLES)
+OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV, *LONG_TIME_OBSERVABLES)
 # parameters that change a cell but not its geometry (its modes): the packed cell columns
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
-LONG_TIME_KEYS = ("transient_periods", "sampled_periods", "period_tolerance", "max_period")
-_TOP_LEVEL = ("t_max", "n_modes", "observables", *LONG_TIME_KEYS, "params", "axes")
+LONG_TIME_KEYS = ("sampled_periods", "period_tolerance", "max_period")  # of LongTime
+_TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes", "transient_periods",
+              *LONG_TIME_KEYS)
 _AXIS_KEYS = ("min", "max", "num", "scale")
-_MAX_MODES = 200
+# Distinct geometries (values of the axes that change the modes) per sweep: each one's modes are
+# computed serially before the map runs, 0.4 ms (5 modes, first impact) to 2 s (200 modes, tied
+# dynamics) each (docs/limits.md).
+MAX_GEOMETRIES = 10_000
 
 
 @dataclasses.dataclass(frozen=True)
@@ -77,6 +108,11 @@ class Axis:
         space = np.geomspace if self.scale == "log" else np.linspace
         return space(self.min, self.max, self.num)
 
+    @property
+    def first(self) -> float | str:
+        """The first value, without computing the others (linspace and geomspace start at min)."""
+        return self.choices[0] if self.choices else self.min
+
     def value(self, index: int) -> float | str:
         """The parameter value at ``index`` along the axis (a float, or a law's name)."""
         return self.choices[index] if self.choices else float(self.values[index])
@@ -98,6 +134,7 @@ class Sweep:
     fixed: Mapping[str, Any]
     axes: tuple[Axis, ...]
     source: str = "sweep"
+    transient_periods: int = 0
     long_time: LongTime | None = None  # how long-time observables sample the run
 
     @property
@@ -108,17 +145,13 @@ class Sweep:
     @property
     def size(self) -> int:
         """Number of cells."""
-        return int(np.prod(self.shape))
+        return math.prod(self.shape)
 
     @property
     def needs_dynamics(self) -> bool:
         """Whether any observable needs the full dynamics (not the free phase alone)."""
-        return self.needs_horizon_run or self.long_time is not None
-
-    @property
-    def needs_horizon_run(self) -> bool:
-        """Whether an observable needs the full dynamics over [0, t_max]."""
-        return any(name in DYNAMICS_OBSERVABLES for name in self.observables)
+        return (any(name in (*DYNAMICS_OBSERVABLES, LYAPUNOV) for name in self.observables)
+                or self.long_time is not None)
 
     def value_shape(self, name: str) -> tuple[int, ...]:
         """Shape of one cell's value of stored array ``name``: (sampled periods,) or ()."""
@@ -133,16 +166,27 @@ class Sweep:
 
     def definition(self) -> dict[str, Any]:
         """The sweep as a plain dict in the TOML file's layout (canonical, for hashing)."""
+        transient = {"transient_periods": self.transient_periods} if self.transient_periods else {}
         long_time = ({} if self.long_time is None else
                      {key: getattr(self.long_time, key) for key in LONG_TIME_KEYS})
         return {"t_max": self.t_max, "n_modes": self.n_modes,
-                "observables": list(self.observables), **long_time, "params": dict(self.fixed),
-                "axes": {a.name: a.definition() for a in self.axes}}
+                "observables": list(self.observables), "params": dict(self.fixed),
+                "axes": {a.name: a.definition() for a in self.axes}, **transient, **long_time}
 
     @property
     def base(self) -> Params:
-        """The fixed parameters (defaults for the rest), before any axis is applied."""
-        return Params.from_mapping(self.fixed, source=f"[params] of {self.source}")
+        """The parameters of the grid's first point: every axis at its first value."""
+        return self.params_at({})
+
+    def params_at(self, changes: Mapping[str, Any]) -> Params:
+        """The parameters of the grid point with the swept ``changes`` (name: value).
+
+        The other axes are at their first values; the fixed parameters, then the defaults, fill
+        the rest.
+        """
+        first = {axis.name: axis.first for axis in self.axes}
+        return Params.from_mapping({**self.fixed, **first, **changes},
+                                   source=f"[params] of {self.source}")
 
     def fingerprint(self) -> str:
         """Hash of the definition and package version: a resumed run must match it."""
@@ -156,37 +200,42 @@ def load_sweep(path: str | Path) -> Sweep:
 
 
 def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
-    """Validate a sweep given as a mapping in the TOML file's layout."""
+    """Validate a sweep given as a mapping in the TOML file's layout.
+
+    Everything is checked before anything is computed, vectorised over the axes (no per-cell
+    work): keys, types, every axis value, conflicts, every grid point's parameters (at the
+    corners of the grid, which suffices: every condition is monotone in each parameter), the
+    modes and horizon, and the expected memory.
+    """
     for key in data:
         require(f"{key!r} in {source}", key, key in _TOP_LEVEL,
                 f"unknown key; allowed top-level keys: {', '.join(_TOP_LEVEL)}")
     t_max = _number(data.get("t_max", 1.0), f"t_max in {source}")
     require(f"t_max in {source}", t_max, t_max > 0, "must be > 0", "s")
     n_modes = data.get("n_modes", 5)
-    require(f"n_modes in {source}", n_modes,
-            isinstance(n_modes, int) and not isinstance(n_modes, bool)
-            and 1 <= n_modes <= _MAX_MODES, f"must be an integer from 1 to {_MAX_MODES}")
-    observables = tuple(data.get("observables", [FIRST_IMPACT]))
-    for name in observables:
-        require(f"observables in {source}", name, name in OBSERVABLES,
-                f"unknown observable; allowed: {', '.join(OBSERVABLES)}")
-    require(f"observables in {source}", list(observables), len(observables) > 0,
-            "must name at least one observable")
-    fixed = dict(data.get("params", {}))
-    base = Params.from_mapping(fixed, source=f"[params] of {source}")
-    axes_table = data.get("axes", {})
-    require(f"[axes] of {source}", axes_table, isinstance(axes_table, dict) and axes_table,
+    require(f"n_modes in {source}", n_modes, _is_integer(n_modes) and 1 <= n_modes <= MAX_MODES,
+            f"must be an integer from 1 to {MAX_MODES}")
+    observables = _observables(data.get("observables", [FIRST_IMPACT]), source)
+    transient = data.get("transient_periods", 0)
+    require(f"transient_periods in {source}", transient, _is_integer(transient) and transient >= 0,
+            "must be an integer >= 0 (forcing periods)")
+    fixed = require_table(data, "params", source)
+    axes_table = require_table(data, "axes", source)
+    require(f"[axes] of {source}", axes_table, bool(axes_table),
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
-    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source,
+    _check_conflicts(fixed, axes, source)
+    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source, transient,
                   _long_time(data, observables, source))
-    _check_grid(sweep, base)
+    _check_grid(sweep)
+    _check_lyapunov(sweep)
+    _check_cost(sweep)
     return sweep
 
 
 def _long_time(data: Mapping[str, Any], observables: tuple[str, ...],
                source: str) -> LongTime | None:
-    """The long-time settings: given only with a long-time observable, defaults for the rest."""
+    """The long-time sampling: its keys only with a long-time observable, defaults for the rest."""
     given = {key: data[key] for key in LONG_TIME_KEYS if key in data}
     if not any(name in LONG_TIME_OBSERVABLES for name in observables):
         require(f"{', '.join(given)} in {source}", list(given.values()), not given,
@@ -199,10 +248,23 @@ def _long_time(data: Mapping[str, Any], observables: tuple[str, ...],
         raise ParameterError(f"{error} (in {source})") from None
 
 
+def _is_integer(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 def _number(value: Any, name: str) -> float:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
-    require(name, value, ok, "must be a finite number")
+    require(name, value, is_real(value) and math.isfinite(value), "must be a finite number")
     return float(value)
+
+
+def _observables(value: Any, source: str) -> tuple[str, ...]:
+    where = f"observables in {source}"
+    require(where, value, isinstance(value, list) and bool(value),
+            f'must be a non-empty list of names, e.g. ["{FIRST_IMPACT}"]')
+    for name in value:
+        require(where, name, name in OBSERVABLES,
+                f"unknown observable; allowed: {', '.join(OBSERVABLES)}")
+    return tuple(value)
 
 
 def _law_axis(spec: Any, where: str) -> Axis:
@@ -230,50 +292,189 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
         require(f"{key} in {where}", None, key in spec, "is required")
     lo, hi = _number(spec["min"], f"min in {where}"), _number(spec["max"], f"max in {where}")
     num, scale = spec["num"], spec.get("scale", "linear")
-    require(f"num in {where}", num, isinstance(num, int) and not isinstance(num, bool)
-            and num >= 1, "must be an integer >= 1")
+    require(f"num in {where}", num, _is_integer(num) and num >= 1, "must be an integer >= 1")
     require(f"scale in {where}", scale, scale in ("linear", "log"), 'must be "linear" or "log"')
     require(f"max in {where}", hi, hi > lo or (hi == lo and num == 1),
             f"the range [{lo!r}, {hi!r}] is empty or reversed: need max > min "
             "(or max == min with num = 1)")
+    require(f"num in {where}", num, num > 1 or hi == lo,
+            f"one value cannot span [{lo!r}, {hi!r}]: give num >= 2, or max = min")
     if scale == "log":
         require(f"min in {where}", lo, lo > 0, "a log axis needs min > 0")
+    # the values run monotonically from min to max (both exact): checking the ends suffices
+    check_range(name, np.array([lo, hi]),
+                lambda index: f"axis {name!r} of {source} reaches a non-physical point: ")
     return Axis(name, lo, hi, num, scale)
 
 
-def _check_grid(sweep: Sweep, base: Params) -> None:
+def _check_conflicts(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: str) -> None:
+    """Refuse a parameter given twice: fixed and swept, or a beam by EI/rhoA and by material."""
+    swept = {axis.name for axis in axes}
+    for name in sorted(swept & set(fixed)):
+        raise ParameterError(f"{name} is given both in [params] ({name} = {fixed[name]!r}) and "
+                             f"as [axes.{name}] of {source}: remove one of them")
+    given = {**{name: "[params]" for name in fixed}, **{name: "[axes]" for name in swept}}
+    for i in ("1", "2"):
+        direct = [k + i for k in ("EI", "rhoA") if k + i in given]
+        material = [k + i for k in MATERIAL_KEYS if k + i in given]
+        if direct and material:
+            where = lambda names: ", ".join(f"{n} ({given[n]})" for n in names)  # noqa: E731
+            raise ParameterError(
+                f"beam {i} of {source} is given both by {where(direct)} and by the material "
+                f"keys {where(material)}, which replace EI{i} and rhoA{i}: give one or the other")
+
+
+def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
+    """Every numeric parameter on the grid's corners, and a namer of the corner points.
+
+    Axis ``k`` varies along dimension ``k`` over its two ends (one value if num = 1); fixed
+    parameters are scalars, the others take the defaults. Material keys are resolved.
+    """
+    dims = len(sweep.axes)
+    ends = []
+    values: dict[str, Any] = {name: value for name, value in sweep.fixed.items()
+                              if name != "contact_law"}
+    for k, axis in enumerate(sweep.axes):
+        axis_ends = np.array([axis.min, axis.max] if axis.num > 1 and not axis.choices
+                             else [axis.min])
+        ends.append(axis_ends)
+        if not axis.choices:
+            values[axis.name] = axis_ends.reshape([-1 if d == k else 1 for d in range(dims)])
+
+    def point(index: tuple[int, ...]) -> str:
+        named = ", ".join(f"{axis.name} = {float(axis_ends[min(i, axis_ends.size - 1)])!r}"
+                          for axis, axis_ends, i in zip(sweep.axes, ends, index, strict=True)
+                          if not axis.choices)
+        return f"at the grid point {named} of {sweep.source}: "
+
+    resolved = resolve_materials(values, f"[params] of {sweep.source}", point)
+    defaults = Params().numeric()
+    return {**defaults, **resolved}, point
+
+
+def _check_grid(sweep: Sweep) -> None:
     """Reject a grid with any non-physical point before computing anything.
 
-    Single-parameter limits are checked on every axis value; the one joint condition, the
-    initial gap clearance + uplift1 - uplift2 > 0, on the whole grid.
+    The fixed parameters are checked at the grid's first point (names, types, values); every
+    condition on several parameters, and the modes and horizon, at all corners of the grid.
     """
-    for axis in sweep.axes:
-        for index in range(axis.num):
-            try:
-                base.replace(**{axis.name: axis.value(index)})
-            except ParameterError as error:
-                raise ParameterError(f"axis {axis.name!r} of {sweep.source} reaches a "
-                                     f"non-physical point: {error}") from None
-    if sweep.long_time is not None:
-        omega = _cell_grid(sweep, base, "omega")
-        require(f"omega in {sweep.source}", float(np.min(omega)), bool(np.all(omega > 0)),
-                "long-time observables sample once per forcing period: need omega > 0 on the "
-                "whole grid", "rad/s")
-    grids = {name: _cell_grid(sweep, base, name) for name in ("clearance", "uplift1", "uplift2")}
-    gap = grids["clearance"] + grids["uplift1"] - grids["uplift2"]
-    if np.any(gap <= 0):
-        bad = np.unravel_index(np.argmin(gap), gap.shape)
-        point = {a.name: a.value(i) for a, i in zip(sweep.axes, bad, strict=True)}
-        raise ParameterError(f"the grid of {sweep.source} has points where the initial gap "
-                             f"clearance + uplift1 - uplift2 <= 0, e.g. at {point}")
+    sweep.params_at({})
+    values, point = _corners(sweep)
+    for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
+        check_range(name, values[name], point)
+    check_joint(values, point)
+    check_run(values, sweep.t_max, sweep.n_modes, point)
+    _check_long_time(sweep, values, point)
 
 
-def _cell_grid(sweep: Sweep, base: Params, name: str) -> np.ndarray:
-    """Per-cell values of the cell parameter ``name``, broadcast to the grid shape."""
-    grid = np.full(sweep.shape, getattr(base, name))
-    for k, axis in enumerate(sweep.axes):
-        if axis.name == name:
-            shape = [1] * len(sweep.axes)
-            shape[k] = axis.num
-            grid = np.broadcast_to(axis.values.reshape(shape), sweep.shape).copy()
-    return grid
+def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) -> None:
+    """Long runs need a forcing period, and a horizon within double precision's phase range.
+
+    Each cell runs (transient_periods + sampled_periods) forcing periods; the longest run is
+    at the smallest Omega, a corner of the grid.
+    """
+    if sweep.long_time is None:
+        return
+    omega = np.asarray(values["omega"], dtype=float)
+    require_all("omega", omega, omega > 0, point, lambda j: (
+        "long-time observables sample once per forcing period: need omega > 0 (rad/s)"))
+    periods = sweep.transient_periods + sweep.long_time.sampled_periods
+    horizon = sweep.long_time.horizon(omega, sweep.transient_periods)
+    phase = np.maximum(highest_frequency(values, sweep.n_modes), omega) * horizon
+    require_all("transient_periods + sampled_periods", periods, phase <= MAX_PHASE, point,
+                lambda j: (f"the run of {value_at(horizon, j):.3g} s turns the fastest "
+                           f"oscillation through {value_at(phase, j):.3g} rad, more than "
+                           f"{MAX_PHASE:g} rad (double precision keeps a phase to ~0.1 eps "
+                           "omega t): use fewer periods or modes"))
+
+
+def _check_lyapunov(sweep: Sweep) -> None:
+    """The Lyapunov exponent is defined for the spring law only (docs/model.md)."""
+    if LYAPUNOV not in sweep.observables:
+        return
+    laws = [axis.choices for axis in sweep.axes if axis.name == "contact_law"]
+    require(f"observables in {sweep.source}", LYAPUNOV,
+            set(laws[0] if laws else [sweep.base.contact_law]) == {"spring"},
+            "needs the spring contact law on every cell (the tied law's projections and "
+            "instantaneous impacts are not a flow whose linearisation converges in n_modes)")
+
+
+def geometry_count(sweep: Sweep) -> int:
+    """Distinct geometries of the grid: the product of the geometry axes' ``num``."""
+    return math.prod(axis.num for axis in _geometry_axes(sweep))
+
+
+def _geometry_axes(sweep: Sweep) -> list[Axis]:
+    from impactbeams.sweep.plan import geometry_axes  # plan builds on this module
+
+    return [sweep.axes[k] for k in geometry_axes(sweep)]
+
+
+def expected_cost(sweep: Sweep, threads: int | None = None) -> Cost:
+    """Peak memory and rough wall time of running ``sweep`` on ``threads`` (default: all cores).
+
+    Memory: the results (one float64 array of every cell per stored variable and the Dataset's
+    copy: 16 bytes per cell and variable, plus 4 for ``impacted`` and its temporaries; the
+    traced peak of a first-impact map, netCDF writing included, is 18.04 bytes per cell), the
+    plan (8 x 2N float64 per geometry; a dynamics map 10 (2N)^2, with its stacking copy) and a
+    dynamics map's per-thread segment buffers (MAX_SEGMENTS x (4 x 2N + 3) float64; a long
+    run's LONG_RUN_CAPACITY of them and its samples' states). Time: ``rate`` x 2N x (fastest
+    frequency x horizon) per cell over the threads, plus the set-up; the horizon is t_max,
+    plus a long run's (transient + sampled) forcing periods.
+    """
+    from impactbeams.sweep.plan import LONG_RUN_CAPACITY, MAX_SEGMENTS
+
+    threads = threads or os.cpu_count() or 1
+    coordinates = 2 * sweep.n_modes
+    geometries = geometry_count(sweep)
+    values, _ = _corners(sweep)
+    fastest = float(np.max(np.maximum(values["omega"],
+                                      highest_frequency(values, sweep.n_modes))))
+    results = sweep.size * (16 * _stored_values(sweep) + 4)
+    # a run over [0, t_max] for the other observables, if any
+    over_t_max = any(name not in LONG_TIME_OBSERVABLES for name in sweep.observables)
+    horizon = sweep.t_max if over_t_max else 0.0
+    if sweep.needs_dynamics:
+        plan = 2 * geometries * 8 * 10 * coordinates**2
+        buffers = threads * MAX_SEGMENTS * (4 * coordinates + 3) * 8 if over_t_max else 0
+        per_geometry, rate = 5e-5 * sweep.n_modes**2, DYNAMICS_RATE
+    else:
+        plan, buffers = 2 * geometries * 8 * 8 * coordinates, 0
+        per_geometry, rate = 4e-4 + 2.5e-5 * sweep.n_modes, FIRST_IMPACT_RATE
+    if sweep.long_time is not None:  # each cell's own run, in windows of LONG_RUN_CAPACITY
+        buffers += threads * (LONG_RUN_CAPACITY * (4 * coordinates + 3)
+                              + sweep.long_time.sampled_periods * (2 * coordinates + 5)) * 8
+        # the mean of the longest and shortest runs (corners of the grid)
+        horizon += float(np.mean(sweep.long_time.horizon(values["omega"],
+                                                         sweep.transient_periods)))
+    compute = sweep.size * coordinates * fastest * horizon * rate / threads
+    return Cost(results + plan + buffers, geometries * per_geometry + compute)
+
+
+def _stored_values(sweep: Sweep) -> int:
+    """Values per cell of the stored arrays (a stroboscopic observable has one per sample)."""
+    return sum(math.prod(sweep.value_shape(name)) for name in sweep.stored)
+
+
+def expected_file_size(sweep: Sweep) -> int:
+    """Disk space (bytes) a run of ``sweep`` needs at its peak.
+
+    The finished chunks under ``OUT.nc.partial/`` and the netCDF file: 8 bytes per cell and
+    stored value each.
+    """
+    return sweep.size * (16 * _stored_values(sweep) + 1)
+
+
+def _check_cost(sweep: Sweep) -> None:
+    """Refuse a sweep with too many geometries, or one that would not fit in memory."""
+    geometries = geometry_count(sweep)
+    if geometries > MAX_GEOMETRIES:
+        swept = ", ".join(f"{axis.name}: num = {axis.num}" for axis in _geometry_axes(sweep)
+                          if axis.num > 1)
+        raise ParameterError(
+            f"the geometry axes of {sweep.source} ({swept}) give {geometries} distinct "
+            f"geometries; at most {MAX_GEOMETRIES} are allowed, since each one's modes are "
+            "computed one after the other before the map starts: use fewer values there")
+    require_memory(f"the grid of {sweep.source} ({' x '.join(map(str, sweep.shape))} = "
+                   f"{sweep.size} cells)", expected_cost(sweep),
+                   "use fewer cells (smaller num) or split the sweep into several files")

@@ -36,9 +36,11 @@ def map_dataset(sweep: Sweep, results: dict[str, np.ndarray]) -> xr.Dataset:
            "sweep_fingerprint": sweep.fingerprint()}
     if sweep.long_time is not None:
         long_time = sweep.long_time
-        run.update({key: getattr(long_time, key) for key in LONG_TIME_KEYS})
+        run.update({key: getattr(long_time, key) for key in LONG_TIME_KEYS},
+                   transient_periods=sweep.transient_periods)
         if any(extra.values()):
-            coords["period"] = ("period", long_time.period_numbers(), attributes("period"))
+            coords["period"] = ("period", long_time.period_numbers(sweep.transient_periods),
+                                attributes("period"))
     resolution = contact_resolution(sweep)
     if resolution is not None:
         run.update(contact_resolved=int(sweep.n_modes >= resolution),

@@ -16,9 +16,16 @@ import numpy as np
 from impactbeams.kernels import layout
 from impactbeams.longtime import LongTime
 from impactbeams.params import Params
-from impactbeams.sweep.definition import CELL_PARAMETERS, FIRST_IMPACT, Sweep
+from impactbeams.sweep.definition import (
+    CELL_PARAMETERS,
+    DYNAMICS_OBSERVABLES,
+    FIRST_IMPACT,
+    LYAPUNOV,
+    Sweep,
+)
 
-MAX_SEGMENTS = 100_000  # phases per cell in a full-dynamics sweep; more: dynamics_status = 1
+MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov exponent's
+# windowed run) in a full-dynamics sweep; more: dynamics_status = 1
 # a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
 LONG_RUN_CAPACITY = 2048
 MAX_PHASES_PER_PERIOD = 2000  # cap of a long run, per forcing period; more: dynamics_status = 1
@@ -80,7 +87,7 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
     for combo in itertools.product(*(range(sweep.axes[k].num) for k in axes)):
         changes = {sweep.axes[k].name: sweep.axes[k].value(i)
                    for k, i in zip(axes, combo, strict=True)}
-        yield sweep.base.replace(**changes) if changes else sweep.base
+        yield sweep.params_at(changes)
 
 
 def _geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
@@ -121,56 +128,102 @@ def chunk_cells(sweep: Sweep, plan: Plan, start: int, stop: int) -> np.ndarray:
     return packing.cell_rows(columns, stop - start)
 
 
+MAX_COLUMN_CELLS = 4096  # a first-impact map's columns: at most this many cells each
+_AFFINE_AXES = {"force_amplitude": layout.CELL_F0, "clearance": layout.CELL_CLEARANCE}
+
+
+@dataclasses.dataclass(frozen=True)
+class Columns:
+    """A chunk's first-impact columns.
+
+    Cells ``start..stop`` (the chunk widened to whole columns), column c being
+    ``bounds[c]..bounds[c + 1]`` of them, along the cell column ``key`` (kernels.layout).
+    """
+
+    start: int
+    stop: int
+    bounds: np.ndarray
+    key: int
+
+
+def first_impact_columns(sweep: Sweep, start: int, stop: int) -> Columns:
+    """The columns of flat cells ``start..stop`` along the sweep's last axis, if affine.
+
+    The gap is affine in F0 and in the clearance, so a run of cells along such an axis shares
+    one modal response (kernels.first_impact). Columns are fixed segments of the grid (at
+    most ``MAX_COLUMN_CELLS`` of the last axis), and a chunk is widened to whole columns, so
+    that every cell's result is the same for any chunking. Other sweeps: columns of one cell.
+    """
+    last = sweep.axes[-1] if sweep.axes else None
+    if last is None or last.name not in _AFFINE_AXES or last.num < 2:
+        return Columns(start, stop, np.arange(stop - start + 1, dtype=np.int64),
+                       layout.CELL_F0)
+    length = min(last.num, MAX_COLUMN_CELLS)
+    flat = np.arange(start, stop)
+    row, position = np.divmod(flat, last.num)
+    segment_start = row * last.num + position // length * length
+    segment_stop = np.minimum(segment_start + length, (row + 1) * last.num)
+    first, end = int(segment_start[0]), int(segment_stop[-1])
+    edges = np.unique(np.concatenate([segment_start, segment_stop])) - first
+    return Columns(first, end, edges.astype(np.int64), _AFFINE_AXES[last.name])
+
+
 def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
                   plan: Plan | None = None) -> dict[str, np.ndarray]:
     """Observables of the flat cells ``start..stop`` of ``sweep`` (one array per observable).
 
     Self-contained, so that any process (a Dask worker, say) can compute any chunk; pass the
     sweep's ``plan`` (:func:`build_plan`) to reuse it across chunks. A first-impact-only sweep
-    runs the free phase alone; the other observables over [0, t_max] run the full dynamics of
-    every cell over [0, t_max] (and give the first impact time from it too); long-time
-    observables run each cell over its own horizon, (transient + sampled) forcing periods
-    (:mod:`impactbeams.longtime`). ``dynamics_status`` is the worse of the two runs'.
+    runs the free phase alone; any other observable runs the full dynamics of every cell over
+    [0, t_max] (and gives the first impact time from it too), except the long-time ones, which
+    run each cell over (transient + sampled) forcing periods (:mod:`impactbeams.longtime`);
+    ``dynamics_status`` is then the worse of the runs'.
     """
-    from impactbeams.kernels import first_impact
+    from impactbeams.kernels import first_impact, observables
 
     if plan is None:
         plan = build_plan(sweep)
     if plan.fingerprint != sweep.fingerprint():
         raise ValueError("the plan was built for another sweep")
-    cells = chunk_cells(sweep, plan, start, stop)
     if plan.switching is None:
         kernel = (first_impact.first_impact_map_parallel if parallel
                   else first_impact.first_impact_map_serial)
+        columns = first_impact_columns(sweep, start, stop)
+        cells = chunk_cells(sweep, plan, columns.start, columns.stop)
         out = np.empty(cells.shape[0])
-        kernel(cells, plan.tables, plan.geometry, sweep.t_max, out)
-        return {FIRST_IMPACT: out}
-    values: dict[str, np.ndarray] = {"dynamics_status": np.zeros(cells.shape[0])}
-    if sweep.needs_horizon_run or FIRST_IMPACT in sweep.observables:
-        values.update(_horizon_run(sweep, plan, cells, parallel))
+        kernel(cells, columns.bounds, columns.key, plan.tables, plan.geometry, sweep.t_max, out)
+        out = out[start - columns.start:stop - columns.start]
+        undecided = np.flatnonzero(np.isneginf(out))  # kernels.events.GAVE_UP
+        if undecided.size:
+            raise RuntimeError(f"{undecided.size} cells of cells {start}..{stop} reached the "
+                               f"event search's step cap (first: cell {start + undecided[0]}); "
+                               "please report this as a bug")
+        return {FIRST_IMPACT: np.ascontiguousarray(out)}
+    cells = chunk_cells(sweep, plan, start, stop)
+    columns = {}
+    if any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables):
+        kernel = (observables.observables_map_parallel if parallel
+                  else observables.observables_map_serial)
+        out = np.empty((cells.shape[0], len(layout.OUT_COLUMNS)))
+        kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max, MAX_SEGMENTS,
+               out)
+        columns = dict(zip(layout.OUT_COLUMNS, out.T, strict=True))
+    if LYAPUNOV in sweep.observables:
+        columns.update(_lyapunov_columns(sweep, plan, cells, parallel, columns))
     if sweep.long_time is not None:
-        long_time = _long_run(sweep.long_time, plan, cells, parallel)
-        long_time["dynamics_status"] = np.maximum(values["dynamics_status"],
-                                                  long_time["dynamics_status"])
-        values.update(long_time)
-    return {name: np.ascontiguousarray(values[name]) for name in sweep.stored}
+        long_run = _long_run(sweep.long_time, sweep.transient_periods, plan, cells, parallel)
+        long_run["dynamics_status"] = np.maximum(
+            long_run["dynamics_status"], columns.get("dynamics_status", 0))
+        columns.update(long_run)
+    return {name: np.ascontiguousarray(columns[name]) for name in sweep.stored}
 
 
-def _horizon_run(sweep: Sweep, plan: Plan, cells: np.ndarray,
-                 parallel: bool) -> dict[str, np.ndarray]:
-    """The ``OUT_COLUMNS`` of every cell's full dynamics over [0, t_max]."""
-    from impactbeams.kernels import observables
-
-    kernel = (observables.observables_map_parallel if parallel
-              else observables.observables_map_serial)
-    out = np.empty((cells.shape[0], len(layout.OUT_COLUMNS)))
-    kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max, MAX_SEGMENTS, out)
-    return dict(zip(layout.OUT_COLUMNS, out.T, strict=True))
-
-
-def _long_run(long_time: LongTime, plan: Plan, cells: np.ndarray,
+def _long_run(long_time: LongTime, transient_periods: int, plan: Plan, cells: np.ndarray,
               parallel: bool) -> dict[str, np.ndarray]:
-    """The long-time observables of every cell (and its run's ``dynamics_status``)."""
+    """The long-time observables of every cell and its run's ``dynamics_status``.
+
+    Each cell runs (transient + sampled) forcing periods, in windows of LONG_RUN_CAPACITY.
+    """
     import numba
 
     from impactbeams.kernels import stroboscope
@@ -184,7 +237,25 @@ def _long_run(long_time: LongTime, plan: Plan, cells: np.ndarray,
     # cells differ in cost by orders of magnitude (a rattle at every period, or no contact at
     # all): the threads take them one at a time instead of in equal contiguous blocks
     with numba.parallel_chunksize(1):
-        kernel(cells, plan.tables, *plan.switching, plan.geometry, long_time.sample_times(omega),
-               long_time.horizon(omega), LONG_RUN_CAPACITY, MAX_PHASES_PER_PERIOD, samples,
-               summary)
-    return long_time_values(long_time, omega, cells[:, layout.CELL_CLEARANCE], samples, summary)
+        kernel(cells, plan.tables, *plan.switching, plan.geometry,
+               long_time.sample_times(omega, transient_periods),
+               long_time.horizon(omega, transient_periods), LONG_RUN_CAPACITY,
+               MAX_PHASES_PER_PERIOD, samples, summary)
+    return long_time_values(long_time, transient_periods, omega,
+                            cells[:, layout.CELL_CLEARANCE], samples, summary)
+
+
+def _lyapunov_columns(sweep: Sweep, plan: Plan, cells: np.ndarray, parallel: bool,
+                      columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The cells' largest Lyapunov exponents, each from its own windowed run, and the status.
+
+    The status is the worse of that run's and the other observables' run (if any).
+    """
+    from impactbeams.kernels import lyapunov
+
+    kernel = lyapunov.lyapunov_map_parallel if parallel else lyapunov.lyapunov_map_serial
+    out = np.empty((cells.shape[0], 2))
+    kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max,
+           sweep.transient_periods, MAX_SEGMENTS, out)
+    status = np.maximum(out[:, 1], columns.get("dynamics_status", out[:, 1]))
+    return {LYAPUNOV: out[:, 0], "dynamics_status": status}

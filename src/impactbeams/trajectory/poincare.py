@@ -17,14 +17,17 @@ from impactbeams.variables import attributes
 
 
 def long_time_variables(packed: Packed, trajectory: Trajectory, dataset: xr.Dataset,
-                        long_time: LongTime) -> xr.Dataset:
-    """``dataset`` (simulate's, with its impact and episode tables) plus the long-time ones."""
+                        long_time: LongTime, transient_periods: int) -> xr.Dataset:
+    """``dataset`` (simulate's, with its impact and episode tables) plus the long-time ones.
+
+    Sampled after ``transient_periods`` forcing periods.
+    """
     omega, clearance = packed.params.omega, packed.params.clearance
-    times = long_time.sample_times(omega)
+    times = long_time.sample_times(omega, transient_periods)
     series = time_series(packed, trajectory, times, energy=False)  # tip 2 is y2 itself here
     tips = [series[name] for name in ("tip_deflection_1", "tip_deflection_2", "tip_velocity_1",
                                       "tip_velocity_2")]
-    start, end = times[0], long_time.horizon(omega)
+    start, end = times[0], long_time.horizon(omega, transient_periods)
 
     def rate(onsets: xr.DataArray) -> float:
         count = np.count_nonzero((onsets.values >= start) & (onsets.values < end))
@@ -40,9 +43,10 @@ def long_time_variables(packed: Packed, trajectory: Trajectory, dataset: xr.Data
                                   attributes("steady_impact_rate"))
     data["steady_episode_rate"] = ((), rate(dataset.episode_onset_time),
                                    attributes("steady_episode_rate"))
-    period = {"period": ("period", long_time.period_numbers(), attributes("period"))}
+    period = {"period": ("period", long_time.period_numbers(transient_periods),
+                         attributes("period"))}
     result = dataset.assign_coords(period).assign(data)
     result.attrs.update({key: getattr(long_time, key) for key in
-                         ("transient_periods", "sampled_periods", "period_tolerance",
-                          "max_period")})
+                         ("sampled_periods", "period_tolerance", "max_period")},
+                        transient_periods=transient_periods)
     return result
