@@ -75,7 +75,7 @@ def cell_costs(sweep, stride: int) -> list[CellCost]:
         start = time.perf_counter()
         values = compute_chunk(sweep, i, i + 1, parallel=False, plan=plan)
         seconds = time.perf_counter() - start
-        omega = float(sweep.axes[0].values[i])
+        omega = float(sweep.params_at(_point(sweep, i)).omega)
         period = float(long_time.forcing_period(omega))
         costs.append(CellCost(omega, seconds,
                               float(long_time.horizon(omega, sweep.transient_periods)),
@@ -85,6 +85,21 @@ def cell_costs(sweep, stride: int) -> list[CellCost]:
         print(f"Omega {omega:7.1f}: {seconds:7.2f} s, {costs[-1].onsets_per_period:5.1f} "
               f"onsets/period, period {costs[-1].response_period}", flush=True)
     return costs
+
+
+def _point(sweep, flat: int) -> dict[str, float]:
+    """The swept parameters of flat cell ``flat``."""
+    index = np.unravel_index(flat, sweep.shape)
+    return {axis.name: axis.value(int(i)) for axis, i in zip(sweep.axes, index, strict=True)}
+
+
+def map_estimate(sweep, stride: int) -> dict:
+    """One-core cost (s) of a whole map, extrapolated from every ``stride``-th cell."""
+    costs = cell_costs(sweep, stride)
+    serial = sum(c.seconds for c in costs)
+    return {"sweep": sweep.source, "cells": sweep.size, "stride": stride,
+            "sampled_cells": len(costs), "one_core_s": stride * serial,
+            "cell_s_mean": serial / len(costs)}
 
 
 def subset_wall_time(sweep, stride: int, threads: int) -> float:
@@ -202,6 +217,15 @@ def _summary_rows(study: dict) -> list[str]:
     ]
 
 
+def _map_rows(estimate: dict | None) -> list[str]:
+    """The period map's extrapolated cost, if it was estimated."""
+    if estimate is None:
+        return []
+    return [f"| `{Path(estimate['sweep']).name}` ({estimate['cells']} cells), 1 core "
+            f"(extrapolated from every {estimate['stride']}-th cell) | "
+            f"{estimate['one_core_s']:,.0f} s ({estimate['cell_s_mean']:.2f} s per cell) |"]
+
+
 def _full_rows(full: dict | None) -> list[str]:
     """The whole diagram's measured run, if it was run."""
     if full is None:
@@ -233,6 +257,7 @@ def markdown(report: dict) -> str:
         "|---|---|",
         *_summary_rows(report),
         *_full_rows(report["full_run"]),
+        *_map_rows(report["period_map"]),
         "",
         f"The same diagram with a softer contact, k = {variant['contact_stiffness']:g} N/m, at "
         f"its resolved {variant['n_modes']} modes per beam:",
@@ -332,6 +357,9 @@ def main() -> None:
     parser.add_argument("--variant-stiffness", type=float, default=1e4)
     parser.add_argument("--no-profile", action="store_true")
     parser.add_argument("--full", action="store_true", help="also run the whole diagram")
+    parser.add_argument("--map", default=str(ROOT / "sweeps" / "period-map-omega-force.toml"))
+    parser.add_argument("--map-stride", type=int, default=46,
+                        help="estimate the period map from every N-th cell (0: skip)")
     args = parser.parse_args()
     sweep = load_sweep(args.sweep)
     name = Path(args.sweep).name
@@ -341,6 +369,8 @@ def main() -> None:
                                       args.stride)
     report.update({
         "full_run": full_run(sweep) if args.full else None,
+        "period_map": (map_estimate(load_sweep(args.map), args.map_stride)
+                       if args.map_stride else None),
         "profile": [] if args.no_profile else [profile(sweep, w) for w in PROFILE_OMEGA],
         "machine": f"{platform.machine()}, {os.cpu_count()} cores",
         "impactbeams": __version__, "numba": numba.__version__,
