@@ -8,8 +8,6 @@ transient and 200 sampled, spring law at a resolved n_modes, in under 60 s on 2 
   diagram's cost on one core is ``stride`` times their sum, on 2 cores half of that at ideal
   scaling. Per cell: run time, simulated time (the horizon), forcing periods, contact onsets per
   period in the sampled window.
-* Parallel scaling: the same cells as one sweep on 2 Numba threads (wall time), against the sum
-  of their 1-thread times (a shared machine lowers it).
 * ``--full``: the whole diagram as one sweep on 2 threads, its wall time and the CPU time of
   this process (on a shared machine the CPU time says what two free cores would take).
 * The same diagram with a softer contact (``--variant-stiffness``, default k = 1e4 N/m, at its
@@ -43,7 +41,6 @@ from impactbeams.kernels import dynamics as dyn
 from impactbeams.kernels.layout import CONTACT, FREE
 from impactbeams.packing import pack_run
 from impactbeams.sweep import build_plan, compute_chunk, load_sweep, run_sweep, sweep_from_mapping
-from impactbeams.sweep.run import numba_threads
 from impactbeams.trajectory.phases import run, sample
 
 ROOT = Path(__file__).parents[1]
@@ -100,21 +97,6 @@ def map_estimate(sweep, stride: int) -> dict:
     return {"sweep": sweep.source, "cells": sweep.size, "stride": stride,
             "sampled_cells": len(costs), "one_core_s": stride * serial,
             "cell_s_mean": serial / len(costs)}
-
-
-def subset_wall_time(sweep, stride: int, threads: int) -> float:
-    """Wall time (s) of the strided cells as one sweep on ``threads`` Numba threads."""
-    axis = sweep.axes[0]
-    values = axis.values[::stride]
-    definition = sweep.definition()
-    definition["axes"] = {axis.name: {"min": float(values[0]), "max": float(values[-1]),
-                                      "num": int(values.size)}}
-    subset = sweep_from_mapping(definition, source="strided subset")
-    plan = build_plan(subset)
-    with numba_threads(threads):
-        start = time.perf_counter()
-        compute_chunk(subset, 0, subset.size, parallel=True, plan=plan)
-        return time.perf_counter() - start
 
 
 @numba.njit
@@ -202,11 +184,10 @@ def _summary_rows(study: dict) -> list[str]:
     """The summary table's rows of one diagram study."""
     one_core = study["diagram_one_core_s"]
     return [
+        *_full_rows(study["full_run"]),
         f"| whole diagram, 1 core (extrapolated) | {one_core:,.0f} s |",
         f"| whole diagram, 2 cores at ideal scaling | {one_core / 2:,.0f} s "
         f"(target {TARGET_S:g} s: {one_core / 2 / TARGET_S:.1f}x) |",
-        f"| 2 threads vs 1 on the sampled cells (wall time, shared machine) | "
-        f"{study['parallel_speedup']:.2f}x |",
         f"| cost per cell: median, max | {study['cell_s_median']:.2f} s, "
         f"{study['cell_s_max']:.1f} s |",
         f"| cost per simulated second: mean over the cells | "
@@ -230,9 +211,9 @@ def _full_rows(full: dict | None) -> list[str]:
     """The whole diagram's measured run, if it was run."""
     if full is None:
         return []
-    return [f"| whole diagram run as one sweep on 2 threads: wall time, CPU time | "
-            f"{full['wall_s']:,.0f} s, {full['cpu_s']:,.0f} s ({full['cores_used']:.2f} cores "
-            "on average) |"]
+    return [f"| **whole diagram run as one sweep on 2 threads**: wall time, CPU time | "
+            f"**{full['wall_s']:,.0f} s**, {full['cpu_s']:,.0f} s ({full['cores_used']:.2f} "
+            f"cores on average; target {TARGET_S:g} s) |"]
 
 
 def markdown(report: dict) -> str:
@@ -256,7 +237,6 @@ def markdown(report: dict) -> str:
         "| quantity | value |",
         "|---|---|",
         *_summary_rows(report),
-        *_full_rows(report["full_run"]),
         *_map_rows(report["period_map"]),
         "",
         f"The same diagram with a softer contact, k = {variant['contact_stiffness']:g} N/m, at "
@@ -294,19 +274,22 @@ def markdown(report: dict) -> str:
 
 def headline(report: dict) -> str:
     """A paragraph for docs/benchmarks/README.md, pointing to longtime.md."""
-    one_core, soft = report["diagram_one_core_s"], report["variant"]
+    soft = report["variant"]
+
+    def cost(study: dict) -> str:
+        full = study["full_run"]
+        measured = (f"{full['wall_s']:,.0f} s on 2 threads ({full['cpu_s']:,.0f} s of CPU), "
+                    if full else "")
+        return f"{measured}{study['diagram_one_core_s']:,.0f} s on one core (extrapolated)"
+
     return (f"## Long-time bifurcation diagram\n\n`{report['sweep']}` "
             f"({report['diagram_cells']} values of Omega, {report['transient_periods']} + "
-            f"{report['sampled_periods']} forcing periods each, {report['n_modes']} modes per "
-            f"beam, Hertz contact k = {report['contact_stiffness']:.3g} N/m): "
-            f"{one_core:,.0f} s on one core, {one_core / 2:,.0f} s on two at ideal scaling "
-            f"(extrapolated from every {report['stride']}-th cell; target {TARGET_S:g} s); "
-            f"{1e3 * report['s_per_period']:.1f} ms per forcing period, "
-            f"{report['s_per_simulated_s']:.2f} s per simulated second. With k = "
-            f"{soft['contact_stiffness']:g} N/m at {soft['n_modes']} modes: "
-            f"{soft['diagram_one_core_s']:,.0f} s on one core, "
-            f"{soft['diagram_one_core_s'] / 2:,.0f} s on two. Details and profile: "
-            "[longtime.md](longtime.md).\n")
+            f"{report['sampled_periods']} forcing periods each, target {TARGET_S:g} s on 2 "
+            f"cores): with the Hertz contact (k = {report['contact_stiffness']:.3g} N/m, "
+            f"{report['n_modes']} modes per beam) {cost(report)}, "
+            f"{1e3 * report['s_per_period']:.1f} ms per forcing period; with k = "
+            f"{soft['contact_stiffness']:g} N/m ({soft['n_modes']} modes) {cost(soft)}. "
+            "Details and profile: [longtime.md](longtime.md).\n")
 
 
 def full_run(sweep) -> dict:
@@ -317,11 +300,10 @@ def full_run(sweep) -> dict:
     return {"wall_s": wall, "cpu_s": cpu, "cores_used": cpu / wall}
 
 
-def diagram_study(sweep, source: str, stride: int) -> dict:
-    """Cost of one bifurcation diagram: per-cell serial times, extrapolation, 2-thread wall."""
+def diagram_study(sweep, source: str, stride: int, full: bool) -> dict:
+    """Cost of one bifurcation diagram: per-cell serial times, extrapolation, a full run."""
     costs = cell_costs(sweep, stride)
     serial = sum(c.seconds for c in costs)
-    wall = subset_wall_time(sweep, stride, min(2, numba.config.NUMBA_NUM_THREADS))
     seconds = np.array([c.seconds for c in costs])
     return {
         "sweep": source, "diagram_cells": sweep.size, "stride": stride,
@@ -330,8 +312,7 @@ def diagram_study(sweep, source: str, stride: int) -> dict:
         "transient_periods": sweep.transient_periods,
         "sampled_periods": sweep.long_time.sampled_periods,
         "cells": [dataclasses.asdict(c) for c in costs],
-        "diagram_one_core_s": stride * serial,
-        "subset_serial_s": serial, "subset_2_threads_s": wall, "parallel_speedup": serial / wall,
+        "diagram_one_core_s": stride * serial, "full_run": full_run(sweep) if full else None,
         "cell_s_median": float(np.median(seconds)), "cell_s_max": float(seconds.max()),
         "s_per_simulated_s": serial / sum(c.horizon for c in costs),
         "s_per_period": serial / sum(c.periods for c in costs),
@@ -363,12 +344,11 @@ def main() -> None:
     args = parser.parse_args()
     sweep = load_sweep(args.sweep)
     name = Path(args.sweep).name
-    report = diagram_study(sweep, name, args.stride)
+    report = diagram_study(sweep, name, args.stride, args.full)
     variant = soft_variant(sweep, args.variant_stiffness)
     report["variant"] = diagram_study(variant, f"{name} with k = {args.variant_stiffness:g} N/m",
-                                      args.stride)
+                                      args.stride, args.full)
     report.update({
-        "full_run": full_run(sweep) if args.full else None,
         "period_map": (map_estimate(load_sweep(args.map), args.map_stride)
                        if args.map_stride else None),
         "profile": [] if args.no_profile else [profile(sweep, w) for w in PROFILE_OMEGA],
