@@ -88,7 +88,7 @@ def _modes(args: argparse.Namespace) -> None:
 
 
 def _run(args: argparse.Namespace) -> None:
-    from impactbeams.sweep import load_sweep, run_sweep
+    from impactbeams.sweep import load_sweep, write_sweep  # writes netCDF without xarray
 
     sweep = load_sweep(args.sweep)
     output = args.output or str(Path("results") / (Path(args.sweep).stem + ".nc"))
@@ -98,8 +98,9 @@ def _run(args: argparse.Namespace) -> None:
           "kernels, about 10 s on a fresh install; they are cached after that)", file=sys.stderr)
     try:
         with _cluster_runner(args) as runner:
-            run_sweep(sweep, output=output, threads=None if runner else args.threads,
-                      progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner)
+            write_sweep(sweep, output, threads=None if runner else args.threads,
+                        progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner,
+                        discard_corrupt=args.discard_corrupt)
     except KeyboardInterrupt:
         print(f"\nimpactbeams: interrupted; finished chunks are kept in {output}.partial/ "
               "and the same command resumes from them", file=sys.stderr)
@@ -207,6 +208,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--chunk-cells", type=_positive_int,
                      help="cells per saved chunk (default: about 1%% of the grid, 4096..65536)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--discard-corrupt", action="store_true",
+                     help="on a resume, delete damaged saved chunks and compute them again "
+                     "(default: stop with an error naming the file)")
     cluster = run.add_mutually_exclusive_group()
     cluster.add_argument("--scheduler", metavar="ADDRESS",
                          help="run the chunks on the Dask cluster at ADDRESS, e.g. "

@@ -2,26 +2,30 @@
 
 A runner (:data:`ChunkRunner`) computes a list of chunks and yields each result as it
 finishes, in any order: :func:`local_runner` in this process, or the Dask runner of
-:mod:`impactbeams.sweep.dask_runner` on a cluster.
+:mod:`impactbeams.sweep.dask_runner` on a cluster. :func:`write_sweep` streams the results
+into a netCDF file chunk by chunk (saving each for a resume); :func:`run_sweep` returns the
+map as a Dataset.
 """
 
 from __future__ import annotations
 
 import contextlib
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
-from impactbeams.io import write_netcdf
 from impactbeams.params import require
 from impactbeams.sweep.definition import Sweep
-from impactbeams.sweep.output import map_dataset
-from impactbeams.sweep.plan import build_plan, compute_chunk, contact_resolution
+from impactbeams.sweep.output import map_dataset, map_file
+from impactbeams.sweep.plan import Chunking, build_plan, compute_chunk, contact_resolution
 from impactbeams.sweep.progress import Progress
 from impactbeams.sweep.store import ChunkStore, finished_output
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 Chunk = tuple[int, int, int]  # (chunk number, first flat cell, end flat cell)
 ChunkRunner = Callable[[Sweep, list[Chunk]], Iterator[tuple[int, dict[str, np.ndarray]]]]
@@ -56,75 +60,111 @@ def local_runner(parallel: bool = True) -> ChunkRunner:
     return run
 
 
-def chunk_bounds(size: int, chunk_cells: int) -> list[tuple[int, int]]:
-    """Split ``size`` flat cells into consecutive chunks of at most ``chunk_cells``."""
-    return [(start, min(start + chunk_cells, size)) for start in range(0, size, chunk_cells)]
+def default_chunk_cells(sweep: Sweep) -> int:
+    """About 100 chunks of 4096 to 2^20 cells (2^16 for full dynamics, far costlier per cell).
 
-
-def default_chunk_cells(size: int) -> int:
-    """About 100 chunks, each between 4096 and 65536 cells (a second or less of work)."""
-    return int(min(max(size // 100, 4096), 65536))
+    A second or two of work per chunk at most: little is lost to an interruption, and the
+    fixed cost of a chunk (its file, its netCDF block, a Dask task) stays small.
+    """
+    largest = 2**16 if sweep.needs_dynamics else 2**20
+    return int(min(max(sweep.size // 100, 4096), largest))
 
 
 def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | None = None,
               progress: bool = False, parallel: bool = True, chunk_cells: int | None = None,
-              on_chunk: Callable[[int], None] | None = None,
-              runner: ChunkRunner | None = None) -> xr.Dataset:
-    """Compute a sweep and return its Dataset; with ``output``, also write it as netCDF.
+              on_chunk: Callable[[int], None] | None = None, runner: ChunkRunner | None = None,
+              discard_corrupt: bool = False) -> xr.Dataset:
+    """Compute a sweep and return its Dataset; with ``output``, write it as netCDF first.
 
-    ``threads``: Numba threads during the run (default: as set; restored afterwards). With
-    ``output``, finished chunks are kept under ``OUTPUT.partial/`` until the file is
-    complete, and a re-run resumes from them. ``progress``: draw a progress bar on stderr.
-    ``on_chunk`` is called with each finished chunk number (for tests and monitoring).
-    ``runner`` computes the chunks (default: :func:`local_runner`; see
-    :mod:`impactbeams.sweep.dask_runner` for a Dask cluster); chunks may finish in any order.
+    Without ``output`` the map is computed in memory. With it, see :func:`write_sweep` (which
+    takes the same arguments); the Dataset returned is then the file, opened lazily, so that
+    a map larger than memory can be read in parts.
     """
+    import xarray as xr
+
+    if output is not None:
+        write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk, runner,
+                    discard_corrupt)
+        return xr.open_dataset(output)
+    _warn_unresolved(sweep)
+    chunking = Chunking.at_most(sweep.shape, chunk_cells or default_chunk_cells(sweep))
+    results = {name: np.full(sweep.size, np.nan) for name in sweep.stored}
+
+    def keep(_: int, start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:
+        for name, array in results.items():
+            array[start:stop] = values[name]
+
+    with numba_threads(threads):
+        _compute(sweep, chunking, range(chunking.count), runner or local_runner(parallel),
+                 Progress(sweep.size, enabled=progress), on_chunk, keep)
+    return map_dataset(sweep, results)
+
+
+def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
+                progress: bool = False, parallel: bool = True, chunk_cells: int | None = None,
+                on_chunk: Callable[[int], None] | None = None, runner: ChunkRunner | None = None,
+                discard_corrupt: bool = False) -> bool:
+    """Compute a sweep into the netCDF file ``output``, chunk by chunk; False if it was there.
+
+    Nothing holds the whole map: each chunk is written into the file as it finishes (and
+    saved under ``OUTPUT.partial/`` until the file is complete, renamed into place at the end),
+    so an interrupted run loses no finished chunk and the same call resumes it. An existing
+    ``output`` of this sweep and code is kept as it is (returns False); any other existing
+    file is an error. A damaged saved chunk is an error naming it; ``discard_corrupt``
+    deletes such chunks and computes them again.
+
+    ``threads``: Numba threads during the run (default: as set; restored afterwards).
+    ``progress``: draw a progress bar on stderr. ``chunk_cells``: the most cells per chunk
+    (default :func:`default_chunk_cells`), rounded down to whole lines of the last axes (a
+    resumed run keeps its chunks). ``on_chunk`` is called with each computed chunk number
+    (for tests and monitoring). ``runner`` computes the chunks (default :func:`local_runner`;
+    see :mod:`impactbeams.sweep.dask_runner` for a Dask cluster); they may finish in any order.
+    """
+    output = Path(output)
+    if finished_output(output, sweep):
+        return False
+    _warn_unresolved(sweep)
+    wanted = Chunking.at_most(sweep.shape, chunk_cells or default_chunk_cells(sweep))
+    store = ChunkStore(output, sweep, wanted, chosen=chunk_cells is not None)
+    chunking, bar = store.chunking, Progress(sweep.size, enabled=progress)
+    with numba_threads(threads), map_file(sweep, output, store.building, chunking) as write:
+        pending = []
+        for chunk in range(chunking.count):  # the saved chunks first: a damaged one stops here
+            start, stop = chunking.bounds(chunk)
+            saved = store.load(chunk, stop - start, sweep.stored, discard_corrupt)
+            if saved is None:
+                pending.append(chunk)
+                continue
+            write(start, stop, saved)
+            bar.update(stop - start, computed=False)
+
+        def keep(chunk: int, start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:
+            store.save(chunk, values)
+            write(start, stop, values)
+
+        _compute(sweep, chunking, pending, runner or local_runner(parallel), bar, on_chunk,
+                 keep)
+    store.remove()
+    return True
+
+
+def _warn_unresolved(sweep: Sweep) -> None:
+    """Warn if the spring contact of a dynamics sweep needs more modes than it has."""
     resolution = contact_resolution(sweep)
     if resolution is not None and sweep.n_modes < resolution:
         warnings.warn(f"n_modes = {sweep.n_modes} does not resolve the spring contact of "
                       f"{sweep.source}: use n_modes >= {resolution} (docs/model.md, "
-                      "Resolution)", RuntimeWarning, stacklevel=2)
-    with numba_threads(threads):
-        store = None
-        if output is not None:
-            output = Path(output)
-            finished = finished_output(output, sweep)
-            if finished is not None:
-                return finished
-            store = ChunkStore(output, sweep.fingerprint(), chunk_cells,
-                               default_chunk_cells(sweep.size))
-            chunk_cells = store.chunk_cells
-        bounds = chunk_bounds(sweep.size, chunk_cells or default_chunk_cells(sweep.size))
-        results = _collect(sweep, bounds, store, runner or local_runner(parallel),
-                           Progress(sweep.size, enabled=progress), on_chunk)
-    dataset = map_dataset(sweep, results)
-    if store is not None:
-        write_netcdf(dataset, output)
-        store.remove()
-    return dataset
+                      "Resolution)", RuntimeWarning, stacklevel=3)
 
 
-def _collect(sweep: Sweep, bounds: list[tuple[int, int]], store: ChunkStore | None,
-             runner: ChunkRunner, bar: Progress,
-             on_chunk: Callable[[int], None] | None) -> dict[str, np.ndarray]:
-    """Flat results of every cell: saved chunks loaded, the others computed by ``runner``."""
-    results = {name: np.full(sweep.size, np.nan) for name in sweep.stored}
-    pending = []
-    for chunk, (start, stop) in enumerate(bounds):
-        saved = store.load(chunk) if store else None
-        if saved is None:
-            pending.append((chunk, start, stop))
-            continue
-        for name in results:
-            results[name][start:stop] = saved[name]
-        bar.update(stop - start, computed=False)
-    for chunk, values in runner(sweep, pending):
-        if store:
-            store.save(chunk, values)
+def _compute(sweep: Sweep, chunking: Chunking, chunks: Iterable[int], runner: ChunkRunner,
+             bar: Progress, on_chunk: Callable[[int], None] | None,
+             keep: Callable[[int, int, int, Mapping[str, np.ndarray]], None]) -> None:
+    """Compute ``chunks`` with ``runner``; pass each to ``keep(chunk, start, stop, values)``."""
+    bounds = {chunk: chunking.bounds(chunk) for chunk in chunks}
+    for chunk, values in runner(sweep, [(chunk, *cells) for chunk, cells in bounds.items()]):
         start, stop = bounds[chunk]
-        for name in results:
-            results[name][start:stop] = values[name]
+        keep(chunk, start, stop, values)
         bar.update(stop - start)
         if on_chunk:
             on_chunk(chunk)
-    return results
