@@ -251,3 +251,20 @@ def test_damaged_chunk_is_named_and_recomputed_with_discard_corrupt(tmp_path, ca
     with xr.open_dataset(out) as result:
         expected = compute_chunk(sweep, 0, sweep.size)["first_impact_time"]
         assert np.array_equal(result.first_impact_time.values.ravel(), expected, equal_nan=True)
+
+
+def test_the_last_chunk_completes_the_file_without_a_chunk_file(tmp_path, monkeypatch):
+    """Every chunk but the last is saved for a resume; a map of one chunk saves none."""
+    sweep = sweep_from_mapping({**CUBE, "axes": {**CUBE["axes"],
+                                                 "omega": {"min": 20.0, "max": 400.0, "num": 3}}})
+    out = tmp_path / "cube.nc"
+    assert len(_interrupted_run(sweep, out, after=2, chunk_cells=180)) == 2  # 3 chunks
+    computed = []
+    write_sweep(sweep, out, on_chunk=computed.append)
+    assert computed == [2]
+    saved = []
+    monkeypatch.setattr(store_module.ChunkStore, "save", lambda self, chunk, _: saved.append(chunk))
+    write_sweep(sweep, tmp_path / "one.nc")  # 540 cells: one chunk, one pass
+    assert saved == []
+    with xr.open_dataset(out) as resumed, xr.open_dataset(tmp_path / "one.nc") as whole:
+        xr.testing.assert_identical(_contents(resumed), _contents(whole))

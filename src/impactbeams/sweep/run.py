@@ -9,11 +9,12 @@ map as a Dataset.
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -29,6 +30,7 @@ if TYPE_CHECKING:
 
 Chunk = tuple[int, int, int]  # (chunk number, first flat cell, end flat cell)
 ChunkRunner = Callable[[Sweep, list[Chunk]], Iterator[tuple[int, dict[str, np.ndarray]]]]
+Keep = Callable[[int, int, int, Mapping[str, np.ndarray]], None]  # (chunk, start, stop, values)
 
 
 @contextlib.contextmanager
@@ -61,13 +63,15 @@ def local_runner(parallel: bool = True) -> ChunkRunner:
 
 
 def default_chunk_cells(sweep: Sweep) -> int:
-    """About 100 chunks of 4096 to 2^20 cells (2^16 for full dynamics, far costlier per cell).
+    """2^20 cells per chunk (2^16 for full dynamics, far costlier per cell): about a second of work.
 
-    A second or two of work per chunk at most: little is lost to an interruption, and the
-    fixed cost of a chunk (its file, its netCDF block, a Dask task) stays small.
+    Large enough that the fixed cost of a chunk (starting the kernel's threads, its file, its
+    netCDF block, a Dask task) stays small beside its computation, which matters on a busy
+    machine where every start of the threads waits for the cores; small enough that an
+    interrupt loses little and a cube streams in pieces of tens of MB. A map of up to 2^20 cells
+    is therefore computed in one pass.
     """
-    largest = 2**16 if sweep.needs_dynamics else 2**20
-    return int(min(max(sweep.size // 100, 4096), largest))
+    return 2**16 if sweep.needs_dynamics else 2**20
 
 
 def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | None = None,
@@ -106,9 +110,10 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
                 discard_corrupt: bool = False) -> bool:
     """Compute a sweep into the netCDF file ``output``, chunk by chunk; False if it was there.
 
-    Nothing holds the whole map: each chunk is written into the file as it finishes (and
-    saved under ``OUTPUT.partial/`` until the file is complete, renamed into place at the end),
-    so an interrupted run loses no finished chunk and the same call resumes it. An existing
+    Nothing holds the whole map: each chunk is written into the file as it finishes, and
+    saved under ``OUTPUT.partial/`` (but the last one, which completes the file) until the
+    file is complete and renamed into place, so an interrupted run loses no finished chunk and
+    the same call resumes it. An existing
     ``output`` of this sweep and code is kept as it is (returns False); any other existing
     file is an error. A damaged saved chunk is an error naming it; ``discard_corrupt``
     deletes such chunks and computes them again.
@@ -138,14 +143,43 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
             write(start, stop, saved)
             bar.update(stop - start, computed=False)
 
+        unsaved = len(pending)
+
         def keep(chunk: int, start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:
-            store.save(chunk, values)
+            nonlocal unsaved
+            unsaved -= 1
+            if unsaved:  # first: once saved, an interrupt cannot lose it. The last chunk
+                store.save(chunk, values)  # completes the file: nothing would resume from it
             write(start, stop, values)
 
-        _compute(sweep, chunking, pending, runner or local_runner(parallel), bar, on_chunk,
-                 keep)
+        with _one_behind(keep) as keep_behind:
+            _compute(sweep, chunking, pending, runner or local_runner(parallel), bar,
+                     on_chunk, keep_behind)
     store.remove()
     return True
+
+
+@contextlib.contextmanager
+def _one_behind(keep: Keep) -> Iterator[Keep]:
+    """``keep`` run on a background thread, one chunk behind the computation.
+
+    Chunk k is saved and compressed into the file while chunk k + 1 computes: on two cores this
+    hides about half of that cost (both release the GIL). One call at most is in flight, so
+    two chunks at most are in memory; a call's error is raised by the next call. On exit, by
+    an error or an interrupt too, every call has finished: no computed chunk goes unsaved.
+    """
+    with concurrent.futures.ThreadPoolExecutor(1, "impactbeams-writer") as writer:
+        previous: concurrent.futures.Future | None = None
+
+        def submit(*arguments: Any) -> None:
+            nonlocal previous
+            if previous is not None:
+                previous.result()
+            previous = writer.submit(keep, *arguments)
+
+        yield submit
+        if previous is not None:
+            previous.result()
 
 
 def _warn_unresolved(sweep: Sweep) -> None:
@@ -159,7 +193,7 @@ def _warn_unresolved(sweep: Sweep) -> None:
 
 def _compute(sweep: Sweep, chunking: Chunking, chunks: Iterable[int], runner: ChunkRunner,
              bar: Progress, on_chunk: Callable[[int], None] | None,
-             keep: Callable[[int, int, int, Mapping[str, np.ndarray]], None]) -> None:
+             keep: Keep) -> None:
     """Compute ``chunks`` with ``runner``; pass each to ``keep(chunk, start, stop, values)``."""
     bounds = {chunk: chunking.bounds(chunk) for chunk in chunks}
     for chunk, values in runner(sweep, [(chunk, *cells) for chunk, cells in bounds.items()]):
