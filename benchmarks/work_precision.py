@@ -45,7 +45,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import references  # noqa: E402
 from baselines import ModalGap, numpy_first_impact, solve_ivp_first_impact  # noqa: E402
-from impactbeams.kernels.first_impact import first_impact_map_serial  # noqa: E402
+from impactbeams.kernels.first_impact import first_impact_cells  # noqa: E402
 from impactbeams.model import build_free_phase  # noqa: E402
 from impactbeams.packing import free_tables, geometry_row  # noqa: E402
 from impactbeams.params import Params  # noqa: E402
@@ -116,7 +116,7 @@ def time_impactbeams(params: Params, n_modes: int, cells: np.ndarray, t_max: flo
 
     def run() -> np.ndarray:
         out = np.empty(len(cells))
-        first_impact_map_serial(packed, tables, geometry, t_max, out)
+        first_impact_cells(packed, tables, geometry, t_max, out)
         return out
 
     run()  # compile or load the kernel

@@ -10,7 +10,7 @@ import pytest
 from scipy.optimize import brentq
 
 from impactbeams import Params, simulate
-from impactbeams.kernels.first_impact import first_impact_map_parallel
+from impactbeams.kernels.first_impact import first_impact_cells
 from impactbeams.model import build_free_phase
 from impactbeams.packing import free_tables, geometry_row
 from references import damped_modal_gap, reference_first_impact
@@ -100,8 +100,8 @@ def test_damped_first_impacts_against_whole_coordinate_closed_form():
              [1.1e-5, 2e-4, 300.0, 3e-6, 0, 0.05], [1.1e-5, 3e-4, 50.0, 2e-6, 1e-6, 0.3]]
     cells = np.array([[*row, 0.0] for row in rows])
     got = np.empty(len(rows))
-    first_impact_map_parallel(cells, free_tables(free)[None], geometry_row(Params(), free)[None],
-                              1.0, got)
+    first_impact_cells(cells, free_tables(free)[None], geometry_row(Params(), free)[None], 1.0,
+                       got)
     hits = 0
     for row, t in zip(rows, got, strict=True):
         clearance, force, omega, uplift1, uplift2, zeta = row

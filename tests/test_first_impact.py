@@ -5,6 +5,7 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 from impactbeams.kernels.first_impact import first_impact_map_parallel, first_impact_map_serial
+from impactbeams.kernels.layout import CELL_F0
 from impactbeams.model import build_free_phase
 from impactbeams.packing import free_tables, geometry_row
 from impactbeams.params import Params
@@ -28,7 +29,8 @@ def run_cells(free, rows, parallel=True):
     cells, tables, compliance = pack(free, [[*r, 0.0] for r in rows])
     out = np.empty(len(cells))
     kernel = first_impact_map_parallel if parallel else first_impact_map_serial
-    kernel(cells, tables, compliance, T_MAX, out)
+    one_cell_columns = np.arange(len(cells) + 1)
+    kernel(cells, one_cell_columns, CELL_F0, tables, compliance, T_MAX, out)
     return out
 
 

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from impactbeams.kernels import dynamics as dyn
-from impactbeams.kernels.first_impact import first_impact_map_serial
+from impactbeams.kernels.first_impact import first_impact_cells
 from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.kernels.propagation import advance
 from impactbeams.kernels.reductions import work_of_force
@@ -49,8 +49,8 @@ def first_impacts(params, n_modes, rows, t_max):
     cells = np.array([[*row[:5], 0.0, 0.0] for row in rows], dtype=float)  # undamped, geometry 0
     assert cells.shape[1] == len(CELL_COLUMNS)
     out = np.empty(len(cells))
-    first_impact_map_serial(cells, free_tables(free)[None], geometry_row(params, free)[None],
-                            t_max, out)
+    first_impact_cells(cells, free_tables(free)[None], geometry_row(params, free)[None], t_max,
+                       out)
     return out
 
 

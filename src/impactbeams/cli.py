@@ -127,7 +127,7 @@ def _cluster_runner(args: argparse.Namespace) -> Iterator[ChunkRunner | None]:
 def _plot(args: argparse.Namespace) -> None:
     import xarray as xr
 
-    from impactbeams.plotting import plot_dataset
+    from impactbeams.plotting import parse_assignments, parse_levels, plot_dataset
 
     if not Path(args.dataset).is_file():
         problem = "is a folder" if Path(args.dataset).is_dir() else "does not exist"
@@ -138,7 +138,13 @@ def _plot(args: argparse.Namespace) -> None:
         raise ParameterError(f"{args.dataset!r} is not a netCDF file of impactbeams: "
                              f"{str(error).splitlines()[0]}") from None
     with dataset:
-        plot_dataset(dataset, args.output)
+        notes = plot_dataset(dataset, args.output, args.var,
+                             values=parse_assignments(args.slice, "--slice"),
+                             indices=parse_assignments(args.slice_index, "--slice-index"),
+                             scale=args.scale, contours=parse_levels(args.contours),
+                             title=args.title, dpi=args.dpi)
+    for note in notes:
+        print(f"impactbeams: {note}", file=sys.stderr)
     print(f"wrote {args.output}", file=sys.stderr)
 
 
@@ -222,6 +228,25 @@ def build_parser() -> argparse.ArgumentParser:
     plot = commands.add_parser("plot", help="draw a saved sweep map or simulated run")
     plot.add_argument("dataset", metavar="IN.nc")
     plot.add_argument("-o", "--output", required=True, metavar="OUT.png")
+    plot.add_argument("--var", metavar="NAME",
+                      help="variable to draw (default: first_impact_time; a run without "
+                           "options gets its overview)")
+    plot.add_argument("--slice", action="append", default=[], metavar="NAME=VALUE",
+                      help="cut a dimension at the grid value nearest VALUE (SI units); "
+                           "repeatable")
+    plot.add_argument("--slice-index", action="append", default=[], metavar="NAME=I",
+                      help="cut a dimension at grid index I (from 0); repeatable")
+    colour_scale = plot.add_mutually_exclusive_group()
+    colour_scale.add_argument("--log", dest="scale", action="store_const", const="log",
+                              help="log colour scale (default when positive values span "
+                                   "more than 1.5 decades)")
+    colour_scale.add_argument("--linear", dest="scale", action="store_const", const="linear",
+                              help="linear colour scale")
+    plot.add_argument("--contours", metavar="N|L1,L2,...",
+                      help="labelled contour lines: about N at round values, or these levels")
+    plot.add_argument("--title", help="title instead of the fixed parameters ('' for none)")
+    plot.add_argument("--dpi", type=_positive_float, default=150,
+                      help="resolution of raster formats (default 150)")
     plot.set_defaults(handler=_plot)
     return parser
 

@@ -35,52 +35,63 @@ CONTACT_LAW_NOTES = {
 
 @dataclasses.dataclass(frozen=True)
 class Parameter:
-    """A model parameter: its CF ``units`` and ``long_name`` (as a coordinate or attribute)."""
+    """A model parameter: its CF ``units`` and ``long_name`` (as a coordinate or attribute).
+
+    ``symbol``: the paper's symbol in matplotlib mathtext, for axis labels ("" if none).
+    """
 
     units: str
     long_name: str
+    symbol: str = ""
 
 
-_BEAM_PARAMETERS = {"l": ("m", "length"), "EI": ("N m^2", "bending stiffness"),
-                    "rhoA": ("kg/m", "mass per unit length")}
+_BEAM_PARAMETERS = {"l": ("m", "length", "l"), "EI": ("N m^2", "bending stiffness", "EI"),
+                    "rhoA": ("kg/m", "mass per unit length", r"\rho A")}
 # material alternative to EI/rhoA (see impactbeams.params)
-_MATERIAL_PARAMETERS = {"E": ("Pa", "Young's modulus"), "rho": ("kg/m^3", "density"),
-                        "width": ("m", "strip width"), "thickness": ("m", "strip thickness")}
+_MATERIAL_PARAMETERS = {"E": ("Pa", "Young's modulus", "E"),
+                        "rho": ("kg/m^3", "density", r"\rho"),
+                        "width": ("m", "strip width", "b"),
+                        "thickness": ("m", "strip thickness", "h")}
 
 # every parameter that can be given, fixed or swept, in the order of options and messages
 PARAMETERS: dict[str, Parameter] = {
-    **{key + i: Parameter(unit, f"{name} of beam {i}")
-       for key, (unit, name) in _BEAM_PARAMETERS.items() for i in ("1", "2")},
-    "clearance": Parameter("m", "clearance between the tips at rest (Delta)"),
-    "force_amplitude": Parameter("N", "amplitude of the tip force on beam 1 (F0)"),
-    "omega": Parameter("rad/s", "forcing frequency (Omega)"),
-    "uplift1": Parameter("m", "initial tip uplift of beam 1 (delta_1)"),
-    "uplift2": Parameter("m", "initial tip uplift of beam 2 (delta_2)"),
-    "damping_ratio": Parameter("1", "modal damping ratio (zeta)"),
+    **{key + i: Parameter(unit, f"{name} of beam {i}", f"${symbol}_{i}$")
+       for key, (unit, name, symbol) in _BEAM_PARAMETERS.items() for i in ("1", "2")},
+    "clearance": Parameter("m", "clearance between the tips at rest (Delta)", r"$\Delta$"),
+    "force_amplitude": Parameter("N", "amplitude of the tip force on beam 1 (F0)", "$F_0$"),
+    "omega": Parameter("rad/s", "forcing frequency (Omega)", r"$\Omega$"),
+    "uplift1": Parameter("m", "initial tip uplift of beam 1 (delta_1)", r"$\delta_1$"),
+    "uplift2": Parameter("m", "initial tip uplift of beam 2 (delta_2)", r"$\delta_2$"),
+    "damping_ratio": Parameter("1", "modal damping ratio (zeta)", r"$\zeta$"),
     "contact_law": Parameter("1", "tip contact law: spring (compliant, converges in n_modes) or "
                                   "tied (the paper's, does not converge after the first impact)"),
-    "contact_stiffness": Parameter("N/m", "stiffness k of the tip contact spring"),
-    "contact_damping": Parameter("N s/m", "damping c of the tip contact dashpot"),
-    **{key + i: Parameter(unit, f"{name} of beam {i}")
-       for key, (unit, name) in _MATERIAL_PARAMETERS.items() for i in ("1", "2")},
+    "contact_stiffness": Parameter("N/m", "stiffness k of the tip contact spring", "$k$"),
+    "contact_damping": Parameter("N s/m", "damping c of the tip contact dashpot", "$c$"),
+    **{key + i: Parameter(unit, f"{name} of beam {i}", f"${symbol}_{i}$")
+       for key, (unit, name, symbol) in _MATERIAL_PARAMETERS.items() for i in ("1", "2")},
 }
 
 
 @dataclasses.dataclass(frozen=True)
 class Variable:
-    """An output variable: its dimensions, CF ``units``, ``long_name`` and a description."""
+    """An output variable: its dimensions, CF ``units``, ``long_name`` and a description.
+
+    ``symbol``: its symbol in matplotlib mathtext, for axis labels ("" if none).
+    """
 
     dims: tuple[str, ...]
     units: str
     long_name: str
     description: str
+    symbol: str = ""
 
 
 # dims "*" = the swept parameters of a map, in sweep order
 VARIABLES: dict[str, Variable] = {
     "first_impact_time": Variable(
         ("*",), "s", "time before the first impact",
-        "first time in (0, t_max] at which the tip gap closes; NaN where no impact by t_max"),
+        "first time in (0, t_max] at which the tip gap closes; NaN where no impact by t_max",
+        symbol="$t^*$"),
     "impacted": Variable(
         ("*",), "1", "impact flag",
         "1 where the tips impact by t_max, 0 where they do not"),
@@ -89,17 +100,19 @@ VARIABLES: dict[str, Variable] = {
         "number of contact onsets in [0, t_max] (full dynamics)"),
     "max_contact_force": Variable(
         ("*",), "N", "largest contact force",
-        "largest contact force R over [0, t_max]; 0 where no impact (full dynamics)"),
+        "largest contact force R over [0, t_max]; 0 where no impact (full dynamics)",
+        symbol=r"$R_\max$"),
     "mean_restitution": Variable(
         ("*",), "1", "mean coefficient of restitution",
         "approach-speed-weighted mean of e = -(dg/dt at separation) / (dg/dt at onset): "
         "sum of separation speeds over sum of approach speeds, over impacts that closed and "
         "separated (impacts with a near-zero approach speed, whose own e is a truncation "
-        "artefact, barely count); NaN where none did (full dynamics)"),
+        "artefact, barely count); NaN where none did (full dynamics)", symbol=r"$\bar e$"),
     "dynamics_status": Variable(
         ("*",), "1", "status of the full-dynamics run",
         "0: reached t_max; 1: stopped at the cap on phases per cell; 2: stuck (a run of "
-        "zero-length phases); observables then cover the part before the stop"),
+        "zero-length phases); 3: an event search reached its step cap; observables then "
+        "cover the part before the stop"),
     "contact_fraction": Variable(
         ("*",), "1", "fraction of time in contact",
         "time spent in the contact phase divided by t_max (full dynamics)"),
@@ -107,17 +120,19 @@ VARIABLES: dict[str, Variable] = {
 
 # simulate(): one trajectory on an output grid ("time") and its impacts ("impact")
 VARIABLES.update({
-    "time": Variable(("time",), "s", "time", "output time"),
+    "time": Variable(("time",), "s", "time", "output time", "$t$"),
     "impact": Variable(("impact",), "1", "impact number",
                        "index of the contact phase, in order of onset (from 0)"),
-    "x1": Variable(("x1",), "m", "position along beam 1", "distance from the clamped end"),
-    "x2": Variable(("x2",), "m", "position along beam 2", "distance from the clamped end"),
+    "x1": Variable(("x1",), "m", "position along beam 1", "distance from the clamped end",
+                   "$x_1$"),
+    "x2": Variable(("x2",), "m", "position along beam 2", "distance from the clamped end",
+                   "$x_2$"),
     "tip_deflection_1": Variable(
-        ("time",), "m", "tip deflection of beam 1", "y1(l1, t), upward positive"),
+        ("time",), "m", "tip deflection of beam 1", "y1(l1, t), upward positive", "$y_1(l_1)$"),
     "tip_deflection_2": Variable(
         ("time",), "m", "tip deflection of beam 2 minus the clearance",
         "y2(l2, t) - Delta, upward positive (as in the paper's Fig. 3a); in contact it equals "
-        "tip_deflection_1"),
+        "tip_deflection_1", symbol=r"$y_2(l_2) - \Delta$"),
     "tip_velocity_1": Variable(("time",), "m s-1", "tip velocity of beam 1", "dy1(l1, t)/dt"),
     "tip_velocity_2": Variable(("time",), "m s-1", "tip velocity of beam 2", "dy2(l2, t)/dt"),
     "gap": Variable(
@@ -126,7 +141,7 @@ VARIABLES.update({
         "basis' representation of the contact field (a truncation error of the modal model)"),
     "contact_force": Variable(
         ("time",), "N", "contact force",
-        "R(t) = EI2 d3y2/dx3 (l2, t) in contact, 0 out of contact"),
+        "R(t) = EI2 d3y2/dx3 (l2, t) in contact, 0 out of contact", "$R$"),
     "in_contact": Variable(
         ("time",), "1", "contact flag", "1 in the contact phase, 0 in the free phase"),
     "energy": Variable(
@@ -162,7 +177,8 @@ VARIABLES.update({
         ("impact",), "N", "peak impact force", "largest contact force during the contact phase"),
     "restitution_coefficient": Variable(
         ("impact",), "1", "coefficient of restitution",
-        "e = -(dg/dt just after release) / (dg/dt just before onset); NaN if not released"),
+        "e = -(dg/dt just after release) / (dg/dt just before onset); NaN if not released",
+        "$e$"),
     "impact_sustained": Variable(
         ("impact",), "1", "sustained-contact flag",
         "1 if the contact followed an instantaneous impact whose released state closed again "

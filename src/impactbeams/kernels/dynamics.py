@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from impactbeams.kernels.events import event_value, first_root
+from impactbeams.kernels.events import GAVE_UP, event_value, first_root
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.layout import (
     CONTACT,
@@ -41,8 +41,8 @@ from impactbeams.kernels.layout import (
 from impactbeams.kernels.propagation import advance
 from impactbeams.kernels.spring import to_contact, to_free
 
-COMPLETE, EVENT_LIMIT, STUCK = 0, 1, 2
-STATUS_NAMES = ("complete", "event_limit", "stuck")
+COMPLETE, EVENT_LIMIT, STUCK, SEARCH_LIMIT = 0, 1, 2, 3
+STATUS_NAMES = ("complete", "event_limit", "stuck", "search_limit")
 # Consecutive zero-length phases allowed before the run is declared stuck. A chattering
 # sequence that converges (alternating projections) ends well before; a persistent conflict
 # between the two truncated phases would repeat forever at one instant.
@@ -101,13 +101,17 @@ def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v):
     """First root in (t_s, t_max] of the phase's event function, NaN if none.
 
     The certified search restarts from the exactly propagated state every ``search span``
-    seconds (settings); the root does not depend on that span beyond round-off.
+    seconds (settings); the root does not depend on that span beyond round-off. A span below
+    the resolution of t searches the rest at once (it could not advance t). ``GAVE_UP`` if a
+    search reached its step cap.
     """
     t_max, span = settings.t_max, settings.search_span
     q_a, v_a = q_s.copy(), v_s.copy()
     t_a = t_s
     while t_a < t_max:
         t_b = min(t_a + span, t_max)
+        if t_b <= t_a:
+            t_b = t_max
         root = first_root(q_a, v_a, t_a, t_b, table[ROW_OMEGA], table[ROW_ZETA], force,
                           table[ROW_EVENT], scalars[SCALAR_CONST], event_sine(scalars),
                           settings.forcing_frequency, q, v)
@@ -143,6 +147,8 @@ def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings
     """First time from t on, in growing steps of a few ulps, where e > 0 (or e' > 0).
 
     Moves a search off a root it has just located, where e (or e') is 0 to round-off.
+    ``GAVE_UP`` if it is still not positive after 64 doublings of the step (a span of
+    2^66 eps t: the root was not a crossing).
     """
     step = 4.0 * _EPS * max(abs(t), 1e-300)
     for _ in range(64):
@@ -150,10 +156,10 @@ def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings
         value, slope = event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST],
                                    event_sine(scalars), settings.forcing_frequency)
         if (slope if positive_rate else value) > 0.0:
-            break
+            return t
         t += step
         step *= 2.0
-    return t
+    return GAVE_UP
 
 
 @kernel
@@ -177,10 +183,12 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
         if not wait_falling:
             return t_s
         t_min = rate_root(table, force, scalars, -1.0, q_s, v_s, t_s, t_max, settings, q, v)
-        if math.isnan(t_min):
-            return np.nan
+        if math.isnan(t_min) or t_min == GAVE_UP:
+            return t_min
         t_a = _step_until(table, force, scalars, q_s, v_s, t_s, t_min, True, settings, q_a,
                           v_a)
+        if t_a == GAVE_UP:
+            return GAVE_UP
         value, _ = event_value(q_a, v_a, t_a, table[ROW_EVENT], scalars[SCALAR_CONST],
                                event_sine(scalars), settings.forcing_frequency)
         if value > 0.0:
@@ -188,13 +196,19 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     elif not wait_rising:
         return t_s
     t_peak = rate_root(table, force, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v)
+    if t_peak == GAVE_UP:
+        return GAVE_UP
     t_limit = t_max if math.isnan(t_peak) else t_peak
     t_up = first_root(q_a, v_a, t_a, t_limit, table[ROW_OMEGA], table[ROW_ZETA], force,
                       -table[ROW_EVENT], -scalars[SCALAR_CONST], -event_sine(scalars),
                       settings.forcing_frequency, q, v)
+    if t_up == GAVE_UP:
+        return GAVE_UP
     if math.isnan(t_up) or t_up >= t_limit:
         return t_peak
     t_up = _step_until(table, force, scalars, q_a, v_a, t_a, t_up, False, settings, q, v)
+    if t_up == GAVE_UP:
+        return GAVE_UP
     q_up, v_up = q.copy(), v.copy()
     return find_event(table, force, scalars, q_up, v_up, t_up, settings, q, v)
 
@@ -227,6 +241,8 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
                           settings, q, v)
     t_open = first_root(q_s, v_s, t_s, settings.t_max, omega, zeta, force, -table[ROW_EVENT],
                         -scalars[SCALAR_CONST], -event_sine(scalars), big_omega, q, v)
+    if t_open == GAVE_UP:
+        return GAVE_UP, False
     if math.isnan(t_open) or t_onset <= t_open:
         return t_onset, False
     return t_open, True
@@ -258,7 +274,9 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
 
     Returns (number of segments, status, end time of the last segment in s). Status:
     ``COMPLETE`` (t_max reached), ``EVENT_LIMIT`` (arrays full: the run stops at the last
-    recorded event) or ``STUCK`` (more than ``ZENO_LIMIT`` zero-length phases in a row).
+    recorded event), ``STUCK`` (more than ``ZENO_LIMIT`` zero-length phases in a row) or
+    ``SEARCH_LIMIT`` (an event search reached its step cap, ``events.step_limit``; the run
+    stops at the start of that segment).
     """
     n_coords = q0.size
     q, v = q0.copy(), v0.copy()
@@ -284,6 +302,10 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
         else:
             t_event = find_switch(table, force, scalars, q, v, t, free or sustained or spring_law,
                                   free and conflict, settings, q_end, v_end)
+        if t_event == GAVE_UP:  # an event search reached its step cap: stop, undecided
+            end_q[k, :] = q
+            end_v[k, :] = v
+            return k + 1, SEARCH_LIMIT, t
         t_stop = settings.t_max if math.isnan(t_event) else t_event
         propagate(table, force, q, v, t, t_stop, settings, q_end, v_end)
         end_q[k, :] = q_end

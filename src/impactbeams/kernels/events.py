@@ -14,6 +14,13 @@ open is passed in a logarithmic number of steps and one that closes, however bri
 When the linear estimate says a crossing is near, a probe beyond it brackets the root; a bracket
 on which ``e`` is certified monotone holds exactly one root, which safeguarded Newton then
 resolves to a few ulps of time.
+
+Certified in exact arithmetic; in floating point e is known only to within its evaluation
+error. ``search_root`` therefore takes a round-off rule: e counts as 0 where it is within
+``tolerance`` eps of its evaluation scale (the magnitudes of its terms summed), and the walk
+certifies e above that level. Maps use it (a grazing gap is classified one way, whatever
+the path to it); the dynamics' switches use ``tolerance`` = 0. Every loop is capped: the walk
+by ``step_limit`` (it then returns ``GAVE_UP``), Newton by ``NEWTON_LIMIT``.
 """
 
 import math
@@ -25,18 +32,36 @@ from impactbeams.kernels.propagation import advance
 
 _EPS = np.finfo(np.float64).eps
 NO_EVENT = np.nan
+GAVE_UP = -np.inf  # the walk reached its step cap (``step_limit``): undecided
+NEWTON_LIMIT = 200
+
+
+@kernel
+def evaluate(q, v, t, weights, const, sine_amp, forcing_frequency):
+    """Return e(t), e'(t) and e's evaluation scale for modal state (q, v) at time t.
+
+    The scale, the sum of the magnitudes of the terms summed into e, bounds them, so e's
+    rounding error is a few eps times it: a value within ``tolerance`` eps of the scale is zero
+    to within its own evaluation error (the round-off rule of ``search_root``).
+    """
+    sine, cosine = math.sin(forcing_frequency * t), math.cos(forcing_frequency * t)
+    sine_term, cosine_term = sine_amp.real * sine, sine_amp.imag * cosine
+    value = const + sine_term + cosine_term
+    slope = (sine_amp.real * forcing_frequency * cosine
+             - sine_amp.imag * forcing_frequency * sine)
+    scale = abs(const) + abs(sine_term) + abs(cosine_term)
+    for j in range(q.size):
+        term = weights[j] * q[j]
+        value += term
+        scale += abs(term)
+        slope += weights[j] * v[j]
+    return value, slope, scale
 
 
 @kernel
 def event_value(q, v, t, weights, const, sine_amp, forcing_frequency):
     """Return e(t) and e'(t) for modal displacements q and velocities v at time t."""
-    sine, cosine = math.sin(forcing_frequency * t), math.cos(forcing_frequency * t)
-    value = const + sine_amp.real * sine + sine_amp.imag * cosine
-    slope = (sine_amp.real * forcing_frequency * cosine
-             - sine_amp.imag * forcing_frequency * sine)
-    for j in range(q.size):
-        value += weights[j] * q[j]
-        slope += weights[j] * v[j]
+    value, slope, _ = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
     return value, slope
 
 
@@ -180,69 +205,121 @@ def cubic_step(value, slope, acceleration, jerk, start):
 
 @kernel
 def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, omega, zeta, force, weights, const,
-                       sine_amp, forcing_frequency, q, v):
-    """The single root of a monotone e on [lo, hi] (e(lo) > 0 >= e(hi)).
+                       sine_amp, forcing_frequency, tolerance, q, v):
+    """The single root of a monotone e on [lo, hi] (e(lo) > 0, e(hi) <= round-off).
 
-    Safeguarded Newton, started from the secant point of the bracket.
+    Safeguarded Newton, started from the secant point of the bracket; it stops at a few ulps
+    of time or, with ``tolerance`` > 0, as soon as |e| is within the round-off rule (Newton
+    steps inside e's noise band wander: they would cost evaluations and change nothing).
     """
     t = lo + (hi - lo) * e_lo / (e_lo - e_hi)
     if not lo < t < hi:
         t = 0.5 * (lo + hi)
-    for _ in range(200):
+    for _ in range(NEWTON_LIMIT):
         advance(q_s, v_s, t_s, t - t_s, omega, zeta, force, forcing_frequency, q, v)
-        value, slope = event_value(q, v, t, weights, const, sine_amp, forcing_frequency)
+        value, slope, scale = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
         if value > 0.0:
             lo = t
         else:
             hi = t
         if value == 0.0 or hi - lo <= 4.0 * _EPS * hi:
             return hi
+        if abs(value) <= tolerance * _EPS * scale:
+            return t
         step = t - value / slope if slope != 0.0 else lo - 1.0
         if not lo < step < hi:
             step = 0.5 * (lo + hi)
         if abs(step - t) <= 2.0 * _EPS * abs(t):  # converged to within an ulp
             return hi if value <= 0.0 else min(hi, t + 4.0 * _EPS * abs(t))
         t = step
-    return hi
+    return hi  # the bracket has shrunk by at least 2^-NEWTON_LIMIT: hi is past the root
+
+
+@kernel
+def step_limit(t_s, t_end, omega):
+    """A cap on the walk's steps over (t_s, t_end]: far above any certified walk's count.
+
+    A walk takes a few steps per period of the fastest mode (fewer near grazing minima, which
+    it passes in a logarithmic number of steps), so 64 per period plus 2^20 is never reached
+    unless the bounds degenerate; the search then ends with ``GAVE_UP`` instead of spinning.
+    """
+    return 2.0**20 + 64.0 * (t_end - t_s) * np.max(omega) / (2.0 * math.pi)
 
 
 @kernel
 def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_amp,
                forcing_frequency, q, v):
-    """First time in (t_s, t_end] where e(t) reaches 0 from above, or NaN if none.
+    """First time in (t_s, t_end] where e(t) reaches 0 from above, NaN if none.
+
+    ``search_root`` from t_s with no round-off tolerance (a root is a value <= 0, resolved to
+    a few ulps of time), as the switching events of the dynamics use it.
+    """
+    return search_root(q_s, v_s, t_s, t_s, t_end, omega, zeta, force, weights, const, sine_amp,
+                       forcing_frequency, 0.0, step_limit(t_s, t_end, omega), q, v)
+
+
+@kernel
+def search_root(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine_amp,
+                forcing_frequency, tolerance, max_steps, q, v):
+    """First time in [t_start, t_end] where e(t) reaches 0 from above; NaN if none.
 
     q_s, v_s: modal state at t_s (s); omega, zeta (per mode), force (complex drive amplitudes),
     forcing_frequency: the phase's oscillators (see ``advance``); weights, const, sine_amp:
-    the event function. ``q``, ``v`` are work arrays. A value within round-off of 0 counts as
-    a root (grazing at round-off).
+    the event function. The caller guarantees that e has no root in (t_s, t_start) (a warm
+    start). ``q``, ``v`` are work arrays.
+
+    Round-off rule: e counts as 0 where ``e <= tolerance * eps * scale`` (``evaluate``'s
+    scale), i.e. where it is zero to within its own evaluation error, so that grazing at the
+    level of rounding is classified one way consistently (``tolerance`` = 0: e <= 0 only).
+    Returns ``GAVE_UP`` (-inf) after ``max_steps`` steps of the walk (see ``step_limit``).
+    """
+    bounds = phase_bounds(q_s, v_s, t_s, t_end - t_s, omega, zeta, force, weights, sine_amp,
+                          forcing_frequency)
+    return walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine_amp,
+                forcing_frequency, tolerance, max_steps, bounds, q, v)
+
+
+@kernel
+def walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine_amp,
+         forcing_frequency, tolerance, max_steps, bounds, q, v):
+    """``search_root`` given ``bounds``, ``phase_bounds`` over [t_s, t_end].
+
+    The bounds do not depend on ``const``: event functions that differ in it alone (a column
+    of a map along the clearance) share them.
     """
     span_cap = 2.0 * math.pi / np.min(omega)  # bounds hold over a step of at most this span
-    coherent, band, curvature, jerk, any_span = phase_bounds(q_s, v_s, t_s, t_end - t_s,
-                                                             omega, zeta, force, weights,
-                                                             sine_amp, forcing_frequency)
-    if const - band - abs(coherent) > 0.0:
+    coherent, band, curvature, jerk, any_span = bounds
+    floor = const - band - abs(coherent)
+    if floor > tolerance * _EPS * (abs(const) + band + abs(coherent)):
         return NO_EVENT  # the event function cannot reach 0 in this phase
     # With every mode split into steady state + free transient, the bounds hold for the whole
     # phase (transient amplitudes do not grow): computed once. Otherwise (a mode at or near
     # resonance) they are recomputed over each step's window.
     per_step = not any_span
-    t = t_s
-    q[:] = q_s
-    v[:] = v_s
-    value, slope = event_value(q, v, t, weights, const, sine_amp, forcing_frequency)
-    while True:
-        if value <= 0.0:
+    t = t_start
+    if t == t_s:
+        q[:] = q_s
+        v[:] = v_s
+    else:
+        advance(q_s, v_s, t_s, t - t_s, omega, zeta, force, forcing_frequency, q, v)
+    value, slope, scale = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
+    steps = 0
+    while steps < max_steps:
+        steps += 1
+        noise = tolerance * _EPS * scale
+        if value <= noise:
             return t
         if per_step:
             coherent, band, curvature, jerk, any_span = phase_bounds(
                 q, v, t, span_cap, omega, zeta, force, weights, sine_amp, forcing_frequency)
-        step = min(certified_step(value, slope, curvature), span_cap)
+        margin = value - noise  # certify e > noise over the step
+        step = min(certified_step(margin, slope, curvature), span_cap)
         if not per_step:  # third order with the exact local e'': wide steps through minima
             acceleration = event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp,
                                               forcing_frequency)
-            step = min(cubic_step(value, slope, acceleration, jerk, step), span_cap)
+            step = min(cubic_step(margin, slope, acceleration, jerk, step), span_cap)
         # the exact sinusoid at Omega minus the bounded rest may certify a longer step
-        skip = band_step(const - band, coherent, t, forcing_frequency)
+        skip = band_step(const - band - noise, coherent, t, forcing_frequency)
         step = max(step, skip if any_span else min(skip, span_cap))
         if step <= 4.0 * _EPS * max(abs(t), span_cap):
             return t  # the event function is at round-off level: touching
@@ -252,14 +329,15 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
                 t_probe = t + reach
                 advance(q_s, v_s, t_s, t_probe - t_s, omega, zeta, force, forcing_frequency,
                         q, v)
-                probe, _ = event_value(q, v, t_probe, weights, const, sine_amp,
-                                       forcing_frequency)
-                if probe <= 0.0:
+                probe, _, probe_scale = evaluate(q, v, t_probe, weights, const, sine_amp,
+                                                 forcing_frequency)
+                if probe <= tolerance * _EPS * probe_scale:
                     return _newton_in_bracket(q_s, v_s, t_s, t, t_probe, value, probe, omega,
                                               zeta, force, weights, const, sine_amp,
-                                              forcing_frequency, q, v)
+                                              forcing_frequency, tolerance, q, v)
         if t + step >= t_end:
             return NO_EVENT
         t += step
         advance(q_s, v_s, t_s, t - t_s, omega, zeta, force, forcing_frequency, q, v)
-        value, slope = event_value(q, v, t, weights, const, sine_amp, forcing_frequency)
+        value, slope, scale = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
+    return GAVE_UP

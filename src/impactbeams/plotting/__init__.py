@@ -1,19 +1,106 @@
-"""Figures drawn from saved Datasets only (no computation happens in plotting code)."""
+"""Figures drawn from saved Datasets only (no computation happens in plotting code).
+
+:func:`draw` puts one variable of a sweep on a matplotlib Axes, as the dataset's shape asks:
+a colour map over two swept axes, a line over one, a bifurcation diagram for samples per
+cell (a ``period`` dimension) over one; :func:`plot_dataset` draws into a file.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import xarray as xr
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from impactbeams.params import ParameterError
+from impactbeams.plotting.labels import case_title
+from impactbeams.plotting.selection import (
+    SAMPLE_DIMENSIONS,
+    choose_variable,
+    parse_assignments,
+    parse_levels,
+    select,
+)
+
+__all__ = ["draw", "parse_assignments", "parse_levels", "plot_dataset"]
 
 
-def plot_dataset(dataset: xr.Dataset, path: str | Path) -> None:
-    """Draw a sweep map or a simulated run, whichever ``dataset`` holds, into ``path``."""
-    if "time" in dataset.dims:
+def draw(axes: Axes, dataset: xr.Dataset, variable: str | None = None, *,
+         values: Mapping[str, float | str] | None = None,
+         indices: Mapping[str, int | str] | None = None, scale: str | None = None,
+         contours: int | Sequence[float] | None = None, title: str | None = None) -> list[str]:
+    """Draw ``variable`` (default first_impact_time) of ``dataset`` on ``axes``.
+
+    ``values`` slices dimensions at the grid values nearest the given ones (SI units, in log
+    distance on log axes), ``indices`` at grid indices; the rest decides the figure: two
+    swept dimensions give a colour map (with a colour bar), one a line, one plus ``period``
+    (Poincare samples) a bifurcation diagram. ``scale``: "log" or "linear" colours (or y axis
+    of a line), None to choose (log when positive data span more than 1.5 decades).
+    ``contours``: labelled contour lines on a map, a number of round levels or the levels.
+    ``title``: None for the fixed parameters and slices, "" for none.
+
+    Returns one note per slice saying which grid value it used. Raises ParameterError for an
+    unknown variable or dimension, or a shape that cannot be drawn.
+    """
+    name = choose_variable(dataset, variable)
+    data, notes = select(dataset, name, values or {}, indices or {})
+    field = data[name]
+    grid = [d for d in field.dims if d not in SAMPLE_DIMENSIONS]
+    if contours is not None and len(field.dims) != 2:
+        raise ParameterError(f"contour lines need a map of two dimensions; {name} has "
+                             f"{_dimensions(field)}")
+    if grid and len(grid) < field.ndim:
+        if len(grid) > 1:
+            raise ParameterError(f"a bifurcation diagram needs one swept axis: {name} has "
+                                 f"{_dimensions(field)}; slice all but one (--slice "
+                                 "NAME=VALUE) or draw one sample (--slice-index period=I)")
+        from impactbeams.plotting.lines import draw_bifurcation
+
+        draw_bifurcation(axes, data, name)
+    elif field.ndim == 1:
+        from impactbeams.plotting.lines import draw_line
+
+        draw_line(axes, data, name, scale)
+    elif field.ndim == 2:
+        from impactbeams.plotting.maps import draw_map
+
+        draw_map(axes, data, name, scale, contours)
+    elif field.ndim == 0:
+        raise ParameterError(f"nothing to draw: {name} is a single value after slicing, "
+                             f"{field.item():g} {field.attrs.get('units', '')}; slice fewer "
+                             "dimensions")
+    else:
+        raise ParameterError(f"a map needs a 2-D sweep (a line a 1-D one): {name} has "
+                             f"{_dimensions(field)}; slice the others (--slice NAME=VALUE)")
+    axes.set_title(case_title(data, name, field.dims) if title is None else title,
+                   loc="left", fontsize="medium")
+    return notes
+
+
+def _dimensions(field: xr.DataArray) -> str:
+    return "dimensions " + ", ".join(f"{d} ({field.sizes[d]})" for d in field.dims)
+
+
+def plot_dataset(dataset: xr.Dataset, path: str | Path, variable: str | None = None, *,
+                 values: Mapping[str, float | str] | None = None,
+                 indices: Mapping[str, int | str] | None = None, scale: str | None = None,
+                 contours: int | Sequence[float] | None = None, title: str | None = None,
+                 dpi: float = 150) -> list[str]:
+    """Draw ``dataset`` into the image file ``path`` (format from its extension).
+
+    A simulated run without options gets its overview (tips, force, restitution, energy);
+    anything else is drawn by :func:`draw`, whose options these are. Returns its notes.
+    """
+    options = values or indices or scale or contours is not None or title is not None
+    if "time" in dataset.dims and variable is None and not options:
         from impactbeams.plotting.trajectories import plot_run
 
         plot_run(dataset, path)
-    else:
-        from impactbeams.plotting.maps import plot_map
-
-        plot_map(dataset, path)
+        return []
+    figure = Figure(figsize=(7, 5), layout="constrained")
+    notes = draw(figure.subplots(), dataset, variable, values=values, indices=indices,
+                 scale=scale, contours=contours, title=title)
+    figure.savefig(path, dpi=dpi)
+    return notes

@@ -1,62 +1,71 @@
-"""Contour maps of a sweep in the style of the paper's Fig. 5."""
+"""Maps of a variable over two swept axes (the paper's Fig. 5): every cell drawn, grey if NaN."""
 
 from __future__ import annotations
 
-from pathlib import Path
+from collections.abc import Sequence
 
-import matplotlib.colors
 import numpy as np
 import xarray as xr
-from matplotlib.figure import Figure
+from matplotlib.axes import Axes
+from matplotlib.colorbar import Colorbar
 
 from impactbeams.params import ParameterError
+from impactbeams.plotting.labels import axis_label, format_number
+from impactbeams.plotting.missing import add_missing_legend, missing_note
+from impactbeams.plotting.scales import (
+    ColourScale,
+    colour_scale,
+    edges,
+    grid_axis,
+    nice_levels,
+)
 
 
-def _label(coordinate: xr.DataArray) -> str:
-    return f"{coordinate.attrs.get('long_name', coordinate.name)} ({coordinate.attrs['units']})"
+def draw_map(axes: Axes, dataset: xr.Dataset, variable: str, scale: str | None = None,
+             contours: int | Sequence[float] | None = None) -> Colorbar:
+    """Colour map of the 2-D ``variable`` on ``axes``, with its colour bar; returns the bar.
 
-
-def plot_map(dataset: xr.Dataset, path: str | Path, variable: str = "first_impact_time") -> None:
-    """Filled contours of ``variable`` over a 2-D sweep, the no-impact region hatched.
-
-    The first swept parameter is the x axis, the second the y axis; log axes stay log.
+    The variable's first dimension is the x axis, its second the y axis; log grid axes stay
+    log. ``scale`` ("log", "linear" or None for automatic) is the colour scale of a continuous
+    variable; ``contours`` adds labelled contour lines: a number of round levels, or levels.
     """
-    if variable not in dataset:
-        raise ParameterError(f"{variable!r} is not in the dataset; it has "
-                             f"{', '.join(map(str, dataset.data_vars))}")
     field = dataset[variable]
-    if field.ndim != 2:
-        raise ParameterError(f"a contour map needs a 2-D sweep; {variable} has dimensions "
-                             f"{field.dims}: select a slice first (e.g. with xarray's .isel)")
     x_name, y_name = field.dims
-    x, y = dataset[x_name], dataset[y_name]
-    values = field.transpose(y_name, x_name).values
-    figure = Figure(figsize=(7, 5), layout="constrained")
-    axes = figure.subplots()
-    finite = values[np.isfinite(values)]
-    if finite.size:
-        # times before impact span decades: log-spaced levels when they are all positive
-        if finite.min() > 0 and finite.max() > finite.min():
-            levels = np.geomspace(finite.min(), finite.max(), 21)
-            norm = matplotlib.colors.LogNorm(finite.min(), finite.max())
-        else:
-            levels, norm = 21, None
-        filled = axes.contourf(x.values, y.values, values, levels=levels, norm=norm,
-                               cmap="viridis")
-        bar = figure.colorbar(filled, ax=axes)
-        bar.set_label(f"{field.attrs['long_name']} ({field.attrs['units']})")
-    if "impacted" in dataset:
-        no_impact = (dataset["impacted"].transpose(y_name, x_name).values == 0).astype(float)
-        if no_impact.any():
-            axes.contourf(x.values, y.values, no_impact, levels=[0.5, 1.5], colors="none",
-                          hatches=["///"])
-            axes.contour(x.values, y.values, no_impact, levels=[0.5], colors="k",
-                         linewidths=0.8)
-    for coordinate, set_scale in ((x, axes.set_xscale), (y, axes.set_yscale)):
-        if coordinate.attrs.get("scale") == "log":
-            set_scale("log")
-    axes.set_xlabel(_label(x))
-    axes.set_ylabel(_label(y))
-    t_max = dataset.attrs.get("t_max")
-    axes.set_title(f"{field.attrs['long_name']}; hatched: no impact by t_max = {t_max} s")
-    figure.savefig(path, dpi=150)
+    colours = colour_scale(field, scale)
+    x, x_log = grid_axis(axes, "x", dataset[x_name])
+    y, y_log = grid_axis(axes, "y", dataset[y_name])
+    values = colours.encode(np.asarray(field.transpose(y_name, x_name).values, dtype=float))
+    mesh = axes.pcolormesh(edges(x, x_log), edges(y, y_log), np.ma.masked_invalid(values),
+                           norm=colours.norm, cmap=colours.cmap, rasterized=True)
+    bar = axes.get_figure().colorbar(mesh, ax=axes, shrink=0.9, anchor=(0.0, 1.0))
+    bar.set_ticks(colours.ticks)
+    bar.formatter = colours.formatter
+    if not colours.log:
+        bar.minorticks_off()
+    bar.set_label(axis_label(field))
+    if contours is not None:
+        _contour_lines(axes, bar, (x, y, values), colours, contours, variable)
+    if np.isnan(values).any():
+        add_missing_legend(bar.ax, missing_note(dataset, variable), below=True)
+    return bar
+
+
+def _contour_lines(axes: Axes, bar: Colorbar, grid: tuple[np.ndarray, np.ndarray, np.ndarray],
+                   colours: ColourScale, contours: int | Sequence[float], variable: str) -> None:
+    """Labelled black contour lines at round levels (or the given ones), marked on the bar."""
+    if colours.categories is not None:
+        raise ParameterError(f"contour lines need a continuous variable; {variable} is drawn "
+                             "as categories")
+    x, y, values = grid
+    vmin, vmax = float(np.nanmin(values)), float(np.nanmax(values))
+    if isinstance(contours, int):
+        levels = nice_levels(vmin, vmax, contours, colours.log)
+    else:
+        levels = np.array([v for v in contours if vmin <= v <= vmax])
+    if levels.size == 0:
+        raise ParameterError(f"no contour level lies within the range of {variable}, "
+                             f"{vmin:g} to {vmax:g}")
+    lines = axes.contour(x, y, np.ma.masked_invalid(values), levels=levels, colors="k",
+                         linewidths=0.6)
+    axes.clabel(lines, fmt=format_number, fontsize="x-small")
+    bar.add_lines(lines)

@@ -229,6 +229,46 @@ class Chunking:
         return first * line, last * line
 
 
+MAX_COLUMN_CELLS = 4096  # a first-impact map's columns: at most this many cells each
+_AFFINE_AXES = {"force_amplitude": layout.CELL_F0, "clearance": layout.CELL_CLEARANCE}
+
+
+@dataclasses.dataclass(frozen=True)
+class Columns:
+    """A chunk's first-impact columns.
+
+    Cells ``start..stop`` (the chunk widened to whole columns), column c being
+    ``bounds[c]..bounds[c + 1]`` of them, along the cell column ``key`` (kernels.layout).
+    """
+
+    start: int
+    stop: int
+    bounds: np.ndarray
+    key: int
+
+
+def first_impact_columns(sweep: Sweep, start: int, stop: int) -> Columns:
+    """The columns of flat cells ``start..stop`` along the sweep's last axis, if affine.
+
+    The gap is affine in F0 and in the clearance, so a run of cells along such an axis shares
+    one modal response (kernels.first_impact). Columns are fixed segments of the grid (at
+    most ``MAX_COLUMN_CELLS`` of the last axis), and a chunk is widened to whole columns, so
+    that every cell's result is the same for any chunking. Other sweeps: columns of one cell.
+    """
+    last = sweep.axes[-1] if sweep.axes else None
+    if last is None or last.name not in _AFFINE_AXES or last.num < 2:
+        return Columns(start, stop, np.arange(stop - start + 1, dtype=np.int64),
+                       layout.CELL_F0)
+    length = min(last.num, MAX_COLUMN_CELLS)
+    flat = np.arange(start, stop)
+    row, position = np.divmod(flat, last.num)
+    segment_start = row * last.num + position // length * length
+    segment_stop = np.minimum(segment_start + length, (row + 1) * last.num)
+    first, end = int(segment_start[0]), int(segment_stop[-1])
+    edges = np.unique(np.concatenate([segment_start, segment_stop])) - first
+    return Columns(first, end, edges.astype(np.int64), _AFFINE_AXES[last.name])
+
+
 def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
                   plan: Plan | None = None) -> dict[str, np.ndarray]:
     """Observables of the flat cells ``start..stop`` of ``sweep`` (one array per observable).
@@ -244,13 +284,21 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
         plan = build_plan(sweep)
     if plan.fingerprint != sweep.fingerprint():
         raise ValueError("the plan was built for another sweep")
-    cells = chunk_cells(sweep, plan, start, stop)
     if plan.switching is None:
         kernel = (first_impact.first_impact_map_parallel if parallel
                   else first_impact.first_impact_map_serial)
+        columns = first_impact_columns(sweep, start, stop)
+        cells = chunk_cells(sweep, plan, columns.start, columns.stop)
         out = np.empty(cells.shape[0])
-        kernel(cells, plan.tables, plan.geometry, sweep.t_max, out)
-        return {FIRST_IMPACT: out}
+        kernel(cells, columns.bounds, columns.key, plan.tables, plan.geometry, sweep.t_max, out)
+        out = out[start - columns.start:stop - columns.start]
+        undecided = np.flatnonzero(np.isneginf(out))  # kernels.events.GAVE_UP
+        if undecided.size:
+            raise RuntimeError(f"{undecided.size} cells of cells {start}..{stop} reached the "
+                               f"event search's step cap (first: cell {start + undecided[0]}); "
+                               "please report this as a bug")
+        return {FIRST_IMPACT: np.ascontiguousarray(out)}
+    cells = chunk_cells(sweep, plan, start, stop)
     kernel = (observables.observables_map_parallel if parallel
               else observables.observables_map_serial)
     out = np.empty((cells.shape[0], len(layout.OUT_COLUMNS)))

@@ -1,0 +1,45 @@
+"""Cells without a value (NaN, e.g. no impact by t_max): drawn light grey and said so."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from matplotlib.axes import Axes
+from matplotlib.patches import Patch
+
+from impactbeams.plotting.labels import format_number
+from impactbeams.plotting.scales import MISSING_COLOUR
+
+
+def missing_note(dataset: xr.Dataset, variable: str) -> str:
+    """What the NaN cells of ``variable`` mean: no impact by t_max where ``impacted`` says so."""
+    field = dataset[variable]
+    if "impacted" in dataset and dataset["impacted"].dims == field.dims and np.array_equal(
+            np.isnan(field.values), dataset["impacted"].values == 0):
+        t_max = dataset.attrs.get("t_max")
+        return ("no impact" if t_max is None
+                else f"no impact by $t_\\max$ = {format_number(float(t_max))} s")
+    return "no value (NaN)"
+
+
+def add_missing_legend(axes: Axes, note: str, below: bool = False) -> None:
+    """A grey swatch saying what the grey (NaN) cells mean, in the axes' best corner.
+
+    ``below``: under the axes instead (a colour bar's), the note broken after "by" to fit.
+    """
+    if below:
+        note = note.replace(" by ", " by\n", 1)
+    swatch = Patch(facecolor=MISSING_COLOUR, edgecolor="0.6", label=note)
+    placement = ({"loc": "upper left", "bbox_to_anchor": (0.0, -0.01), "borderaxespad": 0.0}
+                 if below else {"loc": "best"})
+    axes.legend(handles=[swatch], frameon=not below, fontsize="small", handlelength=1.2,
+                handletextpad=0.5, **placement)
+
+
+def shade_missing(axes: Axes, x_edges: np.ndarray, missing: np.ndarray) -> None:
+    """Grey vertical bands over the cells of a line (edges ``x_edges``) that are ``missing``."""
+    padded = np.concatenate([[False], missing, [False]])
+    starts = np.flatnonzero(padded[1:-1] & ~padded[:-2])
+    stops = np.flatnonzero(padded[1:-1] & ~padded[2:])
+    for start, stop in zip(starts, stops, strict=True):
+        axes.axvspan(x_edges[start], x_edges[stop + 1], color=MISSING_COLOUR, lw=0, zorder=0)

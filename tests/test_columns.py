@@ -1,0 +1,167 @@
+"""First-impact maps by columns (one shared modal response per column) against the
+cell-by-cell search, on the shipped sweeps and on grazing cells."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize_scalar
+
+from impactbeams.kernels import first_impact as fi
+from impactbeams.kernels.events import GAVE_UP, evaluate, search_root
+from impactbeams.kernels.layout import (
+    CELL_CLEARANCE,
+    CELL_F0,
+    CELL_OMEGA,
+    FREE,
+    GEO_C1,
+    ROW_EVENT,
+    ROW_OMEGA,
+)
+from impactbeams.kernels.propagation import advance
+from impactbeams.model import build_free_phase
+from impactbeams.packing import free_tables, geometry_row
+from impactbeams.params import Params
+from impactbeams.sweep.definition import load_sweep, sweep_from_mapping
+from impactbeams.sweep.plan import build_plan, chunk_cells, first_impact_columns
+from references import free_tip_gap
+
+SWEEPS = Path(__file__).parents[1] / "sweeps"
+EPS = np.finfo(float).eps
+
+
+def maps(sweep):
+    """The sweep's cells, plan and first impact times by columns and cell by cell."""
+    plan = build_plan(sweep)
+    cells = chunk_cells(sweep, plan, 0, sweep.size)
+    columns = first_impact_columns(sweep, 0, sweep.size)
+    assert columns.bounds.size - 1 < sweep.size  # the sweep has columns of several cells
+    by_column, by_cell = np.empty(sweep.size), np.empty(sweep.size)
+    fi.first_impact_map_parallel(cells, columns.bounds, columns.key, plan.tables, plan.geometry,
+                                 sweep.t_max, by_column)
+    fi.first_impact_cells(cells, plan.tables, plan.geometry, sweep.t_max, by_cell)
+    return cells, plan, by_column, by_cell
+
+
+def round_off_band(cell, plan, t):
+    """How far (s) a root at t can move within the gap's round-off rule: twice the rule's
+    width over the gap's slope at t, plus 8 ulps of t (Newton's own stop). The width is taken
+    over the terms of either evaluation of the gap: the cell's (its terms at t) and the
+    column's, which adds the modes' steady states |b_j A_j / D_j| and the quasi-static term
+    c1 F0 (it evaluates them apart from the transients)."""
+    g = int(cell[-1])
+    table = plan.tables[g, FREE]
+    work = np.empty((7, table.shape[1]))
+    force = np.empty(table.shape[1], dtype=complex)
+    n = fi._load_moving_modes(cell, table, work, force)
+    q, v = np.empty(n), np.empty(n)
+    advance(work[0, :n], work[1, :n], 0.0, t, work[2, :n], work[3, :n], force[:n],
+            cell[CELL_OMEGA], q, v)
+    _, slope, scale = evaluate(q, v, t, work[4, :n], cell[CELL_CLEARANCE],
+                               complex(-plan.geometry[g, GEO_C1] * cell[CELL_F0], 0.0),
+                               cell[CELL_OMEGA])
+    omega, zeta, big_omega = work[2, :n], work[3, :n], cell[CELL_OMEGA]
+    steady = np.abs(work[4, :n] * force[:n]
+                    / (omega**2 - big_omega**2 + 2j * zeta * omega * big_omega))
+    scale += abs(plan.geometry[g, GEO_C1] * cell[CELL_F0]) + steady.sum()
+    return 2.0 * fi.TOUCH_TOLERANCE * EPS * scale / abs(slope) + 8.0 * np.spacing(t)
+
+
+@pytest.mark.parametrize(("name", "thinned"), [("fig5a-omega-force.toml", "omega"),
+                                               ("fig5b-clearance-force.toml", None),
+                                               ("omega-clearance.toml", None)])
+def test_columns_equal_the_cell_by_cell_search_on_the_shipped_sweeps(name, thinned):
+    sweep = load_sweep(SWEEPS / name)
+    if thinned:  # every 10th column of the 10^6-cell map: 10^5 cells
+        axes = {a.name: {"min": float(a.values[0]), "max": float(a.values[-1]), "num": a.num,
+                         "scale": a.scale} for a in sweep.axes}
+        axes[thinned]["num"] //= 10
+        sweep = sweep_from_mapping({"t_max": sweep.t_max, "n_modes": sweep.n_modes,
+                                    "observables": list(sweep.observables),
+                                    "params": {"clearance": sweep.base.clearance}, "axes": axes})
+    cells, plan, by_column, by_cell = maps(sweep)
+    assert np.array_equal(np.isnan(by_column), np.isnan(by_cell))  # the same classification
+    assert not np.isinf(by_column).any()
+    hit = np.flatnonzero(~np.isnan(by_cell))
+    assert hit.size > 0.2 * sweep.size
+    # the times differ only within the gap's round-off band; check the 200 largest differences
+    difference = np.abs(by_column[hit] - by_cell[hit])
+    for i in hit[np.argsort(difference)[-200:]]:
+        assert abs(by_column[i] - by_cell[i]) <= round_off_band(cells[i], plan, by_cell[i]), i
+
+
+@pytest.fixture(scope="module")
+def free():
+    return build_free_phase(Params(), 5)
+
+
+def grazing_clearance(free, force, omega):
+    """The clearance at which the gap's deepest dip over (0, 1 s] just touches 0."""
+    response = free_tip_gap(free, Params().tip_compliance[0], 0.0, force, omega)
+    t = np.linspace(0, 1.0, 100001)
+    k = int(np.argmin(response(t)))
+    found = minimize_scalar(lambda s: float(response(s)), bounds=(t[max(k - 1, 0)], t[k + 1]),
+                            method="bounded", options={"xatol": 1e-14})
+    return -float(response(found.x))
+
+
+def column(free, rows, key):
+    """First impact times of ``rows`` (clearance, F0, Omega) walked as one column."""
+    cells = np.array([[*row, 0.0, 0.0, 0.0, 0.0] for row in rows])
+    out = np.empty(len(rows))
+    fi.first_impact_map_serial(cells, np.array([0, len(rows)]), key, free_tables(free)[None],
+                               geometry_row(Params(), free)[None], 1.0, out)
+    return out
+
+
+DEPTHS = np.array([-1e-3, -1e-6, -1e-10, 1e-10, 1e-6, 1e-3])  # relative, sorted
+
+
+@pytest.mark.parametrize(("omega", "force"), [(50.0, 2.5e-4), (120.0, 1.5e-4), (400.0, 1e-4)])
+def test_grazing_columns_are_classified_right(free, omega, force):
+    """Columns through a grazing cell, within 1e-10 (relative) of tangency on either side:
+    along the clearance, a clearance below the dip impacts; along F0, a larger force does."""
+    graze = grazing_clearance(free, force, omega)
+    along_clearance = column(free, [[graze * (1 + d), force, omega] for d in DEPTHS],
+                             CELL_CLEARANCE)
+    assert np.array_equal(np.isnan(along_clearance), DEPTHS > 0)
+    along_force = column(free, [[graze, force * (1 + d), omega] for d in DEPTHS], CELL_F0)
+    assert np.array_equal(np.isnan(along_force), DEPTHS < 0)
+    # on each side of tangency the deeper dip closes first
+    assert np.all(np.diff(along_clearance[DEPTHS < 0]) > 0)
+    assert np.all(np.diff(along_force[DEPTHS > 0]) < 0)
+
+
+def test_classification_is_monotone_at_round_off(free):
+    """Clearances within +-40 eps (relative) of tangency: whatever the rule decides at this
+    level, a larger clearance never impacts where a smaller one does not, cell by cell too."""
+    omega, force = 120.0, 1.5e-4
+    graze = grazing_clearance(free, force, omega)
+    rows = [[graze * (1 + k * EPS), force, omega] for k in range(-40, 41)]
+    for by in ("column", "cell"):
+        if by == "column":
+            out = column(free, rows, CELL_CLEARANCE)
+        else:
+            out = np.empty(len(rows))
+            cells = np.array([[*row, 0.0, 0.0, 0.0, 0.0] for row in rows])
+            fi.first_impact_cells(cells, free_tables(free)[None],
+                                  geometry_row(Params(), free)[None], 1.0, out)
+        touched = ~np.isnan(out)
+        assert touched[0] and not touched[-1]
+        assert np.all(np.diff(touched.astype(int)) <= 0), by
+
+
+def test_a_search_that_reaches_its_step_cap_says_so(free):
+    """The walk's step cap ends a search with GAVE_UP (-inf), never a spin or a wrong NaN:
+    one undamped mode driven at 100 rad/s from rest, whose gap (half its steady amplitude
+    above 0) closes after several steps."""
+    table = free_tables(free)[FREE]
+    omega, weights = table[ROW_OMEGA, :1], table[ROW_EVENT, :1]
+    drive = np.array([1e-3 + 0j])
+    steady = abs(weights[0] * drive[0] / (omega[0] ** 2 - 100.0**2))
+    rest = np.zeros(1)
+    args = (rest, rest, 0.0, 0.0, 1.0, omega, np.zeros(1), drive, weights, 0.5 * steady, 0j,
+            100.0, fi.TOUCH_TOLERANCE)
+    work = np.empty(1), np.empty(1)
+    assert search_root(*args, 1, *work) == GAVE_UP
+    assert 0.0 < search_root(*args, 10**6, *work) < 1.0
