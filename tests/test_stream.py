@@ -5,6 +5,7 @@ in one kernel call, interrupted cube runs, the code digest that keeps other code
 files from being reused, and damaged chunk files.
 """
 
+import dataclasses
 import math
 import shutil
 import tracemalloc
@@ -30,7 +31,7 @@ from impactbeams.sweep import (
     write_sweep,
 )
 from impactbeams.sweep import store as store_module
-from impactbeams.sweep.plan import flat_boxes
+from impactbeams.sweep.plan import MAX_COLUMN_CELLS, first_impact_columns, flat_boxes
 
 CUBE = {  # (Omega, Delta, F0) as in the issue's cube, 3600 cells
     "t_max": 0.3,
@@ -45,6 +46,9 @@ CUBE = {  # (Omega, Delta, F0) as in the issue's cube, 3600 cells
 # single line), 160 chunks
 CHUNK_CELLS = 30
 CHUNKS = 160
+MAP = sweep_from_mapping({**CUBE, "axes": {"omega": {"min": 20.0, "max": 400.0, "num": 3},
+                                           "force_amplitude": {"min": 1e-5, "max": 1e-3,
+                                                               "num": 2}}})
 
 
 def cube():
@@ -268,3 +272,23 @@ def test_the_last_chunk_completes_the_file_without_a_chunk_file(tmp_path, monkey
     assert saved == []
     with xr.open_dataset(out) as resumed, xr.open_dataset(tmp_path / "one.nc") as whole:
         xr.testing.assert_identical(_contents(resumed), _contents(whole))
+
+
+@settings(deadline=None)
+@given(num=st.integers(2, 9000), data=st.data())
+def test_columns_are_whole_segments_of_the_last_axis(num, data):
+    """A chunk widened to whole columns: segments of at most MAX_COLUMN_CELLS cells of the
+    last axis, the same for any chunk (checked cell by cell against the segment rule)."""
+    omega, force = MAP.axes
+    sweep = dataclasses.replace(MAP, axes=(omega, dataclasses.replace(force, num=num)))
+    start = data.draw(st.integers(0, sweep.size - 1))
+    stop = data.draw(st.integers(start + 1, sweep.size))
+    columns = first_impact_columns(sweep, start, stop)
+    length = min(num, MAX_COLUMN_CELLS)
+    cells = np.arange(columns.start, columns.stop)
+    segment = cells // num * num + cells % num // length * length  # each cell's segment start
+    assert columns.start == segment[0] <= start and columns.stop >= stop
+    assert (columns.stop - columns.start) - (stop - start) < 2 * length
+    edges = columns.start + columns.bounds
+    assert np.array_equal(edges[:-1], np.unique(segment)) and edges[-1] == columns.stop
+    assert columns.stop == min(segment[-1] + length, (segment[-1] // num + 1) * num)

@@ -260,13 +260,14 @@ def first_impact_columns(sweep: Sweep, start: int, stop: int) -> Columns:
         return Columns(start, stop, np.arange(stop - start + 1, dtype=np.int64),
                        layout.CELL_F0)
     length = min(last.num, MAX_COLUMN_CELLS)
-    flat = np.arange(start, stop)
-    row, position = np.divmod(flat, last.num)
-    segment_start = row * last.num + position // length * length
-    segment_stop = np.minimum(segment_start + length, (row + 1) * last.num)
-    first, end = int(segment_start[0]), int(segment_stop[-1])
-    edges = np.unique(np.concatenate([segment_start, segment_stop])) - first
-    return Columns(first, end, edges.astype(np.int64), _AFFINE_AXES[last.name])
+    rows = np.arange(start // last.num, (stop - 1) // last.num + 1, dtype=np.int64)
+    # the segments tile each row and the rows follow each other: one edge per segment start
+    starts = (rows[:, None] * last.num + np.arange(0, last.num, length)).ravel()
+    ends = np.minimum(starts + length, (starts // last.num + 1) * last.num)
+    touched = (ends > start) & (starts < stop)
+    starts, end = starts[touched], int(ends[touched][-1])
+    return Columns(int(starts[0]), end, np.append(starts, end) - starts[0],
+                   _AFFINE_AXES[last.name])
 
 
 def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
