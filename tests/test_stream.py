@@ -292,3 +292,10 @@ def test_columns_are_whole_segments_of_the_last_axis(num, data):
     edges = columns.start + columns.bounds
     assert np.array_equal(edges[:-1], np.unique(segment)) and edges[-1] == columns.stop
     assert columns.stop == min(segment[-1] + length, (segment[-1] // num + 1) * num)
+
+
+@pytest.mark.parametrize("chunk_cells", [0, 2**24 + 1, 2.5])
+def test_impossible_chunk_sizes_are_refused_before_any_file(tmp_path, chunk_cells):
+    with pytest.raises(ParameterError, match="chunk_cells = .* must be an integer from 1 to"):
+        write_sweep(cube(), tmp_path / "cube.nc", chunk_cells=chunk_cells)
+    assert not list(tmp_path.iterdir())

@@ -74,6 +74,19 @@ def default_chunk_cells(sweep: Sweep) -> int:
     return 2**16 if sweep.needs_dynamics else 2**20
 
 
+# the largest chunk: about 1.3 GB of cell rows and results (kernels.layout.CELL_COLUMNS and an
+# output per cell), and well below HDF5's 4 GiB limit on a compressed block
+MAX_CHUNK_CELLS = 2**24
+
+
+def _chunking(sweep: Sweep, chunk_cells: int | None) -> Chunking:
+    """The chunks of at most ``chunk_cells`` cells (default :func:`default_chunk_cells`)."""
+    require("chunk_cells", chunk_cells, chunk_cells is None or (
+        isinstance(chunk_cells, int) and 1 <= chunk_cells <= MAX_CHUNK_CELLS),
+        f"must be an integer from 1 to {MAX_CHUNK_CELLS}")
+    return Chunking.at_most(sweep.shape, chunk_cells or default_chunk_cells(sweep))
+
+
 def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | None = None,
               progress: bool = False, parallel: bool = True, chunk_cells: int | None = None,
               on_chunk: Callable[[int], None] | None = None, runner: ChunkRunner | None = None,
@@ -91,7 +104,7 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
                     discard_corrupt)
         return xr.open_dataset(output)
     _warn_unresolved(sweep)
-    chunking = Chunking.at_most(sweep.shape, chunk_cells or default_chunk_cells(sweep))
+    chunking = _chunking(sweep, chunk_cells)
     results = {name: np.full(sweep.size, np.nan) for name in sweep.stored}
 
     def keep(_: int, start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:
@@ -129,8 +142,8 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
     if finished_output(output, sweep):
         return False
     _warn_unresolved(sweep)
-    wanted = Chunking.at_most(sweep.shape, chunk_cells or default_chunk_cells(sweep))
-    store = ChunkStore(output, sweep, wanted, chosen=chunk_cells is not None)
+    store = ChunkStore(output, sweep, _chunking(sweep, chunk_cells),
+                       chosen=chunk_cells is not None)
     chunking, bar = store.chunking, Progress(sweep.size, enabled=progress)
     with numba_threads(threads), map_file(sweep, output, store.building, chunking) as write:
         pending = []
