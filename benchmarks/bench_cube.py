@@ -9,9 +9,11 @@ Each cube (``num`` points per axis, t_max = 1 s, 5 modes per beam) runs through
 after a warm-up: wall and CPU time, time per cell, peak memory (RSS of this process), the file's
 size, and the costs of one chunk of the middle of the cube measured apart (building its cell
 rows, the kernel, saving its ``.npz``, compressing it into the file). The 10^9-cell time is
-extrapolated from each size as (wall time per cell) x 10^9. Writes docs/benchmarks/cube.json and
-cube.md, or with --compression compression.json: sizes and write times of the Fig. 5a map and
-of a plane of the cube for several HDF5 filters (the numbers behind ``impactbeams.io.COMPRESSION``).
+extrapolated from each size as (wall time per cell) x 10^9. Results go to
+docs/benchmarks/cube.json and cube.md; a size measured again replaces its earlier result, so the
+long run can be made alone. --compression writes compression.json instead: sizes and write
+times of the Fig. 5a map and of a plane of the cube for several HDF5 filters (the numbers
+behind ``impactbeams.io.COMPRESSION``).
 
 The cube is validated at 10 points per axis and then given ``num`` points per axis: the ranges are
 what validation checks, and the grid-wide check of today's sweep/definition.py would hold the
@@ -97,8 +99,13 @@ def chunk_costs(sweep, directory: Path) -> dict[str, float]:
     values = compute_chunk(sweep, start, stop, plan=plan)
     costs["kernel_s"] = compute - costs["cell_rows_s"]
     costs["save_npz_s"] = timed(write_npz, directory / "chunk.npz", values, repeats=3)
-    with map_file(sweep, directory / "chunk.nc", directory / "building.nc", chunking) as write:
-        costs["netcdf_block_s"] = timed(write, start, stop, values, repeats=3)
+
+    def netcdf_block() -> None:  # HDF5 compresses a block when it leaves its cache: on close
+        with map_file(sweep, directory / "chunk.nc", directory / "building.nc",
+                      chunking) as write:
+            write(start, stop, values)
+
+    costs["netcdf_block_s"] = timed(netcdf_block, repeats=3)
     costs["impacted_fraction"] = float(np.isfinite(values["first_impact_time"]).mean())
     return costs
 
@@ -197,6 +204,11 @@ def markdown(report: dict) -> str:
             "while chunk k + 1 computes):\n\n" + "\n".join(chunk) + "\n")
 
 
+def _saved_runs(path: Path) -> list[dict]:
+    """The runs already in ``path`` (cube.json), so that sizes can be measured separately."""
+    return json.loads(path.read_text())["runs"] if path.exists() else []
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--num", type=int, nargs="+", default=[100, 200],
@@ -219,8 +231,11 @@ def main() -> None:
             (out / "compression.json").write_text(json.dumps(report, indent=1) + "\n")
             print(json.dumps(report, indent=1))
             return
-        runs = [run_cube(num, args.threads, Path(directory)) for num in args.num]
-    report = {"runs": runs, **about}
+            runs = {(r["num"], r["threads"]): r for r in _saved_runs(out / "cube.json")}
+        for num in args.num:  # a size run again replaces its earlier result
+            run = run_cube(num, args.threads, Path(directory))
+            runs[num, args.threads] = {**run, "date": about["date"]}
+    report = {"runs": [runs[key] for key in sorted(runs)], **about}
     (out / "cube.json").write_text(json.dumps(report, indent=1) + "\n")
     (out / "cube.md").write_text(markdown(report))
     print(markdown(report))

@@ -3,7 +3,7 @@
 A runner (:data:`ChunkRunner`) computes a list of chunks and yields each result as it
 finishes, in any order: :func:`local_runner` in this process, or the Dask runner of
 :mod:`impactbeams.sweep.dask_runner` on a cluster. :func:`write_sweep` streams the results
-into a netCDF file chunk by chunk (saving each for a resume); :func:`run_sweep` returns the
+into a netCDF file chunk by chunk (saving them for a resume); :func:`run_sweep` returns the
 map as a Dataset.
 """
 
