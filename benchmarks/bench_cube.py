@@ -231,7 +231,7 @@ def main() -> None:
             (out / "compression.json").write_text(json.dumps(report, indent=1) + "\n")
             print(json.dumps(report, indent=1))
             return
-            runs = {(r["num"], r["threads"]): r for r in _saved_runs(out / "cube.json")}
+        runs = {(r["num"], r["threads"]): r for r in _saved_runs(out / "cube.json")}
         for num in args.num:  # a size run again replaces its earlier result
             run = run_cube(num, args.threads, Path(directory))
             runs[num, args.threads] = {**run, "date": about["date"]}
