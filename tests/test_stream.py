@@ -299,3 +299,16 @@ def test_impossible_chunk_sizes_are_refused_before_any_file(tmp_path, chunk_cell
     with pytest.raises(ParameterError, match="chunk_cells = .* must be an integer from 1 to"):
         write_sweep(cube(), tmp_path / "cube.nc", chunk_cells=chunk_cells)
     assert not list(tmp_path.iterdir())
+
+
+def test_a_resume_keeps_its_chunks(tmp_path):
+    """Chunk k must cover the same cells: another chunking is refused, an equivalent one is
+    accepted (at most 25 cells is the same two lines of 12 as at most 30)."""
+    sweep, out = cube(), tmp_path / "cube.nc"
+    _interrupted_run(sweep, out)
+    with pytest.raises(ParameterError, match=r"chunk_cells = 60 is not allowed: the partial run "
+                       r".* was split into chunks of 24 cells"):
+        write_sweep(sweep, out, chunk_cells=60, runner=_refusing_runner)
+    computed = []
+    write_sweep(sweep, out, chunk_cells=25, on_chunk=computed.append)
+    assert computed == list(range(3, CHUNKS))

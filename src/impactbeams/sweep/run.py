@@ -142,8 +142,7 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
     if finished_output(output, sweep):
         return False
     _warn_unresolved(sweep)
-    store = ChunkStore(output, sweep, _chunking(sweep, chunk_cells),
-                       chosen=chunk_cells is not None)
+    store = ChunkStore(output, sweep, _chunking(sweep, chunk_cells), chunk_cells)
     chunking, bar = store.chunking, Progress(sweep.size, enabled=progress)
     with numba_threads(threads), map_file(sweep, output, store.building, chunking) as write:
         pending = []

@@ -36,11 +36,12 @@ class ChunkStore:
 
     ``run.json`` records the sweep's fingerprint, the code digest and the chunking. A resumed
     run must have the same sweep and code, and adopts the recorded chunking (chunk ``k`` must
-    cover the same cells); ``chosen``: the caller asked for ``chunking``, so another recorded
-    one is an error rather than adopted silently.
+    cover the same cells), unless ``chunk_cells`` (the caller's choice that gave ``chunking``)
+    asks for another one: that is an error rather than ignored.
     """
 
-    def __init__(self, output: Path, sweep: Sweep, chunking: Chunking, chosen: bool) -> None:
+    def __init__(self, output: Path, sweep: Sweep, chunking: Chunking,
+                 chunk_cells: int | None) -> None:
         self.directory = output.with_name(output.name + ".partial")
         self.building = self.directory / output.name  # the netCDF file until it is complete
         identity = {"sweep": sweep.fingerprint(), "code": code_digest()}
@@ -60,9 +61,9 @@ class ChunkStore:
                 f"{self.directory} holds a partial run computed by other impactbeams code (code "
                 f"digest {saved.get('code')}, this code {identity['code']}): delete it to "
                 "recompute with this code, or choose another output")
-        if chosen and self.chunking != chunking:
+        if chunk_cells is not None and self.chunking != chunking:
             raise ParameterError(
-                f"chunk_cells = {chunking.cells} is not allowed: the partial run in "
+                f"chunk_cells = {chunk_cells} is not allowed: the partial run in "
                 f"{self.directory} was split into chunks of {self.chunking.cells} cells; "
                 "resume with that size (or without choosing one)")
 
