@@ -102,7 +102,7 @@ def test_console_script_prints_the_known_frequencies():
 
 def test_console_script_reports_bad_options_with_exit_code_2():
     result = run_console("modes", "--n", "0")
-    assert result.returncode == 2 and "must be an integer >= 1" in result.stderr
+    assert result.returncode == 2 and "must be an integer from 1 to 200" in result.stderr
     result = run_console("modes", "--clearance=-1e-5")
     assert result.returncode == 2
     assert "clearance = -1e-05 is not allowed: must be > 0 (m)" in result.stderr

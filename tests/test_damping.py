@@ -59,8 +59,9 @@ OMEGA_1, OMEGA_2 = build_free_phase(Params(), 2).beam1.omega
     (0.02, 0.5 * (OMEGA_1 + OMEGA_2)), (0.3, OMEGA_1), (0.3, 2500.0)])
 def test_steady_state_equals_damped_modal_sum(zeta, forcing_frequency):
     """After the transient, simulate's tip response is the damped modal sum to 1e-6."""
-    # a clearance the tips never close: the free phase alone (no contact law needed)
-    params = Params(clearance=1.0, force_amplitude=1e-3, omega=forcing_frequency,
+    # a clearance the tips never close (the steady amplitude is at most F0 c1 / (2 zeta) =
+    # 3.7 mm): the free phase alone (no contact law needed)
+    params = Params(clearance=0.02, force_amplitude=1e-3, omega=forcing_frequency,
                     damping_ratio=zeta, contact_law="tied")
     # the slowest transient (beam 1's first mode) decays below 1e-10 of the response
     t_end = 23.0 / (zeta * OMEGA_1)

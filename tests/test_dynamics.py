@@ -396,19 +396,20 @@ def test_chattering_ends_in_sustained_contact():
 def test_grazing_contact_is_found_however_brief():
     """F0 = 0: the gap's minimum is placed at 0 -/+ 1e-9 of the clearance."""
     base = Params(contact_law="tied", force_amplitude=0.0, uplift1=1e-5)
+    far = 0.02  # a clearance never closed (1e-5 m uplift): the free gap is gap - far
     t_window = 0.02
     times = np.linspace(0.0, t_window, 4001)
-    free_gap = simulate(base.replace(clearance=1.0), t_window, times=times).gap.values - 1.0
+    free_gap = simulate(base.replace(clearance=far), t_window, times=times).gap.values - far
     i = int(np.argmin(free_gap))
     fine = np.linspace(times[i - 1], times[i + 1], 4001)
-    lowest = simulate(base.replace(clearance=1.0), t_window, times=fine).gap.min().item() - 1.0
+    lowest = simulate(base.replace(clearance=far), t_window, times=fine).gap.min().item() - far
     touching = -lowest  # the clearance at which the gap just touches 0 (tip motion is linear)
     miss = simulate(base.replace(clearance=touching * (1 + 1e-9)), t_window)
     assert miss.impact.size == 0
     graze = simulate(base.replace(clearance=touching * (1 - 1e-9)), t_window)
     assert graze.impact.size >= 1
     # the gap is below 0 for ~2 sqrt(2e-9 Delta / g'') ~ 4e-7 s around its minimum
-    t_lowest = fine[np.argmin(simulate(base.replace(clearance=1.0), t_window,
+    t_lowest = fine[np.argmin(simulate(base.replace(clearance=far), t_window,
                                        times=fine).gap.values)]
     assert float(graze.impact_onset_time[0]) == pytest.approx(t_lowest, abs=1e-6)
     assert abs(float(graze.impact_velocity[0])) < 1e-6  # grazing: almost no closing speed

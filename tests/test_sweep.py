@@ -276,7 +276,8 @@ def test_cli_run_and_plot(tmp_path, capsys):
 def test_plot_rejects_a_cube(tmp_path):
     from impactbeams.plotting import plot_dataset
 
-    cube = small(axes={**SMALL["axes"], "clearance": {"min": 1e-5, "max": 2e-5, "num": 2}})
+    clearance = {"min": 1e-5, "max": 2e-5, "num": 2}
+    cube = small(params={}, axes={**SMALL["axes"], "clearance": clearance})
     ds = run_sweep(cube, progress=False)
     with pytest.raises(ParameterError, match="needs a 2-D sweep"):
         plot_dataset(ds, tmp_path / "c.png")

@@ -3,6 +3,10 @@
 Subcommands: ``modes`` (natural frequencies), ``run`` (a sweep from a TOML file), ``simulate``
 (one full trajectory), ``plot`` (draw a saved Dataset). Every model parameter is an option
 named like the parameter, with dashes (``--force-amplitude``, ``--EI1``, ``--thickness2``).
+
+Every input (options, files, paths, values, the run's size) is checked before any work starts
+or any file is written; a rejected input prints one line ``impactbeams: error: ...`` and exits
+with :data:`EXIT_USER_ERROR`.
 """
 
 from __future__ import annotations
@@ -10,17 +14,25 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import re
 import sys
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
-from impactbeams.params import CONTACT_LAWS, ParameterError, Params
+from impactbeams.params import CONTACT_LAWS, MAX_MODES, ParameterError, Params
 from impactbeams.variables import DAMPING_LAW, PARAMETERS
 
 if TYPE_CHECKING:
-    from impactbeams.sweep import ChunkRunner
+    import xarray as xr
+
+    from impactbeams.sweep import ChunkRunner, Sweep
+
+EXIT_SYSTEM_ERROR = 1  # a file could not be written (full disk, ...) or memory ran out
+EXIT_USER_ERROR = 2  # an input was rejected: nothing was computed or written
+EXIT_INCOMPLETE = 3  # the result was written, but some runs stopped before t_max
+EXIT_INTERRUPTED = 130
 
 _ALIASES = {"force_amplitude": ["--force"]}
 
@@ -39,13 +51,16 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
             group.add_argument(*flags, dest=name, choices=CONTACT_LAWS,
                                help=f"{description} (default: spring)")
             continue
-        group.add_argument(*flags, dest=name, type=float, metavar="VALUE",
+        group.add_argument(*flags, dest=name, type=_number, metavar="VALUE",
                            help=f"{description} ({parameter.units})")
 
 
 def params_from_args(args: argparse.Namespace) -> Params:
     """The parameters of --params (or the defaults) with the command-line overrides applied."""
-    params = Params.from_toml(args.params) if args.params else Params()
+    from impactbeams.preflight import require_input_file
+
+    params = (Params.from_toml(require_input_file(args.params, "--params")) if args.params
+              else Params())
     overrides = {n: getattr(args, n) for n in PARAMETERS if getattr(args, n, None) is not None}
     return params.replace(**overrides) if overrides else params
 
@@ -67,7 +82,7 @@ def _contact_frequencies(p: Params, n: int) -> list[float]:
     return spring.frequencies[:n].tolist()
 
 
-def _modes(args: argparse.Namespace) -> None:
+def _modes(args: argparse.Namespace) -> int:
     from impactbeams.modes import free_modes
 
     p = params_from_args(args)
@@ -79,23 +94,26 @@ def _modes(args: argparse.Namespace) -> None:
     }
     if args.json:
         print(json.dumps(result))
-        return
+        return 0
     print(f"natural frequencies (rad/s); contact phase of the {p.contact_law} law")
     print(f"{'mode':>4} {'beam 1 free':>16} {'beam 2 free':>16} {'contact':>16}")
     for i in range(args.n):
         row = (result["free"]["beam1"][i], result["free"]["beam2"][i], result["contact"][i])
         print(f"{i + 1:>4} " + " ".join(f"{w:16.6f}" for w in row))
+    return 0
 
 
-def _run(args: argparse.Namespace) -> None:
+def _run(args: argparse.Namespace) -> int:
+    from impactbeams.preflight import require_input_file
     from impactbeams.sweep import load_sweep, write_sweep  # writes netCDF without xarray
 
-    sweep = load_sweep(args.sweep)
-    output = args.output or str(Path("results") / (Path(args.sweep).stem + ".nc"))
-    print(f"{sweep.source}: {' x '.join(map(str, sweep.shape))} = {sweep.size} cells over "
-          f"{', '.join(a.name for a in sweep.axes)}; t_max = {sweep.t_max} s, "
-          f"{sweep.n_modes} modes per beam -> {output}\n(the first chunk also compiles the "
-          "kernels, about 10 s on a fresh install; they are cached after that)", file=sys.stderr)
+    sweep = load_sweep(require_input_file(args.sweep, "sweep"))
+    output = _sweep_output(args, sweep)
+    reuse = output.exists()
+    _check_scheduler(args.scheduler)
+    _check_threads(args)
+    if not reuse:
+        _announce(sweep, output, args)
     try:
         with _cluster_runner(args) as runner:
             write_sweep(sweep, output, threads=None if runner else args.threads,
@@ -105,7 +123,84 @@ def _run(args: argparse.Namespace) -> None:
         print(f"\nimpactbeams: interrupted; finished chunks are kept in {output}.partial/ "
               "and the same command resumes from them", file=sys.stderr)
         raise
-    print(f"wrote {output}", file=sys.stderr)
+    print(f"reused {output}: it already holds the result of this sweep (nothing computed)"
+          if reuse else f"wrote {output}", file=sys.stderr)
+    if not sweep.needs_dynamics:  # no run status to check: xarray need not load
+        return 0
+    import xarray as xr
+
+    with xr.open_dataset(output) as dataset:
+        return _incomplete_cells(dataset)
+
+
+def _sweep_output(args: argparse.Namespace, sweep: Sweep) -> Path:
+    """The checked output of ``run``: a writable .nc path with room on its disk.
+
+    An existing file there must be a netCDF file of impactbeams (reused if it is this sweep's).
+    """
+    from impactbeams.preflight import read_netcdf, require_disk, require_output_file
+    from impactbeams.sweep.definition import expected_file_size
+
+    output = require_output_file(args.output or Path("results") / (Path(args.sweep).stem + ".nc"),
+                                 "-o/--output", {".nc"}, "netCDF")
+    if output.exists():
+        read_netcdf(output, "output").close()
+    else:
+        require_disk(output, expected_file_size(sweep), "-o/--output")
+    return output
+
+
+def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
+    """The run's size, expected cost and destination, on stderr."""
+    from impactbeams.sweep.definition import expected_cost
+
+    print(f"{sweep.source}: {' x '.join(map(str, sweep.shape))} = {sweep.size} cells over "
+          f"{', '.join(a.name for a in sweep.axes)}; t_max = {sweep.t_max} s, "
+          f"{sweep.n_modes} modes per beam -> {output}\nexpected: "
+          f"{expected_cost(sweep, args.threads).describe()}; the first chunk also compiles "
+          "the kernels, about 10 s on a fresh install (cached after that)",
+          file=sys.stderr)
+
+
+def _incomplete_cells(dataset: xr.Dataset) -> int:
+    """Warn about cells whose dynamics stopped before t_max; the exit code of the run."""
+    if "dynamics_status" not in dataset:
+        return 0
+    import numpy as np
+
+    from impactbeams.kernels.dynamics import STATUS_NAMES
+
+    codes, counts = np.unique(dataset["dynamics_status"].values, return_counts=True)
+    stopped = {int(code): int(count) for code, count in zip(codes, counts, strict=True) if code}
+    if not stopped:
+        return 0
+    names = ", ".join(f"{count} {STATUS_NAMES[code] if code < len(STATUS_NAMES) else code}"
+                      for code, count in stopped.items())
+    _warn(f"{sum(stopped.values())} of {dataset['dynamics_status'].size} cells stopped before "
+          f"t_max ({names}; see dynamics_status): their observables cover only the part before "
+          "the stop")
+    return EXIT_INCOMPLETE
+
+
+def _check_threads(args: argparse.Namespace) -> None:
+    """Check --threads of a local run against Numba's limit now, before anything starts."""
+    if args.threads is None or args.scheduler or args.local_cluster:
+        return
+    from impactbeams.sweep.run import numba_threads
+
+    with numba_threads(args.threads):  # raises ParameterError beyond the limit
+        pass
+
+
+# a Dask scheduler address: [PROTOCOL://]HOST:PORT
+_SCHEDULER_ADDRESS = re.compile(
+    r"^([a-z][a-z0-9+.-]*://)?(\[[0-9a-fA-F:.]+\]|[^\s/:\[\]]+):\d{1,5}$|^inproc://\S+$")
+
+
+def _check_scheduler(address: str | None) -> None:
+    if address is not None and not _SCHEDULER_ADDRESS.match(address):
+        raise ParameterError(f"--scheduler {address!r} is not allowed: give the scheduler's "
+                             "address as [PROTOCOL://]HOST:PORT, e.g. tcp://node1:8786")
 
 
 @contextlib.contextmanager
@@ -124,76 +219,118 @@ def _cluster_runner(args: argparse.Namespace) -> Iterator[ChunkRunner | None]:
         yield dask_runner(client, threads_per_task=args.threads)
 
 
-def _plot(args: argparse.Namespace) -> None:
-    import xarray as xr
-
+def _plot(args: argparse.Namespace) -> int:
     from impactbeams.plotting import parse_assignments, parse_levels, plot_dataset
+    from impactbeams.preflight import image_output, read_netcdf
 
-    if not Path(args.dataset).is_file():
-        problem = "is a folder" if Path(args.dataset).is_dir() else "does not exist"
-        raise ParameterError(f"file {args.dataset!r} {problem}: give a netCDF file")
-    try:
-        dataset = xr.open_dataset(args.dataset).load()
-    except (OSError, ValueError) as error:
-        raise ParameterError(f"{args.dataset!r} is not a netCDF file of impactbeams: "
-                             f"{str(error).splitlines()[0]}") from None
+    dataset = read_netcdf(args.dataset, "input")
+    output = image_output(args.output, "-o/--output")
     with dataset:
-        notes = plot_dataset(dataset, args.output, args.var,
+        notes = plot_dataset(dataset, output, args.var,
                              values=parse_assignments(args.slice, "--slice"),
                              indices=parse_assignments(args.slice_index, "--slice-index"),
                              scale=args.scale, contours=parse_levels(args.contours),
                              title=args.title, dpi=args.dpi)
     for note in notes:
         print(f"impactbeams: {note}", file=sys.stderr)
-    print(f"wrote {args.output}", file=sys.stderr)
+    print(f"wrote {output}", file=sys.stderr)
+    return 0
 
 
-def _simulate(args: argparse.Namespace) -> None:
+def _simulate(args: argparse.Namespace) -> int:
     from impactbeams.io import write_netcdf
+    from impactbeams.preflight import require_output_file
     from impactbeams.trajectory import simulate
 
-    output = Path(args.output)
-    if output.suffix != ".nc":
-        raise ParameterError(f"--output {args.output!r} is not allowed: must end in .nc")
+    output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
     dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
                        dt_output=args.dt_output, fields=args.fields,
                        energy_balance=args.energy_balance)
     write_netcdf(dataset, output)
-    print(f"wrote {output}: {dataset.impact.size} impacts, status {dataset.attrs['status']}",
-          file=sys.stderr)
+    status = dataset.attrs["status"]
+    print(f"wrote {output}: {dataset.impact.size} impacts, status {status}", file=sys.stderr)
+    return 0 if status == "complete" else EXIT_INCOMPLETE  # simulate() warned already
+
+
+def _number(text: str) -> float:
+    """A real number (the library checks its range, naming the parameter)."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
 
 
 def _positive_float(text: str) -> float:
-    value = float(text)
-    if not value > 0 or value == float("inf"):
+    """A finite number > 0 (options the library does not check, such as --dpi)."""
+    value = _number(text)
+    if not 0 < value < float("inf"):
         raise argparse.ArgumentTypeError(f"{text} is not allowed: must be a finite number > 0")
     return value
 
 
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{value} is not allowed: must be an integer >= 1")
-    return value
+def _integer_from(low: int, high: int | None = None) -> Callable[[str], int]:
+    """An argparse type: an integer from ``low`` to ``high`` (no upper limit if None)."""
+    allowed = f"an integer from {low} to {high}" if high else f"an integer >= {low}"
+
+    def integer(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be {allowed}"
+                                             ) from None
+        if value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"{value} is not allowed: must be {allowed}")
+        return value
+
+    return integer
+
+
+_POSITIVE_INTEGER = _integer_from(1)
+_MODE_COUNT = _integer_from(1, MAX_MODES)
+
+
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are ParameterErrors: one line, exit code 2, in main."""
+
+    def error(self, message: str) -> NoReturn:
+        raise ParameterError(message)
+
+
+# a negative number as an option's value (argparse reads "-1e-5" as an option)
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$",
+                              re.IGNORECASE)
+
+
+def _attach_negative_values(argv: Sequence[str]) -> list[str]:
+    """``--option -1e-5`` as ``--option=-1e-5``, so that negative values reach the checks."""
+    joined: list[str] = []
+    for token in argv:
+        if (joined and _NEGATIVE_NUMBER.match(token) and joined[-1].startswith("--")
+                and "=" not in joined[-1]):
+            joined[-1] += "=" + token
+        else:
+            joined.append(token)
+    return joined
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``impactbeams`` argument parser with all subcommands."""
-    parser = argparse.ArgumentParser(prog="impactbeams", description=__doc__.split("\n")[0])
+    parser = _Parser(prog="impactbeams", description=__doc__.split("\n")[0])
     commands = parser.add_subparsers(dest="command", required=True)
     modes = commands.add_parser("modes", help="print natural frequencies of both phases (rad/s)")
-    modes.add_argument("--n", type=_positive_int, default=5, help="number of modes (default 5)")
+    modes.add_argument("--n", type=_MODE_COUNT, default=5,
+                       help=f"number of modes (default 5, at most {MAX_MODES})")
     modes.add_argument("--json", action="store_true", help="print JSON instead of a table")
     add_parameter_options(modes)
     modes.set_defaults(handler=_modes)
 
     simulate = commands.add_parser("simulate", help="simulate one trajectory, write netCDF")
-    simulate.add_argument("--t-max", type=_positive_float, required=True, metavar="SECONDS",
+    simulate.add_argument("--t-max", type=_number, required=True, metavar="SECONDS",
                           help="end time (s)")
-    simulate.add_argument("--n-modes", type=_positive_int, default=None,
+    simulate.add_argument("--n-modes", type=_MODE_COUNT, default=None,
                           help="free modes per beam (default: 5 for the tied law; for the "
                                "spring law the number that resolves the contact, 4 n*)")
-    simulate.add_argument("--dt-output", type=_positive_float, default=1e-4, metavar="SECONDS",
+    simulate.add_argument("--dt-output", type=_number, default=1e-4, metavar="SECONDS",
                           help="output time step (s, default 1e-4)")
     simulate.add_argument("--energy-balance", action="store_true",
                           help="also store the work of F and the dissipation (costly with many "
@@ -208,11 +345,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("sweep", metavar="SWEEP.toml")
     run.add_argument("-o", "--output", metavar="OUT.nc",
                      help="netCDF result (default results/<sweep name>.nc)")
-    run.add_argument("--threads", type=_positive_int,
+    run.add_argument("--threads", type=_POSITIVE_INTEGER,
                      help="Numba threads (default: all cores); on a cluster, per task "
                      "(default: cores per host / Dask threads per host)")
-    run.add_argument("--chunk-cells", type=_positive_int,
-                     help="cells per saved chunk (default: about 1%% of the grid, 4096..65536)")
+    run.add_argument("--chunk-cells", type=_POSITIVE_INTEGER,
+                     help="most cells per chunk, rounded down to whole lines of the last "
+                     "axes (default: 2^20 for a first-impact map, 2^16 for full dynamics)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.add_argument("--discard-corrupt", action="store_true",
                      help="on a resume, delete damaged saved chunks and compute them again "
@@ -221,7 +359,7 @@ def build_parser() -> argparse.ArgumentParser:
     cluster.add_argument("--scheduler", metavar="ADDRESS",
                          help="run the chunks on the Dask cluster at ADDRESS, e.g. "
                          "tcp://host:8786 (needs impactbeams[distributed])")
-    cluster.add_argument("--local-cluster", type=_positive_int, metavar="N",
+    cluster.add_argument("--local-cluster", type=_POSITIVE_INTEGER, metavar="N",
                          help="run the chunks on a Dask LocalCluster of N worker processes")
     run.set_defaults(handler=_run)
 
@@ -254,24 +392,40 @@ def build_parser() -> argparse.ArgumentParser:
 def _show_warning(message: Warning | str, category: type[Warning], *_: object,
                   **__: object) -> None:
     """Warnings as one line, like the errors."""
-    print(f"impactbeams: warning: {message}", file=sys.stderr)
+    _warn(str(message))
+
+
+def _warn(text: str) -> None:
+    print(f"impactbeams: warning: {text}", file=sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``impactbeams`` console script."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Entry point of the ``impactbeams`` console script; returns the exit code.
+
+    0: done; 1 (:data:`EXIT_SYSTEM_ERROR`): a file could not be written or memory ran out;
+    2 (:data:`EXIT_USER_ERROR`): an input was rejected before any work; 3
+    (:data:`EXIT_INCOMPLETE`): written, but some runs stopped before t_max; 130: interrupted.
+    """
     try:
+        args = build_parser().parse_args(
+            _attach_negative_values(sys.argv[1:] if argv is None else argv))
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
-            args.handler(args)
+            return args.handler(args)
     except ParameterError as error:
-        print(f"impactbeams: error: {error}", file=sys.stderr)
-        return 2
+        return _fail(error, EXIT_USER_ERROR)
+    except (OSError, MemoryError) as error:
+        return _fail(error, EXIT_SYSTEM_ERROR)
     except KeyboardInterrupt:
         print("impactbeams: interrupted", file=sys.stderr)
-        return 130
-    return 0
+        return EXIT_INTERRUPTED
+
+
+def _fail(error: BaseException, code: int) -> int:
+    """Print ``error`` as one line and return the exit ``code``."""
+    text = " ".join(str(error).split()) or type(error).__name__
+    print(f"impactbeams: error: {text}", file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":

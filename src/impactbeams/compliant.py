@@ -38,9 +38,8 @@ import scipy.linalg
 import scipy.linalg.lapack
 
 from impactbeams.model import FreePhase
-from impactbeams.params import Params
+from impactbeams.params import MAX_MODES, ParameterError, Params
 
-MAX_MODES = 200  # per beam, the package's limit
 # frequencies of the two beams closer than this (relative) count as equal in the rank-one
 # update: the error it makes in their pair is below it, far better than a dense solver's
 _DEFLATE = 1e-13
@@ -190,9 +189,9 @@ def _damped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
     values, modes = scipy.linalg.eig(block)
     rising = np.abs(values.imag) > _OVERDAMPED * np.abs(values)
     if np.count_nonzero(rising) != 2 * m:
-        raise ValueError("the contact phase has overdamped modes (real eigenvalues): lower "
-                         "contact_damping (or damping_ratio) so that every contact mode "
-                         "oscillates")
+        raise ParameterError("the contact phase has overdamped modes (real eigenvalues): lower "
+                             "contact_damping (or damping_ratio) so that every contact mode "
+                             "oscillates")
     keep = np.flatnonzero(values.imag > 0)
     keep = keep[np.argsort(np.abs(values[keep]))]
     inverse = np.linalg.inv(modes)[keep]

@@ -32,9 +32,11 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from impactbeams.variables import PARAMETERS
 
@@ -54,8 +56,8 @@ class ParameterError(ValueError):
     """A model or run parameter has a value that is not allowed."""
 
 
-def _strip_stiffness(material: Mapping[str, float]) -> tuple[float, float]:
-    """Return (EI, rhoA) of a rectangular strip from E, rho, width, thickness."""
+def _strip_stiffness(material: Mapping[str, Any]) -> tuple[Any, Any]:
+    """Return (EI, rhoA) of a rectangular strip from E, rho, width, thickness (floats or arrays)."""
     E, rho, b, h = (material[k] for k in MATERIAL_KEYS)
     return E * b * h**3 / 12.0, rho * b * h
 
@@ -70,11 +72,194 @@ def require(name: str, value: Any, condition: bool, allowed: str, unit: str = ""
         raise ParameterError(f"{name} = {value!r} is not allowed: {allowed}{unit_text}")
 
 
+def is_real(value: Any) -> bool:
+    """Whether ``value`` is a real number (int or float, not bool, not a string)."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
 def require_finite(name: str, value: Any, unit: str = "") -> float:
     """Return value as float, or raise ParameterError if it is not a finite real number."""
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-    require(name, value, ok and math.isfinite(value), "must be a finite real number", unit)
+    require(name, value, is_real(value) and math.isfinite(value), "must be a finite real number",
+            unit)
     return float(value)
+
+
+# --- allowed values ------------------------------------------------------------------------
+# Every limit below is explained in docs/limits.md ("Allowed values").
+
+# A tip deflection (uplift, static deflection under F0, each tip's share of the clearance) of
+# at most this fraction of the beam's length: small-deflection theory. The tip's axial
+# shortening, (3/5) w^2 / l for the static tip-load shape, which the linear model leaves out,
+# stays below 12 % of w.
+MAX_DEFLECTION = 0.2
+MAX_MODES = 200  # free modes per beam: the package's limit (docs/limits.md)
+# rad/s: a continuum beam's frequencies stay far below its lattice vibrations (~1e13 rad/s)
+MAX_FREQUENCY = 1e12
+MAX_CONTACT_STIFFNESS = 1e12  # N/m: beyond it the contact frequencies leave double precision
+FIRST_CANTILEVER_ROOT = 1.8751040687119611  # b_1 of cos b cosh b + 1 = 0
+
+
+@dataclasses.dataclass(frozen=True)
+class Range:
+    """The allowed values of one numeric parameter (SI units).
+
+    ``sign``: ``"> 0"``, ``">= 0"`` or ``""`` (any sign); then magnitudes from ``low`` to
+    ``high`` (``high`` itself excluded if ``high_open``), for the reason ``why``. ``rule``
+    replaces the generated wording.
+    """
+
+    sign: str = ""
+    low: float = 0.0
+    high: float = math.inf
+    high_open: bool = False
+    why: str = ""
+    rule: str = ""
+
+    def sign_holds(self, value: Any) -> Any:
+        """Elementwise: the value (a float or an array) has the allowed sign."""
+        if self.sign == "> 0":
+            return value > 0
+        return value >= 0 if self.sign == ">= 0" else value == value  # all (NaN: refused before)
+
+    def magnitude_holds(self, value: Any) -> Any:
+        """Elementwise: |value| within [low, high] (or [low, high))."""
+        size = abs(value)
+        below = size < self.high if self.high_open else size <= self.high
+        return (size >= self.low) & below
+
+    def describe(self, failed_sign: bool) -> str:
+        """What is allowed, for the message of a value that failed the sign or the magnitude."""
+        if self.rule:
+            return self.rule
+        if failed_sign:
+            return f"must be {self.sign}"
+        if self.low == 0:
+            return f"must be {'<' if self.high_open else '<='} {self.high:g}"
+        return f"must be from {self.low:g} to {self.high:g}"
+
+
+def _beam_ranges(key: str, parameter_range: Range) -> dict[str, Range]:
+    return {key + i: parameter_range for i in ("1", "2")}
+
+
+RANGES: dict[str, Range] = {
+    **_beam_ranges("l", Range("> 0", 1e-6, 1e3, why="a 1 um micro-cantilever to a 1 km structure")),
+    **_beam_ranges("EI", Range("> 0", 1e-24, 1e17, why="a nanowire to a tall building")),
+    **_beam_ranges("rhoA", Range("> 0", 1e-18, 1e7, why="a nanowire to a tall building")),
+    **_beam_ranges("E", Range("> 0", 1e3, 1e13, why="soft gels to ten times diamond")),
+    **_beam_ranges("rho", Range("> 0", 0.1, 1e5, why="aerogels to four times osmium")),
+    **_beam_ranges("width", Range("> 0", 1e-9, 1e3, why="a nanometre to a kilometre")),
+    **_beam_ranges("thickness", Range("> 0", 1e-9, 1e3, why="a nanometre to a kilometre")),
+    "clearance": Range("> 0"),
+    "force_amplitude": Range(">= 0"),
+    "omega": Range(">= 0", high=MAX_FREQUENCY,
+                   why="a continuum beam model does not hold at higher frequencies"),
+    "uplift1": Range(),
+    "uplift2": Range(),
+    "damping_ratio": Range(">= 0", high=1.0, high_open=True,
+                           rule="must satisfy 0 <= damping_ratio < 1 (underdamped modes)"),
+    "contact_stiffness": Range("> 0", high=MAX_CONTACT_STIFFNESS,
+                               rule=f"must be > 0 and <= {MAX_CONTACT_STIFFNESS:g}"),
+    "contact_damping": Range(">= 0"),
+}
+
+# names a grid point for a message: "" for one set of parameters, or the swept values at an
+# index of the corner grid of a sweep
+PointName = Callable[[tuple[int, ...]], str]
+
+
+def no_point(index: tuple[int, ...]) -> str:
+    """No grid point to name: the values are one set of parameters."""
+    return ""
+
+
+def _first_failure(ok: Any) -> tuple[int, ...] | None:
+    """Index of the first False in ``ok`` (a bool or a boolean array), or None if all hold."""
+    if np.ndim(ok) == 0:  # one set of parameters: the common case, kept cheap
+        return None if ok else ()
+    if ok.all():
+        return None
+    return tuple(int(i) for i in np.unravel_index(np.argmin(ok), ok.shape))
+
+
+def check_range(name: str, value: Any, point: PointName = no_point) -> None:
+    """Raise ParameterError if any element of ``value`` is not an allowed value of ``name``.
+
+    ``value``: a float or an array of them (every element is checked, vectorised).
+    """
+    allowed, unit = RANGES[name], PARAMETERS[name].units
+    values = float(value) if np.ndim(value) == 0 else np.asarray(value, dtype=float)
+    for holds, failed_sign in ((np.isfinite(values), None), (allowed.sign_holds(values), True),
+                               (allowed.magnitude_holds(values), False)):
+        index = _first_failure(holds)
+        if index is None:
+            continue
+        bad = value_at(values, index)
+        rule = ("must be a finite real number" if failed_sign is None
+                else allowed.describe(failed_sign))
+        why = f": {allowed.why}" if allowed.why and not failed_sign else ""
+        unit_text = f" ({unit})" if unit != "1" else ""
+        raise ParameterError(f"{point(index)}{name} = {bad!r} is not allowed: {rule}{unit_text}"
+                             f"{why}")
+
+
+def check_joint(values: Mapping[str, Any], point: PointName = no_point) -> None:
+    """Raise ParameterError unless the resolved parameters are jointly allowed.
+
+    ``values``: every numeric field of :class:`Params` (EI/rhoA form), as floats or arrays that
+    broadcast against each other (a sweep's corner grid). Each condition is monotone in every
+    parameter, so a sweep that passes at the corners of its box passes everywhere.
+    """
+    v = {name: np.asarray(value, dtype=float) for name, value in values.items()}
+    # the tips close the clearance by deflecting, each by at most MAX_DEFLECTION of its length
+    reach = v["l1"] + v["l2"]
+    require_all("clearance", v["clearance"], v["clearance"] <= MAX_DEFLECTION * reach, point,
+                lambda j: _deflection_rule("the clearance", "(l1 + l2)", reach, j))
+    for i in ("1", "2"):
+        require_all(f"uplift{i}", v[f"uplift{i}"],
+                    np.abs(v[f"uplift{i}"]) <= MAX_DEFLECTION * v[f"l{i}"], point,
+                    lambda j, i=i: _deflection_rule(f"|uplift{i}|", f"l{i}", v[f"l{i}"], j))
+    gap = v["clearance"] + v["uplift1"] - v["uplift2"]
+    require_all("uplift2", v["uplift2"], gap > 0, point, lambda j: (
+        f"the initial gap clearance + uplift1 - uplift2 = {value_at(gap, j)!r} m must be > 0 (m)"))
+    compliance = v["l1"] ** 3 / (3.0 * v["EI1"])
+    static = v["force_amplitude"] * compliance
+    require_all("force_amplitude", v["force_amplitude"], static <= MAX_DEFLECTION * v["l1"],
+                point, lambda j: _deflection_rule(
+                    f"its static tip deflection F0 l1^3 / (3 EI1) = {value_at(static, j):.3g} m",
+                    "l1", v["l1"], j) + ", i.e. force_amplitude <= "
+                f"{MAX_DEFLECTION * value_at(v['l1'] / compliance, j):.3g} N for this beam 1")
+    for i in ("1", "2"):
+        fundamental = (np.sqrt(v[f"EI{i}"] / v[f"rhoA{i}"])
+                       * (FIRST_CANTILEVER_ROOT / v[f"l{i}"]) ** 2)
+        require_all(f"l{i}", v[f"l{i}"], fundamental <= MAX_FREQUENCY, point,
+                    lambda j, i=i, f=fundamental: (
+                        f"beam {i}'s fundamental frequency sqrt(EI{i} / rhoA{i}) (1.875 / l{i})^2"
+                        f" = {value_at(f, j):.3g} rad/s must be <= {MAX_FREQUENCY:g} rad/s: a "
+                        "continuum beam model does not hold at higher frequencies (check "
+                        f"l{i}, EI{i}, rhoA{i} or the material keys)"))
+
+
+def value_at(array: Any, index: tuple[int, ...]) -> float:
+    """Element ``index`` of the grid that ``array`` broadcasts to (numpy's trailing alignment)."""
+    array = np.asarray(array)
+    own = index[len(index) - array.ndim:] if array.ndim else ()
+    return float(array[tuple(min(k, n - 1) for k, n in zip(own, array.shape, strict=True))])
+
+
+def _deflection_rule(what: str, length: str, lengths: np.ndarray, index: tuple[int, ...]) -> str:
+    limit = MAX_DEFLECTION * value_at(lengths, index)
+    return (f"{what} must be <= {MAX_DEFLECTION:g} {length} = {limit:.3g} m (small deflections: "
+            "the beam model is linear)")
+
+
+def require_all(name: str, value: np.ndarray, ok: np.ndarray, point: PointName,
+                rule: Callable[[tuple[int, ...]], str]) -> None:
+    """Raise ParameterError naming ``name``'s value where ``ok`` fails first."""
+    index = _first_failure(ok)
+    if index is not None:
+        raise ParameterError(f"{point(index)}{name} = {value_at(value, index)!r} is not allowed: "
+                             f"{rule(index)}")
 
 
 def hertz_stiffness(tip_radius: float, force: float, youngs_modulus1: float = STEEL_E,
@@ -96,7 +281,6 @@ CONTACT_LAWS = ("spring", "tied")
 DEFAULT_TIP_RADIUS = 1e-3  # m, of the default contact stiffness
 DEFAULT_CONTACT_FORCE = 1e-3  # N, force scale of the default contact stiffness
 DEFAULT_CONTACT_STIFFNESS = hertz_stiffness(DEFAULT_TIP_RADIUS, DEFAULT_CONTACT_FORCE)
-MAX_CONTACT_STIFFNESS = 1e12  # N/m: beyond it the contact frequencies leave double precision
 
 
 @dataclasses.dataclass(frozen=True)
@@ -127,28 +311,20 @@ class Params:
     def __post_init__(self) -> None:
         require("contact_law", self.contact_law, self.contact_law in CONTACT_LAWS,
                 f"must be one of {', '.join(map(repr, CONTACT_LAWS))}")
-        for field in dataclasses.fields(self):
-            if field.name == "contact_law":
-                continue
-            value = require_finite(field.name, getattr(self, field.name),
-                                   PARAMETERS[field.name].units)
-            object.__setattr__(self, field.name, value)
-        require("contact_stiffness", self.contact_stiffness,
-                0 < self.contact_stiffness <= MAX_CONTACT_STIFFNESS,
-                f"must be > 0 and <= {MAX_CONTACT_STIFFNESS:g}", "N/m")
-        require("contact_damping", self.contact_damping, self.contact_damping >= 0,
-                "must be >= 0", "N s/m")
-        for name in ("l1", "l2", "EI1", "EI2", "rhoA1", "rhoA2", "clearance"):
-            require(name, getattr(self, name), getattr(self, name) > 0, "must be > 0",
-                    PARAMETERS[name].units)
-        for name in ("force_amplitude", "omega"):
-            require(name, getattr(self, name), getattr(self, name) >= 0, "must be >= 0",
-                    PARAMETERS[name].units)
-        require("damping_ratio", self.damping_ratio, 0 <= self.damping_ratio < 1,
-                "must satisfy 0 <= damping_ratio < 1 (underdamped modes)")
-        gap = self.initial_gap
-        require("uplift2", self.uplift2, gap > 0,
-                f"the initial gap clearance + uplift1 - uplift2 = {gap!r} m must be > 0", "m")
+        for name in self.numeric_names():
+            value = require_finite(name, getattr(self, name), PARAMETERS[name].units)
+            check_range(name, value)
+            object.__setattr__(self, name, value)
+        check_joint(self.numeric())
+
+    @staticmethod
+    def numeric_names() -> tuple[str, ...]:
+        """Names of the numeric parameters (all but ``contact_law``), in field order."""
+        return tuple(f.name for f in dataclasses.fields(Params) if f.name != "contact_law")
+
+    def numeric(self) -> dict[str, float]:
+        """The numeric parameters by name (SI units)."""
+        return {name: getattr(self, name) for name in self.numeric_names()}
 
     @property
     def initial_gap(self) -> float:
@@ -183,27 +359,11 @@ class Params:
 
         ``source`` names where the mapping came from, for error messages.
         """
-        values = dict(mapping)
-        for key in values:
+        for key in mapping:
             if key not in PARAMETERS:
                 raise ParameterError(f"unknown parameter {key!r} in {source}; allowed: "
                                      f"{', '.join(sorted(PARAMETERS))}")
-        for i in ("1", "2"):
-            material = {k: values.pop(k + i) for k in MATERIAL_KEYS if k + i in values}
-            if not material:
-                continue
-            direct = [k + i for k in ("EI", "rhoA") if k + i in values]
-            if direct:
-                raise ParameterError(
-                    f"{source} gives both {', '.join(direct)} and material keys "
-                    f"{', '.join(k + i for k in material)} for beam {i}: give one or the other")
-            for key, value in material.items():
-                unit = PARAMETERS[key + i].units
-                require(key + i, value, require_finite(key + i, value, unit) > 0, "must be > 0",
-                        unit)
-            EI, rhoA = _strip_stiffness({**MATERIAL_DEFAULTS, **material})
-            values["EI" + i], values["rhoA" + i] = EI, rhoA
-        return cls(**values)
+        return cls(**resolve_materials(mapping, source))
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Params:
@@ -213,7 +373,36 @@ class Params:
             if key != "params":
                 raise ParameterError(f"unknown key {key!r} in {path}: a parameters file has "
                                      "only a [params] table")
-        return cls.from_mapping(data.get("params", {}), source=f"[params] of {path}")
+        return cls.from_mapping(require_table(data, "params", str(path)),
+                                source=f"[params] of {path}")
+
+
+def resolve_materials(values: Mapping[str, Any], source: str = "parameters",
+                      point: PointName = no_point) -> dict[str, Any]:
+    """``values`` with each beam's material keys (checked) replaced by its EI and rhoA.
+
+    Unspecified material keys of a beam that has some take the steel-strip defaults. Values may
+    be floats or arrays that broadcast (a sweep's corner grid); ``source`` names where they
+    came from, ``point`` the grid point of an array element, for error messages.
+    """
+    resolved = dict(values)
+    for i in ("1", "2"):
+        material = {k: resolved.pop(k + i) for k in MATERIAL_KEYS if k + i in resolved}
+        if not material:
+            continue
+        direct = [k + i for k in ("EI", "rhoA") if k + i in resolved]
+        if direct:
+            raise ParameterError(
+                f"{source}: both {', '.join(direct)} and material keys "
+                f"{', '.join(k + i for k in material)} are given for beam {i}, whose material "
+                f"keys replace EI{i} and rhoA{i}: give one or the other")
+        for key, value in material.items():
+            if np.ndim(value) == 0:
+                require_finite(key + i, value, PARAMETERS[key + i].units)
+            check_range(key + i, value, point)
+        resolved["EI" + i], resolved["rhoA" + i] = _strip_stiffness(
+            {**MATERIAL_DEFAULTS, **material})
+    return resolved
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
@@ -223,5 +412,15 @@ def read_toml(path: str | Path) -> dict[str, Any]:
             return tomllib.load(stream)
     except FileNotFoundError:
         raise ParameterError(f"file {str(path)!r} does not exist") from None
-    except tomllib.TOMLDecodeError as error:
+    except OSError as error:
+        raise ParameterError(f"cannot read {str(path)!r}: {error.strerror or error}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise ParameterError(f"{path} is not valid TOML: {error}") from None
+
+
+def require_table(data: Mapping[str, Any], key: str, source: str) -> dict[str, Any]:
+    """``data[key]`` (default: empty) if it is a TOML table; otherwise a ParameterError."""
+    table = data.get(key, {})
+    require(f"{key} in {source}", table, isinstance(table, dict),
+            f"must be a table: a [{key}] section, or {key} = {{...}}")
+    return table

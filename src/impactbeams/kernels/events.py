@@ -204,15 +204,16 @@ def cubic_step(value, slope, acceleration, jerk, start):
 
 
 @kernel
-def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, omega, zeta, force, weights, const,
-                       sine_amp, forcing_frequency, tolerance, q, v):
+def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, guess, omega, zeta, force, weights,
+                       const, sine_amp, forcing_frequency, tolerance, q, v):
     """The single root of a monotone e on [lo, hi] (e(lo) > 0, e(hi) <= round-off).
 
-    Safeguarded Newton, started from the secant point of the bracket; it stops at a few ulps
-    of time or, with ``tolerance`` > 0, as soon as |e| is within the round-off rule (Newton
-    steps inside e's noise band wander: they would cost evaluations and change nothing).
+    Safeguarded Newton, started from ``guess`` if it is inside the bracket, else from the
+    secant point; it stops at a few ulps of time or, with ``tolerance`` > 0, as soon as |e| is
+    within the round-off rule (Newton steps inside e's noise band wander: they would cost
+    evaluations and change nothing). Returns the root and the time of the state left in q, v.
     """
-    t = lo + (hi - lo) * e_lo / (e_lo - e_hi)
+    t = guess if lo < guess < hi else lo + (hi - lo) * e_lo / (e_lo - e_hi)
     if not lo < t < hi:
         t = 0.5 * (lo + hi)
     for _ in range(NEWTON_LIMIT):
@@ -223,16 +224,16 @@ def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, omega, zeta, force, we
         else:
             hi = t
         if value == 0.0 or hi - lo <= 4.0 * _EPS * hi:
-            return hi
+            return hi, t
         if abs(value) <= tolerance * _EPS * scale:
-            return t
+            return t, t
         step = t - value / slope if slope != 0.0 else lo - 1.0
         if not lo < step < hi:
             step = 0.5 * (lo + hi)
         if abs(step - t) <= 2.0 * _EPS * abs(t):  # converged to within an ulp
-            return hi if value <= 0.0 else min(hi, t + 4.0 * _EPS * abs(t))
+            return (hi if value <= 0.0 else min(hi, t + 4.0 * _EPS * abs(t))), t
         t = step
-    return hi  # the bracket has shrunk by at least 2^-NEWTON_LIMIT: hi is past the root
+    return hi, t  # the bracket has shrunk by at least 2^-NEWTON_LIMIT: hi is past the root
 
 
 @kernel
@@ -275,23 +276,26 @@ def search_root(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, cons
     """
     bounds = phase_bounds(q_s, v_s, t_s, t_end - t_s, omega, zeta, force, weights, sine_amp,
                           forcing_frequency)
-    return walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine_amp,
-                forcing_frequency, tolerance, max_steps, bounds, q, v)
+    root, _ = walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const,
+                   sine_amp, forcing_frequency, tolerance, max_steps, bounds, np.nan, q, v)
+    return root
 
 
 @kernel
 def walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine_amp,
-         forcing_frequency, tolerance, max_steps, bounds, q, v):
+         forcing_frequency, tolerance, max_steps, bounds, t_state, q, v):
     """``search_root`` given ``bounds``, ``phase_bounds`` over [t_s, t_end].
 
     The bounds do not depend on ``const``: event functions that differ in it alone (a column
-    of a map along the clearance) share them.
+    of a map along the clearance) share them. ``q``, ``v`` hold the state at ``t_state`` on
+    entry (NaN: at no time) and on return, which is ``(root, t_state)``, so that a search
+    starting where the previous one ended need not propagate to its start.
     """
     span_cap = 2.0 * math.pi / np.min(omega)  # bounds hold over a step of at most this span
     coherent, band, curvature, jerk, any_span = bounds
     floor = const - band - abs(coherent)
     if floor > tolerance * _EPS * (abs(const) + band + abs(coherent)):
-        return NO_EVENT  # the event function cannot reach 0 in this phase
+        return NO_EVENT, t_state  # the event function cannot reach 0 in this phase
     # With every mode split into steady state + free transient, the bounds hold for the whole
     # phase (transient amplitudes do not grow): computed once. Otherwise (a mode at or near
     # resonance) they are recomputed over each step's window.
@@ -300,44 +304,49 @@ def walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine
     if t == t_s:
         q[:] = q_s
         v[:] = v_s
-    else:
+    elif t != t_state:
         advance(q_s, v_s, t_s, t - t_s, omega, zeta, force, forcing_frequency, q, v)
+    t_state = t
     value, slope, scale = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
     steps = 0
     while steps < max_steps:
         steps += 1
         noise = tolerance * _EPS * scale
         if value <= noise:
-            return t
+            return t, t_state
         if per_step:
             coherent, band, curvature, jerk, any_span = phase_bounds(
                 q, v, t, span_cap, omega, zeta, force, weights, sine_amp, forcing_frequency)
         margin = value - noise  # certify e > noise over the step
         step = min(certified_step(margin, slope, curvature), span_cap)
+        acceleration = event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp,
+                                          forcing_frequency)
         if not per_step:  # third order with the exact local e'': wide steps through minima
-            acceleration = event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp,
-                                              forcing_frequency)
             step = min(cubic_step(margin, slope, acceleration, jerk, step), span_cap)
         # the exact sinusoid at Omega minus the bounded rest may certify a longer step
         skip = band_step(const - band - noise, coherent, t, forcing_frequency)
         step = max(step, skip if any_span else min(skip, span_cap))
         if step <= 4.0 * _EPS * max(abs(t), span_cap):
-            return t  # the event function is at round-off level: touching
+            return t, t_state  # the event function is at round-off level: touching
         if slope < 0.0:  # approaching: try to bracket a crossing beyond the linear estimate
             reach = min(2.0 * value / -slope, span_cap, t_end - t)
             if reach > step and slope + curvature * reach < 0.0:  # e monotone on the bracket
                 t_probe = t + reach
                 advance(q_s, v_s, t_s, t_probe - t_s, omega, zeta, force, forcing_frequency,
                         q, v)
+                t_state = t_probe
                 probe, _, probe_scale = evaluate(q, v, t_probe, weights, const, sine_amp,
                                                  forcing_frequency)
                 if probe <= tolerance * _EPS * probe_scale:
-                    return _newton_in_bracket(q_s, v_s, t_s, t, t_probe, value, probe, omega,
-                                              zeta, force, weights, const, sine_amp,
+                    # start Newton at the root of e's local quadratic: error ~ jerk s^3
+                    guess = t + _first_positive_root(value, slope, 0.5 * acceleration)
+                    return _newton_in_bracket(q_s, v_s, t_s, t, t_probe, value, probe, guess,
+                                              omega, zeta, force, weights, const, sine_amp,
                                               forcing_frequency, tolerance, q, v)
         if t + step >= t_end:
-            return NO_EVENT
+            return NO_EVENT, t_state
         t += step
         advance(q_s, v_s, t_s, t - t_s, omega, zeta, force, forcing_frequency, q, v)
+        t_state = t
         value, slope, scale = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
-    return GAVE_UP
+    return GAVE_UP, t_state

@@ -174,7 +174,7 @@ def _shared_column(cells, first, stride, count, key, table, c1, t_max, work, for
     bounds = phase_bounds(q_s, v_s, 0.0, t_max, omega, zeta, drives, weights, sine_amp,
                           source[CELL_OMEGA])
     max_steps = step_limit(0.0, t_max, omega)
-    t_start = 0.0
+    t_start, t_state = 0.0, np.nan
     i = first
     for _ in range(count):
         if np.isnan(t_start):
@@ -183,9 +183,10 @@ def _shared_column(cells, first, stride, count, key, table, c1, t_max, work, for
             level = cells[i, CELL_CLEARANCE]
             if key == CELL_F0:
                 level /= cells[i, CELL_F0]
-            out[i] = walk(q_s, v_s, 0.0, t_start, t_max, omega, zeta, drives, weights, level,
-                          sine_amp, source[CELL_OMEGA], TOUCH_TOLERANCE, max_steps, bounds,
-                          work[_Q, :active], work[_V, :active])
+            out[i], t_state = walk(q_s, v_s, 0.0, t_start, t_max, omega, zeta, drives, weights,
+                                   level, sine_amp, source[CELL_OMEGA], TOUCH_TOLERANCE,
+                                   max_steps, bounds, t_state, work[_Q, :active],
+                                   work[_V, :active])
             t_start = 0.0 if out[i] == GAVE_UP else out[i]  # NaN ends the column
         i += stride
 

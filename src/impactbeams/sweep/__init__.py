@@ -25,12 +25,12 @@ from impactbeams.sweep.plan import (
     build_plan,
     code_digest,
     compute_chunk,
+    default_chunk_cells,
 )
 from impactbeams.sweep.progress import Progress
 from impactbeams.sweep.run import (
     Chunk,
     ChunkRunner,
-    default_chunk_cells,
     local_runner,
     run_sweep,
     write_sweep,

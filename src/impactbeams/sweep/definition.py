@@ -20,6 +20,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -28,7 +29,29 @@ import numpy as np
 
 from impactbeams import __version__
 from impactbeams.kernels.layout import CELL_COLUMNS
-from impactbeams.params import CONTACT_LAWS, ParameterError, Params, read_toml, require
+from impactbeams.params import (
+    CONTACT_LAWS,
+    MATERIAL_KEYS,
+    MAX_MODES,
+    ParameterError,
+    Params,
+    PointName,
+    check_joint,
+    check_range,
+    is_real,
+    read_toml,
+    require,
+    require_table,
+    resolve_materials,
+)
+from impactbeams.preflight import (
+    DYNAMICS_RATE,
+    FIRST_IMPACT_RATE,
+    Cost,
+    check_run,
+    highest_frequency,
+    require_memory,
+)
 from impactbeams.variables import PARAMETERS
 
 FIRST_IMPACT = "first_impact_time"
@@ -39,7 +62,10 @@ OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES)
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
 _TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes")
 _AXIS_KEYS = ("min", "max", "num", "scale")
-_MAX_MODES = 200
+# Distinct geometries (values of the axes that change the modes) per sweep: each one's modes are
+# computed serially before the map runs, 0.4 ms (5 modes, first impact) to 2 s (200 modes, tied
+# dynamics) each (docs/limits.md).
+MAX_GEOMETRIES = 10_000
 
 
 @dataclasses.dataclass(frozen=True)
@@ -65,6 +91,11 @@ class Axis:
             return np.array([self.min])
         space = np.geomspace if self.scale == "log" else np.linspace
         return space(self.min, self.max, self.num)
+
+    @property
+    def first(self) -> float | str:
+        """The first value, without computing the others (linspace and geomspace start at min)."""
+        return self.choices[0] if self.choices else self.min
 
     def value(self, index: int) -> float | str:
         """The parameter value at ``index`` along the axis (a float, or a law's name)."""
@@ -96,7 +127,7 @@ class Sweep:
     @property
     def size(self) -> int:
         """Number of cells."""
-        return int(np.prod(self.shape))
+        return math.prod(self.shape)
 
     @property
     def needs_dynamics(self) -> bool:
@@ -116,8 +147,18 @@ class Sweep:
 
     @property
     def base(self) -> Params:
-        """The fixed parameters (defaults for the rest), before any axis is applied."""
-        return Params.from_mapping(self.fixed, source=f"[params] of {self.source}")
+        """The parameters of the grid's first point: every axis at its first value."""
+        return self.params_at({})
+
+    def params_at(self, changes: Mapping[str, Any]) -> Params:
+        """The parameters of the grid point with the swept ``changes`` (name: value).
+
+        The other axes are at their first values; the fixed parameters, then the defaults, fill
+        the rest.
+        """
+        first = {axis.name: axis.first for axis in self.axes}
+        return Params.from_mapping({**self.fixed, **first, **changes},
+                                   source=f"[params] of {self.source}")
 
     def fingerprint(self) -> str:
         """Hash of the definition and package version: a resumed run must match it."""
@@ -131,37 +172,51 @@ def load_sweep(path: str | Path) -> Sweep:
 
 
 def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
-    """Validate a sweep given as a mapping in the TOML file's layout."""
+    """Validate a sweep given as a mapping in the TOML file's layout.
+
+    Everything is checked before anything is computed, vectorised over the axes (no per-cell
+    work): keys, types, every axis value, conflicts, every grid point's parameters (at the
+    corners of the grid, which suffices: every condition is monotone in each parameter), the
+    modes and horizon, and the expected memory.
+    """
     for key in data:
         require(f"{key!r} in {source}", key, key in _TOP_LEVEL,
                 f"unknown key; allowed top-level keys: {', '.join(_TOP_LEVEL)}")
     t_max = _number(data.get("t_max", 1.0), f"t_max in {source}")
     require(f"t_max in {source}", t_max, t_max > 0, "must be > 0", "s")
     n_modes = data.get("n_modes", 5)
-    require(f"n_modes in {source}", n_modes,
-            isinstance(n_modes, int) and not isinstance(n_modes, bool)
-            and 1 <= n_modes <= _MAX_MODES, f"must be an integer from 1 to {_MAX_MODES}")
-    observables = tuple(data.get("observables", [FIRST_IMPACT]))
-    for name in observables:
-        require(f"observables in {source}", name, name in OBSERVABLES,
-                f"unknown observable; allowed: {', '.join(OBSERVABLES)}")
-    require(f"observables in {source}", list(observables), len(observables) > 0,
-            "must name at least one observable")
-    fixed = dict(data.get("params", {}))
-    base = Params.from_mapping(fixed, source=f"[params] of {source}")
-    axes_table = data.get("axes", {})
-    require(f"[axes] of {source}", axes_table, isinstance(axes_table, dict) and axes_table,
+    require(f"n_modes in {source}", n_modes, _is_integer(n_modes) and 1 <= n_modes <= MAX_MODES,
+            f"must be an integer from 1 to {MAX_MODES}")
+    observables = _observables(data.get("observables", [FIRST_IMPACT]), source)
+    fixed = require_table(data, "params", source)
+    axes_table = require_table(data, "axes", source)
+    require(f"[axes] of {source}", axes_table, bool(axes_table),
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
+    _check_conflicts(fixed, axes, source)
     sweep = Sweep(t_max, n_modes, observables, fixed, axes, source)
-    _check_grid(sweep, base)
+    _check_grid(sweep)
+    _check_cost(sweep)
     return sweep
 
 
+def _is_integer(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 def _number(value: Any, name: str) -> float:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
-    require(name, value, ok, "must be a finite number")
+    require(name, value, is_real(value) and math.isfinite(value), "must be a finite number")
     return float(value)
+
+
+def _observables(value: Any, source: str) -> tuple[str, ...]:
+    where = f"observables in {source}"
+    require(where, value, isinstance(value, list) and bool(value),
+            f'must be a non-empty list of names, e.g. ["{FIRST_IMPACT}"]')
+    for name in value:
+        require(where, name, name in OBSERVABLES,
+                f"unknown observable; allowed: {', '.join(OBSERVABLES)}")
+    return tuple(value)
 
 
 def _law_axis(spec: Any, where: str) -> Axis:
@@ -189,45 +244,160 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
         require(f"{key} in {where}", None, key in spec, "is required")
     lo, hi = _number(spec["min"], f"min in {where}"), _number(spec["max"], f"max in {where}")
     num, scale = spec["num"], spec.get("scale", "linear")
-    require(f"num in {where}", num, isinstance(num, int) and not isinstance(num, bool)
-            and num >= 1, "must be an integer >= 1")
+    require(f"num in {where}", num, _is_integer(num) and num >= 1, "must be an integer >= 1")
     require(f"scale in {where}", scale, scale in ("linear", "log"), 'must be "linear" or "log"')
     require(f"max in {where}", hi, hi > lo or (hi == lo and num == 1),
             f"the range [{lo!r}, {hi!r}] is empty or reversed: need max > min "
             "(or max == min with num = 1)")
+    require(f"num in {where}", num, num > 1 or hi == lo,
+            f"one value cannot span [{lo!r}, {hi!r}]: give num >= 2, or max = min")
     if scale == "log":
         require(f"min in {where}", lo, lo > 0, "a log axis needs min > 0")
+    # the values run monotonically from min to max (both exact): checking the ends suffices
+    check_range(name, np.array([lo, hi]),
+                lambda index: f"axis {name!r} of {source} reaches a non-physical point: ")
     return Axis(name, lo, hi, num, scale)
 
 
-def _check_grid(sweep: Sweep, base: Params) -> None:
+def _check_conflicts(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: str) -> None:
+    """Refuse a parameter given twice: fixed and swept, or a beam by EI/rhoA and by material."""
+    swept = {axis.name for axis in axes}
+    for name in sorted(swept & set(fixed)):
+        raise ParameterError(f"{name} is given both in [params] ({name} = {fixed[name]!r}) and "
+                             f"as [axes.{name}] of {source}: remove one of them")
+    given = {**{name: "[params]" for name in fixed}, **{name: "[axes]" for name in swept}}
+    for i in ("1", "2"):
+        direct = [k + i for k in ("EI", "rhoA") if k + i in given]
+        material = [k + i for k in MATERIAL_KEYS if k + i in given]
+        if direct and material:
+            where = lambda names: ", ".join(f"{n} ({given[n]})" for n in names)  # noqa: E731
+            raise ParameterError(
+                f"beam {i} of {source} is given both by {where(direct)} and by the material "
+                f"keys {where(material)}, which replace EI{i} and rhoA{i}: give one or the other")
+
+
+def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
+    """Every numeric parameter on the grid's corners, and a namer of the corner points.
+
+    Axis ``k`` varies along dimension ``k`` over its two ends (one value if num = 1); fixed
+    parameters are scalars, the others take the defaults. Material keys are resolved.
+    """
+    dims = len(sweep.axes)
+    ends = []
+    values: dict[str, Any] = {name: value for name, value in sweep.fixed.items()
+                              if name != "contact_law"}
+    for k, axis in enumerate(sweep.axes):
+        axis_ends = np.array([axis.min, axis.max] if axis.num > 1 and not axis.choices
+                             else [axis.min])
+        ends.append(axis_ends)
+        if not axis.choices:
+            values[axis.name] = axis_ends.reshape([-1 if d == k else 1 for d in range(dims)])
+
+    def point(index: tuple[int, ...]) -> str:
+        named = ", ".join(f"{axis.name} = {float(axis_ends[min(i, axis_ends.size - 1)])!r}"
+                          for axis, axis_ends, i in zip(sweep.axes, ends, index, strict=True)
+                          if not axis.choices)
+        return f"at the grid point {named} of {sweep.source}: "
+
+    resolved = resolve_materials(values, f"[params] of {sweep.source}", point)
+    defaults = Params().numeric()
+    return {**defaults, **resolved}, point
+
+
+def _check_grid(sweep: Sweep) -> None:
     """Reject a grid with any non-physical point before computing anything.
 
-    Single-parameter limits are checked on every axis value; the one joint condition, the
-    initial gap clearance + uplift1 - uplift2 > 0, on the whole grid.
+    The fixed parameters are checked at the grid's first point (names, types, values); every
+    condition on several parameters, and the modes and horizon, at all corners of the grid.
     """
-    for axis in sweep.axes:
-        for index in range(axis.num):
-            try:
-                base.replace(**{axis.name: axis.value(index)})
-            except ParameterError as error:
-                raise ParameterError(f"axis {axis.name!r} of {sweep.source} reaches a "
-                                     f"non-physical point: {error}") from None
-    grids = {name: _cell_grid(sweep, base, name) for name in ("clearance", "uplift1", "uplift2")}
-    gap = grids["clearance"] + grids["uplift1"] - grids["uplift2"]
-    if np.any(gap <= 0):
-        bad = np.unravel_index(np.argmin(gap), gap.shape)
-        point = {a.name: a.value(i) for a, i in zip(sweep.axes, bad, strict=True)}
-        raise ParameterError(f"the grid of {sweep.source} has points where the initial gap "
-                             f"clearance + uplift1 - uplift2 <= 0, e.g. at {point}")
+    sweep.params_at({})
+    values, point = _corners(sweep)
+    for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
+        check_range(name, values[name], point)
+    check_joint(values, point)
+    check_run(values, sweep.t_max, sweep.n_modes, point)
 
 
-def _cell_grid(sweep: Sweep, base: Params, name: str) -> np.ndarray:
-    """Per-cell values of the cell parameter ``name``, broadcast to the grid shape."""
-    grid = np.full(sweep.shape, getattr(base, name))
-    for k, axis in enumerate(sweep.axes):
-        if axis.name == name:
-            shape = [1] * len(sweep.axes)
-            shape[k] = axis.num
-            grid = np.broadcast_to(axis.values.reshape(shape), sweep.shape).copy()
-    return grid
+def geometry_count(sweep: Sweep) -> int:
+    """Distinct geometries of the grid: the product of the geometry axes' ``num``."""
+    return math.prod(axis.num for axis in _geometry_axes(sweep))
+
+
+def _geometry_axes(sweep: Sweep) -> list[Axis]:
+    from impactbeams.sweep.plan import geometry_axes  # plan builds on this module
+
+    return [sweep.axes[k] for k in geometry_axes(sweep)]
+
+
+def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = False) -> Cost:
+    """Peak memory and rough wall time of running ``sweep`` on ``threads`` (default: all cores).
+
+    Memory: a streamed run (``write_sweep``, what ``impactbeams run`` does) holds a chunk at a
+    time (:func:`chunk_memory`); ``in_memory`` (``run_sweep`` without an output) also holds the
+    results (one float64 array of every cell per stored variable and the Dataset's copy: 16
+    bytes per cell and variable, plus 4 for ``impacted`` and its temporaries; the traced peak
+    of a first-impact map, netCDF writing included, is 18.04 bytes per cell). Both add the plan
+    (8 x 2N float64 per geometry; a dynamics map 10 (2N)^2, with its stacking copy) and a
+    dynamics map's per-thread segment buffers (MAX_SEGMENTS x (4 x 2N + 3) float64). Time:
+    ``rate`` x 2N x (fastest frequency x t_max) per cell over the threads, plus the set-up.
+    """
+    from impactbeams.sweep.plan import MAX_SEGMENTS
+
+    threads = threads or os.cpu_count() or 1
+    coordinates = 2 * sweep.n_modes
+    geometries = geometry_count(sweep)
+    values, _ = _corners(sweep)
+    fastest = float(np.max(np.maximum(values["omega"],
+                                      highest_frequency(values, sweep.n_modes))))
+    results = sweep.size * (16 * len(sweep.stored) + 4) if in_memory else 0
+    if sweep.needs_dynamics:
+        plan = 2 * geometries * 8 * 10 * coordinates**2
+        buffers = threads * MAX_SEGMENTS * (4 * coordinates + 3) * 8
+        per_geometry, rate = 5e-5 * sweep.n_modes**2, DYNAMICS_RATE
+    else:
+        plan, buffers = 2 * geometries * 8 * 8 * coordinates, 0
+        per_geometry, rate = 4e-4 + 2.5e-5 * sweep.n_modes, FIRST_IMPACT_RATE
+    compute = sweep.size * coordinates * fastest * sweep.t_max * rate / threads
+    return Cost(chunk_memory(sweep) + results + plan + buffers,
+                geometries * per_geometry + compute)
+
+
+def chunk_memory(sweep: Sweep) -> int:
+    """Bytes a run of ``sweep`` holds for its chunk being computed and the one being written.
+
+    Per cell of a default chunk: its cell rows (56 bytes), the kernel's output (8 per
+    column), 24 per stored variable (the chunk's arrays, its saved copy, the file's variables)
+    and 18 for HDF5's buffers of a block (the uncompressed block in its cache and the
+    compressed one; outside Python's allocator). Traced peaks of a streamed first-impact map:
+    69 to 81 bytes per chunk cell (against 106 here).
+    """
+    from impactbeams.kernels.layout import OUT_COLUMNS
+    from impactbeams.sweep.plan import default_chunk_cells
+
+    columns = len(OUT_COLUMNS) if sweep.needs_dynamics else 1
+    cells = min(sweep.size, default_chunk_cells(sweep))
+    return cells * (56 + 8 * columns + 24 * len(sweep.stored) + 18)
+
+
+def expected_file_size(sweep: Sweep) -> int:
+    """Disk space (bytes) a run of ``sweep`` needs at its peak.
+
+    The finished chunks under ``OUT.nc.partial/`` and the netCDF file: 8 bytes per cell and
+    stored variable each.
+    """
+    return sweep.size * (16 * len(sweep.stored) + 1)
+
+
+def _check_cost(sweep: Sweep) -> None:
+    """Refuse a sweep with too many geometries, or one that would not fit in memory."""
+    geometries = geometry_count(sweep)
+    if geometries > MAX_GEOMETRIES:
+        swept = ", ".join(f"{axis.name}: num = {axis.num}" for axis in _geometry_axes(sweep)
+                          if axis.num > 1)
+        raise ParameterError(
+            f"the geometry axes of {sweep.source} ({swept}) give {geometries} distinct "
+            f"geometries; at most {MAX_GEOMETRIES} are allowed, since each one's modes are "
+            "computed one after the other before the map starts: use fewer values there")
+    require_memory(f"the grid of {sweep.source} ({' x '.join(map(str, sweep.shape))} = "
+                   f"{sweep.size} cells)", expected_cost(sweep),
+                   "use fewer cells (smaller num) or split the sweep into several files")

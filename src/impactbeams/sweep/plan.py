@@ -100,7 +100,7 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
     for combo in itertools.product(*(range(sweep.axes[k].num) for k in axes)):
         changes = {sweep.axes[k].name: sweep.axes[k].value(i)
                    for k, i in zip(axes, combo, strict=True)}
-        yield sweep.base.replace(**changes) if changes else sweep.base
+        yield sweep.params_at(changes)
 
 
 def _geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
@@ -227,6 +227,18 @@ class Chunking:
         first = outer * self.shape[self.axis] + j * self.run
         last = outer * self.shape[self.axis] + min((j + 1) * self.run, self.shape[self.axis])
         return first * line, last * line
+
+
+def default_chunk_cells(sweep: Sweep) -> int:
+    """2^20 cells per chunk (2^16 for full dynamics, far costlier per cell): about a second of work.
+
+    Large enough that the fixed cost of a chunk (starting the kernel's threads, its file, its
+    netCDF block, a Dask task) stays small beside its computation, which matters on a busy
+    machine where every start of the threads waits for the cores; small enough that an
+    interrupt loses little and a cube streams in pieces of tens of MB. A map of up to 2^20 cells
+    is therefore computed in one pass.
+    """
+    return 2**16 if sweep.needs_dynamics else 2**20
 
 
 MAX_COLUMN_CELLS = 4096  # a first-impact map's columns: at most this many cells each

@@ -19,9 +19,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from impactbeams.params import require
-from impactbeams.sweep.definition import Sweep
+from impactbeams.preflight import require_memory
+from impactbeams.sweep.definition import Sweep, expected_cost
 from impactbeams.sweep.output import map_dataset, map_file
-from impactbeams.sweep.plan import Chunking, build_plan, compute_chunk, contact_resolution
+from impactbeams.sweep.plan import (
+    Chunking,
+    build_plan,
+    compute_chunk,
+    contact_resolution,
+    default_chunk_cells,
+)
 from impactbeams.sweep.progress import Progress
 from impactbeams.sweep.store import ChunkStore, finished_output
 
@@ -62,18 +69,6 @@ def local_runner(parallel: bool = True) -> ChunkRunner:
     return run
 
 
-def default_chunk_cells(sweep: Sweep) -> int:
-    """2^20 cells per chunk (2^16 for full dynamics, far costlier per cell): about a second of work.
-
-    Large enough that the fixed cost of a chunk (starting the kernel's threads, its file, its
-    netCDF block, a Dask task) stays small beside its computation, which matters on a busy
-    machine where every start of the threads waits for the cores; small enough that an
-    interrupt loses little and a cube streams in pieces of tens of MB. A map of up to 2^20 cells
-    is therefore computed in one pass.
-    """
-    return 2**16 if sweep.needs_dynamics else 2**20
-
-
 # the largest chunk: about 1.3 GB of cell rows and results (kernels.layout.CELL_COLUMNS and an
 # output per cell), and well below HDF5's 4 GiB limit on a compressed block
 MAX_CHUNK_CELLS = 2**24
@@ -93,9 +88,9 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
               discard_corrupt: bool = False) -> xr.Dataset:
     """Compute a sweep and return its Dataset; with ``output``, write it as netCDF first.
 
-    Without ``output`` the map is computed in memory. With it, see :func:`write_sweep` (which
-    takes the same arguments); the Dataset returned is then the file, opened lazily, so that
-    a map larger than memory can be read in parts.
+    Without ``output`` the map is computed in memory (a ParameterError if it would not fit).
+    With it, see :func:`write_sweep` (which takes the same arguments); the Dataset returned is
+    then the file, opened lazily, so that a map larger than memory can be read in parts.
     """
     import xarray as xr
 
@@ -103,6 +98,9 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
         write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk, runner,
                     discard_corrupt)
         return xr.open_dataset(output)
+    require_memory(f"a map of {sweep.size} cells held in memory ({sweep.source})",
+                   expected_cost(sweep, threads, in_memory=True),
+                   "give an output file, to which the map is written chunk by chunk")
     _warn_unresolved(sweep)
     chunking = _chunking(sweep, chunk_cells)
     results = {name: np.full(sweep.size, np.nan) for name in sweep.stored}

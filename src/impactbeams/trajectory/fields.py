@@ -11,7 +11,7 @@ from impactbeams.packing import Packed
 from impactbeams.trajectory.observables import loads, observables
 from impactbeams.trajectory.phases import Trajectory, sample
 
-_CHUNK = 1 << 15  # output times per sampling call: bounds memory at ~N * 0.5 MB
+SAMPLE_CHUNK = 1 << 15  # output times per sampling call: bounds memory at ~N * 0.5 MB
 
 
 def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray, energy: bool = True,
@@ -26,8 +26,8 @@ def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray, energ
              "in_contact"] + (["work_of_force", "damping_dissipation"] if energy else [])
     out = {name: np.full(times.size, np.nan) for name in names}
     reached = np.flatnonzero(inside)
-    for start in range(0, reached.size, _CHUNK):
-        index = reached[start:start + _CHUNK]
+    for start in range(0, reached.size, SAMPLE_CHUNK):
+        index = reached[start:start + SAMPLE_CHUNK]
         phase, q, v = sample(packed, trajectory, times[index])
         for name, values in observables(packed, phase, times[index], q, v).items():
             out[name][index] = values
@@ -58,8 +58,8 @@ def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_poi
     y1 = np.full((times.size, n_points), np.nan)
     y2 = np.full((times.size, n_points), np.nan)
     reached = np.flatnonzero(times <= trajectory.t_end)
-    for start in range(0, reached.size, _CHUNK):
-        index = reached[start:start + _CHUNK]
+    for start in range(0, reached.size, SAMPLE_CHUNK):
+        index = reached[start:start + SAMPLE_CHUNK]
         phase, q, _ = sample(packed, trajectory, times[index])
         q1, q2, _, _ = loads(packed, phase, times[index])
         for ph in (FREE, CONTACT):

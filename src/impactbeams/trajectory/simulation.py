@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -10,24 +11,74 @@ import xarray as xr
 
 from impactbeams.compliant import MAX_MODES, required_modes
 from impactbeams.packing import Packed, pack_run
-from impactbeams.params import Params
+from impactbeams.params import Params, require, require_finite
+from impactbeams.preflight import (
+    DYNAMICS_RATE,
+    Cost,
+    check_run,
+    highest_frequency,
+    require_memory,
+)
 from impactbeams.trajectory.episodes import default_separation, episode_table
-from impactbeams.trajectory.fields import deflections, time_series
+from impactbeams.trajectory.fields import SAMPLE_CHUNK, deflections, time_series
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory, run
 from impactbeams.variables import attributes, global_attributes
 
+# The event search restarts at least every search_span seconds; a span below this fraction of
+# t_max would restart it more than a million times per search (and below eps t_max it cannot
+# advance the time at all).
+MIN_SEARCH_SPAN = 1e-6
+SERIES = 10  # time series always stored (time, tips, gap, force, energies, in_contact)
+ENERGY_SERIES = 2  # work_of_force, damping_dissipation
+# float64 arrays of (output times in a sampling chunk) x (coordinates) alive while a chunk is
+# sampled and its observables evaluated: measured peaks 12 to 15 (tests/test_bad_inputs.py)
+SAMPLING_ARRAYS = 20
+
 
 def _output_times(t_max: float, dt_output: float, times: np.ndarray | None) -> np.ndarray:
     if times is not None:
-        times = np.asarray(times, dtype=float)
-        if times.ndim != 1 or np.any(np.diff(times) < 0) or np.any((times < 0) | (times > t_max)):
-            raise ValueError("times must be a 1-D ascending array within [0, t_max]")
         return times
-    if not (math.isfinite(dt_output) and dt_output > 0):
-        raise ValueError(f"dt_output = {dt_output!r} is not allowed: must be > 0 (s)")
-    count = int(math.floor(t_max / dt_output * (1 + 1e-12))) + 1
-    return np.minimum(np.arange(count) * dt_output, t_max)
+    return np.minimum(np.arange(int(_output_count(t_max, dt_output))) * dt_output, t_max)
+
+
+def _output_count(t_max: float, dt_output: float) -> float:
+    """Points of the output grid 0, dt, 2 dt, ... <= t_max (a float: it may be huge, or inf)."""
+    return float(np.floor(t_max / dt_output * (1 + 1e-12))) + 1
+
+
+def _checked_times(times: np.ndarray | None, t_max: float) -> np.ndarray | None:
+    if times is None:
+        return None
+    times = np.asarray(times, dtype=float)
+    require("times", times, times.ndim == 1 and bool(np.all(np.isfinite(times)))
+            and not np.any(np.diff(times) < 0) and not np.any((times < 0) | (times > t_max)),
+            "must be a 1-D ascending array within [0, t_max]", "s")
+    return times
+
+
+def _require_integer(name: str, value: object, low: int, high: float = math.inf) -> int:
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    allowed = f"from {low} to {high}" if math.isfinite(high) else f">= {low}"
+    require(name, value, ok and low <= value <= high, f"must be an integer {allowed}")
+    return int(value)  # type: ignore[call-overload]
+
+
+def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, fields: bool,
+                    n_points: int, energy_balance: bool, max_events: int) -> Cost:
+    """Peak memory and rough time of a simulated run (arguments as in :func:`simulate`).
+
+    Memory: the output series (and fields) twice (arrays and Dataset), the workspace of the
+    sampling (SAMPLING_ARRAYS float64 arrays of a chunk's times by the coordinates) and the
+    recorded segments at the ``max_events`` cap (time, phase and four states of 2 n_modes).
+    """
+    coordinates = 2 * n_modes
+    series = 1 + SERIES + ENERGY_SERIES * energy_balance + 2 * n_points * fields
+    sampling = SAMPLING_ARRAYS * 8 * min(n_times, SAMPLE_CHUNK) * coordinates
+    segments = max_events * (4 * coordinates + 3) * 8
+    fastest = float(max(highest_frequency(params.numeric(), n_modes), params.omega))
+    return Cost(2 * 8 * series * n_times + sampling + segments,
+                DYNAMICS_RATE * coordinates * fastest * t_max)
 
 
 def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output: float = 1e-4,
@@ -39,7 +90,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
 
     Args:
         params: model parameters (SI units).
-        t_max: end time (s), > 0.
+        t_max: end time (s), > 0; the fastest mode (or the forcing) may turn through at
+            most ``preflight.MAX_PHASE`` = 1e10 rad by then.
         n_modes: free modes per beam. Default: 5 for the tied law (the contact phase has
             2 n_modes modes); for the spring law the number that resolves the contact,
             4 n* (docs/model.md, "Resolution"), at least 5. A spring-law run with fewer gets
@@ -52,8 +104,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         max_events: cap on the number of phases (events + 1); a run that reaches it stops
             there with ``attrs["status"] = "event_limit"`` (and a RuntimeWarning).
         search_span: the event search restarts from the exactly propagated state every this
-            many seconds (default t_max). Results do not depend on it beyond round-off; it is
-            here to test that.
+            many seconds (default t_max; at least 1e-6 t_max, ``MIN_SEARCH_SPAN``). Results do
+            not depend on it beyond round-off; it is here to test that.
         episode_separation: contacts closer than this (s, free interval from release to the
             next onset) form one impact episode; default a quarter period of the slowest free
             mode (see :mod:`impactbeams.trajectory.episodes`).
@@ -64,41 +116,97 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
 
     The output grid never influences the dynamics: events are located by the kernel on its
     own, and the outputs are evaluated from the exact segment states.
+
+    Every argument is checked before any work: a bad one, or a run that would not fit in
+    memory (:func:`simulation_cost`), raises :class:`~impactbeams.params.ParameterError` naming
+    it, its value and what is allowed (docs/limits.md, "Allowed values").
     """
-    if not (isinstance(t_max, (int, float)) and math.isfinite(t_max) and t_max > 0):
-        raise ValueError(f"t_max = {t_max!r} is not allowed: must be a finite number > 0 (s)")
-    if max_events < 1:
-        raise ValueError(f"max_events = {max_events!r} is not allowed: must be >= 1")
-    span = float(t_max if search_span is None else search_span)
-    if not span > 0:
-        raise ValueError(f"search_span = {search_span!r} is not allowed: must be > 0 (s)")
-    out_times = _output_times(float(t_max), dt_output, times)
-    resolution = required_modes(params) if params.contact_law == "spring" else 5
-    if n_modes is None:
-        n_modes = min(resolution, MAX_MODES)
+    run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
+                                 search_span, episode_separation, fields, energy_balance)
+    t_max, n_modes, resolution = run_inputs.t_max, run_inputs.n_modes, run_inputs.resolution
     if n_modes < resolution and params.contact_law == "spring":
         warnings.warn(f"n_modes = {n_modes} does not resolve the spring contact of stiffness "
                       f"{params.contact_stiffness:g} N/m: use n_modes >= {resolution} "
                       "(docs/model.md, Resolution)", RuntimeWarning, stacklevel=2)
-    packed = pack_run(params, n_modes, float(t_max), span)
-    trajectory = run(packed, max_events)
+    out_times = run_inputs.times
+    packed = pack_run(params, n_modes, t_max, run_inputs.search_span)
+    trajectory = run(packed, run_inputs.max_events)
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
                       f"{t_max!r} s: status {trajectory.status!r}", RuntimeWarning, stacklevel=2)
-    if episode_separation is None:
-        episode_separation = default_separation(packed)
-    dataset = _dataset(packed, trajectory, out_times, float(episode_separation),
+    separation = run_inputs.episode_separation
+    dataset = _dataset(packed, trajectory, out_times,
+                       default_separation(packed) if separation is None else separation,
                        energy_balance)
     if fields:
-        x1, x2, y1, y2 = deflections(packed, trajectory, out_times, n_points)
+        x1, x2, y1, y2 = deflections(packed, trajectory, out_times, run_inputs.n_points)
         dataset = dataset.assign_coords(x1=("x1", x1, attributes("x1")),
                                         x2=("x2", x2, attributes("x2")))
         dataset["deflection_1"] = (("time", "x1"), y1, attributes("deflection_1"))
         dataset["deflection_2"] = (("time", "x2"), y2, attributes("deflection_2"))
-    dataset.attrs.update(_global_attributes(params, n_modes, float(t_max), trajectory))
+    dataset.attrs.update(_global_attributes(params, n_modes, t_max, trajectory))
     if params.contact_law == "spring":
         dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
     return dataset
+
+
+@dataclasses.dataclass(frozen=True)
+class _RunInputs:
+    """simulate()'s arguments once checked: floats and ints, defaults filled in."""
+
+    t_max: float
+    n_modes: int
+    resolution: int  # n_modes that resolves a spring contact (5 for the tied law)
+    times: np.ndarray
+    search_span: float
+    episode_separation: float | None
+    max_events: int
+    n_points: int
+
+
+def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output: float,
+                    times: np.ndarray | None, n_points: int, max_events: int,
+                    search_span: float | None, episode_separation: float | None, fields: bool,
+                    energy_balance: bool) -> _RunInputs:
+    """Check every argument of :func:`simulate` (same names) before any work; ParameterError.
+
+    The run's modes and horizon (:func:`~impactbeams.preflight.check_run`) and its memory
+    (:func:`simulation_cost`) are checked too, before the output grid is allocated.
+    """
+    require("params", type(params).__name__, isinstance(params, Params),
+            "must be an impactbeams.Params")
+    t_max = require_finite("t_max", t_max, "s")
+    require("t_max", t_max, t_max > 0, "must be > 0", "s")
+    times = _checked_times(times, t_max)
+    if times is None:
+        dt_output = require_finite("dt_output", dt_output, "s")
+        require("dt_output", dt_output, dt_output > 0, "must be > 0", "s")
+    max_events = _require_integer("max_events", max_events, 1)
+    n_points = _require_integer("n_points", n_points, 2)
+    span = t_max if search_span is None else require_finite("search_span", search_span, "s")
+    require("search_span", search_span, span >= MIN_SEARCH_SPAN * t_max,
+            f"must be >= {MIN_SEARCH_SPAN:g} t_max = {MIN_SEARCH_SPAN * t_max:.3g} (a shorter "
+            "span only restarts the event search more often, more than a million times per "
+            "search)", "s")
+    if episode_separation is not None:
+        episode_separation = require_finite("episode_separation", episode_separation, "s")
+        require("episode_separation", episode_separation, episode_separation >= 0,
+                "must be >= 0", "s")
+    resolution = required_modes(params) if params.contact_law == "spring" else 5
+    if n_modes is None:
+        n_modes = min(resolution, MAX_MODES)
+    n_modes = _require_integer("n_modes", n_modes, 1, MAX_MODES)
+    check_run(params.numeric(), t_max, n_modes)
+    n_times = times.size if times is not None else _output_count(t_max, dt_output)
+    cost = simulation_cost(params, t_max, n_modes, n_times, fields, n_points, energy_balance,
+                           max_events)
+    grid = "times" if times is not None else f"dt_output = {dt_output!r} s"
+    require_memory(f"{grid} ({n_times:.3g} output times over t_max = {t_max!r} s; n_modes = "
+                   f"{n_modes}, max_events = {max_events})", cost,
+                   "use a larger dt_output or a shorter t_max (or fewer fields, modes or "
+                   "max_events)")
+    return _RunInputs(t_max, n_modes, resolution, _output_times(t_max, dt_output, times), span,
+                      episode_separation, max_events, n_points)
 
 
 def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray, separation: float,
