@@ -245,10 +245,14 @@ def _simulate(args: argparse.Namespace) -> int:
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
     dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
                        dt_output=args.dt_output, fields=args.fields,
-                       energy_balance=args.energy_balance)
+                       energy_balance=args.energy_balance, lyapunov=args.lyapunov,
+                       transient_periods=args.transient_periods)
     write_netcdf(dataset, output)
     status = dataset.attrs["status"]
-    print(f"wrote {output}: {dataset.impact.size} impacts, status {status}", file=sys.stderr)
+    exponent = (f", largest Lyapunov exponent {float(dataset.lyapunov_exponent):.6g} +- "
+                f"{float(dataset.lyapunov_exponent_error):.2g} 1/s" if args.lyapunov else "")
+    print(f"wrote {output}: {dataset.impact.size} impacts, status {status}{exponent}",
+          file=sys.stderr)
     return 0 if status == "complete" else EXIT_INCOMPLETE  # simulate() warned already
 
 
@@ -337,6 +341,12 @@ def build_parser() -> argparse.ArgumentParser:
                                "modes)")
     simulate.add_argument("--fields", action="store_true",
                           help="also store the deflection fields y_i(x, t)")
+    simulate.add_argument("--lyapunov", type=_POSITIVE_INTEGER, default=0, metavar="COUNT",
+                          help="also compute the COUNT leading Lyapunov exponents (1/s) of the "
+                               "run, 1 for the largest (spring law)")
+    simulate.add_argument("--transient-periods", type=_integer_from(0), default=0,
+                          metavar="PERIODS",
+                          help="forcing periods left out of the exponents' average (default 0)")
     simulate.add_argument("-o", "--output", required=True, metavar="RUN.nc")
     add_parameter_options(simulate)
     simulate.set_defaults(handler=_simulate)

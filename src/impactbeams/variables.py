@@ -234,6 +234,33 @@ VARIABLES.update({
         "episode's contacts (Stronge's energetic coefficient; quadrature, ~1e-6 relative)"),
 })
 
+# Lyapunov exponents (docs/model.md, "Lyapunov exponents"): of a map's cells ("*") and of a run
+_LYAPUNOV_METHOD = ("of the flow in the modal state (q, q') of both beams (4 n_modes "
+                    "dimensions; the forcing phase as explicit time): tangent vectors propagated "
+                    "exactly within each phase, saltation matrix at the switches, Benettin "
+                    "renormalisation (energy norm of the free modes) every forcing period, log "
+                    "growth averaged over the complete periods after the transient; spring "
+                    "contact law only")
+_BATCH_ERROR = "standard error of the mean of batch means (consecutive groups of forcing periods)"
+VARIABLES.update({
+    "lyapunov_exponent": Variable(
+        ("*",), "s-1", "largest Lyapunov exponent",
+        f"largest Lyapunov exponent {_LYAPUNOV_METHOD}; > 0 chaotic, < 0 a stable orbit; NaN "
+        "where no complete period follows the transient", symbol=r"$\lambda_1$"),
+    "lyapunov_exponent_error": Variable(
+        ("*",), "s-1", "standard error of the largest Lyapunov exponent",
+        _BATCH_ERROR),
+    "exponent": Variable(("exponent",), "1", "exponent number",
+                         "index of the Lyapunov exponent, from the largest (0)"),
+    "lyapunov_spectrum": Variable(
+        ("exponent",), "s-1", "leading Lyapunov exponents",
+        f"leading Lyapunov exponents, descending, {_LYAPUNOV_METHOD} (Gram-Schmidt in the "
+        "energy product)", symbol=r"$\lambda$"),
+    "lyapunov_spectrum_error": Variable(
+        ("exponent",), "s-1", "standard error of the leading Lyapunov exponents",
+        _BATCH_ERROR),
+})
+
 
 def attributes(name: str) -> dict[str, str]:
     """CF attributes (units, long_name, description) of a registered variable."""

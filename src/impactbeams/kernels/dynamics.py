@@ -250,8 +250,14 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
 
 @kernel
 def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings, q0, v0,
-               seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v):
+               seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v, t_start=0.0,
+               phase_start=FREE):
     """Integrate from the free-phase state (q0, v0) at t = 0 to t_max, event by event.
+
+    ``t_start``, ``phase_start``: start instead from the state (q0, v0) of that phase (in its
+    coordinates) at that time (s), to run a long horizon in windows of bounded memory. A
+    window starts afresh: in the tied law the accumulation and conflict history of the
+    previous window is not carried over.
 
     Segment k starts at ``seg_time[k]`` in phase ``seg_phase[k]`` with state
     ``seg_q[k], seg_v[k]`` and ends (next event, or t_max for the last one) in state
@@ -281,7 +287,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
     n_coords = q0.size
     q, v = q0.copy(), v0.copy()
     q_end, v_end = np.empty(n_coords), np.empty(n_coords)
-    phase, t, zero_run, instant_release = FREE, 0.0, 0, -math.inf
+    phase, t, zero_run, instant_release = phase_start, t_start, 0, -math.inf
     sustained = conflict = False
     spring_law = settings.contact_law == SPRING
     opened = False  # the previous segment ended where an early-released gap opened

@@ -5,6 +5,7 @@ A sweep file (names as in :mod:`impactbeams.params`)::
     t_max = 1.0                          # s, horizon of every cell
     n_modes = 5                          # free modes per beam (contact phase: 2 n_modes)
     observables = ["first_impact_time"]  # default
+    transient_periods = 0                # forcing periods left out of long-time observables
     [params]                             # fixed parameters; the rest take the defaults
     clearance = 1.1e-5
     [axes.omega]                         # one table per swept parameter, in order
@@ -57,10 +58,11 @@ from impactbeams.variables import PARAMETERS
 FIRST_IMPACT = "first_impact_time"
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
-OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES)
+LYAPUNOV = "lyapunov_exponent"  # spring law only; its own windowed run (kernels.lyapunov)
+OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV)
 # parameters that change a cell but not its geometry (its modes): the packed cell columns
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
-_TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes")
+_TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes", "transient_periods")
 _AXIS_KEYS = ("min", "max", "num", "scale")
 # Distinct geometries (values of the axes that change the modes) per sweep: each one's modes are
 # computed serially before the map runs, 0.4 ms (5 modes, first impact) to 2 s (200 modes, tied
@@ -118,6 +120,7 @@ class Sweep:
     fixed: Mapping[str, Any]
     axes: tuple[Axis, ...]
     source: str = "sweep"
+    transient_periods: int = 0
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -132,7 +135,7 @@ class Sweep:
     @property
     def needs_dynamics(self) -> bool:
         """Whether any observable needs the full dynamics (not the free phase alone)."""
-        return any(name in DYNAMICS_OBSERVABLES for name in self.observables)
+        return any(name in (*DYNAMICS_OBSERVABLES, LYAPUNOV) for name in self.observables)
 
     @property
     def stored(self) -> list[str]:
@@ -141,9 +144,10 @@ class Sweep:
 
     def definition(self) -> dict[str, Any]:
         """The sweep as a plain dict in the TOML file's layout (canonical, for hashing)."""
+        transient = {"transient_periods": self.transient_periods} if self.transient_periods else {}
         return {"t_max": self.t_max, "n_modes": self.n_modes,
                 "observables": list(self.observables), "params": dict(self.fixed),
-                "axes": {a.name: a.definition() for a in self.axes}}
+                "axes": {a.name: a.definition() for a in self.axes}, **transient}
 
     @property
     def base(self) -> Params:
@@ -188,14 +192,18 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
     require(f"n_modes in {source}", n_modes, _is_integer(n_modes) and 1 <= n_modes <= MAX_MODES,
             f"must be an integer from 1 to {MAX_MODES}")
     observables = _observables(data.get("observables", [FIRST_IMPACT]), source)
+    transient = data.get("transient_periods", 0)
+    require(f"transient_periods in {source}", transient, _is_integer(transient) and transient >= 0,
+            "must be an integer >= 0 (forcing periods)")
     fixed = require_table(data, "params", source)
     axes_table = require_table(data, "axes", source)
     require(f"[axes] of {source}", axes_table, bool(axes_table),
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
     _check_conflicts(fixed, axes, source)
-    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source)
+    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source, transient)
     _check_grid(sweep)
+    _check_lyapunov(sweep)
     _check_cost(sweep)
     return sweep
 
@@ -316,6 +324,17 @@ def _check_grid(sweep: Sweep) -> None:
         check_range(name, values[name], point)
     check_joint(values, point)
     check_run(values, sweep.t_max, sweep.n_modes, point)
+
+
+def _check_lyapunov(sweep: Sweep) -> None:
+    """The Lyapunov exponent is defined for the spring law only (docs/model.md)."""
+    if LYAPUNOV not in sweep.observables:
+        return
+    laws = [axis.choices for axis in sweep.axes if axis.name == "contact_law"]
+    require(f"observables in {sweep.source}", LYAPUNOV,
+            set(laws[0] if laws else [sweep.base.contact_law]) == {"spring"},
+            "needs the spring contact law on every cell (the tied law's projections and "
+            "instantaneous impacts are not a flow whose linearisation converges in n_modes)")
 
 
 def geometry_count(sweep: Sweep) -> int:

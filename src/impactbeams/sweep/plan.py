@@ -21,9 +21,16 @@ import numpy as np
 
 from impactbeams.kernels import layout
 from impactbeams.params import Params
-from impactbeams.sweep.definition import CELL_PARAMETERS, FIRST_IMPACT, Sweep
+from impactbeams.sweep.definition import (
+    CELL_PARAMETERS,
+    DYNAMICS_OBSERVABLES,
+    FIRST_IMPACT,
+    LYAPUNOV,
+    Sweep,
+)
 
-MAX_SEGMENTS = 100_000  # phases per cell in a full-dynamics sweep; more: dynamics_status = 1
+MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov exponent's
+# windowed run) in a full-dynamics sweep; more: dynamics_status = 1
 # The code that decides a sweep's numbers: every kernel and the modules that build their inputs
 # (paths in the package). Saved chunks and finished files of other code are never reused.
 NUMERIC_CODE = ("kernels/*.py", "packing.py", "model.py", "modes.py", "compliant.py",
@@ -312,9 +319,30 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
                                "please report this as a bug")
         return {FIRST_IMPACT: np.ascontiguousarray(out)}
     cells = chunk_cells(sweep, plan, start, stop)
-    kernel = (observables.observables_map_parallel if parallel
-              else observables.observables_map_serial)
-    out = np.empty((cells.shape[0], len(layout.OUT_COLUMNS)))
-    kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max, MAX_SEGMENTS, out)
-    columns = dict(zip(layout.OUT_COLUMNS, out.T, strict=True))
+    columns = {}
+    if any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables):
+        kernel = (observables.observables_map_parallel if parallel
+                  else observables.observables_map_serial)
+        out = np.empty((cells.shape[0], len(layout.OUT_COLUMNS)))
+        kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max, MAX_SEGMENTS,
+               out)
+        columns = dict(zip(layout.OUT_COLUMNS, out.T, strict=True))
+    if LYAPUNOV in sweep.observables:
+        columns.update(_lyapunov_columns(sweep, plan, cells, parallel, columns))
     return {name: np.ascontiguousarray(columns[name]) for name in sweep.stored}
+
+
+def _lyapunov_columns(sweep: Sweep, plan: Plan, cells: np.ndarray, parallel: bool,
+                      columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The cells' largest Lyapunov exponents, each from its own windowed run, and the status.
+
+    The status is the worse of that run's and the other observables' run (if any).
+    """
+    from impactbeams.kernels import lyapunov
+
+    kernel = lyapunov.lyapunov_map_parallel if parallel else lyapunov.lyapunov_map_serial
+    out = np.empty((cells.shape[0], 2))
+    kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max,
+           sweep.transient_periods, MAX_SEGMENTS, out)
+    status = np.maximum(out[:, 1], columns.get("dynamics_status", out[:, 1]))
+    return {LYAPUNOV: out[:, 0], "dynamics_status": status}

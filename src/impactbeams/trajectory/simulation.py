@@ -22,6 +22,7 @@ from impactbeams.preflight import (
 from impactbeams.trajectory.episodes import default_separation, episode_table
 from impactbeams.trajectory.fields import SAMPLE_CHUNK, deflections, time_series
 from impactbeams.trajectory.impacts import impact_table
+from impactbeams.trajectory.lyapunov import Exponents, check_request, lyapunov_exponents
 from impactbeams.trajectory.phases import Trajectory, run
 from impactbeams.variables import attributes, global_attributes
 
@@ -85,7 +86,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
              fields: bool = False, *, times: np.ndarray | None = None, n_points: int = 41,
              max_events: int = 200_000, search_span: float | None = None,
              episode_separation: float | None = None,
-             energy_balance: bool = False) -> xr.Dataset:
+             energy_balance: bool = False, lyapunov: bool | int = False,
+             transient_periods: int = 0) -> xr.Dataset:
     """Simulate the impacting beams from t = 0 to ``t_max`` (s); return an xarray Dataset.
 
     Args:
@@ -113,6 +115,12 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
             ``damping_dissipation``) and the episodes' dissipated energy and energetic
             restitution: quadratures at the fastest mode's time scale, which with many modes
             cost far more than the dynamics (the energy itself is always there).
+        lyapunov: also the largest Lyapunov exponent of this run (True), or that many leading
+            exponents (an integer up to 4 n_modes, the state's dimension): variables
+            ``lyapunov_exponent`` and ``lyapunov_exponent_error`` (1/s), and with more than one
+            ``lyapunov_spectrum`` and its error along ``exponent``. Tangent propagation with
+            Benettin renormalisation every forcing period; spring law only (docs/model.md).
+        transient_periods: forcing periods at the start left out of the exponents' average.
 
     The output grid never influences the dynamics: events are located by the kernel on its
     own, and the outputs are evaluated from the exact segment states.
@@ -130,6 +138,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
                       "(docs/model.md, Resolution)", RuntimeWarning, stacklevel=2)
     out_times = run_inputs.times
     packed = pack_run(params, n_modes, t_max, run_inputs.search_span)
+    if lyapunov:
+        check_request(packed, lyapunov, transient_periods)
     trajectory = run(packed, run_inputs.max_events)
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
@@ -144,6 +154,9 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
                                         x2=("x2", x2, attributes("x2")))
         dataset["deflection_1"] = (("time", "x1"), y1, attributes("deflection_1"))
         dataset["deflection_2"] = (("time", "x2"), y2, attributes("deflection_2"))
+    if lyapunov:
+        exponents = lyapunov_exponents(packed, trajectory, int(lyapunov), transient_periods)
+        dataset = _with_exponents(dataset, exponents, transient_periods)
     dataset.attrs.update(_global_attributes(params, n_modes, t_max, trajectory))
     if params.contact_law == "spring":
         dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
@@ -226,6 +239,24 @@ def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray, separati
                           attributes("episode"))}
     dataset = xr.Dataset(data, coords=coords)
     dataset.attrs["episode_separation"] = separation
+    return dataset
+
+
+def _with_exponents(dataset: xr.Dataset, exponents: Exponents, transient: int) -> xr.Dataset:
+    """The run's Lyapunov exponents as variables, with how they were averaged."""
+    averaging = {"renormalization_interval": exponents.interval,
+                 "transient_periods": transient, "averaged_periods": exponents.periods}
+    dataset["lyapunov_exponent"] = ((), exponents.values[0],
+                                    {**attributes("lyapunov_exponent"), **averaging})
+    dataset["lyapunov_exponent_error"] = ((), exponents.errors[0],
+                                          attributes("lyapunov_exponent_error"))
+    if exponents.values.size > 1:
+        dataset = dataset.assign_coords(exponent=("exponent", np.arange(exponents.values.size),
+                                                  attributes("exponent")))
+        dataset["lyapunov_spectrum"] = ("exponent", exponents.values,
+                                        {**attributes("lyapunov_spectrum"), **averaging})
+        dataset["lyapunov_spectrum_error"] = ("exponent", exponents.errors,
+                                              attributes("lyapunov_spectrum_error"))
     return dataset
 
 

@@ -1,0 +1,292 @@
+"""Tangent dynamics of the spring law and Benettin's method: Lyapunov exponents of a run.
+
+The state is the free coordinates x = (q, q') of both beams (4 n values; docs/model.md,
+"Long-time dynamics"); time enters only through the forcing. Arrays are named in
+:mod:`impactbeams.kernels.layout`; SI units.
+
+**Within a phase** a tangent vector obeys the phase's modal equations without their drive
+(the drive does not depend on the state), so it is advanced by the same closed-form
+propagation (:func:`~impactbeams.kernels.propagation.advance`, zero drive) in the phase's
+own coordinates: the free modes, or the contact oscillators y of
+:mod:`impactbeams.kernels.spring`. The maps between (q, q') and (y, y') are affine, with
+linear parts that do not depend on time: ``to_contact`` and ``to_free`` with zero drives
+are those linear parts.
+
+**At a switch** the Jacobian of the flow is multiplied by the saltation matrix
+``S = I + (f+ - f-) n^T / (n . f- + dh/dt)``: h the event function, n its gradient in x,
+f- and f+ the vector fields before and after. The reset is the identity on x (no
+projection), and in the free coordinates the two vector fields differ by the contact force
+alone, ``f+ - f- = (0, (R+ - R-) w)`` with w the gap weights. R is continuous (S = I) at a
+release (R = 0 on both sides) and at a re-onset after a dashpot's early release (R rises
+through 0). At an onset where the gap closes, ``h = g``, ``n = (w, 0)``,
+``n . f- + dh/dt = g' < 0``, and R jumps from 0 to ``-c_e g'`` (the spring's part ``-k_e g``
+is 0 there): ``S = I - c_e (0; w) (w^T, 0)``, i.e. ``dq' -= c_e w (w . dq)``. Without a
+dashpot S = I at every switch. The tied law is not covered: its switches project onto
+another basis and its instantaneous impacts and accumulations do not form a flow whose
+linearisation converges in n_modes.
+
+**Benettin's method.** k tangent vectors are orthonormalised (modified Gram-Schmidt) every
+``interval`` s, at t = i interval, in the energy inner product of the free modes,
+``<a, b> = sum omega_n^2 a_q b_q + a_q' b_q'``, a norm every undamped mode keeps exactly (so
+undamped motion without contact has exponent 0 to round-off). The logs of the growth factors
+(the diagonal of R in the QR factorisation) of the intervals after ``transient`` are summed
+in ``batches`` consecutive groups, for the exponents (1/s) and their batch-means error.
+"""
+
+import math
+
+import numpy as np
+
+from impactbeams.kernels.dynamics import event_sine
+from impactbeams.kernels.events import event_value
+from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.layout import (
+    CONTACT,
+    FREE,
+    ROW_EVENT,
+    ROW_OMEGA,
+    ROW_ZETA,
+    SCALAR_CONST,
+    SPRING_DRIVE_ROWS,
+)
+from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.spring import to_contact, to_free
+
+
+@kernel
+def renormalization_interval(forcing_frequency, free_omega):
+    """Benettin interval (s): the forcing period 2 pi / Omega (Omega = 0: slowest free mode's)."""
+    if forcing_frequency > 0.0:
+        return 2.0 * math.pi / forcing_frequency
+    return 2.0 * math.pi / np.min(free_omega)
+
+
+@kernel
+def interval_count(t_max, interval):
+    """Number of renormalisation intervals in [0, t_max]; a last one short by round-off counts."""
+    return int(math.floor(t_max / interval * (1.0 + 1e-12)))
+
+
+@kernel
+def renormalization_time(i, interval, t_max):
+    """End (s) of renormalisation interval i (from 1); t_max if past it by round-off."""
+    return min(i * interval, t_max)
+
+
+@kernel
+def _hash_uniform(n):
+    """A fixed number in [-1, 1) for the integer n (splitmix64): reproducible everywhere."""
+    z = np.uint64(n) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    z = z ^ (z >> np.uint64(31))
+    return (z >> np.uint64(11)) * (2.0 / 9007199254740992.0) - 1.0
+
+
+@kernel
+def orthonormalize(tangent_q, tangent_v, omega, log_growth):
+    """Modified Gram-Schmidt of the rows of (tangent_q, tangent_v) in the energy product.
+
+    ``<a, b> = sum_n omega_n^2 a_q b_q + a_v b_v`` (omega: free frequencies, rad/s). Writes
+    the log of each row's norm after removing the earlier rows (the diagonal of R).
+    """
+    columns, m = tangent_q.shape
+    for c in range(columns):
+        for d in range(c):
+            dot = 0.0
+            for j in range(m):
+                dot += (omega[j] * omega[j] * tangent_q[c, j] * tangent_q[d, j]
+                        + tangent_v[c, j] * tangent_v[d, j])
+            for j in range(m):
+                tangent_q[c, j] -= dot * tangent_q[d, j]
+                tangent_v[c, j] -= dot * tangent_v[d, j]
+        norm = 0.0
+        for j in range(m):
+            norm += (omega[j] * tangent_q[c, j]) ** 2 + tangent_v[c, j] ** 2
+        norm = math.sqrt(norm)
+        log_growth[c] = math.log(norm)
+        for j in range(m):
+            tangent_q[c, j] /= norm
+            tangent_v[c, j] /= norm
+
+
+@kernel
+def initial_tangents(columns, omega):
+    """``columns`` orthonormal tangent vectors (energy product) in the free coordinates.
+
+    Fixed pseudo-random directions (not random: the same exponent on every machine), so that
+    the leading ones have a component along every direction the flow stretches.
+    """
+    m = omega.size
+    tangent_q, tangent_v = np.empty((columns, m)), np.empty((columns, m))
+    for c in range(columns):
+        for j in range(m):
+            tangent_q[c, j] = _hash_uniform(2 * m * c + j) / omega[j]
+            tangent_v[c, j] = _hash_uniform(2 * m * c + m + j)
+    orthonormalize(tangent_q, tangent_v, omega, np.empty(columns))
+    return tangent_q, tangent_v
+
+
+@kernel
+def _change_coordinates(tangent_q, tangent_v, to_phase, spring, no_drive, out_q, out_v):
+    """Linear part of the switch into ``to_phase``'s coordinates, row by row (spring law)."""
+    left, right, modes = spring
+    for c in range(tangent_q.shape[0]):
+        if to_phase == CONTACT:
+            to_contact(tangent_q[c], tangent_v[c], 0.0, left, modes, no_drive, 0.0, out_q[c],
+                       out_v[c])
+        else:
+            to_free(tangent_q[c], tangent_v[c], 0.0, right, modes, no_drive, 0.0, out_q[c],
+                    out_v[c])
+
+
+@kernel
+def onset_saltation(tangent_q, tangent_v, weights, force_jump, gap_rate):
+    """Apply S = I + (f+ - f-) n^T / (n . f- + dg/dt) at an onset where the gap closes.
+
+    In the free coordinates: ``f+ - f- = (0, force_jump w)`` (the contact force jumps by
+    ``force_jump``, N), ``n = (w, 0)`` and ``n . f- + dg/dt = gap_rate`` (g', m/s, < 0); w the
+    gap ``weights``.
+    """
+    if force_jump == 0.0:
+        return
+    scale = force_jump / gap_rate
+    for c in range(tangent_q.shape[0]):
+        projection = 0.0
+        for j in range(weights.size):
+            projection += weights[j] * tangent_q[c, j]
+        for j in range(weights.size):
+            tangent_v[c, j] += scale * projection * weights[j]
+
+
+@kernel
+def _onset_force_jump(phase_scalars, tables, settings, q, v, t):
+    """The contact force's jump (N) and the gap rate (m/s) at an onset from free state (q, q').
+
+    The gap closes (g' < 0): R jumps from 0 to -c_e g' (g = 0). The gap opens (g' > 0): a
+    re-onset after an early release, where R rises through 0 continuously: no jump.
+    """
+    _, gap_rate = event_value(q, v, t, tables[FREE, ROW_EVENT],
+                              phase_scalars[FREE, SCALAR_CONST], event_sine(phase_scalars[FREE]),
+                              settings.forcing_frequency)
+    if gap_rate >= 0.0:
+        return 0.0, gap_rate
+    return -settings.contact_damping * gap_rate, gap_rate
+
+
+@kernel
+def _renormalize(tangent_q, tangent_v, phase, spring, no_drive, omega, scratch_q, scratch_v,
+                 log_growth):
+    """Orthonormalise the tangents (in the free coordinates) in the coordinates of ``phase``."""
+    if phase == FREE:
+        orthonormalize(tangent_q, tangent_v, omega, log_growth)
+        return
+    _change_coordinates(tangent_q, tangent_v, FREE, spring, no_drive, scratch_q, scratch_v)
+    orthonormalize(scratch_q, scratch_v, omega, log_growth)
+    _change_coordinates(scratch_q, scratch_v, CONTACT, spring, no_drive, tangent_q, tangent_v)
+
+
+@kernel
+def _advance_tangents(table, tangent_q, tangent_v, t, h, no_force):
+    """Advance every tangent row by h (s) with the phase's unforced closed-form propagation."""
+    for c in range(tangent_q.shape[0]):
+        advance(tangent_q[c], tangent_v[c], t, h, table[ROW_OMEGA], table[ROW_ZETA], no_force,
+                0.0, tangent_q[c], tangent_v[c])
+
+
+@kernel
+def _record(sums, counts, log_growth, i, schedule):
+    """Add interval i's log growths to its batch, if i (from 1) lies after the transient."""
+    _, _, transient, total = schedule
+    j = i - 1 - transient
+    if j < 0:
+        return
+    batch = j * counts.size // (total - transient)
+    counts[batch] += 1
+    for c in range(log_growth.size):
+        sums[batch, c] += log_growth[c]
+
+
+@kernel
+def carry_tangents(tables, phase_scalars, spring, settings, seg_time, seg_phase, end_q, end_v,
+                   count, t_end, schedule, tangent):
+    """Carry the tangent vectors through the recorded segments 0..count-1 of a spring-law run.
+
+    ``tangent = (tangent_q, tangent_v, clock, sums, counts)``: k tangent rows in the
+    coordinates of ``seg_phase[0]`` at ``clock[0] = seg_time[0]`` (s), ``clock[1]``
+    renormalisations done; on return at ``t_end`` in the last segment's coordinates.
+    ``schedule = (interval, t_max, transient, total)``: renormalise at ``i interval`` (s) for
+    i = 1 .. total (the run's complete intervals to ``t_max``), and add the logs of the growth
+    of intervals ``transient + 1 .. total`` into ``sums[batch, row]``, ``counts[batch]``
+    (spread evenly over the batches).
+    ``end_q``, ``end_v``: each segment's state at its end (for the onsets' saltation).
+    """
+    tangent_q, tangent_v, clock, sums, counts = tangent
+    interval, t_max, _, total = schedule
+    columns, m = tangent_q.shape
+    free_omega = tables[FREE, ROW_OMEGA]
+    no_force = np.zeros(m, dtype=np.complex128)
+    no_drive = np.zeros((len(SPRING_DRIVE_ROWS), m), dtype=np.complex128)
+    scratch_q, scratch_v = np.empty((columns, m)), np.empty((columns, m))
+    log_growth = np.empty(columns)
+    for k in range(count):
+        phase = seg_phase[k]
+        seg_end = seg_time[k + 1] if k + 1 < count else t_end
+        while clock[1] < total:
+            t_next = renormalization_time(clock[1] + 1.0, interval, t_max)
+            if t_next > seg_end:
+                break
+            _advance_tangents(tables[phase], tangent_q, tangent_v, clock[0], t_next - clock[0],
+                              no_force)
+            _renormalize(tangent_q, tangent_v, phase, spring, no_drive, free_omega, scratch_q,
+                         scratch_v, log_growth)
+            clock[0], clock[1] = t_next, clock[1] + 1.0
+            _record(sums, counts, log_growth, int(clock[1]), schedule)
+        _advance_tangents(tables[phase], tangent_q, tangent_v, clock[0], seg_end - clock[0],
+                          no_force)
+        clock[0] = seg_end
+        if k + 1 == count or seg_phase[k + 1] == phase:
+            continue
+        if phase == FREE:
+            force_jump, gap_rate = _onset_force_jump(phase_scalars, tables, settings, end_q[k],
+                                                     end_v[k], seg_end)
+            onset_saltation(tangent_q, tangent_v, tables[FREE, ROW_EVENT], force_jump,
+                            gap_rate)
+        _change_coordinates(tangent_q, tangent_v, seg_phase[k + 1], spring, no_drive,
+                            scratch_q, scratch_v)
+        tangent_q[:, :] = scratch_q
+        tangent_v[:, :] = scratch_v
+
+
+@kernel
+def lyapunov_schedule(forcing_frequency, free_omega, t_max, transient):
+    """``(interval, t_max, transient, total)`` of a run to ``t_max`` (s).
+
+    ``total`` complete intervals, of which those after the first ``transient`` count.
+    """
+    interval = renormalization_interval(forcing_frequency, free_omega)
+    return interval, t_max, transient, interval_count(t_max, interval)
+
+
+@kernel
+def new_tangent(columns, free_omega, batches):
+    """A run's tangent state at t = 0 (see :func:`carry_tangents`)."""
+    tangent_q, tangent_v = initial_tangents(columns, free_omega)
+    return (tangent_q, tangent_v, np.zeros(2), np.zeros((batches, columns)),
+            np.zeros(batches, dtype=np.int64))
+
+
+@kernel
+def recorded_run_sums(tables, phase_scalars, spring, settings, seg_time, seg_phase, end_q,
+                      end_v, count, t_end, columns, transient, batches):
+    """Lyapunov sums of a recorded spring-law run from t = 0 (all its segments in memory).
+
+    Returns ``(sums, counts, interval)``: ``sums[batch, row]`` the summed log growths of the
+    ``columns`` leading directions over ``counts[batch]`` intervals of ``interval`` s.
+    """
+    schedule = lyapunov_schedule(settings.forcing_frequency, tables[FREE, ROW_OMEGA],
+                                 settings.t_max, transient)
+    tangent = new_tangent(columns, tables[FREE, ROW_OMEGA], batches)
+    carry_tangents(tables, phase_scalars, spring, settings, seg_time, seg_phase, end_q, end_v,
+                   count, t_end, schedule, tangent)
+    return tangent[3], tangent[4], schedule[0]

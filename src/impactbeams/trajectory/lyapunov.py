@@ -1,0 +1,72 @@
+"""Lyapunov exponents of one simulated run: the tangent kernel on its recorded segments.
+
+The exponents are those of the very trajectory the Dataset holds (docs/model.md, "Lyapunov
+exponents"): tangent vectors carried through every recorded phase
+(:mod:`impactbeams.kernels.tangent`), renormalised every forcing period, their log growth
+averaged over the complete periods after a transient.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from impactbeams.kernels.layout import FREE, ROW_OMEGA
+from impactbeams.kernels.tangent import interval_count, recorded_run_sums, renormalization_interval
+from impactbeams.packing import Packed
+from impactbeams.params import ParameterError, require
+from impactbeams.trajectory.phases import Trajectory
+
+BATCHES = 16  # consecutive groups of periods whose means give the standard error
+
+
+@dataclasses.dataclass(frozen=True)
+class Exponents:
+    """Leading Lyapunov exponents (1/s, descending) and their standard errors (1/s).
+
+    The error is that of the mean of ``BATCHES`` batch means (consecutive groups of forcing
+    periods), NaN with fewer than two; ``interval`` (s) the renormalisation interval,
+    ``periods`` the number of intervals averaged.
+    """
+
+    values: np.ndarray
+    errors: np.ndarray
+    interval: float
+    periods: int
+
+
+def check_request(packed: Packed, count: int, transient_periods: int) -> None:
+    """Raise ParameterError unless ``count`` exponents after ``transient_periods`` are defined."""
+    if not packed.spring_law:
+        raise ParameterError("Lyapunov exponents need the spring contact law: the tied law's "
+                             "projections, instantaneous impacts and accumulations are not a "
+                             "flow whose linearisation converges in n_modes (docs/model.md)")
+    dimension = 2 * packed.q0.size
+    require("lyapunov", count, isinstance(count, (int, np.integer)) and 0 < count <= dimension,
+            f"must be True or a number of exponents from 1 to {dimension} (4 n_modes)")
+    interval = renormalization_interval(float(packed.settings["forcing_frequency"]),
+                                        packed.tables[FREE, ROW_OMEGA])
+    periods = interval_count(float(packed.settings["t_max"]), interval)
+    require("transient_periods", transient_periods,
+            isinstance(transient_periods, (int, np.integer)) and 0 <= transient_periods < periods,
+            f"must be an integer from 0 to {periods - 1} (t_max holds {periods} complete "
+            f"periods of {interval:.6g} s)")
+
+
+def lyapunov_exponents(packed: Packed, trajectory: Trajectory, count: int,
+                       transient_periods: int) -> Exponents:
+    """The ``count`` leading exponents of the recorded spring-law run (1/s)."""
+    sums, counts, interval = recorded_run_sums(
+        packed.tables, packed.phase_scalars, packed.dynamics.spring_arrays, packed.settings,
+        trajectory.time, trajectory.phase, trajectory.end_q, trajectory.end_v,
+        trajectory.time.size, trajectory.t_end, count, transient_periods, BATCHES)
+    periods = int(counts.sum())
+    if periods == 0:
+        return Exponents(np.full(count, np.nan), np.full(count, np.nan), interval, 0)
+    filled = counts > 0
+    means = sums[filled] / (counts[filled, None] * interval)
+    errors = (means.std(axis=0, ddof=1) / math.sqrt(means.shape[0]) if means.shape[0] > 1
+              else np.full(count, np.nan))
+    return Exponents(sums.sum(axis=0) / (periods * interval), errors, interval, periods)
