@@ -7,11 +7,12 @@ Steps: ``bench_sweep.py`` (the Fig. 5a map: compile and run time, 1 and 2 thread
 and as a command), ``bench_cube.py`` (an (Omega, clearance, F0) cube streamed into netCDF), the
 work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics;
 ``spring_precision.py``: full dynamics of the spring law against solve_ivp), the scaling
-series (``scaling.py``) and ``bench_distributed.py`` (Dask overhead, if installed). Results go
-to ``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
+series (``scaling.py``), ``bench_distributed.py`` (Dask overhead, if installed) and
+``bench_longtime.py`` (the long-time bifurcation diagram). Results go to
+``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
 ``sweep.json``/``sweep.md`` from bench_sweep, ``cube.json``/``cube.md`` from bench_cube,
-``distributed.json``/``.md``); the plots are
-drawn from those JSON files only; ``README.md`` holds the headline table.
+``distributed.json``/``.md``, ``longtime.json``/``.md``); the plots are drawn from those JSON
+files only; ``README.md`` holds the headline table.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
+import bench_longtime as longtime  # noqa: E402
 import scaling  # noqa: E402
 import spring_precision as spring  # noqa: E402
 import work_precision as wp  # noqa: E402
@@ -87,6 +89,14 @@ def run_bench_cube(quick: bool) -> None:
     sizes = ["50"] if quick else ["100", "200"]
     subprocess.run([sys.executable, str(HERE / "bench_cube.py"), "--num", *sizes], check=True,
                    stdout=subprocess.DEVNULL)
+
+
+def run_bench_longtime(quick: bool) -> None:
+    """The long-time bifurcation diagram's cost and profile (its own JSON and markdown)."""
+    command = [sys.executable, str(HERE / "bench_longtime.py")]
+    if quick:
+        command += ["--stride", "100", "--no-profile"]
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
 
 
 def run_bench_distributed(quick: bool) -> None:
@@ -327,6 +337,7 @@ def main() -> None:
     parser.add_argument("--out", default=str(ROOT / "docs" / "benchmarks"))
     parser.add_argument("--skip-bench-sweep", action="store_true")
     parser.add_argument("--skip-distributed", action="store_true")
+    parser.add_argument("--skip-longtime", action="store_true")
     parser.add_argument("--report-only", action="store_true",
                         help="redraw plots and README from the JSON already in --out")
     args = parser.parse_args()
@@ -352,6 +363,9 @@ def main() -> None:
     if not args.skip_distributed:
         log("bench_distributed.py")
         run_bench_distributed(args.quick)
+    if not args.skip_longtime:
+        log("bench_longtime.py")
+        run_bench_longtime(args.quick)
     about = {"quick": args.quick, **machine()}
     for name, data in (("work_precision", first), ("dynamics", dynamics), ("scaling", scale),
                        ("spring", springs)):
@@ -371,6 +385,8 @@ def report(out: Path) -> None:
         springs = json.loads((out / "spring.json").read_text())
         spring.plot_spring(springs, out / "work_precision_spring.png")
         readme += "\n" + spring.markdown(springs)
+    if (out / "longtime.json").exists():  # the long-time diagram's cost, in brief
+        readme += "\n" + longtime.headline(json.loads((out / "longtime.json").read_text()))
     (out / "README.md").write_text(readme)
     log(f"wrote {out}")
 

@@ -19,7 +19,7 @@ FLOORS = {
     "kernels": 0,
     "variables": 1, "io": 1,
     "params": 2,
-    "modes": 3,
+    "modes": 3, "longtime": 3,
     "model": 4,
     "compliant": 5,
     "packing": 6, "preflight": 6,

@@ -13,6 +13,7 @@ from impactbeams.params import ParameterError, Params
 _LAZY = {
     "build_model": "impactbeams.model",
     "build_free_phase": "impactbeams.model",
+    "LongTime": "impactbeams.longtime",
     "load_sweep": "impactbeams.sweep",
     "run_sweep": "impactbeams.sweep",
     "simulate": "impactbeams.trajectory",

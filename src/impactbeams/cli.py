@@ -154,8 +154,11 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     """The run's size, expected cost and destination, on stderr."""
     from impactbeams.sweep.definition import expected_cost
 
+    long_time = sweep.long_time
+    horizon = (f"t_max = {sweep.t_max} s" if long_time is None else
+               f"{sweep.transient_periods} + {long_time.sampled_periods} forcing periods")
     print(f"{sweep.source}: {' x '.join(map(str, sweep.shape))} = {sweep.size} cells over "
-          f"{', '.join(a.name for a in sweep.axes)}; t_max = {sweep.t_max} s, "
+          f"{', '.join(a.name for a in sweep.axes)}; {horizon}, "
           f"{sweep.n_modes} modes per beam -> {output}\nexpected: "
           f"{expected_cost(sweep, args.threads).describe()}; the first chunk also compiles "
           "the kernels, about 10 s on a fresh install (cached after that)",

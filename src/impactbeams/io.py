@@ -82,14 +82,15 @@ def write_npz(path: str | Path, arrays: Mapping[str, np.ndarray]) -> None:
 class Layout:
     """What a gridded netCDF file holds before its data.
 
-    ``coords``: one 1-D coordinate per dimension (values, attributes), in the order of the
-    dimensions; ``variables``: (dtype, attributes) of the data variables, each over all the
-    dimensions, stored compressed in blocks of ``chunks``; ``attrs``: global attributes.
+    ``coords``: one 1-D coordinate per dimension (values, attributes), the grid's dimensions
+    first; ``variables``: (dtype, attributes, dimensions) of the data variables, stored
+    compressed in blocks of ``chunks`` along the grid's dimensions (the first ``len(chunks)``)
+    and whole along any other; ``attrs``: global attributes.
     Floating-point variables get ``_FillValue = NaN``, as xarray writes them.
     """
 
     coords: Mapping[str, tuple[np.ndarray, Mapping[str, Any]]]
-    variables: Mapping[str, tuple[np.dtype, Mapping[str, Any]]]
+    variables: Mapping[str, tuple[np.dtype, Mapping[str, Any], tuple[str, ...]]]
     attrs: Mapping[str, Any]
     chunks: tuple[int, ...]
 
@@ -127,10 +128,11 @@ def _define(nc: netCDF4.Dataset, layout: Layout) -> None:
         coordinate = nc.createVariable(name, str if text else values.dtype, (name,))
         coordinate.setncatts(dict(attrs))
         coordinate[:] = values.astype(object) if text else values
-    dims = tuple(layout.coords)
-    for name, (dtype, attrs) in layout.variables.items():
+    block = dict(zip(layout.coords, layout.chunks))
+    for name, (dtype, attrs, dims) in layout.variables.items():
         fill = np.nan if np.dtype(dtype).kind == "f" else None
-        variable = nc.createVariable(name, dtype, dims, fill_value=fill,
-                                     chunksizes=layout.chunks, **COMPRESSION)
+        chunks = tuple(block.get(dim, layout.coords[dim][0].size) for dim in dims)
+        variable = nc.createVariable(name, dtype, dims, fill_value=fill, chunksizes=chunks,
+                                     **COMPRESSION)
         variable.setncatts(dict(attrs))
     nc.setncatts(dict(layout.attrs))

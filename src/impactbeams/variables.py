@@ -262,6 +262,42 @@ VARIABLES.update({
 })
 
 
+# long-time response (impactbeams.longtime): stroboscopic samples along "period", after a
+# transient; in a map "*" is the swept axes, in simulate() nothing
+VARIABLES.update({
+    "period": Variable(
+        ("period",), "1", "forcing periods before the sample",
+        "number of forcing periods 2 pi / Omega from t = 0 to the stroboscopic sample: "
+        "transient_periods + k for the k-th sample"),
+    "poincare_deflection1": Variable(
+        ("*", "period"), "m", "stroboscopic tip deflection of beam 1",
+        "y1(l1, t) once per forcing period at forcing phase 0, t = period * 2 pi / Omega "
+        "(Poincare section; a bifurcation diagram plots it against a swept axis)"),
+    "poincare_deflection2": Variable(
+        ("*", "period"), "m", "stroboscopic tip deflection of beam 2 minus the clearance",
+        "y2(l2, t) - Delta (as tip_deflection_2) once per forcing period at forcing phase 0"),
+    "poincare_velocity1": Variable(
+        ("*", "period"), "m s-1", "stroboscopic tip velocity of beam 1",
+        "dy1(l1, t)/dt once per forcing period at forcing phase 0"),
+    "poincare_velocity2": Variable(
+        ("*", "period"), "m s-1", "stroboscopic tip velocity of beam 2",
+        "dy2(l2, t)/dt once per forcing period at forcing phase 0"),
+    "response_period": Variable(
+        ("*",), "1", "period of the steady response in forcing periods",
+        "smallest p from 1 to max_period with |x(k + p) - x(k)| <= period_tolerance * scale "
+        "over the samples, x = (y1, y2, v1 / Omega, v2 / Omega) at the tips and scale the "
+        "largest |x| component; 0 if none (chaotic, quasi-periodic, longer period, or a "
+        "transient not yet decayed)"),
+    "steady_impact_rate": Variable(
+        ("*",), "s-1", "contact onsets per second in the steady state",
+        "contact onsets in the sampled window [transient_periods, transient_periods + "
+        "sampled_periods) forcing periods, per second (every micro-contact of a rattle)"),
+    "steady_episode_rate": Variable(
+        ("*",), "s-1", "impact episodes per second in the steady state",
+        "impact episodes (clusters of contacts, docs/model.md) starting in the sampled window, "
+        "per second"),
+})
+
 def attributes(name: str) -> dict[str, str]:
     """CF attributes (units, long_name, description) of a registered variable."""
     variable = VARIABLES[name]

@@ -52,6 +52,12 @@ _EPS = np.finfo(np.float64).eps
 
 
 @kernel
+def instantaneous(t_start, t_event):
+    """Whether a phase that starts at t_start (s) and ends at t_event (s) has zero length."""
+    return t_event <= t_start + 4.0 * _EPS * max(t_start, 1.0)
+
+
+@kernel
 def quasi_static_force(t, settings):
     """R_qs(t) = (c1 F(t) - clearance) / (c1 + c2) (N) and its rate R_qs'(t) (N/s)."""
     c1, c2 = settings.c1, settings.c2
@@ -249,6 +255,18 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
 
 
 @kernel
+def segment_arrays(capacity, n_coords):
+    """Empty arrays for ``capacity`` segments of ``n_coords`` coordinates (``run_events``).
+
+    Returns ``(seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v)``.
+    """
+    return (np.empty(capacity), np.empty(capacity, dtype=np.int64),
+            np.empty(capacity, dtype=np.bool_), np.empty((capacity, n_coords)),
+            np.empty((capacity, n_coords)), np.empty((capacity, n_coords)),
+            np.empty((capacity, n_coords)))
+
+
+@kernel
 def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings, q0, v0,
                seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v, t_start=0.0,
                phase_start=FREE):
@@ -257,7 +275,10 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
     ``t_start``, ``phase_start``: start instead from the state (q0, v0) of that phase (in its
     coordinates) at that time (s), to run a long horizon in windows of bounded memory. A
     window starts afresh: in the tied law the accumulation and conflict history of the
-    previous window is not carried over.
+    previous window is not carried over. At the start of a recorded free segment that follows
+    a contact of positive length that history is empty, so a window started there (from its
+    ``seg_time, seg_q, seg_v``) records the same segments, bit for bit, as the uninterrupted
+    run.
 
     Segment k starts at ``seg_time[k]`` in phase ``seg_phase[k]`` with state
     ``seg_q[k], seg_v[k]`` and ends (next event, or t_max for the last one) in state
@@ -323,7 +344,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
             v[:] = v_end
             t = t_event
             continue
-        instant = t_event <= t + 4.0 * _EPS * max(t, 1.0)
+        instant = instantaneous(t, t_event)
         zero_run = zero_run + 1 if instant else 0
         if zero_run > ZENO_LIMIT:
             return k + 1, STUCK, t_stop

@@ -43,6 +43,11 @@ the other rows.
 ``geometry[g]``, fields ``GEOMETRY``: c1, c2 (m/N) and the accumulation time (s) of
 geometry g of a map. ``cells[i]``, columns ``CELL_COLUMNS``: one map cell's parameters and the
 index of its geometry. ``out[i]``, columns ``OUT_COLUMNS``: a dynamics map's observables.
+
+Stroboscopic samples of a long run (:mod:`impactbeams.kernels.stroboscope`): ``samples[k]``,
+columns ``TIP_COLUMNS``, the tip deflections y1(l1), y2(l2) (m) and velocities (m/s) at the k-th
+sample time; ``summary``, fields ``STROBOSCOPE_COLUMNS``: the run's status, its contact onsets
+and impact episodes that start within the sampled window, and the time (s) the run reached.
 """
 
 import numpy as np
@@ -85,3 +90,9 @@ OUT_COLUMNS = ("first_impact_time", "impact_count", "max_contact_force", "mean_r
                "contact_fraction", "dynamics_status")
 (OUT_FIRST_IMPACT, OUT_IMPACTS, OUT_MAX_FORCE, OUT_RESTITUTION, OUT_CONTACT_FRACTION,
  OUT_STATUS) = range(len(OUT_COLUMNS))
+
+TIP_COLUMNS = ("deflection1", "deflection2", "velocity1", "velocity2")
+TIP_Y1, TIP_Y2, TIP_V1, TIP_V2 = range(len(TIP_COLUMNS))
+
+STROBOSCOPE_COLUMNS = ("status", "onsets", "episodes", "t_end")
+STROBE_STATUS, STROBE_ONSETS, STROBE_EPISODES, STROBE_T_END = range(len(STROBOSCOPE_COLUMNS))

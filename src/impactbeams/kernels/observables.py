@@ -11,10 +11,9 @@ columns ``CELL_COLUMNS``. Each cell's run inputs come from
 than 0 (complete) means they cover [0, t_end] only.
 """
 
-import numpy as np
 from numba import prange
 
-from impactbeams.kernels.dynamics import run_events
+from impactbeams.kernels.dynamics import run_events, segment_arrays
 from impactbeams.kernels.forcing import run_inputs
 from impactbeams.kernels.jit import kernel, parallel_kernel
 from impactbeams.kernels.layout import CELL_GEOMETRY
@@ -26,12 +25,8 @@ def cell_observables(cell, tables, overlap, shifts, spring, geometry, t_max, max
     """Run one cell's dynamics (at most ``max_segments`` phases) and write its OUT_COLUMNS."""
     damped, forces, scalars, settings_array, q0, v0, drives = run_inputs(
         cell, tables, geometry, spring, t_max, t_max)
-    n = q0.size
-    seg_time = np.empty(max_segments)
-    seg_phase = np.empty(max_segments, dtype=np.int64)
-    seg_sustained = np.empty(max_segments, dtype=np.bool_)
-    seg_q, seg_v = np.empty((max_segments, n)), np.empty((max_segments, n))
-    end_q, end_v = np.empty((max_segments, n)), np.empty((max_segments, n))
+    seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v = segment_arrays(
+        max_segments, q0.size)
     # the settings record is a view: index it at each use so that its array stays alive
     count, status, t_end = run_events(damped, forces, scalars, overlap, shifts, spring, drives,
                                       settings_array[0], q0, v0, seg_time, seg_phase,

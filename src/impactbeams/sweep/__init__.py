@@ -11,6 +11,7 @@ from impactbeams.sweep.definition import (
     CELL_PARAMETERS,
     DYNAMICS_OBSERVABLES,
     FIRST_IMPACT,
+    LONG_TIME_OBSERVABLES,
     LYAPUNOV,
     OBSERVABLES,
     Axis,
@@ -37,8 +38,8 @@ from impactbeams.sweep.run import (
     write_sweep,
 )
 
-__all__ = ["CELL_PARAMETERS", "DYNAMICS_OBSERVABLES", "FIRST_IMPACT", "LYAPUNOV",
-           "MAX_SEGMENTS", "OBSERVABLES", "Axis", "Chunk", "ChunkRunner", "Chunking", "Plan",
-           "Progress", "Sweep", "build_plan", "code_digest", "compute_chunk",
+__all__ = ["CELL_PARAMETERS", "DYNAMICS_OBSERVABLES", "FIRST_IMPACT", "LONG_TIME_OBSERVABLES",
+           "LYAPUNOV", "MAX_SEGMENTS", "OBSERVABLES", "Axis", "Chunk", "ChunkRunner", "Chunking",
+           "Plan", "Progress", "Sweep", "build_plan", "code_digest", "compute_chunk",
            "default_chunk_cells", "load_sweep", "local_runner", "map_dataset", "run_sweep",
            "sweep_from_mapping", "write_sweep"]

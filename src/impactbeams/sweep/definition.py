@@ -6,6 +6,9 @@ A sweep file (names as in :mod:`impactbeams.params`)::
     n_modes = 5                          # free modes per beam (contact phase: 2 n_modes)
     observables = ["first_impact_time"]  # default
     transient_periods = 0                # forcing periods left out of long-time observables
+    sampled_periods = 200                # stroboscopic samples (long-time observables only)
+    period_tolerance = 1e-4              # of the period detection (module longtime)
+    max_period = 16
     [params]                             # fixed parameters; the rest take the defaults
     clearance = 1.1e-5
     [axes.omega]                         # one table per swept parameter, in order
@@ -30,6 +33,7 @@ import numpy as np
 
 from impactbeams import __version__
 from impactbeams.kernels.layout import CELL_COLUMNS
+from impactbeams.longtime import LongTime
 from impactbeams.params import (
     CONTACT_LAWS,
     MATERIAL_KEYS,
@@ -42,12 +46,15 @@ from impactbeams.params import (
     is_real,
     read_toml,
     require,
+    require_all,
     require_table,
     resolve_materials,
+    value_at,
 )
 from impactbeams.preflight import (
     DYNAMICS_RATE,
     FIRST_IMPACT_RATE,
+    MAX_PHASE,
     Cost,
     check_run,
     highest_frequency,
@@ -59,10 +66,17 @@ FIRST_IMPACT = "first_impact_time"
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
 LYAPUNOV = "lyapunov_exponent"  # spring law only; its own windowed run (kernels.lyapunov)
-OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV)
+# the long run's stroboscopic samples (along a trailing dimension "period") and what they give
+POINCARE_OBSERVABLES = ("poincare_deflection1", "poincare_deflection2", "poincare_velocity1",
+                        "poincare_velocity2")
+LONG_TIME_OBSERVABLES = (*POINCARE_OBSERVABLES, "response_period", "steady_impact_rate",
+                         "steady_episode_rate")
+OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV, *LONG_TIME_OBSERVABLES)
 # parameters that change a cell but not its geometry (its modes): the packed cell columns
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
-_TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes", "transient_periods")
+LONG_TIME_KEYS = ("sampled_periods", "period_tolerance", "max_period")  # of LongTime
+_TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes", "transient_periods",
+              *LONG_TIME_KEYS)
 _AXIS_KEYS = ("min", "max", "num", "scale")
 # Distinct geometries (values of the axes that change the modes) per sweep: each one's modes are
 # computed serially before the map runs, 0.4 ms (5 modes, first impact) to 2 s (200 modes, tied
@@ -121,6 +135,7 @@ class Sweep:
     axes: tuple[Axis, ...]
     source: str = "sweep"
     transient_periods: int = 0
+    long_time: LongTime | None = None  # how long-time observables sample the run
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -135,7 +150,14 @@ class Sweep:
     @property
     def needs_dynamics(self) -> bool:
         """Whether any observable needs the full dynamics (not the free phase alone)."""
-        return any(name in (*DYNAMICS_OBSERVABLES, LYAPUNOV) for name in self.observables)
+        return (any(name in (*DYNAMICS_OBSERVABLES, LYAPUNOV) for name in self.observables)
+                or self.long_time is not None)
+
+    def value_shape(self, name: str) -> tuple[int, ...]:
+        """Shape of one cell's value of stored array ``name``: (sampled periods,) or ()."""
+        if name in POINCARE_OBSERVABLES and self.long_time is not None:
+            return (self.long_time.sampled_periods,)
+        return ()
 
     @property
     def stored(self) -> list[str]:
@@ -145,9 +167,11 @@ class Sweep:
     def definition(self) -> dict[str, Any]:
         """The sweep as a plain dict in the TOML file's layout (canonical, for hashing)."""
         transient = {"transient_periods": self.transient_periods} if self.transient_periods else {}
+        long_time = ({} if self.long_time is None else
+                     {key: getattr(self.long_time, key) for key in LONG_TIME_KEYS})
         return {"t_max": self.t_max, "n_modes": self.n_modes,
                 "observables": list(self.observables), "params": dict(self.fixed),
-                "axes": {a.name: a.definition() for a in self.axes}, **transient}
+                "axes": {a.name: a.definition() for a in self.axes}, **transient, **long_time}
 
     @property
     def base(self) -> Params:
@@ -201,11 +225,27 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
     _check_conflicts(fixed, axes, source)
-    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source, transient)
+    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source, transient,
+                  _long_time(data, observables, source))
     _check_grid(sweep)
     _check_lyapunov(sweep)
     _check_cost(sweep)
     return sweep
+
+
+def _long_time(data: Mapping[str, Any], observables: tuple[str, ...],
+               source: str) -> LongTime | None:
+    """The long-time sampling: its keys only with a long-time observable, defaults for the rest."""
+    given = {key: data[key] for key in LONG_TIME_KEYS if key in data}
+    if not any(name in LONG_TIME_OBSERVABLES for name in observables):
+        require(f"{', '.join(given)} in {source}", list(given.values()), not given,
+                "only long-time observables use it: "
+                f"{', '.join(LONG_TIME_OBSERVABLES)}")
+        return None
+    try:
+        return LongTime(**given)
+    except ParameterError as error:
+        raise ParameterError(f"{error} (in {source})") from None
 
 
 def _is_integer(value: Any) -> bool:
@@ -324,6 +364,28 @@ def _check_grid(sweep: Sweep) -> None:
         check_range(name, values[name], point)
     check_joint(values, point)
     check_run(values, sweep.t_max, sweep.n_modes, point)
+    _check_long_time(sweep, values, point)
+
+
+def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) -> None:
+    """Long runs need a forcing period, and a horizon within double precision's phase range.
+
+    Each cell runs (transient_periods + sampled_periods) forcing periods; the longest run is
+    at the smallest Omega, a corner of the grid.
+    """
+    if sweep.long_time is None:
+        return
+    omega = np.asarray(values["omega"], dtype=float)
+    require_all("omega", omega, omega > 0, point, lambda j: (
+        "long-time observables sample once per forcing period: need omega > 0 (rad/s)"))
+    periods = sweep.transient_periods + sweep.long_time.sampled_periods
+    horizon = sweep.long_time.horizon(omega, sweep.transient_periods)
+    phase = np.maximum(highest_frequency(values, sweep.n_modes), omega) * horizon
+    require_all("transient_periods + sampled_periods", periods, phase <= MAX_PHASE, point,
+                lambda j: (f"the run of {value_at(horizon, j):.3g} s turns the fastest "
+                           f"oscillation through {value_at(phase, j):.3g} rad, more than "
+                           f"{MAX_PHASE:g} rad (double precision keeps a phase to ~0.1 eps "
+                           "omega t): use fewer periods or modes"))
 
 
 def _check_lyapunov(sweep: Sweep) -> None:
@@ -353,14 +415,16 @@ def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = Fa
 
     Memory: a streamed run (``write_sweep``, what ``impactbeams run`` does) holds a chunk at a
     time (:func:`chunk_memory`); ``in_memory`` (``run_sweep`` without an output) also holds the
-    results (one float64 array of every cell per stored variable and the Dataset's copy: 16
-    bytes per cell and variable, plus 4 for ``impacted`` and its temporaries; the traced peak
+    results (one float64 array of every cell per stored value and the Dataset's copy: 16
+    bytes per cell and value, plus 4 for ``impacted`` and its temporaries; the traced peak
     of a first-impact map, netCDF writing included, is 18.04 bytes per cell). Both add the plan
     (8 x 2N float64 per geometry; a dynamics map 10 (2N)^2, with its stacking copy) and a
-    dynamics map's per-thread segment buffers (MAX_SEGMENTS x (4 x 2N + 3) float64). Time:
-    ``rate`` x 2N x (fastest frequency x t_max) per cell over the threads, plus the set-up.
+    dynamics map's per-thread segment buffers (MAX_SEGMENTS x (4 x 2N + 3) float64; a long
+    run's LONG_RUN_CAPACITY of them and its samples' states). Time: ``rate`` x 2N x (fastest
+    frequency x horizon) per cell over the threads, plus the set-up; the horizon is t_max,
+    plus a long run's (transient + sampled) forcing periods.
     """
-    from impactbeams.sweep.plan import MAX_SEGMENTS
+    from impactbeams.sweep.plan import LONG_RUN_CAPACITY, MAX_SEGMENTS
 
     threads = threads or os.cpu_count() or 1
     coordinates = 2 * sweep.n_modes
@@ -368,15 +432,24 @@ def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = Fa
     values, _ = _corners(sweep)
     fastest = float(np.max(np.maximum(values["omega"],
                                       highest_frequency(values, sweep.n_modes))))
-    results = sweep.size * (16 * len(sweep.stored) + 4) if in_memory else 0
+    results = sweep.size * (16 * _stored_values(sweep) + 4) if in_memory else 0
+    # a run over [0, t_max] for the other observables, if any
+    over_t_max = any(name not in LONG_TIME_OBSERVABLES for name in sweep.observables)
+    horizon = sweep.t_max if over_t_max else 0.0
     if sweep.needs_dynamics:
         plan = 2 * geometries * 8 * 10 * coordinates**2
-        buffers = threads * MAX_SEGMENTS * (4 * coordinates + 3) * 8
+        buffers = threads * MAX_SEGMENTS * (4 * coordinates + 3) * 8 if over_t_max else 0
         per_geometry, rate = 5e-5 * sweep.n_modes**2, DYNAMICS_RATE
     else:
         plan, buffers = 2 * geometries * 8 * 8 * coordinates, 0
         per_geometry, rate = 4e-4 + 2.5e-5 * sweep.n_modes, FIRST_IMPACT_RATE
-    compute = sweep.size * coordinates * fastest * sweep.t_max * rate / threads
+    if sweep.long_time is not None:  # each cell's own run, in windows of LONG_RUN_CAPACITY
+        buffers += threads * (LONG_RUN_CAPACITY * (4 * coordinates + 3)
+                              + sweep.long_time.sampled_periods * (2 * coordinates + 5)) * 8
+        # the mean of the longest and shortest runs (corners of the grid)
+        horizon += float(np.mean(sweep.long_time.horizon(values["omega"],
+                                                         sweep.transient_periods)))
+    compute = sweep.size * coordinates * fastest * horizon * rate / threads
     return Cost(chunk_memory(sweep) + results + plan + buffers,
                 geometries * per_geometry + compute)
 
@@ -385,7 +458,7 @@ def chunk_memory(sweep: Sweep) -> int:
     """Bytes a run of ``sweep`` holds for its chunk being computed and the one being written.
 
     Per cell of a default chunk: its cell rows (56 bytes), the kernel's output (8 per
-    column), 24 per stored variable (the chunk's arrays, its saved copy, the file's variables)
+    column), 24 per stored value (the chunk's arrays, its saved copy, the file's variables)
     and 18 for HDF5's buffers of a block (the uncompressed block in its cache and the
     compressed one; outside Python's allocator). Traced peaks of a streamed first-impact map:
     69 to 81 bytes per chunk cell (against 106 here).
@@ -395,16 +468,21 @@ def chunk_memory(sweep: Sweep) -> int:
 
     columns = len(OUT_COLUMNS) if sweep.needs_dynamics else 1
     cells = min(sweep.size, default_chunk_cells(sweep))
-    return cells * (56 + 8 * columns + 24 * len(sweep.stored) + 18)
+    return cells * (56 + 8 * columns + 24 * _stored_values(sweep) + 18)
+
+
+def _stored_values(sweep: Sweep) -> int:
+    """Values per cell of the stored arrays (a stroboscopic observable has one per sample)."""
+    return sum(math.prod(sweep.value_shape(name)) for name in sweep.stored)
 
 
 def expected_file_size(sweep: Sweep) -> int:
     """Disk space (bytes) a run of ``sweep`` needs at its peak.
 
     The finished chunks under ``OUT.nc.partial/`` and the netCDF file: 8 bytes per cell and
-    stored variable each.
+    stored value each.
     """
-    return sweep.size * (16 * len(sweep.stored) + 1)
+    return sweep.size * (16 * _stored_values(sweep) + 1)
 
 
 def _check_cost(sweep: Sweep) -> None:

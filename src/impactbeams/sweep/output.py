@@ -18,14 +18,15 @@ import numpy as np
 
 from impactbeams.io import Layout, build_netcdf
 from impactbeams.params import MATERIAL_KEYS
-from impactbeams.sweep.definition import FIRST_IMPACT, Sweep
+from impactbeams.sweep.definition import FIRST_IMPACT, LONG_TIME_KEYS, Sweep
 from impactbeams.sweep.plan import Chunking, code_digest, contact_resolution, flat_boxes
 from impactbeams.variables import attributes, global_attributes, parameter_attributes
 
 if TYPE_CHECKING:
     import xarray as xr
 
-_INTEGER_TYPES = {"dynamics_status": np.int8, "impact_count": np.int32}  # codes and counts
+_INTEGER_TYPES = {"dynamics_status": np.int8, "impact_count": np.int32,  # codes and counts
+                  "response_period": np.int32}
 ChunkWriter = Callable[[int, int, Mapping[str, np.ndarray]], None]
 
 
@@ -33,14 +34,23 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
     """The map's coordinates, variables and attributes; ``chunks``: its blocks on disk."""
     coords = {axis.name: (axis.values, {**parameter_attributes(axis.name), "scale": axis.scale})
               for axis in sweep.axes}
-    variables = {name: (np.dtype(_INTEGER_TYPES.get(name, np.float64)), attributes(name))
+    grid = tuple(coords)
+    variables = {name: (np.dtype(_INTEGER_TYPES.get(name, np.float64)), attributes(name),
+                        grid + (("period",) if sweep.value_shape(name) else ()))
                  for name in sweep.stored}
     if FIRST_IMPACT in sweep.stored:
-        variables["impacted"] = (np.dtype(np.int8), attributes("impacted"))
+        variables["impacted"] = (np.dtype(np.int8), attributes("impacted"), grid)
     run = {"t_max": sweep.t_max, "t_max_units": "s", "n_modes": sweep.n_modes,
            "observables": " ".join(sweep.observables), "swept_parameters": " ".join(coords),
            "sweep_definition": json.dumps(sweep.definition(), sort_keys=True),
            "sweep_fingerprint": sweep.fingerprint(), "code_digest": code_digest()}
+    if sweep.long_time is not None:
+        long_time = sweep.long_time
+        run.update({key: getattr(long_time, key) for key in LONG_TIME_KEYS},
+                   transient_periods=sweep.transient_periods)
+        if any(sweep.value_shape(name) for name in sweep.stored):
+            coords["period"] = (long_time.period_numbers(sweep.transient_periods),
+                                attributes("period"))
     resolution = contact_resolution(sweep)
     if resolution is not None:
         run.update(contact_resolved=int(sweep.n_modes >= resolution),
@@ -64,10 +74,9 @@ def map_dataset(sweep: Sweep, results: Mapping[str, np.ndarray]) -> xr.Dataset:
     import xarray as xr
 
     layout = map_layout(sweep)
-    dims = list(layout.coords)
     arrays = stored_arrays(sweep, results)
-    data_vars = {name: (dims, arrays[name].reshape(sweep.shape), attrs)
-                 for name, (_, attrs) in layout.variables.items()}
+    data_vars = {name: (dims, arrays[name].reshape(sweep.shape + arrays[name].shape[1:]), attrs)
+                 for name, (_, attrs, dims) in layout.variables.items()}
     coords = {name: (name, values, attrs) for name, (values, attrs) in layout.coords.items()}
     return xr.Dataset(data_vars, coords=coords, attrs=layout.attrs)
 
@@ -87,8 +96,8 @@ def map_file(sweep: Sweep, path: Path, building: Path,
             for box in flat_boxes(start, stop, sweep.shape):
                 shape = tuple(s.stop - s.start for s in box)
                 size = math.prod(shape)
-                for name, array in arrays.items():
-                    nc[name][box] = array[offset:offset + size].reshape(shape)
+                for name, array in arrays.items():  # a sampled observable: all its samples
+                    nc[name][box] = array[offset:offset + size].reshape(shape + array.shape[1:])
                 offset += size
 
         yield write

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from impactbeams.kernels import layout
+from impactbeams.longtime import LongTime
 from impactbeams.params import Params
 from impactbeams.sweep.definition import (
     CELL_PARAMETERS,
@@ -35,6 +36,9 @@ MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov e
 # (paths in the package). Saved chunks and finished files of other code are never reused.
 NUMERIC_CODE = ("kernels/*.py", "packing.py", "model.py", "modes.py", "compliant.py",
                 "params.py", "sweep/definition.py", "sweep/plan.py")
+# a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
+LONG_RUN_CAPACITY = 2048
+MAX_PHASES_PER_PERIOD = 2000  # cap of a long run, per forcing period; more: dynamics_status = 1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -243,8 +247,11 @@ def default_chunk_cells(sweep: Sweep) -> int:
     netCDF block, a Dask task) stays small beside its computation, which matters on a busy
     machine where every start of the threads waits for the cores; small enough that an
     interrupt loses little and a cube streams in pieces of tens of MB. A map of up to 2^20 cells
-    is therefore computed in one pass.
+    is therefore computed in one pass. Long-time observables take seconds per cell: chunks of
+    16 to 256 cells, so that progress shows and an interrupt loses little.
     """
+    if sweep.long_time is not None:
+        return int(min(max(sweep.size // 100, 16), 256))
     return 2**16 if sweep.needs_dynamics else 2**20
 
 
@@ -296,7 +303,9 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     Self-contained, so that any process (a Dask worker, say) can compute any chunk; pass the
     sweep's ``plan`` (:func:`build_plan`) to reuse it across chunks. A first-impact-only sweep
     runs the free phase alone; any other observable runs the full dynamics of every cell over
-    [0, t_max] (and gives the first impact time from it too).
+    [0, t_max] (and gives the first impact time from it too), except the long-time ones, which
+    run each cell over (transient + sampled) forcing periods (:mod:`impactbeams.longtime`);
+    ``dynamics_status`` is then the worse of the runs'.
     """
     from impactbeams.kernels import first_impact, observables
 
@@ -329,7 +338,39 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
         columns = dict(zip(layout.OUT_COLUMNS, out.T, strict=True))
     if LYAPUNOV in sweep.observables:
         columns.update(_lyapunov_columns(sweep, plan, cells, parallel, columns))
+    if sweep.long_time is not None:
+        long_run = _long_run(sweep.long_time, sweep.transient_periods, plan, cells, parallel)
+        long_run["dynamics_status"] = np.maximum(
+            long_run["dynamics_status"], columns.get("dynamics_status", 0))
+        columns.update(long_run)
     return {name: np.ascontiguousarray(columns[name]) for name in sweep.stored}
+
+
+def _long_run(long_time: LongTime, transient_periods: int, plan: Plan, cells: np.ndarray,
+              parallel: bool) -> dict[str, np.ndarray]:
+    """The long-time observables of every cell and its run's ``dynamics_status``.
+
+    Each cell runs (transient + sampled) forcing periods, in windows of LONG_RUN_CAPACITY.
+    """
+    import numba
+
+    from impactbeams.kernels import stroboscope
+    from impactbeams.longtime import long_time_values
+
+    kernel = (stroboscope.stroboscope_map_parallel if parallel
+              else stroboscope.stroboscope_map_serial)
+    omega = cells[:, layout.CELL_OMEGA]
+    samples = np.empty((cells.shape[0], long_time.sampled_periods, len(layout.TIP_COLUMNS)))
+    summary = np.empty((cells.shape[0], len(layout.STROBOSCOPE_COLUMNS)))
+    # cells differ in cost by orders of magnitude (a rattle at every period, or no contact at
+    # all): the threads take them one at a time instead of in equal contiguous blocks
+    with numba.parallel_chunksize(1):
+        kernel(cells, plan.tables, *plan.switching, plan.geometry,
+               long_time.sample_times(omega, transient_periods),
+               long_time.horizon(omega, transient_periods), LONG_RUN_CAPACITY,
+               MAX_PHASES_PER_PERIOD, samples, summary)
+    return long_time_values(long_time, transient_periods, omega,
+                            cells[:, layout.CELL_CLEARANCE], samples, summary)
 
 
 def _lyapunov_columns(sweep: Sweep, plan: Plan, cells: np.ndarray, parallel: bool,

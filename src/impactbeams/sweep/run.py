@@ -103,7 +103,8 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
                    "give an output file, to which the map is written chunk by chunk")
     _warn_unresolved(sweep)
     chunking = _chunking(sweep, chunk_cells)
-    results = {name: np.full(sweep.size, np.nan) for name in sweep.stored}
+    results = {name: np.full((sweep.size, *sweep.value_shape(name)), np.nan)
+               for name in sweep.stored}
 
     def keep(_: int, start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:
         for name, array in results.items():
@@ -146,7 +147,9 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
         pending = []
         for chunk in range(chunking.count):  # the saved chunks first: a damaged one stops here
             start, stop = chunking.bounds(chunk)
-            saved = store.load(chunk, stop - start, sweep.stored, discard_corrupt)
+            saved = store.load(chunk, stop - start,
+                               {name: sweep.value_shape(name) for name in sweep.stored},
+                               discard_corrupt)
             if saved is None:
                 pending.append(chunk)
                 continue

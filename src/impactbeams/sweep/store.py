@@ -15,7 +15,7 @@ import shutil
 import warnings
 import zipfile
 import zlib
-from collections.abc import Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import BinaryIO
 
@@ -80,9 +80,11 @@ class ChunkStore:
     def _path(self, chunk: int) -> Path:
         return self.directory / f"chunk_{chunk:06d}.npz"
 
-    def load(self, chunk: int, size: int, names: Sequence[str],
+    def load(self, chunk: int, size: int, shapes: Mapping[str, tuple[int, ...]],
              discard_corrupt: bool = False) -> dict[str, np.ndarray] | None:
-        """The saved arrays ``names`` of a chunk of ``size`` cells, or None if it is not saved.
+        """The saved arrays of a chunk of ``size`` cells, or None if it is not saved.
+
+        ``shapes``: the arrays' names and the shape of one cell's value of each.
 
         A damaged file (truncated, not an ``.npz``, arrays missing or of the wrong size) is a
         ParameterError naming it; with ``discard_corrupt`` it is deleted instead (with a
@@ -93,7 +95,7 @@ class ChunkStore:
             return None
         try:
             with open(path, "rb") as stream:
-                return _arrays(stream, size, names)
+                return _arrays(stream, size, shapes)
         except _DAMAGE as error:
             problem = f"{type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''}"
             if not discard_corrupt:
@@ -115,17 +117,20 @@ class ChunkStore:
         shutil.rmtree(self.directory)
 
 
-def _arrays(stream: BinaryIO, size: int, names: Sequence[str]) -> dict[str, np.ndarray]:
-    """The float64 arrays ``names`` of ``size`` values each from an open ``.npz`` file."""
+def _arrays(stream: BinaryIO, size: int,
+            shapes: Mapping[str, tuple[int, ...]]) -> dict[str, np.ndarray]:
+    """The float64 arrays of ``size`` cells (one value of ``shapes[name]`` each) in an
+    open ``.npz`` file."""
     archive = np.load(stream)
     if not isinstance(archive, np.lib.npyio.NpzFile):
         raise ValueError("an .npy array, not an .npz archive")
     with archive:
-        values = {name: archive[name] for name in names}
+        values = {name: archive[name] for name in shapes}
     for name, array in values.items():
-        if array.shape != (size,) or array.dtype != np.float64:
+        expected = (size, *shapes[name])
+        if array.shape != expected or array.dtype != np.float64:
             raise ValueError(f"{name} has {array.dtype} values of shape {array.shape}, "
-                             f"expected float64 of shape ({size},)")
+                             f"expected float64 of shape {expected}")
     return values
 
 

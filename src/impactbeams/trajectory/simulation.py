@@ -10,6 +10,7 @@ import numpy as np
 import xarray as xr
 
 from impactbeams.compliant import MAX_MODES, required_modes
+from impactbeams.longtime import LongTime
 from impactbeams.packing import Packed, pack_run
 from impactbeams.params import Params, require, require_finite
 from impactbeams.preflight import (
@@ -24,6 +25,7 @@ from impactbeams.trajectory.fields import SAMPLE_CHUNK, deflections, time_series
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.lyapunov import Exponents, check_request, lyapunov_exponents
 from impactbeams.trajectory.phases import Trajectory, run
+from impactbeams.trajectory.poincare import long_time_variables
 from impactbeams.variables import attributes, global_attributes
 
 # The event search restarts at least every search_span seconds; a span below this fraction of
@@ -87,7 +89,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
              max_events: int = 200_000, search_span: float | None = None,
              episode_separation: float | None = None,
              energy_balance: bool = False, lyapunov: bool | int = False,
-             transient_periods: int = 0) -> xr.Dataset:
+             transient_periods: int = 0, long_time: LongTime | None = None) -> xr.Dataset:
     """Simulate the impacting beams from t = 0 to ``t_max`` (s); return an xarray Dataset.
 
     Args:
@@ -120,7 +122,13 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
             ``lyapunov_exponent`` and ``lyapunov_exponent_error`` (1/s), and with more than one
             ``lyapunov_spectrum`` and its error along ``exponent``. Tangent propagation with
             Benettin renormalisation every forcing period; spring law only (docs/model.md).
-        transient_periods: forcing periods at the start left out of the exponents' average.
+        transient_periods: forcing periods at the start left out of the exponents' average,
+            and before the first stroboscopic sample of ``long_time``.
+        long_time: also the long-time response (:class:`impactbeams.longtime.LongTime`):
+            stroboscopic tip samples ``poincare_deflection1`` ... ``poincare_velocity2``
+            along the dimension ``period``, ``response_period``, ``steady_impact_rate`` and
+            ``steady_episode_rate`` (with this run's ``episode_separation``). Needs
+            Omega > 0 and t_max at least (transient_periods + sampled_periods) 2 pi / Omega.
 
     The output grid never influences the dynamics: events are located by the kernel on its
     own, and the outputs are evaluated from the exact segment states.
@@ -132,6 +140,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
                                  search_span, episode_separation, fields, energy_balance)
     t_max, n_modes, resolution = run_inputs.t_max, run_inputs.n_modes, run_inputs.resolution
+    if long_time is not None:
+        _check_long_time(params, t_max, transient_periods, long_time)
     if n_modes < resolution and params.contact_law == "spring":
         warnings.warn(f"n_modes = {n_modes} does not resolve the spring contact of stiffness "
                       f"{params.contact_stiffness:g} N/m: use n_modes >= {resolution} "
@@ -157,6 +167,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     if lyapunov:
         exponents = lyapunov_exponents(packed, trajectory, int(lyapunov), transient_periods)
         dataset = _with_exponents(dataset, exponents, transient_periods)
+    if long_time is not None:
+        dataset = long_time_variables(packed, trajectory, dataset, long_time, transient_periods)
     dataset.attrs.update(_global_attributes(params, n_modes, t_max, trajectory))
     if params.contact_law == "spring":
         dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
@@ -220,6 +232,19 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
                    "max_events)")
     return _RunInputs(t_max, n_modes, resolution, _output_times(t_max, dt_output, times), span,
                       episode_separation, max_events, n_points)
+
+
+def _check_long_time(params: Params, t_max: float, transient_periods: int,
+                     long_time: LongTime) -> None:
+    """Stroboscopic samples need a forcing period and a run that covers the sampled window."""
+    require("long_time", type(long_time).__name__, isinstance(long_time, LongTime),
+            "must be an impactbeams.LongTime")
+    _require_integer("transient_periods", transient_periods, 0)
+    require("omega", params.omega, params.omega > 0, "long_time samples once per forcing "
+            "period: need omega > 0", "rad/s")
+    horizon = float(long_time.horizon(params.omega, transient_periods))
+    require("t_max", t_max, t_max >= horizon, "long_time needs t_max >= (transient_periods + "
+            f"sampled_periods) 2 pi / omega = {horizon!r}", "s")
 
 
 def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray, separation: float,

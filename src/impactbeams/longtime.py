@@ -1,0 +1,152 @@
+"""Long-time response: stroboscopic sampling, the period of the steady response, steady rates.
+
+Definitions (docs/model.md, "Long-time dynamics"): after ``transient_periods`` forcing periods
+T = 2 pi / Omega (the run's transient, shared with the Lyapunov exponent's: the sweep key and
+simulate's keyword), the tips are sampled once per period at forcing phase 0,
+``t_k = (transient_periods + k) T``, k = 0 .. ``sampled_periods`` - 1; the sampled window is
+``[t_0, t_0 + sampled_periods T)``. The period of the steady response is the smallest p <=
+``max_period`` for which the samples repeat with period p within ``period_tolerance`` of
+their scale; 0 if there is none.
+
+The tolerance is relative to the samples' scale, the largest of |y1|, |y2|, |v1| / Omega,
+|v2| / Omega over the window (m: velocities over Omega are displacement amplitudes; for a
+harmonic response sqrt(y^2 + (v / Omega)^2) is its amplitude at any phase). The default,
+1e-4, lies eight orders above the samples' round-off (exact propagation, event times to a few
+ulps: 1e-11 of the scale and below on stable periodic orbits, tests/test_longtime.py), so a
+periodic response is recognised once its transient has decayed by 1e4, ln(1e4) = 9.2 time
+constants of the slowest one. With modal damping zeta the slowest free mode decays at
+zeta omega_min (omega_min = 170.9 rad/s for the default beams): at zeta = 0.02 that takes
+2.7 s, 500 forcing periods up to Omega = 1170 rad/s. A run whose transient has not decayed
+that far reports 0 (or a spurious long period, when the leftover transient is nearly periodic
+in the samples): lengthen the transient or loosen the tolerance. Chaotic responses change from
+period to period by a sizeable fraction of their scale (10 % to 100 % on the shipped sweeps).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from impactbeams.kernels import layout
+from impactbeams.params import require
+
+DEFAULT_PERIOD_TOLERANCE = 1e-4
+LARGEST_MAX_PERIOD = 16  # the default max_period, when the samples allow it
+
+
+@dataclasses.dataclass(frozen=True)
+class LongTime:
+    """How a long run is sampled after its transient, and its period detected (module doc).
+
+    Attributes:
+        sampled_periods: number of samples, one per forcing period (>= 2).
+        period_tolerance: relative tolerance of the period detection (0 < tol < 1).
+        max_period: largest period looked for, at most sampled_periods / 2 so that a period
+            is seen to repeat at least once over each of its samples; default the smaller of
+            16 and sampled_periods // 2.
+    """
+
+    sampled_periods: int = 200
+    period_tolerance: float = DEFAULT_PERIOD_TOLERANCE
+    max_period: int | None = None
+
+    def __post_init__(self) -> None:
+        require("sampled_periods", self.sampled_periods,
+                _is_int(self.sampled_periods) and self.sampled_periods >= 2,
+                "must be an integer >= 2")
+        tolerance = self.period_tolerance
+        require("period_tolerance", tolerance, isinstance(tolerance, (int, float))
+                and not isinstance(tolerance, bool) and 0.0 < tolerance < 1.0,
+                "must be a number between 0 and 1 (relative to the samples' scale)")
+        if self.max_period is None:
+            object.__setattr__(self, "max_period",
+                               min(LARGEST_MAX_PERIOD, self.sampled_periods // 2))
+        require("max_period", self.max_period, _is_int(self.max_period)
+                and 1 <= self.max_period <= self.sampled_periods // 2,
+                f"must be an integer from 1 to sampled_periods // 2 = "
+                f"{self.sampled_periods // 2}")
+
+    def forcing_period(self, omega: float | np.ndarray) -> float | np.ndarray:
+        """T = 2 pi / Omega (s); Omega in rad/s, > 0."""
+        return 2.0 * math.pi / np.asarray(omega, dtype=float)
+
+    def sample_times(self, omega: float | np.ndarray, transient_periods: int) -> np.ndarray:
+        """Sample times t_k (s), shape ``omega.shape + (sampled_periods,)``."""
+        period = np.asarray(self.forcing_period(omega))[..., None]
+        return self.period_numbers(transient_periods) * period
+
+    def horizon(self, omega: float | np.ndarray, transient_periods: int) -> float | np.ndarray:
+        """End of the sampled window (s): (transient_periods + sampled_periods) T."""
+        return (transient_periods + self.sampled_periods) * self.forcing_period(omega)
+
+    def window(self, omega: float | np.ndarray) -> float | np.ndarray:
+        """Length of the sampled window (s), sampled_periods T."""
+        return self.sampled_periods * self.forcing_period(omega)
+
+    def period_numbers(self, transient_periods: int) -> np.ndarray:
+        """Forcing periods from t = 0 to each sample: the ``period`` coordinate."""
+        return transient_periods + np.arange(self.sampled_periods)
+
+
+def _is_int(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def response_period(deflection1: np.ndarray, deflection2: np.ndarray, velocity1: np.ndarray,
+                    velocity2: np.ndarray, omega: float | np.ndarray, tolerance: float,
+                    max_period: int) -> np.ndarray:
+    """Period of the sampled response in forcing periods (0 if none up to ``max_period``).
+
+    Tip deflections (m) and velocities (m/s) of shape ``(..., samples)``; ``omega`` (rad/s)
+    broadcasts against ``(...)``. Samples with NaN (a run that stopped early) give 0.
+    """
+    scaled = 1.0 / np.asarray(omega, dtype=float)[..., None]
+    state = np.stack([deflection1, deflection2, velocity1 * scaled, velocity2 * scaled],
+                     axis=-1)  # (..., samples, 4), all in m
+    scale = np.max(np.abs(state), axis=(-2, -1))
+    period = np.zeros(scale.shape, dtype=np.int32)
+    for p in range(max_period, 0, -1):  # smallest last: it wins
+        distance = np.max(np.abs(state[..., p:, :] - state[..., :-p, :]), axis=(-2, -1))
+        period = np.where(distance <= tolerance * scale, p, period)
+    return period
+
+
+def steady_rate(count: float | np.ndarray, start: float | np.ndarray, end: float | np.ndarray,
+                reached: float | np.ndarray) -> float | np.ndarray:
+    """Events per second (1/s) counted over the window [start, end) up to the time reached (s).
+
+    NaN where the run stopped before the window began.
+    """
+    covered = np.minimum(end, reached) - start
+    return np.where(covered > 0, count / np.where(covered > 0, covered, 1.0), np.nan)
+
+
+def long_time_values(long_time: LongTime, transient_periods: int, omega: np.ndarray,
+                     clearance: np.ndarray, samples: np.ndarray,
+                     summary: np.ndarray) -> dict[str, np.ndarray]:
+    """The long-time observables of runs from the stroboscope kernel's output.
+
+    ``omega`` (rad/s), ``clearance`` (m): per run; ``samples``: (runs, sampled_periods,
+    ``TIP_COLUMNS``), y2 itself (the stored ``poincare_deflection2`` is y2 - Delta, as
+    ``tip_deflection_2``); ``summary``: (runs, ``STROBOSCOPE_COLUMNS``). Also the runs'
+    ``dynamics_status``.
+    """
+    y1, y2, v1, v2 = (samples[..., column] for column in (layout.TIP_Y1, layout.TIP_Y2,
+                                                          layout.TIP_V1, layout.TIP_V2))
+    start = long_time.sample_times(omega, transient_periods)[..., 0]
+    end = long_time.horizon(omega, transient_periods)
+    reached = summary[:, layout.STROBE_T_END]
+    return {
+        "poincare_deflection1": y1,
+        "poincare_deflection2": y2 - np.asarray(clearance)[:, None],
+        "poincare_velocity1": v1,
+        "poincare_velocity2": v2,
+        "response_period": response_period(y1, y2, v1, v2, omega, long_time.period_tolerance,
+                                           long_time.max_period),
+        "steady_impact_rate": steady_rate(summary[:, layout.STROBE_ONSETS], start, end, reached),
+        "steady_episode_rate": steady_rate(summary[:, layout.STROBE_EPISODES], start, end,
+                                           reached),
+        "dynamics_status": summary[:, layout.STROBE_STATUS],
+    }
