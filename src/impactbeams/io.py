@@ -128,7 +128,7 @@ def _define(nc: netCDF4.Dataset, layout: Layout) -> None:
         coordinate = nc.createVariable(name, str if text else values.dtype, (name,))
         coordinate.setncatts(dict(attrs))
         coordinate[:] = values.astype(object) if text else values
-    block = dict(zip(layout.coords, layout.chunks))
+    block = dict(zip(layout.coords, layout.chunks, strict=False))  # the grid: coords first
     for name, (dtype, attrs, dims) in layout.variables.items():
         fill = np.nan if np.dtype(dtype).kind == "f" else None
         chunks = tuple(block.get(dim, layout.coords[dim][0].size) for dim in dims)

@@ -119,8 +119,10 @@ class ChunkStore:
 
 def _arrays(stream: BinaryIO, size: int,
             shapes: Mapping[str, tuple[int, ...]]) -> dict[str, np.ndarray]:
-    """The float64 arrays of ``size`` cells (one value of ``shapes[name]`` each) in an
-    open ``.npz`` file."""
+    """The float64 arrays of ``size`` cells in an open ``.npz`` file.
+
+    Each cell has one value of ``shapes[name]`` in array ``name``.
+    """
     archive = np.load(stream)
     if not isinstance(archive, np.lib.npyio.NpzFile):
         raise ValueError("an .npy array, not an .npz archive")
