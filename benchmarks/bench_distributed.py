@@ -33,6 +33,7 @@ import numpy as np  # noqa: E402
 
 from impactbeams import __version__  # noqa: E402
 from impactbeams.sweep import (  # noqa: E402
+    Chunking,
     compute_chunk,
     default_chunk_cells,
     load_sweep,
@@ -86,7 +87,7 @@ def task_cost(client, sweep, repeats, tasks=1000):
 
 def measure(sweep, client, chunk_sizes, repeats):
     """Minimum wall times: local and distributed per chunk size, local default, local serial."""
-    default = default_chunk_cells(sweep.size)
+    default = default_chunk_cells(sweep)
     local = {c: [] for c in {*chunk_sizes, default}}
     remote = {c: [] for c in chunk_sizes}
     serial = []  # one process, serial kernel: serial / workers is the ideal distributed time
@@ -114,8 +115,8 @@ def check_equal(sweep, client):
 def report(args, sweep, startup, task_s, timings, equal, load_before):
     default, local, remote, serial = timings
     baseline, ideal = local[default], serial / args.workers
-    rows = [{"chunk_cells": c, "chunks": -(-sweep.size // c), "local_s": local[c],
-             "distributed_s": remote[c], "overhead": remote[c] / baseline - 1,
+    rows = [{"chunk_cells": c, "chunks": Chunking.at_most(sweep.shape, c).count,
+             "local_s": local[c], "distributed_s": remote[c], "overhead": remote[c] / baseline - 1,
              "overhead_same_chunks": remote[c] / local[c] - 1,
              "overhead_vs_ideal": remote[c] / ideal - 1} for c in sorted(remote)]
     below = [r["chunk_cells"] for r in rows if r["overhead"] < THRESHOLD]

@@ -3,15 +3,16 @@
     python benchmarks/run_all.py            # full size (tens of minutes on 2 cores)
     python benchmarks/run_all.py --quick    # small sizes, a couple of minutes
 
-Steps: ``bench_sweep.py`` (the Fig. 5a map: compile and run time, 1 and 2 threads), the
+Steps: ``bench_sweep.py`` (the Fig. 5a map: compile and run time, 1 and 2 threads, in process
+and as a command), ``bench_cube.py`` (an (Omega, clearance, F0) cube streamed into netCDF), the
 work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics;
 ``spring_precision.py``: full dynamics of the spring law against solve_ivp), the scaling
 series (``scaling.py``), ``bench_distributed.py`` (Dask overhead, if installed) and
 ``bench_longtime.py`` (the long-time bifurcation diagram). Results go to
 ``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
-``sweep.json``/``sweep.md`` from bench_sweep, ``distributed.json``/``.md``,
-``longtime.json``/``.md``); the plots are drawn from those JSON files only; ``README.md`` holds
-the headline table.
+``sweep.json``/``sweep.md`` from bench_sweep, ``cube.json``/``cube.md`` from bench_cube,
+``distributed.json``/``.md``, ``longtime.json``/``.md``); the plots are drawn from those JSON
+files only; ``README.md`` holds the headline table.
 """
 
 from __future__ import annotations
@@ -81,6 +82,13 @@ def run_bench_sweep(quick: bool) -> None:
             path.write_text(SMALL_SWEEP)
             command += ["--sweep", str(path), "--repeats", "1"]
         subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+
+
+def run_bench_cube(quick: bool) -> None:
+    """The streamed cube (10^6 and 8 10^6 cells, extrapolated to 10^9; 50^3 with --quick)."""
+    sizes = ["50"] if quick else ["100", "200"]
+    subprocess.run([sys.executable, str(HERE / "bench_cube.py"), "--num", *sizes], check=True,
+                   stdout=subprocess.DEVNULL)
 
 
 def run_bench_longtime(quick: bool) -> None:
@@ -316,7 +324,8 @@ Targets at matched error (first-impact map grid):
   impacts matched by index. Against many modes the impact sequence does not converge (modal
   non-convergence, see `docs/modal_convergence.md` and `docs/limits.md`).
 
-Files: `work_precision.json`, `dynamics.json`, `scaling.json`, `sweep.json` / `sweep.md`;
+Files: `work_precision.json`, `dynamics.json`, `scaling.json`, `sweep.json` / `sweep.md`,
+`cube.json` / `cube.md`, `compression.json` (`bench_cube.py --compression`);
 plots `work_precision_first_impact.png`, `work_precision_dynamics.png`, `scaling.png`.
 """
 
@@ -340,6 +349,8 @@ def main() -> None:
     if not args.skip_bench_sweep:
         log("bench_sweep.py")
         run_bench_sweep(args.quick)
+        log("bench_cube.py")
+        run_bench_cube(args.quick)
     log("work-precision: first impact")
     first = wp.first_impact_study(wp.QUICK if args.quick else wp.FirstImpactConfig(), log)
     log("work-precision: full dynamics")

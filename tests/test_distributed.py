@@ -23,7 +23,7 @@ GRID = {  # 40 x 30 cells, a fraction of a second of serial work
         "force_amplitude": {"min": 1e-5, "max": 1e-3, "num": 30, "scale": "log"},
     },
 }
-SLOW_GRID = {  # 250000 cells, about 2 s of serial work: 16 chunks of ~0.1 s
+SLOW_GRID = {  # 250000 cells, about 2 s of serial work: 16 chunks of 32 lines, ~0.1 s each
     "t_max": 1.0,
     "n_modes": 20,
     "params": {"clearance": 1.1e-5},
@@ -94,9 +94,9 @@ def test_distributed_map_is_bitwise_equal_to_local(client, threads_per_task, tmp
     seen = []
     out = tmp_path / "map.nc"
     runner = dask_runner(client, threads_per_task=threads_per_task)
-    remote = run_sweep(sweep, output=out, progress=False, chunk_cells=100, runner=runner,
+    remote = run_sweep(sweep, output=out, progress=False, chunk_cells=120, runner=runner,
                        on_chunk=seen.append)
-    assert sorted(seen) == list(range(12))  # every chunk exactly once
+    assert sorted(seen) == list(range(10))  # every chunk (4 lines of 30 cells) exactly once
     assert_same_map(remote, local)
     assert out.exists() and not (tmp_path / "map.nc.partial").exists()
     assert default_threads_per_task(client) == max(1, os.cpu_count() // 2)
@@ -113,14 +113,14 @@ def test_interrupted_client_resumes_from_saved_chunks(client, tmp_path):
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        run_sweep(sweep, output=out, progress=False, chunk_cells=100,
+        run_sweep(sweep, output=out, progress=False, chunk_cells=120,
                   runner=dask_runner(client), on_chunk=stop_after_three)
     partial = tmp_path / "map.nc.partial"
     assert sorted(int(p.stem[6:]) for p in partial.glob("chunk_*.npz")) == sorted(done)
     computed = []
-    resumed = run_sweep(sweep, output=out, progress=False, chunk_cells=100,
+    resumed = run_sweep(sweep, output=out, progress=False, chunk_cells=120,
                         runner=dask_runner(client), on_chunk=computed.append)
-    assert sorted(computed) == sorted(set(range(12)) - set(done))
+    assert sorted(computed) == sorted(set(range(10)) - set(done))
     assert_same_map(resumed, run_sweep(sweep, progress=False))
     assert not partial.exists()
 
@@ -131,6 +131,16 @@ def test_workers_of_another_version_are_refused(client, monkeypatch):
     monkeypatch.setattr(dask_runner_module, "__version__", "0.0.0")  # client side only
     sweep = sweep_from_mapping(GRID, source="grid")
     with pytest.raises(RuntimeError, match="install the same version on every worker"):
+        run_sweep(sweep, progress=False, runner=dask_runner(client))
+
+
+def test_workers_with_other_code_are_refused(client, monkeypatch):
+    """Same version, edited kernels (another code digest) on this side only: refused."""
+    import impactbeams.sweep.dask_runner as dask_runner_module
+
+    monkeypatch.setattr(dask_runner_module, "code_digest", lambda: "0" * 16)  # client side
+    sweep = sweep_from_mapping(GRID, source="grid")
+    with pytest.raises(RuntimeError, match=r"\(code 0{16}\): install the same version"):
         run_sweep(sweep, progress=False, runner=dask_runner(client))
 
 
@@ -155,7 +165,7 @@ def test_killed_worker_loses_and_doubles_no_chunk(tmp_path):
             killed["worker"], killed["keys"] = victim, keys
             os.kill(client.run(os.getpid, workers=[victim])[victim], signal.SIGKILL)
 
-        remote = run_sweep(sweep, output=tmp_path / "s.nc", progress=False, chunk_cells=15625,
+        remote = run_sweep(sweep, output=tmp_path / "s.nc", progress=False, chunk_cells=16000,
                            runner=dask_runner(client, window=16),
                            on_chunk=kill_a_computing_worker)
         # it died (the nanny may start a new one, at another address)

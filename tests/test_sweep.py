@@ -142,9 +142,11 @@ def test_interrupted_run_resumes_to_the_same_result(tmp_path):
     partial = tmp_path / "map.nc.partial"
     assert not out.exists()
     assert len(list(partial.glob("chunk_*.npz"))) == 3
+    assert not list(partial.glob("*.nc"))  # the unfinished file is deleted on the interrupt
     computed = []
     resumed = run_sweep(sweep, output=out, progress=False, chunk_cells=10, on_chunk=computed.append)
-    assert computed == list(range(3, 10))  # 91 cells in chunks of 10: only the unsaved ones
+    # 13 x 7 cells in chunks of at most 10 whole lines of 7: only the unsaved ones are computed
+    assert computed == list(range(3, 13))
     fresh = run_sweep(sweep, progress=False)
     assert np.array_equal(resumed.first_impact_time, fresh.first_impact_time, equal_nan=True)
     assert out.exists() and not partial.exists()
@@ -155,7 +157,7 @@ def test_interrupted_run_resumes_to_the_same_result(tmp_path):
     again = run_sweep(sweep, output=out, progress=False, on_chunk=computed.append,
                       runner=_refusing_runner)
     after = out.stat()
-    assert computed == list(range(3, 10))
+    assert computed == list(range(3, 13))
     assert (after.st_ino, after.st_mtime_ns, after.st_size) == (
         before.st_ino, before.st_mtime_ns, before.st_size)
     assert out.read_bytes() == content
@@ -252,6 +254,10 @@ def test_netcdf_file_is_self_describing(tmp_path):
     with xr.open_dataset(out) as back:
         assert np.array_equal(back.first_impact_time, ds.first_impact_time, equal_nan=True)
         assert back.force_amplitude.attrs["scale"] == "log"
+    with netCDF4.Dataset(out) as nc:  # small maps are compressed too (issue 13)
+        for name in ("first_impact_time", "impacted"):
+            filters = nc[name].filters()
+            assert filters["zlib"] and filters["shuffle"] and filters["complevel"] == 4
 
 
 def test_cli_run_and_plot(tmp_path, capsys):

@@ -1,19 +1,14 @@
 """impactbeams: exact modal dynamics of two impacting cantilevers, and sweeps over it.
 
 The physics follows Dzyubak & Bhaskar (2017) as corrected in docs/model.md. Heavy modules load on
-first use, so ``import impactbeams`` stays fast and compiles nothing.
+first use, so ``import impactbeams`` stays fast and compiles nothing; so does ``__version__``
+(reading the installed metadata costs more than the rest of the import).
 """
 
 from importlib import import_module
-from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
 from impactbeams.params import ParameterError, Params
-
-try:
-    __version__ = version("impactbeams")
-except PackageNotFoundError:  # running from a source tree without installation
-    __version__ = "0+unknown"
 
 _LAZY = {
     "build_model": "impactbeams.model",
@@ -28,7 +23,20 @@ _LAZY = {
 __all__ = ["ParameterError", "Params", "__version__", *_LAZY]
 
 
+def _version() -> str:
+    """The installed package's version ("0+unknown" in a source tree without installation)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("impactbeams")
+    except PackageNotFoundError:
+        return "0+unknown"
+
+
 def __getattr__(name: str) -> Any:
+    if name == "__version__":
+        globals()[name] = _version()  # once: later look-ups find the module attribute
+        return globals()[name]
     if name in _LAZY:
         return getattr(import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'impactbeams' has no attribute {name!r}")

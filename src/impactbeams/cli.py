@@ -105,7 +105,7 @@ def _modes(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from impactbeams.preflight import require_input_file
-    from impactbeams.sweep import load_sweep, run_sweep
+    from impactbeams.sweep import load_sweep, write_sweep  # writes netCDF without xarray
 
     sweep = load_sweep(require_input_file(args.sweep, "sweep"))
     output = _sweep_output(args, sweep)
@@ -116,16 +116,21 @@ def _run(args: argparse.Namespace) -> int:
         _announce(sweep, output, args)
     try:
         with _cluster_runner(args) as runner:
-            dataset = run_sweep(sweep, output=output, threads=None if runner else args.threads,
-                                progress=not args.quiet, chunk_cells=args.chunk_cells,
-                                runner=runner)
+            write_sweep(sweep, output, threads=None if runner else args.threads,
+                        progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner,
+                        discard_corrupt=args.discard_corrupt)
     except KeyboardInterrupt:
         print(f"\nimpactbeams: interrupted; finished chunks are kept in {output}.partial/ "
               "and the same command resumes from them", file=sys.stderr)
         raise
     print(f"reused {output}: it already holds the result of this sweep (nothing computed)"
           if reuse else f"wrote {output}", file=sys.stderr)
-    return _incomplete_cells(dataset)
+    if not sweep.needs_dynamics:  # no run status to check: xarray need not load
+        return 0
+    import xarray as xr
+
+    with xr.open_dataset(output) as dataset:
+        return _incomplete_cells(dataset)
 
 
 def _sweep_output(args: argparse.Namespace, sweep: Sweep) -> Path:
@@ -357,8 +362,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="Numba threads (default: all cores); on a cluster, per task "
                      "(default: cores per host / Dask threads per host)")
     run.add_argument("--chunk-cells", type=_POSITIVE_INTEGER,
-                     help="cells per saved chunk (default: about 1%% of the grid, 4096..65536)")
+                     help="most cells per chunk, rounded down to whole lines of the last "
+                     "axes (default: 2^20 for a first-impact map, 2^16 for full dynamics)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--discard-corrupt", action="store_true",
+                     help="on a resume, delete damaged saved chunks and compute them again "
+                     "(default: stop with an error naming the file)")
     cluster = run.add_mutually_exclusive_group()
     cluster.add_argument("--scheduler", metavar="ADDRESS",
                          help="run the chunks on the Dask cluster at ADDRESS, e.g. "

@@ -157,12 +157,18 @@ def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
                     (spring.left, spring.right, modes))
 
 
-def cell_rows(columns: Mapping[str, np.ndarray | float], size: int) -> np.ndarray:
-    """``size`` cell rows (``layout.CELL_COLUMNS``) from per-column values (arrays or scalars)."""
-    cells = np.empty((size, len(layout.CELL_COLUMNS)))
+def cell_rows(columns: Mapping[str, np.ndarray | float], shape: int | tuple[int, ...],
+              ) -> np.ndarray:
+    """Cell rows (``layout.CELL_COLUMNS``) of a box of ``shape`` cells (or of ``shape`` cells).
+
+    The rows are in C order; each column's value is a scalar or an array that broadcasts to
+    ``shape`` (a swept axis's values along its dimension).
+    """
+    box = (shape,) if isinstance(shape, int) else shape
+    cells = np.empty((*box, len(layout.CELL_COLUMNS)))
     for index, name in enumerate(layout.CELL_COLUMNS):
-        cells[:, index] = columns[name]
-    return cells
+        cells[..., index] = columns[name]
+    return cells.reshape(-1, len(layout.CELL_COLUMNS))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -3,7 +3,8 @@
 The data flow, one module each: :mod:`~impactbeams.sweep.definition` (what a sweep is) ->
 :mod:`~impactbeams.sweep.plan` (the kernels' inputs, :func:`compute_chunk`) ->
 :mod:`~impactbeams.sweep.run` (chunks through a runner; :mod:`~impactbeams.sweep.store` keeps
-finished ones for a resume) -> :mod:`~impactbeams.sweep.output` (the map Dataset).
+finished ones for a resume) -> :mod:`~impactbeams.sweep.output` (the map, in memory or streamed
+into netCDF). Importing this package loads NumPy only: xarray, netCDF4 and Numba load on use.
 """
 
 from impactbeams.sweep.definition import (
@@ -19,19 +20,26 @@ from impactbeams.sweep.definition import (
     sweep_from_mapping,
 )
 from impactbeams.sweep.output import map_dataset
-from impactbeams.sweep.plan import MAX_SEGMENTS, Plan, build_plan, compute_chunk
+from impactbeams.sweep.plan import (
+    MAX_SEGMENTS,
+    Chunking,
+    Plan,
+    build_plan,
+    code_digest,
+    compute_chunk,
+    default_chunk_cells,
+)
 from impactbeams.sweep.progress import Progress
 from impactbeams.sweep.run import (
     Chunk,
     ChunkRunner,
-    chunk_bounds,
-    default_chunk_cells,
     local_runner,
     run_sweep,
+    write_sweep,
 )
 
 __all__ = ["CELL_PARAMETERS", "DYNAMICS_OBSERVABLES", "FIRST_IMPACT", "LONG_TIME_OBSERVABLES",
-           "LYAPUNOV", "MAX_SEGMENTS", "OBSERVABLES", "Axis", "Chunk", "ChunkRunner", "Plan",
-           "Progress", "Sweep", "build_plan", "chunk_bounds", "compute_chunk",
+           "LYAPUNOV", "MAX_SEGMENTS", "OBSERVABLES", "Axis", "Chunk", "ChunkRunner", "Chunking",
+           "Plan", "Progress", "Sweep", "build_plan", "code_digest", "compute_chunk",
            "default_chunk_cells", "load_sweep", "local_runner", "map_dataset", "run_sweep",
-           "sweep_from_mapping"]
+           "sweep_from_mapping", "write_sweep"]

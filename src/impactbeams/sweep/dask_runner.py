@@ -33,7 +33,7 @@ import numpy as np
 from impactbeams import __version__
 from impactbeams.params import ParameterError, require
 from impactbeams.sweep.definition import Sweep
-from impactbeams.sweep.plan import Plan, build_plan, compute_chunk
+from impactbeams.sweep.plan import Plan, build_plan, code_digest, compute_chunk
 from impactbeams.sweep.run import Chunk, ChunkRunner, numba_threads
 
 if TYPE_CHECKING:
@@ -80,20 +80,29 @@ def dask_client(scheduler: str | None = None,
         yield client
 
 
+def _release() -> str:
+    """The impactbeams version and the digest of its numerical code in this process."""
+    return f"{__version__} (code {code_digest()})"
+
+
 def _worker_info() -> tuple[str, int, str]:
-    """(host name, Numba's thread limit, impactbeams version) of the calling worker process."""
+    """(host name, Numba's thread limit, :func:`_release`) of the calling worker process."""
     import numba
 
-    return socket.gethostname(), int(numba.config.NUMBA_NUM_THREADS), __version__
+    return socket.gethostname(), int(numba.config.NUMBA_NUM_THREADS), _release()
 
 
 def _workers(client: Client) -> dict[str, tuple[str, int, str]]:
-    """:func:`_worker_info` of every connected worker; all must run this impactbeams version."""
+    """:func:`_worker_info` of every connected worker; all must run this client's code.
+
+    The version alone is not enough: an edited kernel without a version bump would compute
+    other numbers on the workers than here.
+    """
     info = client.run(_worker_info)
-    other = sorted({version for _, _, version in info.values()} - {__version__})
+    other = sorted({release for _, _, release in info.values()} - {_release()})
     if other:
         raise RuntimeError(f"workers run impactbeams {', '.join(other)}, this client "
-                           f"{__version__}: install the same version on every worker")
+                           f"{_release()}: install the same version on every worker")
     return info
 
 

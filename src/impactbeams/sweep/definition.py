@@ -410,13 +410,15 @@ def _geometry_axes(sweep: Sweep) -> list[Axis]:
     return [sweep.axes[k] for k in geometry_axes(sweep)]
 
 
-def expected_cost(sweep: Sweep, threads: int | None = None) -> Cost:
+def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = False) -> Cost:
     """Peak memory and rough wall time of running ``sweep`` on ``threads`` (default: all cores).
 
-    Memory: the results (one float64 array of every cell per stored variable and the Dataset's
-    copy: 16 bytes per cell and variable, plus 4 for ``impacted`` and its temporaries; the
-    traced peak of a first-impact map, netCDF writing included, is 18.04 bytes per cell), the
-    plan (8 x 2N float64 per geometry; a dynamics map 10 (2N)^2, with its stacking copy) and a
+    Memory: a streamed run (``write_sweep``, what ``impactbeams run`` does) holds a chunk at a
+    time (:func:`chunk_memory`); ``in_memory`` (``run_sweep`` without an output) also holds the
+    results (one float64 array of every cell per stored value and the Dataset's copy: 16
+    bytes per cell and value, plus 4 for ``impacted`` and its temporaries; the traced peak
+    of a first-impact map, netCDF writing included, is 18.04 bytes per cell). Both add the plan
+    (8 x 2N float64 per geometry; a dynamics map 10 (2N)^2, with its stacking copy) and a
     dynamics map's per-thread segment buffers (MAX_SEGMENTS x (4 x 2N + 3) float64; a long
     run's LONG_RUN_CAPACITY of them and its samples' states). Time: ``rate`` x 2N x (fastest
     frequency x horizon) per cell over the threads, plus the set-up; the horizon is t_max,
@@ -430,7 +432,7 @@ def expected_cost(sweep: Sweep, threads: int | None = None) -> Cost:
     values, _ = _corners(sweep)
     fastest = float(np.max(np.maximum(values["omega"],
                                       highest_frequency(values, sweep.n_modes))))
-    results = sweep.size * (16 * _stored_values(sweep) + 4)
+    results = sweep.size * (16 * _stored_values(sweep) + 4) if in_memory else 0
     # a run over [0, t_max] for the other observables, if any
     over_t_max = any(name not in LONG_TIME_OBSERVABLES for name in sweep.observables)
     horizon = sweep.t_max if over_t_max else 0.0
@@ -448,7 +450,25 @@ def expected_cost(sweep: Sweep, threads: int | None = None) -> Cost:
         horizon += float(np.mean(sweep.long_time.horizon(values["omega"],
                                                          sweep.transient_periods)))
     compute = sweep.size * coordinates * fastest * horizon * rate / threads
-    return Cost(results + plan + buffers, geometries * per_geometry + compute)
+    return Cost(chunk_memory(sweep) + results + plan + buffers,
+                geometries * per_geometry + compute)
+
+
+def chunk_memory(sweep: Sweep) -> int:
+    """Bytes a run of ``sweep`` holds for its chunk being computed and the one being written.
+
+    Per cell of a default chunk: its cell rows (56 bytes), the kernel's output (8 per
+    column), 24 per stored value (the chunk's arrays, its saved copy, the file's variables)
+    and 18 for HDF5's buffers of a block (the uncompressed block in its cache and the
+    compressed one; outside Python's allocator). Traced peaks of a streamed first-impact map:
+    69 to 81 bytes per chunk cell (against 106 here).
+    """
+    from impactbeams.kernels.layout import OUT_COLUMNS
+    from impactbeams.sweep.plan import default_chunk_cells
+
+    columns = len(OUT_COLUMNS) if sweep.needs_dynamics else 1
+    cells = min(sweep.size, default_chunk_cells(sweep))
+    return cells * (56 + 8 * columns + 24 * _stored_values(sweep) + 18)
 
 
 def _stored_values(sweep: Sweep) -> int:

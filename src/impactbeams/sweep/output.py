@@ -1,45 +1,55 @@
-"""The map Dataset of a sweep: one array per observable over the swept axes."""
+"""The map of a sweep: one array per observable over the swept axes, in memory or on disk.
+
+:func:`map_layout` is what both forms hold (coordinates, variables, attributes);
+:func:`map_dataset` builds the in-memory Dataset, :func:`map_file` fills the netCDF file
+chunk by chunk, never holding the whole map.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import json
+import math
+from collections.abc import Callable, Iterator, Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
+from impactbeams.io import Layout, build_netcdf
 from impactbeams.params import MATERIAL_KEYS
 from impactbeams.sweep.definition import FIRST_IMPACT, LONG_TIME_KEYS, Sweep
-from impactbeams.sweep.plan import contact_resolution
+from impactbeams.sweep.plan import Chunking, code_digest, contact_resolution, flat_boxes
 from impactbeams.variables import attributes, global_attributes, parameter_attributes
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 _INTEGER_TYPES = {"dynamics_status": np.int8, "impact_count": np.int32,  # codes and counts
                   "response_period": np.int32}
+ChunkWriter = Callable[[int, int, Mapping[str, np.ndarray]], None]
 
 
-def map_dataset(sweep: Sweep, results: dict[str, np.ndarray]) -> xr.Dataset:
-    """The Dataset of ``sweep`` from its flat ``results`` (one array of all cells each)."""
-    dims = [axis.name for axis in sweep.axes]
-    coords = {axis.name: (axis.name, axis.values,
-                          {**parameter_attributes(axis.name), "scale": axis.scale})
+def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
+    """The map's coordinates, variables and attributes; ``chunks``: its blocks on disk."""
+    coords = {axis.name: (axis.values, {**parameter_attributes(axis.name), "scale": axis.scale})
               for axis in sweep.axes}
-    extra = {name: sweep.value_shape(name) for name in results}
-    data_vars = {name: ([*dims, *(["period"] if extra[name] else [])],
-                        values.astype(_INTEGER_TYPES.get(name, values.dtype))
-                        .reshape(sweep.shape + extra[name]), attributes(name))
-                 for name, values in results.items()}
-    if FIRST_IMPACT in results:
-        impacted = np.isfinite(results[FIRST_IMPACT]).astype(np.int8).reshape(sweep.shape)
-        data_vars["impacted"] = (dims, impacted, attributes("impacted"))
+    grid = tuple(coords)
+    variables = {name: (np.dtype(_INTEGER_TYPES.get(name, np.float64)), attributes(name),
+                        grid + (("period",) if sweep.value_shape(name) else ()))
+                 for name in sweep.stored}
+    if FIRST_IMPACT in sweep.stored:
+        variables["impacted"] = (np.dtype(np.int8), attributes("impacted"), grid)
     run = {"t_max": sweep.t_max, "t_max_units": "s", "n_modes": sweep.n_modes,
-           "observables": " ".join(sweep.observables), "swept_parameters": " ".join(dims),
+           "observables": " ".join(sweep.observables), "swept_parameters": " ".join(coords),
            "sweep_definition": json.dumps(sweep.definition(), sort_keys=True),
-           "sweep_fingerprint": sweep.fingerprint()}
+           "sweep_fingerprint": sweep.fingerprint(), "code_digest": code_digest()}
     if sweep.long_time is not None:
         long_time = sweep.long_time
         run.update({key: getattr(long_time, key) for key in LONG_TIME_KEYS},
                    transient_periods=sweep.transient_periods)
-        if any(extra.values()):
-            coords["period"] = ("period", long_time.period_numbers(sweep.transient_periods),
+        if any(sweep.value_shape(name) for name in sweep.stored):
+            coords["period"] = (long_time.period_numbers(sweep.transient_periods),
                                 attributes("period"))
     resolution = contact_resolution(sweep)
     if resolution is not None:
@@ -47,7 +57,50 @@ def map_dataset(sweep: Sweep, results: dict[str, np.ndarray]) -> xr.Dataset:
                    contact_resolution_modes=resolution)
     attrs = global_attributes("impactbeams parameter sweep", f"run {sweep.source}",
                               _fixed_parameters(sweep), **run)
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    return Layout(coords, variables, attrs, chunks or sweep.shape)
+
+
+def stored_arrays(sweep: Sweep, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The map's variables over some cells, from the computed values of those cells."""
+    arrays = {name: values[name].astype(_INTEGER_TYPES.get(name, np.float64), copy=False)
+              for name in sweep.stored}
+    if FIRST_IMPACT in values:
+        arrays["impacted"] = np.isfinite(values[FIRST_IMPACT]).astype(np.int8)
+    return arrays
+
+
+def map_dataset(sweep: Sweep, results: Mapping[str, np.ndarray]) -> xr.Dataset:
+    """The in-memory Dataset of ``sweep`` from its flat ``results`` (one array of all cells)."""
+    import xarray as xr
+
+    layout = map_layout(sweep)
+    arrays = stored_arrays(sweep, results)
+    data_vars = {name: (dims, arrays[name].reshape(sweep.shape + arrays[name].shape[1:]), attrs)
+                 for name, (_, attrs, dims) in layout.variables.items()}
+    coords = {name: (name, values, attrs) for name, (values, attrs) in layout.coords.items()}
+    return xr.Dataset(data_vars, coords=coords, attrs=layout.attrs)
+
+
+@contextlib.contextmanager
+def map_file(sweep: Sweep, path: Path, building: Path,
+             chunking: Chunking) -> Iterator[ChunkWriter]:
+    """Build the netCDF file of ``sweep`` at ``building`` and yield ``write(start, stop, values)``.
+
+    ``write`` stores the computed values of the flat cells start..stop; each chunk of
+    ``chunking`` is one compressed block of the file. On a normal exit the file is renamed to
+    ``path`` (see :func:`impactbeams.io.build_netcdf`).
+    """
+    with build_netcdf(path, building, map_layout(sweep, chunking.box)) as nc:
+        def write(start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:
+            arrays, offset = stored_arrays(sweep, values), 0
+            for box in flat_boxes(start, stop, sweep.shape):
+                shape = tuple(s.stop - s.start for s in box)
+                size = math.prod(shape)
+                for name, array in arrays.items():  # a sampled observable: all its samples
+                    nc[name][box] = array[offset:offset + size].reshape(shape + array.shape[1:])
+                offset += size
+
+        yield write
 
 
 def _fixed_parameters(sweep: Sweep) -> dict[str, float]:

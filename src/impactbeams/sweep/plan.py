@@ -1,15 +1,21 @@
 """A sweep's kernel inputs (the per-geometry plan, a chunk's cells) and :func:`compute_chunk`.
 
-The grid is flattened; a chunk is a range of flat cells. Axes over :data:`CELL_PARAMETERS`
-change a cell's forcing, initial state or damping only; the other axes change the geometry,
-whose modes are computed once per geometry (the plan).
+The grid is flattened in C order; a chunk is a range of flat cells. :class:`Chunking` cuts the
+grid into chunks that are also boxes of the array (whole lines of the last axes), so that a
+chunk's cells are built by broadcasting the axis values, never the whole grid's, and a chunk is
+one compressed block of the netCDF file. Axes over :data:`CELL_PARAMETERS` change a cell's
+forcing, initial state or damping only; the other axes change the geometry, whose modes are
+computed once per geometry (the plan).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import itertools
+import math
 from collections.abc import Iterator
+from pathlib import Path
 
 import numpy as np
 
@@ -26,6 +32,10 @@ from impactbeams.sweep.definition import (
 
 MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov exponent's
 # windowed run) in a full-dynamics sweep; more: dynamics_status = 1
+# The code that decides a sweep's numbers: every kernel and the modules that build their inputs
+# (paths in the package). Saved chunks and finished files of other code are never reused.
+NUMERIC_CODE = ("kernels/*.py", "packing.py", "model.py", "modes.py", "compliant.py",
+                "params.py", "sweep/definition.py", "sweep/plan.py")
 # a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
 LONG_RUN_CAPACITY = 2048
 MAX_PHASES_PER_PERIOD = 2000  # cap of a long run, per forcing period; more: dynamics_status = 1
@@ -48,6 +58,20 @@ class Plan:
     geometry: np.ndarray  # (geometries, len(GEOMETRY))
     geometry_axes: tuple[int, ...]  # positions of the axes that change the geometry
     switching: tuple[np.ndarray, ...] | None  # a dynamics map's switching arrays
+    axis_values: tuple[np.ndarray, ...]  # every axis's values, computed once for all chunks
+
+
+def code_digest(package: Path = Path(__file__).parents[1]) -> str:
+    """Short hash of the :data:`NUMERIC_CODE` files of ``package`` (default: this one).
+
+    Part of a run's identity next to the sweep's fingerprint: a changed kernel without a new
+    version number must not resume from the old code's chunks.
+    """
+    paths = sorted(path for pattern in NUMERIC_CODE for path in package.glob(pattern))
+    digest = hashlib.sha256()
+    for path in paths:
+        digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:16]
 
 
 def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
@@ -64,10 +88,10 @@ def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
 
 def contact_resolution(sweep: Sweep) -> int | None:
     """n_modes that resolves a spring-law dynamics map's stiffest contact; None otherwise."""
-    from impactbeams.compliant import required_modes
-
     if not sweep.needs_dynamics or "spring" not in _laws(sweep):
         return None
+    from impactbeams.compliant import required_modes  # SciPy's optimisers: only when needed
+
     swept = [axis.max for axis in sweep.axes if axis.name == "contact_stiffness"]
     stiffest = swept[0] if swept else sweep.base.contact_stiffness
     return required_modes(sweep.base.replace(contact_law="spring", contact_stiffness=stiffest))
@@ -109,23 +133,126 @@ def build_plan(sweep: Sweep) -> Plan:
     tables, geometry, *switching = (np.array(arrays) for arrays in zip(*per_geometry,
                                                                         strict=True))
     return Plan(sweep.fingerprint(), sweep.base, tables, geometry, geometry_axes(sweep),
-                tuple(switching) or None)
+                tuple(switching) or None, tuple(axis.values for axis in sweep.axes))
 
 
 def chunk_cells(sweep: Sweep, plan: Plan, start: int, stop: int) -> np.ndarray:
     """The packed cell rows (kernels.layout.CELL_COLUMNS) of flat cells start..stop."""
+    rows = [_box_cells(sweep, plan, box) for box in flat_boxes(start, stop, sweep.shape)]
+    return rows[0] if len(rows) == 1 else np.concatenate(rows)
+
+
+def _box_cells(sweep: Sweep, plan: Plan, box: tuple[slice, ...]) -> np.ndarray:
+    """The cell rows of one box of the grid, in C order, from the axis values by broadcasting."""
     from impactbeams import packing
 
-    index = np.unravel_index(np.arange(start, stop), sweep.shape)
-    columns = {name: getattr(plan.base, name) for name in CELL_PARAMETERS}
+    columns: dict[str, float | np.ndarray] = {name: getattr(plan.base, name)
+                                              for name in CELL_PARAMETERS}
     for k, axis in enumerate(sweep.axes):
         if axis.name in columns:
-            columns[axis.name] = axis.values[index[k]]
-    geometry_shape = tuple(sweep.axes[k].num for k in plan.geometry_axes)
-    geometry_index = tuple(index[k] for k in plan.geometry_axes)
-    columns["geometry"] = (np.ravel_multi_index(geometry_index, geometry_shape)
-                           if geometry_shape else 0)
-    return packing.cell_rows(columns, stop - start)
+            columns[axis.name] = _along(plan.axis_values[k][box[k]], k, len(box))
+    geometry, stride = 0, 1  # the flat index over the geometry axes, the last one fastest
+    for k in reversed(plan.geometry_axes):
+        geometry = geometry + _along(np.arange(box[k].start, box[k].stop) * stride, k, len(box))
+        stride *= sweep.axes[k].num
+    columns["geometry"] = geometry
+    return packing.cell_rows(columns, tuple(s.stop - s.start for s in box))
+
+
+def _along(values: np.ndarray, axis: int, ndim: int) -> np.ndarray:
+    """``values`` shaped to broadcast along ``axis`` of an ``ndim``-D box."""
+    return values.reshape([-1 if k == axis else 1 for k in range(ndim)])
+
+
+def flat_boxes(start: int, stop: int, shape: tuple[int, ...]) -> Iterator[tuple[slice, ...]]:
+    """The boxes (one slice per axis) that tile the flat C-order cells start..stop, in order.
+
+    A range aligned on whole lines (a :class:`Chunking` chunk) is one box; any other range is
+    at most ``2 len(shape) - 1`` boxes.
+    """
+    if len(shape) == 1:
+        yield (slice(start, stop),)
+        return
+    inner = math.prod(shape[1:])
+    first, head = divmod(start, inner)
+    last, tail = divmod(stop, inner)
+    if first == last:
+        for box in flat_boxes(head, tail, shape[1:]):
+            yield slice(first, first + 1), *box
+        return
+    if head:
+        for box in flat_boxes(head, inner, shape[1:]):
+            yield slice(first, first + 1), *box
+        first += 1
+    if last > first:
+        yield slice(first, last), *(slice(0, n) for n in shape[1:])
+    if tail:
+        for box in flat_boxes(0, tail, shape[1:]):
+            yield slice(last, last + 1), *box
+
+
+@dataclasses.dataclass(frozen=True)
+class Chunking:
+    """The chunks of a grid: ``run`` indices of axis ``axis`` times every later axis whole.
+
+    Each chunk is one index of the axes before ``axis`` and a run along it, so it is both a
+    contiguous range of flat cells and a box of the array (the last run along ``axis`` may be
+    shorter). Chunks are numbered in C order; chunk ``k`` covers the same cells in every run
+    with the same chunking, which is what a resume relies on.
+    """
+
+    shape: tuple[int, ...]
+    axis: int
+    run: int
+
+    @classmethod
+    def at_most(cls, shape: tuple[int, ...], cells: int) -> Chunking:
+        """The largest chunks of at most ``cells`` cells (at least one), whole lines if they fit.
+
+        The outermost axis whose later axes hold at most ``cells`` cells is cut into runs.
+        """
+        cells = max(cells, 1)
+        axis = next(k for k in range(len(shape)) if math.prod(shape[k + 1:]) <= cells)
+        return cls(tuple(shape), axis, min(shape[axis], cells // math.prod(shape[axis + 1:])))
+
+    @property
+    def box(self) -> tuple[int, ...]:
+        """The shape of a (full) chunk."""
+        return (1,) * self.axis + (self.run,) + self.shape[self.axis + 1:]
+
+    @property
+    def cells(self) -> int:
+        """The number of cells of a (full) chunk."""
+        return math.prod(self.box)
+
+    @property
+    def count(self) -> int:
+        """The number of chunks."""
+        return math.prod(self.shape[:self.axis]) * -(-self.shape[self.axis] // self.run)
+
+    def bounds(self, chunk: int) -> tuple[int, int]:
+        """The flat cells start..stop of chunk number ``chunk``."""
+        per_line = -(-self.shape[self.axis] // self.run)
+        outer, j = divmod(chunk, per_line)
+        line = math.prod(self.shape[self.axis + 1:])
+        first = outer * self.shape[self.axis] + j * self.run
+        last = outer * self.shape[self.axis] + min((j + 1) * self.run, self.shape[self.axis])
+        return first * line, last * line
+
+
+def default_chunk_cells(sweep: Sweep) -> int:
+    """2^20 cells per chunk (2^16 for full dynamics, far costlier per cell): about a second of work.
+
+    Large enough that the fixed cost of a chunk (starting the kernel's threads, its file, its
+    netCDF block, a Dask task) stays small beside its computation, which matters on a busy
+    machine where every start of the threads waits for the cores; small enough that an
+    interrupt loses little and a cube streams in pieces of tens of MB. A map of up to 2^20 cells
+    is therefore computed in one pass. Long-time observables take seconds per cell: chunks of
+    16 to 256 cells, so that progress shows and an interrupt loses little.
+    """
+    if sweep.long_time is not None:
+        return int(min(max(sweep.size // 100, 16), 256))
+    return 2**16 if sweep.needs_dynamics else 2**20
 
 
 MAX_COLUMN_CELLS = 4096  # a first-impact map's columns: at most this many cells each
@@ -159,13 +286,14 @@ def first_impact_columns(sweep: Sweep, start: int, stop: int) -> Columns:
         return Columns(start, stop, np.arange(stop - start + 1, dtype=np.int64),
                        layout.CELL_F0)
     length = min(last.num, MAX_COLUMN_CELLS)
-    flat = np.arange(start, stop)
-    row, position = np.divmod(flat, last.num)
-    segment_start = row * last.num + position // length * length
-    segment_stop = np.minimum(segment_start + length, (row + 1) * last.num)
-    first, end = int(segment_start[0]), int(segment_stop[-1])
-    edges = np.unique(np.concatenate([segment_start, segment_stop])) - first
-    return Columns(first, end, edges.astype(np.int64), _AFFINE_AXES[last.name])
+    rows = np.arange(start // last.num, (stop - 1) // last.num + 1, dtype=np.int64)
+    # the segments tile each row and the rows follow each other: one edge per segment start
+    starts = (rows[:, None] * last.num + np.arange(0, last.num, length)).ravel()
+    ends = np.minimum(starts + length, (starts // last.num + 1) * last.num)
+    touched = (ends > start) & (starts < stop)
+    starts, end = starts[touched], int(ends[touched][-1])
+    return Columns(int(starts[0]), end, np.append(starts, end) - starts[0],
+                   _AFFINE_AXES[last.name])
 
 
 def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,

@@ -26,7 +26,7 @@ class Progress:
         """Record ``cells`` more finished cells (``computed=False``: loaded from a resume)."""
         self.done += cells
         now = time.perf_counter()
-        eta = float("nan")
+        eta = 0.0 if self.done == self.total else float("nan")
         if computed and self.warm is None:
             self.warm = (now, self.done)
         elif computed and now > self.warm[0]:

@@ -2,29 +2,42 @@
 
 A runner (:data:`ChunkRunner`) computes a list of chunks and yields each result as it
 finishes, in any order: :func:`local_runner` in this process, or the Dask runner of
-:mod:`impactbeams.sweep.dask_runner` on a cluster.
+:mod:`impactbeams.sweep.dask_runner` on a cluster. :func:`write_sweep` streams the results
+into a netCDF file chunk by chunk (saving them for a resume); :func:`run_sweep` returns the
+map as a Dataset.
 """
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
-from impactbeams.io import write_netcdf
 from impactbeams.params import require
-from impactbeams.sweep.definition import Sweep
-from impactbeams.sweep.output import map_dataset
-from impactbeams.sweep.plan import build_plan, compute_chunk, contact_resolution
+from impactbeams.preflight import require_memory
+from impactbeams.sweep.definition import Sweep, expected_cost
+from impactbeams.sweep.output import map_dataset, map_file
+from impactbeams.sweep.plan import (
+    Chunking,
+    build_plan,
+    compute_chunk,
+    contact_resolution,
+    default_chunk_cells,
+)
 from impactbeams.sweep.progress import Progress
 from impactbeams.sweep.store import ChunkStore, finished_output
 
+if TYPE_CHECKING:
+    import xarray as xr
+
 Chunk = tuple[int, int, int]  # (chunk number, first flat cell, end flat cell)
 ChunkRunner = Callable[[Sweep, list[Chunk]], Iterator[tuple[int, dict[str, np.ndarray]]]]
+Keep = Callable[[int, int, int, Mapping[str, np.ndarray]], None]  # (chunk, start, stop, values)
 
 
 @contextlib.contextmanager
@@ -56,83 +69,149 @@ def local_runner(parallel: bool = True) -> ChunkRunner:
     return run
 
 
-def chunk_bounds(size: int, chunk_cells: int) -> list[tuple[int, int]]:
-    """Split ``size`` flat cells into consecutive chunks of at most ``chunk_cells``."""
-    return [(start, min(start + chunk_cells, size)) for start in range(0, size, chunk_cells)]
+# the largest chunk: about 1.3 GB of cell rows and results (kernels.layout.CELL_COLUMNS and an
+# output per cell), and well below HDF5's 4 GiB limit on a compressed block
+MAX_CHUNK_CELLS = 2**24
 
 
-def default_chunk_cells(size: int, long_runs: bool = False) -> int:
-    """About 100 chunks, each between 4096 and 65536 cells (a second or less of work).
-
-    ``long_runs``: cells of long-time observables take seconds each: chunks of 16 to 256
-    cells, so that progress shows and an interrupted run loses little.
-    """
-    if long_runs:
-        return int(min(max(size // 100, 16), 256))
-    return int(min(max(size // 100, 4096), 65536))
+def _chunking(sweep: Sweep, chunk_cells: int | None) -> Chunking:
+    """The chunks of at most ``chunk_cells`` cells (default :func:`default_chunk_cells`)."""
+    require("chunk_cells", chunk_cells, chunk_cells is None or (
+        isinstance(chunk_cells, int) and 1 <= chunk_cells <= MAX_CHUNK_CELLS),
+        f"must be an integer from 1 to {MAX_CHUNK_CELLS}")
+    return Chunking.at_most(sweep.shape, chunk_cells or default_chunk_cells(sweep))
 
 
 def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | None = None,
               progress: bool = False, parallel: bool = True, chunk_cells: int | None = None,
-              on_chunk: Callable[[int], None] | None = None,
-              runner: ChunkRunner | None = None) -> xr.Dataset:
-    """Compute a sweep and return its Dataset; with ``output``, also write it as netCDF.
+              on_chunk: Callable[[int], None] | None = None, runner: ChunkRunner | None = None,
+              discard_corrupt: bool = False) -> xr.Dataset:
+    """Compute a sweep and return its Dataset; with ``output``, write it as netCDF first.
 
-    ``threads``: Numba threads during the run (default: as set; restored afterwards). With
-    ``output``, finished chunks are kept under ``OUTPUT.partial/`` until the file is
-    complete, and a re-run resumes from them. ``progress``: draw a progress bar on stderr.
-    ``on_chunk`` is called with each finished chunk number (for tests and monitoring).
-    ``runner`` computes the chunks (default: :func:`local_runner`; see
-    :mod:`impactbeams.sweep.dask_runner` for a Dask cluster); chunks may finish in any order.
+    Without ``output`` the map is computed in memory (a ParameterError if it would not fit).
+    With it, see :func:`write_sweep` (which takes the same arguments); the Dataset returned is
+    then the file, opened lazily, so that a map larger than memory can be read in parts.
     """
+    import xarray as xr
+
+    if output is not None:
+        write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk, runner,
+                    discard_corrupt)
+        return xr.open_dataset(output)
+    require_memory(f"a map of {sweep.size} cells held in memory ({sweep.source})",
+                   expected_cost(sweep, threads, in_memory=True),
+                   "give an output file, to which the map is written chunk by chunk")
+    _warn_unresolved(sweep)
+    chunking = _chunking(sweep, chunk_cells)
+    results = {name: np.full((sweep.size, *sweep.value_shape(name)), np.nan)
+               for name in sweep.stored}
+
+    def keep(_: int, start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:
+        for name, array in results.items():
+            array[start:stop] = values[name]
+
+    with numba_threads(threads):
+        _compute(sweep, chunking, range(chunking.count), runner or local_runner(parallel),
+                 Progress(sweep.size, enabled=progress), on_chunk, keep)
+    return map_dataset(sweep, results)
+
+
+def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
+                progress: bool = False, parallel: bool = True, chunk_cells: int | None = None,
+                on_chunk: Callable[[int], None] | None = None, runner: ChunkRunner | None = None,
+                discard_corrupt: bool = False) -> bool:
+    """Compute a sweep into the netCDF file ``output``, chunk by chunk; False if it was there.
+
+    Nothing holds the whole map: each chunk is written into the file as it finishes, and
+    saved under ``OUTPUT.partial/`` (but the last one, which completes the file) until the
+    file is complete and renamed into place, so an interrupted run loses no finished chunk and
+    the same call resumes it. An existing
+    ``output`` of this sweep and code is kept as it is (returns False); any other existing
+    file is an error. A damaged saved chunk is an error naming it; ``discard_corrupt``
+    deletes such chunks and computes them again.
+
+    ``threads``: Numba threads during the run (default: as set; restored afterwards).
+    ``progress``: draw a progress bar on stderr. ``chunk_cells``: the most cells per chunk
+    (default :func:`default_chunk_cells`), rounded down to whole lines of the last axes (a
+    resumed run keeps its chunks). ``on_chunk`` is called with each computed chunk number
+    (for tests and monitoring). ``runner`` computes the chunks (default :func:`local_runner`;
+    see :mod:`impactbeams.sweep.dask_runner` for a Dask cluster); they may finish in any order.
+    """
+    output = Path(output)
+    if finished_output(output, sweep):
+        return False
+    _warn_unresolved(sweep)
+    store = ChunkStore(output, sweep, _chunking(sweep, chunk_cells), chunk_cells)
+    chunking, bar = store.chunking, Progress(sweep.size, enabled=progress)
+    with numba_threads(threads), map_file(sweep, output, store.building, chunking) as write:
+        pending = []
+        for chunk in range(chunking.count):  # the saved chunks first: a damaged one stops here
+            start, stop = chunking.bounds(chunk)
+            saved = store.load(chunk, stop - start,
+                               {name: sweep.value_shape(name) for name in sweep.stored},
+                               discard_corrupt)
+            if saved is None:
+                pending.append(chunk)
+                continue
+            write(start, stop, saved)
+            bar.update(stop - start, computed=False)
+
+        unsaved = len(pending)
+
+        def keep(chunk: int, start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:
+            nonlocal unsaved
+            unsaved -= 1
+            if unsaved:  # first: once saved, an interrupt cannot lose it. The last chunk
+                store.save(chunk, values)  # completes the file: nothing would resume from it
+            write(start, stop, values)
+
+        with _one_behind(keep) as keep_behind:
+            _compute(sweep, chunking, pending, runner or local_runner(parallel), bar,
+                     on_chunk, keep_behind)
+    store.remove()
+    return True
+
+
+@contextlib.contextmanager
+def _one_behind(keep: Keep) -> Iterator[Keep]:
+    """``keep`` run on a background thread, one chunk behind the computation.
+
+    Chunk k is saved and compressed into the file while chunk k + 1 computes: on two cores this
+    hides about half of that cost (both release the GIL). One call at most is in flight, so
+    two chunks at most are in memory; a call's error is raised by the next call. On exit, by
+    an error or an interrupt too, every call has finished: no computed chunk goes unsaved.
+    """
+    with concurrent.futures.ThreadPoolExecutor(1, "impactbeams-writer") as writer:
+        previous: concurrent.futures.Future | None = None
+
+        def submit(*arguments: Any) -> None:
+            nonlocal previous
+            if previous is not None:
+                previous.result()
+            previous = writer.submit(keep, *arguments)
+
+        yield submit
+        if previous is not None:
+            previous.result()
+
+
+def _warn_unresolved(sweep: Sweep) -> None:
+    """Warn if the spring contact of a dynamics sweep needs more modes than it has."""
     resolution = contact_resolution(sweep)
     if resolution is not None and sweep.n_modes < resolution:
         warnings.warn(f"n_modes = {sweep.n_modes} does not resolve the spring contact of "
                       f"{sweep.source}: use n_modes >= {resolution} (docs/model.md, "
-                      "Resolution)", RuntimeWarning, stacklevel=2)
-    with numba_threads(threads):
-        store = None
-        if output is not None:
-            output = Path(output)
-            finished = finished_output(output, sweep)
-            if finished is not None:
-                return finished
-            store = ChunkStore(output, sweep.fingerprint(), chunk_cells,
-                               default_chunk_cells(sweep.size, sweep.long_time is not None))
-            chunk_cells = store.chunk_cells
-        bounds = chunk_bounds(sweep.size, chunk_cells or default_chunk_cells(
-            sweep.size, sweep.long_time is not None))
-        results = _collect(sweep, bounds, store, runner or local_runner(parallel),
-                           Progress(sweep.size, enabled=progress), on_chunk)
-    dataset = map_dataset(sweep, results)
-    if store is not None:
-        write_netcdf(dataset, output)
-        store.remove()
-    return dataset
+                      "Resolution)", RuntimeWarning, stacklevel=3)
 
 
-def _collect(sweep: Sweep, bounds: list[tuple[int, int]], store: ChunkStore | None,
-             runner: ChunkRunner, bar: Progress,
-             on_chunk: Callable[[int], None] | None) -> dict[str, np.ndarray]:
-    """Flat results of every cell: saved chunks loaded, the others computed by ``runner``."""
-    results = {name: np.full((sweep.size, *sweep.value_shape(name)), np.nan)
-               for name in sweep.stored}
-    pending = []
-    for chunk, (start, stop) in enumerate(bounds):
-        saved = store.load(chunk) if store else None
-        if saved is None:
-            pending.append((chunk, start, stop))
-            continue
-        for name in results:
-            results[name][start:stop] = saved[name]
-        bar.update(stop - start, computed=False)
-    for chunk, values in runner(sweep, pending):
-        if store:
-            store.save(chunk, values)
+def _compute(sweep: Sweep, chunking: Chunking, chunks: Iterable[int], runner: ChunkRunner,
+             bar: Progress, on_chunk: Callable[[int], None] | None,
+             keep: Keep) -> None:
+    """Compute ``chunks`` with ``runner``; pass each to ``keep(chunk, start, stop, values)``."""
+    bounds = {chunk: chunking.bounds(chunk) for chunk in chunks}
+    for chunk, values in runner(sweep, [(chunk, *cells) for chunk, cells in bounds.items()]):
         start, stop = bounds[chunk]
-        for name in results:
-            results[name][start:stop] = values[name]
+        keep(chunk, start, stop, values)
         bar.update(stop - start)
         if on_chunk:
             on_chunk(chunk)
-    return results
