@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from impactbeams.kernels.events import GAVE_UP, event_value, first_root
+from impactbeams.kernels.events import GAVE_UP, event_value, first_root, rising_exit
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.layout import (
     CONTACT,
@@ -201,6 +201,12 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
             return find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v)
     elif not wait_rising:
         return t_s
+    t_up = rising_exit(q_a, v_a, t_a, table[ROW_OMEGA], table[ROW_ZETA], force, table[ROW_EVENT],
+                       scalars[SCALAR_CONST], event_sine(scalars), settings.forcing_frequency, q,
+                       v)
+    if not math.isnan(t_up):  # certainly risen through 0: no need to find its peak
+        q_up, v_up = q.copy(), v.copy()
+        return find_event(table, force, scalars, q_up, v_up, t_up, settings, q, v)
     t_peak = rate_root(table, force, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v)
     if t_peak == GAVE_UP:
         return GAVE_UP

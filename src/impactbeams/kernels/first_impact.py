@@ -14,7 +14,14 @@ coordinate).
 import numpy as np
 from numba import prange
 
-from impactbeams.kernels.events import GAVE_UP, phase_bounds, search_root, step_limit, walk
+from impactbeams.kernels.events import (
+    GAVE_UP,
+    phase_bounds,
+    search_root,
+    split_steady_states,
+    step_limit,
+    walk,
+)
 from impactbeams.kernels.forcing import rest_state
 from impactbeams.kernels.jit import kernel, parallel_kernel
 from impactbeams.kernels.layout import (
@@ -125,35 +132,6 @@ def _walk_order(cells, lo, hi, key, table, c1, work, force):
     return (hi - 1, -1) if rising else (lo, 1)
 
 
-# A mode's steady state is split off when |D| >= omega^2 / 4 (its steady amplitude is at most
-# 4 times the quasi-static one): then its terms add little rounding; nearer resonance the
-# steady state and the transient would cancel, and the mode stays driven.
-_SPLIT_DETUNING = 0.25
-
-
-@kernel
-def _split_steady_states(q_s, v_s, omega, zeta, force, weights, sine_amp, forcing_frequency):
-    """Move the steady states of the modes away from resonance into the event's sinusoid.
-
-    Mode j driven by Im(A e^(i Omega t)) is its steady state Im(P e^(i Omega t)), P = A / D,
-    D = omega^2 - Omega^2 + 2 i zeta omega Omega, plus a free transient from
-    (q - Im P, q' - Omega Re P). The event function keeps its value, with the steady states
-    summed into ``sine_amp`` (returned) and those modes undriven: their propagation is then
-    a free oscillation, much cheaper than the driven one. Arrays are changed in place.
-    """
-    for j in range(omega.size):
-        w = omega[j]
-        detuning = complex(w * w - forcing_frequency**2, 2.0 * zeta[j] * w * forcing_frequency)
-        if force[j] == 0 or abs(detuning) < _SPLIT_DETUNING * w * w:
-            continue
-        steady = force[j] / detuning
-        q_s[j] -= steady.imag
-        v_s[j] -= forcing_frequency * steady.real
-        sine_amp += weights[j] * steady
-        force[j] = 0.0
-    return sine_amp
-
-
 @kernel
 def _shared_column(cells, first, stride, count, key, table, c1, t_max, work, force, out):
     """One column whose cells share one modal response; walked once, level by level.
@@ -169,8 +147,8 @@ def _shared_column(cells, first, stride, count, key, table, c1, t_max, work, for
     active = _load_moving_modes(source, table, work, force)
     q_s, v_s, omega = work[_Q_S, :active], work[_V_S, :active], work[_OMEGA, :active]
     zeta, weights, drives = work[_ZETA, :active], work[_WEIGHTS, :active], force[:active]
-    sine_amp = _split_steady_states(q_s, v_s, omega, zeta, drives, weights,
-                                    complex(-c1 * source[CELL_F0], 0.0), source[CELL_OMEGA])
+    sine_amp = split_steady_states(q_s, v_s, 0.0, omega, zeta, drives, weights,
+                                   complex(-c1 * source[CELL_F0], 0.0), source[CELL_OMEGA])
     bounds = phase_bounds(q_s, v_s, 0.0, t_max, omega, zeta, drives, weights, sine_amp,
                           source[CELL_OMEGA])
     max_steps = step_limit(0.0, t_max, omega)

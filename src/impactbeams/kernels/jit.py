@@ -16,6 +16,11 @@ def kernel(function):
     return njit(**_OPTIONS)(function)
 
 
+def inlined_kernel(function):
+    """A small kernel inlined into its callers' Numba IR (a per-mode body of a hot loop)."""
+    return njit(inline="always", **_OPTIONS)(function)
+
+
 def parallel_kernel(function):
     """Compile ``function`` twice: parallel (prange over threads) and serial, the same code.
 

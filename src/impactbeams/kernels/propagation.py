@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import inlined_kernel, kernel
 
 
 @kernel
@@ -56,35 +56,37 @@ def advance(q0, v0, t0, h, omega, zeta, force, forcing_frequency, q, v):
     ``q0``/``v0``.
     """
     phase_plus = complex(math.cos(forcing_frequency * t0), math.sin(forcing_frequency * t0))
-    phase_minus = phase_plus.conjugate()
     step_plus = complex(math.cos(forcing_frequency * h), math.sin(forcing_frequency * h))
-    step_minus = step_plus.conjugate()
     for j in range(omega.size):
-        w = omega[j]
-        z = zeta[j]
-        sigma, wd = z * w, w if z == 0.0 else w * math.sqrt(1.0 - z * z)
-        decay = math.exp(-sigma * h)
-        c, s = math.cos(wd * h), math.sin(wd * h)
-        qj, vj = q0[j], v0[j]
-        q_free = decay * (qj * c + (vj + sigma * qj) / wd * s)
-        v_free = decay * (vj * c - (w * w * qj + sigma * vj) / wd * s)
-        f = force[j]
-        if f == 0.0:
-            q[j], v[j] = q_free, v_free
-            continue
-        lam = complex(-sigma, wd)
-        growth = decay * complex(c, s)
-        e_plus = duhamel(lam, complex(sigma, forcing_frequency - wd), growth, step_plus, h)
-        e_minus = duhamel(lam, complex(sigma, -forcing_frequency - wd), growth, step_minus, h)
-        if f.imag == 0.0:  # a sine drive: the real form, fewer roundings
-            combined = phase_minus * e_minus - phase_plus * e_plus
-            scale = f.real / (2.0 * wd)
-            q[j] = q_free + scale * combined.real
-            v[j] = v_free + scale * (lam * combined).real
-        else:
-            combined = f.conjugate() * phase_minus * e_minus - f * phase_plus * e_plus
-            q[j] = q_free + combined.real / (2.0 * wd)
-            v[j] = v_free + (lam * combined).real / (2.0 * wd)
+        q[j], v[j] = advance_mode(q0[j], v0[j], h, omega[j], zeta[j], force[j],
+                                  forcing_frequency, phase_plus, step_plus)
+
+
+@inlined_kernel
+def advance_mode(q0, v0, h, w, z, f, forcing_frequency, phase_plus, step_plus):
+    """One mode of ``advance``: (q, q') after ``h`` (s) from (q0, v0) at t0.
+
+    ``phase_plus`` = e^(i Omega t0), ``step_plus`` = e^(i Omega h); w, z, f: the mode's
+    omega (rad/s), zeta and complex drive amplitude.
+    """
+    sigma, wd = z * w, w if z == 0.0 else w * math.sqrt(1.0 - z * z)
+    decay = math.exp(-sigma * h)
+    c, s = math.cos(wd * h), math.sin(wd * h)
+    q_free = decay * (q0 * c + (v0 + sigma * q0) / wd * s)
+    v_free = decay * (v0 * c - (w * w * q0 + sigma * v0) / wd * s)
+    if f == 0.0:
+        return q_free, v_free
+    lam = complex(-sigma, wd)
+    growth = decay * complex(c, s)
+    e_plus = duhamel(lam, complex(sigma, forcing_frequency - wd), growth, step_plus, h)
+    e_minus = duhamel(lam, complex(sigma, -forcing_frequency - wd), growth,
+                      step_plus.conjugate(), h)
+    if f.imag == 0.0:  # a sine drive: the real form, fewer roundings
+        combined = phase_plus.conjugate() * e_minus - phase_plus * e_plus
+        scale = f.real / (2.0 * wd)
+        return q_free + scale * combined.real, v_free + scale * (lam * combined).real
+    combined = f.conjugate() * phase_plus.conjugate() * e_minus - f * phase_plus * e_plus
+    return q_free + combined.real / (2.0 * wd), v_free + (lam * combined).real / (2.0 * wd)
 
 
 @kernel

@@ -248,10 +248,11 @@ def default_chunk_cells(sweep: Sweep) -> int:
     machine where every start of the threads waits for the cores; small enough that an
     interrupt loses little and a cube streams in pieces of tens of MB. A map of up to 2^20 cells
     is therefore computed in one pass. Long-time observables take seconds per cell: chunks of
-    16 to 256 cells, so that progress shows and an interrupt loses little.
+    a hundredth of the sweep, 1 to 64 cells, so that progress shows, an interrupt loses little
+    and the threads, each running a chunk of its own (``run.local_runner``), finish together.
     """
     if sweep.long_time is not None:
-        return int(min(max(sweep.size // 100, 16), 256))
+        return int(min(max(sweep.size // 100, 1), 64))
     return 2**16 if sweep.needs_dynamics else 2**20
 
 

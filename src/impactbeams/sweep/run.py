@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import itertools
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
@@ -60,13 +61,50 @@ def numba_threads(threads: int | None) -> Iterator[None]:
 
 
 def local_runner(parallel: bool = True) -> ChunkRunner:
-    """Compute chunks one after the other in this process, each over all Numba threads."""
+    """Compute chunks in this process over all Numba threads.
+
+    A chunk of long runs (seconds per cell, costs that differ by orders of magnitude between
+    cells) goes to one thread, which runs its cells one after the other, while the other
+    threads take the next chunks: no thread waits at the end of a chunk for another's last
+    cell. Other chunks run one after the other, each over all threads.
+    """
     def run(sweep: Sweep, chunks: list[Chunk]) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
         plan = build_plan(sweep) if chunks else None  # once per run, shared by its chunks
+        if parallel and sweep.long_time is not None:
+            yield from _chunk_per_thread(sweep, chunks, plan)
+            return
         for chunk, start, stop in chunks:
             yield chunk, compute_chunk(sweep, start, stop, parallel, plan)
 
     return run
+
+
+def _chunk_per_thread(sweep: Sweep, chunks: list[Chunk],
+                      plan: Any) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
+    """Each chunk computed serially on one of Numba's thread count of threads, as they free."""
+    import numba
+
+    workers = numba.get_num_threads()
+    queue = iter(chunks)
+    pool = concurrent.futures.ThreadPoolExecutor(workers)
+    pending: dict[concurrent.futures.Future, int] = {}
+
+    def submit() -> None:
+        for chunk, start, stop in itertools.islice(queue, 1):
+            pending[pool.submit(compute_chunk, sweep, start, stop, False, plan)] = chunk
+
+    try:
+        for _ in range(workers):
+            submit()
+        while pending:
+            done, _ = concurrent.futures.wait(pending,
+                                              return_when=concurrent.futures.FIRST_COMPLETED)
+            for future in done:
+                chunk = pending.pop(future)
+                submit()
+                yield chunk, future.result()
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
 
 
 # the largest chunk: about 1.3 GB of cell rows and results (kernels.layout.CELL_COLUMNS and an
