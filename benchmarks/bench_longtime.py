@@ -39,6 +39,7 @@ import numpy as np
 from impactbeams import __version__
 from impactbeams.kernels import dynamics as dyn
 from impactbeams.kernels.layout import CONTACT, FREE
+from impactbeams.kernels.rotor import rotor_arrays
 from impactbeams.packing import pack_run
 from impactbeams.sweep import build_plan, compute_chunk, load_sweep, run_sweep, sweep_from_mapping
 from impactbeams.trajectory.phases import run, sample
@@ -105,11 +106,13 @@ def _replay_searches(tables, forces, scalars, seg_time, seg_phase, seg_q, seg_v,
     """Repeat the switching search from the start of every recorded segment of ``phase``."""
     n = seg_q.shape[1]
     q, v = np.empty(n), np.empty(n)
+    rotor = rotor_arrays(n)
     total = 0.0
     for k in range(seg_time.size):
         if seg_phase[k] == phase:
             total += dyn.find_switch(tables[phase], forces[phase], scalars[phase], seg_q[k],
-                                     seg_v[k], seg_time[k], True, False, settings, q, v)
+                                     seg_v[k], seg_time[k], True, False, settings, q, v,
+                                     rotor)
     return total
 
 

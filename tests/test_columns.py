@@ -19,6 +19,7 @@ from impactbeams.kernels.layout import (
     ROW_OMEGA,
 )
 from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.rotor import rotor_arrays
 from impactbeams.model import build_free_phase
 from impactbeams.packing import free_tables, geometry_row
 from impactbeams.params import Params
@@ -48,7 +49,9 @@ def round_off_band(cell, plan, t):
     width over the gap's slope at t, plus 8 ulps of t (Newton's own stop). The width is taken
     over the terms of either evaluation of the gap: the cell's (its terms at t) and the
     column's, which adds the modes' steady states |b_j A_j / D_j| and the quasi-static term
-    c1 F0 (it evaluates them apart from the transients)."""
+    c1 F0 (it evaluates them apart from the transients). Late in a run the rounding of the
+    oscillations' phases adds eps omega t times each oscillating term (eps Omega t for the
+    forced ones): over the slope, a band that Newton's steps wander in, twice."""
     g = int(cell[-1])
     table = plan.tables[g, FREE]
     work = np.empty((7, table.shape[1]))
@@ -63,8 +66,13 @@ def round_off_band(cell, plan, t):
     omega, zeta, big_omega = work[2, :n], work[3, :n], cell[CELL_OMEGA]
     steady = np.abs(work[4, :n] * force[:n]
                     / (omega**2 - big_omega**2 + 2j * zeta * omega * big_omega))
-    scale += abs(plan.geometry[g, GEO_C1] * cell[CELL_F0]) + steady.sum()
-    return 2.0 * fi.TOUCH_TOLERANCE * EPS * scale / abs(slope) + 8.0 * np.spacing(t)
+    forced = abs(plan.geometry[g, GEO_C1] * cell[CELL_F0]) + steady.sum()
+    scale += forced
+    damped = omega * np.sqrt(1.0 - zeta**2)
+    transient = np.abs(work[4, :n]) * np.hypot(q, (v + zeta * omega * q) / damped)
+    phases = big_omega * t * forced + t * np.sum(omega * transient)
+    return (2.0 * fi.TOUCH_TOLERANCE * EPS * scale + 2.0 * EPS * phases) / abs(slope) \
+        + 8.0 * np.spacing(t)
 
 
 @pytest.mark.parametrize(("name", "thinned"), [("fig5a-omega-force.toml", "omega"),
@@ -162,6 +170,6 @@ def test_a_search_that_reaches_its_step_cap_says_so(free):
     rest = np.zeros(1)
     args = (rest, rest, 0.0, 0.0, 1.0, omega, np.zeros(1), drive, weights, 0.5 * steady, 0j,
             100.0, fi.TOUCH_TOLERANCE)
-    work = np.empty(1), np.empty(1)
+    work = np.empty(1), np.empty(1), rotor_arrays(1)
     assert search_root(*args, 1, *work) == GAVE_UP
     assert 0.0 < search_root(*args, 10**6, *work) < 1.0

@@ -4,8 +4,16 @@ import numpy as np
 import pytest
 
 from impactbeams.params import Params
-from impactbeams.sweep import DYNAMICS_OBSERVABLES, FIRST_IMPACT, run_sweep, sweep_from_mapping
+from impactbeams.sweep import (
+    DYNAMICS_OBSERVABLES,
+    FIRST_IMPACT,
+    build_plan,
+    run_sweep,
+    sweep_from_mapping,
+)
+from impactbeams.sweep.plan import chunk_cells
 from impactbeams.trajectory import simulate
+from test_columns import round_off_band
 
 T_MAX = 0.2
 # both contact laws: the tied one at the paper's 5 modes, the spring one resolved (k = 1e4 N/m
@@ -62,12 +70,19 @@ def test_observables_equal_simulate_impact_table(dynamics_map, law):
 
 
 def test_first_impact_agrees_with_the_free_phase_kernel(dynamics_map, law):
-    """The free-phase-only map and the full dynamics locate the same first root; their step
-    sequences differ (beam 2's modes enter the dynamics kernel's step cap): 4 ulps."""
-    alone = run_sweep(sweep_from_mapping(definition(law)), progress=False)
-    a, b = dynamics_map.first_impact_time.values, alone.first_impact_time.values
+    """The free-phase-only map and the full dynamics locate the same first root, each to
+    within the gap's round-off: the map stops on its round-off rule, the dynamics (no rule)
+    at a few ulps of time, and they evaluate the gap in different forms (the dynamics with
+    beam 2's modes and the steady states split off). Their difference stays within the band
+    of ``test_columns.round_off_band``."""
+    sweep = sweep_from_mapping(definition(law))
+    alone = run_sweep(sweep, progress=False)
+    a, b = dynamics_map.first_impact_time.values.ravel(), alone.first_impact_time.values.ravel()
     assert np.array_equal(np.isnan(a), np.isnan(b))
-    assert np.nanmax(np.abs(a - b) / b) <= 4 * np.finfo(float).eps
+    plan = build_plan(sweep)
+    cells = chunk_cells(sweep, plan, 0, sweep.size)
+    for i in np.flatnonzero(~np.isnan(b)):
+        assert abs(a[i] - b[i]) <= round_off_band(cells[i], plan, b[i]), i
 
 
 def test_dynamics_map_parallel_equals_serial(dynamics_map, law):

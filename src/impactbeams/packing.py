@@ -109,8 +109,8 @@ class Dynamics:
     ``model``: the tied law's modal model (contact modes, projections), else None; ``spring``:
     the spring law's contact phase, else None. ``bases``: the coordinates in which sampled
     states come back (the spring law's are the free ones in both phases). ``overlap``,
-    ``shifts`` (tied) and ``spring_arrays`` = (left, right, modes) (spring) are zeros for the
-    other law.
+    ``shifts`` (tied) and ``spring_arrays`` = (left, right, modes) (spring, in the layout of
+    :mod:`impactbeams.kernels.spring`) are zeros for the other law.
     """
 
     params: Params
@@ -127,7 +127,7 @@ class Dynamics:
 
 def _no_spring(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Zero spring arrays of the full size (geometries of both laws stack in one map)."""
-    return (np.zeros((m, 2 * m), complex), np.zeros((2 * m, m), complex),
+    return (np.zeros((2 * m, m), complex), np.zeros((m, 2 * m), complex),
             np.zeros((len(layout.SPRING_MODE_ROWS), m), complex))
 
 
@@ -154,7 +154,8 @@ def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
     m = free.omega.size  # zero tied-law arrays of the full size, as for the spring ones
     return Dynamics(params, free, None, spring, (free_basis(free), free_basis(free)), tables,
                     geometry_row(params, free, spring), np.zeros((m, m)), np.zeros((2, m)),
-                    (spring.left, spring.right, modes))
+                    (np.ascontiguousarray(spring.left.T),  # the kernels' layout
+                     np.ascontiguousarray(spring.right.T), modes))
 
 
 def cell_rows(columns: Mapping[str, np.ndarray | float], shape: int | tuple[int, ...],

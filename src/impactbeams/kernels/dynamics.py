@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from impactbeams.kernels.events import GAVE_UP, event_value, first_root, rising_exit
+from impactbeams.kernels.events import GAVE_UP, event_value, first_root, root_after_rise
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.layout import (
     CONTACT,
@@ -39,9 +39,11 @@ from impactbeams.kernels.layout import (
     SPRING,
 )
 from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.rotor import rotor_arrays
 from impactbeams.kernels.spring import to_contact, to_free
 
 COMPLETE, EVENT_LIMIT, STUCK, SEARCH_LIMIT = 0, 1, 2, 3
+NOT_RISEN = -1.0  # find_event: a rise it could not certify (times are never negative)
 STATUS_NAMES = ("complete", "event_limit", "stuck", "search_limit")
 # Consecutive zero-length phases allowed before the run is declared stuck. A chattering
 # sequence that converges (alternating projections) ends well before; a persistent conflict
@@ -103,24 +105,34 @@ def propagate(table, force, q_s, v_s, t_s, t, settings, q, v):
 
 
 @kernel
-def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v):
+def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor, rising=False):
     """First root in (t_s, t_max] of the phase's event function, NaN if none.
 
     The certified search restarts from the exactly propagated state every ``search span``
     seconds (settings); the root does not depend on that span beyond round-off. A span below
     the resolution of t searches the rest at once (it could not advance t). ``GAVE_UP`` if a
-    search reached its step cap.
+    search reached its step cap. ``rising``: e(t_s) <= 0 < e'(t_s), and the root sought is the
+    first after e has risen through 0 (``events.root_after_rise``); ``NOT_RISEN`` if that rise
+    cannot be certified.
     """
     t_max, span = settings.t_max, settings.search_span
+    omega, zeta, weights = table[ROW_OMEGA], table[ROW_ZETA], table[ROW_EVENT]
+    const, sine_amp = scalars[SCALAR_CONST], event_sine(scalars)
+    big_omega = settings.forcing_frequency
     q_a, v_a = q_s.copy(), v_s.copy()
     t_a = t_s
     while t_a < t_max:
         t_b = min(t_a + span, t_max)
         if t_b <= t_a:
             t_b = t_max
-        root = first_root(q_a, v_a, t_a, t_b, table[ROW_OMEGA], table[ROW_ZETA], force,
-                          table[ROW_EVENT], scalars[SCALAR_CONST], event_sine(scalars),
-                          settings.forcing_frequency, q, v)
+        if rising and t_a == t_s:
+            root, risen = root_after_rise(q_a, v_a, t_a, t_b, omega, zeta, force, weights, const,
+                                          sine_amp, big_omega, q, v, rotor)
+            if not risen:
+                return NOT_RISEN
+        else:
+            root = first_root(q_a, v_a, t_a, t_b, omega, zeta, force, weights, const, sine_amp,
+                              big_omega, q, v, rotor)
         if not math.isnan(root):
             return root
         propagate(table, force, q_s, v_s, t_s, t_b, settings, q_a, v_a)
@@ -129,7 +141,7 @@ def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v):
 
 
 @kernel
-def rate_root(table, force, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v):
+def rate_root(table, force, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v, rotor):
     """First time in (t_s, t_end] where ``sign * e'`` reaches 0 from above; NaN if none.
 
     ``e' = sine_amp Omega cos(Omega t) + weights . q'(t)``. The velocities p = q' obey the
@@ -144,7 +156,7 @@ def rate_root(table, force, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v)
                     - 2.0 * zeta * omega * v_s - omega * omega * q_s)
     root = first_root(v_s, acceleration, t_s + shift, t_end + shift, omega, zeta,
                       force * big_omega, sign * table[ROW_EVENT], 0.0,
-                      sign * event_sine(scalars) * big_omega, big_omega, q, v)
+                      sign * event_sine(scalars) * big_omega, big_omega, q, v, rotor)
     return root - shift
 
 
@@ -170,7 +182,7 @@ def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings
 
 @kernel
 def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling, settings, q,
-                v):
+                v, rotor):
     """First time (s) from t_s at which e <= 0 while not rising (e' <= 0); NaN if none.
 
     e > 0 at the start: its first root (``find_event``). e <= 0 at the start: t_s, except
@@ -183,12 +195,13 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     value, slope = event_value(q_s, v_s, t_s, table[ROW_EVENT], scalars[SCALAR_CONST],
                                event_sine(scalars), settings.forcing_frequency)
     if value > 0.0:
-        return find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v)
+        return find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor)
     q_a, v_a, t_a = q_s.copy(), v_s.copy(), t_s
     if slope <= 0.0:
         if not wait_falling:
             return t_s
-        t_min = rate_root(table, force, scalars, -1.0, q_s, v_s, t_s, t_max, settings, q, v)
+        t_min = rate_root(table, force, scalars, -1.0, q_s, v_s, t_s, t_max, settings, q, v,
+                          rotor)
         if math.isnan(t_min) or t_min == GAVE_UP:
             return t_min
         t_a = _step_until(table, force, scalars, q_s, v_s, t_s, t_min, True, settings, q_a,
@@ -198,22 +211,19 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
         value, _ = event_value(q_a, v_a, t_a, table[ROW_EVENT], scalars[SCALAR_CONST],
                                event_sine(scalars), settings.forcing_frequency)
         if value > 0.0:
-            return find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v)
+            return find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v, rotor)
     elif not wait_rising:
         return t_s
-    t_up = rising_exit(q_a, v_a, t_a, table[ROW_OMEGA], table[ROW_ZETA], force, table[ROW_EVENT],
-                       scalars[SCALAR_CONST], event_sine(scalars), settings.forcing_frequency, q,
-                       v)
-    if not math.isnan(t_up):  # certainly risen through 0: no need to find its peak
-        q_up, v_up = q.copy(), v.copy()
-        return find_event(table, force, scalars, q_up, v_up, t_up, settings, q, v)
-    t_peak = rate_root(table, force, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v)
+    root = find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v, rotor, True)
+    if root != NOT_RISEN:  # certainly risen through 0: no need to find its peak
+        return root
+    t_peak = rate_root(table, force, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v, rotor)
     if t_peak == GAVE_UP:
         return GAVE_UP
     t_limit = t_max if math.isnan(t_peak) else t_peak
     t_up = first_root(q_a, v_a, t_a, t_limit, table[ROW_OMEGA], table[ROW_ZETA], force,
                       -table[ROW_EVENT], -scalars[SCALAR_CONST], -event_sine(scalars),
-                      settings.forcing_frequency, q, v)
+                      settings.forcing_frequency, q, v, rotor)
     if t_up == GAVE_UP:
         return GAVE_UP
     if math.isnan(t_up) or t_up >= t_limit:
@@ -222,11 +232,11 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     if t_up == GAVE_UP:
         return GAVE_UP
     q_up, v_up = q.copy(), v.copy()
-    return find_event(table, force, scalars, q_up, v_up, t_up, settings, q, v)
+    return find_event(table, force, scalars, q_up, v_up, t_up, settings, q, v, rotor)
 
 
 @kernel
-def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings, q, v):
+def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor):
     """Spring law with a dashpot, free phase entered with the tips still overlapping.
 
     The dashpot released them early (R = -k_e g - c_e g' fell to 0 with g < 0). Returns
@@ -250,9 +260,9 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
     harmonic = impedance * event_sine(scalars)
     force_scalars[SCALAR_SINE], force_scalars[SCALAR_COSINE] = harmonic.real, harmonic.imag
     t_onset = find_switch(table, impedance * force, force_scalars, y, y_rate, t_s, True, False,
-                          settings, q, v)
+                          settings, q, v, rotor)
     t_open = first_root(q_s, v_s, t_s, settings.t_max, omega, zeta, force, -table[ROW_EVENT],
-                        -scalars[SCALAR_CONST], -event_sine(scalars), big_omega, q, v)
+                        -scalars[SCALAR_CONST], -event_sine(scalars), big_omega, q, v, rotor)
     if t_open == GAVE_UP:
         return GAVE_UP, False
     if math.isnan(t_open) or t_onset <= t_open:
@@ -314,6 +324,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
     n_coords = q0.size
     q, v = q0.copy(), v0.copy()
     q_end, v_end = np.empty(n_coords), np.empty(n_coords)
+    rotors = (rotor_arrays(n_coords), rotor_arrays(n_coords))  # a phase's searches share one
     phase, t, zero_run, instant_release = phase_start, t_start, 0, -math.inf
     sustained = conflict = False
     spring_law = settings.contact_law == SPRING
@@ -331,10 +342,10 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
         if (spring_law and free and settings.contact_damping > 0.0 and value < 0.0
                 and not reopening):
             t_event, opened = _reonset_after_early_release(table, force, scalars, q, v, t,
-                                                           settings, q_end, v_end)
+                                                           settings, q_end, v_end, rotors[phase])
         else:
             t_event = find_switch(table, force, scalars, q, v, t, free or sustained or spring_law,
-                                  free and conflict, settings, q_end, v_end)
+                                  free and conflict, settings, q_end, v_end, rotors[phase])
         if t_event == GAVE_UP:  # an event search reached its step cap: stop, undecided
             end_q[k, :] = q
             end_v[k, :] = v

@@ -29,12 +29,19 @@ import numpy as np
 
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.propagation import advance
-from impactbeams.kernels.rotor import rotor_arrays, rotor_event, rotor_load, rotor_step
+from impactbeams.kernels.rotor import (
+    modulus_bound,
+    rotor_bounds,
+    rotor_event,
+    rotor_load,
+    rotor_step,
+)
 
 _EPS = np.finfo(np.float64).eps
 NO_EVENT = np.nan
 GAVE_UP = -np.inf  # the walk reached its step cap (``step_limit``): undecided
 NEWTON_LIMIT = 200
+REFRESH_STEPS = 8  # a walk's bounds are recomputed from its rotor every this many steps
 
 
 @kernel
@@ -94,7 +101,7 @@ def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
     """
     root = math.sqrt(1.0 - zeta * zeta)
     sigma, wd = zeta * w, w * root
-    free = math.hypot(q, (v + sigma * q) / wd)
+    free = modulus_bound(q, (v + sigma * q) / wd)
     grow = free + abs(f) * span / wd
     grow_curvature = w * w * free + abs(f) * (
         1.0 + 2.0 * sigma * span / root + w * w * min(0.5 * span * span, span / wd))
@@ -104,7 +111,7 @@ def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
     steady = f / D
     P = steady * rotation
     dq, dv = q - P.imag, v - forcing_frequency * P.real
-    transient = math.hypot(dq, (dv + sigma * dq) / wd)
+    transient = modulus_bound(dq, (dv + sigma * dq) / wd)
     if abs(steady) + transient >= grow:
         return 0j, grow, grow_curvature
     return steady, transient, w * w * transient
@@ -261,38 +268,15 @@ def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, guess, omega, zeta, fo
         if abs(value) <= tolerance * _EPS * scale:
             return t, t
         step = t - value / slope if slope != 0.0 else lo - 1.0
+        # converged to within an ulp (tested before the safeguard, which would otherwise
+        # replace a step that stays at t = lo or hi by a bisection far from the root): the
+        # root is t, or the Newton point with a margin of 2 eps t past it
+        if abs(step - t) <= 2.0 * _EPS * abs(t):
+            return (hi if value <= 0.0 else min(hi, max(step, t) + 2.0 * _EPS * abs(t))), t
         if not lo < step < hi:
             step = 0.5 * (lo + hi)
-        if abs(step - t) <= 2.0 * _EPS * abs(t):  # converged to within an ulp
-            return (hi if value <= 0.0 else min(hi, t + 4.0 * _EPS * abs(t))), t
         t = step
     return hi, t  # the bracket has shrunk by at least 2^-NEWTON_LIMIT: hi is past the root
-
-
-@kernel
-def rising_exit(q_s, v_s, t_s, omega, zeta, force, weights, const, sine_amp, forcing_frequency,
-                q, v):
-    """A time after t_s by which e, rising from e(t_s) <= 0, has certainly crossed 0; or NaN.
-
-    With e' > 0 at t_s and |e''| <= C over the window (``phase_bounds``), e rises for
-    s < e'(t_s) / C and gains at least e'^2 / (2 C) by then: if that lifts it above 0, e has
-    crossed 0 exactly once in between, and the search for its next root may start at the
-    window's end, where the state is left in q, v. NaN when the bound cannot certify this (the
-    caller then follows e to its peak, which costs a search of e').
-    """
-    value, slope, _ = evaluate(q_s, v_s, t_s, weights, const, sine_amp, forcing_frequency)
-    if slope <= 0.0:
-        return np.nan
-    span_cap = 2.0 * math.pi / np.min(omega)  # phase_bounds hold over this window
-    curvature = phase_bounds(q_s, v_s, t_s, span_cap, omega, zeta, force, weights, sine_amp,
-                             forcing_frequency)[2]
-    reach = min(slope / curvature, span_cap) if curvature > 0.0 else span_cap
-    if not value + reach * (slope - 0.5 * curvature * reach) > 0.0:
-        return np.nan
-    advance(q_s, v_s, t_s, reach, omega, zeta, force, forcing_frequency, q, v)
-    t = t_s + reach
-    end, _, _ = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
-    return t if end > 0.0 else np.nan  # (not above 0 only through rounding)
 
 
 @kernel
@@ -308,7 +292,7 @@ def step_limit(t_s, t_end, omega):
 
 @kernel
 def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_amp,
-               forcing_frequency, q, v):
+               forcing_frequency, q, v, rotor):
     """First time in (t_s, t_end] where e(t) reaches 0 from above, NaN if none.
 
     ``search_root`` from t_s with no round-off tolerance (a root is a value <= 0, resolved to
@@ -326,14 +310,48 @@ def first_root(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_am
         # e is at round-off level at t_s and the two forms round it differently: the caller
         # saw e > 0 there (it may have stepped off a root to that point), so search its form
         return search_root(q_s, v_s, t_s, t_s, t_end, omega, zeta, force, weights, const,
-                           sine_amp, forcing_frequency, 0.0, max_steps, q, v)
+                           sine_amp, forcing_frequency, 0.0, max_steps, q, v, rotor)
     return search_root(q_free, v_free, t_s, t_s, t_end, omega, zeta, drives, weights, const,
-                       split_amp, forcing_frequency, 0.0, max_steps, q, v)
+                       split_amp, forcing_frequency, 0.0, max_steps, q, v, rotor)
+
+
+@kernel
+def root_after_rise(q_s, v_s, t_s, t_end, omega, zeta, force, weights, const, sine_amp,
+                    forcing_frequency, q, v, rotor):
+    """``first_root`` of an e that rises through 0 at t_s: ``(root, certified)``.
+
+    With e(t_s) <= 0 < e'(t_s) and |e''| <= C over the search (``phase_bounds``), e rises for
+    s < e'(t_s) / C and gains at least e'^2 / (2 C) by then: if that lifts it above 0, it has
+    crossed 0 exactly once, and the search for its next root starts at the window's end
+    (steady states split off as in ``first_root``). ``certified`` is False when the bound
+    cannot show the rise (or rounding keeps e at 0 there): the caller then follows e to its
+    peak, which costs a search of e'.
+    """
+    q_free, v_free, drives = q_s.copy(), v_s.copy(), force.copy()
+    split_amp = split_steady_states(q_free, v_free, t_s, omega, zeta, drives, weights, sine_amp,
+                                    forcing_frequency)
+    value, slope, _ = evaluate(q_free, v_free, t_s, weights, const, split_amp,
+                               forcing_frequency)
+    if slope <= 0.0:
+        return np.nan, False
+    bounds = phase_bounds(q_free, v_free, t_s, t_end - t_s, omega, zeta, drives, weights,
+                          split_amp, forcing_frequency)
+    curvature = bounds[2]
+    reach = min(slope / curvature, t_end - t_s) if curvature > 0.0 else t_end - t_s
+    if not value + reach * (slope - 0.5 * curvature * reach) > 0.0:
+        return np.nan, False
+    t_start = t_s + reach
+    root, _ = walk(q_free, v_free, t_s, t_start, t_end, omega, zeta, drives, weights, const,
+                   split_amp, forcing_frequency, 0.0, step_limit(t_s, t_end, omega), bounds,
+                   np.nan, q, v, rotor)
+    if root == t_start:  # e not above 0 at the window's end: only through rounding
+        return np.nan, False
+    return root, True
 
 
 @kernel
 def search_root(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine_amp,
-                forcing_frequency, tolerance, max_steps, q, v):
+                forcing_frequency, tolerance, max_steps, q, v, rotor):
     """First time in [t_start, t_end] where e(t) reaches 0 from above; NaN if none.
 
     q_s, v_s: modal state at t_s (s); omega, zeta (per mode), force (complex drive amplitudes),
@@ -349,13 +367,14 @@ def search_root(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, cons
     bounds = phase_bounds(q_s, v_s, t_s, t_end - t_s, omega, zeta, force, weights, sine_amp,
                           forcing_frequency)
     root, _ = walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const,
-                   sine_amp, forcing_frequency, tolerance, max_steps, bounds, np.nan, q, v)
+                   sine_amp, forcing_frequency, tolerance, max_steps, bounds, np.nan, q, v,
+                   rotor)
     return root
 
 
 @kernel
 def walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine_amp,
-         forcing_frequency, tolerance, max_steps, bounds, t_state, q, v):
+         forcing_frequency, tolerance, max_steps, bounds, t_state, q, v, rotor):
     """``search_root`` given ``bounds``, ``phase_bounds`` over [t_s, t_end].
 
     The bounds do not depend on ``const``: event functions that differ in it alone (a column
@@ -384,9 +403,8 @@ def walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine
                                       forcing_frequency)
     # Between exact states the walk's own steps rotate the undriven modes (rotor), unless the
     # bounds need the exact state at every step.
-    rotor = rotor_arrays(0 if per_step else q.size)
-    if not per_step:
-        rotor_load(rotor, q, v, omega, zeta, force)
+    driven = 0 if per_step else rotor_load(rotor, q, v, t, omega, zeta, force, weights,
+                                           forcing_frequency)
     t_origin, offset = t, 0.0  # t = t_origin + offset, offset a sum of the rotor's steps
     steps = 0
     while steps < max_steps:
@@ -397,6 +415,9 @@ def walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine
         if per_step:
             coherent, band, curvature, jerk, any_span = phase_bounds(
                 q, v, t, span_cap, omega, zeta, force, weights, sine_amp, forcing_frequency)
+        elif driven == 0 and steps % REFRESH_STEPS == 0:  # the fast transients have decayed
+            coherent, band, curvature, jerk, any_span = rotor_bounds(
+                rotor, omega, weights, coherent, forcing_frequency)
         margin = value - noise  # certify e > noise over the step
         step = min(certified_step(margin, slope, curvature), span_cap)
         if not per_step:  # third order with the exact local e'': wide steps through minima
@@ -423,10 +444,11 @@ def walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine
                                               forcing_frequency, tolerance, q, v)
         if t + step >= t_end:
             return NO_EVENT, t_state
-        if per_step:
+        taken = 0.0 if per_step else rotor_step(rotor, step)
+        if taken == 0.0:  # (a step below the rotor's table: exact)
             t += step
         else:
-            offset += rotor_step(rotor, step)
+            offset += taken
             t = t_origin + offset
             value, slope, scale, acceleration = rotor_event(
                 rotor, q_s, v_s, t_s, t, omega, zeta, force, weights, const, sine_amp,
@@ -440,6 +462,6 @@ def walk(q_s, v_s, t_s, t_start, t_end, omega, zeta, force, weights, const, sine
         acceleration = event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp,
                                           forcing_frequency)
         if not per_step:
-            rotor_load(rotor, q, v, omega, zeta, force)
+            rotor_load(rotor, q, v, t, omega, zeta, force, weights, forcing_frequency)
             t_origin, offset = t, 0.0
     return GAVE_UP, t_state

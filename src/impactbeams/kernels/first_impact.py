@@ -41,6 +41,7 @@ from impactbeams.kernels.layout import (
     ROW_UNIT2,
 )
 from impactbeams.kernels.propagation import drive_amplitude
+from impactbeams.kernels.rotor import rotor_arrays
 
 # rows of the per-mode scratch of the moving modes (private to this kernel)
 _WORK_ROWS = ("q_s", "v_s", "omega", "zeta", "weights", "q", "v")
@@ -74,7 +75,7 @@ def _load_moving_modes(cell, table, work, force):
 
 
 @kernel
-def first_impact_time(cell, table, c1, t_max, t_start, work, force):
+def first_impact_time(cell, table, c1, t_max, t_start, work, force, rotor):
     """Time (s) of the first gap closure in (0, t_max] for one cell, NaN if none.
 
     ``table``: the free-phase table of the cell's geometry; ``c1``: beam 1's tip compliance
@@ -91,7 +92,8 @@ def first_impact_time(cell, table, c1, t_max, t_start, work, force):
     return search_root(q_s, v_s, 0.0, t_start, t_max, omega, work[_ZETA, :active],
                        force[:active], work[_WEIGHTS, :active], cell[CELL_CLEARANCE],
                        -c1 * cell[CELL_F0], cell[CELL_OMEGA], TOUCH_TOLERANCE,
-                       step_limit(0.0, t_max, omega), work[_Q, :active], work[_V, :active])
+                       step_limit(0.0, t_max, omega), work[_Q, :active], work[_V, :active],
+                       rotor)
 
 
 @kernel
@@ -133,7 +135,8 @@ def _walk_order(cells, lo, hi, key, table, c1, work, force):
 
 
 @kernel
-def _shared_column(cells, first, stride, count, key, table, c1, t_max, work, force, out):
+def _shared_column(cells, first, stride, count, key, table, c1, t_max, work, force, rotor,
+                   out):
     """One column whose cells share one modal response; walked once, level by level.
 
     Along the clearance the gap is ``clearance + phi(t)``, phi the response of the column's
@@ -164,13 +167,13 @@ def _shared_column(cells, first, stride, count, key, table, c1, t_max, work, for
             out[i], t_state = walk(q_s, v_s, 0.0, t_start, t_max, omega, zeta, drives, weights,
                                    level, sine_amp, source[CELL_OMEGA], TOUCH_TOLERANCE,
                                    max_steps, bounds, t_state, work[_Q, :active],
-                                   work[_V, :active])
+                                   work[_V, :active], rotor)
             t_start = 0.0 if out[i] == GAVE_UP else out[i]  # NaN ends the column
         i += stride
 
 
 @kernel
-def _column(cells, lo, hi, key, tables, geometry, t_max, work, force, out):
+def _column(cells, lo, hi, key, tables, geometry, t_max, work, force, rotor, out):
     """Fill out[lo:hi], one column, each search starting where the previous closed.
 
     In walk order the first impact time does not decrease, so each cell's gap stays open until
@@ -184,14 +187,16 @@ def _column(cells, lo, hi, key, tables, geometry, t_max, work, force, out):
                                        and cells[lo, CELL_UPLIFT2] == 0.0
                                        and min(cells[lo, key], cells[hi - 1, key]) > 0.0)
     if stride != 0 and shared:
-        _shared_column(cells, i, stride, hi - lo, key, table, c1, t_max, work, force, out)
+        _shared_column(cells, i, stride, hi - lo, key, table, c1, t_max, work, force, rotor,
+                       out)
         return
     t_start = 0.0
     for _ in range(hi - lo):
         if np.isnan(t_start):
             out[i] = np.nan
         else:
-            out[i] = first_impact_time(cells[i], table, c1, t_max, t_start, work, force)
+            out[i] = first_impact_time(cells[i], table, c1, t_max, t_start, work, force,
+                                       rotor)
             if stride != 0:
                 t_start = 0.0 if out[i] == GAVE_UP else out[i]  # NaN ends the column
         i = i + stride if stride != 0 else i + 1
@@ -215,9 +220,10 @@ def _first_impact_map(cells, columns, key, tables, geometry, t_max, out):
     for block in prange(n_blocks):
         work = np.empty((len(_WORK_ROWS), tables.shape[3]))
         force = np.empty(tables.shape[3], dtype=np.complex128)
+        rotor = rotor_arrays(tables.shape[3])
         for c in range(block, n_columns, n_blocks):
             _column(cells, columns[c], columns[c + 1], key, tables, geometry, t_max, work,
-                    force, out)
+                    force, rotor, out)
 
 
 first_impact_map_parallel, first_impact_map_serial = parallel_kernel(_first_impact_map)
@@ -228,7 +234,8 @@ def first_impact_cells(cells, tables, geometry, t_max, out):
     """``out[i]``: each cell searched on its own from t = 0 (the reference for the columns)."""
     work = np.empty((len(_WORK_ROWS), tables.shape[3]))
     force = np.empty(tables.shape[3], dtype=np.complex128)
+    rotor = rotor_arrays(tables.shape[3])
     for i in range(cells.shape[0]):
         g = int(cells[i, CELL_GEOMETRY])
         out[i] = first_impact_time(cells[i], tables[g, FREE], geometry[g, GEO_C1], t_max, 0.0,
-                                   work, force)
+                                   work, force, rotor)

@@ -22,17 +22,22 @@ from impactbeams.kernels.reductions import summarize_run
 
 @kernel
 def cell_observables(cell, tables, overlap, shifts, spring, geometry, t_max, max_segments, out):
-    """Run one cell's dynamics (at most ``max_segments`` phases) and write its OUT_COLUMNS."""
+    """Run one cell's dynamics (at most ``max_segments`` phases) and write its OUT_COLUMNS.
+
+    Returns the run's t_max (s).
+    """
     damped, forces, scalars, settings_array, q0, v0, drives = run_inputs(
         cell, tables, geometry, spring, t_max, t_max)
     seg_time, seg_phase, seg_sustained, seg_q, seg_v, end_q, end_v = segment_arrays(
         max_segments, q0.size)
-    # the settings record is a view: index it at each use so that its array stays alive
     count, status, t_end = run_events(damped, forces, scalars, overlap, shifts, spring, drives,
                                       settings_array[0], q0, v0, seg_time, seg_phase,
                                       seg_sustained, seg_q, seg_v, end_q, end_v)
     summarize_run(damped, forces, scalars, settings_array[0], seg_time, seg_phase, seg_q, seg_v,
                   end_q, end_v, count, status, t_end, out)
+    # The settings record is a view into settings_array, which Numba frees after its last use:
+    # this use keeps it alive until the summary has been written.
+    return settings_array[0].t_max
 
 
 def _observables_map(cells, tables, overlaps, shifts, spring_left, spring_right, spring_modes,

@@ -8,16 +8,22 @@ states of the others into the event's sinusoid) is instead a rotating complex am
     q(t) = Re z(t),   q'(t) = Re(lambda z),   q'' = Re(lambda^2 z),   z(t + h) = z(t) e^(lambda h),
 
 with lambda = -zeta omega + i omega_d; a step multiplies z by a stored e^(lambda h). Steps are
-rounded down to ``2^k`` or ``3 * 2^(k-1)`` (one or two stored factors, so that a walk computes
-the factors of a handful of step sizes), and the walk's time offset is a sum of such numbers,
-exact in floating point unless the steps span more than 2^53. Each product rounds once: after n steps z carries a relative error of
-about n ulps, far below what the walk certifies; roots are resolved by exact propagation.
-Driven modes (near resonance) are propagated exactly to each point.
+rounded down to ``2^k`` or ``3 * 2^(k-1)`` (one or two stored factors e^(lambda 2^k), computed
+on first use), and the walk's time offset is a sum of such numbers, exact in floating point
+unless the steps span more than 2^53. Each product rounds once: after n steps z carries a
+relative error of about n ulps, far below what the walk certifies; roots are resolved by exact
+propagation. Driven modes (near resonance) are propagated exactly to each point. The forcing's
+phasor e^(i Omega t) turns along as one more amplitude (lambda = i Omega), after the modes.
 
-The rotor is a tuple of arrays ``(z, lam, driven, slot_exponent, slot_factor)``: the
-amplitudes, the eigenvalues, which modes are driven, and ``SLOTS`` stored step factors
-e^(lambda 2^k), keyed by k in ``slot_exponent[:SLOTS]`` (``slot_exponent[SLOTS]`` is the
-slot replaced next, in turn, so that the two factors of one step never evict each other).
+The rotor is a tuple of arrays ``(z, lam, driven, levels, factors, rates)``, sized for at most
+``capacity`` modes (a phase uses the first ``omega.size``, and the next for the forcing): the
+amplitudes, the eigenvalues,
+which modes are driven, the event's weights times lambda and lambda^2 (rows of ``rates``), and
+the factors ``factors[k - LOWEST] = e^(lambda 2^k)`` of the steps
+2^k, k from ``LOWEST`` to ``LOWEST + LEVELS - 1`` (``levels[k - LOWEST]`` = 1 once computed;
+``levels[LEVELS]``: the number of modes they were computed for). A rotor kept across the
+searches of one phase (``dynamics.run_events`` keeps one per phase) computes each factor once
+per run: ``rotor_load`` clears them only when the eigenvalues change.
 """
 
 import math
@@ -27,87 +33,137 @@ import numpy as np
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.propagation import advance_mode
 
-SLOTS = 16
-_EMPTY = -(2**31)  # no exponent is stored in the slot
+# Steps from 2^-80 s (a walk's steps are at least 4 eps times a period of the slowest mode)
+# to 2^19 s; a longer certified step is taken as 2^19 s.
+LOWEST, LEVELS = -80, 100
+_EPS = np.finfo(np.float64).eps
 
 
 @kernel
-def rotor_arrays(n_modes):
-    """An empty rotor for ``n_modes`` modes."""
-    return (np.empty(n_modes, dtype=np.complex128), np.empty(n_modes, dtype=np.complex128),
-            np.empty(n_modes, dtype=np.bool_), _empty_slots(),
-            np.empty((SLOTS, n_modes), dtype=np.complex128))
+def modulus_bound(x, y):
+    """An upper bound of |x + i y|, cheaper than ``math.hypot`` (which guards against overflow).
+
+    x^2, y^2, their sum and the square root each round once, by at most eps / 2: together
+    under 2 eps of the result, and 4 eps more covers them. Where the squares could underflow,
+    |x| + |y|.
+    """
+    square = x * x + y * y
+    if square < 1e-280:
+        return abs(x) + abs(y)
+    return math.sqrt(square) * (1.0 + 4.0 * _EPS)
 
 
 @kernel
-def _empty_slots():
-    """``slot_exponent`` with every slot empty and slot 0 next."""
-    slots = np.full(SLOTS + 1, _EMPTY, dtype=np.int64)
-    slots[SLOTS] = 0
-    return slots
+def rotor_arrays(capacity):
+    """An empty rotor for up to ``capacity`` modes."""
+    return (np.empty(capacity + 1, dtype=np.complex128),
+            np.empty(capacity + 1, dtype=np.complex128), np.empty(capacity, dtype=np.bool_),
+            np.zeros(LEVELS + 1, dtype=np.int64),
+            np.empty((LEVELS, capacity + 1), dtype=np.complex128),
+            np.empty((2, capacity), dtype=np.complex128))
 
 
 @kernel
-def rotor_load(rotor, q, v, omega, zeta, force):
-    """Set the rotor's amplitudes from the modal state (q, v) (undriven modes only)."""
-    z, lam, driven = rotor[0], rotor[1], rotor[2]
+def rotor_load(rotor, q, v, t, omega, zeta, force, weights, forcing_frequency):
+    """Set the rotor's amplitudes from the modal state (q, v) at t (s); return the driven count.
+
+    The stored step factors are kept if the eigenvalues are those they were computed for.
+    ``weights``: the event function's, whose products with lambda and lambda^2 give e' and e''.
+    """
+    z, lam, driven, levels, rates = rotor[0], rotor[1], rotor[2], rotor[3], rotor[5]
+    same = levels[LEVELS] == omega.size
+    count = 0
     for j in range(omega.size):
         w = omega[j]
-        lam[j] = complex(-zeta[j] * w, w * math.sqrt(1.0 - zeta[j] * zeta[j]))
+        eigenvalue = complex(-zeta[j] * w, w * math.sqrt(1.0 - zeta[j] * zeta[j]))
+        same = same and lam[j] == eigenvalue
+        lam[j] = eigenvalue
         driven[j] = force[j] != 0
-        z[j] = complex(q[j], (lam[j].real * q[j] - v[j]) / lam[j].imag)
+        count += driven[j]
+        z[j] = complex(q[j], (eigenvalue.real * q[j] - v[j]) / eigenvalue.imag)
+        rates[0, j] = weights[j] * eigenvalue
+        rates[1, j] = rates[0, j] * eigenvalue
+    n = omega.size
+    same = same and lam[n] == complex(0.0, forcing_frequency)
+    lam[n] = complex(0.0, forcing_frequency)
+    z[n] = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
+    if not same:
+        levels[:] = 0
+        levels[LEVELS] = omega.size
+    return count
+
+
+@kernel
+def rotor_bounds(rotor, omega, weights, coherent, forcing_frequency):
+    """``events.phase_bounds`` from now on, for a rotor without driven modes.
+
+    A free mode's amplitude |z| bounds |q| and, times omega^k, its k-th derivative for all
+    later times (it decays): the transients' band, curvature and jerk shrink as the fast
+    modes die out, and the walk's certified steps grow.
+    """
+    z = rotor[0]
+    band = curvature = jerk = 0.0
+    for j in range(omega.size):
+        term = abs(weights[j]) * modulus_bound(z[j].real, z[j].imag)
+        w2 = omega[j] * omega[j]
+        band += term
+        curvature += w2 * term
+        jerk += w2 * omega[j] * term
+    forced = abs(coherent)
+    return (coherent, band, curvature + forcing_frequency**2 * forced,
+            jerk + forcing_frequency**3 * forced, True)
 
 
 @kernel
 def _factor(rotor, exponent):
-    """The stored e^(lambda 2^exponent) of every mode, computed on first use."""
-    lam, slot_exponent, slot_factor = rotor[1], rotor[3], rotor[4]
-    for i in range(SLOTS):
-        if slot_exponent[i] == exponent:
-            return slot_factor[i]
-    i = slot_exponent[SLOTS]
-    slot_exponent[SLOTS] = (i + 1) % SLOTS
-    slot_exponent[i] = exponent
-    h = math.ldexp(1.0, exponent)
-    for j in range(lam.size):
-        growth = lam[j] * h
-        slot_factor[i, j] = math.exp(growth.real) * complex(math.cos(growth.imag),
-                                                            math.sin(growth.imag))
-    return slot_factor[i]
+    """e^(lambda 2^exponent) of every mode, computed on first use."""
+    lam, levels, factors = rotor[1], rotor[3], rotor[4]
+    level = exponent - LOWEST
+    if levels[level] == 0:
+        levels[level] = 1
+        h = math.ldexp(1.0, exponent)
+        for j in range(levels[LEVELS] + 1):
+            growth = lam[j] * h
+            factors[level, j] = math.exp(growth.real) * complex(math.cos(growth.imag),
+                                                                math.sin(growth.imag))
+    return factors[level]
 
 
 @kernel
 def rotor_step(rotor, step):
     """Rotate the undriven modes by the largest 2^k or 3 * 2^(k-1) not above ``step`` (s > 0).
 
-    Returns the step taken (s).
+    Returns the step taken (s), 0 if ``step`` is below the table's smallest (nothing moved).
     """
-    z, driven = rotor[0], rotor[2]
+    z, n_modes = rotor[0], rotor[3][LEVELS]
     fraction, exponent = math.frexp(step)  # step = fraction 2^exponent, 1/2 <= fraction < 1
+    if exponent - 2 < LOWEST:
+        return 0.0
+    exponent = min(exponent, LOWEST + LEVELS)
     first = _factor(rotor, exponent - 1)
     taken = math.ldexp(1.0, exponent - 1)
+    # every mode turns (a driven mode's z is never read), which the compiler can vectorise
     if fraction >= 0.75:
         second = _factor(rotor, exponent - 2)
         taken += math.ldexp(1.0, exponent - 2)
-        for j in range(z.size):
-            if not driven[j]:
-                z[j] = z[j] * first[j] * second[j]
+        for j in range(n_modes + 1):
+            z[j] = z[j] * first[j] * second[j]
         return taken
-    for j in range(z.size):
-        if not driven[j]:
-            z[j] = z[j] * first[j]
+    for j in range(n_modes + 1):
+        z[j] = z[j] * first[j]
     return taken
 
 
 @kernel
 def rotor_event(rotor, q_s, v_s, t_s, t, omega, zeta, force, weights, const, sine_amp,
                 forcing_frequency):
-    """e, e', its evaluation scale and e'' at time t (s): ``events.evaluate`` and
-    ``events.event_acceleration`` with the undriven modes taken from the rotor and the driven
-    ones propagated exactly from their state (q_s, v_s) at t_s (s).
+    """e, e', its evaluation scale and e'' at time t (s), from the rotor.
+
+    As ``events.evaluate`` and ``events.event_acceleration``, with the undriven modes taken from
+    the rotor and the driven ones propagated exactly from their state (q_s, v_s) at t_s (s).
     """
-    z, lam, driven = rotor[0], rotor[1], rotor[2]
-    sine, cosine = math.sin(forcing_frequency * t), math.cos(forcing_frequency * t)
+    z, driven, rates = rotor[0], rotor[2], rotor[5]
+    sine, cosine = z[omega.size].imag, z[omega.size].real  # the forcing's phasor
     sine_term, cosine_term = sine_amp.real * sine, sine_amp.imag * cosine
     value = const + sine_term + cosine_term
     slope = forcing_frequency * (sine_amp.real * cosine - sine_amp.imag * sine)
@@ -115,7 +171,7 @@ def rotor_event(rotor, q_s, v_s, t_s, t, omega, zeta, force, weights, const, sin
     scale = abs(const) + abs(sine_term) + abs(cosine_term)
     h = t - t_s
     phase_plus = step_plus = 0j  # the drive's phases, computed for the first driven mode
-    for j in range(z.size):
+    for j in range(omega.size):
         if driven[j]:
             if step_plus == 0:
                 phase_plus = complex(math.cos(forcing_frequency * t_s),
@@ -127,12 +183,14 @@ def rotor_event(rotor, q_s, v_s, t_s, t, omega, zeta, force, weights, const, sin
                                   phase_plus, step_plus)
             aj = (force[j].real * sine + force[j].imag * cosine - 2.0 * zeta[j] * w * vj
                   - w * w * qj)
-        else:
-            rate = lam[j] * z[j]
-            qj, vj, aj = z[j].real, rate.real, (lam[j] * rate).real
-        term = weights[j] * qj
+            term = weights[j] * qj
+            slope += weights[j] * vj
+            acceleration += weights[j] * aj
+        else:  # q = Re z, w q' = Re(w lambda z), w q'' = Re(w lambda^2 z)
+            x, y = z[j].real, z[j].imag
+            term = weights[j] * x
+            slope += rates[0, j].real * x - rates[0, j].imag * y
+            acceleration += rates[1, j].real * x - rates[1, j].imag * y
         value += term
         scale += abs(term)
-        slope += weights[j] * vj
-        acceleration += weights[j] * aj
     return value, slope, scale, acceleration

@@ -6,7 +6,9 @@ modes z (M, one of each conjugate pair):
 
 * ``modes`` (complex, rows ``layout.SPRING_MODE_ROWS``): eigenvalues lambda_j (1/s) and
   phases rho_j (|rho_j| = 1) of the contact oscillators y_j = 2 Re(rho_j z_j) - y_eq_j;
-* ``left`` (M, 2 M): z = left x; ``right`` (2 M, M): x = 2 Re(right z);
+* ``left`` (2 M, M): z = left^T x; ``right`` (M, 2 M): x = 2 Re(right^T z) (the transposes of
+  the compliant module's, so that a change of coordinates adds up contiguous rows, which
+  vectorises in a fixed order);
 * ``drives`` (complex, rows ``layout.SPRING_DRIVE_ROWS``, per run): the modal drive of z,
   z_j' = lambda_j z_j + P_j e^(i Omega t) + N_j e^(-i Omega t) + C_j, and y_eq_j.
 
@@ -39,9 +41,9 @@ def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency)
     y_eq_j, real), and the drive amplitudes A_j of the oscillators,
     y_j'' + 2 zeta_j |lambda_j| y_j' + |lambda_j|^2 y_j = Im(A_j e^(i Omega t)).
     """
-    m = left.shape[0]
+    m = left.shape[1]
     drives = np.empty((len(SPRING_DRIVE_ROWS), m), dtype=np.complex128)
-    velocity_rows = np.ascontiguousarray(left[:, m:])
+    velocity_rows = np.ascontiguousarray(left[m:].T)
     rising = velocity_rows @ contact_drive / 2j
     falling = -(velocity_rows @ np.conj(contact_drive)) / 2j
     constant = velocity_rows @ constant_drive.astype(np.complex128)
@@ -60,9 +62,14 @@ def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency)
 
 
 @kernel
-def _mode_drive(drives, j, t, forcing_frequency):
-    """The drive gamma_j(t) of complex mode j at time t (s)."""
-    turn = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
+def _turn(t, forcing_frequency):
+    """e^(i Omega t)."""
+    return complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
+
+
+@kernel
+def _mode_drive(drives, j, turn):
+    """The drive gamma_j(t) of complex mode j, given ``turn`` = e^(i Omega t)."""
     return (drives[DRIVE_RISING, j] * turn + drives[DRIVE_FALLING, j] * turn.conjugate()
             + drives[DRIVE_CONSTANT, j])
 
@@ -71,27 +78,35 @@ def _mode_drive(drives, j, t, forcing_frequency):
 def to_contact(q, v, t, left, modes, drives, forcing_frequency, y, y_rate):
     """Contact oscillators (y, y') at time t of the free coordinates (q, q')."""
     m = q.size
+    z_real, z_imag = np.zeros(m), np.zeros(m)
+    for n in range(2 * m):
+        x = q[n] if n < m else v[n - m]
+        row = left[n]
+        for j in range(m):
+            z_real[j] += row[j].real * x
+            z_imag[j] += row[j].imag * x
+    turn = _turn(t, forcing_frequency)
     for j in range(m):
-        z = 0j
-        for n in range(m):
-            z += left[j, n] * q[n] + left[j, m + n] * v[n]
+        z = complex(z_real[j], z_imag[j])
         lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
         y[j] = 2.0 * (rho * z).real - drives[DRIVE_EQUILIBRIUM, j].real
-        y_rate[j] = 2.0 * (rho * (lam * z + _mode_drive(drives, j, t, forcing_frequency))).real
+        y_rate[j] = 2.0 * (rho * (lam * z + _mode_drive(drives, j, turn))).real
 
 
 @kernel
 def to_free(y, y_rate, t, right, modes, drives, forcing_frequency, q, v):
     """Free coordinates (q, q') at time t of the contact oscillators (y, y')."""
     m = y.size
-    q[:] = 0.0
-    v[:] = 0.0
+    turn = _turn(t, forcing_frequency)
+    x = np.zeros(2 * m)
     for j in range(m):
         lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
         a = 0.5 * (y[j] + drives[DRIVE_EQUILIBRIUM, j].real)
-        forced = (rho * _mode_drive(drives, j, t, forcing_frequency)).real
+        forced = (rho * _mode_drive(drives, j, turn)).real
         b = (lam.real * a - 0.5 * y_rate[j] + forced) / lam.imag
         z = rho.conjugate() * complex(a, b)
-        for n in range(m):
-            q[n] += 2.0 * (right[n, j] * z).real
-            v[n] += 2.0 * (right[m + n, j] * z).real
+        row = right[j]
+        for n in range(2 * m):
+            x[n] += row[n].real * z.real - row[n].imag * z.imag
+    for n in range(m):
+        q[n], v[n] = 2.0 * x[n], 2.0 * x[m + n]

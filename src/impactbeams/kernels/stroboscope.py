@@ -213,16 +213,19 @@ def cell_stroboscope(cell, tables, overlap, shifts, spring, geometry, times, hor
     """One map cell's long run to ``horizon`` (s), sampled at ``times`` (s): ``sampled_run``.
 
     The episode rule's separation is a quarter period of the slowest free mode; the cap on
-    phases is ``max_phases_per_period`` per forcing period of the horizon.
+    phases is ``max_phases_per_period`` per forcing period of the horizon. Returns the run's
+    horizon (s).
     """
     damped, forces, scalars, settings_array, q0, v0, drives = run_inputs(
         cell, tables, geometry, spring, horizon, horizon)
     separation = 0.5 * math.pi / np.min(tables[FREE, ROW_OMEGA])
     periods = horizon * settings_array[0].forcing_frequency / (2.0 * math.pi)
     max_phases = int(max_phases_per_period * math.ceil(periods))
-    # the settings record is a view: index it at each use so that its array stays alive
     sampled_run(damped, forces, scalars, overlap, shifts, spring, drives, settings_array[0], q0,
                 v0, times, separation, capacity, max_phases, samples, summary)
+    # The settings record is a view into settings_array, which Numba frees after its last use:
+    # this use keeps it alive until the run has ended (without it the run read freed memory).
+    return settings_array[0].t_max
 
 
 def _stroboscope_map(cells, tables, overlaps, shifts, spring_left, spring_right, spring_modes,
