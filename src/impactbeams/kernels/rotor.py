@@ -33,8 +33,8 @@ import numpy as np
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.propagation import advance_mode
 
-# Steps from 2^-80 s (a walk's steps are at least 4 eps times a period of the slowest mode)
-# to 2^19 s; a longer certified step is taken as 2^19 s.
+# Factors of the steps 2^-80 s (a walk's steps are at least 4 eps times a period of the
+# slowest mode) to 2^19 s; a longer certified step is taken as 2^19 or 3 2^18 s.
 LOWEST, LEVELS = -80, 100
 _EPS = np.finfo(np.float64).eps
 
