@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from impactbeams.kernels.jit import kernel
-from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.propagation import advance, steady_phasor
 from impactbeams.kernels.rotor import (
     modulus_bound,
     rotor_bounds,
@@ -174,30 +174,22 @@ def band_step(margin, coherent, t, forcing_frequency):
     return (target - theta) / forcing_frequency * (1.0 - 1e-9)
 
 
-# A mode's steady state is split off when |D| >= omega^2 / 4 (its steady amplitude is at most
-# 4 times the quasi-static one): then its terms add little rounding; nearer resonance the
-# steady state and the transient would cancel, and the mode stays driven.
-SPLIT_DETUNING = 0.25
-
-
 @kernel
 def split_steady_states(q_s, v_s, t_s, omega, zeta, force, weights, sine_amp, forcing_frequency):
     """Move the steady states of the modes away from resonance into the event's sinusoid.
 
-    Mode j driven by Im(A e^(i Omega t)) is its steady state Im(P e^(i Omega t)), P = A / D,
-    D = omega^2 - Omega^2 + 2 i zeta omega Omega, plus a free transient from its state at t_s
-    (s) less the steady one. The event function keeps its value, with the steady states
+    Mode j driven by Im(A e^(i Omega t)) is its steady state Im(P e^(i Omega t))
+    (``propagation.steady_phasor``) plus a free transient from its state at t_s (s) less the
+    steady one. The event function keeps its value, with the steady states
     summed into ``sine_amp`` (returned) and those modes undriven: their propagation is then
     a free oscillation, about 2-3 times cheaper than the driven one. ``q_s``, ``v_s`` and
     ``force`` are changed in place.
     """
     rotation = complex(math.cos(forcing_frequency * t_s), math.sin(forcing_frequency * t_s))
     for j in range(omega.size):
-        w = omega[j]
-        detuning = complex(w * w - forcing_frequency**2, 2.0 * zeta[j] * w * forcing_frequency)
-        if force[j] == 0 or abs(detuning) < SPLIT_DETUNING * w * w:
+        steady = steady_phasor(omega[j], zeta[j], force[j], forcing_frequency)
+        if steady == 0:
             continue
-        steady = force[j] / detuning
         phasor = steady * rotation
         q_s[j] -= phasor.imag
         v_s[j] -= forcing_frequency * phasor.real

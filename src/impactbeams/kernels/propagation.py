@@ -89,6 +89,25 @@ def advance_mode(q0, v0, h, w, z, f, forcing_frequency, phase_plus, step_plus):
     return q_free + combined.real / (2.0 * wd), v_free + (lam * combined).real / (2.0 * wd)
 
 
+# A mode's steady state is split off when |D| >= omega^2 / 4 (its steady amplitude is at most
+# 4 times the quasi-static one): then its terms add little rounding; nearer resonance the
+# steady state and the transient would cancel, and the mode stays driven.
+SPLIT_DETUNING = 0.25
+
+
+@kernel
+def steady_phasor(w, z, f, forcing_frequency):
+    """The steady state Im(P e^(i Omega t)) of a mode away from resonance: P = A / D; else 0.
+
+    D = omega^2 - Omega^2 + 2 i zeta omega Omega; 0 for an undriven mode or |D| below
+    ``SPLIT_DETUNING`` omega^2 (compared in squares: no square root per mode).
+    """
+    detuning = complex(w * w - forcing_frequency**2, 2.0 * z * w * forcing_frequency)
+    if f == 0 or detuning.real**2 + detuning.imag**2 < (SPLIT_DETUNING * w * w)**2:
+        return 0j
+    return f / detuning
+
+
 @kernel
 def drive_amplitude(drive, omega, zeta, force_amplitude, forcing_frequency):
     """Complex amplitude A of a mode's drive ``b (F'' + 2 zeta omega F')``, as Im(A e^(i Omega t)).
