@@ -17,13 +17,14 @@ phasor e^(i Omega t) turns along as one more amplitude (lambda = i Omega), after
 
 The rotor is a tuple of arrays ``(z, lam, driven, levels, factors, rates)``, sized for at most
 ``capacity`` modes (a phase uses the first ``omega.size``, and the next for the forcing): the
-amplitudes, the eigenvalues,
-which modes are driven, the event's weights times lambda and lambda^2 (rows of ``rates``), and
-the factors ``factors[k - LOWEST] = e^(lambda 2^k)`` of the steps
-2^k, k from ``LOWEST`` to ``LOWEST + LEVELS - 1`` (``levels[k - LOWEST]`` = 1 once computed;
-``levels[LEVELS]``: the number of modes they were computed for). A rotor kept across the
-searches of one phase (``dynamics.run_events`` keeps one per phase) computes each factor once
-per run: ``rotor_load`` clears them only when the eigenvalues change.
+amplitudes, the eigenvalues, which modes are driven, the factors
+``factors[k - LOWEST] = e^(lambda 2^k)`` of the steps 2^k, k from ``LOWEST`` to
+``LOWEST + LEVELS - 1``, and the event's weights of the undriven modes with their products by
+lambda and lambda^2 (rows of ``rates``). ``levels[k - LOWEST]`` is 1 once a factor is
+computed, ``levels[LEVELS]`` the number of modes they were computed for, ``levels[LEVELS + 1]``
+the number of driven modes. A rotor kept across the searches of one phase
+(``dynamics.run_events`` keeps one per phase) computes each factor once per run:
+``rotor_load`` clears them only when the eigenvalues change.
 """
 
 import math
@@ -58,9 +59,9 @@ def rotor_arrays(capacity):
     """An empty rotor for up to ``capacity`` modes."""
     return (np.empty(capacity + 1, dtype=np.complex128),
             np.empty(capacity + 1, dtype=np.complex128), np.empty(capacity, dtype=np.bool_),
-            np.zeros(LEVELS + 1, dtype=np.int64),
+            np.zeros(LEVELS + 2, dtype=np.int64),
             np.empty((LEVELS, capacity + 1), dtype=np.complex128),
-            np.empty((2, capacity), dtype=np.complex128))
+            np.empty((3, capacity), dtype=np.complex128))
 
 
 @kernel
@@ -68,7 +69,8 @@ def rotor_load(rotor, q, v, t, omega, zeta, force, weights, forcing_frequency):
     """Set the rotor's amplitudes from the modal state (q, v) at t (s); return the driven count.
 
     The stored step factors are kept if the eigenvalues are those they were computed for.
-    ``weights``: the event function's, whose products with lambda and lambda^2 give e' and e''.
+    ``weights``: the event function's; ``rates`` holds, for the undriven modes (0 for the
+    driven), the weights and their products with lambda and lambda^2, which give e, e', e''.
     """
     z, lam, driven, levels, rates = rotor[0], rotor[1], rotor[2], rotor[3], rotor[5]
     same = levels[LEVELS] == omega.size
@@ -81,15 +83,18 @@ def rotor_load(rotor, q, v, t, omega, zeta, force, weights, forcing_frequency):
         driven[j] = force[j] != 0
         count += driven[j]
         z[j] = complex(q[j], (eigenvalue.real * q[j] - v[j]) / eigenvalue.imag)
-        rates[0, j] = weights[j] * eigenvalue
-        rates[1, j] = rates[0, j] * eigenvalue
+        free_weight = 0.0 if driven[j] else weights[j]
+        rates[0, j] = free_weight
+        rates[1, j] = free_weight * eigenvalue
+        rates[2, j] = rates[1, j] * eigenvalue
     n = omega.size
     same = same and lam[n] == complex(0.0, forcing_frequency)
     lam[n] = complex(0.0, forcing_frequency)
     z[n] = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
     if not same:
-        levels[:] = 0
+        levels[:LEVELS] = 0
         levels[LEVELS] = omega.size
+    levels[LEVELS + 1] = count
     return count
 
 
@@ -162,35 +167,52 @@ def rotor_event(rotor, q_s, v_s, t_s, t, omega, zeta, force, weights, const, sin
     As ``events.evaluate`` and ``events.event_acceleration``, with the undriven modes taken from
     the rotor and the driven ones propagated exactly from their state (q_s, v_s) at t_s (s).
     """
-    z, driven, rates = rotor[0], rotor[2], rotor[5]
-    sine, cosine = z[omega.size].imag, z[omega.size].real  # the forcing's phasor
+    z, driven, levels, rates = rotor[0], rotor[2], rotor[3], rotor[5]
+    n = omega.size
+    sine, cosine = z[n].imag, z[n].real  # the forcing's phasor
     sine_term, cosine_term = sine_amp.real * sine, sine_amp.imag * cosine
-    value = const + sine_term + cosine_term
-    slope = forcing_frequency * (sine_amp.real * cosine - sine_amp.imag * sine)
-    acceleration = -forcing_frequency**2 * (sine_term + cosine_term)
-    scale = abs(const) + abs(sine_term) + abs(cosine_term)
+    # the undriven modes (weight 0 for the driven): q = Re z, w q' = Re(w lambda z), w q'' =
+    # Re(w lambda^2 z); two partial sums of each, in a fixed order, so that the additions do
+    # not each wait for the previous one
+    v0 = v1 = s0 = s1 = d0 = d1 = a0 = a1 = 0.0
+    for j in range(0, n - 1, 2):
+        x, y = z[j].real, z[j].imag
+        term = rates[0, j].real * x
+        v0 += term
+        s0 += abs(term)
+        d0 += rates[1, j].real * x - rates[1, j].imag * y
+        a0 += rates[2, j].real * x - rates[2, j].imag * y
+        x, y = z[j + 1].real, z[j + 1].imag
+        term = rates[0, j + 1].real * x
+        v1 += term
+        s1 += abs(term)
+        d1 += rates[1, j + 1].real * x - rates[1, j + 1].imag * y
+        a1 += rates[2, j + 1].real * x - rates[2, j + 1].imag * y
+    if n % 2 == 1:
+        x, y = z[n - 1].real, z[n - 1].imag
+        term = rates[0, n - 1].real * x
+        v0 += term
+        s0 += abs(term)
+        d0 += rates[1, n - 1].real * x - rates[1, n - 1].imag * y
+        a0 += rates[2, n - 1].real * x - rates[2, n - 1].imag * y
+    value = const + sine_term + cosine_term + (v0 + v1)
+    scale = abs(const) + abs(sine_term) + abs(cosine_term) + (s0 + s1)
+    slope = forcing_frequency * (sine_amp.real * cosine - sine_amp.imag * sine) + (d0 + d1)
+    acceleration = -forcing_frequency**2 * (sine_term + cosine_term) + (a0 + a1)
+    if levels[LEVELS + 1] == 0:
+        return value, slope, scale, acceleration
     h = t - t_s
-    phase_plus = step_plus = 0j  # the drive's phases, computed for the first driven mode
-    for j in range(omega.size):
+    phase_plus = complex(math.cos(forcing_frequency * t_s), math.sin(forcing_frequency * t_s))
+    step_plus = complex(math.cos(forcing_frequency * h), math.sin(forcing_frequency * h))
+    for j in range(n):
         if driven[j]:
-            if step_plus == 0:
-                phase_plus = complex(math.cos(forcing_frequency * t_s),
-                                     math.sin(forcing_frequency * t_s))
-                step_plus = complex(math.cos(forcing_frequency * h),
-                                    math.sin(forcing_frequency * h))
             w = omega[j]
             qj, vj = advance_mode(q_s[j], v_s[j], h, w, zeta[j], force[j], forcing_frequency,
                                   phase_plus, step_plus)
-            aj = (force[j].real * sine + force[j].imag * cosine - 2.0 * zeta[j] * w * vj
-                  - w * w * qj)
             term = weights[j] * qj
+            value += term
+            scale += abs(term)
             slope += weights[j] * vj
-            acceleration += weights[j] * aj
-        else:  # q = Re z, w q' = Re(w lambda z), w q'' = Re(w lambda^2 z)
-            x, y = z[j].real, z[j].imag
-            term = weights[j] * x
-            slope += rates[0, j].real * x - rates[0, j].imag * y
-            acceleration += rates[1, j].real * x - rates[1, j].imag * y
-        value += term
-        scale += abs(term)
+            acceleration += weights[j] * (force[j].real * sine + force[j].imag * cosine
+                                          - 2.0 * zeta[j] * w * vj - w * w * qj)
     return value, slope, scale, acceleration
