@@ -188,8 +188,11 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     e > 0 at the start: its first root (``find_event``). e <= 0 at the start: t_s, except
 
     * rising (e' > 0) and ``wait_rising``: follow e until it has risen through 0 and falls back
-      to it, or until it peaks below 0 (e' = 0), whichever comes first;
+      to it, or until it peaks below 0 (e' = 0), whichever comes first (a rise certified by
+      ``events.root_after_rise`` needs no search for the peak);
     * falling and ``wait_falling``: follow e to its minimum, then as when rising.
+
+    ``rotor``: the phase's (``rotor.rotor_arrays``), kept across its searches.
     """
     t_max = settings.t_max
     value, slope = event_value(q_s, v_s, t_s, table[ROW_EVENT], scalars[SCALAR_CONST],

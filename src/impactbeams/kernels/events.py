@@ -13,7 +13,9 @@ minimum these steps shrink like ``sqrt(e / M2)``, not like ``e / |e'|``, so a mi
 open is passed in a logarithmic number of steps and one that closes, however briefly, is found.
 When the linear estimate says a crossing is near, a probe beyond it brackets the root; a bracket
 on which ``e`` is certified monotone holds exactly one root, which safeguarded Newton then
-resolves to a few ulps of time.
+resolves to a few ulps of time. The walk's own points are evaluated by a rotor
+(:mod:`impactbeams.kernels.rotor`: undriven modes as rotating amplitudes, the steady states
+split off by ``split_steady_states``); the probe and Newton propagate exactly.
 
 Certified in exact arithmetic; in floating point e is known only to within its evaluation
 error. ``search_root`` therefore takes a round-off rule: e counts as 0 where it is within
