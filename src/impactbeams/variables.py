@@ -76,7 +76,9 @@ PARAMETERS: dict[str, Parameter] = {
 class Variable:
     """An output variable: its dimensions, CF ``units``, ``long_name`` and a description.
 
-    ``symbol``: its symbol in matplotlib mathtext, for axis labels ("" if none).
+    ``symbol``: its symbol in matplotlib mathtext, for axis labels ("" if none). ``dtype``: its
+    NumPy type wherever it is stored (a map in memory or on disk, a sweep's saved chunks, a
+    run's Dataset).
     """
 
     dims: tuple[str, ...]
@@ -84,6 +86,7 @@ class Variable:
     long_name: str
     description: str
     symbol: str = ""
+    dtype: str = "float64"
 
 
 # dims "*" = the swept parameters of a map, in sweep order
@@ -94,10 +97,10 @@ VARIABLES: dict[str, Variable] = {
         symbol="$t^*$"),
     "impacted": Variable(
         ("*",), "1", "impact flag",
-        "1 where the tips impact by t_max, 0 where they do not"),
+        "1 where the tips impact by t_max, 0 where they do not", dtype="int8"),
     "impact_count": Variable(
         ("*",), "1", "number of impacts",
-        "number of contact onsets in [0, t_max] (full dynamics)"),
+        "number of contact onsets in [0, t_max] (full dynamics)", dtype="int32"),
     "max_contact_force": Variable(
         ("*",), "N", "largest contact force",
         "largest contact force R over [0, t_max]; 0 where no impact (full dynamics)",
@@ -112,7 +115,7 @@ VARIABLES: dict[str, Variable] = {
         ("*",), "1", "status of the full-dynamics run",
         "0: reached t_max; 1: stopped at the cap on phases per cell; 2: stuck (a run of "
         "zero-length phases); 3: an event search reached its step cap; observables then "
-        "cover the part before the stop"),
+        "cover the part before the stop", dtype="int8"),
     "contact_fraction": Variable(
         ("*",), "1", "fraction of time in contact",
         "time spent in the contact phase divided by t_max (full dynamics)"),
@@ -122,7 +125,7 @@ VARIABLES: dict[str, Variable] = {
 VARIABLES.update({
     "time": Variable(("time",), "s", "time", "output time", "$t$"),
     "impact": Variable(("impact",), "1", "impact number",
-                       "index of the contact phase, in order of onset (from 0)"),
+                       "index of the contact phase, in order of onset (from 0)", dtype="int64"),
     "x1": Variable(("x1",), "m", "position along beam 1", "distance from the clamped end",
                    "$x_1$"),
     "x2": Variable(("x2",), "m", "position along beam 2", "distance from the clamped end",
@@ -183,7 +186,7 @@ VARIABLES.update({
         ("impact",), "1", "sustained-contact flag",
         "1 if the contact followed an instantaneous impact whose released state closed again "
         "within half a period of the fastest free mode (an accumulation), so that it was kept "
-        "until the force, rising from <= 0, fell back to 0 or peaked below 0"),
+        "until the force, rising from <= 0, fell back to 0 or peaked below 0", dtype="int8"),
     "impact_velocity": Variable(
         ("impact",), "m s-1", "gap rate at onset", "dg/dt just before the onset (<= 0)"),
     "separation_velocity": Variable(
@@ -210,14 +213,16 @@ VARIABLES.update({
 # simulate(): impact episodes, clusters of contacts (trajectory.episodes)
 VARIABLES.update({
     "episode": Variable(("episode",), "1", "episode number",
-                        "index of the impact episode (a cluster of contacts), from 0"),
+                        "index of the impact episode (a cluster of contacts), from 0",
+                        dtype="int64"),
     "episode_onset_time": Variable(("episode",), "s", "episode onset time",
                                    "onset of the episode's first contact"),
     "episode_duration": Variable(
         ("episode",), "s", "episode duration",
         "first onset to last release; NaN if the last contact is still open at the end"),
     "episode_contact_count": Variable(("episode",), "1", "contacts in the episode",
-                                      "number of (micro-)contacts of the episode"),
+                                      "number of (micro-)contacts of the episode",
+                                      dtype="int32"),
     "episode_impulse": Variable(("episode",), "N s", "episode impulse",
                                 "integral of the contact force over the episode's contacts"),
     "episode_peak_force": Variable(("episode",), "N", "episode peak force",
@@ -251,7 +256,7 @@ VARIABLES.update({
         ("*",), "s-1", "standard error of the largest Lyapunov exponent",
         _BATCH_ERROR),
     "exponent": Variable(("exponent",), "1", "exponent number",
-                         "index of the Lyapunov exponent, from the largest (0)"),
+                         "index of the Lyapunov exponent, from the largest (0)", dtype="int64"),
     "lyapunov_spectrum": Variable(
         ("exponent",), "s-1", "leading Lyapunov exponents",
         f"leading Lyapunov exponents, descending, {_LYAPUNOV_METHOD} (Gram-Schmidt in the "
@@ -268,7 +273,7 @@ VARIABLES.update({
     "period": Variable(
         ("period",), "1", "forcing periods before the sample",
         "number of forcing periods 2 pi / Omega from t = 0 to the stroboscopic sample: "
-        "transient_periods + k for the k-th sample"),
+        "transient_periods + k for the k-th sample", dtype="int64"),
     "poincare_deflection1": Variable(
         ("*", "period"), "m", "stroboscopic tip deflection of beam 1",
         "y1(l1, t) once per forcing period at forcing phase 0, t = period * 2 pi / Omega "
@@ -287,7 +292,7 @@ VARIABLES.update({
         "smallest p from 1 to max_period with |x(k + p) - x(k)| <= period_tolerance * scale "
         "over the samples, x = (y1, y2, v1 / Omega, v2 / Omega) at the tips and scale the "
         "largest |x| component; 0 if none (chaotic, quasi-periodic, longer period, or a "
-        "transient not yet decayed)"),
+        "transient not yet decayed)", dtype="int32"),
     "steady_impact_rate": Variable(
         ("*",), "s-1", "contact onsets per second in the steady state",
         "contact onsets in the sampled window [transient_periods, transient_periods + "
@@ -297,6 +302,10 @@ VARIABLES.update({
         "impact episodes (clusters of contacts, docs/model.md) starting in the sampled window, "
         "per second"),
 })
+
+# what a sweep's map can hold along its grid ("*"): observables and what comes with them
+MAP_VARIABLES = tuple(name for name, variable in VARIABLES.items() if variable.dims[0] == "*")
+
 
 def attributes(name: str) -> dict[str, str]:
     """CF attributes (units, long_name, description) of a registered variable."""
@@ -336,7 +345,10 @@ def global_attributes(title: str, action: str, parameters: Mapping[str, Any],
 
 
 def validate(dataset: xr.Dataset) -> None:
-    """Raise ValueError if a registered variable in ``dataset`` lacks its units or long_name."""
+    """Raise ValueError if a registered variable in ``dataset`` is not as registered.
+
+    Checked: its units, long_name and dtype.
+    """
     for name in dataset.data_vars:
         if name not in VARIABLES:
             continue
@@ -345,3 +357,6 @@ def validate(dataset: xr.Dataset) -> None:
             if dataset[name].attrs.get(key) != expected[key]:
                 raise ValueError(f"variable {name!r} has {key} = "
                                  f"{dataset[name].attrs.get(key)!r}, expected {expected[key]!r}")
+        if dataset[name].dtype != VARIABLES[name].dtype:
+            raise ValueError(f"variable {name!r} has dtype {dataset[name].dtype}, expected "
+                             f"{VARIABLES[name].dtype}")

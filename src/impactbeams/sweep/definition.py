@@ -60,7 +60,7 @@ from impactbeams.preflight import (
     highest_frequency,
     require_memory,
 )
-from impactbeams.variables import PARAMETERS
+from impactbeams.variables import PARAMETERS, VARIABLES
 
 FIRST_IMPACT = "first_impact_time"
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
@@ -154,10 +154,12 @@ class Sweep:
                 or self.long_time is not None)
 
     def value_shape(self, name: str) -> tuple[int, ...]:
-        """Shape of one cell's value of stored array ``name``: (sampled periods,) or ()."""
-        if name in POINCARE_OBSERVABLES and self.long_time is not None:
-            return (self.long_time.sampled_periods,)
-        return ()
+        """Shape of one cell's value of stored array ``name``, e.g. (sampled periods,) or ().
+
+        Its registered dimensions after the grid's (variables.VARIABLES), here ``period``.
+        """
+        lengths = {"period": self.long_time.sampled_periods} if self.long_time else {}
+        return tuple(lengths[dim] for dim in VARIABLES[name].dims[1:])
 
     @property
     def stored(self) -> list[str]:

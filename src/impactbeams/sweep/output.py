@@ -20,13 +20,11 @@ from impactbeams.io import Layout, build_netcdf
 from impactbeams.params import MATERIAL_KEYS
 from impactbeams.sweep.definition import FIRST_IMPACT, LONG_TIME_KEYS, Sweep
 from impactbeams.sweep.plan import Chunking, code_digest, contact_resolution, flat_boxes
-from impactbeams.variables import attributes, global_attributes, parameter_attributes
+from impactbeams.variables import VARIABLES, attributes, global_attributes, parameter_attributes
 
 if TYPE_CHECKING:
     import xarray as xr
 
-_INTEGER_TYPES = {"dynamics_status": np.int8, "impact_count": np.int32,  # codes and counts
-                  "response_period": np.int32}
 ChunkWriter = Callable[[int, int, Mapping[str, np.ndarray]], None]
 
 
@@ -35,11 +33,10 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
     coords = {axis.name: (axis.values, {**parameter_attributes(axis.name), "scale": axis.scale})
               for axis in sweep.axes}
     grid = tuple(coords)
-    variables = {name: (np.dtype(_INTEGER_TYPES.get(name, np.float64)), attributes(name),
-                        grid + (("period",) if sweep.value_shape(name) else ()))
-                 for name in sweep.stored}
+    variables = {name: (dtype, attributes(name), grid + VARIABLES[name].dims[1:])
+                 for name, (dtype, _) in cell_values(sweep).items()}
     if FIRST_IMPACT in sweep.stored:
-        variables["impacted"] = (np.dtype(np.int8), attributes("impacted"), grid)
+        variables["impacted"] = (_dtype("impacted"), attributes("impacted"), grid)
     run = {"t_max": sweep.t_max, "t_max_units": "s", "n_modes": sweep.n_modes,
            "observables": " ".join(sweep.observables), "swept_parameters": " ".join(coords),
            "sweep_definition": json.dumps(sweep.definition(), sort_keys=True),
@@ -48,9 +45,9 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
         long_time = sweep.long_time
         run.update({key: getattr(long_time, key) for key in LONG_TIME_KEYS},
                    transient_periods=sweep.transient_periods)
-        if any(sweep.value_shape(name) for name in sweep.stored):
-            coords["period"] = (long_time.period_numbers(sweep.transient_periods),
-                                attributes("period"))
+        if any("period" in dims for _, _, dims in variables.values()):
+            coords["period"] = (long_time.period_numbers(sweep.transient_periods).astype(
+                _dtype("period"), copy=False), attributes("period"))
     resolution = contact_resolution(sweep)
     if resolution is not None:
         run.update(contact_resolved=int(sweep.n_modes >= resolution),
@@ -60,12 +57,25 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
     return Layout(coords, variables, attrs, chunks or sweep.shape)
 
 
+def cell_values(sweep: Sweep) -> dict[str, tuple[np.dtype, tuple[int, ...]]]:
+    """Each array a chunk of ``sweep`` yields: its dtype and the shape of one cell's value.
+
+    The dtype is the registered one (variables.VARIABLES): the map in memory, its file and the
+    saved chunks all hold it.
+    """
+    return {name: (_dtype(name), sweep.value_shape(name)) for name in sweep.stored}
+
+
+def _dtype(name: str) -> np.dtype:
+    return np.dtype(VARIABLES[name].dtype)
+
+
 def stored_arrays(sweep: Sweep, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
     """The map's variables over some cells, from the computed values of those cells."""
-    arrays = {name: values[name].astype(_INTEGER_TYPES.get(name, np.float64), copy=False)
-              for name in sweep.stored}
+    arrays = {name: values[name].astype(dtype, copy=False)
+              for name, (dtype, _) in cell_values(sweep).items()}
     if FIRST_IMPACT in values:
-        arrays["impacted"] = np.isfinite(values[FIRST_IMPACT]).astype(np.int8)
+        arrays["impacted"] = np.isfinite(values[FIRST_IMPACT]).astype(_dtype("impacted"))
     return arrays
 
 

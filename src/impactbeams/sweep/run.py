@@ -22,7 +22,7 @@ import numpy as np
 from impactbeams.params import require
 from impactbeams.preflight import require_memory
 from impactbeams.sweep.definition import Sweep, expected_cost
-from impactbeams.sweep.output import map_dataset, map_file
+from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.plan import (
     Chunking,
     build_plan,
@@ -141,8 +141,9 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
                    "give an output file, to which the map is written chunk by chunk")
     _warn_unresolved(sweep)
     chunking = _chunking(sweep, chunk_cells)
-    results = {name: np.full((sweep.size, *sweep.value_shape(name)), np.nan)
-               for name in sweep.stored}
+    # every cell is filled by its chunk
+    results = {name: np.empty((sweep.size, *shape), dtype)
+               for name, (dtype, shape) in cell_values(sweep).items()}
 
     def keep(_: int, start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:
         for name, array in results.items():
@@ -165,7 +166,7 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
     file is complete and renamed into place, so an interrupted run loses no finished chunk and
     the same call resumes it. An existing
     ``output`` of this sweep and code is kept as it is (returns False); any other existing
-    file is an error. A damaged saved chunk is an error naming it; ``discard_corrupt``
+    file is an error. Damaged saved chunks are an error naming them; ``discard_corrupt``
     deletes such chunks and computes them again.
 
     ``threads``: Numba threads during the run (default: as set; restored afterwards).
@@ -183,16 +184,15 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
     chunking, bar = store.chunking, Progress(sweep.size, enabled=progress)
     with numba_threads(threads), map_file(sweep, output, store.building, chunking) as write:
         pending = []
-        for chunk in range(chunking.count):  # the saved chunks first: a damaged one stops here
+        for chunk in range(chunking.count):  # the saved chunks first: damaged ones stop the run
             start, stop = chunking.bounds(chunk)
-            saved = store.load(chunk, stop - start,
-                               {name: sweep.value_shape(name) for name in sweep.stored},
-                               discard_corrupt)
+            saved = store.load(chunk, stop - start, discard_corrupt)
             if saved is None:
                 pending.append(chunk)
                 continue
             write(start, stop, saved)
             bar.update(stop - start, computed=False)
+        store.refuse_damaged()
 
         unsaved = len(pending)
 

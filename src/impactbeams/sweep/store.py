@@ -17,18 +17,23 @@ import zipfile
 import zlib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
-from impactbeams.io import write_npz, write_text
+from impactbeams.io import Layout, write_npz, write_text
 from impactbeams.params import ParameterError
 from impactbeams.sweep.definition import Sweep
+from impactbeams.sweep.output import cell_values, map_layout
 from impactbeams.sweep.plan import Chunking, code_digest
+
+if TYPE_CHECKING:
+    import netCDF4
 
 RECORD = "run.json"  # what the saved chunks belong to
 # what reading a damaged .npz raises (truncated, overwritten, bits flipped, arrays missing)
 _DAMAGE = (OSError, EOFError, ValueError, KeyError, zipfile.BadZipFile, zlib.error)
+NAMED_DAMAGED = 5  # damaged chunks named in the error; the others are counted
 
 
 class ChunkStore:
@@ -37,13 +42,16 @@ class ChunkStore:
     ``run.json`` records the sweep's fingerprint, the code digest and the chunking. A resumed
     run must have the same sweep and code, and adopts the recorded chunking (chunk ``k`` must
     cover the same cells), unless ``chunk_cells`` (the caller's choice that gave ``chunking``)
-    asks for another one: that is an error rather than ignored.
+    asks for another one: that is an error rather than ignored. Each array is saved with its
+    registered dtype and its cells' value shape (:func:`~impactbeams.sweep.output.cell_values`).
     """
 
     def __init__(self, output: Path, sweep: Sweep, chunking: Chunking,
                  chunk_cells: int | None) -> None:
         self.directory = output.with_name(output.name + ".partial")
         self.building = self.directory / output.name  # the netCDF file until it is complete
+        self.values = cell_values(sweep)
+        self.damaged: list[tuple[Path, str]] = []  # (file, what is wrong), found by load
         identity = {"sweep": sweep.fingerprint(), "code": code_digest()}
         record = self.directory / RECORD
         if not self.directory.exists():
@@ -80,37 +88,50 @@ class ChunkStore:
     def _path(self, chunk: int) -> Path:
         return self.directory / f"chunk_{chunk:06d}.npz"
 
-    def load(self, chunk: int, size: int, shapes: Mapping[str, tuple[int, ...]],
+    def load(self, chunk: int, size: int,
              discard_corrupt: bool = False) -> dict[str, np.ndarray] | None:
         """The saved arrays of a chunk of ``size`` cells, or None if it is not saved.
 
-        ``shapes``: the arrays' names and the shape of one cell's value of each.
-
-        A damaged file (truncated, not an ``.npz``, arrays missing or of the wrong size) is a
-        ParameterError naming it; with ``discard_corrupt`` it is deleted instead (with a
-        warning) and the chunk counts as not saved.
+        A damaged file (truncated, not an ``.npz``, arrays missing or of the wrong size or
+        dtype) counts as not saved and is listed in ``damaged`` for :meth:`refuse_damaged`;
+        with ``discard_corrupt`` it is deleted instead (with a warning).
         """
         path = self._path(chunk)
         if not path.exists():
             return None
         try:
             with open(path, "rb") as stream:
-                return _arrays(stream, size, shapes)
+                return _arrays(stream, size, self.values)
         except _DAMAGE as error:
             problem = f"{type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''}"
             if not discard_corrupt:
-                raise ParameterError(
-                    f"saved chunk {path} is damaged ({problem}): run again with "
-                    "--discard-corrupt (discard_corrupt=True) to recompute its cells, or delete "
-                    f"{self.directory}") from None
+                self.damaged.append((path, problem))
+                return None
             warnings.warn(f"discarded the damaged chunk {path} ({problem}); its cells are "
                           "computed again", RuntimeWarning, stacklevel=2)
             path.unlink()
             return None
 
-    def save(self, chunk: int, values: dict[str, np.ndarray]) -> None:
-        """Save a finished chunk atomically."""
-        write_npz(self._path(chunk), values)
+    def refuse_damaged(self) -> None:
+        """A ParameterError naming the damaged chunks :meth:`load` found, if any."""
+        if not self.damaged:
+            return
+        (path, problem), others = self.damaged[0], [p.name for p, _ in self.damaged[1:]]
+        if not others:
+            found = f"saved chunk {path} is damaged ({problem})"
+        else:
+            more = len(others) - NAMED_DAMAGED + 1
+            listed = ", ".join(others[:NAMED_DAMAGED - 1]) + (f" and {more} more"
+                                                               if more > 0 else "")
+            found = (f"{len(self.damaged)} saved chunks are damaged: {path} ({problem}), "
+                     f"{listed}")
+        raise ParameterError(f"{found}: run again with --discard-corrupt (discard_corrupt=True) "
+                             f"to recompute their cells, or delete {self.directory}")
+
+    def save(self, chunk: int, values: Mapping[str, np.ndarray]) -> None:
+        """Save a finished chunk atomically, each array with its registered dtype."""
+        write_npz(self._path(chunk), {name: np.asarray(values[name], dtype)
+                                      for name, (dtype, _) in self.values.items()})
 
     def remove(self) -> None:
         """Delete the partial results once the final file is written."""
@@ -118,21 +139,21 @@ class ChunkStore:
 
 
 def _arrays(stream: BinaryIO, size: int,
-            shapes: Mapping[str, tuple[int, ...]]) -> dict[str, np.ndarray]:
-    """The float64 arrays of ``size`` cells in an open ``.npz`` file.
+            layout: Mapping[str, tuple[np.dtype, tuple[int, ...]]]) -> dict[str, np.ndarray]:
+    """The arrays of ``size`` cells in an open ``.npz`` file.
 
-    Each cell has one value of ``shapes[name]`` in array ``name``.
+    ``layout[name]``: the dtype of array ``name`` and the shape of one cell's value in it.
     """
     archive = np.load(stream)
     if not isinstance(archive, np.lib.npyio.NpzFile):
         raise ValueError("an .npy array, not an .npz archive")
     with archive:
-        values = {name: archive[name] for name in shapes}
+        values = {name: archive[name] for name in layout}
     for name, array in values.items():
-        expected = (size, *shapes[name])
-        if array.shape != expected or array.dtype != np.float64:
+        dtype, shape = layout[name]
+        if array.shape != (size, *shape) or array.dtype != dtype:
             raise ValueError(f"{name} has {array.dtype} values of shape {array.shape}, "
-                             f"expected float64 of shape {expected}")
+                             f"expected {dtype} of shape {(size, *shape)}")
     return values
 
 
@@ -140,8 +161,8 @@ def finished_output(output: Path, sweep: Sweep) -> bool:
     """Whether ``output`` already holds this sweep's result from this code (nothing to do).
 
     False if there is no file; a ParameterError if it holds anything else (another sweep, the
-    same sweep from other code, not netCDF): an existing file is never silently reused or
-    overwritten.
+    same sweep from other code, other coordinates or variables, not netCDF): an existing file
+    is never silently reused or overwritten.
     """
     if not output.exists():
         return False
@@ -153,9 +174,10 @@ def finished_output(output: Path, sweep: Sweep) -> bool:
         with netCDF4.Dataset(output) as nc:
             found = {key: nc.getncattr(key) if key in nc.ncattrs() else None
                      for key in ("sweep_fingerprint", "code_digest")}
-    except OSError as error:
-        raise ParameterError(f"{output} exists and is not a netCDF file ({error}): delete it "
-                             "or choose another output") from None
+            difference = _difference(nc, map_layout(sweep))
+    except (OSError, RuntimeError) as error:  # RuntimeError: netCDF4's HDF errors
+        raise ParameterError(f"{output} exists and is not a readable netCDF file ({error}): "
+                             "delete it or choose another output") from None
     if found["sweep_fingerprint"] != sweep.fingerprint():
         raise ParameterError(f"{output} exists and holds a different result: delete it or "
                              "choose another output")
@@ -164,4 +186,40 @@ def finished_output(output: Path, sweep: Sweep) -> bool:
             f"{output} holds this sweep's result computed by other impactbeams code (code "
             f"digest {found['code_digest']}, this code {code_digest()}): delete it to recompute "
             "with this code, or choose another output")
+    if difference is not None:
+        raise ParameterError(f"{output} records this sweep and code but does not hold its map: "
+                             f"{difference}; delete it or choose another output")
     return True
+
+
+def _difference(nc: netCDF4.Dataset, layout: Layout) -> str | None:
+    """How the open file ``nc`` differs from ``layout`` (None if it does not).
+
+    Compared: the coordinates' values, the variables' names, dtypes and dimensions.
+    """
+    for name, (values, _) in layout.coords.items():
+        if name not in nc.variables:
+            return f"it has no coordinate {name}"
+        coordinate = nc[name]
+        coordinate.set_auto_mask(False)
+        stored = coordinate[:]
+        text = values.dtype.kind in "US"  # a categorical axis: strings
+        if stored.shape != values.shape or (not text and stored.dtype != values.dtype):
+            return (f"its coordinate {name} has {stored.dtype} values of shape {stored.shape}, "
+                    f"the sweep's {values.dtype} of shape {values.shape}")
+        unequal = np.flatnonzero(stored != values)
+        if unequal.size:
+            first = unequal[0]
+            return (f"{unequal.size} of the {values.size} values of its coordinate {name} "
+                    f"differ from the sweep's (first at index {first}: {stored[first]!r}, the "
+                    f"sweep's {values[first]!r})")
+    names, expected = set(nc.variables), {*layout.coords, *layout.variables}
+    if names != expected:
+        return (f"it has the variables {', '.join(sorted(names))}, the sweep's map "
+                f"{', '.join(sorted(expected))}")
+    for name, (dtype, _, dims) in layout.variables.items():
+        variable = nc[name]
+        if variable.dtype != dtype or variable.dimensions != dims:
+            return (f"its variable {name} has {variable.dtype} values along "
+                    f"{variable.dimensions}, the sweep's map {dtype} along {dims}")
+    return None
