@@ -9,7 +9,6 @@ holds the sweep's map; two uninterrupted runs differ only in their ``history`` a
 """
 
 import functools
-import os
 import signal
 import subprocess
 import sys
@@ -18,16 +17,16 @@ import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
-from test_distributed import local_cluster
-from test_sweep import PROCESS_DEADLINE, _wait_for
 
 from impactbeams.cli import EXIT_INTERRUPTED, main
 from impactbeams.params import ParameterError
 from impactbeams.sweep import Chunking, load_sweep, sweep_from_mapping, write_sweep
-from impactbeams.sweep.definition import OBSERVABLES, LONG_TIME_OBSERVABLES
+from impactbeams.sweep.definition import LONG_TIME_OBSERVABLES, OBSERVABLES
 from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.store import NAMED_DAMAGED, ChunkStore
 from impactbeams.variables import MAP_VARIABLES, VARIABLES
+from test_distributed import local_cluster
+from test_sweep import PROCESS_DEADLINE, _wait_for
 
 # --- the store, the file and the in-memory map hold every stored observable as registered ---
 
@@ -267,3 +266,98 @@ def test_a_killed_client_of_a_cluster_resumes_to_the_uninterrupted_map(
     map equals the local uninterrupted run's (the same bits on workers and here)."""
     _kill_and_resume(sweep_files, uninterrupted, tmp_path, kind, SIGNALS[how],
                      "--scheduler", scheduler)
+
+
+# --- damaged chunks, finished files -------------------------------------------------------------
+
+
+def test_damaged_chunks_are_named_and_only_they_are_recomputed(sweep_files, uninterrupted,
+                                                               tmp_path, capsys):
+    """Not the first chunk checked but the damaged ones: one named with its fault and the others
+    named up to NAMED_DAMAGED, then counted; --discard-corrupt recomputes exactly those."""
+    sweep, out = load_sweep(sweep_files / "long-time.toml"), tmp_path / "long-time.nc"
+
+    def stop(chunk):
+        if chunk == 7:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        write_sweep(sweep, out, chunk_cells=1, threads=1, on_chunk=stop)
+    saved = sorted((tmp_path / "long-time.nc.partial").glob("chunk_*.npz"))
+    assert [path.name for path in saved] == [f"chunk_{k:06d}.npz" for k in range(8)]
+    saved[2].write_bytes(b"")
+    saved[4].write_bytes(saved[4].read_bytes()[:200])
+    command = _command(sweep_files, "long-time", out)
+    assert main(command) == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"impactbeams: error: 2 saved chunks are damaged: {saved[2]} (EOFError: No data left "
+        "in file), chunk_000004.npz: run again with --discard-corrupt (discard_corrupt=True) to "
+        f"recompute their cells, or delete {saved[0].parent}")
+    for path in (saved[0], saved[1], saved[3], saved[5], saved[6]):
+        path.write_bytes(b"")
+    assert main(command) == 2
+    assert capsys.readouterr().err.splitlines()[-1].startswith(
+        f"impactbeams: error: 7 saved chunks are damaged: {saved[0]} (EOFError: No data left in "
+        "file), chunk_000001.npz, chunk_000002.npz, chunk_000003.npz, chunk_000004.npz and "
+        "2 more: run again with --discard-corrupt")
+    assert NAMED_DAMAGED == 5 and all(path.exists() for path in saved) and not out.exists()
+    computed = []
+    with pytest.warns(RuntimeWarning, match="discarded the damaged chunk") as discarded:
+        write_sweep(sweep, out, chunk_cells=1, threads=1, discard_corrupt=True,
+                    on_chunk=computed.append)
+    assert len(discarded) == 7
+    assert sorted(computed) == [k for k in range(sweep.size) if k != 7]  # chunk 7 was loaded
+    assert_same_map(out, uninterrupted("long-time"))
+
+
+def _zero_omega(reference, out):
+    out.write_bytes(reference.read_bytes())
+    with netCDF4.Dataset(out, "a") as nc:
+        nc["omega"][:] = 0.0  # as a second writer once left it
+
+
+def _rewritten(change):
+    def rewrite(reference, out):
+        with xr.open_dataset(reference) as dataset:
+            change(dataset.load()).to_netcdf(out)
+    return rewrite
+
+
+FILE_CHANGES = {  # kind, change, what the error says
+    "omega all 0.0": ("long-time", _zero_omega,
+                      "40 of the 40 values of its coordinate omega differ from the sweep's (first "
+                      "at index 0: 0.0, the sweep's 100.0)"),
+    "another law": ("dynamics", _rewritten(lambda d: d.assign_coords(
+                        contact_law=["tied", "tied"])),
+                    "1 of the 2 values of its coordinate contact_law differ from the sweep's "
+                    "(first at index 1: 'tied', the sweep's 'spring')"),
+    "float64 periods": ("long-time", _rewritten(lambda d: d.assign(
+                            response_period=d.response_period.astype(np.float64))),
+                        "its variable response_period has float64 values along ('omega',), the "
+                        "sweep's map int32 along ('omega',)"),
+    "a variable missing": ("lyapunov", _rewritten(lambda d: d.drop_vars("dynamics_status")),
+                           "it has the variables lyapunov_exponent, omega, the sweep's map "
+                           "dynamics_status, lyapunov_exponent, omega"),
+}
+
+
+@pytest.mark.parametrize("change", FILE_CHANGES)
+def test_a_finished_file_is_reused_only_if_it_holds_the_sweeps_map(
+        sweep_files, uninterrupted, tmp_path, capsys, change):
+    """Its fingerprint and code digest match, but its coordinates or variables do not: one line,
+    exit 2, the file left as it was. Unchanged, it is reused."""
+    kind, edit, difference = FILE_CHANGES[change]
+    out = tmp_path / "out.nc"
+    edit(uninterrupted(kind), out)
+    before = out.read_bytes()
+    assert main(_command(sweep_files, kind, out)) == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"impactbeams: error: {out} records this sweep and code but does not hold its map: "
+        f"{difference}; delete it or choose another output")
+    assert out.read_bytes() == before
+    with pytest.raises(ParameterError, match="does not hold its map"):
+        write_sweep(load_sweep(sweep_files / f"{kind}.toml"), out)
+    intact = uninterrupted(kind).read_bytes()
+    out.write_bytes(intact)
+    assert main(_command(sweep_files, kind, out)) == 0
+    assert "reused" in capsys.readouterr().err and out.read_bytes() == intact

@@ -210,9 +210,10 @@ def _difference(nc: netCDF4.Dataset, layout: Layout) -> str | None:
         unequal = np.flatnonzero(stored != values)
         if unequal.size:
             first = unequal[0]
+            found, wanted = (array[first:first + 1].tolist()[0] for array in (stored, values))
             return (f"{unequal.size} of the {values.size} values of its coordinate {name} "
-                    f"differ from the sweep's (first at index {first}: {stored[first]!r}, the "
-                    f"sweep's {values[first]!r})")
+                    f"differ from the sweep's (first at index {first}: {found!r}, the sweep's "
+                    f"{wanted!r})")
     names, expected = set(nc.variables), {*layout.coords, *layout.variables}
     if names != expected:
         return (f"it has the variables {', '.join(sorted(names))}, the sweep's map "
