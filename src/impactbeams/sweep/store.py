@@ -118,15 +118,16 @@ class ChunkStore:
             return
         (path, problem), others = self.damaged[0], [p.name for p, _ in self.damaged[1:]]
         if not others:
-            found = f"saved chunk {path} is damaged ({problem})"
+            found, whose = f"saved chunk {path} is damaged ({problem})", "its"
         else:
             more = len(others) - NAMED_DAMAGED + 1
             listed = ", ".join(others[:NAMED_DAMAGED - 1]) + (f" and {more} more"
                                                                if more > 0 else "")
             found = (f"{len(self.damaged)} saved chunks are damaged: {path} ({problem}), "
                      f"{listed}")
+            whose = "their"
         raise ParameterError(f"{found}: run again with --discard-corrupt (discard_corrupt=True) "
-                             f"to recompute their cells, or delete {self.directory}")
+                             f"to recompute {whose} cells, or delete {self.directory}")
 
     def save(self, chunk: int, values: Mapping[str, np.ndarray]) -> None:
         """Save a finished chunk atomically, each array with its registered dtype."""
