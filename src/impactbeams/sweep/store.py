@@ -27,6 +27,7 @@ from impactbeams.sweep.definition import Sweep
 from impactbeams.sweep.plan import Chunking, code_digest
 
 RECORD = "run.json"  # what the saved chunks belong to
+CHUNK_NAME = "chunk_{:06d}.npz"
 # what reading a damaged .npz raises (truncated, overwritten, bits flipped, arrays missing)
 _DAMAGE = (OSError, EOFError, ValueError, KeyError, zipfile.BadZipFile, zlib.error)
 
@@ -42,12 +43,11 @@ class ChunkStore:
 
     def __init__(self, output: Path, sweep: Sweep, chunking: Chunking,
                  chunk_cells: int | None) -> None:
-        self.directory = output.with_name(output.name + ".partial")
+        self.directory = partial_folder(output)
         self.building = self.directory / output.name  # the netCDF file until it is complete
         identity = {"sweep": sweep.fingerprint(), "code": code_digest()}
         record = self.directory / RECORD
-        if not self.directory.exists():
-            self.directory.mkdir(parents=True)
+        if not self.directory.exists():  # write_text makes it
             write_text(record, json.dumps({**identity, "chunk_axis": chunking.axis,
                                            "chunk_run": chunking.run}))
             self.chunking = chunking
@@ -78,7 +78,7 @@ class ChunkStore:
                                  "output") from None
 
     def _path(self, chunk: int) -> Path:
-        return self.directory / f"chunk_{chunk:06d}.npz"
+        return self.directory / CHUNK_NAME.format(chunk)
 
     def load(self, chunk: int, size: int, shapes: Mapping[str, tuple[int, ...]],
              discard_corrupt: bool = False) -> dict[str, np.ndarray] | None:
@@ -113,8 +113,27 @@ class ChunkStore:
         write_npz(self._path(chunk), values)
 
     def remove(self) -> None:
-        """Delete the partial results once the final file is written."""
-        shutil.rmtree(self.directory)
+        """Delete the partial results once the final file is written.
+
+        A failure is a warning: the result is complete, the folder is only left over.
+        """
+        try:
+            shutil.rmtree(self.directory)
+        except OSError as error:
+            warnings.warn(f"the result is complete, but {self.directory} could not be deleted "
+                          f"({error.strerror or error}): delete it by hand", RuntimeWarning,
+                          stacklevel=2)
+
+
+def partial_folder(output: Path) -> Path:
+    """The folder of an unfinished run's saved chunks and file: ``OUT.nc.partial``."""
+    return output.with_name(output.name + ".partial")
+
+
+def saved_chunks(output: Path) -> tuple[Path, int]:
+    """The partial folder of ``output`` and how many finished chunks are saved in it."""
+    folder = partial_folder(output)
+    return folder, len(list(folder.glob(CHUNK_NAME.replace("{:06d}", "*"))))
 
 
 def _arrays(stream: BinaryIO, size: int,
