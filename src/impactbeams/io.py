@@ -89,18 +89,21 @@ def _disk_state(path: Path) -> str:
     return "HDF5 gives no cause: a quota, a read-only or failing disk, or a full one"
 
 
-@contextlib.contextmanager
-def _temporary_for(path: Path) -> Iterator[Path]:
-    """A temporary name next to ``path`` (hidden, never matching the target's pattern).
+def atomic_write(path: str | Path, write: Callable[[Path], None], folders: bool = True) -> None:
+    """Call ``write(temporary)`` to fill a temporary file, then rename it to ``path``.
 
-    Any OSError (the folders, the writing, the rename) is a :class:`WriteError` naming
-    ``path``; the temporary file is deleted on every exit.
+    The temporary file sits next to ``path`` (hidden, never matching the target's pattern) and
+    is deleted on every exit. ``folders``: create missing folders above ``path`` (else a
+    missing folder is an error). Any OSError (the folders, the writing, the rename) is a
+    :class:`WriteError` naming ``path``.
     """
+    path = Path(path)
     temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         with writing(path):
-            path.parent.mkdir(parents=True, exist_ok=True)
-            yield temporary
+            if folders:
+                path.parent.mkdir(parents=True, exist_ok=True)
+            write(temporary)
             os.replace(temporary, path)
     finally:
         _remove(temporary)
@@ -113,12 +116,6 @@ def _remove(path: Path) -> None:
     """
     with contextlib.suppress(OSError):
         path.unlink(missing_ok=True)
-
-
-def atomic_write(path: str | Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(temporary)`` to fill a temporary file, then rename it to ``path``."""
-    with _temporary_for(Path(path)) as temporary:
-        write(temporary)
 
 
 def _compressible(dtype: np.dtype) -> bool:
@@ -147,12 +144,12 @@ def write_text(path: str | Path, text: str) -> None:
 
 
 def write_npz(path: str | Path, arrays: Mapping[str, np.ndarray]) -> None:
-    """Write ``arrays`` to an uncompressed ``.npz`` file atomically."""
+    """Write ``arrays`` to an uncompressed ``.npz`` file atomically, in an existing folder."""
     def save(temporary: Path) -> None:
         with open(temporary, "wb") as stream:  # a file object: np.savez adds no suffix
             np.savez(stream, **arrays)
 
-    atomic_write(path, save)
+    atomic_write(path, save, folders=False)
 
 
 @dataclasses.dataclass(frozen=True)

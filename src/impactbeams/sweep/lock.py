@@ -96,6 +96,8 @@ def _acquire(path: Path) -> int:
             os.ftruncate(descriptor, 0)
             os.pwrite(descriptor, json.dumps(_this_process()).encode(), 0)
     except BaseException:
+        with contextlib.suppress(OSError):  # still locked: nobody else has opened this file
+            path.unlink()
         os.close(descriptor)
         raise
     if previous:

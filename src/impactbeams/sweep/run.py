@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from impactbeams.io import WriteError
 from impactbeams.params import require
 from impactbeams.preflight import require_memory
 from impactbeams.sweep.definition import Sweep, expected_cost
@@ -33,7 +32,7 @@ from impactbeams.sweep.plan import (
     default_chunk_cells,
 )
 from impactbeams.sweep.progress import Progress
-from impactbeams.sweep.store import ChunkStore, finished_output, saved_chunks
+from impactbeams.sweep.store import ChunkStore, finished_output, reporting_kept_chunks
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -185,15 +184,9 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
     the chunks kept: the same call resumes from them once the cause is fixed.
     """
     output = Path(output)
-    try:
-        with output_lock(output):
-            return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells,
-                                on_chunk, runner, discard_corrupt)
-    except WriteError as error:
-        folder, kept = saved_chunks(output)
-        error.advice = (f"{kept} finished chunks are kept in {folder}/ and the same command "
-                        "resumes from them" if kept else "no chunk was saved yet")
-        raise
+    with reporting_kept_chunks(output), output_lock(output):
+        return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk,
+                            runner, discard_corrupt)
 
 
 def _write_sweep(sweep: Sweep, output: Path, threads: int | None, progress: bool,

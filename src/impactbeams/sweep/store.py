@@ -10,18 +10,19 @@ another sweep or of other code are never reused.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import shutil
 import warnings
 import zipfile
 import zlib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import BinaryIO
 
 import numpy as np
 
-from impactbeams.io import write_npz, write_text
+from impactbeams.io import WriteError, write_npz, write_text, writing
 from impactbeams.params import ParameterError
 from impactbeams.sweep.definition import Sweep
 from impactbeams.sweep.plan import Chunking, code_digest
@@ -47,7 +48,9 @@ class ChunkStore:
         self.building = self.directory / output.name  # the netCDF file until it is complete
         identity = {"sweep": sweep.fingerprint(), "code": code_digest()}
         record = self.directory / RECORD
-        if not self.directory.exists():  # write_text makes it
+        if not record.exists() and not saved_chunks(output)[1]:  # new, or stopped before its
+            with writing(self.directory):  # record was written (a full disk): nothing to resume
+                self.directory.mkdir(parents=True, exist_ok=True)
             write_text(record, json.dumps({**identity, "chunk_axis": chunking.axis,
                                            "chunk_run": chunking.run}))
             self.chunking = chunking
@@ -184,3 +187,20 @@ def finished_output(output: Path, sweep: Sweep) -> bool:
             f"digest {found['code_digest']}, this code {code_digest()}): delete it to recompute "
             "with this code, or choose another output")
     return True
+
+
+@contextlib.contextmanager
+def reporting_kept_chunks(output: Path) -> Iterator[None]:
+    """Add to a :class:`~impactbeams.io.WriteError` of the body what the run keeps.
+
+    That is, how many finished chunks of ``output`` are saved, and that the same command
+    resumes from them.
+    """
+    try:
+        yield
+    except WriteError as error:
+        folder, kept = saved_chunks(output)
+        error.advice = (f"{kept} finished chunks are kept in {folder}/ and the same command "
+                        "resumes from them" if kept else "no finished chunk is kept: the same "
+                        "command starts again")
+        raise
