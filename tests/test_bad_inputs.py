@@ -486,19 +486,20 @@ def test_a_full_disk_is_refused_before_the_run(scratch, capsys, monkeypatch):
 
 
 def test_a_system_error_while_writing_is_one_line_with_exit_code_1(scratch, capsys, monkeypatch):
-    import impactbeams.io
     import impactbeams.trajectory
 
     done = xr.Dataset({"impact": ("impact", np.arange(3))}, attrs={"status": "complete"})
     monkeypatch.setattr(impactbeams.trajectory, "simulate", lambda *args, **kwargs: done)
 
-    def full_disk(dataset, path):
-        raise OSError(28, "No space left on device", str(path))
+    def full_disk(dataset, path, **kwargs):
+        raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(impactbeams.io, "write_netcdf", full_disk)
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", full_disk)
+    before = tree(scratch)
     assert main(["simulate", "--t-max", "0.1", "-o", "r.nc"]) == 1
-    assert capsys.readouterr().err == ("impactbeams: error: [Errno 28] No space left on device: "
-                                       "'r.nc'\n")
+    assert capsys.readouterr().err == ("impactbeams: error: could not write r.nc: No space left "
+                                       "on device\n")
+    assert tree(scratch) == before  # no temporary file, no lock file
 
 
 def test_sweep_memory_estimate_bounds_the_measured_peak(tmp_path):
