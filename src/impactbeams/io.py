@@ -195,9 +195,12 @@ def build_netcdf(path: str | Path, building: str | Path,
         with writing(Path(path)):
             os.replace(building, path)
     finally:
-        if nc.isopen():  # after an error: the error raised says what went wrong, not this
+        if nc.isopen():  # after an error, which says what went wrong: not this close's error
             with contextlib.suppress(RuntimeError, OSError):
                 nc.close()
+        if nc.isopen():  # HDF5 could not flush it (a full disk) and keeps it open until the
+            with contextlib.suppress(OSError):  # process ends: free its space at least
+                os.truncate(building, 0)
         _remove(building)
 
 
