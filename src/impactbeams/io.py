@@ -112,8 +112,12 @@ def atomic_write(path: str | Path, write: Callable[[Path], None], folders: bool 
 def _remove(path: Path) -> None:
     """Delete ``path`` if it is there; silently leave it if that fails (a read-only disk).
 
-    The error being raised at that moment says what went wrong, not this.
+    The error being raised at that moment says what went wrong, not this. The file is
+    emptied first: a library that failed to write it may keep it open until the process ends
+    (HDF5 does, when it cannot flush a file on a full disk), and its space would stay taken.
     """
+    with contextlib.suppress(OSError):
+        os.truncate(path, 0)
     with contextlib.suppress(OSError):
         path.unlink(missing_ok=True)
 
@@ -198,9 +202,6 @@ def build_netcdf(path: str | Path, building: str | Path,
         if nc.isopen():  # after an error, which says what went wrong: not this close's error
             with contextlib.suppress(RuntimeError, OSError):
                 nc.close()
-        if nc.isopen():  # HDF5 could not flush it (a full disk) and keeps it open until the
-            with contextlib.suppress(OSError):  # process ends: free its space at least
-                os.truncate(building, 0)
         _remove(building)
 
 
