@@ -346,6 +346,22 @@ def test_plot_without_suffix_reports_the_file_written(scratch, capsys):
     assert not (scratch / "xfile").exists()
 
 
+def test_plot_into_a_missing_folder_makes_it_as_run_does(scratch, capsys):
+    assert main(["plot", "map.nc", "-o", "sub/dir/x.png"]) == 0
+    assert capsys.readouterr().err == "wrote sub/dir/x.png\n"
+    assert (scratch / "sub" / "dir" / "x.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert tree(scratch / "sub") == ["dir", "dir/x.png"]  # written atomically: no temporary left
+
+
+def test_a_map_in_which_no_cell_impacts_is_plotted(scratch, capsys):
+    sweep = load_sweep(scratch / "ok.toml")
+    write_netcdf(map_dataset(sweep, {"first_impact_time": np.full(2, np.nan)}), "none.nc")
+    assert main(["plot", "none.nc", "-o", "none.png"]) == 0
+    assert capsys.readouterr().err == (
+        "impactbeams: first_impact_time has no value in any cell (no impact by t_max = 0.3 s): "
+        "drawn all grey\nwrote none.png\n")
+
+
 def test_rerun_of_a_finished_sweep_says_it_reused_the_result(scratch, capsys):
     small_map(scratch / "same.nc", source="same.toml")
     (scratch / "same.toml").write_text(

@@ -373,18 +373,6 @@ def _error(capsys, argv):
     return err
 
 
-def test_cli_draws_a_map_without_impacts_into_a_new_folder(tmp_path, capsys):
-    """A missing output folder is made, as for ``run -o`` and ``simulate -o``."""
-    data, png = tmp_path / "none.nc", tmp_path / "sub" / "dir" / "none.png"
-    no_impact_anywhere().to_netcdf(data)
-    assert main(["plot", str(data), "-o", str(png)]) == 0
-    assert capsys.readouterr().err == (
-        "impactbeams: first_impact_time has no value in any cell (no impact by t_max = 1 s): "
-        f"drawn all grey\nwrote {png}\n")
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert sorted(p.name for p in png.parent.iterdir()) == ["none.png"]  # no temporary left
-
-
 def test_cli_plot_write_error_is_one_line_exit_1(saved, tmp_path, capsys, monkeypatch):
     def full_disk(self, *args, **kwargs):
         raise OSError(28, "No space left on device")
