@@ -346,6 +346,22 @@ def test_plot_without_suffix_reports_the_file_written(scratch, capsys):
     assert not (scratch / "xfile").exists()
 
 
+def test_plot_into_a_missing_folder_makes_it_as_run_does(scratch, capsys):
+    assert main(["plot", "map.nc", "-o", "sub/dir/x.png"]) == 0
+    assert capsys.readouterr().err == "wrote sub/dir/x.png\n"
+    assert (scratch / "sub" / "dir" / "x.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert tree(scratch / "sub") == ["dir", "dir/x.png"]  # written atomically: no temporary left
+
+
+def test_a_map_in_which_no_cell_impacts_is_plotted(scratch, capsys):
+    sweep = load_sweep(scratch / "ok.toml")
+    write_netcdf(map_dataset(sweep, {"first_impact_time": np.full(2, np.nan)}), "none.nc")
+    assert main(["plot", "none.nc", "-o", "none.png"]) == 0
+    assert capsys.readouterr().err == (
+        "impactbeams: first_impact_time has no value in any cell (no impact by t_max = 0.3 s): "
+        "drawn all grey\nwrote none.png\n")
+
+
 def test_rerun_of_a_finished_sweep_says_it_reused_the_result(scratch, capsys):
     small_map(scratch / "same.nc", source="same.toml")
     (scratch / "same.toml").write_text(
@@ -486,19 +502,20 @@ def test_a_full_disk_is_refused_before_the_run(scratch, capsys, monkeypatch):
 
 
 def test_a_system_error_while_writing_is_one_line_with_exit_code_1(scratch, capsys, monkeypatch):
-    import impactbeams.io
     import impactbeams.trajectory
 
     done = xr.Dataset({"impact": ("impact", np.arange(3))}, attrs={"status": "complete"})
     monkeypatch.setattr(impactbeams.trajectory, "simulate", lambda *args, **kwargs: done)
 
-    def full_disk(dataset, path):
-        raise OSError(28, "No space left on device", str(path))
+    def full_disk(dataset, path, **kwargs):
+        raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(impactbeams.io, "write_netcdf", full_disk)
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", full_disk)
+    before = tree(scratch)
     assert main(["simulate", "--t-max", "0.1", "-o", "r.nc"]) == 1
-    assert capsys.readouterr().err == ("impactbeams: error: [Errno 28] No space left on device: "
-                                       "'r.nc'\n")
+    assert capsys.readouterr().err == ("impactbeams: error: could not write r.nc: No space left "
+                                       "on device\n")
+    assert tree(scratch) == before  # no temporary file, no lock file
 
 
 def test_sweep_memory_estimate_bounds_the_measured_peak(tmp_path):

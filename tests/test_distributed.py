@@ -4,6 +4,7 @@ import contextlib
 import os
 import signal
 import sys
+import threading
 import time
 
 import numpy as np
@@ -123,6 +124,31 @@ def test_interrupted_client_resumes_from_saved_chunks(client, tmp_path):
     assert sorted(computed) == sorted(set(range(10)) - set(done))
     assert_same_map(resumed, run_sweep(sweep, progress=False))
     assert not partial.exists()
+
+
+def test_the_client_holds_the_output_lock_while_the_cluster_computes(client, tmp_path):
+    """The writes happen in the client: a run on the same output from another thread (as
+    from another process) is refused while the cluster's chunks come in."""
+    from impactbeams.sweep.lock import OutputInUse, lock_path
+
+    sweep = sweep_from_mapping(GRID, source="grid")
+    out, refusals = tmp_path / "map.nc", []
+
+    def second_run(chunk):
+        def attempt():
+            try:
+                run_sweep(sweep, output=out, progress=False)
+            except OutputInUse as error:
+                refusals.append(str(error))
+
+        thread = threading.Thread(target=attempt)
+        thread.start()
+        thread.join()
+
+    run_sweep(sweep, output=out, progress=False, chunk_cells=120, runner=dask_runner(client),
+              on_chunk=second_run).close()
+    assert len(refusals) == 10 and all(f"process {os.getpid()} on host" in r for r in refusals)
+    assert not lock_path(out).exists()
 
 
 def test_workers_of_another_version_are_refused(client, monkeypatch):

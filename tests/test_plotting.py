@@ -133,6 +133,37 @@ def test_no_impact_cells_are_grey_and_named(figure):
     assert text.get_text() == "no impact by\n$t_\\max$ = 1 s"
 
 
+def no_impact_anywhere(shape=(4, 3)):
+    """A valid map in which no cell impacts: first_impact_time all NaN, impacted all 0."""
+    ds = fig5a_like(shape)
+    ds["first_impact_time"][:] = np.nan
+    ds["impacted"][:] = 0
+    return ds
+
+
+def test_a_map_without_impacts_is_drawn_grey_with_a_note(figure):
+    axes = figure.subplots()
+    notes = draw(axes, no_impact_anywhere())
+    assert notes == ["first_impact_time has no value in any cell (no impact by t_max = 1 s): "
+                     "drawn all grey"]
+    mesh = _mesh(figure)
+    assert mesh.get_array().size == 12 and len(figure.axes) == 1  # every cell; no colour bar
+    assert all(matplotlib.colors.same_color(colour, MISSING_COLOUR)
+               for colour in mesh.to_rgba(mesh.get_array().ravel()))
+    (text,) = axes.texts  # on the figure, as on the terminal
+    assert text.get_text() == "no impact by $t_\\max$ = 1 s in any cell"
+    with pytest.raises(ParameterError, match="contour lines need values: first_impact_time "
+                       "has none"):
+        draw(Figure().subplots(), no_impact_anywhere(), contours=3)
+
+
+def test_a_line_without_impacts_is_shaded_with_a_note(figure):
+    axes = figure.subplots()
+    notes = draw(axes, no_impact_anywhere(), indices={"force_amplitude": 0})
+    assert notes[-1].startswith("first_impact_time has no value in any cell (no impact by")
+    assert len(axes.patches) == 1 and axes.texts  # one grey band over the whole line
+
+
 def test_contour_lines_are_labelled(figure):
     axes = figure.subplots()
     draw(axes, fig5a_like(), contours=4)
@@ -340,6 +371,18 @@ def _error(capsys, argv):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("impactbeams: error: ")
     return err
+
+
+def test_cli_plot_write_error_is_one_line_exit_1(saved, tmp_path, capsys, monkeypatch):
+    def full_disk(self, *args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(Figure, "savefig", full_disk)
+    png = tmp_path / "x.png"
+    assert main(["plot", str(saved), "-o", str(png), "--slice", "clearance=1e-4"]) == 1
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"impactbeams: error: could not write {png}: No space left on device")
+    assert list(tmp_path.iterdir()) == [saved]
 
 
 def test_cli_errors_are_one_line(saved, tmp_path, capsys):

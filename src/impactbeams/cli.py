@@ -105,13 +105,23 @@ def _modes(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from impactbeams.preflight import require_input_file
-    from impactbeams.sweep import load_sweep, write_sweep  # writes netCDF without xarray
+    from impactbeams.sweep import load_sweep
+    from impactbeams.sweep.lock import output_lock
+    from impactbeams.sweep.store import reporting_kept_chunks
 
     sweep = load_sweep(require_input_file(args.sweep, "sweep"))
     output = _sweep_output(args, sweep)
-    reuse = output.exists()
     _check_scheduler(args.scheduler)
     _check_threads(args)
+    with reporting_kept_chunks(output), output_lock(output):  # before anything is printed,
+        return _locked_run(args, sweep, output)  # created or computed
+
+
+def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
+    """``run`` once its output is locked: compute (or reuse) the map, check its statuses."""
+    from impactbeams.sweep import write_sweep  # writes netCDF without xarray
+
+    reuse = output.exists()
     if not reuse:
         _announce(sweep, output, args)
     try:
@@ -243,14 +253,16 @@ def _plot(args: argparse.Namespace) -> int:
 def _simulate(args: argparse.Namespace) -> int:
     from impactbeams.io import write_netcdf
     from impactbeams.preflight import require_output_file
+    from impactbeams.sweep.lock import output_lock
     from impactbeams.trajectory import simulate
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
-    dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
-                       dt_output=args.dt_output, fields=args.fields,
-                       energy_balance=args.energy_balance, lyapunov=args.lyapunov,
-                       transient_periods=args.transient_periods)
-    write_netcdf(dataset, output)
+    with output_lock(output):  # a second simulate on this output would silently replace it
+        dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
+                           dt_output=args.dt_output, fields=args.fields,
+                           energy_balance=args.energy_balance, lyapunov=args.lyapunov,
+                           transient_periods=args.transient_periods)
+        write_netcdf(dataset, output)
     status = dataset.attrs["status"]
     exponent = (f", largest Lyapunov exponent {float(dataset.lyapunov_exponent):.6g} +- "
                 f"{float(dataset.lyapunov_exponent_error):.2g} 1/s" if args.lyapunov else "")

@@ -2,7 +2,8 @@
 
 Every writer goes through :func:`atomic_write` or :func:`build_netcdf`: write a temporary
 file, then rename it over the target, so a reader sees the old file or the whole new one.
-netCDF variables of numbers are compressed (:data:`COMPRESSION`).
+netCDF variables of numbers are compressed (:data:`COMPRESSION`). A failed write (a full
+disk, a removed or read-only folder, a quota) raises :class:`WriteError`, naming the file.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import os
+import shutil
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -29,22 +31,95 @@ if TYPE_CHECKING:
 COMPRESSION = {"zlib": True, "complevel": 4, "shuffle": True}
 
 
+class WriteError(OSError):
+    """A file could not be written: ``filename`` names it, ``strerror`` says why.
+
+    ``str()`` is one line; a caller that knows what was kept (a run's saved chunks) sets
+    ``advice``, which is appended.
+    """
+
+    advice = ""
+
+    def __str__(self) -> str:
+        text = f"could not write {self.filename}: {self.strerror}"
+        return f"{text}; {self.advice}" if self.advice else text
+
+
 @contextlib.contextmanager
-def _temporary_for(path: Path) -> Iterator[Path]:
-    """A temporary name next to ``path`` (hidden, never matching the target's pattern)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+def writing(path: Path) -> Iterator[None]:
+    """Raise an OSError of the body as a :class:`WriteError` naming ``path``."""
+    try:
+        yield
+    except WriteError:
+        raise
+    except OSError as error:
+        cause = error.strerror or str(error) or type(error).__name__
+        raise WriteError(error.errno, cause, str(path)) from error
+
+
+@contextlib.contextmanager
+def writing_netcdf(path: Path) -> Iterator[None]:
+    """:func:`writing` for netCDF4 calls, whose HDF5 errors are RuntimeErrors.
+
+    HDF5 reports a failed write (a full disk, a quota) as "NetCDF: HDF error" with no errno
+    (a RuntimeError, or an OSError with netCDF's negative error code when creating a file):
+    the message then says what the disk shows (the folder gone, little space left).
+    """
+    with writing(path):
+        try:
+            yield
+        except (RuntimeError, OSError) as error:
+            if isinstance(error, OSError) and (error.errno or 0) >= 0:
+                raise  # the system's own errno says it
+            cause = error.strerror if isinstance(error, OSError) else error
+            raise WriteError(None, f"{cause} ({_disk_state(path)})", str(path)) from error
+
+
+# free space below which a failed write is put down to a full disk
+_NEARLY_FULL = 16 * 2**20
+
+
+def _disk_state(path: Path) -> str:
+    """What may have made a write to ``path`` fail, as seen from its folder."""
+    if not path.parent.is_dir():
+        return f"its folder {path.parent} no longer exists"
+    free = shutil.disk_usage(path.parent).free
+    if free < _NEARLY_FULL:
+        return f"the disk is full: {free / 2**20:.3g} MiB free"
+    return "HDF5 gives no cause: a quota, a read-only or failing disk, or a full one"
+
+
+def atomic_write(path: str | Path, write: Callable[[Path], None], folders: bool = True) -> None:
+    """Call ``write(temporary)`` to fill a temporary file, then rename it to ``path``.
+
+    The temporary file sits next to ``path`` (hidden, never matching the target's pattern) and
+    is deleted on every exit. ``folders``: create missing folders above ``path`` (else a
+    missing folder is an error). Any OSError (the folders, the writing, the rename) is a
+    :class:`WriteError` naming ``path``.
+    """
+    path = Path(path)
     temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        yield temporary
-        os.replace(temporary, path)
+        with writing(path):
+            if folders:
+                path.parent.mkdir(parents=True, exist_ok=True)
+            write(temporary)
+            os.replace(temporary, path)
     finally:
-        temporary.unlink(missing_ok=True)
+        _remove(temporary)
 
 
-def atomic_write(path: str | Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(temporary)`` to fill a temporary file, then rename it to ``path``."""
-    with _temporary_for(Path(path)) as temporary:
-        write(temporary)
+def _remove(path: Path) -> None:
+    """Delete ``path`` if it is there; silently leave it if that fails (a read-only disk).
+
+    The error being raised at that moment says what went wrong, not this. The file is
+    emptied first: a library that failed to write it may keep it open until the process ends
+    (HDF5 does, when it cannot flush a file on a full disk), and its space would stay taken.
+    """
+    with contextlib.suppress(OSError):
+        os.truncate(path, 0)
+    with contextlib.suppress(OSError):
+        path.unlink(missing_ok=True)
 
 
 def _compressible(dtype: np.dtype) -> bool:
@@ -60,8 +135,11 @@ def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
     encoding: dict[str, dict[str, Any]] = {name: {"_FillValue": None} for name in dataset.coords}
     encoding.update({name: dict(COMPRESSION) for name, variable in dataset.data_vars.items()
                      if variable.ndim and _compressible(variable.dtype)})
-    atomic_write(path, lambda temporary: dataset.to_netcdf(
-        temporary, engine="netcdf4", format="NETCDF4", encoding=encoding))
+    def write(temporary: Path) -> None:
+        with writing_netcdf(Path(path)):
+            dataset.to_netcdf(temporary, engine="netcdf4", format="NETCDF4", encoding=encoding)
+
+    atomic_write(path, write)
 
 
 def write_text(path: str | Path, text: str) -> None:
@@ -70,12 +148,12 @@ def write_text(path: str | Path, text: str) -> None:
 
 
 def write_npz(path: str | Path, arrays: Mapping[str, np.ndarray]) -> None:
-    """Write ``arrays`` to an uncompressed ``.npz`` file atomically."""
+    """Write ``arrays`` to an uncompressed ``.npz`` file atomically, in an existing folder."""
     def save(temporary: Path) -> None:
         with open(temporary, "wb") as stream:  # a file object: np.savez adds no suffix
             np.savez(stream, **arrays)
 
-    atomic_write(path, save)
+    atomic_write(path, save, folders=False)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,22 +180,29 @@ def build_netcdf(path: str | Path, building: str | Path,
 
     On a normal exit the file is closed and renamed to ``path``; on an error (or interrupt)
     it is deleted and ``path`` is left as it was. Fill it box by box (``nc[name][box] =
-    values``) with boxes of ``layout.chunks``: each one is then compressed once.
+    values``, inside :func:`writing_netcdf`) with boxes of ``layout.chunks``: each one is
+    then compressed once. A failure to create, define, close or rename the file is a
+    :class:`WriteError`.
     """
     import netCDF4
 
     building = Path(building)
-    building.parent.mkdir(parents=True, exist_ok=True)
-    nc = netCDF4.Dataset(building, "w", format="NETCDF4")
+    with writing_netcdf(building):
+        building.parent.mkdir(parents=True, exist_ok=True)
+        nc = netCDF4.Dataset(building, "w", format="NETCDF4")
     try:
-        _define(nc, layout)
+        with writing_netcdf(building):
+            _define(nc, layout)
         yield nc
-        nc.close()
-        os.replace(building, path)
-    finally:
-        if nc.isopen():
+        with writing_netcdf(building):
             nc.close()
-        building.unlink(missing_ok=True)
+        with writing(Path(path)):
+            os.replace(building, path)
+    finally:
+        if nc.isopen():  # after an error, which says what went wrong: not this close's error
+            with contextlib.suppress(RuntimeError, OSError):
+                nc.close()
+        _remove(building)
 
 
 def _define(nc: netCDF4.Dataset, layout: Layout) -> None:

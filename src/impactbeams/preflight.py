@@ -208,8 +208,8 @@ def image_suffixes() -> dict[str, str]:
             for name, description in FigureCanvasBase.get_supported_filetypes().items()}
 
 
-def image_output(path: str | Path, what: str) -> Path:
-    """The file a figure saved at ``path`` goes to, checked like :func:`require_output_file`.
+def image_path(path: str | Path) -> Path:
+    """The file a figure saved at ``path`` goes to.
 
     Without a suffix, matplotlib appends its default format's (``savefig.format``, png).
     """
@@ -218,7 +218,15 @@ def image_output(path: str | Path, what: str) -> Path:
     path = Path(path)
     if not path.suffix:
         path = path.with_name(f"{path.name.rstrip('.')}.{matplotlib.rcParams['savefig.format']}")
-    return require_output_file(path, what, image_suffixes(), "figure")
+    return path
+
+
+def image_output(path: str | Path, what: str) -> Path:
+    """:func:`image_path` of ``path``, checked like :func:`require_output_file`.
+
+    Missing folders are made when the figure is saved, as for every output.
+    """
+    return require_output_file(image_path(path), what, image_suffixes(), "figure")
 
 
 def read_netcdf(path: str | Path, what: str) -> xr.Dataset:

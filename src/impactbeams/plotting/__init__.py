@@ -10,12 +10,15 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from impactbeams.params import ParameterError
+from impactbeams.plotting.files import save_figure
 from impactbeams.plotting.labels import case_title
+from impactbeams.plotting.missing import note_empty
 from impactbeams.plotting.selection import (
     SAMPLE_DIMENSIONS,
     choose_variable,
@@ -76,6 +79,8 @@ def draw(axes: Axes, dataset: xr.Dataset, variable: str | None = None, *,
                              f"{_dimensions(field)}; slice the others (--slice NAME=VALUE)")
     axes.set_title(case_title(data, name, field.dims) if title is None else title,
                    loc="left", fontsize="medium")
+    if not np.isfinite(np.asarray(field.values, dtype=float)).any():
+        notes.append(note_empty(axes, data, name))
     return notes
 
 
@@ -102,5 +107,5 @@ def plot_dataset(dataset: xr.Dataset, path: str | Path, variable: str | None = N
     figure = Figure(figsize=(7, 5), layout="constrained")
     notes = draw(figure.subplots(), dataset, variable, values=values, indices=indices,
                  scale=scale, contours=contours, title=title)
-    figure.savefig(path, dpi=dpi)
+    save_figure(figure, path, dpi)
     return notes

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import matplotlib.colors
 import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
@@ -13,6 +14,7 @@ from impactbeams.params import ParameterError
 from impactbeams.plotting.labels import axis_label, format_number
 from impactbeams.plotting.missing import add_missing_legend, missing_note
 from impactbeams.plotting.scales import (
+    MISSING_COLOUR,
     ColourScale,
     colour_scale,
     edges,
@@ -22,20 +24,30 @@ from impactbeams.plotting.scales import (
 
 
 def draw_map(axes: Axes, dataset: xr.Dataset, variable: str, scale: str | None = None,
-             contours: int | Sequence[float] | None = None) -> Colorbar:
+             contours: int | Sequence[float] | None = None) -> Colorbar | None:
     """Colour map of the 2-D ``variable`` on ``axes``, with its colour bar; returns the bar.
 
     The variable's first dimension is the x axis, its second the y axis; log grid axes stay
     log. ``scale`` ("log", "linear" or None for automatic) is the colour scale of a continuous
     variable; ``contours`` adds labelled contour lines: a number of round levels, or levels.
+    A variable without any value (no cell impacts) is drawn all grey, without a colour bar
+    (None is returned).
     """
     field = dataset[variable]
     x_name, y_name = field.dims
-    colours = colour_scale(field, scale)
     x, x_log = grid_axis(axes, "x", dataset[x_name])
     y, y_log = grid_axis(axes, "y", dataset[y_name])
-    values = colours.encode(np.asarray(field.transpose(y_name, x_name).values, dtype=float))
-    mesh = axes.pcolormesh(edges(x, x_log), edges(y, y_log), np.ma.masked_invalid(values),
+    cells = (edges(x, x_log), edges(y, y_log))
+    values = np.asarray(field.transpose(y_name, x_name).values, dtype=float)
+    if not np.isfinite(values).any():
+        if contours is not None:
+            raise ParameterError(f"contour lines need values: {variable} has none (all NaN)")
+        axes.pcolormesh(*cells, np.zeros_like(values), rasterized=True,
+                        cmap=matplotlib.colors.ListedColormap([MISSING_COLOUR]))
+        return None
+    colours = colour_scale(field, scale)
+    values = colours.encode(values)
+    mesh = axes.pcolormesh(*cells, np.ma.masked_invalid(values),
                            norm=colours.norm, cmap=colours.cmap, rasterized=True)
     bar = axes.get_figure().colorbar(mesh, ax=axes, shrink=0.9, anchor=(0.0, 1.0))
     bar.set_ticks(colours.ticks)

@@ -11,15 +11,30 @@ from impactbeams.plotting.labels import format_number
 from impactbeams.plotting.scales import MISSING_COLOUR
 
 
-def missing_note(dataset: xr.Dataset, variable: str) -> str:
-    """What the NaN cells of ``variable`` mean: no impact by t_max where ``impacted`` says so."""
+def missing_note(dataset: xr.Dataset, variable: str, t_max: str = "$t_\\max$") -> str:
+    """What the NaN cells of ``variable`` mean: no impact by t_max where ``impacted`` says so.
+
+    ``t_max``: how to write t_max (mathtext for a figure; "t_max" for a terminal).
+    """
     field = dataset[variable]
     if "impacted" in dataset and dataset["impacted"].dims == field.dims and np.array_equal(
             np.isnan(field.values), dataset["impacted"].values == 0):
-        t_max = dataset.attrs.get("t_max")
-        return ("no impact" if t_max is None
-                else f"no impact by $t_\\max$ = {format_number(float(t_max))} s")
+        horizon = dataset.attrs.get("t_max")
+        return ("no impact" if horizon is None
+                else f"no impact by {t_max} = {format_number(float(horizon))} s")
     return "no value (NaN)"
+
+
+def note_empty(axes: Axes, dataset: xr.Dataset, variable: str) -> str:
+    """Say on ``axes`` that ``variable`` has no value in any cell (e.g. no cell impacts).
+
+    Returns the same note in plain text, for the terminal.
+    """
+    axes.text(0.5, 0.5, f"{missing_note(dataset, variable)} in any cell",
+              transform=axes.transAxes, ha="center", va="center",
+              bbox={"facecolor": "white", "edgecolor": "0.6"})
+    return (f"{variable} has no value in any cell ({missing_note(dataset, variable, 't_max')}):"
+            " drawn all grey")
 
 
 def add_missing_legend(axes: Axes, note: str, below: bool = False) -> None:

@@ -13,6 +13,8 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from impactbeams.plotting.files import save_figure
+
 _MICRO = 1e6  # m -> um
 _MILLI = 1e3  # N -> mN, s -> ms
 
@@ -38,10 +40,6 @@ def _law(dataset: xr.Dataset) -> str:
 
 def _title(dataset: xr.Dataset) -> str:
     return f"{_case(dataset)}\n{_law(dataset)}"
-
-
-def _save(figure: Figure, path: str | Path, dpi: float = 150) -> None:
-    figure.savefig(path, dpi=dpi)
 
 
 def plot_tips(axis: Axes, dataset: xr.Dataset) -> None:
@@ -73,7 +71,7 @@ def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
     axes[3].set_xlabel("time t (s)")
     axes[3].legend(loc="upper left", fontsize="small")
     axes[0].set_title(f"{_title(dataset)}; status {dataset.attrs.get('status', '?')}")
-    _save(figure, path)
+    save_figure(figure, path)
 
 
 def _draw_surface(axis: Axes, dataset: xr.Dataset, beam: str, rows: int) -> None:
@@ -95,7 +93,7 @@ def plot_surfaces(dataset: xr.Dataset, path: str | Path) -> None:
         _draw_surface(axis, dataset, beam, 200)
         axis.set_title(f"({'ab'[i]}) beam {beam}")
     figure.suptitle(_title(dataset))
-    _save(figure, path)
+    save_figure(figure, path)
 
 
 def plot_surfaces_laws(datasets: Sequence[xr.Dataset], path: str | Path,
@@ -109,7 +107,7 @@ def plot_surfaces_laws(datasets: Sequence[xr.Dataset], path: str | Path,
             axis.set_title(f"({'abcdefgh'[2 * row + i]}) beam {beam}; {_law(dataset)}",
                            fontsize="medium")
     figure.suptitle(_case(datasets[0]))
-    figure.savefig(path, dpi=dpi)
+    save_figure(figure, path, dpi=dpi)
 
 
 def plot_paper_fig3(dataset: xr.Dataset, path: str | Path) -> None:
@@ -118,7 +116,7 @@ def plot_paper_fig3(dataset: xr.Dataset, path: str | Path) -> None:
     axes = figure.subplots(3, 1)
     _fig3_panels(axes, dataset)
     figure.suptitle(_title(dataset))
-    _save(figure, path)
+    save_figure(figure, path)
 
 
 def _fig3_panels(axes: Sequence[Axes], dataset: xr.Dataset, episodes: bool = False) -> None:
@@ -168,7 +166,7 @@ def plot_paper_fig3_laws(datasets: Sequence[xr.Dataset], path: str | Path) -> No
         _fig3_panels(column, dataset, episodes=True)
         column[0].set_title(f"(a) {_law(dataset)}", loc="left")
     figure.suptitle(_case(datasets[0]))
-    _save(figure, path)
+    save_figure(figure, path)
 
 
 def plot_divergence(datasets: Sequence[xr.Dataset], labels: Sequence[str],
@@ -178,7 +176,7 @@ def plot_divergence(datasets: Sequence[xr.Dataset], labels: Sequence[str],
     axes = figure.subplots(3, 1, sharex=True)
     _divergence_panels(axes, datasets, labels)
     figure.suptitle(_title(datasets[0]))
-    _save(figure, path)
+    save_figure(figure, path)
 
 
 def plot_divergence_laws(groups: Sequence[Sequence[xr.Dataset]], labels: Sequence[str],
@@ -193,7 +191,7 @@ def plot_divergence_laws(groups: Sequence[Sequence[xr.Dataset]], labels: Sequenc
         _divergence_panels(column, datasets, labels)
         column[0].set_title(_law(datasets[0]))
     figure.suptitle(_case(groups[0][0]))
-    _save(figure, path, dpi=110)
+    save_figure(figure, path, dpi=110)
 
 
 def _divergence_panels(axes: Sequence[Axes], datasets: Sequence[xr.Dataset],
@@ -224,7 +222,7 @@ def plot_phase_portrait(dense: xr.Dataset, section: xr.Dataset, path: str | Path
     figure = Figure(figsize=(11, 4.8), layout="constrained")
     _phase_panels(figure.subplots(1, 2), dense, section)
     figure.suptitle(_title(section))
-    _save(figure, path)
+    save_figure(figure, path)
 
 
 def plot_phase_portrait_laws(denses: Sequence[xr.Dataset], sections: Sequence[xr.Dataset],
@@ -238,7 +236,7 @@ def plot_phase_portrait_laws(denses: Sequence[xr.Dataset], sections: Sequence[xr
             axis.set_title(f"{_law(section)}\n{axis.get_title()}", fontsize="medium")
             axis.tick_params(labelbottom=True)
     figure.suptitle(_case(sections[0]))
-    _save(figure, path)
+    save_figure(figure, path)
 
 
 def _phase_panels(axes: Sequence[Axes], dense: xr.Dataset, section: xr.Dataset) -> None:

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from impactbeams.io import Layout, build_netcdf
+from impactbeams.io import Layout, build_netcdf, writing_netcdf
 from impactbeams.params import MATERIAL_KEYS
 from impactbeams.sweep.definition import FIRST_IMPACT, LONG_TIME_KEYS, Sweep
 from impactbeams.sweep.plan import Chunking, code_digest, contact_resolution, flat_boxes
@@ -107,7 +107,9 @@ def map_file(sweep: Sweep, path: Path, building: Path,
                 shape = tuple(s.stop - s.start for s in box)
                 size = math.prod(shape)
                 for name, array in arrays.items():  # a sampled observable: all its samples
-                    nc[name][box] = array[offset:offset + size].reshape(shape + array.shape[1:])
+                    block = array[offset:offset + size].reshape(shape + array.shape[1:])
+                    with writing_netcdf(building):
+                        nc[name][box] = block
                 offset += size
 
         yield write

@@ -22,6 +22,7 @@ import numpy as np
 from impactbeams.params import require
 from impactbeams.preflight import require_memory
 from impactbeams.sweep.definition import Sweep, expected_cost
+from impactbeams.sweep.lock import output_lock
 from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.plan import (
     Chunking,
@@ -31,7 +32,7 @@ from impactbeams.sweep.plan import (
     default_chunk_cells,
 )
 from impactbeams.sweep.progress import Progress
-from impactbeams.sweep.store import ChunkStore, finished_output
+from impactbeams.sweep.store import ChunkStore, finished_output, reporting_kept_chunks
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -175,8 +176,25 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
     resumed run keeps its chunks). ``on_chunk`` is called with each computed chunk number
     (for tests and monitoring). ``runner`` computes the chunks (default :func:`local_runner`;
     see :mod:`impactbeams.sweep.dask_runner` for a Dask cluster); they may finish in any order.
+
+    One writer per output: the run holds the lock of :mod:`impactbeams.sweep.lock` from its
+    start to its end; while another run holds it, this one raises
+    :class:`~impactbeams.sweep.lock.OutputInUse` (a ParameterError) naming that run. A file
+    that cannot be written (a full disk, a removed or read-only folder, a quota) raises
+    :class:`~impactbeams.io.WriteError` (an OSError), one line naming the file, its cause and
+    the chunks kept: the same call resumes from them once the cause is fixed.
     """
     output = Path(output)
+    with reporting_kept_chunks(output), output_lock(output):
+        return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk,
+                            runner, discard_corrupt)
+
+
+def _write_sweep(sweep: Sweep, output: Path, threads: int | None, progress: bool,
+                 parallel: bool, chunk_cells: int | None,
+                 on_chunk: Callable[[int], None] | None, runner: ChunkRunner | None,
+                 discard_corrupt: bool) -> bool:
+    """:func:`write_sweep` under the output's lock."""
     if finished_output(output, sweep):
         return False
     _warn_unresolved(sweep)
@@ -206,6 +224,9 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
         with _one_behind(keep) as keep_behind:
             _compute(sweep, chunking, pending, runner or local_runner(parallel), bar,
                      on_chunk, keep_behind)
+        if unsaved:  # a runner that stopped early: the file must not be moved into place
+            raise RuntimeError(f"the chunk runner returned {len(pending) - unsaved} of "
+                               f"{len(pending)} chunks: {output} was not written")
     store.remove()
     return True
 

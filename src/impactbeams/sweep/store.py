@@ -10,18 +10,19 @@ another sweep or of other code are never reused.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import shutil
 import warnings
 import zipfile
 import zlib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
-from impactbeams.io import Layout, write_npz, write_text
+from impactbeams.io import Layout, WriteError, write_npz, write_text, writing
 from impactbeams.params import ParameterError
 from impactbeams.sweep.definition import Sweep
 from impactbeams.sweep.output import cell_values, map_layout
@@ -31,6 +32,7 @@ if TYPE_CHECKING:
     import netCDF4
 
 RECORD = "run.json"  # what the saved chunks belong to
+CHUNK_NAME = "chunk_{:06d}.npz"
 # what reading a damaged .npz raises (truncated, overwritten, bits flipped, arrays missing)
 _DAMAGE = (OSError, EOFError, ValueError, KeyError, zipfile.BadZipFile, zlib.error)
 NAMED_DAMAGED = 5  # damaged chunks named in the error; the others are counted
@@ -48,14 +50,15 @@ class ChunkStore:
 
     def __init__(self, output: Path, sweep: Sweep, chunking: Chunking,
                  chunk_cells: int | None) -> None:
-        self.directory = output.with_name(output.name + ".partial")
+        self.directory = partial_folder(output)
         self.building = self.directory / output.name  # the netCDF file until it is complete
         self.values = cell_values(sweep)
         self.damaged: list[tuple[Path, str]] = []  # (file, what is wrong), found by load
         identity = {"sweep": sweep.fingerprint(), "code": code_digest()}
         record = self.directory / RECORD
-        if not self.directory.exists():
-            self.directory.mkdir(parents=True)
+        if not record.exists() and not saved_chunks(output)[1]:  # new, or stopped before its
+            with writing(self.directory):  # record was written (a full disk): nothing to resume
+                self.directory.mkdir(parents=True, exist_ok=True)
             write_text(record, json.dumps({**identity, "chunk_axis": chunking.axis,
                                            "chunk_run": chunking.run}))
             self.chunking = chunking
@@ -86,7 +89,7 @@ class ChunkStore:
                                  "output") from None
 
     def _path(self, chunk: int) -> Path:
-        return self.directory / f"chunk_{chunk:06d}.npz"
+        return self.directory / CHUNK_NAME.format(chunk)
 
     def load(self, chunk: int, size: int,
              discard_corrupt: bool = False) -> dict[str, np.ndarray] | None:
@@ -135,8 +138,27 @@ class ChunkStore:
                                       for name, (dtype, _) in self.values.items()})
 
     def remove(self) -> None:
-        """Delete the partial results once the final file is written."""
-        shutil.rmtree(self.directory)
+        """Delete the partial results once the final file is written.
+
+        A failure is a warning: the result is complete, the folder is only left over.
+        """
+        try:
+            shutil.rmtree(self.directory)
+        except OSError as error:
+            warnings.warn(f"the result is complete, but {self.directory} could not be deleted "
+                          f"({error.strerror or error}): delete it by hand", RuntimeWarning,
+                          stacklevel=2)
+
+
+def partial_folder(output: Path) -> Path:
+    """The folder of an unfinished run's saved chunks and file: ``OUT.nc.partial``."""
+    return output.with_name(output.name + ".partial")
+
+
+def saved_chunks(output: Path) -> tuple[Path, int]:
+    """The partial folder of ``output`` and how many finished chunks are saved in it."""
+    folder = partial_folder(output)
+    return folder, len(list(folder.glob(CHUNK_NAME.replace("{:06d}", "*"))))
 
 
 def _arrays(stream: BinaryIO, size: int,
@@ -225,3 +247,20 @@ def _difference(nc: netCDF4.Dataset, layout: Layout) -> str | None:
             return (f"its variable {name} has {variable.dtype} values along "
                     f"{variable.dimensions}, the sweep's map {dtype} along {dims}")
     return None
+
+
+@contextlib.contextmanager
+def reporting_kept_chunks(output: Path) -> Iterator[None]:
+    """Add to a :class:`~impactbeams.io.WriteError` of the body what the run keeps.
+
+    That is, how many finished chunks of ``output`` are saved, and that the same command
+    resumes from them.
+    """
+    try:
+        yield
+    except WriteError as error:
+        folder, kept = saved_chunks(output)
+        error.advice = (f"{kept} finished chunks are kept in {folder}/ and the same command "
+                        "resumes from them" if kept else "no finished chunk is kept: the same "
+                        "command starts again")
+        raise
