@@ -12,6 +12,7 @@ import functools
 import signal
 import subprocess
 import sys
+import warnings
 
 import netCDF4
 import numpy as np
@@ -211,15 +212,22 @@ def _interrupt(command, partial, how):
     return len(list(partial.glob("chunk_*.npz")))
 
 
-def _kill_and_resume(sweep_files, uninterrupted, tmp_path, kind, how, *options):
+def _kill_and_resume(sweep_files, uninterrupted, tmp_path, capsys, kind, how, *options):
     reference = uninterrupted(kind)  # first: compiled here, the CLI process loads the kernels
     out = tmp_path / f"{kind}.nc"
     command = _command(sweep_files, kind, out, *options)
     saved = _interrupt(command, tmp_path / f"{kind}.nc.partial", how)
     count = Chunking.at_most(load_sweep(sweep_files / f"{kind}.toml").shape, 1).count
     assert not out.exists() and SAVED_BEFORE_THE_SIGNAL <= saved < count - 1
-    assert main(command) == 0  # the same command
+    capsys.readouterr()
+    with warnings.catch_warnings():  # the CLI prints its warnings as one line each
+        warnings.simplefilter("always")
+        assert main(command) == 0  # the same command
+    # a killed run cannot release its output's lock: the same command takes it over, warning
+    taken_over = "warning: took over the lock file" in capsys.readouterr().err
+    assert taken_over == (how == signal.SIGKILL)
     assert not (tmp_path / f"{kind}.nc.partial").exists()
+    assert not (tmp_path / f"{kind}.nc.lock").exists()
     assert_same_map(out, reference)
 
 
@@ -233,8 +241,8 @@ FAST = {("long-time", "SIGKILL"), ("lyapunov", "SIGINT"), ("dynamics", "SIGKILL"
     pytest.param(kind, how, marks=() if (kind, how) in FAST else pytest.mark.slow)
     for kind in KINDS for how in SIGNALS])
 def test_a_killed_run_resumes_to_the_uninterrupted_map(sweep_files, uninterrupted, tmp_path,
-                                                       kind, how):
-    _kill_and_resume(sweep_files, uninterrupted, tmp_path, kind, SIGNALS[how])
+                                                       capsys, kind, how):
+    _kill_and_resume(sweep_files, uninterrupted, tmp_path, capsys, kind, SIGNALS[how])
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -265,10 +273,10 @@ def scheduler():
     pytest.param("lyapunov", "SIGKILL", marks=pytest.mark.slow),
     pytest.param("first-impact", "SIGINT", marks=pytest.mark.slow)])
 def test_a_killed_client_of_a_cluster_resumes_to_the_uninterrupted_map(
-        sweep_files, uninterrupted, scheduler, tmp_path, kind, how):
+        sweep_files, uninterrupted, scheduler, tmp_path, capsys, kind, how):
     """The CLI's client killed while the cluster computes; the same command resumes on it. The
     map equals the local uninterrupted run's (the same bits on workers and here)."""
-    _kill_and_resume(sweep_files, uninterrupted, tmp_path, kind, SIGNALS[how],
+    _kill_and_resume(sweep_files, uninterrupted, tmp_path, capsys, kind, SIGNALS[how],
                      "--scheduler", scheduler)
 
 
