@@ -80,6 +80,32 @@ def spring_convergence() -> str:
     return "\n".join(lines) + "\n"
 
 
+def tied_convergence() -> str:
+    """The tied law at 4 to 50 modes: the first impact, and the impacts over 0.6 s."""
+    import impactbeams as ib
+
+    counts = (4, 5, 10, 20, 50)
+    runs = {n: ib.simulate(ib.Params(contact_law="tied"), t_max=0.6, n_modes=n,
+                           times=[0.0, 0.6]) for n in counts}
+    first = {n: run.isel(impact=0) for n, run in runs.items()}
+    onset = {n: float(first[n].impact_onset_time) for n in counts}
+    rows = {
+        f"first onset, distance from {counts[-1]} modes (s)":
+            [f"{abs(onset[n] - onset[counts[-1]]):.1e}" for n in counts[:-1]] + ["-"],
+        "energy lost at the first onset (nJ)":
+            [f"{1e9 * float(first[n].impact_energy_loss):.3g}" for n in counts],
+        "first contact duration (ms)":
+            [f"{1e3 * float(first[n].impact_duration):#.2g}" for n in counts],
+        "first peak force (mN)": [f"{1e3 * float(first[n].impact_peak_force):#.2g}"
+                                  for n in counts],
+        "impacts in 0.6 s": [str(runs[n].sizes["impact"]) for n in counts],
+    }
+    lines = ["| quantity | " + " | ".join(map(str, counts)) + " |",
+             "|---" * (len(counts) + 1) + "|"]
+    lines += [f"| {name} | {' | '.join(values)} |" for name, values in rows.items()]
+    return "\n".join(lines) + "\n"
+
+
 def performance() -> str:
     """Headline costs, each read from its results file with its date and machine."""
     columns, sweep, cube = _results("columns"), _results("sweep"), _results("cube")
@@ -118,6 +144,7 @@ def performance() -> str:
 SECTIONS: dict[str, Callable[[], str]] = {
     "trajectory": trajectory,
     "spring-convergence": spring_convergence,
+    "tied-convergence": tied_convergence,
     "performance": performance,
 }
 
