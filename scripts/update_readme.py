@@ -32,13 +32,13 @@ def _results(name: str) -> dict:
 
 
 def recorded(report: dict) -> str:
-    """When and where a results file was measured, or "not recorded" (older files)."""
-    about = report.get("run", report)
-    date = about.get("date", "date not recorded")
-    machine = about.get("machine", "machine not recorded")
-    if isinstance(machine, dict):  # bench_distributed's record
-        machine = f"{machine.get('cpu_count', '?')} cores"
-    return f"{date}, {machine}"
+    """When and where a results file was measured (the benchmarks page's rule)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from run_all import recorded as date_and_machine
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    return ", ".join(dict.fromkeys(date_and_machine(report)))  # "not recorded" once
 
 
 def transcript(*arguments: str) -> str:
@@ -94,8 +94,10 @@ def spring_convergence() -> str:
 
 
 def _robust_count(impacts: int, n_modes: int) -> str:
-    """An impact count as far as it is reproducible: from 10 tied modes on it follows
-    round-off (the BLAS thread count alone moves it by a few per cent), so only its scale."""
+    """An impact count as far as it is reproducible: its scale only from 10 tied modes on.
+
+    From there it follows round-off: the BLAS thread count alone moves it by a few per cent.
+    """
     if n_modes < 10:
         return str(impacts)
     return "hundreds" if impacts < 1000 else "thousands"
@@ -162,7 +164,24 @@ def performance() -> str:
     return "\n".join(lines) + "\n"
 
 
+def longtime() -> str:
+    """The long-time bifurcation diagram's cost, from ``longtime.json``."""
+    report = _results("longtime")
+    soft, full = report["variant"], report["full_run"]
+    return (f"`sweeps/{report['sweep']}`, {report['diagram_cells']} values of Omega, "
+            f"{report['transient_periods']} + {report['sampled_periods']} forcing periods "
+            f"each, default Hertz contact (k = {report['contact_stiffness']:.3g} N/m) at its "
+            f"resolved {report['n_modes']} modes: **{full['wall_s']:.0f} s on 2 threads** "
+            f"({full['cpu_s']:.0f} s of CPU; one core: {report['diagram_one_core_s']:.0f} s, "
+            f"extrapolated from every {report['stride']}th cell), "
+            f"{1e3 * report['s_per_period']:.2f} ms per forcing period, up to "
+            f"{report['onsets_per_period_max']:.0f} contact onsets per period; with k = "
+            f"{soft['contact_stiffness']:g} N/m at its {soft['n_modes']} modes, "
+            f"{soft['full_run']['wall_s']:.0f} s ({recorded(report)}).\n")
+
+
 SECTIONS: dict[str, Callable[[], str]] = {
+    "longtime": longtime,
     "bad-input": lambda: transcript("modes", "--clearance=-1e-5"),
     "trajectory": trajectory,
     "spring-convergence": spring_convergence,
