@@ -22,6 +22,7 @@ from impactbeams.kernels import first_impact
 from impactbeams.kernels.layout import CELL_F0
 from impactbeams.sweep import load_sweep
 from impactbeams.sweep.plan import build_plan, chunk_cells, first_impact_columns
+from run_all import machine
 
 ROOT = Path(__file__).parents[1]
 OUT = ROOT / "docs" / "benchmarks"
@@ -64,6 +65,7 @@ def main() -> None:
                                        for t in (1, 2)},
         "speedup_2_threads": {name: best[name, 1] / best[name, 2] for name in variants},
         "repeats": args.repeats,
+        **machine(),
     }
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "columns.json").write_text(json.dumps(report, indent=2) + "\n")

@@ -250,7 +250,8 @@ def headline(first: dict, dynamics: dict, scale: dict, quick: bool) -> str:
     lines = ["| quantity | value |", "|---|---|"]
     for row in scale["threads"]:
         lines.append(f"| cells per second, {row['threads']} thread(s), {row['cells']:,}-cell "
-                     f"map, t_max = 1 s, {n} modes | {row['cells_per_second']:,.0f} |")
+                     f"map, t_max = 1 s, {n} modes (`scaling.json`) | "
+                     f"{row['cells_per_second']:,.0f} |")
     verdicts = []
     for (family, ref), m in sorted(speed.items()):
         bound = ">= " if m["lower_bound"] else ""
@@ -273,7 +274,8 @@ def headline(first: dict, dynamics: dict, scale: dict, quick: bool) -> str:
     lines.append(f"| full dynamics ({dynamics['config']['t_max']} s, {n} modes): impactbeams vs "
                  f"tight DOP853 | onsets {tight['onset_max']:.1e} s, peak forces "
                  f"{tight['peak_rel_max']:.1e} rel., impact count diff {tight['count_diff']} |")
-    lines.append(f"| compile time (apart from run time) | {scale['compile']['cold_s']:.1f} s cold, "
+    lines.append(f"| compile time (apart from run time, `scaling.json`) | "
+                 f"{scale['compile']['cold_s']:.1f} s cold, "
                  f"{scale['compile']['warm_cache_s']:.2f} s from the Numba cache |")
     size = "QUICK (small sizes: numbers indicative only)" if quick else "full size"
     run = {k: v for k, v in first["run"].items() if k != "quick"}
@@ -373,21 +375,67 @@ def main() -> None:
     report(out)
 
 
+def _load(out: Path, name: str) -> dict:
+    return json.loads((out / f"{name}.json").read_text())
+
+
+def recorded(report: dict) -> tuple[str, str]:
+    """(date, machine) of a results file, "not recorded" where an older writer left them out."""
+    about = report.get("run", report)
+    machine = about.get("machine", "not recorded")
+    if isinstance(machine, dict):  # bench_distributed's record
+        machine = f"{machine.get('cpu_count', '?')} cores, {machine.get('platform', '')}"
+    return about.get("date", "not recorded"), machine
+
+
+def results_files(out: Path) -> str:
+    """A table of every results file in ``out``: when and where it was measured."""
+    lines = ["## Results files", "",
+             "Every number on this page is read from these files (the page is generated from "
+             "them: `python benchmarks/run_all.py --report-only`); they were measured at "
+             "different dates, by the script named in each file's section.", "",
+             "| file | date | machine |", "|---|---|---|"]
+    for path in sorted(out.glob("*.json")):
+        date, machine = recorded(json.loads(path.read_text()))
+        lines.append(f"| `{path.name}` | {date} | {machine} |")
+    return "\n".join(lines) + "\n"
+
+
+def page(out: Path) -> str:
+    """The benchmarks page (README.md of ``out``), from its JSON files only."""
+    first, dynamics, scale = (_load(out, name) for name in ("work_precision", "dynamics",
+                                                             "scaling"))
+    readme = headline(first, dynamics, scale, first["run"]["quick"])
+    if (out / "columns.json").exists():  # the map by columns, measured apart
+        readme += "\n" + columns_section(_load(out, "columns"))
+    if (out / "spring.json").exists():  # the spring law's section
+        readme += "\n" + spring.markdown(_load(out, "spring"))
+    if (out / "longtime.json").exists():  # the long-time diagram's cost, in brief
+        readme += "\n" + longtime.headline(_load(out, "longtime"))
+    return readme + "\n" + results_files(out)
+
+
+def columns_section(report: dict) -> str:
+    """The Fig. 5a map by columns against cell by cell (``bench_columns.py``)."""
+    date, machine = recorded(report)
+    rows = [f"| {name} | {seconds:.3f} s |" for name, seconds in report["best_s"].items()]
+    return ("## The Fig. 5a map by columns\n\n"
+            f"`bench_columns.py` ({date}; {machine}): {report['cells']:,} cells, compute only, "
+            f"kernels loaded, best of {report['repeats']}; same classification in every cell: "
+            f"{report['same_classification']}, largest difference in t* "
+            f"{report['max_time_difference_s']:.1e} s. The table above (`scaling.json`) is the "
+            "full suite's older series. Details: [columns.md](columns.md).\n\n"
+            "| kernel, threads | best time |\n|---|---|\n" + "\n".join(rows) + "\n")
+
+
 def report(out: Path) -> None:
     """Plots and README from the saved JSON files in ``out`` (no computation)."""
-    first, dynamics, scale = (json.loads((out / f"{name}.json").read_text())
-                              for name in ("work_precision", "dynamics", "scaling"))
-    plot_first_impact(first, out / "work_precision_first_impact.png")
-    plot_dynamics(dynamics, out / "work_precision_dynamics.png")
-    plot_scaling(scale, out / "scaling.png")
-    readme = headline(first, dynamics, scale, first["run"]["quick"])
-    if (out / "spring.json").exists():  # the spring law's section
-        springs = json.loads((out / "spring.json").read_text())
-        spring.plot_spring(springs, out / "work_precision_spring.png")
-        readme += "\n" + spring.markdown(springs)
-    if (out / "longtime.json").exists():  # the long-time diagram's cost, in brief
-        readme += "\n" + longtime.headline(json.loads((out / "longtime.json").read_text()))
-    (out / "README.md").write_text(readme)
+    plot_first_impact(_load(out, "work_precision"), out / "work_precision_first_impact.png")
+    plot_dynamics(_load(out, "dynamics"), out / "work_precision_dynamics.png")
+    plot_scaling(_load(out, "scaling"), out / "scaling.png")
+    if (out / "spring.json").exists():
+        spring.plot_spring(_load(out, "spring"), out / "work_precision_spring.png")
+    (out / "README.md").write_text(page(out))
     log(f"wrote {out}")
 
 

@@ -1,0 +1,215 @@
+"""Regenerate the README's numbers: the sections between ``<!-- generated: NAME -->`` markers.
+
+    python scripts/update_readme.py            # rewrite README.md in place
+    python scripts/update_readme.py --check    # exit 1 if README.md is out of date
+
+README.md is read on the forge, not built, so its numbers cannot be computed when it is shown.
+Each marked section is produced here instead: from short runs of the library (the first
+contacts and the episodes of the Fig. 3 case, which do not follow round-off) or from the
+benchmark results files in docs/benchmarks/ (never re-measured here). ``tests/test_docs.py``
+fails when README.md differs from what this script writes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+README = ROOT / "README.md"
+BENCHMARKS = ROOT / "docs" / "benchmarks"
+MARKER = re.compile(r"(<!-- generated: (?P<name>[\w-]+) .*?-->\n)(?P<body>.*?)"
+                    r"(<!-- end generated: (?P=name) -->)", re.DOTALL)
+
+
+def _results(name: str) -> dict:
+    return json.loads((BENCHMARKS / f"{name}.json").read_text())
+
+
+def recorded(report: dict) -> str:
+    """When and where a results file was measured (the benchmarks page's rule)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from run_all import recorded as date_and_machine
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    return ", ".join(dict.fromkeys(date_and_machine(report)))  # "not recorded" once
+
+
+def transcript(*arguments: str) -> str:
+    """A console block: ``impactbeams ARGUMENTS`` and what it prints (stdout and stderr)."""
+    import contextlib
+    import io
+
+    from impactbeams.cli import main
+
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(printed):
+        main(list(arguments))
+    return f"```console\n$ impactbeams {' '.join(arguments)}\n{printed.getvalue()}```\n"
+
+
+def trajectory() -> str:
+    """The Fig. 3 case over 0.6 s: its episodes, and the tied law's impacts at 5 modes."""
+    import impactbeams as ib
+
+    run = ib.simulate(ib.Params(), t_max=0.6, times=[0.0, 0.6])
+    tied = ib.simulate(ib.Params(contact_law="tied"), t_max=0.6, times=[0.0, 0.6])
+    return (f"Over these 0.6 s the default run's contacts come in {run.sizes['episode']} "
+            "episodes, one per forcing period, and the tied run has "
+            f"{tied.sizes['impact']} impacts. The number of contacts within an episode of the "
+            "undamped spring run follows round-off (a stiff, undamped rattle is chaotic: a "
+            "change in the last bits of an event time changes the micro-contacts that follow), "
+            "so it is not quoted here; the first contacts and the episodes are robust. See "
+            "[the trajectory tutorial](docs/tutorials/trajectory.md#what-is-robust), whose "
+            "numbers are computed when the documentation is built.\n")
+
+
+def spring_convergence() -> str:
+    """The first contact and the first episode at 16, 32 and 64 modes."""
+    import impactbeams as ib
+
+    rows = {"first onset (s)": [], "first contact duration (ms)": [],
+            "first peak force (mN)": [], "first impulse (uN s)": [],
+            "first episode's impulse (uN s)": []}
+    for n in (16, 32, 64):
+        with warnings.catch_warnings():  # 16 modes do not resolve the contact: on purpose
+            warnings.simplefilter("ignore")
+            run = ib.simulate(ib.Params(), t_max=0.06, n_modes=n, times=[0.0, 0.06])
+        first = run.isel(impact=0)
+        rows["first onset (s)"].append(f"{float(first.impact_onset_time):.12f}")
+        rows["first contact duration (ms)"].append(f"{1e3 * float(first.impact_duration):.4f}")
+        rows["first peak force (mN)"].append(f"{1e3 * float(first.impact_peak_force):.3f}")
+        rows["first impulse (uN s)"].append(f"{1e6 * float(first.impact_impulse):.5f}")
+        rows["first episode's impulse (uN s)"].append(
+            f"{1e6 * float(run.episode_impulse[0]):.3f}")
+    lines = ["| quantity | 16 | 32 (default) | 64 |", "|---|---|---|---|"]
+    lines += [f"| {name} | {' | '.join(values)} |" for name, values in rows.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _robust_count(impacts: int, n_modes: int) -> str:
+    """An impact count as far as it is reproducible: its scale only from 10 tied modes on.
+
+    From there it follows round-off: the BLAS thread count alone moves it by a few per cent.
+    """
+    if n_modes < 10:
+        return str(impacts)
+    return "hundreds" if impacts < 1000 else "thousands"
+
+
+def tied_convergence() -> str:
+    """The tied law at 4 to 50 modes: the first impact, and the impacts over 0.6 s."""
+    import impactbeams as ib
+
+    counts = (4, 5, 10, 20, 50)
+    runs = {n: ib.simulate(ib.Params(contact_law="tied"), t_max=0.6, n_modes=n,
+                           times=[0.0, 0.6]) for n in counts}
+    first = {n: run.isel(impact=0) for n, run in runs.items()}
+    onset = {n: float(first[n].impact_onset_time) for n in counts}
+    rows = {
+        f"first onset, distance from {counts[-1]} modes (s)":
+            [f"{abs(onset[n] - onset[counts[-1]]):.1e}" for n in counts[:-1]] + ["-"],
+        "energy lost at the first onset (nJ)":
+            [f"{1e9 * float(first[n].impact_energy_loss):.3g}" for n in counts],
+        "first contact duration (ms)":
+            [f"{1e3 * float(first[n].impact_duration):#.2g}" for n in counts],
+        "first peak force (mN)": [f"{1e3 * float(first[n].impact_peak_force):#.2g}"
+                                  for n in counts],
+        "impacts in 0.6 s": [_robust_count(runs[n].sizes["impact"], n) for n in counts],
+    }
+    lines = ["| quantity | " + " | ".join(map(str, counts)) + " |",
+             "|---" * (len(counts) + 1) + "|"]
+    lines += [f"| {name} | {' | '.join(values)} |" for name, values in rows.items()]
+    return "\n".join(lines) + "\n"
+
+
+def performance() -> str:
+    """Headline costs, each read from its results file with its date and machine."""
+    columns, sweep, cube = _results("columns"), _results("sweep"), _results("cube")
+    scale = _results("scaling")
+    best = columns["best_s"]
+    full = next(run for run in cube["runs"] if run["cells"] == 10**9)
+    rows = [
+        ("Fig. 5a map, 10^6 cells, t_max = 1 s, 5 modes per beam, compute in-process "
+         "([columns](docs/benchmarks/columns.md))",
+         f"{best['columns, 1 thread(s)']:.2f} s on 1 thread, "
+         f"{best['columns, 2 thread(s)']:.2f} s on 2 by columns; "
+         f"{best['cells, 1 thread(s)']:.1f} s / {best['cells, 2 thread(s)']:.1f} s cell by "
+         f"cell (same classification in every cell: {columns['same_classification']}, t* "
+         f"within {columns['max_time_difference_s']:.1e} s)", recorded(columns)),
+        ("the same map as a command, `impactbeams run sweeps/fig5a-omega-force.toml -o "
+         "OUT.nc`, warm Numba cache ([phases](docs/benchmarks/sweep.md))",
+         f"{sweep['command_s']:.1f} s, of which {sweep['command_overhead_s']:.1f} s "
+         "interpreter, imports, loading the kernels and writing", recorded(sweep)),
+        ("compile time of the map's kernels (apart)",
+         f"{sweep['compile_cold_s']:.0f} s cold, {sweep['compile_warm_cache_s']:.1f} s from "
+         "the disk cache", recorded(sweep)),
+        ("(Omega, Delta, F0) cube of 1000^3 = 10^9 cells streamed into netCDF, 2 threads "
+         "([details](docs/benchmarks/cube.md))",
+         f"{full['wall_s']:.0f} s, {full['cpu_s']:.0f} s of CPU, peak memory "
+         f"{full['peak_rss_mb']:.0f} MB, {full['file_mb']:.0f} MB file",
+         recorded({**cube, "date": full.get("date", cube.get("date"))})),
+        ("Fig. 5a map, 10^6 cells, in the full suite's last scaling series (`scaling.json`)",
+         ", ".join(f"{row['seconds']:.2f} s on {row['threads']} thread(s)"
+                    for row in scale["threads"]), recorded(scale)),
+    ]
+    lines = ["| quantity | value | measured |", "|---|---|---|"]
+    lines += [f"| {what} | {value} | {when} |" for what, value, when in rows]
+    return "\n".join(lines) + "\n"
+
+
+def longtime() -> str:
+    """The long-time bifurcation diagram's cost, from ``longtime.json``."""
+    report = _results("longtime")
+    soft, full = report["variant"], report["full_run"]
+    return (f"`sweeps/{report['sweep']}`, {report['diagram_cells']} values of Omega, "
+            f"{report['transient_periods']} + {report['sampled_periods']} forcing periods "
+            f"each, default Hertz contact (k = {report['contact_stiffness']:.3g} N/m) at its "
+            f"resolved {report['n_modes']} modes: **{full['wall_s']:.0f} s on 2 threads** "
+            f"({full['cpu_s']:.0f} s of CPU; one core: {report['diagram_one_core_s']:.0f} s, "
+            f"extrapolated from every {report['stride']}th cell), "
+            f"{1e3 * report['s_per_period']:.2f} ms per forcing period, up to "
+            f"{report['onsets_per_period_max']:.0f} contact onsets per period; with k = "
+            f"{soft['contact_stiffness']:g} N/m at its {soft['n_modes']} modes, "
+            f"{soft['full_run']['wall_s']:.0f} s ({recorded(report)}).\n")
+
+
+SECTIONS: dict[str, Callable[[], str]] = {
+    "longtime": longtime,
+    "bad-input": lambda: transcript("modes", "--clearance=-1e-5"),
+    "trajectory": trajectory,
+    "spring-convergence": spring_convergence,
+    "tied-convergence": tied_convergence,
+    "performance": performance,
+}
+
+
+def render(text: str) -> str:
+    """``text`` with every generated section recomputed."""
+    found = {match["name"] for match in MARKER.finditer(text)}
+    if found != set(SECTIONS):
+        raise SystemExit(f"README.md markers {sorted(found)} != sections {sorted(SECTIONS)}")
+    return MARKER.sub(lambda m: m[1] + SECTIONS[m["name"]]() + m[4], text)
+
+
+def main() -> None:
+    """Rewrite README.md, or with --check report whether it is up to date."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--check", action="store_true", help="exit 1 if README.md is stale")
+    args = parser.parse_args()
+    text = README.read_text()
+    new = render(text)
+    if args.check:
+        sys.exit(0 if new == text else 1)
+    README.write_text(new)
+    print("README.md up to date" if new == text else "README.md regenerated")
+
+
+if __name__ == "__main__":
+    main()
