@@ -1,5 +1,6 @@
-// MathJax configuration for pymdownx.arithmatex (generic mode). MathJax itself is loaded by
-// the reader's browser from a CDN; building the site needs no network.
+// MathJax configuration for pymdownx.arithmatex (generic mode). MathJax itself (pinned in
+// package.json) is served by the site, loaded right after this file, and typesets each page
+// when it loads: the site uses full page loads (no navigation.instant), so nothing else is needed.
 window.MathJax = {
   tex: {
     inlineMath: [["\\(", "\\)"]],
@@ -12,10 +13,3 @@ window.MathJax = {
     processHtmlClass: "arithmatex"
   }
 };
-
-document$.subscribe(() => {
-  MathJax.startup.output.clearCache()
-  MathJax.typesetClear()
-  MathJax.texReset()
-  MathJax.typesetPromise()
-})
