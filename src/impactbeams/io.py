@@ -1,8 +1,8 @@
 """Writing results: files that are never left half-written (netCDF, text, npz).
 
-Every writer goes through :func:`atomic_write` or :func:`build_netcdf`: write a temporary
+Every writer goes through `atomic_write` or `build_netcdf`: write a temporary
 file, then rename it over the target, so a reader sees the old file or the whole new one.
-netCDF variables of numbers are compressed (:data:`COMPRESSION`).
+netCDF variables of numbers are compressed (`COMPRESSION`).
 """
 
 from __future__ import annotations

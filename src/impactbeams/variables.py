@@ -1,8 +1,8 @@
 """The one registry of names: data variables, parameters and global attributes.
 
 Parameters appear as coordinates (swept) or attributes (fixed). Used both to build Datasets
-(:func:`attributes`, :func:`parameter_attributes`, :func:`global_attributes`) and to check
-them (:func:`validate`). Imports nothing heavy: :mod:`impactbeams.params` takes its units
+(`attributes`, `parameter_attributes`, `global_attributes`) and to check
+them (`validate`). Imports nothing heavy: `impactbeams.params` takes its units
 from here.
 """
 

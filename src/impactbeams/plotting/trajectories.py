@@ -1,4 +1,4 @@
-"""Plots of simulated trajectories (Datasets from :func:`impactbeams.trajectory.simulate`).
+"""Plots of simulated trajectories (Datasets from [`impactbeams.trajectory.simulate`][]).
 
 Everything here reads saved Datasets; nothing is computed but unit scaling and selections.
 """

@@ -1,6 +1,6 @@
 """What a sweep is: its axes, fixed parameters and observables, read and validated from TOML.
 
-A sweep file (names as in :mod:`impactbeams.params`)::
+A sweep file (names as in `impactbeams.params`)::
 
     t_max = 1.0                          # s, horizon of every cell
     n_modes = 5                          # free modes per beam (contact phase: 2 n_modes)
@@ -414,7 +414,7 @@ def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = Fa
     """Peak memory and rough wall time of running ``sweep`` on ``threads`` (default: all cores).
 
     Memory: a streamed run (``write_sweep``, what ``impactbeams run`` does) holds a chunk at a
-    time (:func:`chunk_memory`); ``in_memory`` (``run_sweep`` without an output) also holds the
+    time (`chunk_memory`); ``in_memory`` (``run_sweep`` without an output) also holds the
     results (one float64 array of every cell per stored value and the Dataset's copy: 16
     bytes per cell and value, plus 4 for ``impacted`` and its temporaries; the traced peak
     of a first-impact map, netCDF writing included, is 18.04 bytes per cell). Both add the plan
