@@ -6,7 +6,14 @@ window.MathJax = {
     inlineMath: [["\\(", "\\)"]],
     displayMath: [["\\[", "\\]"]],
     processEscapes: true,
-    processEnvironments: true
+    processEnvironments: true,
+    // an unknown macro is an error, not red text, and every TeX error is logged to the console
+    // (tests/test_docs_site.py fails on any console message)
+    packages: {"[-]": ["noundefined"]},
+    formatError: (jax, error) => {
+      console.error("TeX error: " + error.message);
+      return jax.formatError(error);
+    }
   },
   options: {
     ignoreHtmlClass: ".*|",
