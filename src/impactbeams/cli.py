@@ -1,8 +1,10 @@
-"""Command-line interface: a thin argparse layer over the library.
+"""Two cantilever beams impacting across a clearance: frequencies, trajectories, sweeps, plots.
 
-Subcommands: ``modes`` (natural frequencies), ``run`` (a sweep from a TOML file), ``simulate``
-(one full trajectory), ``plot`` (draw a saved Dataset). Every model parameter is an option
-named like the parameter, with dashes (``--force-amplitude``, ``--EI1``, ``--thickness2``).
+The command-line interface, a thin argparse layer over the library; the line above is the
+description `impactbeams --help` opens with. Subcommands: ``modes`` (natural frequencies),
+``run`` (a sweep from a TOML file), ``simulate`` (one full trajectory), ``plot`` (draw a saved
+Dataset). Every model parameter is an option named like the parameter, with dashes
+(``--force-amplitude``, ``--EI1``, ``--thickness2``).
 
 Every input (options, files, paths, values, the run's size) is checked before any work starts
 or any file is written; a rejected input prints one line ``impactbeams: error: ...`` and exits

@@ -177,7 +177,10 @@ VARIABLES.update({
         ("impact",), "N", "peak impact force", "largest contact force during the contact phase"),
     "restitution_coefficient": Variable(
         ("impact",), "1", "coefficient of restitution",
-        "e = -(dg/dt just after release) / (dg/dt just before onset); NaN if not released",
+        "e = -(dg/dt just after release) / (dg/dt just before onset); NaN if not released. "
+        "Negative under the tied law where the release's projection onto the truncated free "
+        "modes leaves the tips still approaching (a truncation artefact, the exact rigid "
+        "release has e = 0; docs/model.md, What comes out); the spring law gives e >= 0",
         "$e$"),
     "impact_sustained": Variable(
         ("impact",), "1", "sustained-contact flag",
@@ -297,6 +300,15 @@ VARIABLES.update({
         "impact episodes (clusters of contacts, docs/model.md) starting in the sampled window, "
         "per second"),
 })
+
+# what the long-time response gives: computed over sampled_periods forcing periods after
+# transient_periods, not over [0, t_max] (the sweeps' long-time observables; plot titles name
+# that window instead of t_max)
+POINCARE_VARIABLES = ("poincare_deflection1", "poincare_deflection2", "poincare_velocity1",
+                      "poincare_velocity2")
+LONG_TIME_VARIABLES = (*POINCARE_VARIABLES, "response_period", "steady_impact_rate",
+                       "steady_episode_rate")
+
 
 def attributes(name: str) -> dict[str, str]:
     """CF attributes (units, long_name, description) of a registered variable."""

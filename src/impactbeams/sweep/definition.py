@@ -60,17 +60,15 @@ from impactbeams.preflight import (
     highest_frequency,
     require_memory,
 )
-from impactbeams.variables import PARAMETERS
+from impactbeams.variables import LONG_TIME_VARIABLES, PARAMETERS, POINCARE_VARIABLES
 
 FIRST_IMPACT = "first_impact_time"
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
 LYAPUNOV = "lyapunov_exponent"  # spring law only; its own windowed run (kernels.lyapunov)
 # the long run's stroboscopic samples (along a trailing dimension "period") and what they give
-POINCARE_OBSERVABLES = ("poincare_deflection1", "poincare_deflection2", "poincare_velocity1",
-                        "poincare_velocity2")
-LONG_TIME_OBSERVABLES = (*POINCARE_OBSERVABLES, "response_period", "steady_impact_rate",
-                         "steady_episode_rate")
+POINCARE_OBSERVABLES = POINCARE_VARIABLES
+LONG_TIME_OBSERVABLES = LONG_TIME_VARIABLES
 OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV, *LONG_TIME_OBSERVABLES)
 # parameters that change a cell but not its geometry (its modes): the packed cell columns
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
