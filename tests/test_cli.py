@@ -41,6 +41,14 @@ def test_modes_json_matches_the_library(capsys, tmp_path):
     assert result["free"]["beam2"] == pytest.approx(beam2, rel=1e-9)
 
 
+def test_help_opens_with_what_the_program_does(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    description = " ".join(capsys.readouterr().out.split("\n\n")[1].split())
+    assert description == ("Two cantilever beams impacting across a clearance: frequencies, "
+                           "trajectories, sweeps, plots.")
+
+
 def test_modes_table(capsys):
     assert main(["modes", "--n", "3", "--contact-law", "tied"]) == 0
     out = capsys.readouterr().out

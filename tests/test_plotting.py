@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 
 from impactbeams.cli import main
 from impactbeams.params import ParameterError
-from impactbeams.plotting import draw, plot_dataset
+from impactbeams.plotting import draw, plot_dataset, trajectories
 from impactbeams.plotting.labels import axis_label, power_of_ten, units_text
 from impactbeams.plotting.scales import MISSING_COLOUR, NONE_COLOUR
 from impactbeams.variables import attributes, parameter_attributes
@@ -177,6 +177,29 @@ def test_contour_lines_are_labelled(figure):
     assert list(lines.levels) == [0.01, 0.1]
 
 
+def test_crowded_contour_labels_are_one_per_level_and_apart(figure):
+    """Levels broken into many pieces along a ragged edge (as along Fig. 5a's impact boundary
+    at Omega 40-60) get one label each, on their longest line, and no two labels overlap
+    (matplotlib's default, one label per piece, drew 46 labels here, 17 pairs overlapping)."""
+    omega = _axis("omega", np.linspace(10.0, 400.0, 200))
+    force = _axis("force_amplitude", np.geomspace(1e-6, 1e-3, 150), "log")
+    u = np.linspace(0.0, 1.0, 200)[:, None] + np.linspace(0.0, 1.0, 150)[None, :]
+    t = 0.99 * (0.0044 / 0.99) ** ((u - 0.5) / 1.5)
+    band = (u > 0.5) & (u < 0.65)  # values jump from cell to cell near the edge
+    t[band] *= np.random.default_rng(5).uniform(0.2, 5.0, band.sum())
+    t[u < 0.5] = np.nan
+    figure.set_size_inches(6.4, 4.8)
+    axes = figure.subplots()
+    draw(axes, _sweep(t, [omega, force]), contours=6)
+    figure.canvas.draw()
+    (lines,) = [c for c in axes.get_children() if isinstance(c, ContourSet)]
+    assert len(lines.labelTexts) == len(lines.levels) >= 5
+    boxes = [text.get_window_extent() for text in lines.labelTexts]
+    for i, box in enumerate(boxes):
+        assert not any(box.overlaps(other) for other in boxes[i + 1:])
+        assert axes.bbox.contains(*box.p0) and axes.bbox.contains(*box.p1)
+
+
 def test_no_contour_lines_without_the_option(figure):
     axes = figure.subplots()
     draw(axes, fig5a_like())
@@ -200,6 +223,44 @@ def test_labels_are_symbols_with_units(figure):
         assert axis_label(_axis(name, [1.0, 2.0])) == label
     assert units_text("m s-1") == "m s$^{-1}$" and units_text("kg/m^3") == "kg/m$^{3}$"
     assert power_of_ten(2e-5) == "$2\\times10^{-5}$" and power_of_ten(1e3) == "$10^{3}$"
+
+
+def test_long_time_titles_name_the_sampled_periods_not_t_max(figure):
+    """Long-time observables are not computed over [0, t_max]: their titles give the window."""
+    ds = poincare_sweep().assign_attrs(transient_periods=500, sampled_periods=200)
+    for variable in ("response_period", "poincare_deflection1"):
+        axes = Figure().subplots()
+        draw(axes, ds, variable)
+        assert axes.get_title(loc="left") == ("$\\Delta$ = $1.1\\times10^{-5}$ m, 500 transient "
+                                              "+ 200 sampled periods, 5 modes, spring law")
+    axes = figure.subplots()  # the same file's other observables cover [0, t_max]
+    draw(axes, fig5a_like().assign_attrs(transient_periods=500, sampled_periods=200))
+    assert "$t_\\max$ = 1 s" in axes.get_title(loc="left")
+
+
+def test_run_overview_writes_symbols_and_units_as_the_maps(monkeypatch, tmp_path):
+    figures = []
+    monkeypatch.setattr(trajectories, "_save", lambda figure, path, dpi=150: figures.append(
+        figure))
+    time = np.linspace(0.0, 0.01, 11)
+    run = xr.Dataset(
+        {"tip_deflection_1": ("time", 1e-6 * np.sin(time)), "tip_deflection_2": ("time", 0 * time),
+         "contact_force": ("time", 0 * time), "energy": ("time", 1e-9 + 0 * time),
+         "restitution_coefficient": ("impact", [0.5]), "impact_onset_time": ("impact", [0.005])},
+        coords={"time": time},
+        attrs={"force_amplitude": 1e-3, "omega": 40.0, "clearance": 2e-5, "n_modes": 40,
+               "contact_law": "spring", "contact_stiffness": 1.2345e7, "status": "complete"})
+    trajectories.plot_run(run, tmp_path / "run.png")
+    (figure,) = figures
+    axes = figure.axes
+    assert axes[0].get_title() == (
+        "$F_0$ = 0.001 N, $\\Omega$ = 40 rad/s, $\\Delta$ = $2\\times10^{-5}$ m\n"
+        "spring law, $k$ = $1.23\\times10^{7}$ N/m, 40 modes; status complete")
+    assert axes[0].get_ylabel() == "tip deflection (µm)"
+    assert [t.get_text() for t in axes[0].get_legend().get_texts()] == [
+        "$y_1(l_1)$", "$y_2(l_2) - \\Delta$"]
+    assert axes[2].get_ylabel() == "restitution $e$"
+    assert axes[3].get_xlabel() == "time $t$ (s)"
 
 
 # --- variables, slices, lines -------------------------------------------------------------------

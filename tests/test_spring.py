@@ -177,6 +177,15 @@ def test_force_is_compressive_and_gap_signs_match_the_phases(unforced):
     assert np.all(ds.gap.values[~contact] >= -scale)
 
 
+def test_restitution_is_never_negative_with_the_spring_law(unforced):
+    """The spring law releases with dg/dt >= 0 (no projection at release), so e >= 0; only the
+    tied law's release projection gives e < 0, as the Dataset's description says."""
+    e = unforced.restitution_coefficient
+    released = np.isfinite(e.values)
+    assert released.sum() > 100 and np.all(e.values[released] >= 0.0)
+    assert "Negative under the tied law" in e.attrs["description"]
+
+
 @pytest.mark.parametrize("forced", [False, True], ids=["unforced", "forced"])
 def test_dashpot_and_modal_damping_dissipate_what_the_energy_loses(forced):
     """c > 0, zeta > 0: energy + dissipation - work of F is constant, and the dissipation

@@ -1,12 +1,14 @@
-"""Command-line interface: a thin argparse layer over the library.
+"""Two cantilever beams impacting across a clearance: frequencies, trajectories, sweeps, plots.
 
-Subcommands: ``modes`` (natural frequencies), ``run`` (a sweep from a TOML file), ``simulate``
-(one full trajectory), ``plot`` (draw a saved Dataset). Every model parameter is an option
-named like the parameter, with dashes (``--force-amplitude``, ``--EI1``, ``--thickness2``).
+The command-line interface, a thin argparse layer over the library; the line above is the
+description `impactbeams --help` opens with. Subcommands: ``modes`` (natural frequencies),
+``run`` (a sweep from a TOML file), ``simulate`` (one full trajectory), ``plot`` (draw a saved
+Dataset). Every model parameter is an option named like the parameter, with dashes
+(``--force-amplitude``, ``--EI1``, ``--thickness2``).
 
 Every input (options, files, paths, values, the run's size) is checked before any work starts
 or any file is written; a rejected input prints one line ``impactbeams: error: ...`` and exits
-with :data:`EXIT_USER_ERROR`.
+with `EXIT_USER_ERROR`.
 """
 
 from __future__ import annotations
@@ -427,9 +429,9 @@ def _warn(text: str) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``impactbeams`` console script; returns the exit code.
 
-    0: done; 1 (:data:`EXIT_SYSTEM_ERROR`): a file could not be written or memory ran out;
-    2 (:data:`EXIT_USER_ERROR`): an input was rejected before any work; 3
-    (:data:`EXIT_INCOMPLETE`): written, but some runs stopped before t_max; 130: interrupted.
+    0: done; 1 (`EXIT_SYSTEM_ERROR`): a file could not be written or memory ran out;
+    2 (`EXIT_USER_ERROR`): an input was rejected before any work; 3
+    (`EXIT_INCOMPLETE`): written, but some runs stopped before t_max; 130: interrupted.
     """
     try:
         args = build_parser().parse_args(

@@ -1,6 +1,6 @@
 """Writing results: files that are never left half-written (netCDF, text, npz).
 
-Every writer goes through :func:`atomic_write` or :func:`build_netcdf`: write a temporary
+Every writer goes through `atomic_write` or `build_netcdf`: write a temporary
 file, then rename it over the target, so a reader sees the old file or the whole new one.
 netCDF variables of numbers are compressed (:data:`COMPRESSION`). A failed write (a full
 disk, a removed or read-only folder, a quota) raises :class:`WriteError`, naming the file.

@@ -101,7 +101,7 @@ class ModalModel:
     Attributes (SI units):
         params: the geometry (forcing values in it are not used here).
         n_modes: free modes per beam.
-        free: the free phase (see :class:`FreePhase`).
+        free: the free phase (see `FreePhase`).
         contact: contact-phase modes.
         contact_tip: common tip displacement of the contact shapes.
         contact_shear2: EI_2 Z_2m'''(l_2), tip shear (contact force) per contact coordinate (N).

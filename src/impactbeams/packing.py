@@ -1,10 +1,10 @@
-"""Every kernel input, built from the physics objects (:mod:`impactbeams.model`).
+"""Every kernel input, built from the physics objects (`impactbeams.model`).
 
-The kernels (:mod:`impactbeams.kernels`) take plain arrays in SI units, named in
-:mod:`impactbeams.kernels.layout`; this module is the one place that fills them: a geometry's
+The kernels (`impactbeams.kernels`) take plain arrays in SI units, named in
+`impactbeams.kernels.layout`; this module is the one place that fills them: a geometry's
 phase tables and geometry row, the cell rows of a grid or of one run, and a run's complete
-inputs (:func:`pack_run`). What depends on a cell's forcing, damping and uplifts is computed
-by :func:`impactbeams.kernels.forcing.run_inputs`, the same function the map kernels call per
+inputs (`pack_run`). What depends on a cell's forcing, damping and uplifts is computed
+by `impactbeams.kernels.forcing.run_inputs`, the same function the map kernels call per
 cell, so a simulated run and a sweep cell with the same parameters get the same bits.
 """
 
@@ -110,7 +110,7 @@ class Dynamics:
     the spring law's contact phase, else None. ``bases``: the coordinates in which sampled
     states come back (the spring law's are the free ones in both phases). ``overlap``,
     ``shifts`` (tied) and ``spring_arrays`` = (left, right, modes) (spring, in the layout of
-    :mod:`impactbeams.kernels.spring`) are zeros for the other law.
+    `impactbeams.kernels.spring`) are zeros for the other law.
     """
 
     params: Params

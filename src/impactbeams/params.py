@@ -206,7 +206,7 @@ def check_range(name: str, value: Any, point: PointName = no_point) -> None:
 def check_joint(values: Mapping[str, Any], point: PointName = no_point) -> None:
     """Raise ParameterError unless the resolved parameters are jointly allowed.
 
-    ``values``: every numeric field of :class:`Params` (EI/rhoA form), as floats or arrays that
+    ``values``: every numeric field of [`Params`][] (EI/rhoA form), as floats or arrays that
     broadcast against each other (a sweep's corner grid). Each condition is monotone in every
     parameter, so a sweep that passes at the corners of its box passes everywhere.
     """
@@ -288,8 +288,8 @@ class Params:
     """Parameters of the two-beam impact model (SI units, see the module docstring).
 
     Build it with keywords (``Params(clearance=2e-5)``), from a mapping that may use the
-    material keys (:meth:`from_mapping`) or from a TOML file (:meth:`from_toml`). Every value is
-    validated on construction; a bad value raises :class:`ParameterError`.
+    material keys ([`from_mapping`][]) or from a TOML file ([`from_toml`][]). Every value is
+    validated on construction; a bad value raises [`ParameterError`][].
     """
 
     l1: float = 0.1

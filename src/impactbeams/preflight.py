@@ -45,7 +45,7 @@ DYNAMICS_RATE = 4e-8
 def highest_frequency(values: Mapping[str, Any], n_modes: int) -> np.ndarray:
     """The highest free-mode frequency (rad/s) of both beams with ``n_modes`` modes each.
 
-    ``values``: resolved parameters (floats or arrays that broadcast, as in :func:`check_run`).
+    ``values``: resolved parameters (floats or arrays that broadcast, as in `check_run`).
     """
     from impactbeams.modes import cantilever_roots  # SciPy: only when a run is checked
 

@@ -1,8 +1,8 @@
 """The one registry of names: data variables, parameters and global attributes.
 
 Parameters appear as coordinates (swept) or attributes (fixed). Used both to build Datasets
-(:func:`attributes`, :func:`parameter_attributes`, :func:`global_attributes`) and to check
-them (:func:`validate`). Imports nothing heavy: :mod:`impactbeams.params` takes its units
+(`attributes`, `parameter_attributes`, `global_attributes`) and to check
+them (`validate`). Imports nothing heavy: `impactbeams.params` takes its units
 from here.
 """
 
@@ -180,7 +180,10 @@ VARIABLES.update({
         ("impact",), "N", "peak impact force", "largest contact force during the contact phase"),
     "restitution_coefficient": Variable(
         ("impact",), "1", "coefficient of restitution",
-        "e = -(dg/dt just after release) / (dg/dt just before onset); NaN if not released",
+        "e = -(dg/dt just after release) / (dg/dt just before onset); NaN if not released. "
+        "Negative under the tied law where the release's projection onto the truncated free "
+        "modes leaves the tips still approaching (a truncation artefact, the exact rigid "
+        "release has e = 0; docs/model.md, What comes out); the spring law gives e >= 0",
         "$e$"),
     "impact_sustained": Variable(
         ("impact",), "1", "sustained-contact flag",
@@ -303,6 +306,13 @@ VARIABLES.update({
         "per second"),
 })
 
+# what the long-time response gives: computed over sampled_periods forcing periods after
+# transient_periods, not over [0, t_max] (the sweeps' long-time observables; plot titles name
+# that window instead of t_max)
+POINCARE_VARIABLES = ("poincare_deflection1", "poincare_deflection2", "poincare_velocity1",
+                      "poincare_velocity2")
+LONG_TIME_VARIABLES = (*POINCARE_VARIABLES, "response_period", "steady_impact_rate",
+                       "steady_episode_rate")
 # what a sweep's map can hold along its grid ("*"): observables and what comes with them
 MAP_VARIABLES = tuple(name for name, variable in VARIABLES.items() if variable.dims[0] == "*")
 

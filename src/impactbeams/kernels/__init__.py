@@ -4,7 +4,7 @@
 import) and are cached on disk (``cache=True``). Numba checks a cached kernel only against its
 own source file, not against the kernels it calls in other files: after editing a kernel,
 clear the cache (``find src -name '*.nb[ic]' -delete``) or key the cache directory by
-:func:`source_digest`, as the test suite does.
+`source_digest`, as the test suite does.
 """
 
 import hashlib

@@ -2,14 +2,14 @@
 
 Exact propagation within phases, certified switching events, and the states at any time.
 
-Plain-array interface, packed by :mod:`impactbeams.packing`; every array is named in
-:mod:`impactbeams.kernels.layout`: ``tables[phase]`` (rows ``TABLE_ROWS``), ``forces[phase]``
+Plain-array interface, packed by `impactbeams.packing`; every array is named in
+`impactbeams.kernels.layout`: ``tables[phase]`` (rows ``TABLE_ROWS``), ``forces[phase]``
 (complex drive amplitudes), ``phase_scalars[phase]`` (``PHASE_SCALARS``) and ``settings``
 (``SETTINGS``). Both phases have ``N = 2 n`` modal coordinates. Reductions over a run (work,
-dissipation, peak force) are in :mod:`impactbeams.kernels.reductions`.
+dissipation, peak force) are in `impactbeams.kernels.reductions`.
 
 The contact law is ``settings.contact_law``. Spring law: the contact phase's coordinates are
-the oscillators of :mod:`impactbeams.kernels.spring`, and a switch is a change of coordinates
+the oscillators of `impactbeams.kernels.spring`, and a switch is a change of coordinates
 that keeps (q, q') (``spring = (left, right, modes)``, ``drives``). Tied law: switching
 (docs/model.md) uses ``overlap[m, n] = <Z_m, Y_n>`` and the static shifts
 ``shifts[FREE] = <s, Y_n>``, ``shifts[CONTACT] = <s, Z_m>``:

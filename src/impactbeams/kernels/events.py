@@ -14,7 +14,7 @@ open is passed in a logarithmic number of steps and one that closes, however bri
 When the linear estimate says a crossing is near, a probe beyond it brackets the root; a bracket
 on which ``e`` is certified monotone holds exactly one root, which safeguarded Newton then
 resolves to a few ulps of time. The walk's own points are evaluated by a rotor
-(:mod:`impactbeams.kernels.rotor`: undriven modes as rotating amplitudes, the steady states
+(`impactbeams.kernels.rotor`: undriven modes as rotating amplitudes, the steady states
 split off by ``split_steady_states``); the probe and Newton propagate exactly.
 
 Certified in exact arithmetic; in floating point e is known only to within its evaluation

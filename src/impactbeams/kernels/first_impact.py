@@ -1,12 +1,12 @@
 """Time to first impact: the free phase only, stopped at the first gap closure.
 
-Plain-array interface, packed by :mod:`impactbeams.packing` (names in
-:mod:`impactbeams.kernels.layout`): ``cells[i]`` with columns ``CELL_COLUMNS``;
+Plain-array interface, packed by `impactbeams.packing` (names in
+`impactbeams.kernels.layout`): ``cells[i]`` with columns ``CELL_COLUMNS``;
 ``tables[g, FREE]`` the free-phase table of geometry g (rows ``TABLE_ROWS``; its ``event`` row
 is the gap weight ``Y_1n(l1) - Y_2n(l2)``); ``geometry[g]`` with fields ``GEOMETRY``.
 
 A cell's gap is ``g(t) = clearance - c_1 F(t) + sum_n event_n q_n(t)``, from the initial state
-of docs/model.md (at rest in the uplift shape, :func:`~impactbeams.kernels.forcing.rest_state`),
+of docs/model.md (at rest in the uplift shape, `rest_state`),
 with each mode driven by ``b_n (F'' + 2 zeta omega_n F')`` (modal damping of the whole
 coordinate).
 """

@@ -1,9 +1,9 @@
 """A run's inputs that depend on its cell (forcing, damping, clearance, uplifts): one formula each.
 
-Called by :mod:`impactbeams.packing` for one run (:func:`run_inputs` on a cell row packed from
+Called by `impactbeams.packing` for one run (`run_inputs` on a cell row packed from
 the parameters) and by the map kernels for each cell of a grid, so that a sweep cell and a
 simulated run with the same parameters get the same bits. Arrays and fields are named in
-:mod:`impactbeams.kernels.layout`; SI units.
+`impactbeams.kernels.layout`; SI units.
 """
 
 import numpy as np

@@ -1,6 +1,6 @@
 """Named rows, columns and fields of every kernel array: the contract between packing and kernels.
 
-:mod:`impactbeams.packing` fills the arrays by these names and the kernels read them by these
+`impactbeams.packing` fills the arrays by these names and the kernels read them by these
 names; nobody writes a bare offset. Each group of indices is unpacked next to its tuple of
 names. Units: SI throughout.
 
@@ -28,13 +28,13 @@ contact, 1 in spring contact, where the free phase's quasi-static part is kept).
 compliances c1, c2 (m/N), force amplitude F0 (N), forcing frequency Omega (rad/s), end time
 t_max (s), search span (s; the event search restarts from the exactly propagated state this
 often), accumulation time (s; see
-:func:`impactbeams.kernels.dynamics.run_events`), contact law (``CONTACT_LAWS`` index), and the
+`impactbeams.kernels.dynamics.run_events`), contact law (``CONTACT_LAWS`` index), and the
 spring law's effective stiffness k_e (N/m) and dashpot c_e (N s/m) after the static correction,
 and beam 1's residual tip flexibility r_1 (m/N: what its modes miss of c1).
 
 Contact laws: ``TIED`` (the paper's: tips tied in contact, contact modes of the tied pair,
 projections at switches: ``overlap``, ``shifts``) and ``SPRING`` (compliant: the free
-coordinates kept, the contact phase as the oscillators of :mod:`impactbeams.kernels.spring`:
+coordinates kept, the contact phase as the oscillators of `impactbeams.kernels.spring`:
 ``spring = (left, right, modes)`` per geometry and ``drives`` per run, rows
 ``SPRING_MODE_ROWS`` and ``SPRING_DRIVE_ROWS``). In the spring law the contact table has the
 oscillators' frequencies and damping ratios, the contact force weights as ``event`` and zeros in
@@ -44,7 +44,7 @@ the other rows.
 geometry g of a map. ``cells[i]``, columns ``CELL_COLUMNS``: one map cell's parameters and the
 index of its geometry. ``out[i]``, columns ``OUT_COLUMNS``: a dynamics map's observables.
 
-Stroboscopic samples of a long run (:mod:`impactbeams.kernels.stroboscope`): ``samples[k]``,
+Stroboscopic samples of a long run (`impactbeams.kernels.stroboscope`): ``samples[k]``,
 columns ``TIP_COLUMNS``, the tip deflections y1(l1), y2(l2) (m) and velocities (m/s) at the k-th
 sample time; ``summary``, fields ``STROBOSCOPE_COLUMNS``: the run's status, its contact onsets
 and impact episodes that start within the sampled window, and the time (s) the run reached.

@@ -2,11 +2,11 @@
 
 A cell's spring-law run goes one renormalisation interval (forcing period) at a time:
 ``run_events`` from the previous window's end state, then the tangent vector through the
-window's segments (:func:`~impactbeams.kernels.tangent.carry_tangents`), so that memory
+window's segments (`carry_tangents`), so that memory
 depends on the events per window, not on the horizon. Restarting the event search at each
 window changes the run at round-off only (a chaotic run then follows another trajectory of
 the same attractor: the exponent is the same to its statistical error). Plain arrays packed
-per geometry as for :mod:`impactbeams.kernels.observables`; SI units.
+per geometry as for `impactbeams.kernels.observables`; SI units.
 """
 
 import math

@@ -1,13 +1,13 @@
 """Per-cell observables of the full impact dynamics over [0, t_max], for sweeps.
 
-Plain-array interface, packed by :mod:`impactbeams.packing` per geometry g (names in
-:mod:`impactbeams.kernels.layout`): ``tables[g]`` the phase tables of both phases,
+Plain-array interface, packed by `impactbeams.packing` per geometry g (names in
+`impactbeams.kernels.layout`): ``tables[g]`` the phase tables of both phases,
 ``overlaps[g]`` = <Z_m, Y_n>, ``shifts[g]`` the static shifts of both phases (tied law),
 ``spring_left[g]``, ``spring_right[g]``, ``spring_modes[g]`` (spring law; see
-:mod:`impactbeams.kernels.spring`), ``geometry[g]`` with fields ``GEOMETRY``; ``cells[i]`` with
+`impactbeams.kernels.spring`), ``geometry[g]`` with fields ``GEOMETRY``; ``cells[i]`` with
 columns ``CELL_COLUMNS``. Each cell's run inputs come from
-:func:`~impactbeams.kernels.forcing.run_inputs` (as for one simulated run), its observables
-(``OUT_COLUMNS``) from :func:`~impactbeams.kernels.reductions.summarize_run`; a status other
+`run_inputs` (as for one simulated run), its observables
+(``OUT_COLUMNS``) from `summarize_run`; a status other
 than 0 (complete) means they cover [0, t_end] only.
 """
 

@@ -3,8 +3,8 @@
 Work of the force, damping dissipation, peak contact force, and the per-cell summary of a
 dynamics map (impacts, largest force, restitution, contact time).
 
-They use the state machine's propagation (:mod:`impactbeams.kernels.dynamics`); arrays are
-named in :mod:`impactbeams.kernels.layout`.
+They use the state machine's propagation (`impactbeams.kernels.dynamics`); arrays are
+named in `impactbeams.kernels.layout`.
 """
 
 import math

@@ -1,6 +1,6 @@
 """Cheap repeated evaluation of an event function along a certified walk.
 
-A walk (:func:`impactbeams.kernels.events.walk`) evaluates e, e' and e'' at a few dozen points
+A walk (`impactbeams.kernels.events.walk`) evaluates e, e' and e'' at a few dozen points
 per phase. Propagating every mode from the phase's start to each point costs an exponential,
 a sine and a cosine per mode. An undriven mode (``events.split_steady_states`` moves the steady
 states of the others into the event's sinusoid) is instead a rotating complex amplitude,

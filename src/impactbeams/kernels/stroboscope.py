@@ -1,17 +1,17 @@
 """Stroboscopic (Poincare) samples of a long run, in windows of bounded memory.
 
 A long run (hundreds of forcing periods, thousands of phases) is integrated by
-:func:`~impactbeams.kernels.dynamics.run_events` into segment arrays of a fixed capacity.
+`run_events` into segment arrays of a fixed capacity.
 When they are full, the states at the sample times that the recorded segments cover are taken
-in closed form (:func:`~impactbeams.kernels.dynamics.sample_states`), and the run resumes from
+in closed form (`sample_states`), and the run resumes from
 the start of the last free segment that follows a contact of positive length, which reproduces
 the uninterrupted run bit for bit. A cell's memory is the capacity, whatever the horizon.
 
 Per sample: the tip deflections and velocities (``TIP_COLUMNS``, layout); per run, over the
 sampled window ``[t_first, t_max)``: contact onsets and impact episodes (a contact starts a new
 episode unless the free interval since the previous release is shorter than ``separation``,
-the rule of :mod:`impactbeams.trajectory.episodes`), in ``STROBOSCOPE_COLUMNS``. Arrays are
-named in :mod:`impactbeams.kernels.layout`; SI units.
+the rule of `impactbeams.trajectory.episodes`), in ``STROBOSCOPE_COLUMNS``. Arrays are
+named in `impactbeams.kernels.layout`; SI units.
 """
 
 import math

@@ -2,13 +2,13 @@
 
 The state is the free coordinates x = (q, q') of both beams (4 n values; docs/model.md,
 "Long-time dynamics"); time enters only through the forcing. Arrays are named in
-:mod:`impactbeams.kernels.layout`; SI units.
+`impactbeams.kernels.layout`; SI units.
 
 **Within a phase** a tangent vector obeys the phase's modal equations without their drive
 (the drive does not depend on the state), so it is advanced by the same closed-form
-propagation (:func:`~impactbeams.kernels.propagation.advance`, zero drive) in the phase's
+propagation (`advance`, zero drive) in the phase's
 own coordinates: the free modes, or the contact oscillators y of
-:mod:`impactbeams.kernels.spring`. The maps between (q, q') and (y, y') are affine, with
+`impactbeams.kernels.spring`. The maps between (q, q') and (y, y') are affine, with
 linear parts that do not depend on time: ``to_contact`` and ``to_free`` with zero drives
 are those linear parts.
 
@@ -270,7 +270,7 @@ def lyapunov_schedule(forcing_frequency, free_omega, t_max, transient):
 
 @kernel
 def new_tangent(columns, free_omega, batches):
-    """A run's tangent state at t = 0 (see :func:`carry_tangents`)."""
+    """A run's tangent state at t = 0 (see `carry_tangents`)."""
     tangent_q, tangent_v = initial_tangents(columns, free_omega)
     return (tangent_q, tangent_v, np.zeros(2), np.zeros((batches, columns)),
             np.zeros(batches, dtype=np.int64))

@@ -1,8 +1,8 @@
 """Figures drawn from saved Datasets only (no computation happens in plotting code).
 
-:func:`draw` puts one variable of a sweep on a matplotlib Axes, as the dataset's shape asks:
+[`draw`][] puts one variable of a sweep on a matplotlib Axes, as the dataset's shape asks:
 a colour map over two swept axes, a line over one, a bifurcation diagram for samples per
-cell (a ``period`` dimension) over one; :func:`plot_dataset` draws into a file.
+cell (a ``period`` dimension) over one; [`plot_dataset`][] draws into a file.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def plot_dataset(dataset: xr.Dataset, path: str | Path, variable: str | None = N
     """Draw ``dataset`` into the image file ``path`` (format from its extension).
 
     A simulated run without options gets its overview (tips, force, restitution, energy);
-    anything else is drawn by :func:`draw`, whose options these are. Returns its notes.
+    anything else is drawn by [`draw`][], whose options these are. Returns its notes.
     """
     options = values or indices or scale or contours is not None or title is not None
     if "time" in dataset.dims and variable is None and not options:

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactbeams.variables import PARAMETERS, VARIABLES
+from impactbeams.variables import LONG_TIME_VARIABLES, PARAMETERS, VARIABLES
 
 # fixed parameters that say which case a map shows, in this order (others only when sliced)
 _CASE = ("omega", "force_amplitude", "clearance", "uplift1", "uplift2", "damping_ratio")
@@ -98,13 +98,19 @@ def case_title(dataset: xr.Dataset, variable: str, shown: tuple[str, ...]) -> st
             values[str(name)] = (coordinate.item(), coordinate.attrs.get("units", ""))
     parts = [quantity(n, v, u) for n, (v, u) in values.items()
              if not (n in _ZERO_BY_DEFAULT and v == 0)]
-    parts += _run_settings(dataset.attrs, law=variable not in _LAW_FREE)
+    parts += _run_settings(dataset.attrs, law=variable not in _LAW_FREE,
+                           long_time=variable in LONG_TIME_VARIABLES)
     return ", ".join(parts)
 
 
-def _run_settings(attrs: Mapping[str, Any], law: bool) -> list[str]:
+def _run_settings(attrs: Mapping[str, Any], law: bool, long_time: bool) -> list[str]:
+    """The window a variable covers (t_max, or the long run's periods), modes and law."""
     parts = []
-    if "t_max" in attrs:
+    if long_time:  # not over [0, t_max]: over the sampled periods after the transient
+        if "transient_periods" in attrs and "sampled_periods" in attrs:
+            parts.append(f"{attrs['transient_periods']} transient + "
+                         f"{attrs['sampled_periods']} sampled periods")
+    elif "t_max" in attrs:
         parts.append(f"$t_\\max$ = {format_number(float(attrs['t_max']))} s")
     if "n_modes" in attrs:
         parts.append(f"{attrs['n_modes']} modes")

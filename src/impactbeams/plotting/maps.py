@@ -9,6 +9,8 @@ import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.colorbar import Colorbar
+from matplotlib.contour import ContourSet
+from matplotlib.path import Path
 
 from impactbeams.params import ParameterError
 from impactbeams.plotting.labels import axis_label, format_number
@@ -79,5 +81,33 @@ def _contour_lines(axes: Axes, bar: Colorbar, grid: tuple[np.ndarray, np.ndarray
                              f"{vmin:g} to {vmax:g}")
     lines = axes.contour(x, y, np.ma.masked_invalid(values), levels=levels, colors="k",
                          linewidths=0.6)
-    axes.clabel(lines, fmt=format_number, fontsize="x-small")
+    axes.clabel(lines, fmt=format_number, fontsize="x-small", inline_spacing=2,
+                manual=label_positions(axes, lines))
     bar.add_lines(lines)
+
+
+def label_positions(axes: Axes, lines: ContourSet) -> list[tuple[float, float]]:
+    """One label per level, each as far as it can be from the others and the frame.
+
+    Labels placed by default (one per line piece) pile up where levels crowd together, as
+    along Fig. 5a's boundary of the impact region; here each level gets a single label on its
+    longest line (not on a fragment of a jagged boundary), at the point farthest, in axes
+    fractions, from the labels already placed and from the axes' frame. Returns data
+    coordinates (for ``clabel(manual=...)``).
+    """
+    to_fraction = axes.transData + axes.transAxes.inverted()
+    placed: list[np.ndarray] = []
+    positions = []
+    for path in lines.get_paths():
+        if not len(path.vertices):
+            continue
+        starts = np.flatnonzero(path.codes == Path.MOVETO)[1:] if path.codes is not None else []
+        pieces = np.split(to_fraction.transform(path.vertices), starts)
+        points = max(pieces, key=lambda p: np.hypot(*np.diff(p, axis=0).T).sum())
+        clearance = np.min(np.concatenate([points, 1.0 - points], axis=1), axis=1)
+        for label in placed:
+            clearance = np.minimum(clearance, np.hypot(*(points - label).T))
+        best = points[int(np.argmax(clearance))]
+        placed.append(best)
+        positions.append(tuple(to_fraction.inverted().transform(best)))
+    return positions

@@ -42,7 +42,7 @@ class ColourScale:
     """How values become colours: norm, colour map and the colour bar's ticks and labels.
 
     ``categories``: for categorical data, the category values (data are drawn by their
-    index in it, see :meth:`encode`); None otherwise.
+    index in it, see `encode`); None otherwise.
     """
 
     norm: matplotlib.colors.Normalize

@@ -1,4 +1,4 @@
-"""Plots of simulated trajectories (Datasets from :func:`impactbeams.trajectory.simulate`).
+"""Plots of simulated trajectories (Datasets from [`impactbeams.trajectory.simulate`][]).
 
 Everything here reads saved Datasets; nothing is computed but unit scaling and selections.
 """
@@ -14,15 +14,23 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from impactbeams.plotting.files import save_figure
+from impactbeams.plotting.labels import quantity
+from impactbeams.variables import PARAMETERS
 
-_MICRO = 1e6  # m -> um
+_MICRO = 1e6  # m -> µm
 _MILLI = 1e3  # N -> mN, s -> ms
+# the tips in mathtext, as in docs/model.md: y2 is drawn minus the clearance
+_TIP1, _TIP2 = "$y_1(l_1)$", r"$y_2(l_2) - \Delta$"
+
+
+def _parameter(dataset: xr.Dataset, name: str) -> str:
+    """``"$F_0$ = 0.001 N"``: the registry's symbol and units, numbers as on the maps."""
+    return quantity(name, dataset.attrs.get(name, np.nan), PARAMETERS[name].units)
 
 
 def _case(dataset: xr.Dataset) -> str:
-    a = dataset.attrs
-    return (f"F0 = {a.get('force_amplitude', np.nan):g} N, Omega = {a.get('omega', np.nan):g} "
-            f"rad/s, Delta = {a.get('clearance', np.nan):g} m")
+    return ", ".join(_parameter(dataset, name)
+                     for name in ("force_amplitude", "omega", "clearance"))
 
 
 def _law(dataset: xr.Dataset) -> str:
@@ -31,9 +39,9 @@ def _law(dataset: xr.Dataset) -> str:
     modes = f"{a.get('n_modes', '?')} modes"
     if a.get("contact_law") != "spring":
         return f"tied law, {modes}" if "contact_law" in a else modes
-    text = f"spring law, k = {a.get('contact_stiffness', np.nan):.3g} N/m"
+    text = f"spring law, {_parameter(dataset, 'contact_stiffness')}"
     if a.get("contact_damping", 0.0):
-        text += f", c = {a['contact_damping']:g} N s/m"
+        text += f", {_parameter(dataset, 'contact_damping')}"
     resolved = a.get("contact_resolved", 1)
     return f"{text}, {modes}" + ("" if resolved else " (unresolved)")
 
@@ -43,11 +51,11 @@ def _title(dataset: xr.Dataset) -> str:
 
 
 def plot_tips(axis: Axes, dataset: xr.Dataset) -> None:
-    """Tip deflections y1(l1) and y2(l2) - Delta (um) against time (s), as the paper's Fig. 3a."""
+    """Tip deflections y1(l1) and y2(l2) - Delta (µm) against time (s), as the paper's Fig. 3a."""
     t = dataset.time.values
-    axis.plot(t, dataset.tip_deflection_1 * _MICRO, lw=0.7, label="y1(l1)")
-    axis.plot(t, dataset.tip_deflection_2 * _MICRO, lw=0.7, label="y2(l2) - Delta")
-    axis.set_ylabel("tip deflection (um)")
+    axis.plot(t, dataset.tip_deflection_1 * _MICRO, lw=0.7, label=_TIP1)
+    axis.plot(t, dataset.tip_deflection_2 * _MICRO, lw=0.7, label=_TIP2)
+    axis.set_ylabel("tip deflection (µm)")
     axis.legend(loc="upper right", fontsize="small")
 
 
@@ -58,17 +66,17 @@ def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
     t = dataset.time.values
     plot_tips(axes[0], dataset)
     axes[1].plot(t, dataset.contact_force * _MILLI, lw=0.7, color="C3")
-    axes[1].set_ylabel("contact force R (mN)")
+    axes[1].set_ylabel("contact force $R$ (mN)")
     onset = dataset.impact_onset_time.values
     axes[2].plot(onset, dataset.restitution_coefficient, ".", ms=3, color="C2")
     axes[2].axhline(0.0, color="0.6", lw=0.5)
-    axes[2].set_ylabel("restitution e")
+    axes[2].set_ylabel("restitution $e$")
     energy0 = float(dataset.energy[0])
-    axes[3].plot(t, (dataset.energy - energy0) * 1e9, lw=0.7, label="E(t) - E(0)")
+    axes[3].plot(t, (dataset.energy - energy0) * 1e9, lw=0.7, label="$E(t) - E(0)$")
     if "work_of_force" in dataset:
-        axes[3].plot(t, dataset.work_of_force * 1e9, lw=0.7, label="work of F")
+        axes[3].plot(t, dataset.work_of_force * 1e9, lw=0.7, label="work of $F$")
     axes[3].set_ylabel("energy (nJ)")
-    axes[3].set_xlabel("time t (s)")
+    axes[3].set_xlabel("time $t$ (s)")
     axes[3].legend(loc="upper left", fontsize="small")
     axes[0].set_title(f"{_title(dataset)}; status {dataset.attrs.get('status', '?')}")
     save_figure(figure, path)
@@ -80,9 +88,9 @@ def _draw_surface(axis: Axes, dataset: xr.Dataset, beam: str, rows: int) -> None
     x, t = np.meshgrid(dataset["x" + beam].values, dataset.time.values)
     axis.plot_surface(x, t, field.values * _MICRO, cmap="viridis", linewidth=0,
                       rstride=max(1, t.shape[0] // rows), cstride=1)
-    axis.set_xlabel(f"x{beam} (m)")
-    axis.set_ylabel("t (s)")
-    axis.set_zlabel(f"y{beam} (um)")
+    axis.set_xlabel(f"$x_{beam}$ (m)")
+    axis.set_ylabel("$t$ (s)")
+    axis.set_zlabel(f"$y_{beam}$ (µm)")
 
 
 def plot_surfaces(dataset: xr.Dataset, path: str | Path) -> None:
@@ -122,16 +130,16 @@ def plot_paper_fig3(dataset: xr.Dataset, path: str | Path) -> None:
 def _fig3_panels(axes: Sequence[Axes], dataset: xr.Dataset, episodes: bool = False) -> None:
     """The three panels of Fig. 3; ``episodes`` adds the episodes' restitution and peaks."""
     plot_tips(axes[0], dataset)
-    axes[0].set_xlabel("t (s)")
+    axes[0].set_xlabel("$t$ (s)")
     released = np.isfinite(dataset.restitution_coefficient.values)
     axes[1].plot(dataset.impact_onset_time.values[released],
                  dataset.restitution_coefficient.values[released], ".", ms=4 if not episodes
                  else 2, color="C2", label="per contact")
-    axes[1].set_ylabel("restitution e")
+    axes[1].set_ylabel("restitution $e$")
     axes[1].set_xlabel("impact onset time (s)")
     axes[2].plot(dataset.time, dataset.contact_force * _MILLI, lw=0.7, color="C3")
-    axes[2].set_ylabel("impact force R (mN)")
-    axes[2].set_xlabel("t (s)")
+    axes[2].set_ylabel("impact force $R$ (mN)")
+    axes[2].set_xlabel("$t$ (s)")
     if episodes and "episode_restitution" in dataset:
         axes[1].plot(dataset.episode_onset_time, dataset.episode_restitution, "D", ms=5,
                      color="C1", mec="k", mew=0.5, label="per episode")
@@ -205,10 +213,10 @@ def _divergence_panels(axes: Sequence[Axes], datasets: Sequence[xr.Dataset],
         axes[2].semilogy(datasets[0].time, np.maximum(distance * _MICRO, 1e-12), lw=0.4 if
                          len(datasets) > 2 else 0.6, color=f"C{j + 1}" if len(datasets) > 2
                          else "C0", label=f"{label} vs {labels[0]}")
-    axes[0].set_ylabel("(a) y1(l1) (um)")
-    axes[1].set_ylabel("(b) y2(l2) - Delta (um)")
-    axes[2].set_ylabel("|difference of y1(l1)| (um)")
-    axes[2].set_xlabel("t (s)")
+    axes[0].set_ylabel(f"(a) {_TIP1} (µm)")
+    axes[1].set_ylabel(f"(b) {_TIP2} (µm)")
+    axes[2].set_ylabel(f"|difference of {_TIP1}| (µm)")
+    axes[2].set_xlabel("$t$ (s)")
     axes[0].legend(fontsize="small", loc="upper right")
     if len(datasets) > 2:
         axes[2].legend(fontsize="small", loc="lower right")
@@ -241,11 +249,11 @@ def plot_phase_portrait_laws(denses: Sequence[xr.Dataset], sections: Sequence[xr
 
 def _phase_panels(axes: Sequence[Axes], dense: xr.Dataset, section: xr.Dataset) -> None:
     axes[0].plot(dense.tip_deflection_1 * _MICRO, dense.tip_velocity_1 * _MILLI, lw=0.3)
-    axes[0].set_title(f"phase plane, {float(dense.time[0]):g} s <= t <= "
+    axes[0].set_title(f"phase plane, {float(dense.time[0]):g} s ≤ $t$ ≤ "
                       f"{float(dense.time[-1]):g} s")
     axes[1].plot(section.tip_deflection_1 * _MICRO, section.tip_velocity_1 * _MILLI, ".",
                  ms=2)
-    axes[1].set_title(f"Poincare section: {section.time.size} forcing periods")
+    axes[1].set_title(f"Poincaré section: {section.time.size} forcing periods")
     for axis in axes:
-        axis.set_xlabel("y1(l1) (um)")
-        axis.set_ylabel("dy1(l1)/dt (mm/s)")
+        axis.set_xlabel(f"{_TIP1} (µm)")
+        axis.set_ylabel(r"$\dot y_1(l_1)$ (mm/s)")

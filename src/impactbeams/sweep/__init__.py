@@ -1,9 +1,9 @@
 """Parameter sweeps: definitions (TOML), validation, chunked parallel runs that resume.
 
-The data flow, one module each: :mod:`~impactbeams.sweep.definition` (what a sweep is) ->
-:mod:`~impactbeams.sweep.plan` (the kernels' inputs, :func:`compute_chunk`) ->
-:mod:`~impactbeams.sweep.run` (chunks through a runner; :mod:`~impactbeams.sweep.store` keeps
-finished ones for a resume) -> :mod:`~impactbeams.sweep.output` (the map, in memory or streamed
+The data flow, one module each: `definition` (what a sweep is) ->
+`plan` (the kernels' inputs, `compute_chunk`) ->
+`run` (chunks through a runner; `store` keeps
+finished ones for a resume) -> `output` (the map, in memory or streamed
 into netCDF). Importing this package loads NumPy only: xarray, netCDF4 and Numba load on use.
 """
 

@@ -1,9 +1,9 @@
 """Run sweeps on a Dask cluster (``dask.distributed``): one task per chunk, saved as it arrives.
 
-:func:`dask_runner` is a :data:`~impactbeams.sweep.ChunkRunner` for
-:func:`~impactbeams.sweep.run_sweep`: the sweep's plan (the modes of every geometry) is built
+`dask_runner` is a `ChunkRunner` for
+[`run_sweep`][impactbeams.sweep.run_sweep]: the sweep's plan (the modes of every geometry) is built
 once, as a task whose result stays on the cluster, and every pending chunk becomes one task
-computing :func:`~impactbeams.sweep.compute_chunk` with it on a worker; results come back in
+computing `compute_chunk` with it on a worker; results come back in
 the order they finish. The client saves each one at once under ``OUT.nc.partial/`` (as a
 local run does), so an interrupted client loses no finished chunk and the same command
 resumes. A task whose worker dies is rerun elsewhere by the scheduler (up to
@@ -86,14 +86,14 @@ def _release() -> str:
 
 
 def _worker_info() -> tuple[str, int, str]:
-    """(host name, Numba's thread limit, :func:`_release`) of the calling worker process."""
+    """(host name, Numba's thread limit, `_release`) of the calling worker process."""
     import numba
 
     return socket.gethostname(), int(numba.config.NUMBA_NUM_THREADS), _release()
 
 
 def _workers(client: Client) -> dict[str, tuple[str, int, str]]:
-    """:func:`_worker_info` of every connected worker; all must run this client's code.
+    """`_worker_info` of every connected worker; all must run this client's code.
 
     The version alone is not enough: an edited kernel without a version bump would compute
     other numbers on the workers than here.
@@ -139,7 +139,7 @@ def dask_runner(client: Client, threads_per_task: int | None = None,
                 window: int | None = None) -> ChunkRunner:
     """A chunk runner that computes chunks as tasks on the cluster of ``client``.
 
-    ``threads_per_task``: Numba threads per task (default :func:`default_threads_per_task`).
+    ``threads_per_task``: Numba threads per task (default `default_threads_per_task`).
     ``window``: most tasks in flight (default 4 per Dask thread); more are submitted as
     results come in, so a grid of thousands of chunks holds only a window in memory.
     """

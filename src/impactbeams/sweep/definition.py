@@ -1,6 +1,6 @@
 """What a sweep is: its axes, fixed parameters and observables, read and validated from TOML.
 
-A sweep file (names as in :mod:`impactbeams.params`)::
+A sweep file (names as in `impactbeams.params`)::
 
     t_max = 1.0                          # s, horizon of every cell
     n_modes = 5                          # free modes per beam (contact phase: 2 n_modes)
@@ -60,17 +60,20 @@ from impactbeams.preflight import (
     highest_frequency,
     require_memory,
 )
-from impactbeams.variables import PARAMETERS, VARIABLES
+from impactbeams.variables import (
+    LONG_TIME_VARIABLES,
+    PARAMETERS,
+    POINCARE_VARIABLES,
+    VARIABLES,
+)
 
 FIRST_IMPACT = "first_impact_time"
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
 LYAPUNOV = "lyapunov_exponent"  # spring law only; its own windowed run (kernels.lyapunov)
 # the long run's stroboscopic samples (along a trailing dimension "period") and what they give
-POINCARE_OBSERVABLES = ("poincare_deflection1", "poincare_deflection2", "poincare_velocity1",
-                        "poincare_velocity2")
-LONG_TIME_OBSERVABLES = (*POINCARE_OBSERVABLES, "response_period", "steady_impact_rate",
-                         "steady_episode_rate")
+POINCARE_OBSERVABLES = POINCARE_VARIABLES
+LONG_TIME_OBSERVABLES = LONG_TIME_VARIABLES
 OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV, *LONG_TIME_OBSERVABLES)
 # parameters that change a cell but not its geometry (its modes): the packed cell columns
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
@@ -416,7 +419,7 @@ def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = Fa
     """Peak memory and rough wall time of running ``sweep`` on ``threads`` (default: all cores).
 
     Memory: a streamed run (``write_sweep``, what ``impactbeams run`` does) holds a chunk at a
-    time (:func:`chunk_memory`); ``in_memory`` (``run_sweep`` without an output) also holds the
+    time (`chunk_memory`); ``in_memory`` (``run_sweep`` without an output) also holds the
     results (one float64 array of every cell per stored value and the Dataset's copy: 16
     bytes per cell and value, plus 4 for ``impacted`` and its temporaries; the traced peak
     of a first-impact map, netCDF writing included, is 18.04 bytes per cell). Both add the plan

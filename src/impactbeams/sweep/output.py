@@ -1,7 +1,7 @@
 """The map of a sweep: one array per observable over the swept axes, in memory or on disk.
 
-:func:`map_layout` is what both forms hold (coordinates, variables, attributes);
-:func:`map_dataset` builds the in-memory Dataset, :func:`map_file` fills the netCDF file
+`map_layout` is what both forms hold (coordinates, variables, attributes);
+`map_dataset` builds the in-memory Dataset, `map_file` fills the netCDF file
 chunk by chunk, never holding the whole map.
 """
 
@@ -98,7 +98,7 @@ def map_file(sweep: Sweep, path: Path, building: Path,
 
     ``write`` stores the computed values of the flat cells start..stop; each chunk of
     ``chunking`` is one compressed block of the file. On a normal exit the file is renamed to
-    ``path`` (see :func:`impactbeams.io.build_netcdf`).
+    ``path`` (see `impactbeams.io.build_netcdf`).
     """
     with build_netcdf(path, building, map_layout(sweep, chunking.box)) as nc:
         def write(start: int, stop: int, values: Mapping[str, np.ndarray]) -> None:

@@ -1,9 +1,9 @@
-"""A sweep's kernel inputs (the per-geometry plan, a chunk's cells) and :func:`compute_chunk`.
+"""A sweep's kernel inputs (the per-geometry plan, a chunk's cells) and `compute_chunk`.
 
-The grid is flattened in C order; a chunk is a range of flat cells. :class:`Chunking` cuts the
+The grid is flattened in C order; a chunk is a range of flat cells. `Chunking` cuts the
 grid into chunks that are also boxes of the array (whole lines of the last axes), so that a
 chunk's cells are built by broadcasting the axis values, never the whole grid's, and a chunk is
-one compressed block of the netCDF file. Axes over :data:`CELL_PARAMETERS` change a cell's
+one compressed block of the netCDF file. Axes over `CELL_PARAMETERS` change a cell's
 forcing, initial state or damping only; the other axes change the geometry, whose modes are
 computed once per geometry (the plan).
 """
@@ -62,7 +62,7 @@ class Plan:
 
 
 def code_digest(package: Path = Path(__file__).parents[1]) -> str:
-    """Short hash of the :data:`NUMERIC_CODE` files of ``package`` (default: this one).
+    """Short hash of the `NUMERIC_CODE` files of ``package`` (default: this one).
 
     Part of a run's identity next to the sweep's fingerprint: a changed kernel without a new
     version number must not resume from the old code's chunks.
@@ -167,7 +167,7 @@ def _along(values: np.ndarray, axis: int, ndim: int) -> np.ndarray:
 def flat_boxes(start: int, stop: int, shape: tuple[int, ...]) -> Iterator[tuple[slice, ...]]:
     """The boxes (one slice per axis) that tile the flat C-order cells start..stop, in order.
 
-    A range aligned on whole lines (a :class:`Chunking` chunk) is one box; any other range is
+    A range aligned on whole lines (a `Chunking` chunk) is one box; any other range is
     at most ``2 len(shape) - 1`` boxes.
     """
     if len(shape) == 1:
@@ -302,10 +302,10 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     """Observables of the flat cells ``start..stop`` of ``sweep`` (one array per observable).
 
     Self-contained, so that any process (a Dask worker, say) can compute any chunk; pass the
-    sweep's ``plan`` (:func:`build_plan`) to reuse it across chunks. A first-impact-only sweep
+    sweep's ``plan`` (`build_plan`) to reuse it across chunks. A first-impact-only sweep
     runs the free phase alone; any other observable runs the full dynamics of every cell over
     [0, t_max] (and gives the first impact time from it too), except the long-time ones, which
-    run each cell over (transient + sampled) forcing periods (:mod:`impactbeams.longtime`);
+    run each cell over (transient + sampled) forcing periods (`impactbeams.longtime`);
     ``dynamics_status`` is then the worse of the runs'.
     """
     from impactbeams.kernels import first_impact, observables

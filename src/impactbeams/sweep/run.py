@@ -1,9 +1,9 @@
 """Running a sweep: chunks handed to a runner, collected (and saved) as they finish.
 
-A runner (:data:`ChunkRunner`) computes a list of chunks and yields each result as it
-finishes, in any order: :func:`local_runner` in this process, or the Dask runner of
-:mod:`impactbeams.sweep.dask_runner` on a cluster. :func:`write_sweep` streams the results
-into a netCDF file chunk by chunk (saving them for a resume); :func:`run_sweep` returns the
+A runner (`ChunkRunner`) computes a list of chunks and yields each result as it
+finishes, in any order: `local_runner` in this process, or the Dask runner of
+`impactbeams.sweep.dask_runner` on a cluster. `write_sweep` streams the results
+into a netCDF file chunk by chunk (saving them for a resume); [`run_sweep`][] returns the
 map as a Dataset.
 """
 
@@ -114,7 +114,7 @@ MAX_CHUNK_CELLS = 2**24
 
 
 def _chunking(sweep: Sweep, chunk_cells: int | None) -> Chunking:
-    """The chunks of at most ``chunk_cells`` cells (default :func:`default_chunk_cells`)."""
+    """The chunks of at most ``chunk_cells`` cells (default `default_chunk_cells`)."""
     require("chunk_cells", chunk_cells, chunk_cells is None or (
         isinstance(chunk_cells, int) and 1 <= chunk_cells <= MAX_CHUNK_CELLS),
         f"must be an integer from 1 to {MAX_CHUNK_CELLS}")
@@ -128,7 +128,7 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
     """Compute a sweep and return its Dataset; with ``output``, write it as netCDF first.
 
     Without ``output`` the map is computed in memory (a ParameterError if it would not fit).
-    With it, see :func:`write_sweep` (which takes the same arguments); the Dataset returned is
+    With it, see `write_sweep` (which takes the same arguments); the Dataset returned is
     then the file, opened lazily, so that a map larger than memory can be read in parts.
     """
     import xarray as xr
@@ -172,7 +172,7 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
 
     ``threads``: Numba threads during the run (default: as set; restored afterwards).
     ``progress``: draw a progress bar on stderr. ``chunk_cells``: the most cells per chunk
-    (default :func:`default_chunk_cells`), rounded down to whole lines of the last axes (a
+    (default `default_chunk_cells`), rounded down to whole lines of the last axes (a
     resumed run keeps its chunks). ``on_chunk`` is called with each computed chunk number
     (for tests and monitoring). ``runner`` computes the chunks (default :func:`local_runner`;
     see :mod:`impactbeams.sweep.dask_runner` for a Dask cluster); they may finish in any order.

@@ -4,7 +4,7 @@ Each finished chunk is saved at once, atomically, under ``OUT.nc.partial/``, nex
 file being built there; a run that is interrupted (Ctrl-C or a killed process) loses no
 finished chunk, and the same command resumes: it rebuilds the file from the saved chunks and
 computes the others. A run is identified by the sweep's fingerprint and the digest of the code
-that computes it (:func:`~impactbeams.sweep.plan.code_digest`): chunks or finished files of
+that computes it (`code_digest`): chunks or finished files of
 another sweep or of other code are never reused.
 """
 

@@ -1,12 +1,12 @@
 """Full impact dynamics of the two beams: one trajectory as an xarray Dataset.
 
-The data flow, one module each: :mod:`impactbeams.packing` packs the modal model into plain
-arrays; :mod:`~impactbeams.trajectory.phases` runs the event-driven kernel
-(:mod:`impactbeams.kernels.dynamics`) and samples the recorded phase segments;
-:mod:`~impactbeams.trajectory.observables` evaluates tips, gap, force and energies from the
-exact segment states; :mod:`~impactbeams.trajectory.fields` (time series, deflection surfaces)
-and :mod:`~impactbeams.trajectory.impacts` (the per-impact table) reduce them;
-:mod:`~impactbeams.trajectory.simulation` holds :func:`simulate` and builds the Dataset.
+The data flow, one module each: `impactbeams.packing` packs the modal model into plain
+arrays; `phases` runs the event-driven kernel
+(`impactbeams.kernels.dynamics`) and samples the recorded phase segments;
+`observables` evaluates tips, gap, force and energies from the
+exact segment states; `fields` (time series, deflection surfaces)
+and `impacts` (the per-impact table) reduce them;
+`simulation` holds [`simulate`][] and builds the Dataset.
 """
 
 from impactbeams.packing import Packed, pack_run

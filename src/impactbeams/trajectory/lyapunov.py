@@ -2,7 +2,7 @@
 
 The exponents are those of the very trajectory the Dataset holds (docs/model.md, "Lyapunov
 exponents"): tangent vectors carried through every recorded phase
-(:mod:`impactbeams.kernels.tangent`), renormalised every forcing period, their log growth
+(`impactbeams.kernels.tangent`), renormalised every forcing period, their log growth
 averaged over the complete periods after a transient.
 """
 

@@ -69,7 +69,7 @@ def _require_integer(name: str, value: object, low: int, high: float = math.inf)
 
 def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, fields: bool,
                     n_points: int, energy_balance: bool, max_events: int) -> Cost:
-    """Peak memory and rough time of a simulated run (arguments as in :func:`simulate`).
+    """Peak memory and rough time of a simulated run (arguments as in [`simulate`][]).
 
     Memory: the output series (and fields) twice (arrays and Dataset), the workspace of the
     sampling (SAMPLING_ARRAYS float64 arrays of a chunk's times by the coordinates) and the
@@ -112,7 +112,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
             not depend on it beyond round-off; it is here to test that.
         episode_separation: contacts closer than this (s, free interval from release to the
             next onset) form one impact episode; default a quarter period of the slowest free
-            mode (see :mod:`impactbeams.trajectory.episodes`).
+            mode (see `impactbeams.trajectory.episodes`).
         energy_balance: also compute the work of F and the dissipation (``work_of_force``,
             ``damping_dissipation``) and the episodes' dissipated energy and energetic
             restitution: quadratures at the fastest mode's time scale, which with many modes
@@ -124,7 +124,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
             Benettin renormalisation every forcing period; spring law only (docs/model.md).
         transient_periods: forcing periods at the start left out of the exponents' average,
             and before the first stroboscopic sample of ``long_time``.
-        long_time: also the long-time response (:class:`impactbeams.longtime.LongTime`):
+        long_time: also the long-time response ([`impactbeams.longtime.LongTime`][]):
             stroboscopic tip samples ``poincare_deflection1`` ... ``poincare_velocity2``
             along the dimension ``period``, ``response_period``, ``steady_impact_rate`` and
             ``steady_episode_rate`` (with this run's ``episode_separation``). Needs
@@ -134,7 +134,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     own, and the outputs are evaluated from the exact segment states.
 
     Every argument is checked before any work: a bad one, or a run that would not fit in
-    memory (:func:`simulation_cost`), raises :class:`~impactbeams.params.ParameterError` naming
+    memory (`simulation_cost`), raises [`ParameterError`][] naming
     it, its value and what is allowed (docs/limits.md, "Allowed values").
     """
     run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
@@ -193,10 +193,10 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
                     times: np.ndarray | None, n_points: int, max_events: int,
                     search_span: float | None, episode_separation: float | None, fields: bool,
                     energy_balance: bool) -> _RunInputs:
-    """Check every argument of :func:`simulate` (same names) before any work; ParameterError.
+    """Check every argument of [`simulate`][] (same names) before any work; ParameterError.
 
-    The run's modes and horizon (:func:`~impactbeams.preflight.check_run`) and its memory
-    (:func:`simulation_cost`) are checked too, before the output grid is allocated.
+    The run's modes and horizon (`check_run`) and its memory
+    (`simulation_cost`) are checked too, before the output grid is allocated.
     """
     require("params", type(params).__name__, isinstance(params, Params),
             "must be an impactbeams.Params")
