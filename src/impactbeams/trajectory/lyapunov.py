@@ -16,7 +16,7 @@ import numpy as np
 from impactbeams.kernels.layout import FREE, ROW_OMEGA
 from impactbeams.kernels.tangent import interval_count, recorded_run_sums, renormalization_interval
 from impactbeams.packing import Packed
-from impactbeams.params import ParameterError, require
+from impactbeams.params import ParameterError, require, require_integer
 from impactbeams.trajectory.phases import Trajectory
 
 BATCHES = 16  # consecutive groups of periods whose means give the standard error
@@ -46,13 +46,19 @@ def check_request(packed: Packed, count: int, transient_periods: int) -> None:
     dimension = 2 * packed.q0.size
     require("lyapunov", count, isinstance(count, (int, np.integer)) and 0 < count <= dimension,
             f"must be True or a number of exponents from 1 to {dimension} (4 n_modes)")
-    interval = renormalization_interval(float(packed.settings["forcing_frequency"]),
-                                        packed.tables[FREE, ROW_OMEGA])
-    periods = interval_count(float(packed.settings["t_max"]), interval)
-    require("transient_periods", transient_periods,
-            isinstance(transient_periods, (int, np.integer)) and 0 <= transient_periods < periods,
-            f"must be an integer from 0 to {periods - 1} (t_max holds {periods} complete "
-            f"periods of {interval:.6g} s)")
+    forcing = float(packed.settings["forcing_frequency"])
+    interval = renormalization_interval(forcing, packed.tables[FREE, ROW_OMEGA])
+    t_max = float(packed.settings["t_max"])
+    periods = interval_count(t_max, interval)
+    transient = require_integer("transient_periods", transient_periods, 0)
+    what = ("forcing periods 2 pi / omega" if forcing > 0 else
+            "periods of the slowest free mode (omega = 0)")
+    fewer = f", or transient_periods <= {periods - 1}" if periods else ""
+    require("t_max", t_max, transient < periods,
+            f"the exponents average over the complete {what} of {interval:.6g} s after "
+            f"transient_periods = {transient}, and t_max holds {periods} of them: need t_max >= "
+            f"(transient_periods + 1) x {interval:.6g} s = {(transient + 1) * interval:.6g} s"
+            f"{fewer}")
 
 
 def lyapunov_exponents(packed: Packed, trajectory: Trajectory, count: int,
