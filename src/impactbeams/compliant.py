@@ -143,10 +143,7 @@ def rank_one_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
     n = active.size
     sigma, gap = np.empty(n), np.empty((n, n))  # gap[i, j] = d_j^2 - sigma_i^2
     for i in range(n):
-        delta, sigma[i], work, info = scipy.linalg.lapack.dlasd4(i, da, za, 1.0)
-        if info != 0:
-            raise ArithmeticError(f"dlasd4 failed (info {info}) on contact mode {i}")
-        gap[i] = delta * work
+        sigma[i], gap[i] = _secular_root(i, da, za)
     # Loewner: the weights for which the computed roots are exact
     corrected = np.empty(n)
     for j in range(n):  # d_i^2 - d_j^2 as a product: no cancellation for close frequencies
@@ -165,6 +162,24 @@ def rank_one_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
     full = np.empty((m, m))
     full[order] = modes[:, arrange]
     return frequencies[arrange], full
+
+
+def _secular_root(i: int, d: np.ndarray, z: np.ndarray) -> tuple[float, np.ndarray]:
+    """Root ``i`` of the rank-one update's secular equation (LAPACK's dlasd4): sigma_i and
+    d_j^2 - sigma_i^2 for every j.
+
+    A root that does not converge is solved again on the problem scaled to d <= 1 (the
+    iteration's stopping test has an absolute part: seen for the last root of a stiff contact
+    on a beam whose modes reach 4e11 rad/s); roots that converge are left exactly as they are.
+    """
+    delta, sigma, work, info = scipy.linalg.lapack.dlasd4(i, d, z, 1.0)
+    if info != 0:
+        scale = d[-1]
+        delta, sigma, work, info = scipy.linalg.lapack.dlasd4(i, d / scale, z / scale, 1.0)
+        delta, sigma, work = delta * scale, sigma * scale, work * scale
+    if info != 0:
+        raise ArithmeticError(f"dlasd4 failed (info {info}) on contact mode {i}")
+    return sigma, delta * work
 
 
 def _undamped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
