@@ -268,7 +268,7 @@ def _overdamped(modes: Callable[[float], object], damping: float, damping_ratio:
         low, high = (middle, high) if modes(middle) is not None else (low, middle)
     return ParameterError(f"contact_damping = {damping!r} is not allowed: {law}, it overdamps "
                           "the contact phase (a mode pair with real eigenvalues); at most "
-                          f"{low:.3g} N s/m keeps every contact mode oscillating")
+                          f"about {low:.3g} N s/m keeps every contact mode oscillating")
 
 
 def required_modes(params: Params) -> int:

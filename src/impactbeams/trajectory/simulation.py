@@ -152,10 +152,10 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         warnings.warn(f"n_modes = {n_modes} does not resolve the spring contact of stiffness "
                       f"{params.contact_stiffness:g} N/m: use n_modes >= {resolution} "
                       "(docs/model.md, Resolution)", RuntimeWarning, stacklevel=2)
+    if lyapunov:
+        check_request(params, n_modes, t_max, lyapunov, transient_periods)
     out_times = run_inputs.times
     packed = pack_run(params, n_modes, t_max, run_inputs.search_span)
-    if lyapunov:
-        check_request(packed, lyapunov, transient_periods)
     trajectory = run(packed, run_inputs.max_events)
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
