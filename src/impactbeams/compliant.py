@@ -165,9 +165,9 @@ def rank_one_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
 
 
 def _secular_root(i: int, d: np.ndarray, z: np.ndarray) -> tuple[float, np.ndarray]:
-    """Root ``i`` of the rank-one update's secular equation (LAPACK's dlasd4): sigma_i and
-    d_j^2 - sigma_i^2 for every j.
+    """Root ``i`` of the rank-one update's secular equation (LAPACK's dlasd4).
 
+    Returns sigma_i and d_j^2 - sigma_i^2 for every j.
     A root that does not converge is solved again on the problem scaled to d <= 1 (the
     iteration's stopping test has an absolute part: seen for the last root of a stiff contact
     on a beam whose modes reach 4e11 rad/s); roots that converge are left exactly as they are.
@@ -193,8 +193,9 @@ def _undamped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
 
 def _damped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
                   damping_matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """Complex modes of (q, q')' = [[0, I], [-K, -C]] (q, q'), balanced; None if a mode pair
-    is overdamped (real eigenvalues).
+    """Complex modes of (q, q')' = [[0, I], [-K, -C]] (q, q'), balanced.
+
+    None if a mode pair is overdamped (real eigenvalues).
 
     Solved in the undamped modes p = V^T q with the scaled state s = (Omega p, p'), where the
     first-order matrix [[0, Omega], [-Omega, -V^T C V]] has entries of one size.

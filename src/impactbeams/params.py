@@ -83,8 +83,10 @@ def require(name: str, value: Any, condition: bool, allowed: str, unit: str = ""
 
 
 def require_type(name: str, value: Any, condition: bool, allowed: str) -> None:
-    """Raise ArgumentTypeError naming the argument, the value given, its type and what is
-    allowed (``allowed`` completes "must be ...")."""
+    """Raise ArgumentTypeError naming the argument, the value given, its type and what is allowed.
+
+    ``allowed`` completes "must be ...".
+    """
     if not condition:
         raise ArgumentTypeError(f"{name} = {reprlib.repr(value)} ({type(value).__name__}) is "
                                 f"not allowed: must be {allowed}")
@@ -101,8 +103,10 @@ def is_integer(value: Any) -> bool:
 
 
 def require_integer(name: str, value: Any, low: int, high: float = math.inf) -> int:
-    """Return ``value`` as an int, or raise ParameterError unless it is an integer from
-    ``low`` to ``high``."""
+    """Return ``value`` as an int if it is an integer from ``low`` to ``high``.
+
+    Otherwise raise ParameterError.
+    """
     allowed = f"from {low} to {high}" if math.isfinite(high) else f">= {low}"
     require(name, value, is_integer(value) and low <= value <= high,
             f"must be an integer {allowed}")

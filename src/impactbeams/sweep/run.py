@@ -126,18 +126,18 @@ def _check_options(output: object, threads: object, chunk_cells: object,
     require_type("output", output, output is None or is_path(output),
                  "None or the path of a netCDF file (str or pathlib.Path)")
     for name, value in (("threads", threads), ("chunk_cells", chunk_cells)):
-        require_type(name, value, value is None or is_integer(value) and not isinstance(
-            value, np.integer), "None or an int")
+        python_int = is_integer(value) and not isinstance(value, np.integer)
+        require_type(name, value, value is None or python_int, "None or an int")
     for name, value in callbacks.items():
         require_type(name, value, value is None or callable(value), "None or a function")
     for name, value in switches.items():
         require_type(name, value, isinstance(value, (bool, np.bool_)), "True or False")
 
 
-def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None, threads: int | None = None,
-              progress: bool = False, parallel: bool = True, chunk_cells: int | None = None,
-              on_chunk: Callable[[int], None] | None = None, runner: ChunkRunner | None = None,
-              discard_corrupt: bool = False) -> xr.Dataset:
+def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
+              threads: int | None = None, progress: bool = False, parallel: bool = True,
+              chunk_cells: int | None = None, on_chunk: Callable[[int], None] | None = None,
+              runner: ChunkRunner | None = None, discard_corrupt: bool = False) -> xr.Dataset:
     """Compute a sweep and return its Dataset; with ``output``, write it as netCDF first.
 
     Without ``output`` the map is computed in memory (a ParameterError if it would not fit).

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 import warnings
 
 import numpy as np
@@ -241,8 +240,10 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
 
 def _check_options(fields: bool, energy_balance: bool, lyapunov: bool | int,
                    transient_periods: int, long_time: LongTime | None) -> None:
-    """Check the types of :func:`simulate`'s options (same names), and that a transient is
-    left out of something."""
+    """Check the types of :func:`simulate`'s options (same names).
+
+    A transient must be left out of something: the exponents or the long-time samples.
+    """
     for name, value in (("fields", fields), ("energy_balance", energy_balance)):
         require_type(name, value, isinstance(value, (bool, np.bool_)), "True or False")
     require_type("lyapunov", lyapunov, isinstance(lyapunov, (bool, np.bool_))
