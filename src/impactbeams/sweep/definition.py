@@ -5,7 +5,7 @@ A sweep file (names as in :mod:`impactbeams.params`)::
     t_max = 1.0                          # s, horizon of every cell
     n_modes = 5                          # free modes per beam (contact phase: 2 n_modes)
     observables = ["first_impact_time"]  # default
-    transient_periods = 0                # forcing periods left out of long-time observables
+    transient_periods = 0                # forcing periods left out (Lyapunov, long-time only)
     sampled_periods = 200                # stroboscopic samples (long-time observables only)
     period_tolerance = 1e-4              # of the period detection (module longtime)
     max_period = 16
