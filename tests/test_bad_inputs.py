@@ -264,6 +264,10 @@ CASES = {
         ["run", "s.toml"], {"s.toml": sweep_file(top="transient_periods = 20")},
         ["transient_periods in s.toml = 20 is not allowed: only lyapunov_exponent, "
          "poincare_deflection1", "observables here: first_impact_time"]),
+    "sweep-observables-twice": (
+        ["run", "s.toml"],
+        {"s.toml": sweep_file(top='observables = ["first_impact_time", "first_impact_time"]')},
+        ["observables in s.toml = ['first_impact_time', 'first_impact_time']", "once"]),
     "sweep-material-list": (["run", "s.toml"], {"s.toml": sweep_file(params='E1 = ["x"]')},
                             ["E1 = ['x']", "finite real number"]),
     "modes-params-rho1-empty-list": (["modes", "--params", "p.toml"],
@@ -601,7 +605,7 @@ def _public_calls():
         "run_sweep-sweep": (lambda: ib.run_sweep(5), "sweep = 5 (int) is not allowed: must be "
                             "a Sweep (load_sweep, sweep_from_mapping) or the path of a sweep"),
         "run_sweep-threads": (lambda: ib.run_sweep(fig5a, threads="2"),
-                              "threads = '2' (str) is not allowed: must be None or an int"),
+                              "threads = '2' (str) is not allowed: must be None or an integer"),
         "run_sweep-output": (lambda: ib.run_sweep(fig5a, output=3), "output = 3 (int)"),
         "run_sweep-progress": (lambda: ib.run_sweep(fig5a, progress="yes"),
                                "progress = 'yes' (str) is not allowed: must be True or False"),

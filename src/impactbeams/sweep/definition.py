@@ -291,6 +291,7 @@ def _observables(value: Any, source: str) -> tuple[str, ...]:
     for name in value:
         require(where, name, name in OBSERVABLES,
                 f"unknown observable; allowed: {', '.join(OBSERVABLES)}")
+    require(where, value, len(set(value)) == len(value), "must name each observable once")
     return tuple(value)
 
 

@@ -120,14 +120,15 @@ def _chunking(sweep: Sweep, chunk_cells: int | None) -> Chunking:
     return Chunking.at_most(sweep.shape, chunk_cells or default_chunk_cells(sweep))
 
 
-def _check_options(output: object, threads: object, chunk_cells: object,
-                   callbacks: Mapping[str, object], switches: Mapping[str, object]) -> None:
-    """The types of run_sweep's and write_sweep's options (their values are checked on use)."""
+def _check_options(output: object, threads: object, callbacks: Mapping[str, object],
+                   switches: Mapping[str, object]) -> None:
+    """The types of run_sweep's and write_sweep's options.
+
+    Their values are checked on use; chunk_cells, type and value, by :func:`_chunking`.
+    """
     require_type("output", output, output is None or is_path(output),
                  "None or the path of a netCDF file (str or pathlib.Path)")
-    for name, value in (("threads", threads), ("chunk_cells", chunk_cells)):
-        python_int = is_integer(value) and not isinstance(value, np.integer)
-        require_type(name, value, value is None or python_int, "None or an int")
+    require_type("threads", threads, threads is None or is_integer(threads), "None or an integer")
     for name, value in callbacks.items():
         require_type(name, value, value is None or callable(value), "None or a function")
     for name, value in switches.items():
@@ -148,7 +149,7 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
     import xarray as xr
 
     sweep = as_sweep(sweep)
-    _check_options(output, threads, chunk_cells, {"on_chunk": on_chunk, "runner": runner},
+    _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
 
@@ -199,7 +200,7 @@ def write_sweep(sweep: Sweep | str | Path, output: str | Path, threads: int | No
     sweep = as_sweep(sweep)
     require_type("output", output, is_path(output), "the path of a netCDF file (str or "
                  "pathlib.Path)")
-    _check_options(output, threads, chunk_cells, {"on_chunk": on_chunk, "runner": runner},
+    _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
     output = Path(output)
