@@ -25,7 +25,7 @@ import numpy as np
 from numpy.polynomial.legendre import leggauss
 
 from impactbeams.modes import BeamShapes, ContactModes, FreeModes, contact_modes, free_modes
-from impactbeams.params import MAX_MODES, Params, require_integer, require_type
+from impactbeams.params import Params, require_integer, require_type
 
 _GAUSS_ORDER = 12
 
@@ -127,7 +127,7 @@ class ModalModel:
 
 def _checked(params: Params, n_modes: int) -> int:
     """``n_modes`` as an int, once both arguments are checked (ParameterError, TypeError)."""
-    n = require_integer("n_modes", n_modes, 1, MAX_MODES)
+    n = require_integer("n_modes", n_modes, 1)
     require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
     return n
 
