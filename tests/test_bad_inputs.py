@@ -26,6 +26,7 @@ from impactbeams.trajectory import simulate
 GOOD = ('t_max = 0.3\nn_modes = 4\n[params]\nclearance = 1.1e-5\n'
         '[axes.omega]\nmin = 50.0\nmax = 200.0\nnum = 2\n')
 OMEGA_AXIS = "[axes.omega]\nmin = 10.0\nmax = 400.0\nnum = 3\n"
+FORCE_AXIS = "[axes.force_amplitude]\nmin = 1e-4\nmax = 1e-3\nnum = 3\n"
 
 
 def sweep_file(top="", params="", axes=OMEGA_AXIS):
@@ -249,6 +250,52 @@ CASES = {
     "sweep-E1-axis": (["run", "s.toml"], {"s.toml": sweep_file(axes=axis("E1", 1e9, 1e20, 3))},
                       ["axis 'E1'", "E1 = 1e+20"]),
     "sweep-syntax": (["run", "s.toml"], {"s.toml": "t_max = \n"}, ["s.toml is not valid TOML"]),
+    # --- issue 20: tracebacks, unclear and silent cases
+    "sweep-t-max-1e9-fixed-omega": (
+        ["run", "s.toml"], {"s.toml": sweep_file(params="omega = 50.0", axes=FORCE_AXIS).replace(
+            "t_max = 0.3", "t_max = 1e9")},
+        ["at every grid point of s.toml: t_max = 1000000000.0", "t_max <= "]),
+    "sweep-transient-1e9-fixed-omega": (
+        ["run", "s.toml"], {"s.toml": sweep_file(
+            top='observables = ["response_period"]\ntransient_periods = 1000000000',
+            params="omega = 50.0", axes=FORCE_AXIS)},
+        ["at every grid point of s.toml: transient_periods + sampled_periods", "fewer periods"]),
+    "sweep-transient-first-impact": (
+        ["run", "s.toml"], {"s.toml": sweep_file(top="transient_periods = 20")},
+        ["transient_periods in s.toml = 20 is not allowed: only lyapunov_exponent, "
+         "poincare_deflection1", "observables here: first_impact_time"]),
+    "sweep-observables-twice": (
+        ["run", "s.toml"],
+        {"s.toml": sweep_file(top='observables = ["first_impact_time", "first_impact_time"]')},
+        ["observables in s.toml = ['first_impact_time', 'first_impact_time']", "once"]),
+    "sweep-material-list": (["run", "s.toml"], {"s.toml": sweep_file(params='E1 = ["x"]')},
+                            ["E1 = ['x']", "finite real number"]),
+    "modes-params-rho1-empty-list": (["modes", "--params", "p.toml"],
+                                     {"p.toml": "[params]\nrho1 = []\n"},
+                                     ["rho1 = [] is not allowed: must be a finite real number"]),
+    "modes-params-width1-list": (["modes", "--params", "p.toml"],
+                                 {"p.toml": '[params]\nwidth1 = ["x"]\n'}, ["width1 = ['x']"]),
+    "modes-params-thickness1-list": (["modes", "--params", "p.toml"],
+                                     {"p.toml": "[params]\nthickness1 = [1, 2]\n"},
+                                     ["thickness1 = [1, 2]"]),
+    "simulate-lyapunov-t-max-short": (
+        ["simulate", "--t-max", "0.05", "--lyapunov", "1", "--transient-periods", "100", "-o",
+         "r.nc"], {},
+        ["t_max = 0.05 is not allowed", "forcing periods 2 pi / omega of 0.125664 s",
+         "t_max holds 0 of them", "t_max >= (transient_periods + 1) x 0.125664 s = 12.692 s"]),
+    "simulate-lyapunov-transient-long": (
+        ["simulate", "--t-max", "1", "--lyapunov", "1", "--transient-periods", "100", "-o",
+         "r.nc"], {}, ["t_max holds 7 of them", "or transient_periods <= 6"]),
+    "simulate-transient-alone": (["simulate", "--t-max", "0.05", "--transient-periods", "3", "-o",
+                                  "r.nc"], {}, ["transient_periods = 3", "this run has neither"]),
+    "simulate-contact-damping-overdamped": (
+        ["simulate", "--t-max", "0.05", "--contact-damping", "1e6", "--contact-stiffness", "1e4",
+         "-o", "r.nc"], {},
+        ["contact_damping = 1000000.0 is not allowed: with contact_stiffness = 10000 N/m",
+         "at most about 1.35 N s/m"]),
+    "run-chunk-cells-1e9": (["run", "ok.toml", "--chunk-cells", "1000000000"], {},
+                            ["argument --chunk-cells: 1000000000 is not allowed: must be an "
+                             "integer from 1 to 16777216"]),
     # --- plot: the input file, the figure's path
     "plot-folder": (["plot", ".", "-o", "x.png"], {}, ["input file '.' is a folder"]),
     "plot-missing": (["plot", "missing.nc", "-o", "x.png"], {},
@@ -563,3 +610,145 @@ def test_simulation_memory_estimate_bounds_the_measured_peak(tmp_path, n_modes, 
     estimate = simulation_cost(params, t_max, n_modes, ds.time.size, fields, 41, False,
                                5000).memory
     assert peak <= estimate <= 3 * peak
+
+
+def _public_calls():
+    """(call, fragments of its message) for bad arguments of the public functions."""
+    import impactbeams as ib
+    from impactbeams.sweep import write_sweep
+
+    fig5a = "sweeps/fig5a-omega-force.toml"
+    return {
+        "run_sweep-sweep": (lambda: ib.run_sweep(5), "sweep = 5 (int) is not allowed: must be "
+                            "a Sweep (load_sweep, sweep_from_mapping) or the path of a sweep"),
+        "run_sweep-threads": (lambda: ib.run_sweep(fig5a, threads="2"),
+                              "threads = '2' (str) is not allowed: must be None or an integer"),
+        "run_sweep-output": (lambda: ib.run_sweep(fig5a, output=3), "output = 3 (int)"),
+        "run_sweep-progress": (lambda: ib.run_sweep(fig5a, progress="yes"),
+                               "progress = 'yes' (str) is not allowed: must be True or False"),
+        "run_sweep-on_chunk": (lambda: ib.run_sweep(fig5a, on_chunk=3),
+                               "on_chunk = 3 (int) is not allowed: must be None or a function"),
+        "write_sweep-output": (lambda: write_sweep(fig5a, None),
+                               "output = None (NoneType) is not allowed"),
+        "write_sweep-runner": (lambda: write_sweep(fig5a, "x.nc", runner="local"),
+                               "runner = 'local' (str)"),
+        "load_sweep-path": (lambda: ib.load_sweep(None), "path = None (NoneType) is not "
+                            "allowed: must be the path of a TOML file"),
+        "sweep_from_mapping-data": (lambda: sweep_from_mapping("t_max = 1"),
+                                    "data = 't_max = 1' (str) is not allowed: must be a mapping"),
+        "sweep_from_mapping-source": (lambda: sweep_from_mapping({}, source=3),
+                                      "source = 3 (int)"),
+        "Params-contact_law": (lambda: Params(contact_law=np.array(["tied"])),
+                               "contact_law = array(['tied']"),
+        "Params-l1": (lambda: Params(l1=[0.1]), "l1 = [0.1] is not allowed: must be a finite"),
+        "Params.replace-rho1": (lambda: Params().replace(rho1=[]), "rho1 = []"),
+        "Params.from_mapping": (lambda: Params.from_mapping([("l1", 0.1)]),
+                                "mapping = [('l1', 0.1)] (list) is not allowed"),
+        "Params.from_toml": (lambda: Params.from_toml(5), "path = 5 (int)"),
+        "build_model-params": (lambda: ib.build_model(None, 3),
+                               "params = None (NoneType) is not allowed: must be an "
+                               "impactbeams.Params"),
+        "build_model-n_modes": (lambda: ib.build_model(Params(), 3.0),
+                                "n_modes = 3.0 is not allowed: must be an integer >= 1"),
+        "build_free_phase-n_modes": (lambda: ib.build_free_phase(Params(), True),
+                                     "n_modes = True"),
+        "LongTime-sampled_periods": (lambda: ib.LongTime(sampled_periods="3"),
+                                     "sampled_periods = '3'"),
+        "simulate-params": (lambda: simulate({"l1": 0.1}, 1.0), "params = {'l1': 0.1} (dict)"),
+        "simulate-fields": (lambda: simulate(Params(), 0.1, fields="yes"), "fields = 'yes'"),
+        "simulate-times": (lambda: simulate(Params(), 0.1, times=["a"]),
+                           "times = ['a'] (list) is not allowed: must be an array of output"),
+        "simulate-lyapunov": (lambda: simulate(Params(), 0.1, lyapunov="1"),
+                              "lyapunov = '1' (str)"),
+        "simulate-long_time": (lambda: simulate(Params(), 0.1, long_time=5),
+                               "long_time = 5 (int) is not allowed: must be None or an "
+                               "impactbeams.LongTime"),
+        "simulate-transient_periods": (lambda: simulate(Params(), 0.1, transient_periods=2.5),
+                                       "transient_periods = 2.5"),
+        "plot_dataset-dataset": (lambda: ib.plot_dataset(5, "x.png"),
+                                 "dataset = 5 (int) is not allowed: must be an xarray.Dataset"),
+        "plot_dataset-dpi": (lambda: ib.plot_dataset(xr.Dataset(), "x.png", dpi=-1),
+                             "dpi = -1"),
+    }
+
+
+@pytest.mark.parametrize("name", sorted(_public_calls()))
+def test_public_functions_check_their_arguments(name, monkeypatch):
+    """One clear error, a TypeError or a ParameterError, naming the argument and its value;
+    before any work (nothing computed, no file)."""
+    monkeypatch.chdir(__import__("pathlib").Path(__file__).parents[1])
+    call, fragment = _public_calls()[name]
+    with pytest.raises((TypeError, ParameterError)) as error:
+        call()
+    assert fragment in str(error.value)
+    assert isinstance(error.value, ParameterError)  # the command line reports it in one line
+
+
+def test_the_public_functions_all_check_their_arguments():
+    import impactbeams
+
+    called = {name.split("-")[0].split(".")[0] for name in _public_calls()}
+    functions = set(impactbeams.__all__) - {"ParameterError", "__version__"}
+    assert functions <= called | {"write_sweep", "sweep_from_mapping"}, functions - called
+
+
+def test_run_sweep_and_write_sweep_take_a_path(tmp_path):
+    path = tmp_path / "tiny.toml"
+    path.write_text(GOOD)
+    from impactbeams.sweep import run_sweep, write_sweep
+
+    expected = run_sweep(load_sweep(path))
+    xr.testing.assert_identical(run_sweep(str(path)), expected)
+    assert write_sweep(path, tmp_path / "tiny.nc") is True
+    with xr.open_dataset(tmp_path / "tiny.nc") as written:
+        np.testing.assert_array_equal(written.first_impact_time, expected.first_impact_time)
+
+
+def test_numpy_scalars_in_a_sweep_mapping_are_python_numbers():
+    """The definition is hashed as JSON: a NumPy scalar must not break the fingerprint."""
+    sweep = sweep_from_mapping({"n_modes": np.int64(4), "params": {"clearance": np.float32(2e-5)},
+                                "axes": {"omega": {"min": 50.0, "max": 60.0,
+                                                   "num": np.int32(2)}}})
+    assert sweep.fingerprint() == sweep_from_mapping({"n_modes": 4, "params": {
+        "clearance": float(np.float32(2e-5))}, "axes": {"omega": {"min": 50.0, "max": 60.0,
+                                                                  "num": 2}}}).fingerprint()
+
+
+def test_the_largest_contact_damping_named_is_the_limit():
+    """The refusal's "at most about C" is the threshold: C / 1.01 oscillates, 1.01 C does not
+    (it is found to 0.1 % and printed to 3 digits)."""
+    import re
+
+    from impactbeams.compliant import spring_contact
+    from impactbeams.model import build_free_phase
+
+    params = Params(contact_stiffness=1e4, damping_ratio=0.01)
+    free = build_free_phase(params, 8)
+
+    def contact(damping):
+        return spring_contact(free, params.tip_compliance, 0.01, 1e4, damping)
+
+    with pytest.raises(ParameterError) as error:
+        contact(1e6)
+    limit = float(re.search(r"at most about (\S+) N s/m", str(error.value)).group(1))
+    contact(limit / 1.01)
+    with pytest.raises(ParameterError, match="contact_damping"):
+        contact(limit * 1.01)
+
+
+def test_a_stiff_contact_on_a_light_beam_has_its_modes():
+    """A light beam 2 (modes to 4e11 rad/s): LAPACK's dlasd4 did not converge on the last
+    contact root (a traceback in `modes`); solved again scaled, it agrees with a dense
+    eigensolver to 1e-13 (the top root: dense solvers are accurate there)."""
+    from impactbeams.compliant import rank_one_modes, recommended_modes, residual_flexibilities
+    from impactbeams.model import build_free_phase
+
+    params = Params(EI2=1e-3, rhoA2=2e-14)
+    free = build_free_phase(params, recommended_modes(params))
+    residual = sum(residual_flexibilities(free, params.tip_compliance))
+    stiffness = params.contact_stiffness / (1 + params.contact_stiffness * residual)
+    weights = free.tip1 - free.tip2
+    frequencies, _ = rank_one_modes(free.omega, stiffness, weights)
+    dense = np.sqrt(np.linalg.eigvalsh(np.diag(free.omega**2)
+                                       + stiffness * np.outer(weights, weights)))
+    assert frequencies[-1] == pytest.approx(dense[-1], rel=1e-13)

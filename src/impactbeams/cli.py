@@ -336,6 +336,7 @@ def _attach_negative_values(argv: Sequence[str]) -> list[str]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``impactbeams`` argument parser with all subcommands."""
+    from impactbeams.sweep.run import MAX_CHUNK_CELLS  # NumPy only, loaded already
     parser = _Parser(prog="impactbeams", description=__doc__.split("\n")[0])
     commands = parser.add_subparsers(dest="command", required=True)
     modes = commands.add_parser("modes", help="print natural frequencies of both phases (rad/s)")
@@ -375,7 +376,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--threads", type=_POSITIVE_INTEGER,
                      help="Numba threads (default: all cores); on a cluster, per task "
                      "(default: cores per host / Dask threads per host)")
-    run.add_argument("--chunk-cells", type=_POSITIVE_INTEGER,
+    run.add_argument("--chunk-cells", type=_integer_from(1, MAX_CHUNK_CELLS),
                      help="most cells per chunk, rounded down to whole lines of the last "
                      "axes (default: 2^20 for a first-impact map, 2^16 for full dynamics)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from impactbeams.kernels import layout
-from impactbeams.params import require
+from impactbeams.params import is_integer, is_real, require
 
 DEFAULT_PERIOD_TOLERANCE = 1e-4
 LARGEST_MAX_PERIOD = 16  # the default max_period, when the samples allow it
@@ -54,19 +54,22 @@ class LongTime:
 
     def __post_init__(self) -> None:
         require("sampled_periods", self.sampled_periods,
-                _is_int(self.sampled_periods) and self.sampled_periods >= 2,
+                is_integer(self.sampled_periods) and self.sampled_periods >= 2,
                 "must be an integer >= 2")
         tolerance = self.period_tolerance
-        require("period_tolerance", tolerance, isinstance(tolerance, (int, float))
-                and not isinstance(tolerance, bool) and 0.0 < tolerance < 1.0,
+        require("period_tolerance", tolerance, is_real(tolerance) and 0.0 < tolerance < 1.0,
                 "must be a number between 0 and 1 (relative to the samples' scale)")
         if self.max_period is None:
             object.__setattr__(self, "max_period",
                                min(LARGEST_MAX_PERIOD, self.sampled_periods // 2))
-        require("max_period", self.max_period, _is_int(self.max_period)
+        require("max_period", self.max_period, is_integer(self.max_period)
                 and 1 <= self.max_period <= self.sampled_periods // 2,
                 f"must be an integer from 1 to sampled_periods // 2 = "
                 f"{self.sampled_periods // 2}")
+        # Python numbers: a sweep's definition holding them is hashed as JSON
+        for name, kind in (("sampled_periods", int), ("period_tolerance", float),
+                           ("max_period", int)):
+            object.__setattr__(self, name, kind(getattr(self, name)))
 
     def forcing_period(self, omega: float | np.ndarray) -> float | np.ndarray:
         """T = 2 pi / Omega (s); Omega in rad/s, > 0."""
@@ -88,10 +91,6 @@ class LongTime:
     def period_numbers(self, transient_periods: int) -> np.ndarray:
         """Forcing periods from t = 0 to each sample: the ``period`` coordinate."""
         return transient_periods + np.arange(self.sampled_periods)
-
-
-def _is_int(value: object) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def response_period(deflection1: np.ndarray, deflection2: np.ndarray, velocity1: np.ndarray,

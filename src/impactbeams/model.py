@@ -25,7 +25,7 @@ import numpy as np
 from numpy.polynomial.legendre import leggauss
 
 from impactbeams.modes import BeamShapes, ContactModes, FreeModes, contact_modes, free_modes
-from impactbeams.params import Params
+from impactbeams.params import Params, require_integer, require_type
 
 _GAUSS_ORDER = 12
 
@@ -77,7 +77,7 @@ class FreePhase:
 
 def build_free_phase(params: Params, n_modes: int) -> FreePhase:
     """Free-phase modal data with ``n_modes`` cantilever modes per beam."""
-    n = _check_n_modes(n_modes)
+    n = _checked(params, n_modes)
     p = params
     c1, c2 = p.tip_compliance
     beam1 = free_modes(p.EI1, p.rhoA1, p.l1, n)
@@ -125,10 +125,11 @@ class ModalModel:
     contact_drive: np.ndarray
 
 
-def _check_n_modes(n_modes: int) -> int:
-    if not isinstance(n_modes, (int, np.integer)) or isinstance(n_modes, bool) or n_modes < 1:
-        raise ValueError(f"n_modes = {n_modes!r} is not allowed: must be an integer >= 1")
-    return int(n_modes)
+def _checked(params: Params, n_modes: int) -> int:
+    """``n_modes`` as an int, once both arguments are checked (ParameterError, TypeError)."""
+    n = require_integer("n_modes", n_modes, 1)
+    require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
+    return n
 
 
 def _free_on_beam(shapes: BeamShapes, n_before: int, n_after: int, x: np.ndarray) -> np.ndarray:

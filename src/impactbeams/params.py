@@ -31,6 +31,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import reprlib
 import tomllib
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -56,6 +58,14 @@ class ParameterError(ValueError):
     """A model or run parameter has a value that is not allowed."""
 
 
+class ArgumentTypeError(ParameterError, TypeError):
+    """An argument of a public function has a type that is not allowed.
+
+    A TypeError, as Python expects, and a ParameterError, so that a caller (the command line)
+    that reports refused inputs in one line reports this one too.
+    """
+
+
 def _strip_stiffness(material: Mapping[str, Any]) -> tuple[Any, Any]:
     """Return (EI, rhoA) of a rectangular strip from E, rho, width, thickness (floats or arrays)."""
     E, rho, b, h = (material[k] for k in MATERIAL_KEYS)
@@ -72,9 +82,40 @@ def require(name: str, value: Any, condition: bool, allowed: str, unit: str = ""
         raise ParameterError(f"{name} = {value!r} is not allowed: {allowed}{unit_text}")
 
 
+def require_type(name: str, value: Any, condition: bool, allowed: str) -> None:
+    """Raise ArgumentTypeError naming the argument, the value given, its type and what is allowed.
+
+    ``allowed`` completes "must be ...".
+    """
+    if not condition:
+        raise ArgumentTypeError(f"{name} = {reprlib.repr(value)} ({type(value).__name__}) is "
+                                f"not allowed: must be {allowed}")
+
+
 def is_real(value: Any) -> bool:
     """Whether ``value`` is a real number (int or float, not bool, not a string)."""
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
+def is_integer(value: Any) -> bool:
+    """Whether ``value`` is an integer (Python's or NumPy's, not bool)."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
+def require_integer(name: str, value: Any, low: int, high: float = math.inf) -> int:
+    """Return ``value`` as an int if it is an integer from ``low`` to ``high``.
+
+    Otherwise raise ParameterError.
+    """
+    allowed = f"from {low} to {high}" if math.isfinite(high) else f">= {low}"
+    require(name, value, is_integer(value) and low <= value <= high,
+            f"must be an integer {allowed}")
+    return int(value)
+
+
+def is_path(value: Any) -> bool:
+    """Whether ``value`` names a file: a str or an os.PathLike (pathlib.Path)."""
+    return isinstance(value, (str, os.PathLike))
 
 
 def require_finite(name: str, value: Any, unit: str = "") -> float:
@@ -309,7 +350,8 @@ class Params:
     contact_damping: float = 0.0
 
     def __post_init__(self) -> None:
-        require("contact_law", self.contact_law, self.contact_law in CONTACT_LAWS,
+        require("contact_law", self.contact_law,
+                isinstance(self.contact_law, str) and self.contact_law in CONTACT_LAWS,
                 f"must be one of {', '.join(map(repr, CONTACT_LAWS))}")
         for name in self.numeric_names():
             value = require_finite(name, getattr(self, name), PARAMETERS[name].units)
@@ -359,6 +401,8 @@ class Params:
 
         ``source`` names where the mapping came from, for error messages.
         """
+        require_type("mapping", mapping, isinstance(mapping, Mapping),
+                     "a mapping of parameter names to values")
         for key in mapping:
             if key not in PARAMETERS:
                 raise ParameterError(f"unknown parameter {key!r} in {source}; allowed: "
@@ -397,7 +441,7 @@ def resolve_materials(values: Mapping[str, Any], source: str = "parameters",
                 f"{', '.join(k + i for k in material)} are given for beam {i}, whose material "
                 f"keys replace EI{i} and rhoA{i}: give one or the other")
         for key, value in material.items():
-            if np.ndim(value) == 0:
+            if not isinstance(value, np.ndarray):  # a given value (a sweep's corners: arrays)
                 require_finite(key + i, value, PARAMETERS[key + i].units)
             check_range(key + i, value, point)
         resolved["EI" + i], resolved["rhoA" + i] = _strip_stiffness(
@@ -407,6 +451,7 @@ def resolve_materials(values: Mapping[str, Any], source: str = "parameters",
 
 def read_toml(path: str | Path) -> dict[str, Any]:
     """Parse a TOML file, turning a missing file or bad syntax into a clear error."""
+    require_type("path", path, is_path(path), "the path of a TOML file (str or pathlib.Path)")
     try:
         with open(path, "rb") as stream:
             return tomllib.load(stream)

@@ -15,7 +15,7 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from impactbeams.params import ParameterError
+from impactbeams.params import ParameterError, is_path, is_real, require, require_type
 from impactbeams.plotting.files import save_figure
 from impactbeams.plotting.labels import case_title
 from impactbeams.plotting.missing import note_empty
@@ -84,6 +84,19 @@ def draw(axes: Axes, dataset: xr.Dataset, variable: str | None = None, *,
     return notes
 
 
+def _check_arguments(dataset: object, path: object, variable: object, values: object,
+                     indices: object, title: object, dpi: object) -> None:
+    """The types of :func:`plot_dataset`'s arguments (same names), and dpi's value."""
+    require_type("dataset", dataset, isinstance(dataset, xr.Dataset), "an xarray.Dataset")
+    require_type("path", path, is_path(path), "the path of an image file (str or pathlib.Path)")
+    for name, value in (("variable", variable), ("title", title)):
+        require_type(name, value, value is None or isinstance(value, str), "None or a str")
+    for name, value in (("values", values), ("indices", indices)):
+        require_type(name, value, value is None or isinstance(value, Mapping),
+                     "None or a mapping of dimension names to values")
+    require("dpi", dpi, is_real(dpi) and 0 < dpi < float("inf"), "must be a finite number > 0")
+
+
 def _dimensions(field: xr.DataArray) -> str:
     return "dimensions " + ", ".join(f"{d} ({field.sizes[d]})" for d in field.dims)
 
@@ -98,6 +111,7 @@ def plot_dataset(dataset: xr.Dataset, path: str | Path, variable: str | None = N
     A simulated run without options gets its overview (tips, force, restitution, energy);
     anything else is drawn by [`draw`][], whose options these are. Returns its notes.
     """
+    _check_arguments(dataset, path, variable, values, indices, title, dpi)
     options = values or indices or scale or contours is not None or title is not None
     if "time" in dataset.dims and variable is None and not options:
         from impactbeams.plotting.trajectories import plot_run

@@ -5,7 +5,7 @@ A sweep file (names as in `impactbeams.params`)::
     t_max = 1.0                          # s, horizon of every cell
     n_modes = 5                          # free modes per beam (contact phase: 2 n_modes)
     observables = ["first_impact_time"]  # default
-    transient_periods = 0                # forcing periods left out of long-time observables
+    transient_periods = 0                # forcing periods left out (Lyapunov, long-time only)
     sampled_periods = 200                # stroboscopic samples (long-time observables only)
     period_tolerance = 1e-4              # of the period detection (module longtime)
     max_period = 16
@@ -26,7 +26,6 @@ import json
 import math
 import os
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -43,11 +42,14 @@ from impactbeams.params import (
     PointName,
     check_joint,
     check_range,
+    is_integer,
+    is_path,
     is_real,
     read_toml,
     require,
     require_all,
     require_table,
+    require_type,
     resolve_materials,
     value_at,
 )
@@ -199,9 +201,18 @@ class Sweep:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def load_sweep(path: str | Path) -> Sweep:
+def load_sweep(path: str | os.PathLike[str]) -> Sweep:
     """Read and validate a sweep TOML file; errors name the key and the value."""
     return sweep_from_mapping(read_toml(path), source=str(path))
+
+
+def as_sweep(sweep: Sweep | str | os.PathLike[str]) -> Sweep:
+    """``sweep`` itself, or the sweep file at that path, loaded by :func:`load_sweep`."""
+    if isinstance(sweep, Sweep):
+        return sweep
+    require_type("sweep", sweep, is_path(sweep),
+                 "a Sweep (load_sweep, sweep_from_mapping) or the path of a sweep TOML file")
+    return load_sweep(sweep)
 
 
 def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
@@ -210,32 +221,52 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
     Everything is checked before anything is computed, vectorised over the axes (no per-cell
     work): keys, types, every axis value, conflicts, every grid point's parameters (at the
     corners of the grid, which suffices: every condition is monotone in each parameter), the
-    modes and horizon, and the expected memory.
+    modes and horizon, and the expected memory. NumPy scalars are taken as Python numbers.
     """
+    require_type("data", data, isinstance(data, Mapping),
+                 "a mapping in the sweep file's layout, e.g. tomllib.load of a sweep file")
+    require_type("source", source, isinstance(source, str), "a str naming the sweep in messages")
     for key in data:
         require(f"{key!r} in {source}", key, key in _TOP_LEVEL,
                 f"unknown key; allowed top-level keys: {', '.join(_TOP_LEVEL)}")
     t_max = _number(data.get("t_max", 1.0), f"t_max in {source}")
     require(f"t_max in {source}", t_max, t_max > 0, "must be > 0", "s")
     n_modes = data.get("n_modes", 5)
-    require(f"n_modes in {source}", n_modes, _is_integer(n_modes) and 1 <= n_modes <= MAX_MODES,
+    require(f"n_modes in {source}", n_modes, is_integer(n_modes) and 1 <= n_modes <= MAX_MODES,
             f"must be an integer from 1 to {MAX_MODES}")
     observables = _observables(data.get("observables", [FIRST_IMPACT]), source)
-    transient = data.get("transient_periods", 0)
-    require(f"transient_periods in {source}", transient, _is_integer(transient) and transient >= 0,
-            "must be an integer >= 0 (forcing periods)")
-    fixed = require_table(data, "params", source)
+    transient = _transient_periods(data, observables, source)
+    fixed = {name: _plain(value) for name, value in require_table(data, "params", source).items()}
     axes_table = require_table(data, "axes", source)
     require(f"[axes] of {source}", axes_table, bool(axes_table),
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
     _check_conflicts(fixed, axes, source)
-    sweep = Sweep(t_max, n_modes, observables, fixed, axes, source, transient,
+    sweep = Sweep(t_max, int(n_modes), observables, fixed, axes, source, transient,
                   _long_time(data, observables, source))
     _check_grid(sweep)
     _check_lyapunov(sweep)
     _check_cost(sweep)
     return sweep
+
+
+def _transient_periods(data: Mapping[str, Any], observables: tuple[str, ...], source: str) -> int:
+    """The forcing periods left out: given only with an observable that leaves them out."""
+    where = f"transient_periods in {source}"
+    if "transient_periods" not in data:
+        return 0
+    transient = data["transient_periods"]
+    users = (LYAPUNOV, *LONG_TIME_OBSERVABLES)
+    require(where, transient, any(name in users for name in observables),
+            f"only {', '.join(users)} use it (observables here: {', '.join(observables)})")
+    require(where, transient, is_integer(transient) and transient >= 0,
+            "must be an integer >= 0 (forcing periods)")
+    return int(transient)
+
+
+def _plain(value: Any) -> Any:
+    """A NumPy scalar as the Python number it holds (the definition is hashed as JSON)."""
+    return value.item() if isinstance(value, np.generic) else value
 
 
 def _long_time(data: Mapping[str, Any], observables: tuple[str, ...],
@@ -253,10 +284,6 @@ def _long_time(data: Mapping[str, Any], observables: tuple[str, ...],
         raise ParameterError(f"{error} (in {source})") from None
 
 
-def _is_integer(value: Any) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
 def _number(value: Any, name: str) -> float:
     require(name, value, is_real(value) and math.isfinite(value), "must be a finite number")
     return float(value)
@@ -269,6 +296,7 @@ def _observables(value: Any, source: str) -> tuple[str, ...]:
     for name in value:
         require(where, name, name in OBSERVABLES,
                 f"unknown observable; allowed: {', '.join(OBSERVABLES)}")
+    require(where, value, len(set(value)) == len(value), "must name each observable once")
     return tuple(value)
 
 
@@ -297,7 +325,7 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
         require(f"{key} in {where}", None, key in spec, "is required")
     lo, hi = _number(spec["min"], f"min in {where}"), _number(spec["max"], f"max in {where}")
     num, scale = spec["num"], spec.get("scale", "linear")
-    require(f"num in {where}", num, _is_integer(num) and num >= 1, "must be an integer >= 1")
+    require(f"num in {where}", num, is_integer(num) and num >= 1, "must be an integer >= 1")
     require(f"scale in {where}", scale, scale in ("linear", "log"), 'must be "linear" or "log"')
     require(f"max in {where}", hi, hi > lo or (hi == lo and num == 1),
             f"the range [{lo!r}, {hi!r}] is empty or reversed: need max > min "
@@ -309,7 +337,7 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
     # the values run monotonically from min to max (both exact): checking the ends suffices
     check_range(name, np.array([lo, hi]),
                 lambda index: f"axis {name!r} of {source} reaches a non-physical point: ")
-    return Axis(name, lo, hi, num, scale)
+    return Axis(name, lo, hi, int(num), scale)
 
 
 def _check_conflicts(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: str) -> None:
@@ -347,10 +375,15 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
             values[axis.name] = axis_ends.reshape([-1 if d == k else 1 for d in range(dims)])
 
     def point(index: tuple[int, ...]) -> str:
+        # a condition alike along the leading axes has fewer dimensions (NumPy's trailing
+        # alignment): name the axes it depends on, or none if it fails everywhere
+        depends = slice(dims - len(index), dims)
         named = ", ".join(f"{axis.name} = {float(axis_ends[min(i, axis_ends.size - 1)])!r}"
-                          for axis, axis_ends, i in zip(sweep.axes, ends, index, strict=True)
+                          for axis, axis_ends, i in zip(sweep.axes[depends], ends[depends],
+                                                        index, strict=True)
                           if not axis.choices)
-        return f"at the grid point {named} of {sweep.source}: "
+        return (f"at the grid point {named} of {sweep.source}: " if named
+                else f"at every grid point of {sweep.source}: ")
 
     resolved = resolve_materials(values, f"[params] of {sweep.source}", point)
     defaults = Params().numeric()

@@ -19,9 +19,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from impactbeams.params import require
+from impactbeams.params import is_integer, is_path, require, require_type
 from impactbeams.preflight import require_memory
-from impactbeams.sweep.definition import Sweep, expected_cost
+from impactbeams.sweep.definition import Sweep, as_sweep, expected_cost
 from impactbeams.sweep.lock import output_lock
 from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.plan import (
@@ -51,7 +51,7 @@ def numba_threads(threads: int | None) -> Iterator[None]:
     import numba
 
     limit = numba.config.NUMBA_NUM_THREADS
-    require("threads", threads, isinstance(threads, int) and 1 <= threads <= limit,
+    require("threads", threads, is_integer(threads) and 1 <= threads <= limit,
             f"must be an integer from 1 to {limit}")
     previous = numba.get_num_threads()
     numba.set_num_threads(threads)
@@ -121,17 +121,38 @@ def _chunking(sweep: Sweep, chunk_cells: int | None) -> Chunking:
     return Chunking.at_most(sweep.shape, chunk_cells or default_chunk_cells(sweep))
 
 
-def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | None = None,
-              progress: bool = False, parallel: bool = True, chunk_cells: int | None = None,
-              on_chunk: Callable[[int], None] | None = None, runner: ChunkRunner | None = None,
-              discard_corrupt: bool = False) -> xr.Dataset:
+def _check_options(output: object, threads: object, callbacks: Mapping[str, object],
+                   switches: Mapping[str, object]) -> None:
+    """The types of run_sweep's and write_sweep's options.
+
+    Their values are checked on use; chunk_cells, type and value, by :func:`_chunking`.
+    """
+    require_type("output", output, output is None or is_path(output),
+                 "None or the path of a netCDF file (str or pathlib.Path)")
+    require_type("threads", threads, threads is None or is_integer(threads), "None or an integer")
+    for name, value in callbacks.items():
+        require_type(name, value, value is None or callable(value), "None or a function")
+    for name, value in switches.items():
+        require_type(name, value, isinstance(value, (bool, np.bool_)), "True or False")
+
+
+def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
+              threads: int | None = None, progress: bool = False, parallel: bool = True,
+              chunk_cells: int | None = None, on_chunk: Callable[[int], None] | None = None,
+              runner: ChunkRunner | None = None, discard_corrupt: bool = False) -> xr.Dataset:
     """Compute a sweep and return its Dataset; with ``output``, write it as netCDF first.
 
     Without ``output`` the map is computed in memory (a ParameterError if it would not fit).
     With it, see `write_sweep` (which takes the same arguments); the Dataset returned is
     then the file, opened lazily, so that a map larger than memory can be read in parts.
+    ``sweep`` may be the path of a sweep TOML file (read by :func:`load_sweep`).
     """
     import xarray as xr
+
+    sweep = as_sweep(sweep)
+    _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
+                   {"progress": progress, "parallel": parallel,
+                    "discard_corrupt": discard_corrupt})
 
     if output is not None:
         write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk, runner,
@@ -156,7 +177,7 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
     return map_dataset(sweep, results)
 
 
-def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
+def write_sweep(sweep: Sweep | str | Path, output: str | Path, threads: int | None = None,
                 progress: bool = False, parallel: bool = True, chunk_cells: int | None = None,
                 on_chunk: Callable[[int], None] | None = None, runner: ChunkRunner | None = None,
                 discard_corrupt: bool = False) -> bool:
@@ -176,6 +197,7 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
     resumed run keeps its chunks). ``on_chunk`` is called with each computed chunk number
     (for tests and monitoring). ``runner`` computes the chunks (default :func:`local_runner`;
     see :mod:`impactbeams.sweep.dask_runner` for a Dask cluster); they may finish in any order.
+    ``sweep`` may be the path of a sweep TOML file (read by :func:`load_sweep`).
 
     One writer per output: the run holds the lock of :mod:`impactbeams.sweep.lock` from its
     start to its end; while another run holds it, this one raises
@@ -184,6 +206,12 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
     :class:`~impactbeams.io.WriteError` (an OSError), one line naming the file, its cause and
     the chunks kept: the same call resumes from them once the cause is fixed.
     """
+    sweep = as_sweep(sweep)
+    require_type("output", output, is_path(output), "the path of a netCDF file (str or "
+                 "pathlib.Path)")
+    _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
+                   {"progress": progress, "parallel": parallel,
+                    "discard_corrupt": discard_corrupt})
     output = Path(output)
     with reporting_kept_chunks(output), output_lock(output):
         return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk,

@@ -13,10 +13,10 @@ import math
 
 import numpy as np
 
-from impactbeams.kernels.layout import FREE, ROW_OMEGA
 from impactbeams.kernels.tangent import interval_count, recorded_run_sums, renormalization_interval
+from impactbeams.modes import free_modes
 from impactbeams.packing import Packed
-from impactbeams.params import ParameterError, require
+from impactbeams.params import ParameterError, Params, require, require_integer
 from impactbeams.trajectory.phases import Trajectory
 
 BATCHES = 16  # consecutive groups of periods whose means give the standard error
@@ -37,22 +37,34 @@ class Exponents:
     periods: int
 
 
-def check_request(packed: Packed, count: int, transient_periods: int) -> None:
-    """Raise ParameterError unless ``count`` exponents after ``transient_periods`` are defined."""
-    if not packed.spring_law:
+def check_request(params: Params, n_modes: int, t_max: float, count: int,
+                  transient_periods: int) -> None:
+    """Raise ParameterError unless ``count`` exponents after ``transient_periods`` are defined.
+
+    Checked before any model is built: the renormalisation interval needs only the forcing
+    frequency, or without forcing the slowest free mode (both beams' fundamentals).
+    """
+    if params.contact_law != "spring":
         raise ParameterError("Lyapunov exponents need the spring contact law: the tied law's "
                              "projections, instantaneous impacts and accumulations are not a "
                              "flow whose linearisation converges in n_modes (docs/model.md)")
-    dimension = 2 * packed.q0.size
+    dimension = 4 * n_modes
     require("lyapunov", count, isinstance(count, (int, np.integer)) and 0 < count <= dimension,
             f"must be True or a number of exponents from 1 to {dimension} (4 n_modes)")
-    interval = renormalization_interval(float(packed.settings["forcing_frequency"]),
-                                        packed.tables[FREE, ROW_OMEGA])
-    periods = interval_count(float(packed.settings["t_max"]), interval)
-    require("transient_periods", transient_periods,
-            isinstance(transient_periods, (int, np.integer)) and 0 <= transient_periods < periods,
-            f"must be an integer from 0 to {periods - 1} (t_max holds {periods} complete "
-            f"periods of {interval:.6g} s)")
+    fundamentals = np.array([free_modes(params.EI1, params.rhoA1, params.l1, 1).omega[0],
+                             free_modes(params.EI2, params.rhoA2, params.l2, 1).omega[0]])
+    # the kernels' own functions, run as Python: nothing compiles for a check
+    interval = renormalization_interval.py_func(params.omega, fundamentals)
+    periods = interval_count.py_func(t_max, interval)
+    transient = require_integer("transient_periods", transient_periods, 0)
+    what = ("forcing periods 2 pi / omega" if params.omega > 0 else
+            "periods of the slowest free mode (omega = 0)")
+    fewer = f", or transient_periods <= {periods - 1}" if periods else ""
+    require("t_max", t_max, transient < periods,
+            f"the exponents average over the complete {what} of {interval:.6g} s after "
+            f"transient_periods = {transient}, and t_max holds {periods} of them: need t_max >= "
+            f"(transient_periods + 1) x {interval:.6g} s = {(transient + 1) * interval:.6g} s"
+            f"{fewer}")
 
 
 def lyapunov_exponents(packed: Packed, trajectory: Trajectory, count: int,

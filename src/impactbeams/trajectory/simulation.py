@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 import warnings
 
 import numpy as np
@@ -12,7 +11,14 @@ import xarray as xr
 from impactbeams.compliant import MAX_MODES, required_modes
 from impactbeams.longtime import LongTime
 from impactbeams.packing import Packed, pack_run
-from impactbeams.params import Params, require, require_finite
+from impactbeams.params import (
+    Params,
+    is_integer,
+    require,
+    require_finite,
+    require_integer,
+    require_type,
+)
 from impactbeams.preflight import (
     DYNAMICS_RATE,
     Cost,
@@ -53,18 +59,16 @@ def _output_count(t_max: float, dt_output: float) -> float:
 def _checked_times(times: np.ndarray | None, t_max: float) -> np.ndarray | None:
     if times is None:
         return None
-    times = np.asarray(times, dtype=float)
+    try:
+        array = np.asarray(times, dtype=float)
+    except (TypeError, ValueError):  # not numbers
+        array = None
+    require_type("times", times, array is not None, "an array of output times (s)")
+    times = array
     require("times", times, times.ndim == 1 and bool(np.all(np.isfinite(times)))
             and not np.any(np.diff(times) < 0) and not np.any((times < 0) | (times > t_max)),
             "must be a 1-D ascending array within [0, t_max]", "s")
     return times
-
-
-def _require_integer(name: str, value: object, low: int, high: float = math.inf) -> int:
-    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-    allowed = f"from {low} to {high}" if math.isfinite(high) else f">= {low}"
-    require(name, value, ok and low <= value <= high, f"must be an integer {allowed}")
-    return int(value)  # type: ignore[call-overload]
 
 
 def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, fields: bool,
@@ -137,6 +141,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     memory (`simulation_cost`), raises [`ParameterError`][] naming
     it, its value and what is allowed (docs/limits.md, "Allowed values").
     """
+    _check_options(fields, energy_balance, lyapunov, transient_periods, long_time)
     run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
                                  search_span, episode_separation, fields, energy_balance)
     t_max, n_modes, resolution = run_inputs.t_max, run_inputs.n_modes, run_inputs.resolution
@@ -146,10 +151,10 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         warnings.warn(f"n_modes = {n_modes} does not resolve the spring contact of stiffness "
                       f"{params.contact_stiffness:g} N/m: use n_modes >= {resolution} "
                       "(docs/model.md, Resolution)", RuntimeWarning, stacklevel=2)
+    if lyapunov:
+        check_request(params, n_modes, t_max, lyapunov, transient_periods)
     out_times = run_inputs.times
     packed = pack_run(params, n_modes, t_max, run_inputs.search_span)
-    if lyapunov:
-        check_request(packed, lyapunov, transient_periods)
     trajectory = run(packed, run_inputs.max_events)
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
@@ -198,16 +203,15 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
     The run's modes and horizon (`check_run`) and its memory
     (`simulation_cost`) are checked too, before the output grid is allocated.
     """
-    require("params", type(params).__name__, isinstance(params, Params),
-            "must be an impactbeams.Params")
+    require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
     t_max = require_finite("t_max", t_max, "s")
     require("t_max", t_max, t_max > 0, "must be > 0", "s")
     times = _checked_times(times, t_max)
     if times is None:
         dt_output = require_finite("dt_output", dt_output, "s")
         require("dt_output", dt_output, dt_output > 0, "must be > 0", "s")
-    max_events = _require_integer("max_events", max_events, 1)
-    n_points = _require_integer("n_points", n_points, 2)
+    max_events = require_integer("max_events", max_events, 1)
+    n_points = require_integer("n_points", n_points, 2)
     span = t_max if search_span is None else require_finite("search_span", search_span, "s")
     require("search_span", search_span, span >= MIN_SEARCH_SPAN * t_max,
             f"must be >= {MIN_SEARCH_SPAN:g} t_max = {MIN_SEARCH_SPAN * t_max:.3g} (a shorter "
@@ -220,7 +224,7 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
     resolution = required_modes(params) if params.contact_law == "spring" else 5
     if n_modes is None:
         n_modes = min(resolution, MAX_MODES)
-    n_modes = _require_integer("n_modes", n_modes, 1, MAX_MODES)
+    n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
     check_run(params.numeric(), t_max, n_modes)
     n_times = times.size if times is not None else _output_count(t_max, dt_output)
     cost = simulation_cost(params, t_max, n_modes, n_times, fields, n_points, energy_balance,
@@ -234,12 +238,27 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
                       episode_separation, max_events, n_points)
 
 
+def _check_options(fields: bool, energy_balance: bool, lyapunov: bool | int,
+                   transient_periods: int, long_time: LongTime | None) -> None:
+    """Check the types of :func:`simulate`'s options (same names).
+
+    A transient must be left out of something: the exponents or the long-time samples.
+    """
+    for name, value in (("fields", fields), ("energy_balance", energy_balance)):
+        require_type(name, value, isinstance(value, (bool, np.bool_)), "True or False")
+    require_type("lyapunov", lyapunov, isinstance(lyapunov, (bool, np.bool_))
+                 or is_integer(lyapunov), "True, False or a number of exponents")
+    require_type("long_time", long_time, long_time is None or isinstance(long_time, LongTime),
+                 "None or an impactbeams.LongTime")
+    transient = require_integer("transient_periods", transient_periods, 0)
+    require("transient_periods", transient_periods, not transient or lyapunov
+            or long_time is not None, "only the Lyapunov exponents (lyapunov) and the "
+            "long-time samples (long_time) leave a transient out; this run has neither")
+
+
 def _check_long_time(params: Params, t_max: float, transient_periods: int,
                      long_time: LongTime) -> None:
     """Stroboscopic samples need a forcing period and a run that covers the sampled window."""
-    require("long_time", type(long_time).__name__, isinstance(long_time, LongTime),
-            "must be an impactbeams.LongTime")
-    _require_integer("transient_periods", transient_periods, 0)
     require("omega", params.omega, params.omega > 0, "long_time samples once per forcing "
             "period: need omega > 0", "rad/s")
     horizon = float(long_time.horizon(params.omega, transient_periods))
