@@ -31,7 +31,7 @@ NOT_EXECUTED = {
     '&& pytest -m "not slow"': "README's test command, run verbatim by .ci/run",
     "python3 -m venv .venv && . .venv/bin/activate && pip install -e .":
         "the install step, the start of the main job that .ci/run runs verbatim",
-    'pip install -e ".[docs]" && mkdocs serve      # http://127.0.0.1:8000; `mkdocs build` '
+    'pip install -e ".[docs]" && npm ci && mkdocs serve   # http://127.0.0.1:8000; `mkdocs build` '
     "writes site/": "serves the site until stopped; .ci/run runs `mkdocs build --strict`",
     "pip install 'impactbeams[distributed]'":
         "an install from the package index; .ci/run installs the same extra through `.[test]`",
@@ -110,8 +110,10 @@ def test_changelog_counts_the_executed_blocks():
 
 def test_readme_python_blocks_run(caplog, tmp_path, monkeypatch):
     # markdown-exec runs each block (one session: the blocks build on each other) and logs a
-    # warning with the traceback when one fails; files go to results/ (git-ignored).
-    monkeypatch.chdir(ROOT)
+    # warning with the traceback when one fails. They run in a fresh folder, as in a fresh
+    # clone: a results/ left by other code would be refused (its code digest differs).
+    (tmp_path / "sweeps").symlink_to(ROOT / "sweeps")
+    monkeypatch.chdir(tmp_path)
     fences = [{"name": language, "class": language, "validator": markdown_exec.validator,
                "format": markdown_exec.formatter} for language in ("python", "console", "sh")]
     with caplog.at_level(logging.WARNING):
