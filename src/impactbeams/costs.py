@@ -1,0 +1,122 @@
+"""Expected wall time of a run: a cost model calibrated on this project's 2-core machine.
+
+A run's time is the interpreter's start-up, the kernels' compile (only when they are not in
+Numba's disk cache, :mod:`impactbeams.compilation`) and the compute, per cell of a sweep:
+
+* a first-impact map: ``FIRST_IMPACT_CELL + FIRST_IMPACT_MODE n`` per cell (n modes per beam;
+  a cell's search stops at its first impact, and by columns the next cell starts from there);
+* the full dynamics: per *cycle*, the horizon over the period of the forcing or of the
+  slowest free mode, whichever is shorter (a beam that is not forced fast still rings at its
+  own first mode). A cell that impacts costs ``a n^p`` per cycle (``IMPACT_CYCLE[kind][law]``:
+  the events' searches, the switches and the chatter within an impact grow with the modes, the
+  spring law's switches as n^2, and so do the dynamics observables' peak-force searches); one
+  that never impacts ``FREE_CYCLE n`` (one walk of the free search). Whether a cell impacts is
+  told by :func:`impacts`, from the linear response of beam 1's tip. The kinds: ``dynamics``
+  (a map's run over t_max with its observables), ``lyapunov`` (its windowed run with the
+  tangent vectors), ``long_time`` (transient + sampled forcing periods, stroboscopic samples)
+  and ``simulate`` (one run, then every contact's peak force and the impact table; plus
+  ``SAMPLING`` per output time and mode).
+
+Time on T threads: the compute divided by ``THREAD_SPEEDUP[T]`` (measured on 2 cores).
+
+The constants are measured by ``python benchmarks/calibrate_costs.py``, which writes
+docs/benchmarks/costs.json (its ``constants``: ``tests/test_costs.py`` checks that these are
+the same); the measured load average is stored with them. Estimates against the actual times
+of the shipped sweeps and of random runs: docs/limits.md, "Time".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+# --- constants from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ---------------
+# s per cell, and per cell and mode, of a first-impact map by columns (one core)
+FIRST_IMPACT_CELL = 8.2e-07
+FIRST_IMPACT_MODE = 4.0e-08
+# s per cycle of an impacting cell, one core: a n^p by kind of run and contact law: (a, p)
+IMPACT_CYCLE = {
+    "dynamics": {"tied": (5.9e-06, 1.9), "spring": (1.9e-05, 1.5)},
+    "lyapunov": {"tied": (2.0e-05, 1.9), "spring": (2.0e-05, 1.9)},
+    "long_time": {"tied": (2.0e-06, 1.5), "spring": (2.0e-06, 1.5)},
+    "simulate": {"tied": (1.0e-05, 1.9), "spring": (3.0e-05, 1.8)},
+}
+FREE_CYCLE = 3.0e-07  # s per cycle and mode of a cell that does not impact
+SAMPLING = 2.0e-07  # s per output time and mode (simulate)
+GEOMETRY = 5.0e-05  # s per geometry and mode^2 (modes, tables and switching matrices)
+START_UP = 1.7  # s: the interpreter, imports and loading the kernels from the cache
+THREAD_SPEEDUP = {1: 1.0, 2: 1.7}
+# s: cold compile of each kind of run's kernels (empty Numba cache)
+COMPILE = {"first_impact": 22.0, "dynamics": 40.0, "lyapunov": 45.0, "long_time": 40.0,
+           "simulate": 55.0}
+# ----------------------------------------------------------------------------------------------
+
+TRANSIENT_GROWTH = 1.5  # the start from rest overshoots the steady amplitude by up to this
+
+
+def speedup(threads: int) -> float:
+    """Measured speed-up of a sweep on ``threads`` threads (the largest measured beyond)."""
+    known = max(count for count in THREAD_SPEEDUP if count <= max(threads, 1))
+    return THREAD_SPEEDUP[known]
+
+
+def cycles(values: Mapping[str, Any], horizon: Any) -> np.ndarray:
+    """Cycles of a run over ``horizon`` (s): horizon max(Omega, omega_1) / 2 pi.
+
+    omega_1 is the slowest free mode of the two beams (rad/s). ``values``: numeric parameters
+    (floats or arrays that broadcast).
+    """
+    first = 1.8751040687**2
+    slowest = np.minimum(*(first / np.asarray(values[f"l{i}"]) ** 2
+                           * np.sqrt(np.asarray(values[f"EI{i}"]) / values[f"rhoA{i}"])
+                           for i in ("1", "2")))
+    return np.asarray(horizon) * np.maximum(np.asarray(values["omega"], dtype=float),
+                                            slowest) / (2 * np.pi)
+
+
+def impacts(values: Mapping[str, Any], n_modes: int, horizon: Any) -> np.ndarray:
+    """Whether the tips are expected to meet within ``horizon`` (s): a bool per point.
+
+    Beam 1's tip under F0 sin(Omega t) from rest, from its modes' receptance at its tip
+    (mass-normalised cantilever modes have Y_n(l)^2 = 4 / (rhoA l)); a mode near resonance
+    grows like t, i.e. has at least the damping ratio 1 / (omega_n horizon). The tips meet if
+    TRANSIENT_GROWTH times that amplitude, plus the uplifts, reach the clearance.
+    """
+    from impactbeams.modes import cantilever_roots
+
+    roots = cantilever_roots(n_modes)
+    length, rho_a = np.asarray(values["l1"])[..., None], np.asarray(values["rhoA1"])[..., None]
+    omega_n = (roots / length) ** 2 * np.sqrt(np.asarray(values["EI1"])[..., None] / rho_a)
+    big_omega = np.asarray(values["omega"], dtype=float)[..., None]
+    zeta = np.maximum(np.asarray(values["damping_ratio"])[..., None],
+                      1.0 / (omega_n * np.asarray(horizon)[..., None]))
+    receptance = np.abs(np.sum(4.0 / (rho_a * length) / (
+        omega_n**2 - big_omega**2 + 2j * zeta * omega_n * big_omega), axis=-1))
+    reach = (TRANSIENT_GROWTH * np.asarray(values["force_amplitude"]) * receptance
+             + np.abs(values["uplift1"]) + np.abs(values["uplift2"]))
+    return reach >= np.asarray(values["clearance"])
+
+
+def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon: Any,
+                     kind: str) -> np.ndarray:
+    """Seconds on one core of full-dynamics runs over ``horizon`` (s), per point of ``values``.
+
+    ``kind``: of ``IMPACT_CYCLE`` (dynamics, lyapunov, long_time, simulate); ``law``: the
+    contact law of every point.
+    """
+    scale, power = IMPACT_CYCLE[kind][law]
+    per_cycle = np.where(impacts(values, n_modes, horizon), scale * n_modes**power,
+                         FREE_CYCLE * n_modes)
+    return cycles(values, horizon) * per_cycle
+
+
+def first_impact_seconds(cells: float, n_modes: int) -> float:
+    """Seconds on one core of a first-impact map of ``cells`` cells."""
+    return cells * (FIRST_IMPACT_CELL + FIRST_IMPACT_MODE * n_modes)
+
+
+def geometry_seconds(geometries: int, n_modes: int) -> float:
+    """Seconds of the serial set-up of ``geometries`` geometries (modes, tables, switching)."""
+    return geometries * GEOMETRY * n_modes**2
