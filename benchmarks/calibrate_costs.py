@@ -110,8 +110,9 @@ def dynamics_costs(kind, law, log):
             observables, extra, t_max = {
                 "dynamics": (["impact_count"], {}, 0.3),
                 "lyapunov": (["lyapunov_exponent"], {}, 0.3),
-                "long_time": (["response_period"], {"transient_periods": 60,
-                                                    "sampled_periods": 40}, 1.0),
+                "long_time": (["response_period"], {"transient_periods": 200,
+                                                    "sampled_periods": 100,
+                                                    "damping_ratio": 0.03}, 1.0),
             }[kind]
             sweep = sweep_mapping(n, t_max, observables, law, IMPACTING, **extra)
             if kind == "long_time":
@@ -135,14 +136,14 @@ def free_cost(log):
     axes = {"omega": (150.0, 900.0), "force_amplitude": (1e-8, 1e-7)}
     per_mode_cycle = []
     for n in (5, 20):
-        sweep = sweep_mapping(n, 1.0, ["impact_count"], "spring", axes, num=4)
+        sweep = sweep_mapping(n, 10.0, ["impact_count"], "spring", axes, num=4)
         points_cycles = impacting_cycles(sweep, lambda v, sweep=sweep: sweep.t_max)
         assert points_cycles[1] == 0.0
         from impactbeams.sweep.definition import sample_points
 
         points = sample_points(sweep, limit=sweep.size)
         values = {k: np.array([p.numeric()[k] for p in points]) for k in points[0].numeric()}
-        total = float(np.sum(costs.cycles(values, 1.0)))
+        total = float(np.sum(costs.cycles(values, sweep.t_max)))
         per_mode_cycle.append(timed(lambda sweep=sweep: run_sweep(sweep, threads=1)) / total / n)
         log(f"free, {n} modes: {per_mode_cycle[-1] * 1e9:.1f} ns per cycle and mode")
     return float(np.mean(per_mode_cycle))
@@ -244,16 +245,16 @@ def write_module(constants):
     """Rewrite the constants block of src/impactbeams/costs.py from ``constants``."""
     def text(value):
         if isinstance(value, dict):
-            return "{" + ", ".join(f"{key!r}: {text(v)}" for key, v in value.items()) + "}"
+            return "{" + ", ".join(f"{text(key)}: {text(v)}" for key, v in value.items()) + "}"
         if isinstance(value, list):
             return "(" + ", ".join(text(v) for v in value) + ")"
-        return repr(value)
+        return json.dumps(value) if isinstance(value, str) else repr(value)
 
     lines = []
     for name, value in constants.items():
         line = f"{name} = {text(value)}"
         if len(line) > 99 and isinstance(value, dict):  # one entry per line
-            line = "\n".join([f"{name} = {{", *(f"    {key!r}: {text(v)}," for key, v in
+            line = "\n".join([f"{name} = {{", *(f"    {text(key)}: {text(v)}," for key, v in
                                                  value.items()), "}"])
         lines.append(line)
     path = ROOT / "src" / "impactbeams" / "costs.py"

@@ -17,6 +17,8 @@ import time
 from collections.abc import Iterator
 from typing import Any, TextIO
 
+REPORTED_COMPILE = 1.0  # s: an outermost compile at least this long ends with a line
+
 # The kernels called from Python by each kind of run (their callees compile with them, and
 # load with them from the cache): (module in impactbeams.kernels, kernel name).
 ENTRY_KERNELS = {
@@ -63,8 +65,8 @@ def reporting_compiles(expected: float, stream: TextIO | None = None) -> Iterato
     """Print ``compiling kernels ...`` when a compile starts, and its time when it ends.
 
     ``expected``: the measured cold compile time (s) announced. Each outermost compile (a
-    kernel called from Python, with every kernel it calls) that takes a second or more ends
-    with a line ``compiled N kernels in S s``; on a terminal a line counts the nested kernels
+    kernel called from Python, with every kernel it calls) of at least ``REPORTED_COMPILE``
+    seconds ends with a line ``compiled N kernels in S s``; on a terminal a line counts the nested kernels
     as they finish. Nothing is printed when every kernel loads from the cache.
     """
     from numba.core import event
@@ -106,7 +108,7 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
             with self.lock:
                 self.kernels += 1
                 elapsed = time.perf_counter() - self.start
-                if self.local.depth == 0 and elapsed >= 1.0:
+                if self.local.depth == 0 and elapsed >= REPORTED_COMPILE:
                     self._write(f"compiled {self.kernels} kernels in {elapsed:.1f} s (cached "
                                 "for later runs)", final=True)
                 elif self.interactive:

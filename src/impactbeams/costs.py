@@ -33,24 +33,26 @@ from typing import Any
 import numpy as np
 
 # --- constants from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ---------------
-# s per cell, and per cell and mode, of a first-impact map by columns (one core)
-FIRST_IMPACT_CELL = 8.2e-07
-FIRST_IMPACT_MODE = 4.0e-08
-# s per cycle of an impacting cell, one core: a n^p by kind of run and contact law: (a, p)
+FIRST_IMPACT_CELL = 3e-06
+FIRST_IMPACT_MODE = 1.9e-07
 IMPACT_CYCLE = {
-    "dynamics": {"tied": (5.9e-06, 1.9), "spring": (1.9e-05, 1.5)},
-    "lyapunov": {"tied": (2.0e-05, 1.9), "spring": (2.0e-05, 1.9)},
-    "long_time": {"tied": (2.0e-06, 1.5), "spring": (2.0e-06, 1.5)},
-    "simulate": {"tied": (1.0e-05, 1.9), "spring": (3.0e-05, 1.8)},
+    'dynamics': {'tied': (8.9e-05, 1.7), 'spring': (0.00015, 1.6)},
+    'lyapunov': {'spring': (2.8e-05, 1.5)},
+    'long_time': {'tied': (2.7e-05, 1.3), 'spring': (2.5e-05, 1.6)},
+    'simulate': {'tied': (0.00023, 1.6), 'spring': (0.00085, 1.3)},
 }
-FREE_CYCLE = 3.0e-07  # s per cycle and mode of a cell that does not impact
-SAMPLING = 2.0e-07  # s per output time and mode (simulate)
-GEOMETRY = 5.0e-05  # s per geometry and mode^2 (modes, tables and switching matrices)
-START_UP = 1.7  # s: the interpreter, imports and loading the kernels from the cache
-THREAD_SPEEDUP = {1: 1.0, 2: 1.7}
-# s: cold compile of each kind of run's kernels (empty Numba cache)
-COMPILE = {"first_impact": 22.0, "dynamics": 40.0, "lyapunov": 45.0, "long_time": 40.0,
-           "simulate": 55.0}
+FREE_CYCLE = 7.5e-06
+SAMPLING = 9.4e-07
+GEOMETRY = 4.5e-05
+THREAD_SPEEDUP = {1: 1.0, 2: 0.78}
+START_UP = 1.7
+COMPILE = {
+    'first_impact': 22.0,
+    'dynamics': 40.0,
+    'lyapunov': 45.0,
+    'long_time': 40.0,
+    'simulate': 55.0,
+}
 # ----------------------------------------------------------------------------------------------
 
 TRANSIENT_GROWTH = 1.5  # the start from rest overshoots the steady amplitude by up to this
