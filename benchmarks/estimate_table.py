@@ -3,9 +3,10 @@
     python benchmarks/estimate_table.py [--random 20] [--seed 2026] [--threads 2]
 
 Each case runs as a command (``impactbeams run``/``simulate`` in a subprocess, start-up
-included) with a filled Numba cache ("warm"); the first case of each kind of run also with an
-empty one ("cold", compile included). The estimate is the one the command announces: start-up
-(``costs.START_UP``) + compute (the cost model) + compile when cold (``costs.COMPILE``). Writes
+included) with a filled Numba cache ("warm"); the first case of each kind of run first with
+an empty one ("cold", compile included), whose kernels then fill the warm cache. The
+estimate is the one the command announces: start-up (``costs.START_UP``) + compute (the cost
+model) + compile when cold (``costs.COMPILE``). Writes
 docs/benchmarks/estimates.json (with the load average around each run) and the table in
 docs/limits.md between its markers (``--table-only``: the table from the JSON alone).
 """
@@ -15,6 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -33,6 +35,7 @@ END = "<!-- end of the estimates table -->"
 REDUCED = {"bifurcation-omega": {"axes.omega.num": 100},
            "period-map-omega-force": {"axes.omega.num": 12, "axes.force_amplitude.num": 4}}
 LONGEST = 60.0  # s: random cases are shrunk until their estimate is below this
+SHORTEST = 3.0  # s: and grown until it is above this (else start-up is all one measures)
 
 
 def shipped_cases():
@@ -101,8 +104,17 @@ def estimate(case, threads):
     return run_kind(sweep), expected_cost(sweep, threads).seconds
 
 
-def shrink(case, threads):
-    """Halve the grid (or the horizon) until the estimate is below LONGEST."""
+def fit(case, threads):
+    """Double the grid (or the horizon) until the estimate is above SHORTEST, then halve it
+    until it is below LONGEST."""
+    for _ in range(12):
+        if estimate(case, threads)[1] >= SHORTEST:
+            break
+        if "simulate" in case:
+            case["simulate"]["t_max"] *= 2
+        else:
+            axis = min(case["sweep"]["axes"].values(), key=lambda a: a["num"])
+            axis["num"] *= 2
     while estimate(case, threads)[1] > LONGEST:
         if "simulate" in case:
             case["simulate"]["t_max"] /= 2
@@ -164,14 +176,14 @@ def measure(cases, threads, log):
         for case in cases:
             kind, compute = estimate(case, threads)
             arguments = command(case, folder, threads)
-            if kind not in cold_done:
+            if kind not in cold_done:  # an empty cache of its own, then shared with the others
                 cold_done.add(kind)
                 cold_cache = Path(folder) / f"cold-{kind}"
                 seconds, load = actual(arguments, cold_cache, folder)
                 rows.append(row(case, kind, "cold", costs.START_UP + costs.COMPILE[kind]
                                 + compute, seconds, load))
                 log(rows[-1])
-            actual(arguments, warm_cache, folder)  # fills the cache (discarded)
+                shutil.copytree(cold_cache, warm_cache, dirs_exist_ok=True)
             seconds, load = actual(arguments, warm_cache, folder)
             rows.append(row(case, kind, "warm", costs.START_UP + compute, seconds, load))
             log(rows[-1])
@@ -222,7 +234,7 @@ def main() -> None:
         return
     warnings.simplefilter("ignore")
     rng = np.random.default_rng(args.seed)
-    cases = shipped_cases() + [shrink(random_case(rng, i + 1), args.threads)
+    cases = shipped_cases() + [fit(random_case(rng, i + 1), args.threads)
                                for i in range(args.random)]
     started, before = time.time(), os.getloadavg()
     rows = measure(cases, args.threads, lambda entry: print(json.dumps(entry), flush=True))

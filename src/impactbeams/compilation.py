@@ -66,8 +66,8 @@ def reporting_compiles(expected: float, stream: TextIO | None = None) -> Iterato
 
     ``expected``: the measured cold compile time (s) announced. Each outermost compile (a
     kernel called from Python, with every kernel it calls) of at least ``REPORTED_COMPILE``
-    seconds ends with a line ``compiled N kernels in S s``; on a terminal a line counts the nested kernels
-    as they finish. Nothing is printed when every kernel loads from the cache.
+    seconds ends with a line ``compiled N kernels in S s``; on a terminal a line counts the
+    nested kernels as they finish. Nothing is printed when every kernel loads from the cache.
     """
     from numba.core import event
 

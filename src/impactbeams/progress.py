@@ -12,15 +12,17 @@ class Progress:
 
     Counts ``total`` units (cells of a sweep, seconds of a simulated run, ...). The rate behind
     the ETA is measured from the end of the first computed update, which also pays for
-    compiling the kernels (until then the ETA shows as unknown). An update may carry a
-    ``weight``, its expected cost in any unit (``total_weight`` in all): the ETA then assumes
-    that the rest runs at the same cost per unit of weight, for work whose parts differ in cost.
+    compiling the kernels (until then the ETA shows as unknown). The work may come in
+    ``weights``: the expected cost of each part (in any unit), an update naming its ``part``;
+    the ETA then assumes that the rest runs at the same cost per unit of weight, for work whose
+    parts differ in cost.
     """
 
     def __init__(self, total: float, enabled: bool = True, stream: Any = None,
-                 unit: str = "cells", total_weight: float | None = None) -> None:
+                 unit: str = "cells", weights: list[float] | None = None) -> None:
         self.total, self.done, self.enabled, self.unit = total, 0, enabled, unit
-        self.total_weight = total if total_weight is None else total_weight
+        self.weights = weights
+        self.total_weight = total if weights is None else sum(weights)
         self.weighed = 0.0  # weight of the finished work
         self.stream = stream or sys.stderr
         self.interactive = self.stream.isatty()
@@ -28,10 +30,13 @@ class Progress:
         self.reported_decile = -1
         self.warm: tuple[float, float] | None = None  # (time, weight done) after the first
 
-    def update(self, amount: float, computed: bool = True, weight: float | None = None) -> None:
-        """Record ``amount`` more finished units (``computed=False``: loaded from a resume)."""
+    def update(self, amount: float, computed: bool = True, part: int | None = None) -> None:
+        """Record ``amount`` more finished units (``computed=False``: loaded from a resume).
+
+        ``part``: the index of the part of ``weights`` finished (with weights only).
+        """
         self.done += amount
-        self.weighed += amount if weight is None else weight
+        self.weighed += amount if self.weights is None or part is None else self.weights[part]
         now = time.perf_counter()
         eta = 0.0 if self.done >= self.total else float("nan")
         if computed and self.warm is None:

@@ -498,6 +498,15 @@ def cell_seconds(sweep: Sweep, points: list[Params]) -> np.ndarray:
     return seconds
 
 
+def chunk_seconds(sweep: Sweep, start: int, stop: int, limit: int = 4) -> float:
+    """Expected seconds on one core of a full-dynamics sweep's flat cells start..stop.
+
+    From ``limit`` cells spread over them (:func:`cell_seconds`): weights of a progress bar.
+    """
+    return (stop - start) * float(np.mean(cell_seconds(sweep, sample_points(sweep, start, stop,
+                                                                            limit))))
+
+
 def sample_points(sweep: Sweep, start: int = 0, stop: int | None = None,
                   limit: int = COST_SAMPLES) -> list[Params]:
     """Parameters of at most ``limit`` cells spread evenly over the flat cells start..stop."""

@@ -30,7 +30,7 @@ from impactbeams.sweep.plan import (
     contact_resolution,
     default_chunk_cells,
 )
-from impactbeams.sweep.progress import Progress
+from impactbeams.sweep.progress import Progress, chunk_progress
 from impactbeams.sweep.store import ChunkStore, finished_output
 
 if TYPE_CHECKING:
@@ -150,7 +150,7 @@ def run_sweep(sweep: Sweep, output: str | Path | None = None, threads: int | Non
 
     with numba_threads(threads):
         _compute(sweep, chunking, range(chunking.count), runner or local_runner(parallel),
-                 Progress(sweep.size, enabled=progress), on_chunk, keep)
+                 chunk_progress(sweep, chunking, progress), on_chunk, keep)
     return map_dataset(sweep, results)
 
 
@@ -180,7 +180,8 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
         return False
     _warn_unresolved(sweep)
     store = ChunkStore(output, sweep, _chunking(sweep, chunk_cells), chunk_cells)
-    chunking, bar = store.chunking, Progress(sweep.size, enabled=progress)
+    chunking = store.chunking
+    bar = chunk_progress(sweep, chunking, progress)
     with numba_threads(threads), map_file(sweep, output, store.building, chunking) as write:
         pending = []
         for chunk in range(chunking.count):  # the saved chunks first: a damaged one stops here
@@ -192,7 +193,7 @@ def write_sweep(sweep: Sweep, output: str | Path, threads: int | None = None,
                 pending.append(chunk)
                 continue
             write(start, stop, saved)
-            bar.update(stop - start, computed=False)
+            bar.update(stop - start, computed=False, part=chunk)
 
         unsaved = len(pending)
 
@@ -250,6 +251,6 @@ def _compute(sweep: Sweep, chunking: Chunking, chunks: Iterable[int], runner: Ch
     for chunk, values in runner(sweep, [(chunk, *cells) for chunk, cells in bounds.items()]):
         start, stop = bounds[chunk]
         keep(chunk, start, stop, values)
-        bar.update(stop - start)
+        bar.update(stop - start, part=chunk)
         if on_chunk:
             on_chunk(chunk)
