@@ -1,5 +1,7 @@
-"""The progress bar of a sweep: :class:`impactbeams.progress.Progress`, its ETA weighted by the
-cost model when the chunks differ in cost (long runs, full dynamics).
+"""The progress bar of a sweep, its ETA weighted by the cost model of its chunks.
+
+:class:`impactbeams.progress.Progress` (shared with ``simulate``); the chunks of a long-time
+or full-dynamics sweep differ in cost, those of a first-impact map hardly.
 """
 
 from __future__ import annotations
