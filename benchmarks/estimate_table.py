@@ -153,7 +153,7 @@ def command(case, folder, threads):
 
 
 def actual(arguments, cache, folder):
-    """Wall time (s) of the command, and the 1-minute load average before and after."""
+    """Wall time (s) of the command, the 1-minute load average before and after, its stderr."""
     for output in Path(folder).glob("*.nc"):
         output.unlink()
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONWARNINGS": "ignore"}
@@ -164,7 +164,7 @@ def actual(arguments, cache, folder):
     seconds = time.perf_counter() - start
     if done.returncode not in (0, 3):
         raise RuntimeError(f"{arguments}: {done.stderr}")
-    return seconds, [round(load, 2), round(os.getloadavg()[0], 2)]
+    return seconds, [round(load, 2), round(os.getloadavg()[0], 2)], done.stderr
 
 
 def measure(cases, threads, log):
@@ -179,12 +179,13 @@ def measure(cases, threads, log):
             if kind not in cold_done:  # an empty cache of its own, then shared with the others
                 cold_done.add(kind)
                 cold_cache = Path(folder) / f"cold-{kind}"
-                seconds, load = actual(arguments, cold_cache, folder)
+                seconds, load, stderr = actual(arguments, cold_cache, folder)
                 rows.append(row(case, kind, "cold", costs.START_UP + costs.COMPILE[kind]
                                 + compute, seconds, load))
+                rows[-1]["stderr"] = stderr[-3000:]  # what a new user sees
                 log(rows[-1])
                 shutil.copytree(cold_cache, warm_cache, dirs_exist_ok=True)
-            seconds, load = actual(arguments, warm_cache, folder)
+            seconds, load, _ = actual(arguments, warm_cache, folder)
             rows.append(row(case, kind, "warm", costs.START_UP + compute, seconds, load))
             log(rows[-1])
     return rows
