@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-MODES = (5, 12, 24)
+MODES = (5, 12, 32)
 # an impacting grid (most cells impact: checked), moderate modal damping
 IMPACTING = {"omega": (150.0, 900.0), "force_amplitude": (3e-3, 1e-2)}
 
@@ -110,8 +110,9 @@ def dynamics_costs(kind, law, log):
             observables, extra, t_max = {
                 "dynamics": (["impact_count"], {}, 0.3),
                 "lyapunov": (["lyapunov_exponent"], {}, 0.3),
-                "long_time": (["response_period"], {"transient_periods": 200,
-                                                    "sampled_periods": 100,
+                # the shipped long-time sweeps' periods and damping
+                "long_time": (["response_period"], {"transient_periods": 500,
+                                                    "sampled_periods": 200,
                                                     "damping_ratio": 0.03}, 1.0),
             }[kind]
             sweep = sweep_mapping(n, t_max, observables, law, IMPACTING, **extra)
