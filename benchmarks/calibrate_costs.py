@@ -36,7 +36,9 @@ def sweep_mapping(n_modes, t_max, observables, law, axes, num=3, **extra):
 
     data = {"t_max": t_max, "n_modes": n_modes, "observables": observables,
             "params": {"clearance": 1.1e-5, "contact_law": law,
-                       "damping_ratio": extra.pop("damping_ratio", 0.01)},
+                       "damping_ratio": extra.pop("damping_ratio", 0.01),
+                       **({"force_amplitude": extra.pop("force_amplitude")}
+                          if "force_amplitude" in extra else {})},
             "axes": {name: {"min": lo, "max": hi, "num": num if lo != hi else 1,
                             "scale": "log" if name == "force_amplitude" else "linear"}
                      for name, (lo, hi) in axes.items()}, **extra}
@@ -87,6 +89,34 @@ def first_impact_costs(log):
                                                                   float(slope))
 
 
+def cell_search_costs(log):
+    """First-impact cells searched alone (a map along omega): s per mode of an impacting cell,
+    and per cycle and mode of a cell without impact (its whole horizon walked)."""
+    from impactbeams.sweep.run import run_sweep
+
+    alone, walk = [], []
+    for n in (5, 20):
+        for force, found in ((1e-2, alone), (1e-8, walk)):
+            sweep = sweep_mapping(n, 1.0, ["first_impact_time"], "spring",
+                                  {"omega": (300.0, 600.0)}, num=400, force_amplitude=force)
+            cycles, share = impacting_cycles(sweep, lambda v, sweep=sweep: sweep.t_max)
+            assert share == (1.0 if force > 1e-4 else 0.0)
+            seconds = timed(lambda sweep=sweep: run_sweep(sweep, threads=1))
+            if share:
+                found.append(seconds / sweep.size / n)
+            else:
+                from impactbeams import costs
+                from impactbeams.sweep.definition import sample_points
+
+                points = sample_points(sweep, limit=sweep.size)
+                values = {k: np.array([p.numeric()[k] for p in points])
+                          for k in points[0].numeric()}
+                found.append(seconds / float(np.sum(costs.cycles(values, 1.0))) / n)
+        log(f"first impact alone, {n} modes: {alone[-1] * 1e6:.2f} us per impacting cell "
+            f"and mode, {walk[-1] * 1e9:.1f} ns per cycle and mode without impact")
+    return float(np.mean(alone)), float(np.mean(walk))
+
+
 def dynamics_costs(kind, law, log):
     """Seconds per impacting cycle at MODES, and the fit, of one kind of run."""
     from impactbeams.sweep.run import run_sweep
@@ -105,7 +135,7 @@ def dynamics_costs(kind, law, log):
             assert costs.impacts(values, n, t_max)
             simulate(params, 0.01, n_modes=n)
             seconds = timed(lambda: simulate(params, t_max, n_modes=n,  # noqa: B023
-                                             dt_output=1e-3))
+                                             dt_output=1e-3), 3)
         else:
             observables, extra, t_max = {
                 "dynamics": (["impact_count"], {}, 0.3),
@@ -278,6 +308,7 @@ def main() -> None:
     measured, constants = {}, {}
     measured["first_impact"], (cell, mode) = first_impact_costs(log)
     constants["FIRST_IMPACT_CELL"], constants["FIRST_IMPACT_MODE"] = cell, mode
+    constants["FIRST_IMPACT_ALONE"], constants["FIRST_IMPACT_WALK"] = cell_search_costs(log)
     cycle = {}
     for kind, laws in (("dynamics", ("tied", "spring")), ("lyapunov", ("spring",)),
                        ("long_time", ("tied", "spring")), ("simulate", ("tied", "spring"))):

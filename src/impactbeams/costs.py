@@ -4,14 +4,20 @@ A run's time is the interpreter's start-up, the kernels' compile (only when they
 Numba's disk cache, :mod:`impactbeams.compilation`) and the compute, per cell of a sweep:
 
 * a first-impact map: ``FIRST_IMPACT_CELL + FIRST_IMPACT_MODE n`` per cell (n modes per beam;
-  a cell's search stops at its first impact, and by columns the next cell starts from there);
+  a cell's search stops at its first impact, and by columns the next cell starts from there,
+  a column ending at its first cell without impact). A map that is not run by columns (its
+  last axis is not F0 or the clearance) searches each cell alone: ``FIRST_IMPACT_ALONE n``
+  per impacting cell, and a cell without impact walks its whole horizon, ``FIRST_IMPACT_WALK``
+  per cycle (below) and mode;
 * the full dynamics: per *cycle*, the horizon over the period of the forcing or of the
   slowest free mode, whichever is shorter (a beam that is not forced fast still rings at its
   own first mode). A cell that impacts costs ``a n^p`` per cycle (``IMPACT_CYCLE[kind][law]``:
   the events' searches, the switches and the chatter within an impact grow with the modes, the
   spring law's switches as n^2, and so do the dynamics observables' peak-force searches); one
   that never impacts ``FREE_CYCLE n`` (one walk of the free search). Whether a cell impacts is
-  told by :func:`impacts`, from the linear response of beam 1's tip. The kinds: ``dynamics``
+  told by :func:`impacts`, from the linear response of beam 1's tip (the Lyapunov run
+  carries its tangent vectors through every cycle: it costs ``a n^p`` either way). The
+  kinds: ``dynamics``
   (a map's run over t_max with its observables), ``lyapunov`` (its windowed run with the
   tangent vectors), ``long_time`` (transient + sampled forcing periods, stroboscopic samples)
   and ``simulate`` (one run, then every contact's peak force and the impact table; plus
@@ -33,25 +39,27 @@ from typing import Any
 import numpy as np
 
 # --- constants from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ---------------
-FIRST_IMPACT_CELL = 3e-06
-FIRST_IMPACT_MODE = 1.9e-07
+FIRST_IMPACT_CELL = 5.7e-07
+FIRST_IMPACT_MODE = 3.6e-08
+FIRST_IMPACT_ALONE = 4.8e-06
+FIRST_IMPACT_WALK = 5.6e-08
 IMPACT_CYCLE = {
-    'dynamics': {'tied': (8.9e-05, 1.7), 'spring': (0.00015, 1.6)},
-    'lyapunov': {'spring': (2.8e-05, 1.5)},
-    'long_time': {'tied': (2.7e-05, 1.3), 'spring': (2.5e-05, 1.6)},
-    'simulate': {'tied': (0.00023, 1.6), 'spring': (0.00085, 1.3)},
+    "dynamics": {"tied": (1.3e-05, 1.8), "spring": (3.3e-05, 1.8)},
+    "lyapunov": {"spring": (3.2e-06, 2.2)},
+    "long_time": {"tied": (1e-05, 1.1), "spring": (3.2e-05, 0.87)},
+    "simulate": {"tied": (3.7e-05, 1.7), "spring": (5.9e-05, 1.8)},
 }
-FREE_CYCLE = 7.5e-06
-SAMPLING = 9.4e-07
-GEOMETRY = 4.5e-05
-THREAD_SPEEDUP = {1: 1.0, 2: 0.78}
-START_UP = 1.7
+FREE_CYCLE = 1.7e-07
+SAMPLING = 3.7e-07
+GEOMETRY = 1.1e-05
+THREAD_SPEEDUP = {1: 1.0, 2: 1.0}
+START_UP = 1.1
 COMPILE = {
-    'first_impact': 22.0,
-    'dynamics': 40.0,
-    'lyapunov': 45.0,
-    'long_time': 40.0,
-    'simulate': 55.0,
+    "first_impact": 19.0,
+    "dynamics": 41.0,
+    "lyapunov": 60.0,
+    "long_time": 35.0,
+    "simulate": 29.0,
 }
 # ----------------------------------------------------------------------------------------------
 
@@ -109,14 +117,20 @@ def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon:
     contact law of every point.
     """
     scale, power = IMPACT_CYCLE[kind][law]
-    per_cycle = np.where(impacts(values, n_modes, horizon), scale * n_modes**power,
-                         FREE_CYCLE * n_modes)
+    impacting = kind == "lyapunov" or impacts(values, n_modes, horizon)
+    per_cycle = np.where(impacting, scale * n_modes**power, FREE_CYCLE * n_modes)
     return cycles(values, horizon) * per_cycle
 
 
 def first_impact_seconds(cells: float, n_modes: int) -> float:
     """Seconds on one core of a first-impact map of ``cells`` cells."""
     return cells * (FIRST_IMPACT_CELL + FIRST_IMPACT_MODE * n_modes)
+
+
+def cell_search_seconds(values: Mapping[str, Any], n_modes: int, t_max: float) -> np.ndarray:
+    """Seconds on one core of first-impact cells searched alone (not by columns), per point."""
+    return np.where(impacts(values, n_modes, t_max), FIRST_IMPACT_ALONE * n_modes,
+                    FIRST_IMPACT_WALK * n_modes * cycles(values, t_max))
 
 
 def geometry_seconds(geometries: int, n_modes: int) -> float:

@@ -469,7 +469,9 @@ def expected_seconds(sweep: Sweep, threads: int | None = None) -> float:
 
     threads = threads or os.cpu_count() or 1
     set_up = costs.geometry_seconds(geometry_count(sweep), sweep.n_modes)
-    if not sweep.needs_dynamics:
+    from impactbeams.sweep.plan import by_columns
+
+    if not sweep.needs_dynamics and by_columns(sweep):
         return set_up + costs.first_impact_seconds(sweep.size, sweep.n_modes) / costs.speedup(
             threads)
     return set_up + sweep.size * float(np.mean(cell_seconds(sweep, sample_points(sweep)))
@@ -477,7 +479,10 @@ def expected_seconds(sweep: Sweep, threads: int | None = None) -> float:
 
 
 def cell_seconds(sweep: Sweep, points: list[Params]) -> np.ndarray:
-    """Seconds on one core of the full-dynamics cells with parameters ``points``."""
+    """Seconds on one core of the cells with parameters ``points``.
+
+    Full dynamics, or first impacts searched cell by cell (a map not run by columns).
+    """
     from impactbeams import costs
 
     seconds = np.zeros(len(points))
@@ -485,7 +490,9 @@ def cell_seconds(sweep: Sweep, points: list[Params]) -> np.ndarray:
         index = [k for k, point in enumerate(points) if point.contact_law == law]
         values = {name: np.array([points[k].numeric()[name] for k in index])
                   for name in points[0].numeric()}
-        if any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables):
+        if not sweep.needs_dynamics:
+            seconds[index] += costs.cell_search_seconds(values, sweep.n_modes, sweep.t_max)
+        elif any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables):
             seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, sweep.t_max,
                                                      "dynamics")
         if LYAPUNOV in sweep.observables:
