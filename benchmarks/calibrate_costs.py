@@ -159,7 +159,7 @@ def dynamics_costs(kind, law, log):
     return {"modes": list(MODES), "seconds_per_cycle": per_cycle}, fit_power(MODES, per_cycle)
 
 
-def free_cost(log):
+def free_cost(log, observable="impact_count"):
     """Seconds per cycle and mode of cells that never impact (tiny force)."""
     from impactbeams import costs
     from impactbeams.sweep.run import run_sweep
@@ -167,7 +167,7 @@ def free_cost(log):
     axes = {"omega": (150.0, 900.0), "force_amplitude": (1e-8, 1e-7)}
     per_mode_cycle = []
     for n in (5, 20):
-        sweep = sweep_mapping(n, 10.0, ["impact_count"], "spring", axes, num=4)
+        sweep = sweep_mapping(n, 10.0, [observable], "spring", axes, num=4)
         points_cycles = impacting_cycles(sweep, lambda v, sweep=sweep: sweep.t_max)
         assert points_cycles[1] == 0.0
         from impactbeams.sweep.definition import sample_points
@@ -176,7 +176,8 @@ def free_cost(log):
         values = {k: np.array([p.numeric()[k] for p in points]) for k in points[0].numeric()}
         total = float(np.sum(costs.cycles(values, sweep.t_max)))
         per_mode_cycle.append(timed(lambda sweep=sweep: run_sweep(sweep, threads=1)) / total / n)
-        log(f"free, {n} modes: {per_mode_cycle[-1] * 1e9:.1f} ns per cycle and mode")
+        log(f"free, {observable}, {n} modes: {per_mode_cycle[-1] * 1e9:.1f} ns per cycle and "
+            "mode")
     return float(np.mean(per_mode_cycle))
 
 
@@ -317,6 +318,7 @@ def main() -> None:
             measured[f"{kind}_{law}"], cycle[kind][law] = dynamics_costs(kind, law, log)
     constants["IMPACT_CYCLE"] = cycle
     constants["FREE_CYCLE"] = free_cost(log)
+    constants["LYAPUNOV_FREE_CYCLE"] = free_cost(log, "lyapunov_exponent")
     constants["SAMPLING"] = sampling_cost(log)
     constants["GEOMETRY"] = geometry_cost(log)
     constants["THREAD_SPEEDUP"] = {1: 1.0, 2: thread_speedup(log)}

@@ -94,13 +94,13 @@ def test_impacting_cells_cost_more_than_free_ones():
 
 
 def test_the_impact_prediction_follows_the_static_deflection():
-    """Far below resonance beam 1's tip moves F0 c1, c1 = l^3 / (3 EI): impacts iff that
-    (times the allowed transient growth) reaches the clearance."""
-    values = Params(omega=1.0, damping_ratio=0.01).numeric()
+    """Far below resonance beam 1's tip moves F0 c1, c1 = l^3 / (3 EI) (the modes' sum of
+    Y_n(l)^2 / omega_n^2): impacts iff that reaches the clearance."""
+    values = Params(omega=1e-3, damping_ratio=0.01).numeric()
     c1 = values["l1"] ** 3 / (3 * values["EI1"])
-    threshold = values["clearance"] / (costs.TRANSIENT_GROWTH * c1)
-    assert costs.impacts({**values, "force_amplitude": 1.01 * threshold}, 20, 10.0)
-    assert not costs.impacts({**values, "force_amplitude": 0.99 * threshold}, 20, 10.0)
+    threshold = values["clearance"] / c1
+    assert costs.impacts({**values, "force_amplitude": 1.01 * threshold}, 20, 1e4)
+    assert not costs.impacts({**values, "force_amplitude": 0.99 * threshold}, 20, 1e4)
 
 
 @pytest.mark.parametrize("kind", list(costs.IMPACT_CYCLE))
@@ -197,3 +197,14 @@ def test_the_docs_table_is_generated_from_the_json():
     table = _load_benchmark("estimate_table")
     result = json.loads(table.OUTPUT.read_text())
     assert table.render_table(result) in (ROOT / "docs" / "limits.md").read_text()
+
+
+def test_a_map_searched_cell_by_cell_walks_the_horizon_of_its_free_cells():
+    """Along omega alone (no column axis) a cell without impact walks all of t_max."""
+    def seconds(t_max, force):
+        return expected_seconds(sweep_from_mapping({
+            "t_max": t_max, "n_modes": 5, "params": {"force_amplitude": force},
+            "axes": {"omega": {"min": 300.0, "max": 600.0, "num": 1000}}}), 1)
+
+    assert seconds(2.0, 1e-8) == pytest.approx(2 * seconds(1.0, 1e-8), rel=0.01)
+    assert seconds(1.0, 1e-2) == seconds(2.0, 1e-2)  # impacting cells stop at their impact

@@ -15,9 +15,9 @@ Numba's disk cache, :mod:`impactbeams.compilation`) and the compute, per cell of
   the events' searches, the switches and the chatter within an impact grow with the modes, the
   spring law's switches as n^2, and so do the dynamics observables' peak-force searches); one
   that never impacts ``FREE_CYCLE n`` (one walk of the free search). Whether a cell impacts is
-  told by :func:`impacts`, from the linear response of beam 1's tip (the Lyapunov run
-  carries its tangent vectors through every cycle: it costs ``a n^p`` either way). The
-  kinds: ``dynamics``
+  told by :func:`impacts`, from the linear response of beam 1's tip (a Lyapunov run without
+  impact still carries its tangent vectors through every cycle: ``LYAPUNOV_FREE_CYCLE n``).
+  The kinds: ``dynamics``
   (a map's run over t_max with its observables), ``lyapunov`` (its windowed run with the
   tangent vectors), ``long_time`` (transient + sampled forcing periods, stroboscopic samples)
   and ``simulate`` (one run, then every contact's peak force and the impact table; plus
@@ -50,6 +50,7 @@ IMPACT_CYCLE = {
     "simulate": {"tied": (3.7e-05, 1.7), "spring": (5.9e-05, 1.8)},
 }
 FREE_CYCLE = 1.7e-07
+LYAPUNOV_FREE_CYCLE = 1e-06
 SAMPLING = 3.7e-07
 GEOMETRY = 1.1e-05
 THREAD_SPEEDUP = {1: 1.0, 2: 1.0}
@@ -62,9 +63,6 @@ COMPILE = {
     "simulate": 29.0,
 }
 # ----------------------------------------------------------------------------------------------
-
-TRANSIENT_GROWTH = 1.5  # the start from rest overshoots the steady amplitude by up to this
-
 
 def speedup(threads: int) -> float:
     """Measured speed-up of a sweep on ``threads`` threads (the largest measured beyond)."""
@@ -89,10 +87,13 @@ def cycles(values: Mapping[str, Any], horizon: Any) -> np.ndarray:
 def impacts(values: Mapping[str, Any], n_modes: int, horizon: Any) -> np.ndarray:
     """Whether the tips are expected to meet within ``horizon`` (s): a bool per point.
 
-    Beam 1's tip under F0 sin(Omega t) from rest, from its modes' receptance at its tip
-    (mass-normalised cantilever modes have Y_n(l)^2 = 4 / (rhoA l)); a mode near resonance
-    grows like t, i.e. has at least the damping ratio 1 / (omega_n horizon). The tips meet if
-    TRANSIENT_GROWTH times that amplitude, plus the uplifts, reach the clearance.
+    Beam 1's tip under F0 sin(Omega t) from rest, mode by mode at its tip (mass-normalised
+    cantilever modes have Y_n(l)^2 = 4 / (rhoA l)): a mode of frequency omega_n moves
+    F0 Y_n(l)^2 / |omega_n^2 - Omega^2 + 2 i zeta omega_n Omega| in the steady state, and the
+    start from rest adds its free vibration, Omega / omega_n times that, at most; a mode near
+    resonance grows like t, i.e. has at least the damping ratio 1 / (omega_n horizon). The
+    tips meet if the sum of the modes' largest motions, plus the uplifts, reaches the
+    clearance.
     """
     from impactbeams.modes import cantilever_roots
 
@@ -102,10 +103,11 @@ def impacts(values: Mapping[str, Any], n_modes: int, horizon: Any) -> np.ndarray
     big_omega = np.asarray(values["omega"], dtype=float)[..., None]
     zeta = np.maximum(np.asarray(values["damping_ratio"])[..., None],
                       1.0 / (omega_n * np.asarray(horizon)[..., None]))
-    receptance = np.abs(np.sum(4.0 / (rho_a * length) / (
-        omega_n**2 - big_omega**2 + 2j * zeta * omega_n * big_omega), axis=-1))
-    reach = (TRANSIENT_GROWTH * np.asarray(values["force_amplitude"]) * receptance
-             + np.abs(values["uplift1"]) + np.abs(values["uplift2"]))
+    steady = 4.0 / (rho_a * length) / np.abs(omega_n**2 - big_omega**2
+                                             + 2j * zeta * omega_n * big_omega)
+    motion = np.sum(steady * (1.0 + big_omega / omega_n), axis=-1)
+    reach = (np.asarray(values["force_amplitude"]) * motion + np.abs(values["uplift1"])
+             + np.abs(values["uplift2"]))
     return reach >= np.asarray(values["clearance"])
 
 
@@ -117,8 +119,9 @@ def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon:
     contact law of every point.
     """
     scale, power = IMPACT_CYCLE[kind][law]
-    impacting = kind == "lyapunov" or impacts(values, n_modes, horizon)
-    per_cycle = np.where(impacting, scale * n_modes**power, FREE_CYCLE * n_modes)
+    free = LYAPUNOV_FREE_CYCLE if kind == "lyapunov" else FREE_CYCLE
+    per_cycle = np.where(impacts(values, n_modes, horizon), scale * n_modes**power,
+                         free * n_modes)
     return cycles(values, horizon) * per_cycle
 
 
