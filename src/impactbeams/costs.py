@@ -39,19 +39,19 @@ from typing import Any
 import numpy as np
 
 # --- constants from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ---------------
-FIRST_IMPACT_CELL = 5.7e-07
+FIRST_IMPACT_CELL = 5.8e-07
 FIRST_IMPACT_MODE = 3.6e-08
-FIRST_IMPACT_ALONE = 4.8e-06
-FIRST_IMPACT_WALK = 5.6e-08
+FIRST_IMPACT_ALONE = 4.7e-06
+FIRST_IMPACT_WALK = 5.7e-08
 IMPACT_CYCLE = {
-    "dynamics": {"tied": (1.3e-05, 1.8), "spring": (3.3e-05, 1.8)},
-    "lyapunov": {"spring": (3.2e-06, 2.2)},
-    "long_time": {"tied": (1e-05, 1.1), "spring": (3.2e-05, 0.87)},
-    "simulate": {"tied": (3.7e-05, 1.7), "spring": (5.9e-05, 1.8)},
+    "dynamics": {"tied": (2.4e-05, 1.6), "spring": (4.7e-05, 1.5)},
+    "lyapunov": {"spring": (7.9e-06, 1.6)},
+    "long_time": {"tied": (8.7e-06, 1.1), "spring": (2.5e-05, 0.95)},
+    "simulate": {"tied": (4.4e-05, 1.6), "spring": (0.00014, 1.4)},
 }
-FREE_CYCLE = 1.7e-07
-LYAPUNOV_FREE_CYCLE = 1e-06
-SAMPLING = 3.7e-07
+FREE_CYCLE = 2.1e-07
+LYAPUNOV_FREE_CYCLE = 9.5e-07
+SAMPLING = 3.5e-07
 GEOMETRY = 1.1e-05
 THREAD_SPEEDUP = {1: 1.0, 2: 1.0}
 START_UP = 1.1
