@@ -127,6 +127,21 @@ def _geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
             *dynamics.spring_arrays)
 
 
+def check_contact_phases(sweep: Sweep) -> None:
+    """Refuse a sweep whose damped spring contact cannot oscillate, before any work starts.
+
+    An overdamped contact phase (real eigenvalues) is found only when its modes are built, so
+    the geometries with a damped spring contact build their dynamics arrays here, the plan's
+    own SciPy work (done again by the run's plan); a ParameterError names the largest contact
+    damping allowed. Other sweeps cost nothing.
+    """
+    if not sweep.needs_dynamics:
+        return
+    for params in _geometries(sweep):
+        if params.contact_law == "spring" and (params.contact_damping or params.damping_ratio):
+            _geometry_arrays(params, sweep)
+
+
 def build_plan(sweep: Sweep) -> Plan:
     """The modes of every geometry of ``sweep``, packed for the kernels (SciPy work)."""
     per_geometry = [_geometry_arrays(params, sweep) for params in _geometries(sweep)]

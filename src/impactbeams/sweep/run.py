@@ -27,6 +27,7 @@ from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.plan import (
     Chunking,
     build_plan,
+    check_contact_phases,
     compute_chunk,
     contact_resolution,
     default_chunk_cells,
@@ -153,7 +154,7 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
     _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
-
+    check_contact_phases(sweep)
     if output is not None:
         write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk, runner,
                     discard_corrupt)
@@ -212,6 +213,7 @@ def write_sweep(sweep: Sweep | str | Path, output: str | Path, threads: int | No
     _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
+    check_contact_phases(sweep)
     output = Path(output)
     with reporting_kept_chunks(output), output_lock(output):
         return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk,
