@@ -9,6 +9,7 @@ docs/limits.md, generated from docs/benchmarks/estimates.json (checked below).
 import importlib.util
 import io
 import json
+import math
 import os
 import subprocess
 import sys
@@ -208,3 +209,21 @@ def test_a_map_searched_cell_by_cell_walks_the_horizon_of_its_free_cells():
 
     assert seconds(2.0, 1e-8) == pytest.approx(2 * seconds(1.0, 1e-8), rel=0.01)
     assert seconds(1.0, 1e-2) == seconds(2.0, 1e-2)  # impacting cells stop at their impact
+
+
+def test_cells_that_meet_only_in_the_start_from_rest_vibration_are_charged_for_its_duration():
+    """Above beam 1's first resonance, a damped tip whose steady motion misses the clearance
+    meets it only while the free vibration of the start from rest lasts: a time that does
+    not depend on the horizon (so the share of the horizon falls as 1 / horizon). Undamped,
+    that vibration never decays: the whole horizon."""
+    values = Params(damping_ratio=0.05).numeric()
+    omega_1 = 1.8751040687**2 / values["l1"] ** 2 * math.sqrt(values["EI1"] / values["rhoA1"])
+    values = {**values, "omega": 2.0 * omega_1, "uplift1": 0.0, "uplift2": 0.0}
+    steady = 4.0 / (values["rhoA1"] * values["l1"]) / (3.0 * omega_1**2)  # mode 1, per newton
+    cell = {**values, "force_amplitude": 0.6 * values["clearance"] / steady}
+    shares = [float(costs.impacting_fraction(cell, 8, horizon)) for horizon in (10.0, 40.0)]
+    assert 0.0 < shares[1] < shares[0] < 1.0
+    assert shares[0] * 10.0 == pytest.approx(shares[1] * 40.0, rel=1e-12)
+    assert costs.impacting_fraction({**cell, "damping_ratio": 0.0}, 8, 40.0) == 1.0
+    assert costs.impacting_fraction({**cell, "force_amplitude": 1e-3 * cell["force_amplitude"]},
+                                    8, 40.0) == 0.0

@@ -85,15 +85,22 @@ def cycles(values: Mapping[str, Any], horizon: Any) -> np.ndarray:
 
 
 def impacts(values: Mapping[str, Any], n_modes: int, horizon: Any) -> np.ndarray:
-    """Whether the tips are expected to meet within ``horizon`` (s): a bool per point.
+    """Whether the tips are expected to meet within ``horizon`` (s): a bool per point."""
+    return impacting_fraction(values, n_modes, horizon) > 0.0
+
+
+def impacting_fraction(values: Mapping[str, Any], n_modes: int, horizon: Any) -> np.ndarray:
+    """The share of ``horizon`` (s) over which the tips are expected to meet, per point.
 
     Beam 1's tip under F0 sin(Omega t) from rest, mode by mode at its tip (mass-normalised
     cantilever modes have Y_n(l)^2 = 4 / (rhoA l)): a mode of frequency omega_n moves
     F0 Y_n(l)^2 / |omega_n^2 - Omega^2 + 2 i zeta omega_n Omega| in the steady state, and the
     start from rest adds its free vibration, Omega / omega_n times that, at most; a mode near
     resonance grows like t, i.e. has at least the damping ratio 1 / (omega_n horizon). The
-    tips meet if the sum of the modes' largest motions, plus the uplifts, reaches the
-    clearance.
+    tips meet for the whole horizon if the steady motions, plus the uplifts, reach the
+    clearance; if only the free vibration's help reaches it, for as long as that vibration,
+    decaying like exp(-zeta omega_1 t), still makes up the difference (the whole horizon
+    without damping); else never.
     """
     from impactbeams.modes import cantilever_roots
 
@@ -101,14 +108,19 @@ def impacts(values: Mapping[str, Any], n_modes: int, horizon: Any) -> np.ndarray
     length, rho_a = np.asarray(values["l1"])[..., None], np.asarray(values["rhoA1"])[..., None]
     omega_n = (roots / length) ** 2 * np.sqrt(np.asarray(values["EI1"])[..., None] / rho_a)
     big_omega = np.asarray(values["omega"], dtype=float)[..., None]
-    zeta = np.maximum(np.asarray(values["damping_ratio"])[..., None],
-                      1.0 / (omega_n * np.asarray(horizon)[..., None]))
+    damping = np.asarray(values["damping_ratio"], dtype=float)
+    zeta = np.maximum(damping[..., None], 1.0 / (omega_n * np.asarray(horizon)[..., None]))
     steady = 4.0 / (rho_a * length) / np.abs(omega_n**2 - big_omega**2
                                              + 2j * zeta * omega_n * big_omega)
-    motion = np.sum(steady * (1.0 + big_omega / omega_n), axis=-1)
-    reach = (np.asarray(values["force_amplitude"]) * motion + np.abs(values["uplift1"])
-             + np.abs(values["uplift2"]))
-    return reach >= np.asarray(values["clearance"])
+    force = np.asarray(values["force_amplitude"])
+    uplifts = np.abs(values["uplift1"]) + np.abs(values["uplift2"])
+    lasting = force * np.sum(steady, axis=-1) + uplifts
+    passing = force * np.sum(steady * big_omega / omega_n, axis=-1)
+    gap = np.asarray(values["clearance"]) - lasting
+    decay = damping * omega_n[..., 0] * np.asarray(horizon)  # free vibration's decay over it
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(decay > 0.0, np.log(passing / gap) / decay, 1.0)
+    return np.where(gap <= 0.0, 1.0, np.where(passing >= gap, np.clip(share, 0.0, 1.0), 0.0))
 
 
 def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon: Any,
@@ -120,8 +132,8 @@ def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon:
     """
     scale, power = IMPACT_CYCLE[kind][law]
     free = LYAPUNOV_FREE_CYCLE if kind == "lyapunov" else FREE_CYCLE
-    per_cycle = np.where(impacts(values, n_modes, horizon), scale * n_modes**power,
-                         free * n_modes)
+    share = impacting_fraction(values, n_modes, horizon)
+    per_cycle = share * scale * n_modes**power + (1.0 - share) * free * n_modes
     return cycles(values, horizon) * per_cycle
 
 
