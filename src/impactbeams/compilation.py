@@ -2,8 +2,8 @@
 
 Kernels compile on their first call and are cached on disk (``cache=True``): a fresh install
 pays for it once per kind of run (docs/limits.md, "Time": cold compile times measured by
-``benchmarks/calibrate_costs.py``). :func:`kernels_cached` tells, before a run, whether its
-entry kernels are in Numba's disk cache; :func:`reporting_compiles` prints a line when a compile
+``benchmarks/calibrate_costs.py``). `kernels_cached` tells, before a run, whether its
+entry kernels are in Numba's disk cache; `reporting_compiles` prints a line when a compile
 starts and when it ends, from Numba's own compile events (no thread: the lines come from the
 thread that compiles).
 """

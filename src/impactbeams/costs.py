@@ -1,7 +1,7 @@
 """Expected wall time of a run: a cost model calibrated on this project's 2-core machine.
 
 A run's time is the interpreter's start-up, the kernels' compile (only when they are not in
-Numba's disk cache, :mod:`impactbeams.compilation`) and the compute, per cell of a sweep:
+Numba's disk cache, `impactbeams.compilation`) and the compute, per cell of a sweep:
 
 * a first-impact map: ``FIRST_IMPACT_CELL + FIRST_IMPACT_MODE n`` per cell (n modes per beam;
   a cell's search stops at its first impact, and by columns the next cell starts from there,
@@ -15,7 +15,7 @@ Numba's disk cache, :mod:`impactbeams.compilation`) and the compute, per cell of
   the events' searches, the switches and the chatter within an impact grow with the modes, the
   spring law's switches as n^2, and so do the dynamics observables' peak-force searches); one
   that never impacts ``FREE_CYCLE n`` (one walk of the free search). Whether a cell impacts is
-  told by :func:`impacts`, from the linear response of beam 1's tip (a Lyapunov run without
+  told by `impacts`, from the linear response of beam 1's tip (a Lyapunov run without
   impact still carries its tangent vectors through every cycle: ``LYAPUNOV_FREE_CYCLE n``).
   The kinds: ``dynamics``
   (a map's run over t_max with its observables), ``lyapunov`` (its windowed run with the

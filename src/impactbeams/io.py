@@ -2,8 +2,8 @@
 
 Every writer goes through `atomic_write` or `build_netcdf`: write a temporary
 file, then rename it over the target, so a reader sees the old file or the whole new one.
-netCDF variables of numbers are compressed (:data:`COMPRESSION`). A failed write (a full
-disk, a removed or read-only folder, a quota) raises :class:`WriteError`, naming the file.
+netCDF variables of numbers are compressed (`COMPRESSION`). A failed write (a full
+disk, a removed or read-only folder, a quota) raises [`WriteError`][], naming the file.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ class WriteError(OSError):
 
 @contextlib.contextmanager
 def writing(path: Path) -> Iterator[None]:
-    """Raise an OSError of the body as a :class:`WriteError` naming ``path``."""
+    """Raise an OSError of the body as a [`WriteError`][] naming ``path``."""
     try:
         yield
     except WriteError:
@@ -59,7 +59,7 @@ def writing(path: Path) -> Iterator[None]:
 
 @contextlib.contextmanager
 def writing_netcdf(path: Path) -> Iterator[None]:
-    """:func:`writing` for netCDF4 calls, whose HDF5 errors are RuntimeErrors.
+    """`writing` for netCDF4 calls, whose HDF5 errors are RuntimeErrors.
 
     HDF5 reports a failed write (a full disk, a quota) as "NetCDF: HDF error" with no errno
     (a RuntimeError, or an OSError with netCDF's negative error code when creating a file):
@@ -95,7 +95,7 @@ def atomic_write(path: str | Path, write: Callable[[Path], None], folders: bool 
     The temporary file sits next to ``path`` (hidden, never matching the target's pattern) and
     is deleted on every exit. ``folders``: create missing folders above ``path`` (else a
     missing folder is an error). Any OSError (the folders, the writing, the rename) is a
-    :class:`WriteError` naming ``path``.
+    [`WriteError`][] naming ``path``.
     """
     path = Path(path)
     temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
@@ -180,9 +180,9 @@ def build_netcdf(path: str | Path, building: str | Path,
 
     On a normal exit the file is closed and renamed to ``path``; on an error (or interrupt)
     it is deleted and ``path`` is left as it was. Fill it box by box (``nc[name][box] =
-    values``, inside :func:`writing_netcdf`) with boxes of ``layout.chunks``: each one is
+    values``, inside `writing_netcdf`) with boxes of ``layout.chunks``: each one is
     then compressed once. A failure to create, define, close or rename the file is a
-    :class:`WriteError`.
+    [`WriteError`][].
     """
     import netCDF4
 

@@ -74,7 +74,7 @@ def check_run(values: Mapping[str, Any], t_max: float, n_modes: int,
 class Cost:
     """Expected cost of a run: peak ``memory`` (bytes) and its compute time (``seconds``).
 
-    The time comes from the cost model of :mod:`impactbeams.costs`.
+    The time comes from the cost model of `impactbeams.costs`.
     """
 
     memory: float
@@ -219,7 +219,7 @@ def image_path(path: str | Path) -> Path:
 
 
 def image_output(path: str | Path, what: str) -> Path:
-    """:func:`image_path` of ``path``, checked like :func:`require_output_file`.
+    """`image_path` of ``path``, checked like `require_output_file`.
 
     Missing folders are made when the figure is saved, as for every output.
     """

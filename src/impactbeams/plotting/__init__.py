@@ -86,7 +86,7 @@ def draw(axes: Axes, dataset: xr.Dataset, variable: str | None = None, *,
 
 def _check_arguments(dataset: object, path: object, variable: object, values: object,
                      indices: object, title: object, dpi: object) -> None:
-    """The types of :func:`plot_dataset`'s arguments (same names), and dpi's value."""
+    """The types of [`plot_dataset`][]'s arguments (same names), and dpi's value."""
     require_type("dataset", dataset, isinstance(dataset, xr.Dataset), "an xarray.Dataset")
     require_type("path", path, is_path(path), "the path of an image file (str or pathlib.Path)")
     for name, value in (("variable", variable), ("title", title)):

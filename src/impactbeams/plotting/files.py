@@ -13,8 +13,9 @@ from impactbeams.preflight import image_path
 def save_figure(figure: Figure, path: str | Path, dpi: float = 150) -> Path:
     """Save ``figure`` to ``path`` (matplotlib's default format if it has no suffix).
 
-    Written as a temporary file renamed into place (:func:`impactbeams.io.atomic_write`): an
-    error leaves no partial image, and a failed write is a :class:`~impactbeams.io.WriteError`.
+    Written as a temporary file renamed into place (`impactbeams.io.atomic_write`): an
+    error leaves no partial image, and a failed write is a
+    [`WriteError`][impactbeams.io.WriteError].
     Returns the file written.
     """
     path = image_path(path)

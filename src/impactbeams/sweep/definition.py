@@ -205,7 +205,7 @@ def load_sweep(path: str | os.PathLike[str]) -> Sweep:
 
 
 def as_sweep(sweep: Sweep | str | os.PathLike[str]) -> Sweep:
-    """``sweep`` itself, or the sweep file at that path, loaded by :func:`load_sweep`."""
+    """``sweep`` itself, or the sweep file at that path, loaded by [`load_sweep`][]."""
     if isinstance(sweep, Sweep):
         return sweep
     require_type("sweep", sweep, is_path(sweep),
@@ -456,7 +456,7 @@ def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = Fa
     of a first-impact map, netCDF writing included, is 18.04 bytes per cell). Both add the plan
     (8 x 2N float64 per geometry; a dynamics map 10 (2N)^2, with its stacking copy) and a
     dynamics map's per-thread segment buffers (MAX_SEGMENTS x (4 x 2N + 3) float64; a long
-    run's LONG_RUN_CAPACITY of them and its samples' states). Time: :func:`expected_seconds`.
+    run's LONG_RUN_CAPACITY of them and its samples' states). Time: `expected_seconds`.
     """
     from impactbeams.sweep.plan import LONG_RUN_CAPACITY, MAX_SEGMENTS
 
@@ -495,7 +495,7 @@ COST_SAMPLES = 64
 
 
 def expected_seconds(sweep: Sweep, threads: int | None = None) -> float:
-    """Wall time (s) of computing ``sweep`` on ``threads``: :mod:`impactbeams.costs`' model.
+    """Wall time (s) of computing ``sweep`` on ``threads``: `impactbeams.costs`' model.
 
     The set-up of every geometry, then the cells over the threads: a first-impact map's cost
     per cell, or the full dynamics' per cycle of each run (over t_max for the dynamics
@@ -546,7 +546,7 @@ def cell_seconds(sweep: Sweep, points: list[Params]) -> np.ndarray:
 def chunk_seconds(sweep: Sweep, start: int, stop: int, limit: int = 4) -> float:
     """Expected seconds on one core of a full-dynamics sweep's flat cells start..stop.
 
-    From ``limit`` cells spread over them (:func:`cell_seconds`): weights of a progress bar.
+    From ``limit`` cells spread over them (`cell_seconds`): weights of a progress bar.
     """
     return (stop - start) * float(np.mean(cell_seconds(sweep, sample_points(sweep, start, stop,
                                                                             limit))))

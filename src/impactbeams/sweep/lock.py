@@ -2,7 +2,7 @@
 
 A run takes the lock before it creates or writes anything for its output and holds it until
 the file is complete (or the run stops): a second run on the same output is refused at once
-(:class:`OutputInUse`, naming the first one's process, host and start). The lock is
+([`OutputInUse`][], naming the first one's process, host and start). The lock is
 ``fcntl.flock`` on the lock file, which records the holder; the operating system releases it
 when its process ends, however it ends, so a lock file left by a killed run is stale and the
 next run takes it over (with a warning). A normal release deletes the file.
@@ -44,11 +44,11 @@ def lock_path(output: Path) -> Path:
 
 @contextlib.contextmanager
 def output_lock(output: str | Path) -> Iterator[None]:
-    """Hold the exclusive lock on ``output`` for the body (:class:`OutputInUse` if taken).
+    """Hold the exclusive lock on ``output`` for the body ([`OutputInUse`][] if taken).
 
     Missing folders above ``output`` are created for the lock file, and removed again if they
     are still empty when the lock is released. Writing the lock file may raise
-    :class:`~impactbeams.io.WriteError`.
+    [`WriteError`][impactbeams.io.WriteError].
     """
     path = lock_path(Path(output))
     key = os.path.realpath(path)

@@ -1,6 +1,6 @@
 """The progress bar of a sweep, its ETA weighted by the cost model of its chunks.
 
-:class:`impactbeams.progress.Progress` (shared with ``simulate``); the chunks of a long-time
+`impactbeams.progress.Progress` (shared with ``simulate``); the chunks of a long-time
 or full-dynamics sweep differ in cost, those of a first-impact map hardly.
 """
 

@@ -126,7 +126,7 @@ def _check_options(output: object, threads: object, callbacks: Mapping[str, obje
                    switches: Mapping[str, object]) -> None:
     """The types of run_sweep's and write_sweep's options.
 
-    Their values are checked on use; chunk_cells, type and value, by :func:`_chunking`.
+    Their values are checked on use; chunk_cells, type and value, by `_chunking`.
     """
     require_type("output", output, output is None or is_path(output),
                  "None or the path of a netCDF file (str or pathlib.Path)")
@@ -146,7 +146,7 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
     Without ``output`` the map is computed in memory (a ParameterError if it would not fit).
     With it, see `write_sweep` (which takes the same arguments); the Dataset returned is
     then the file, opened lazily, so that a map larger than memory can be read in parts.
-    ``sweep`` may be the path of a sweep TOML file (read by :func:`load_sweep`).
+    ``sweep`` may be the path of a sweep TOML file (read by [`load_sweep`][]).
     """
     import xarray as xr
 
@@ -196,15 +196,15 @@ def write_sweep(sweep: Sweep | str | Path, output: str | Path, threads: int | No
     ``progress``: draw a progress bar on stderr. ``chunk_cells``: the most cells per chunk
     (default `default_chunk_cells`), rounded down to whole lines of the last axes (a
     resumed run keeps its chunks). ``on_chunk`` is called with each computed chunk number
-    (for tests and monitoring). ``runner`` computes the chunks (default :func:`local_runner`;
-    see :mod:`impactbeams.sweep.dask_runner` for a Dask cluster); they may finish in any order.
-    ``sweep`` may be the path of a sweep TOML file (read by :func:`load_sweep`).
+    (for tests and monitoring). ``runner`` computes the chunks (default `local_runner`;
+    see `impactbeams.sweep.dask_runner` for a Dask cluster); they may finish in any order.
+    ``sweep`` may be the path of a sweep TOML file (read by [`load_sweep`][]).
 
-    One writer per output: the run holds the lock of :mod:`impactbeams.sweep.lock` from its
+    One writer per output: the run holds the lock of `impactbeams.sweep.lock` from its
     start to its end; while another run holds it, this one raises
-    :class:`~impactbeams.sweep.lock.OutputInUse` (a ParameterError) naming that run. A file
+    [`OutputInUse`][impactbeams.sweep.lock.OutputInUse] (a ParameterError) naming that run. A file
     that cannot be written (a full disk, a removed or read-only folder, a quota) raises
-    :class:`~impactbeams.io.WriteError` (an OSError), one line naming the file, its cause and
+    [`WriteError`][impactbeams.io.WriteError] (an OSError), one line naming the file, its cause and
     the chunks kept: the same call resumes from them once the cause is fixed.
     """
     sweep = as_sweep(sweep)
@@ -224,7 +224,7 @@ def _write_sweep(sweep: Sweep, output: Path, threads: int | None, progress: bool
                  parallel: bool, chunk_cells: int | None,
                  on_chunk: Callable[[int], None] | None, runner: ChunkRunner | None,
                  discard_corrupt: bool) -> bool:
-    """:func:`write_sweep` under the output's lock."""
+    """`write_sweep` under the output's lock."""
     if finished_output(output, sweep):
         return False
     _warn_unresolved(sweep)

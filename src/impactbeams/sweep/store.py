@@ -45,7 +45,7 @@ class ChunkStore:
     run must have the same sweep and code, and adopts the recorded chunking (chunk ``k`` must
     cover the same cells), unless ``chunk_cells`` (the caller's choice that gave ``chunking``)
     asks for another one: that is an error rather than ignored. Each array is saved with its
-    registered dtype and its cells' value shape (:func:`~impactbeams.sweep.output.cell_values`).
+    registered dtype and its cells' value shape (`cell_values`).
     """
 
     def __init__(self, output: Path, sweep: Sweep, chunking: Chunking,
@@ -96,7 +96,7 @@ class ChunkStore:
         """The saved arrays of a chunk of ``size`` cells, or None if it is not saved.
 
         A damaged file (truncated, not an ``.npz``, arrays missing or of the wrong size or
-        dtype) counts as not saved and is listed in ``damaged`` for :meth:`refuse_damaged`;
+        dtype) counts as not saved and is listed in ``damaged`` for `refuse_damaged`;
         with ``discard_corrupt`` it is deleted instead (with a warning).
         """
         path = self._path(chunk)
@@ -116,7 +116,7 @@ class ChunkStore:
             return None
 
     def refuse_damaged(self) -> None:
-        """A ParameterError naming the damaged chunks :meth:`load` found, if any."""
+        """A ParameterError naming the damaged chunks `load` found, if any."""
         if not self.damaged:
             return
         (path, problem), others = self.damaged[0], [p.name for p, _ in self.damaged[1:]]
@@ -251,7 +251,7 @@ def _difference(nc: netCDF4.Dataset, layout: Layout) -> str | None:
 
 @contextlib.contextmanager
 def reporting_kept_chunks(output: Path) -> Iterator[None]:
-    """Add to a :class:`~impactbeams.io.WriteError` of the body what the run keeps.
+    """Add to a [`WriteError`][] of the body what the run keeps.
 
     That is, how many finished chunks of ``output`` are saved, and that the same command
     resumes from them.

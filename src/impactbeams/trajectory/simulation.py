@@ -76,7 +76,7 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
     Memory: the output series (and fields) twice (arrays and Dataset), the workspace of the
     sampling (SAMPLING_ARRAYS float64 arrays of a chunk's times by the coordinates) and the
     recorded segments at the ``max_events`` cap (time, phase and four states of 2 n_modes).
-    Time: :mod:`impactbeams.costs` (the run and its impact table per cycle, and the sampling).
+    Time: `impactbeams.costs` (the run and its impact table per cycle, and the sampling).
     """
     coordinates = 2 * n_modes
     series = 1 + SERIES + ENERGY_SERIES * energy_balance + 2 * n_points * fields
@@ -260,7 +260,7 @@ def _announce(params: Params, run_inputs: _RunInputs) -> None:
 def _check_options(fields: bool, energy_balance: bool, lyapunov: bool | int,
                    transient_periods: int, long_time: LongTime | None,
                    progress: bool) -> None:
-    """Check the types of :func:`simulate`'s options (same names).
+    """Check the types of [`simulate`][]'s options (same names).
 
     A transient must be left out of something: the exponents or the long-time samples.
     """
