@@ -191,12 +191,24 @@ def assert_same_map(path, reference):
     assert attrs == expected_attrs
 
 
+# the command line with every locally computed chunk 0.1 s longer: the signal always finds the
+# run going, however loaded the machine (a poll starved for a second could miss a fast run)
+SLOW_CLI = ("import sys, time\n"
+            "from impactbeams.sweep import run\n"
+            "compute = run.compute_chunk\n"
+            "def slow(*args, **kwargs):\n"
+            "    time.sleep(0.1)\n"
+            "    return compute(*args, **kwargs)\n"
+            "run.compute_chunk = slow\n"
+            "from impactbeams.cli import main\n"
+            "sys.exit(main(sys.argv[1:]))\n")
+
+
 def _interrupt(command, partial, how):
     """Run ``command`` in a CLI process; send it ``how`` once a few chunks are saved."""
     log = partial.with_name("stderr.txt")
     with open(log, "w") as stderr:
-        process = subprocess.Popen([sys.executable, "-m", "impactbeams.cli", *command],
-                                   stderr=stderr)
+        process = subprocess.Popen([sys.executable, "-c", SLOW_CLI, *command], stderr=stderr)
         try:
             _wait_for(lambda: len(list(partial.glob("chunk_*.npz"))) >= SAVED_BEFORE_THE_SIGNAL,
                       f"{SAVED_BEFORE_THE_SIGNAL} saved chunks", process, log)
