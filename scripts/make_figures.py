@@ -12,8 +12,8 @@ paper's), and the distance to one from uplift1 = 1e-12 m; a phase plane and a Po
 1.5 minutes on one core.
 
 The numbers the README quotes about Fig. 4 are written with the figures, from the same saved
-Datasets, into ``fig4.json`` (read by scripts/update_readme.py): the distance between the tips
-of beam 1 from uplift1 = 0 and 1e-6 m over the first 0.1 s and over the 3 s, the tip's
+Datasets, into ``fig4.json`` (dated; read by scripts/update_readme.py): the distance between
+the tips of beam 1 from uplift1 = 0 and 1e-6 m over the first 0.1 s and over the 3 s, the tip's
 amplitude, and the distance from uplift1 = 1e-12 m at the end of the first impact episode.
 """
 
@@ -23,6 +23,7 @@ import argparse
 import json
 import math
 import time
+from datetime import date
 from pathlib import Path
 
 import numpy as np
@@ -102,6 +103,7 @@ def draw(data: Path, out: Path) -> None:
     summary = {law: fig4_distances(*runs) for law, runs in
                zip(LAWS, zip(load("fig4_a"), load("fig4_b"), load("fig4_c"), strict=True),
                    strict=True)}
+    summary["date"] = f"{date.today()}"
     (out / "fig4.json").write_text(json.dumps(summary, indent=1) + "\n")
     print(f"figures and fig4.json in {out}")
 
