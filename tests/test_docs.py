@@ -166,3 +166,18 @@ def test_pages_delete_the_sweep_outputs_they_are_about_to_write():
                     missing.append(f"{path.relative_to(ROOT)}: {output}")
             earlier.append(source)
     assert not missing, f"maps written without deleting a leftover first: {missing}"
+
+
+def test_the_accuracy_table_names_tests_that_exist():
+    # The README's accuracy table states the tolerance each named test asserts; a renamed or
+    # removed test would leave a claim that CI no longer checks.
+    section = (ROOT / "README.md").read_text().split("## Accuracy", 1)[1].split("\n## ", 1)[0]
+    named, current = [], None
+    for module, function in re.findall(r"`(?:(test_\w+\.py))?::(\w+)`", section):
+        current = module or current
+        named.append((current, function))
+    assert len(named) >= 20
+    missing = [f"{module}::{function}" for module, function in named
+               if not re.search(rf"^def {function}\(", (ROOT / "tests" / module).read_text(),
+                                re.MULTILINE)]
+    assert not missing, f"README's accuracy table names tests that do not exist: {missing}"
