@@ -295,6 +295,32 @@ def fig4() -> str:
         f"{um * tied['distance_max_m']:.1f} um of each other over {tied['t_max_s']:g} s.\n")
 
 
+def spring_limits() -> str:
+    """The resolution rule's modes over k, and the cost per simulated second (spring.json).
+
+    Indented by two spaces: the section sits inside an item of the Limits list.
+    """
+    import impactbeams as ib
+    from impactbeams.compliant import required_modes
+    from impactbeams.params import MAX_MODES
+
+    default = ib.Params().contact_stiffness
+    stiffnesses = (1e4, 1e5, default, 1e6, 1e7, 1e8)
+    modes = [required_modes(ib.Params(contact_stiffness=k)) for k in stiffnesses]
+    grid = [10 ** (exponent / 20) for exponent in range(160, 240)]  # 20 per decade
+    beyond = next(k for k in grid if required_modes(ib.Params(contact_stiffness=k)) > MAX_MODES)
+    report = _results("spring")
+    cost = report["cost"]
+    names = [f"{_sci(k, 2)} (default)" if k == default else _sci(k) for k in stiffnesses]
+    return (f"  {', '.join(map(str, modes))} modes at k = {', '.join(names)} N/m; above about "
+            f"{_sci(beyond)} N/m it asks for more than the package's {MAX_MODES} modes per "
+            "beam. The run time per simulated second grows faster than the number of modes ("
+            + ", ".join(f"{row['per_simulated_second']['events']:.2g}" for row in cost)
+            + " s at " + ", ".join(str(row["n_modes"]) for row in cost) + " modes for k = "
+            f"{_sci(report['config']['cost_stiffness'])}, "
+            "[benchmarks](docs/benchmarks/README.md)).\n  ")
+
+
 SECTIONS: dict[str, Callable[[], str]] = {
     "longtime": longtime,
     "bad-input": lambda: transcript("modes", "--clearance=-1e-5"),
@@ -306,6 +332,7 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "spring-precision": spring_precision,
     "map-threads": map_threads,
     "fig4": fig4,
+    "spring-limits": spring_limits,
 }
 
 
