@@ -293,6 +293,12 @@ CASES = {
          "-o", "r.nc"], {},
         ["contact_damping = 1000000.0 is not allowed: with contact_stiffness = 10000 N/m",
          "at most about 1.35 N s/m"]),
+    "run-contact-damping-overdamped": (  # 4 modes: before its plan is printed or a file made
+        ["run", "s.toml"],
+        {"s.toml": sweep_file(top='observables = ["impact_count"]',
+                              params="contact_damping = 1e6\ncontact_stiffness = 1e4")},
+        ["contact_damping = 1000000.0 is not allowed: with contact_stiffness = 10000 N/m",
+         "at most about 3.52 N s/m"]),
     "run-chunk-cells-1e9": (["run", "ok.toml", "--chunk-cells", "1000000000"], {},
                             ["argument --chunk-cells: 1000000000 is not allowed: must be an "
                              "integer from 1 to 16777216"]),

@@ -240,7 +240,7 @@ def test_long_time_titles_name_the_sampled_periods_not_t_max(figure):
 
 def test_run_overview_writes_symbols_and_units_as_the_maps(monkeypatch, tmp_path):
     figures = []
-    monkeypatch.setattr(trajectories, "_save", lambda figure, path, dpi=150: figures.append(
+    monkeypatch.setattr(trajectories, "save_figure", lambda figure, path, dpi=150: figures.append(
         figure))
     time = np.linspace(0.0, 0.01, 11)
     run = xr.Dataset(

@@ -109,12 +109,14 @@ def _run(args: argparse.Namespace) -> int:
     from impactbeams.preflight import require_input_file
     from impactbeams.sweep import load_sweep
     from impactbeams.sweep.lock import output_lock
+    from impactbeams.sweep.plan import check_contact_phases
     from impactbeams.sweep.store import reporting_kept_chunks
 
     sweep = load_sweep(require_input_file(args.sweep, "sweep"))
     output = _sweep_output(args, sweep)
     _check_scheduler(args.scheduler)
     _check_threads(args)
+    check_contact_phases(sweep)
     with reporting_kept_chunks(output), output_lock(output):  # before anything is printed,
         return _locked_run(args, sweep, output)  # created or computed
 
@@ -122,12 +124,13 @@ def _run(args: argparse.Namespace) -> int:
 def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
     """``run`` once its output is locked: compute (or reuse) the map, check its statuses."""
     from impactbeams.sweep import write_sweep  # writes netCDF without xarray
+    from impactbeams.sweep.definition import run_kind
 
     reuse = output.exists()
     if not reuse:
         _announce(sweep, output, args)
     try:
-        with _cluster_runner(args) as runner:
+        with _cluster_runner(args) as runner, _compile_report(run_kind(sweep)):
             write_sweep(sweep, output, threads=None if runner else args.threads,
                         progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner,
                         discard_corrupt=args.discard_corrupt)
@@ -164,7 +167,10 @@ def _sweep_output(args: argparse.Namespace, sweep: Sweep) -> Path:
 
 def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     """The run's size, expected cost and destination, on stderr."""
-    from impactbeams.sweep.definition import expected_cost
+    from impactbeams.compilation import kernels_cached
+    from impactbeams.costs import COMPILE
+    from impactbeams.preflight import format_time
+    from impactbeams.sweep.definition import expected_cost, run_kind
 
     long_time = sweep.long_time
     horizon = (f"t_max = {sweep.t_max} s" if long_time is None else
@@ -172,9 +178,18 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     print(f"{sweep.source}: {' x '.join(map(str, sweep.shape))} = {sweep.size} cells over "
           f"{', '.join(a.name for a in sweep.axes)}; {horizon}, "
           f"{sweep.n_modes} modes per beam -> {output}\nexpected: "
-          f"{expected_cost(sweep, args.threads).describe()}; the first chunk also compiles "
-          "the kernels, about 10 s on a fresh install (cached after that)",
-          file=sys.stderr)
+          f"{expected_cost(sweep, args.threads).describe()}"
+          + ("" if kernels_cached(run_kind(sweep)) else
+             f", after compiling the kernels (once per install), about "
+             f"{format_time(COMPILE[run_kind(sweep)])}"), file=sys.stderr)
+
+
+def _compile_report(kind: str) -> contextlib.AbstractContextManager[None]:
+    """Lines on stderr while the kernels of a run of ``kind`` compile (if they do)."""
+    from impactbeams.compilation import reporting_compiles
+    from impactbeams.costs import COMPILE
+
+    return reporting_compiles(COMPILE[kind])
 
 
 def _incomplete_cells(dataset: xr.Dataset) -> int:
@@ -260,10 +275,11 @@ def _simulate(args: argparse.Namespace) -> int:
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
     with output_lock(output):  # a second simulate on this output would silently replace it
-        dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
-                           dt_output=args.dt_output, fields=args.fields,
-                           energy_balance=args.energy_balance, lyapunov=args.lyapunov,
-                           transient_periods=args.transient_periods)
+        with _compile_report("simulate"):
+            dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
+                               dt_output=args.dt_output, fields=args.fields,
+                               energy_balance=args.energy_balance, lyapunov=args.lyapunov,
+                               transient_periods=args.transient_periods, progress=True)
         write_netcdf(dataset, output)
     status = dataset.attrs["status"]
     exponent = (f", largest Lyapunov exponent {float(dataset.lyapunov_exponent):.6g} +- "

@@ -34,12 +34,6 @@ if TYPE_CHECKING:
 # forcing's). A phase is rounded to ~0.1 eps omega t per evaluation (docs/limits.md), 2e-7 rad
 # at 1e10 rad; beyond, results lose their digits, and the run would take hours per cell.
 MAX_PHASE = 1e10
-# Rough run costs, seconds per coordinate (2 n_modes) and radian of the fastest oscillation over
-# [0, t_max], per cell and core (docs/limits.md): a first-impact map (Fig. 5a by columns, 1e6
-# cells in 0.25-0.9 s on 2 cores, many cells stopping early; 1.5e-10 cell by cell) and the full
-# dynamics (simulate, spring law, 20 to 40 modes: 1.5e-8 to 3.8e-8).
-FIRST_IMPACT_RATE = 1.5e-11
-DYNAMICS_RATE = 4e-8
 
 
 def highest_frequency(values: Mapping[str, Any], n_modes: int) -> np.ndarray:
@@ -78,7 +72,10 @@ def check_run(values: Mapping[str, Any], t_max: float, n_modes: int,
 
 @dataclasses.dataclass(frozen=True)
 class Cost:
-    """Expected cost of a run: peak ``memory`` (bytes) and a rough wall time (``seconds``)."""
+    """Expected cost of a run: peak ``memory`` (bytes) and its compute time (``seconds``).
+
+    The time comes from the cost model of :mod:`impactbeams.costs`.
+    """
 
     memory: float
     seconds: float

@@ -54,8 +54,6 @@ from impactbeams.params import (
     value_at,
 )
 from impactbeams.preflight import (
-    DYNAMICS_RATE,
-    FIRST_IMPACT_RATE,
     MAX_PHASE,
     Cost,
     check_run,
@@ -449,7 +447,7 @@ def _geometry_axes(sweep: Sweep) -> list[Axis]:
 
 
 def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = False) -> Cost:
-    """Peak memory and rough wall time of running ``sweep`` on ``threads`` (default: all cores).
+    """Peak memory and wall time of running ``sweep`` on ``threads`` (default: all cores).
 
     Memory: a streamed run (``write_sweep``, what ``impactbeams run`` does) holds a chunk at a
     time (`chunk_memory`); ``in_memory`` (``run_sweep`` without an output) also holds the
@@ -458,38 +456,110 @@ def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = Fa
     of a first-impact map, netCDF writing included, is 18.04 bytes per cell). Both add the plan
     (8 x 2N float64 per geometry; a dynamics map 10 (2N)^2, with its stacking copy) and a
     dynamics map's per-thread segment buffers (MAX_SEGMENTS x (4 x 2N + 3) float64; a long
-    run's LONG_RUN_CAPACITY of them and its samples' states). Time: ``rate`` x 2N x (fastest
-    frequency x horizon) per cell over the threads, plus the set-up; the horizon is t_max,
-    plus a long run's (transient + sampled) forcing periods.
+    run's LONG_RUN_CAPACITY of them and its samples' states). Time: :func:`expected_seconds`.
     """
     from impactbeams.sweep.plan import LONG_RUN_CAPACITY, MAX_SEGMENTS
 
     threads = threads or os.cpu_count() or 1
     coordinates = 2 * sweep.n_modes
     geometries = geometry_count(sweep)
-    values, _ = _corners(sweep)
-    fastest = float(np.max(np.maximum(values["omega"],
-                                      highest_frequency(values, sweep.n_modes))))
     results = sweep.size * (16 * _stored_values(sweep) + 4) if in_memory else 0
-    # a run over [0, t_max] for the other observables, if any
-    over_t_max = any(name not in LONG_TIME_OBSERVABLES for name in sweep.observables)
-    horizon = sweep.t_max if over_t_max else 0.0
+    over_t_max = _runs_over_t_max(sweep)
     if sweep.needs_dynamics:
         plan = 2 * geometries * 8 * 10 * coordinates**2
         buffers = threads * MAX_SEGMENTS * (4 * coordinates + 3) * 8 if over_t_max else 0
-        per_geometry, rate = 5e-5 * sweep.n_modes**2, DYNAMICS_RATE
     else:
         plan, buffers = 2 * geometries * 8 * 8 * coordinates, 0
-        per_geometry, rate = 4e-4 + 2.5e-5 * sweep.n_modes, FIRST_IMPACT_RATE
     if sweep.long_time is not None:  # each cell's own run, in windows of LONG_RUN_CAPACITY
         buffers += threads * (LONG_RUN_CAPACITY * (4 * coordinates + 3)
                               + sweep.long_time.sampled_periods * (2 * coordinates + 5)) * 8
-        # the mean of the longest and shortest runs (corners of the grid)
-        horizon += float(np.mean(sweep.long_time.horizon(values["omega"],
-                                                         sweep.transient_periods)))
-    compute = sweep.size * coordinates * fastest * horizon * rate / threads
-    return Cost(chunk_memory(sweep) + results + plan + buffers,
-                geometries * per_geometry + compute)
+    return Cost(chunk_memory(sweep) + results + plan + buffers, expected_seconds(sweep, threads))
+
+
+def run_kind(sweep: Sweep) -> str:
+    """The kind of run whose kernels a sweep compiles most of (``compilation.ENTRY_KERNELS``)."""
+    if sweep.long_time is not None:
+        return "long_time"
+    if LYAPUNOV in sweep.observables:
+        return "lyapunov"
+    return "dynamics" if sweep.needs_dynamics else "first_impact"
+
+
+def _runs_over_t_max(sweep: Sweep) -> bool:
+    """Whether any observable needs a run over [0, t_max] (all but the long-time ones)."""
+    return any(name not in LONG_TIME_OBSERVABLES for name in sweep.observables)
+
+
+# cells of the grid at which a sweep's cost is evaluated (a regular sub-grid)
+COST_SAMPLES = 64
+
+
+def expected_seconds(sweep: Sweep, threads: int | None = None) -> float:
+    """Wall time (s) of computing ``sweep`` on ``threads``: :mod:`impactbeams.costs`' model.
+
+    The set-up of every geometry, then the cells over the threads: a first-impact map's cost
+    per cell, or the full dynamics' per cycle of each run (over t_max for the dynamics
+    observables, again for the Lyapunov exponent, and over the long run's periods), averaged
+    over a regular sub-grid of at most ``COST_SAMPLES`` cells. Start-up and compile are apart
+    (``costs.START_UP``, ``costs.COMPILE``).
+    """
+    from impactbeams import costs
+
+    threads = threads or os.cpu_count() or 1
+    set_up = costs.geometry_seconds(geometry_count(sweep), sweep.n_modes)
+    from impactbeams.sweep.plan import by_columns
+
+    if not sweep.needs_dynamics and by_columns(sweep):
+        return set_up + costs.first_impact_seconds(sweep.size, sweep.n_modes) / costs.speedup(
+            threads)
+    return set_up + sweep.size * float(np.mean(cell_seconds(sweep, sample_points(sweep)))
+                                       ) / costs.speedup(threads)
+
+
+def cell_seconds(sweep: Sweep, points: list[Params]) -> np.ndarray:
+    """Seconds on one core of the cells with parameters ``points``.
+
+    Full dynamics, or first impacts searched cell by cell (a map not run by columns).
+    """
+    from impactbeams import costs
+
+    seconds = np.zeros(len(points))
+    for law in set(point.contact_law for point in points):
+        index = [k for k, point in enumerate(points) if point.contact_law == law]
+        values = {name: np.array([points[k].numeric()[name] for k in index])
+                  for name in points[0].numeric()}
+        if not sweep.needs_dynamics:
+            seconds[index] += costs.cell_search_seconds(values, sweep.n_modes, sweep.t_max)
+        elif any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables):
+            seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, sweep.t_max,
+                                                     "dynamics")
+        if LYAPUNOV in sweep.observables:
+            seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, sweep.t_max,
+                                                     "lyapunov")
+        if sweep.long_time is not None:
+            horizon = sweep.long_time.horizon(values["omega"], sweep.transient_periods)
+            seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, horizon,
+                                                     "long_time")
+    return seconds
+
+
+def chunk_seconds(sweep: Sweep, start: int, stop: int, limit: int = 4) -> float:
+    """Expected seconds on one core of a full-dynamics sweep's flat cells start..stop.
+
+    From ``limit`` cells spread over them (:func:`cell_seconds`): weights of a progress bar.
+    """
+    return (stop - start) * float(np.mean(cell_seconds(sweep, sample_points(sweep, start, stop,
+                                                                            limit))))
+
+
+def sample_points(sweep: Sweep, start: int = 0, stop: int | None = None,
+                  limit: int = COST_SAMPLES) -> list[Params]:
+    """Parameters of at most ``limit`` cells spread evenly over the flat cells start..stop."""
+    stop = sweep.size if stop is None else stop
+    flat = np.unique(np.linspace(start, stop - 1, min(limit, stop - start)).astype(np.int64))
+    return [sweep.params_at({axis.name: axis.value(int(i)) for axis, i in
+                             zip(sweep.axes, np.unravel_index(cell, sweep.shape), strict=True)})
+            for cell in flat]
 
 
 def chunk_memory(sweep: Sweep) -> int:

@@ -127,6 +127,21 @@ def _geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
             *dynamics.spring_arrays)
 
 
+def check_contact_phases(sweep: Sweep) -> None:
+    """Refuse a sweep whose damped spring contact cannot oscillate, before any work starts.
+
+    An overdamped contact phase (real eigenvalues) is found only when its modes are built, so
+    the geometries with a damped spring contact build their dynamics arrays here, the plan's
+    own SciPy work (done again by the run's plan); a ParameterError names the largest contact
+    damping allowed. Other sweeps cost nothing.
+    """
+    if not sweep.needs_dynamics:
+        return
+    for params in _geometries(sweep):
+        if params.contact_law == "spring" and (params.contact_damping or params.damping_ratio):
+            _geometry_arrays(params, sweep)
+
+
 def build_plan(sweep: Sweep) -> Plan:
     """The modes of every geometry of ``sweep``, packed for the kernels (SciPy work)."""
     per_geometry = [_geometry_arrays(params, sweep) for params in _geometries(sweep)]
@@ -274,6 +289,11 @@ class Columns:
     key: int
 
 
+def by_columns(sweep: Sweep) -> bool:
+    """Whether a first-impact map runs by columns: its last axis is F0 or the clearance."""
+    return bool(sweep.axes) and sweep.axes[-1].name in _AFFINE_AXES and sweep.axes[-1].num > 1
+
+
 def first_impact_columns(sweep: Sweep, start: int, stop: int) -> Columns:
     """The columns of flat cells ``start..stop`` along the sweep's last axis, if affine.
 
@@ -282,10 +302,10 @@ def first_impact_columns(sweep: Sweep, start: int, stop: int) -> Columns:
     most ``MAX_COLUMN_CELLS`` of the last axis), and a chunk is widened to whole columns, so
     that every cell's result is the same for any chunking. Other sweeps: columns of one cell.
     """
-    last = sweep.axes[-1] if sweep.axes else None
-    if last is None or last.name not in _AFFINE_AXES or last.num < 2:
+    if not by_columns(sweep):
         return Columns(start, stop, np.arange(stop - start + 1, dtype=np.int64),
                        layout.CELL_F0)
+    last = sweep.axes[-1]
     length = min(last.num, MAX_COLUMN_CELLS)
     rows = np.arange(start // last.num, (stop - 1) // last.num + 1, dtype=np.int64)
     # the segments tile each row and the rows follow each other: one edge per segment start

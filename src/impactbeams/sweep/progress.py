@@ -1,49 +1,32 @@
-"""The progress bar of a sweep (shown by the CLI; the library prints nothing by default)."""
+"""The progress bar of a sweep, its ETA weighted by the cost model of its chunks.
+
+:class:`impactbeams.progress.Progress` (shared with ``simulate``); the chunks of a long-time
+or full-dynamics sweep differ in cost, those of a first-impact map hardly.
+"""
 
 from __future__ import annotations
 
-import sys
-import time
-from typing import Any
+from typing import TYPE_CHECKING
+
+from impactbeams.progress import Progress
+from impactbeams.sweep.definition import Sweep, chunk_seconds
+
+if TYPE_CHECKING:
+    from impactbeams.sweep.plan import Chunking
+
+__all__ = ["Progress", "chunk_progress"]
+
+# chunks beyond which the ETA is not weighted (their costs are evaluated before the run starts)
+WEIGHED_CHUNKS = 4096
 
 
-class Progress:
-    """Progress bar with ETA on stderr; one line per 10% when stderr is not a terminal.
+def chunk_progress(sweep: Sweep, chunking: Chunking, enabled: bool) -> Progress:
+    """The progress bar of ``sweep`` run in ``chunking``'s chunks.
 
-    The rate behind the ETA is measured from the end of the first computed chunk, which also
-    pays for compiling the kernels (until then the ETA shows as unknown).
+    A full-dynamics chunk weighs its expected cost (``definition.chunk_seconds``), so that the
+    ETA holds when the chunks differ in cost (a first-impact map's chunks cost their cells).
     """
-
-    def __init__(self, total: int, enabled: bool = True, stream: Any = None) -> None:
-        self.total, self.done, self.enabled = total, 0, enabled
-        self.stream = stream or sys.stderr
-        self.interactive = self.stream.isatty()
-        self.start = time.perf_counter()
-        self.reported_decile = -1
-        self.warm: tuple[float, int] | None = None  # (time, cells done) after the first chunk
-
-    def update(self, cells: int, computed: bool = True) -> None:
-        """Record ``cells`` more finished cells (``computed=False``: loaded from a resume)."""
-        self.done += cells
-        now = time.perf_counter()
-        eta = 0.0 if self.done == self.total else float("nan")
-        if computed and self.warm is None:
-            self.warm = (now, self.done)
-        elif computed and now > self.warm[0]:
-            rate = (self.done - self.warm[1]) / (now - self.warm[0])
-            eta = (self.total - self.done) / rate
-        if self.enabled:
-            self._draw(now, eta)
-
-    def _draw(self, now: float, eta: float) -> None:
-        fraction = self.done / self.total
-        bar = "#" * int(30 * fraction)
-        eta_text = "   ?  " if eta != eta else f"{eta:6.1f}"
-        line = (f"[{bar:<30}] {100 * fraction:5.1f}% {self.done}/{self.total} cells "
-                f"{now - self.start:6.1f} s elapsed, ETA {eta_text} s")
-        if self.interactive:
-            self.stream.write("\r" + line + ("\n" if self.done == self.total else ""))
-        elif int(10 * fraction) > self.reported_decile:
-            self.reported_decile = int(10 * fraction)
-            self.stream.write(line + "\n")
-        self.stream.flush()
+    if not (sweep.needs_dynamics and chunking.count <= WEIGHED_CHUNKS):
+        return Progress(sweep.size, enabled=enabled)
+    weights = [chunk_seconds(sweep, *chunking.bounds(chunk)) for chunk in range(chunking.count)]
+    return Progress(sweep.size, enabled=enabled, weights=weights)

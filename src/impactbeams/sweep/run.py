@@ -27,11 +27,12 @@ from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.plan import (
     Chunking,
     build_plan,
+    check_contact_phases,
     compute_chunk,
     contact_resolution,
     default_chunk_cells,
 )
-from impactbeams.sweep.progress import Progress
+from impactbeams.sweep.progress import Progress, chunk_progress
 from impactbeams.sweep.store import ChunkStore, finished_output, reporting_kept_chunks
 
 if TYPE_CHECKING:
@@ -153,7 +154,7 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
     _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
-
+    check_contact_phases(sweep)
     if output is not None:
         write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk, runner,
                     discard_corrupt)
@@ -173,7 +174,7 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
 
     with numba_threads(threads):
         _compute(sweep, chunking, range(chunking.count), runner or local_runner(parallel),
-                 Progress(sweep.size, enabled=progress), on_chunk, keep)
+                 chunk_progress(sweep, chunking, progress), on_chunk, keep)
     return map_dataset(sweep, results)
 
 
@@ -212,6 +213,7 @@ def write_sweep(sweep: Sweep | str | Path, output: str | Path, threads: int | No
     _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
+    check_contact_phases(sweep)
     output = Path(output)
     with reporting_kept_chunks(output), output_lock(output):
         return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk,
@@ -227,7 +229,8 @@ def _write_sweep(sweep: Sweep, output: Path, threads: int | None, progress: bool
         return False
     _warn_unresolved(sweep)
     store = ChunkStore(output, sweep, _chunking(sweep, chunk_cells), chunk_cells)
-    chunking, bar = store.chunking, Progress(sweep.size, enabled=progress)
+    chunking = store.chunking
+    bar = chunk_progress(sweep, chunking, progress)
     with numba_threads(threads), map_file(sweep, output, store.building, chunking) as write:
         pending = []
         for chunk in range(chunking.count):  # the saved chunks first: damaged ones stop the run
@@ -237,7 +240,7 @@ def _write_sweep(sweep: Sweep, output: Path, threads: int | None, progress: bool
                 pending.append(chunk)
                 continue
             write(start, stop, saved)
-            bar.update(stop - start, computed=False)
+            bar.update(stop - start, computed=False, part=chunk)
         store.refuse_damaged()
 
         unsaved = len(pending)
@@ -299,6 +302,6 @@ def _compute(sweep: Sweep, chunking: Chunking, chunks: Iterable[int], runner: Ch
     for chunk, values in runner(sweep, [(chunk, *cells) for chunk, cells in bounds.items()]):
         start, stop = bounds[chunk]
         keep(chunk, start, stop, values)
-        bar.update(stop - start)
+        bar.update(stop - start, part=chunk)
         if on_chunk:
             on_chunk(chunk)

@@ -5,6 +5,8 @@ Onset time, duration, impulse, peak force, restitution, and the energy changes a
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from impactbeams.kernels.layout import (
@@ -20,6 +22,8 @@ from impactbeams.kernels.reductions import peak_force
 from impactbeams.packing import Packed
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory, free_states
+
+_REPORT_EVERY = 256  # contacts between progress reports
 
 
 def _segment_observables(packed: Packed, trajectory: Trajectory, k: np.ndarray, end: bool,
@@ -75,8 +79,13 @@ def _impulses(packed: Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarr
     return quasi_static + modal @ shear
 
 
-def impact_table(packed: Packed, trajectory: Trajectory) -> dict[str, np.ndarray]:
-    """Per-impact quantities: one entry per contact phase (zero-duration ones included)."""
+def impact_table(packed: Packed, trajectory: Trajectory,
+                 report: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
+    """Per-impact quantities: one entry per contact phase (zero-duration ones included).
+
+    ``report(count)`` is called as the peak forces of ``count`` more contacts are found (the
+    costly part: a search of each contact at the fastest mode's time scale).
+    """
     k = np.flatnonzero(trajectory.phase == CONTACT)
     released = k + 1 < trajectory.time.size
     before = _segment_observables(packed, trajectory, k - 1, end=True)
@@ -86,10 +95,14 @@ def impact_table(packed: Packed, trajectory: Trajectory) -> dict[str, np.ndarray
                                      np.minimum(k + 1, trajectory.time.size - 1), end=False)
     nan = np.full(k.size, np.nan)
     onset_rate, separation_rate = _gap_rate(before), _gap_rate(separated)
-    peaks = np.array([
-        peak_force(packed.tables[CONTACT], packed.forces[CONTACT], packed.phase_scalars[CONTACT],
-                   packed.settings, trajectory.q[j], trajectory.v[j], trajectory.time[j],
-                   trajectory.segment_end[j])[0] for j in k])
+    peaks = np.empty(k.size)
+    segment_end = trajectory.segment_end
+    for i, j in enumerate(k):
+        peaks[i] = peak_force(packed.tables[CONTACT], packed.forces[CONTACT],
+                              packed.phase_scalars[CONTACT], packed.settings, trajectory.q[j],
+                              trajectory.v[j], trajectory.time[j], segment_end[j])[0]
+        if report is not None and ((i + 1) % _REPORT_EVERY == 0 or i + 1 == k.size):
+            report(i % _REPORT_EVERY + 1)
     return {
         "impact_onset_time": trajectory.time[k],
         "impact_duration": np.where(released, trajectory.segment_end[k] - trajectory.time[k],

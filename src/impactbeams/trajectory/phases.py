@@ -3,15 +3,20 @@
 from __future__ import annotations
 
 import dataclasses
+import time
+from collections.abc import Callable
 
 import numpy as np
 
 from impactbeams.kernels import dynamics as dyn
-from impactbeams.kernels.layout import CONTACT
+from impactbeams.kernels.layout import CONTACT, FREE
 from impactbeams.kernels.spring import to_free
 from impactbeams.packing import Packed
 
-_INITIAL_CAPACITY = 4096  # segments; doubled (rerun from t = 0) until max_events
+_INITIAL_CAPACITY = 4096  # segments; doubled as needed up to max_events
+_WINDOW = 1024  # segments of the first window of a run; then about WINDOW_SECONDS each
+WINDOW_SECONDS = 0.5  # wall time per window (s): how often a run reports its progress
+_MIN_WINDOW = 256  # segments
 
 
 @dataclasses.dataclass(frozen=True)
@@ -41,23 +46,65 @@ class Trajectory:
         return np.append(self.time[1:], self.t_end)
 
 
-def run(packed: Packed, max_events: int) -> Trajectory:
-    """Run the event kernel; grow its arrays (rerunning from t = 0) up to ``max_events``."""
-    capacity = min(_INITIAL_CAPACITY, max_events)
+def run(packed: Packed, max_events: int,
+        report: Callable[[float], None] | None = None) -> Trajectory:
+    """Run the event kernel, in windows of segments, up to ``max_events`` segments.
+
+    Each window ends where the run can resume exactly (``stroboscope.resume_point``: a free
+    segment after a contact of positive length, where no history carries over), so that the
+    segments are bit for bit those of one uninterrupted run; ``report(t)`` is called after
+    each window with the simulated time reached (s). The arrays grow by doubling.
+    """
+    from impactbeams.kernels.stroboscope import resume_point
+
+    arrays = _segment_arrays(min(_INITIAL_CAPACITY, max_events), packed.q0.size)
+    start, window = 0, _WINDOW
+    q0, v0, t0 = packed.q0, packed.v0, 0.0
     while True:
-        time = np.empty(capacity)
-        phase = np.empty(capacity, dtype=np.int64)
-        sustained = np.empty(capacity, dtype=np.bool_)
-        q, v, end_q, end_v = (np.empty((capacity, packed.q0.size)) for _ in range(4))
-        count, status, t_end = dyn.run_events(packed.tables, packed.forces, packed.phase_scalars,
-                                              *packed.switching(), packed.settings, packed.q0,
-                                              packed.v0, time, phase, sustained, q, v, end_q,
-                                              end_v)
-        if status != dyn.EVENT_LIMIT or capacity >= max_events:
+        stop = min(start + window, max_events)
+        if stop > arrays[0].size:
+            arrays = _grown(arrays, min(max(2 * arrays[0].size, stop), max_events))
+        views = [array[start:stop] for array in arrays]
+        began = time.perf_counter()
+        count, status, t_end = dyn.run_events(packed.tables, packed.forces,
+                                              packed.phase_scalars, *packed.switching(),
+                                              packed.settings, q0, v0, *views, t0, FREE)
+        if status != dyn.EVENT_LIMIT or stop >= max_events:
             break
-        capacity = min(2 * capacity, max_events)
-    return Trajectory(time[:count], phase[:count], sustained[:count], q[:count], v[:count],
-                      end_q[:count], end_v[:count], dyn.STATUS_NAMES[status], float(t_end))
+        resume = resume_point(views[0], views[1], count)
+        if resume == 0:  # no point to resume from in this window: run it longer
+            window *= 2
+            continue
+        start += resume
+        q0, v0, t0 = arrays[3][start].copy(), arrays[4][start].copy(), float(arrays[0][start])
+        window = _next_window(window, resume, time.perf_counter() - began)
+        if report is not None:
+            report(t0)
+    count += start
+    time_, phase, sustained, q, v, end_q, end_v = (array[:count] for array in arrays)
+    return Trajectory(time_, phase, sustained, q, v, end_q, end_v, dyn.STATUS_NAMES[status],
+                      float(t_end))
+
+
+def _segment_arrays(capacity: int, n_coords: int) -> list[np.ndarray]:
+    """Empty segment arrays as ``run_events`` fills them (time, phase, sustained, 4 states)."""
+    return [np.empty(capacity), np.empty(capacity, dtype=np.int64),
+            np.empty(capacity, dtype=np.bool_),
+            *(np.empty((capacity, n_coords)) for _ in range(4))]
+
+
+def _grown(arrays: list[np.ndarray], capacity: int) -> list[np.ndarray]:
+    grown = _segment_arrays(capacity, arrays[3].shape[1])
+    for old, new in zip(arrays, grown, strict=True):
+        new[:old.shape[0]] = old
+    return grown
+
+
+def _next_window(window: int, kept: int, seconds: float) -> int:
+    """Segments of the next window: about WINDOW_SECONDS at the last window's pace."""
+    pace = kept / max(seconds, 1e-6)  # segments per second
+    return int(min(max(pace * WINDOW_SECONDS, _MIN_WINDOW), 4 * window))
+
 
 
 def sample(packed: Packed, trajectory: Trajectory, times: np.ndarray,

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import dataclasses
+import sys
 import warnings
 
 import numpy as np
 import xarray as xr
 
+from impactbeams import costs
 from impactbeams.compliant import MAX_MODES, required_modes
+from impactbeams.kernels.layout import CONTACT
 from impactbeams.longtime import LongTime
 from impactbeams.packing import Packed, pack_run
 from impactbeams.params import (
@@ -19,13 +22,8 @@ from impactbeams.params import (
     require_integer,
     require_type,
 )
-from impactbeams.preflight import (
-    DYNAMICS_RATE,
-    Cost,
-    check_run,
-    highest_frequency,
-    require_memory,
-)
+from impactbeams.preflight import Cost, check_run, format_time, require_memory
+from impactbeams.progress import Progress
 from impactbeams.trajectory.episodes import default_separation, episode_table
 from impactbeams.trajectory.fields import SAMPLE_CHUNK, deflections, time_series
 from impactbeams.trajectory.impacts import impact_table
@@ -78,14 +76,15 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
     Memory: the output series (and fields) twice (arrays and Dataset), the workspace of the
     sampling (SAMPLING_ARRAYS float64 arrays of a chunk's times by the coordinates) and the
     recorded segments at the ``max_events`` cap (time, phase and four states of 2 n_modes).
+    Time: :mod:`impactbeams.costs` (the run and its impact table per cycle, and the sampling).
     """
     coordinates = 2 * n_modes
     series = 1 + SERIES + ENERGY_SERIES * energy_balance + 2 * n_points * fields
     sampling = SAMPLING_ARRAYS * 8 * min(n_times, SAMPLE_CHUNK) * coordinates
     segments = max_events * (4 * coordinates + 3) * 8
-    fastest = float(max(highest_frequency(params.numeric(), n_modes), params.omega))
-    return Cost(2 * 8 * series * n_times + sampling + segments,
-                DYNAMICS_RATE * coordinates * fastest * t_max)
+    seconds = float(costs.dynamics_seconds(params.numeric(), params.contact_law, n_modes, t_max,
+                                           "simulate")) + costs.SAMPLING * n_times * n_modes
+    return Cost(2 * 8 * series * n_times + sampling + segments, seconds)
 
 
 def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output: float = 1e-4,
@@ -93,7 +92,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
              max_events: int = 200_000, search_span: float | None = None,
              episode_separation: float | None = None,
              energy_balance: bool = False, lyapunov: bool | int = False,
-             transient_periods: int = 0, long_time: LongTime | None = None) -> xr.Dataset:
+             transient_periods: int = 0, long_time: LongTime | None = None,
+             progress: bool = False) -> xr.Dataset:
     """Simulate the impacting beams from t = 0 to ``t_max`` (s); return an xarray Dataset.
 
     Args:
@@ -133,6 +133,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
             along the dimension ``period``, ``response_period``, ``steady_impact_rate`` and
             ``steady_episode_rate`` (with this run's ``episode_separation``). Needs
             Omega > 0 and t_max at least (transient_periods + sampled_periods) 2 pi / Omega.
+        progress: print the expected time, then progress bars with an ETA over the simulated
+            time and over the impacts' peak forces, on stderr (the results are the same).
 
     The output grid never influences the dynamics: events are located by the kernel on its
     own, and the outputs are evaluated from the exact segment states.
@@ -141,7 +143,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     memory (`simulation_cost`), raises [`ParameterError`][] naming
     it, its value and what is allowed (docs/limits.md, "Allowed values").
     """
-    _check_options(fields, energy_balance, lyapunov, transient_periods, long_time)
+    _check_options(fields, energy_balance, lyapunov, transient_periods, long_time, progress)
     run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
                                  search_span, episode_separation, fields, energy_balance)
     t_max, n_modes, resolution = run_inputs.t_max, run_inputs.n_modes, run_inputs.resolution
@@ -155,14 +157,18 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         check_request(params, n_modes, t_max, lyapunov, transient_periods)
     out_times = run_inputs.times
     packed = pack_run(params, n_modes, t_max, run_inputs.search_span)
-    trajectory = run(packed, run_inputs.max_events)
+    if progress:
+        _announce(params, run_inputs)
+    bar = Progress(t_max, enabled=progress, unit="s simulated")
+    trajectory = run(packed, run_inputs.max_events, bar.reach)
+    bar.reach(t_max)
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
                       f"{t_max!r} s: status {trajectory.status!r}", RuntimeWarning, stacklevel=2)
     separation = run_inputs.episode_separation
     dataset = _dataset(packed, trajectory, out_times,
                        default_separation(packed) if separation is None else separation,
-                       energy_balance)
+                       energy_balance, progress)
     if fields:
         x1, x2, y1, y2 = deflections(packed, trajectory, out_times, run_inputs.n_points)
         dataset = dataset.assign_coords(x1=("x1", x1, attributes("x1")),
@@ -192,6 +198,7 @@ class _RunInputs:
     episode_separation: float | None
     max_events: int
     n_points: int
+    seconds: float  # expected compute time (simulation_cost)
 
 
 def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output: float,
@@ -235,16 +242,30 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
                    "use a larger dt_output or a shorter t_max (or fewer fields, modes or "
                    "max_events)")
     return _RunInputs(t_max, n_modes, resolution, _output_times(t_max, dt_output, times), span,
-                      episode_separation, max_events, n_points)
+                      episode_separation, max_events, n_points, cost.seconds)
+
+
+def _announce(params: Params, run_inputs: _RunInputs) -> None:
+    """The run's expected time on stderr, with the kernels' compile if they are not cached."""
+    from impactbeams.compilation import kernels_cached
+
+    compile_note = ("" if kernels_cached("simulate") else
+                    f", after compiling the kernels (once per install), about "
+                    f"{format_time(costs.COMPILE['simulate'])}")
+    print(f"simulate: {params.contact_law} contact, {run_inputs.n_modes} modes per beam, "
+          f"t_max = {run_inputs.t_max:g} s; expected: roughly "
+          f"{format_time(run_inputs.seconds)}{compile_note}", file=sys.stderr)
 
 
 def _check_options(fields: bool, energy_balance: bool, lyapunov: bool | int,
-                   transient_periods: int, long_time: LongTime | None) -> None:
+                   transient_periods: int, long_time: LongTime | None,
+                   progress: bool) -> None:
     """Check the types of :func:`simulate`'s options (same names).
 
     A transient must be left out of something: the exponents or the long-time samples.
     """
-    for name, value in (("fields", fields), ("energy_balance", energy_balance)):
+    for name, value in (("fields", fields), ("energy_balance", energy_balance),
+                        ("progress", progress)):
         require_type(name, value, isinstance(value, (bool, np.bool_)), "True or False")
     require_type("lyapunov", lyapunov, isinstance(lyapunov, (bool, np.bool_))
                  or is_integer(lyapunov), "True, False or a number of exponents")
@@ -267,10 +288,12 @@ def _check_long_time(params: Params, t_max: float, transient_periods: int,
 
 
 def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray, separation: float,
-             energy: bool) -> xr.Dataset:
+             energy: bool, progress: bool = False) -> xr.Dataset:
     series = time_series(packed, trajectory, times, energy)
     series["tip_deflection_2"] = series["tip_deflection_2"] - packed.params.clearance
-    impacts = impact_table(packed, trajectory)
+    contacts = int(np.count_nonzero(trajectory.phase == CONTACT))
+    bar = Progress(contacts, enabled=progress and contacts > 0, unit="contacts' peak forces")
+    impacts = impact_table(packed, trajectory, bar.update)
     data = {name: ("time", values, attributes(name)) for name, values in series.items()}
     data.update({name: ("impact", values, attributes(name)) for name, values in impacts.items()})
     episodes = episode_table(packed, trajectory, impacts, separation, energy)

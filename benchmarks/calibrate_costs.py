@@ -1,0 +1,346 @@
+"""Measure the constants of the cost model (impactbeams.costs) on this machine.
+
+    python benchmarks/calibrate_costs.py [--output docs/benchmarks/costs.json] [--skip-compile]
+
+Compute costs on one thread in this process (warm kernels; the first call of each kind is
+discarded), per cell (first-impact maps) or per cycle of an impacting cell (full dynamics,
+fitted as a n^p over n modes per beam, per kind of run and contact law); the 2-thread speed-up;
+the start-up of a command and the cold compile of each kind of run (subprocesses with an empty
+NUMBA_CACHE_DIR, minus the same run with the cache filled). Writes the JSON (with the load
+average before and after) and rewrites the constants block of src/impactbeams/costs.py.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+MODES = (5, 12, 32)
+# an impacting grid (most cells impact: checked), moderate modal damping
+IMPACTING = {"omega": (150.0, 900.0), "force_amplitude": (3e-3, 1e-2)}
+
+
+def sweep_mapping(n_modes, t_max, observables, law, axes, num=3, **extra):
+    from impactbeams.sweep.definition import sweep_from_mapping
+
+    data = {"t_max": t_max, "n_modes": n_modes, "observables": observables,
+            "params": {"clearance": 1.1e-5, "contact_law": law,
+                       "damping_ratio": extra.pop("damping_ratio", 0.01),
+                       **({"force_amplitude": extra.pop("force_amplitude")}
+                          if "force_amplitude" in extra else {})},
+            "axes": {name: {"min": lo, "max": hi, "num": num if lo != hi else 1,
+                            "scale": "log" if name == "force_amplitude" else "linear"}
+                     for name, (lo, hi) in axes.items()}, **extra}
+    return sweep_from_mapping(data, source="calibration")
+
+
+def timed(function, repeat=2):
+    """Best wall time of ``repeat`` calls (s)."""
+    best = np.inf
+    for _ in range(repeat):
+        start = time.perf_counter()
+        function()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def impacting_cycles(sweep, horizon_of):
+    """Cycles of the sweep's cells that the model says impact, and that fraction."""
+    from impactbeams import costs
+    from impactbeams.sweep.definition import sample_points
+
+    points = sample_points(sweep, limit=sweep.size)
+    values = {name: np.array([p.numeric()[name] for p in points]) for name in points[0].numeric()}
+    horizon = horizon_of(values)
+    hit = costs.impacts(values, sweep.n_modes, horizon)
+    return float(np.sum(costs.cycles(values, horizon) * hit)), float(hit.mean())
+
+
+def fit_power(modes, per_cycle):
+    """(a, p) of per_cycle = a n^p, least squares in logs."""
+    power, log_scale = np.polyfit(np.log(modes), np.log(per_cycle), 1)
+    return float(np.exp(log_scale)), float(power)
+
+
+def first_impact_costs(log):
+    from impactbeams.sweep.run import run_sweep
+
+    axes = {"omega": (10.0, 400.0), "force_amplitude": (1e-6, 1e-3)}
+    per_cell = []
+    for n in (5, 20, 40):
+        sweep = sweep_mapping(n, 1.0, ["first_impact_time"], "spring", axes, num=200,
+                              damping_ratio=0.0)
+        run_sweep(sweep, threads=1)
+        per_cell.append(timed(lambda: run_sweep(sweep, threads=1), 3) / sweep.size)  # noqa: B023
+        log(f"first impact, {n} modes: {per_cell[-1] * 1e6:.3f} us per cell")
+    slope, intercept = np.polyfit((5, 20, 40), per_cell, 1)
+    return {"modes": [5, 20, 40], "seconds_per_cell": per_cell}, (float(intercept),
+                                                                  float(slope))
+
+
+def cell_search_costs(log):
+    """First-impact cells searched alone (a map along omega): s per mode of an impacting cell,
+    and per cycle and mode of a cell without impact (its whole horizon walked)."""
+    from impactbeams.sweep.run import run_sweep
+
+    alone, walk = [], []
+    for n in (5, 20):
+        for force, found in ((1e-2, alone), (1e-8, walk)):
+            sweep = sweep_mapping(n, 1.0, ["first_impact_time"], "spring",
+                                  {"omega": (300.0, 600.0)}, num=400, force_amplitude=force)
+            cycles, share = impacting_cycles(sweep, lambda v, sweep=sweep: sweep.t_max)
+            assert share == (1.0 if force > 1e-4 else 0.0)
+            seconds = timed(lambda sweep=sweep: run_sweep(sweep, threads=1))
+            if share:
+                found.append(seconds / sweep.size / n)
+            else:
+                from impactbeams import costs
+                from impactbeams.sweep.definition import sample_points
+
+                points = sample_points(sweep, limit=sweep.size)
+                values = {k: np.array([p.numeric()[k] for p in points])
+                          for k in points[0].numeric()}
+                found.append(seconds / float(np.sum(costs.cycles(values, 1.0))) / n)
+        log(f"first impact alone, {n} modes: {alone[-1] * 1e6:.2f} us per impacting cell "
+            f"and mode, {walk[-1] * 1e9:.1f} ns per cycle and mode without impact")
+    return float(np.mean(alone)), float(np.mean(walk))
+
+
+def dynamics_costs(kind, law, log):
+    """Seconds per impacting cycle at MODES, and the fit, of one kind of run."""
+    from impactbeams.sweep.run import run_sweep
+    from impactbeams.trajectory import simulate
+
+    per_cycle = []
+    for n in MODES:
+        if kind == "simulate":
+            from impactbeams import Params, costs
+
+            params = Params(contact_law=law, omega=400.0, force_amplitude=5e-3,
+                            damping_ratio=0.01)
+            t_max = 0.3
+            values = params.numeric()
+            cycles = float(costs.cycles(values, t_max))
+            assert costs.impacts(values, n, t_max)
+            simulate(params, 0.01, n_modes=n)
+            seconds = timed(lambda: simulate(params, t_max, n_modes=n,  # noqa: B023
+                                             dt_output=1e-3), 3)
+        else:
+            observables, extra, t_max = {
+                "dynamics": (["impact_count"], {}, 0.3),
+                "lyapunov": (["lyapunov_exponent"], {}, 0.3),
+                # the shipped long-time sweeps' periods and damping
+                "long_time": (["response_period"], {"transient_periods": 500,
+                                                    "sampled_periods": 200,
+                                                    "damping_ratio": 0.03}, 1.0),
+            }[kind]
+            sweep = sweep_mapping(n, t_max, observables, law, IMPACTING, **extra)
+            if kind == "long_time":
+                horizon = lambda v, sweep=sweep: sweep.long_time.horizon(  # noqa: E731
+                    v["omega"], sweep.transient_periods)
+                cycles, share = impacting_cycles(sweep, horizon)
+            else:
+                cycles, share = impacting_cycles(sweep, lambda v, sweep=sweep: sweep.t_max)
+            assert share >= 0.5, f"calibration grid of {kind}: {share:.0%} impacting"
+            seconds = timed(lambda sweep=sweep: run_sweep(sweep, threads=1))  # the first compiles
+        per_cycle.append(seconds / cycles)
+        log(f"{kind}, {law}, {n} modes: {per_cycle[-1] * 1e6:.1f} us per impacting cycle")
+    return {"modes": list(MODES), "seconds_per_cycle": per_cycle}, fit_power(MODES, per_cycle)
+
+
+def free_cost(log, observable="impact_count"):
+    """Seconds per cycle and mode of cells that never impact (tiny force)."""
+    from impactbeams import costs
+    from impactbeams.sweep.run import run_sweep
+
+    axes = {"omega": (150.0, 900.0), "force_amplitude": (1e-8, 1e-7)}
+    per_mode_cycle = []
+    for n in (5, 20):
+        sweep = sweep_mapping(n, 10.0, [observable], "spring", axes, num=4)
+        points_cycles = impacting_cycles(sweep, lambda v, sweep=sweep: sweep.t_max)
+        assert points_cycles[1] == 0.0
+        from impactbeams.sweep.definition import sample_points
+
+        points = sample_points(sweep, limit=sweep.size)
+        values = {k: np.array([p.numeric()[k] for p in points]) for k in points[0].numeric()}
+        total = float(np.sum(costs.cycles(values, sweep.t_max)))
+        per_mode_cycle.append(timed(lambda sweep=sweep: run_sweep(sweep, threads=1)) / total / n)
+        log(f"free, {observable}, {n} modes: {per_mode_cycle[-1] * 1e9:.1f} ns per cycle and "
+            "mode")
+    return float(np.mean(per_mode_cycle))
+
+
+def sampling_cost(log):
+    """Seconds per output time and mode of simulate (fine grid minus coarse grid)."""
+    from impactbeams import Params
+    from impactbeams.trajectory import simulate
+
+    params, n = Params(contact_law="spring", omega=400.0, damping_ratio=0.01), 12
+    coarse = timed(lambda: simulate(params, 0.2, n_modes=n, dt_output=1e-3))
+    fine = timed(lambda: simulate(params, 0.2, n_modes=n, dt_output=2e-6))
+    per = max(fine - coarse, 0.0) / (0.2 / 2e-6) / n
+    log(f"sampling: {per * 1e9:.1f} ns per output time and mode")
+    return per
+
+
+def geometry_cost(log):
+    from impactbeams.sweep.plan import build_plan
+
+    n = 16
+    sweep = sweep_mapping(n, 0.01, ["impact_count"], "spring", {"l1": (0.09, 0.11)}, num=10)
+    build_plan(sweep)
+    per = timed(lambda: build_plan(sweep)) / 10 / n**2
+    log(f"geometry: {per * 1e6:.2f} us per geometry and mode^2")
+    return per
+
+
+def thread_speedup(log):
+    from impactbeams.sweep.run import run_sweep
+
+    sweep = sweep_mapping(12, 0.3, ["impact_count"], "spring", IMPACTING, num=4)
+    one = timed(lambda sweep=sweep: run_sweep(sweep, threads=1))
+    two = timed(lambda: run_sweep(sweep, threads=2))
+    log(f"2 threads: {one / two:.2f}x")
+    return one / two
+
+
+# tiny runs of each kind, through the command line (compile and start-up)
+TINY = {
+    "first_impact": "t_max = 0.1\nn_modes = 5\n[axes.omega]\nmin = 100.0\nmax = 300.0\nnum = 4\n",
+    "dynamics": ('t_max = 0.01\nn_modes = 5\nobservables = ["impact_count"]\n[params]\n'
+                 "force_amplitude = 1e-2\n[axes.omega]\nmin = 100.0\nmax = 300.0\nnum = 2\n"),
+    "lyapunov": ('t_max = 0.05\nn_modes = 5\nobservables = ["lyapunov_exponent"]\n[params]\n'
+                 "force_amplitude = 1e-2\n[axes.omega]\nmin = 300.0\nmax = 400.0\nnum = 2\n"),
+    "long_time": ('n_modes = 5\nobservables = ["response_period"]\nsampled_periods = 4\n'
+                  "[params]\nforce_amplitude = 1e-2\n[axes.omega]\nmin = 300.0\nmax = 400.0\n"
+                  "num = 2\n"),
+}
+
+
+def command(kind, folder):
+    """The CLI command of the tiny run of ``kind`` (writing into ``folder``)."""
+    if kind == "simulate":
+        return ["simulate", "--t-max", "0.01", "--n-modes", "5", "-o",
+                str(Path(folder) / "simulate.nc")]
+    sweep = Path(folder) / f"{kind}.toml"
+    sweep.write_text(TINY[kind])
+    return ["run", str(sweep), "-o", str(Path(folder) / f"{kind}.nc"), "--quiet"]
+
+
+def cli_seconds(arguments, cache, folder):
+    """Wall time (s) of ``impactbeams ARGUMENTS`` with NUMBA_CACHE_DIR=cache, output removed."""
+    for output in Path(folder).glob("*.nc"):
+        output.unlink()
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONWARNINGS": "ignore"}
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "impactbeams.cli", *arguments], env=env, check=True,
+                   capture_output=True)
+    return time.perf_counter() - start
+
+
+def compile_costs(log):
+    """Cold compile (s) of each kind, and the start-up of a warm command (s)."""
+    compile_seconds, warm = {}, {}
+    with tempfile.TemporaryDirectory() as folder:
+        for kind in ("first_impact", "dynamics", "lyapunov", "long_time", "simulate"):
+            cache = Path(folder) / f"cache-{kind}"
+            arguments = command(kind, folder)
+            cold = cli_seconds(arguments, cache, folder)
+            warm[kind] = min(cli_seconds(arguments, cache, folder) for _ in range(2))
+            compile_seconds[kind] = cold - warm[kind]
+            log(f"compile {kind}: {compile_seconds[kind]:.1f} s (cold {cold:.1f} s, warm "
+                f"{warm[kind]:.2f} s)")
+    return compile_seconds, warm
+
+
+def round_constants(constants):
+    """Two significant digits (floats), recursively."""
+    if isinstance(constants, dict):
+        return {key: round_constants(value) for key, value in constants.items()}
+    if isinstance(constants, (list, tuple)):
+        return [round_constants(value) for value in constants]
+    return float(f"{constants:.2g}")
+
+
+def write_module(constants):
+    """Rewrite the constants block of src/impactbeams/costs.py from ``constants``."""
+    def text(value):
+        if isinstance(value, dict):
+            return "{" + ", ".join(f"{text(key)}: {text(v)}" for key, v in value.items()) + "}"
+        if isinstance(value, list):
+            return "(" + ", ".join(text(v) for v in value) + ")"
+        return json.dumps(value) if isinstance(value, str) else repr(value)
+
+    lines = []
+    for name, value in constants.items():
+        line = f"{name} = {text(value)}"
+        if len(line) > 99 and isinstance(value, dict):  # one entry per line
+            line = "\n".join([f"{name} = {{", *(f"    {text(key)}: {text(v)}," for key, v in
+                                                 value.items()), "}"])
+        lines.append(line)
+    path = ROOT / "src" / "impactbeams" / "costs.py"
+    source = path.read_text()
+    block = re.compile(r"(# --- constants from .*?\n)(.*?)(# ---+\n)", re.S)
+    path.write_text(block.sub(lambda m: m.group(1) + "\n".join(lines) + "\n" + m.group(3),
+                              source, count=1))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--output", type=Path, default=ROOT / "docs" / "benchmarks" / "costs.json")
+    parser.add_argument("--skip-compile", action="store_true",
+                        help="keep the compile and start-up figures of the existing output")
+    args = parser.parse_args()
+    warnings.simplefilter("ignore")
+    log = lambda text: print(text, flush=True)  # noqa: E731
+    load_before = os.getloadavg()
+    started = time.time()
+    measured, constants = {}, {}
+    measured["first_impact"], (cell, mode) = first_impact_costs(log)
+    constants["FIRST_IMPACT_CELL"], constants["FIRST_IMPACT_MODE"] = cell, mode
+    constants["FIRST_IMPACT_ALONE"], constants["FIRST_IMPACT_WALK"] = cell_search_costs(log)
+    cycle = {}
+    for kind, laws in (("dynamics", ("tied", "spring")), ("lyapunov", ("spring",)),
+                       ("long_time", ("tied", "spring")), ("simulate", ("tied", "spring"))):
+        cycle[kind] = {}
+        for law in laws:
+            measured[f"{kind}_{law}"], cycle[kind][law] = dynamics_costs(kind, law, log)
+    constants["IMPACT_CYCLE"] = cycle
+    constants["FREE_CYCLE"] = free_cost(log)
+    constants["LYAPUNOV_FREE_CYCLE"] = free_cost(log, "lyapunov_exponent")
+    constants["SAMPLING"] = sampling_cost(log)
+    constants["GEOMETRY"] = geometry_cost(log)
+    constants["THREAD_SPEEDUP"] = {1: 1.0, 2: thread_speedup(log)}
+    if args.skip_compile:
+        previous = json.loads(args.output.read_text())
+        constants["START_UP"] = previous["constants"]["START_UP"]
+        constants["COMPILE"] = previous["constants"]["COMPILE"]
+        measured["warm_command"] = previous["measured"]["warm_command"]
+    else:
+        constants["COMPILE"], measured["warm_command"] = compile_costs(log)
+        constants["START_UP"] = min(measured["warm_command"].values())
+    constants = round_constants(constants)
+    constants["THREAD_SPEEDUP"] = {int(k): v for k, v in constants["THREAD_SPEEDUP"].items()}
+    result = {"constants": constants, "measured": measured,
+              "load_average_before": list(load_before), "load_average_after":
+              list(os.getloadavg()), "cpu_count": os.cpu_count(),
+              "started_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime(started)),
+              "seconds": round(time.time() - started, 1)}
+    args.output.write_text(json.dumps(result, indent=1) + "\n")
+    write_module(constants)
+    log(f"wrote {args.output} and the constants of src/impactbeams/costs.py")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,125 @@
+"""Numba's compile of the kernels: whether a run will compile, and a report while it does.
+
+Kernels compile on their first call and are cached on disk (``cache=True``): a fresh install
+pays for it once per kind of run (docs/limits.md, "Time": cold compile times measured by
+``benchmarks/calibrate_costs.py``). :func:`kernels_cached` tells, before a run, whether its
+entry kernels are in Numba's disk cache; :func:`reporting_compiles` prints a line when a compile
+starts and when it ends, from Numba's own compile events (no thread: the lines come from the
+thread that compiles).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from typing import Any, TextIO
+
+REPORTED_COMPILE = 1.0  # s: an outermost compile at least this long ends with a line
+
+# The kernels called from Python by each kind of run (their callees compile with them, and
+# load with them from the cache): (module in impactbeams.kernels, kernel name).
+ENTRY_KERNELS = {
+    "first_impact": (("first_impact", "first_impact_map_parallel"),),
+    "dynamics": (("observables", "observables_map_parallel"),),
+    "lyapunov": (("lyapunov", "lyapunov_map_parallel"),),
+    "long_time": (("stroboscope", "stroboscope_map_serial"),),
+    "simulate": (("dynamics", "run_events"), ("dynamics", "sample_states")),
+}
+
+
+def kernels_cached(kind: str) -> bool:
+    """Whether the entry kernels of a run of ``kind`` (``ENTRY_KERNELS``) are in the disk cache.
+
+    Reads each kernel's cache index, as Numba does before it compiles (the file
+    ``<module>.<name>-<line>.py<version>.nbi`` in the cache folder, which Numba's locator
+    finds): it holds machine code for this CPU if it names this machine's code generator and
+    its source stamp matches the kernel's file. Cheap (a small pickle per kernel).
+    """
+    import importlib
+
+    for module, name in ENTRY_KERNELS[kind]:
+        dispatcher = getattr(importlib.import_module(f"impactbeams.kernels.{module}"), name)
+        if not _has_machine_code(dispatcher):
+            return False
+    return True
+
+
+def _has_machine_code(dispatcher: Any) -> bool:
+    cache = getattr(dispatcher, "_cache", None)
+    index = getattr(cache, "_cache_file", None)
+    if index is None:  # caching disabled: every process compiles
+        return False
+    magic = dispatcher.targetctx.codegen().magic_tuple()
+    try:
+        overloads = index._load_index()
+    except Exception:  # an unreadable index: Numba recompiles, and so does the run
+        return False
+    return any(key[1] == magic for key in overloads)
+
+
+@contextlib.contextmanager
+def reporting_compiles(expected: float, stream: TextIO | None = None) -> Iterator[None]:
+    """Print ``compiling kernels ...`` when a compile starts, and its time when it ends.
+
+    ``expected``: the measured cold compile time (s) announced. Each outermost compile (a
+    kernel called from Python, with every kernel it calls) of at least ``REPORTED_COMPILE``
+    seconds ends with a line ``compiled N kernels in S s``; on a terminal a line counts the
+    nested kernels as they finish. Nothing is printed when every kernel loads from the cache.
+    """
+    from numba.core import event
+
+    listener = _compile_report(expected, stream or sys.stderr)
+    event.register("numba:compile", listener)
+    try:
+        yield
+    finally:
+        event.unregister("numba:compile", listener)
+
+
+def _compile_report(expected: float, stream: TextIO) -> Any:
+    """A Numba ``numba:compile`` listener printing the compile's progress on ``stream``."""
+    from numba.core import event
+
+    class CompileReport(event.Listener):
+        def __init__(self) -> None:
+            self.interactive = stream.isatty()
+            self.local = threading.local()  # each thread's compile depth (Dask, long runs)
+            self.lock = threading.Lock()
+            self.announced = False
+            self.start = 0.0
+            self.kernels = 0
+
+        def on_start(self, _: Any) -> None:
+            depth = getattr(self.local, "depth", 0)
+            self.local.depth = depth + 1
+            with self.lock:
+                if depth == 0:
+                    self.start, self.kernels = time.perf_counter(), 0
+                if not self.announced:
+                    self.announced = True
+                    self._write(f"compiling kernels (once per install), about {expected:.0f} s",
+                                final=not self.interactive)
+
+        def on_end(self, _: Any) -> None:
+            self.local.depth -= 1
+            with self.lock:
+                self.kernels += 1
+                elapsed = time.perf_counter() - self.start
+                if self.local.depth == 0 and elapsed >= REPORTED_COMPILE:
+                    self._write(f"compiled {self.kernels} kernels in {elapsed:.1f} s (cached "
+                                "for later runs)", final=True)
+                elif self.interactive:
+                    self._write(f"compiling kernels (once per install), about {expected:.0f} "
+                                f"s: {self.kernels} compiled, {elapsed:.0f} s", final=False)
+
+        def _write(self, line: str, final: bool) -> None:
+            if self.interactive:  # rewrite the line in place; end it when final
+                stream.write(f"\rimpactbeams: {line}\033[K" + ("\n" if final else ""))
+            else:
+                stream.write(f"impactbeams: {line}\n")
+            stream.flush()
+
+    return CompileReport()

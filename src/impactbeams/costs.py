@@ -1,0 +1,153 @@
+"""Expected wall time of a run: a cost model calibrated on this project's 2-core machine.
+
+A run's time is the interpreter's start-up, the kernels' compile (only when they are not in
+Numba's disk cache, :mod:`impactbeams.compilation`) and the compute, per cell of a sweep:
+
+* a first-impact map: ``FIRST_IMPACT_CELL + FIRST_IMPACT_MODE n`` per cell (n modes per beam;
+  a cell's search stops at its first impact, and by columns the next cell starts from there,
+  a column ending at its first cell without impact). A map that is not run by columns (its
+  last axis is not F0 or the clearance) searches each cell alone: ``FIRST_IMPACT_ALONE n``
+  per impacting cell, and a cell without impact walks its whole horizon, ``FIRST_IMPACT_WALK``
+  per cycle (below) and mode;
+* the full dynamics: per *cycle*, the horizon over the period of the forcing or of the
+  slowest free mode, whichever is shorter (a beam that is not forced fast still rings at its
+  own first mode). A cell that impacts costs ``a n^p`` per cycle (``IMPACT_CYCLE[kind][law]``:
+  the events' searches, the switches and the chatter within an impact grow with the modes, the
+  spring law's switches as n^2, and so do the dynamics observables' peak-force searches); one
+  that never impacts ``FREE_CYCLE n`` (one walk of the free search). Whether a cell impacts is
+  told by :func:`impacts`, from the linear response of beam 1's tip (a Lyapunov run without
+  impact still carries its tangent vectors through every cycle: ``LYAPUNOV_FREE_CYCLE n``).
+  The kinds: ``dynamics``
+  (a map's run over t_max with its observables), ``lyapunov`` (its windowed run with the
+  tangent vectors), ``long_time`` (transient + sampled forcing periods, stroboscopic samples)
+  and ``simulate`` (one run, then every contact's peak force and the impact table; plus
+  ``SAMPLING`` per output time and mode).
+
+Time on T threads: the compute divided by ``THREAD_SPEEDUP[T]`` (measured on 2 cores).
+
+The constants are measured by ``python benchmarks/calibrate_costs.py``, which writes
+docs/benchmarks/costs.json (its ``constants``: ``tests/test_costs.py`` checks that these are
+the same); the measured load average is stored with them. Estimates against the actual times
+of the shipped sweeps and of random runs: docs/limits.md, "Time".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+# --- constants from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ---------------
+FIRST_IMPACT_CELL = 5.8e-07
+FIRST_IMPACT_MODE = 3.6e-08
+FIRST_IMPACT_ALONE = 4.7e-06
+FIRST_IMPACT_WALK = 5.7e-08
+IMPACT_CYCLE = {
+    "dynamics": {"tied": (2.4e-05, 1.6), "spring": (4.7e-05, 1.5)},
+    "lyapunov": {"spring": (7.9e-06, 1.6)},
+    "long_time": {"tied": (8.7e-06, 1.1), "spring": (2.5e-05, 0.95)},
+    "simulate": {"tied": (4.4e-05, 1.6), "spring": (0.00014, 1.4)},
+}
+FREE_CYCLE = 2.1e-07
+LYAPUNOV_FREE_CYCLE = 9.5e-07
+SAMPLING = 3.5e-07
+GEOMETRY = 1.1e-05
+THREAD_SPEEDUP = {1: 1.0, 2: 1.0}
+START_UP = 1.1
+COMPILE = {
+    "first_impact": 19.0,
+    "dynamics": 41.0,
+    "lyapunov": 60.0,
+    "long_time": 35.0,
+    "simulate": 29.0,
+}
+# ----------------------------------------------------------------------------------------------
+
+def speedup(threads: int) -> float:
+    """Measured speed-up of a sweep on ``threads`` threads (the largest measured beyond)."""
+    known = max(count for count in THREAD_SPEEDUP if count <= max(threads, 1))
+    return THREAD_SPEEDUP[known]
+
+
+def cycles(values: Mapping[str, Any], horizon: Any) -> np.ndarray:
+    """Cycles of a run over ``horizon`` (s): horizon max(Omega, omega_1) / 2 pi.
+
+    omega_1 is the slowest free mode of the two beams (rad/s). ``values``: numeric parameters
+    (floats or arrays that broadcast).
+    """
+    first = 1.8751040687**2
+    slowest = np.minimum(*(first / np.asarray(values[f"l{i}"]) ** 2
+                           * np.sqrt(np.asarray(values[f"EI{i}"]) / values[f"rhoA{i}"])
+                           for i in ("1", "2")))
+    return np.asarray(horizon) * np.maximum(np.asarray(values["omega"], dtype=float),
+                                            slowest) / (2 * np.pi)
+
+
+def impacts(values: Mapping[str, Any], n_modes: int, horizon: Any) -> np.ndarray:
+    """Whether the tips are expected to meet within ``horizon`` (s): a bool per point."""
+    return impacting_fraction(values, n_modes, horizon) > 0.0
+
+
+def impacting_fraction(values: Mapping[str, Any], n_modes: int, horizon: Any) -> np.ndarray:
+    """The share of ``horizon`` (s) over which the tips are expected to meet, per point.
+
+    Beam 1's tip under F0 sin(Omega t) from rest, mode by mode at its tip (mass-normalised
+    cantilever modes have Y_n(l)^2 = 4 / (rhoA l)): a mode of frequency omega_n moves
+    F0 Y_n(l)^2 / |omega_n^2 - Omega^2 + 2 i zeta omega_n Omega| in the steady state, and the
+    start from rest adds its free vibration, Omega / omega_n times that, at most; a mode near
+    resonance grows like t, i.e. has at least the damping ratio 1 / (omega_n horizon). The
+    tips meet for the whole horizon if the steady motions, plus the uplifts, reach the
+    clearance; if only the free vibration's help reaches it, for as long as that vibration,
+    decaying like exp(-zeta omega_1 t), still makes up the difference (the whole horizon
+    without damping); else never.
+    """
+    from impactbeams.modes import cantilever_roots
+
+    roots = cantilever_roots(n_modes)
+    length, rho_a = np.asarray(values["l1"])[..., None], np.asarray(values["rhoA1"])[..., None]
+    omega_n = (roots / length) ** 2 * np.sqrt(np.asarray(values["EI1"])[..., None] / rho_a)
+    big_omega = np.asarray(values["omega"], dtype=float)[..., None]
+    damping = np.asarray(values["damping_ratio"], dtype=float)
+    zeta = np.maximum(damping[..., None], 1.0 / (omega_n * np.asarray(horizon)[..., None]))
+    steady = 4.0 / (rho_a * length) / np.abs(omega_n**2 - big_omega**2
+                                             + 2j * zeta * omega_n * big_omega)
+    force = np.asarray(values["force_amplitude"])
+    uplifts = np.abs(values["uplift1"]) + np.abs(values["uplift2"])
+    lasting = force * np.sum(steady, axis=-1) + uplifts
+    passing = force * np.sum(steady * big_omega / omega_n, axis=-1)
+    gap = np.asarray(values["clearance"]) - lasting
+    decay = damping * omega_n[..., 0] * np.asarray(horizon)  # free vibration's decay over it
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(decay > 0.0, np.log(passing / gap) / decay, 1.0)
+    return np.where(gap <= 0.0, 1.0, np.where(passing >= gap, np.clip(share, 0.0, 1.0), 0.0))
+
+
+def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon: Any,
+                     kind: str) -> np.ndarray:
+    """Seconds on one core of full-dynamics runs over ``horizon`` (s), per point of ``values``.
+
+    ``kind``: of ``IMPACT_CYCLE`` (dynamics, lyapunov, long_time, simulate); ``law``: the
+    contact law of every point.
+    """
+    scale, power = IMPACT_CYCLE[kind][law]
+    free = LYAPUNOV_FREE_CYCLE if kind == "lyapunov" else FREE_CYCLE
+    share = impacting_fraction(values, n_modes, horizon)
+    per_cycle = share * scale * n_modes**power + (1.0 - share) * free * n_modes
+    return cycles(values, horizon) * per_cycle
+
+
+def first_impact_seconds(cells: float, n_modes: int) -> float:
+    """Seconds on one core of a first-impact map of ``cells`` cells."""
+    return cells * (FIRST_IMPACT_CELL + FIRST_IMPACT_MODE * n_modes)
+
+
+def cell_search_seconds(values: Mapping[str, Any], n_modes: int, t_max: float) -> np.ndarray:
+    """Seconds on one core of first-impact cells searched alone (not by columns), per point."""
+    return np.where(impacts(values, n_modes, t_max), FIRST_IMPACT_ALONE * n_modes,
+                    FIRST_IMPACT_WALK * n_modes * cycles(values, t_max))
+
+
+def geometry_seconds(geometries: int, n_modes: int) -> float:
+    """Seconds of the serial set-up of ``geometries`` geometries (modes, tables, switching)."""
+    return geometries * GEOMETRY * n_modes**2

@@ -1,0 +1,229 @@
+"""The cost model's structure, its calibration, the compile report and progress without effect.
+
+No timing here (timings in unit tests are banned): the model's constants must be those of the
+calibration file, its estimates must grow with cells, modes and periods, and showing progress
+must not change a result by one bit. The estimates against actual times are in
+docs/limits.md, generated from docs/benchmarks/estimates.json (checked below).
+"""
+
+import importlib.util
+import io
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numba
+import numpy as np
+import pytest
+
+from impactbeams import Params, costs
+from impactbeams.compilation import kernels_cached, reporting_compiles
+from impactbeams.packing import pack_run
+from impactbeams.sweep.definition import expected_seconds, sweep_from_mapping
+from impactbeams.trajectory import phases, simulate
+
+ROOT = Path(__file__).resolve().parents[1]
+CALIBRATION = ROOT / "docs" / "benchmarks" / "costs.json"
+
+
+def _load_benchmark(name):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _as_json(value):
+    """A module constant as the calibration file holds it (tuples as lists, keys as text)."""
+    return json.loads(json.dumps(value))
+
+
+def test_the_constants_are_those_of_the_calibration_file():
+    constants = json.loads(CALIBRATION.read_text())["constants"]
+    for name, value in constants.items():
+        assert _as_json(getattr(costs, name)) == value, name
+
+
+def test_the_calibration_records_its_load():
+    calibration = json.loads(CALIBRATION.read_text())
+    assert len(calibration["load_average_before"]) == 3
+    assert len(calibration["load_average_after"]) == 3
+
+
+def _sweep(n_modes=8, num=6, observables=("impact_count",), **extra):
+    data = {"n_modes": n_modes, "observables": list(observables),
+            "params": {"force_amplitude": 5e-3, "damping_ratio": 0.01},
+            "axes": {"omega": {"min": 100.0, "max": 800.0, "num": num}}, **extra}
+    if "sampled_periods" not in data:
+        data.setdefault("t_max", 0.5)
+    return sweep_from_mapping(data)
+
+
+@pytest.mark.parametrize("observables, extra", [
+    (("first_impact_time",), {}),
+    (("impact_count",), {}),
+    (("lyapunov_exponent",), {}),
+    (("response_period",), {"transient_periods": 50, "sampled_periods": 20}),
+])
+def test_a_sweep_costs_more_with_more_cells_and_modes(observables, extra):
+    base = expected_seconds(_sweep(8, 6, observables, **extra), 1)
+    assert expected_seconds(_sweep(8, 12, observables, **extra), 1) > base
+    assert expected_seconds(_sweep(16, 6, observables, **extra), 1) > base
+    set_up = costs.geometry_seconds(1, 8)  # serial; the cells over the threads
+    assert expected_seconds(_sweep(8, 6, observables, **extra), 2) - set_up == pytest.approx(
+        (base - set_up) / costs.THREAD_SPEEDUP[2], rel=1e-12)
+
+
+def test_a_sweep_costs_more_with_a_longer_horizon():
+    assert (expected_seconds(_sweep(t_max=1.0), 1) > expected_seconds(_sweep(t_max=0.5), 1))
+    short, long = ({"transient_periods": periods, "sampled_periods": 20} for periods in (50, 100))
+    assert (expected_seconds(_sweep(observables=("response_period",), **long), 1)
+            > expected_seconds(_sweep(observables=("response_period",), **short), 1))
+
+
+def test_impacting_cells_cost_more_than_free_ones():
+    values = {**Params(omega=300.0, damping_ratio=0.01).numeric()}
+    loud = {**values, "force_amplitude": 1e-2}
+    quiet = {**values, "force_amplitude": 1e-8}
+    assert costs.impacts(loud, 8, 1.0) and not costs.impacts(quiet, 8, 1.0)
+    for law in ("tied", "spring"):
+        assert (costs.dynamics_seconds(loud, law, 8, 1.0, "dynamics")
+                > costs.dynamics_seconds(quiet, law, 8, 1.0, "dynamics"))
+
+
+def test_the_impact_prediction_follows_the_static_deflection():
+    """Far below resonance beam 1's tip moves F0 c1, c1 = l^3 / (3 EI) (the modes' sum of
+    Y_n(l)^2 / omega_n^2): impacts iff that reaches the clearance."""
+    values = Params(omega=1e-3, damping_ratio=0.01).numeric()
+    c1 = values["l1"] ** 3 / (3 * values["EI1"])
+    threshold = values["clearance"] / c1
+    assert costs.impacts({**values, "force_amplitude": 1.01 * threshold}, 20, 1e4)
+    assert not costs.impacts({**values, "force_amplitude": 0.99 * threshold}, 20, 1e4)
+
+
+@pytest.mark.parametrize("kind", list(costs.IMPACT_CYCLE))
+def test_the_cost_per_cycle_grows_with_the_modes(kind):
+    for scale, power in costs.IMPACT_CYCLE[kind].values():
+        assert scale > 0 and power > 0
+
+
+def test_first_impact_cost_grows_with_cells_and_modes():
+    assert costs.first_impact_seconds(2e6, 5) > costs.first_impact_seconds(1e6, 5)
+    assert costs.first_impact_seconds(1e6, 10) > costs.first_impact_seconds(1e6, 5)
+
+
+def test_an_empty_numba_cache_is_told_apart(tmp_path):
+    """A process whose cache folder is empty would compile: ``kernels_cached`` says so."""
+    code = "from impactbeams.compilation import kernels_cached; print(kernels_cached('simulate'))"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    result = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                            text=True, check=True)
+    assert result.stdout.strip() == "False"
+
+
+def test_a_run_leaves_its_kernels_cached():
+    simulate(Params(contact_law="tied"), 0.01, n_modes=3)
+    assert kernels_cached("simulate")
+
+
+def test_a_compile_is_announced_and_timed(monkeypatch):
+    from impactbeams import compilation
+
+    monkeypatch.setattr(compilation, "REPORTED_COMPILE", 0.0)
+    stream = io.StringIO()
+
+    @numba.njit(cache=False)
+    def fresh(x):
+        return x + 1
+
+    with reporting_compiles(12.0, stream):
+        fresh(1)
+        fresh(2)  # compiled already: no new line
+    lines = stream.getvalue().splitlines()
+    assert lines[0] == "impactbeams: compiling kernels (once per install), about 12 s"
+    assert lines[1].startswith("impactbeams: compiled 1 kernels in ") and len(lines) == 2
+
+
+def test_a_loaded_kernel_prints_nothing():
+    stream = io.StringIO()
+    with reporting_compiles(12.0, stream):
+        simulate(Params(contact_law="tied"), 0.01, n_modes=3)
+    assert stream.getvalue() == ""
+
+
+FIELDS = ("time", "phase", "sustained", "q", "v", "end_q", "end_v")
+
+
+@pytest.mark.parametrize("law, n_modes, max_events", [
+    ("spring", 8, 200_000), ("tied", 5, 200_000), ("spring", 8, 300)])
+def test_a_run_in_windows_is_bitwise_the_uninterrupted_run(monkeypatch, law, n_modes,
+                                                           max_events):
+    """Windows of a few segments, resumed many times, against one call of the kernel."""
+    params = Params(contact_law=law, omega=400.0, force_amplitude=5e-3, damping_ratio=0.01)
+    packed = pack_run(params, n_modes, 0.3, 0.3)
+    whole = phases.run(packed, max_events)  # one window: the first one holds every segment
+    monkeypatch.setattr(phases, "_WINDOW", 16)
+    monkeypatch.setattr(phases, "_MIN_WINDOW", 16)
+    monkeypatch.setattr(phases, "WINDOW_SECONDS", 0.0)
+    reached = []
+    windowed = phases.run(packed, max_events, reached.append)
+    assert len(reached) >= 5 and reached == sorted(reached)
+    for field in FIELDS:
+        assert np.array_equal(getattr(windowed, field), getattr(whole, field)), field
+    assert (windowed.status, windowed.t_end) == (whole.status, whole.t_end)
+
+
+def test_the_first_window_holds_a_short_run():
+    """The reference above: a run shorter than the first window is one call of the kernel."""
+    packed = pack_run(Params(omega=400.0, force_amplitude=5e-3), 8, 0.3, 0.3)
+    assert phases.run(packed, 200_000).time.size < phases._WINDOW
+
+
+def test_progress_does_not_change_a_simulation(capsys):
+    params = Params(contact_law="tied", omega=400.0, force_amplitude=5e-3)
+    quiet = simulate(params, 0.2, n_modes=8, dt_output=1e-3)
+    assert capsys.readouterr().err == ""
+    shown = simulate(params, 0.2, n_modes=8, dt_output=1e-3, progress=True)
+    err = capsys.readouterr().err
+    assert "expected: roughly" in err and "s simulated" in err and "peak forces" in err
+    assert set(quiet.variables) == set(shown.variables)
+    for name in quiet.variables:
+        assert quiet[name].values.tobytes() == shown[name].values.tobytes(), name
+
+
+def test_the_docs_table_is_generated_from_the_json():
+    table = _load_benchmark("estimate_table")
+    result = json.loads(table.OUTPUT.read_text())
+    assert table.render_table(result) in (ROOT / "docs" / "limits.md").read_text()
+
+
+def test_a_map_searched_cell_by_cell_walks_the_horizon_of_its_free_cells():
+    """Along omega alone (no column axis) a cell without impact walks all of t_max."""
+    def seconds(t_max, force):
+        return expected_seconds(sweep_from_mapping({
+            "t_max": t_max, "n_modes": 5, "params": {"force_amplitude": force},
+            "axes": {"omega": {"min": 300.0, "max": 600.0, "num": 1000}}}), 1)
+
+    assert seconds(2.0, 1e-8) == pytest.approx(2 * seconds(1.0, 1e-8), rel=0.01)
+    assert seconds(1.0, 1e-2) == seconds(2.0, 1e-2)  # impacting cells stop at their impact
+
+
+def test_cells_that_meet_only_in_the_start_from_rest_vibration_are_charged_for_its_duration():
+    """Above beam 1's first resonance, a damped tip whose steady motion misses the clearance
+    meets it only while the free vibration of the start from rest lasts: a time that does
+    not depend on the horizon (so the share of the horizon falls as 1 / horizon). Undamped,
+    that vibration never decays: the whole horizon."""
+    values = Params(damping_ratio=0.05).numeric()
+    omega_1 = 1.8751040687**2 / values["l1"] ** 2 * math.sqrt(values["EI1"] / values["rhoA1"])
+    values = {**values, "omega": 2.0 * omega_1, "uplift1": 0.0, "uplift2": 0.0}
+    steady = 4.0 / (values["rhoA1"] * values["l1"]) / (3.0 * omega_1**2)  # mode 1, per newton
+    cell = {**values, "force_amplitude": 0.6 * values["clearance"] / steady}
+    shares = [float(costs.impacting_fraction(cell, 8, horizon)) for horizon in (10.0, 40.0)]
+    assert 0.0 < shares[1] < shares[0] < 1.0
+    assert shares[0] * 10.0 == pytest.approx(shares[1] * 40.0, rel=1e-12)
+    assert costs.impacting_fraction({**cell, "damping_ratio": 0.0}, 8, 40.0) == 1.0
+    assert costs.impacting_fraction({**cell, "force_amplitude": 1e-3 * cell["force_amplitude"]},
+                                    8, 40.0) == 0.0
