@@ -1,6 +1,6 @@
 """The paper's Fig. 4 case answered with a number: its largest Lyapunov exponent.
 
-    python scripts/lyapunov_fig4.py [--horizon 40] [--out build/lyapunov_fig4.json]
+    python scripts/lyapunov_fig4.py [--horizon 40] [--out docs/figures/lyapunov_fig4.json]
 
 The paper's parameters (F0 = 1 mN, Omega = 50 rad/s, Delta = 1.1e-5 m, no damping) with the
 default spring law (Hertz k = 4.3e5 N/m) at the resolution rule's 4 n* = 32 modes per beam
@@ -8,8 +8,9 @@ default spring law (Hertz k = 4.3e5 N/m) at the resolution rule's 4 n* = 32 mode
 Fig. 4 horizon (0.5-3 s) and 5 s to ``--horizon``; and the exponent in consecutive 2-s batches
 of the long window (the undamped beams keep absorbing energy from the force, so the exponent is
 not stationary: see docs/lyapunov.md, made with ``--horizon 80``). Prints a table and writes
-the numbers as JSON. About 4 minutes on one core with ``--horizon 80`` (the 64-mode run
-dominates).
+the numbers as JSON, with the horizon and the date: the results file that README.md and
+docs/lyapunov.md quote (scripts/update_readme.py reads it). About 4 minutes on one core with
+``--horizon 80`` (the 64-mode run dominates).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import argparse
 import json
 import math
 import time
+from datetime import date
 from pathlib import Path
 
 from impactbeams.compliant import recommended_modes
@@ -27,6 +29,8 @@ from impactbeams.params import Params
 from impactbeams.trajectory import run
 from impactbeams.trajectory.lyapunov import lyapunov_exponents
 
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "docs" / "figures" / "lyapunov_fig4.json"
 PAPER = Params()
 PERIOD = 2 * math.pi / PAPER.omega
 WINDOWS = {"fig4": (3.0, 4), "long": (None, 40)}  # (t_max or --horizon, transient periods)
@@ -58,7 +62,7 @@ def main() -> None:
     """Compute, print and save the exponents."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--horizon", type=float, default=40.0, help="end of the long window (s)")
-    parser.add_argument("--out", type=Path, default=Path("build/lyapunov_fig4.json"))
+    parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args()
     base = recommended_modes(PAPER)
     rows = []
@@ -72,7 +76,9 @@ def main() -> None:
     batches = batch_exponents(base, args.horizon, 2.0)
     print("2-s batches at", base, "modes:", " ".join(f"{b:.0f}" for b in batches))
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({"windows": rows, "batches_2s": batches}, indent=1))
+    args.out.write_text(json.dumps({"horizon_s": args.horizon, "windows": rows,
+                                    "batches_2s": batches, "date": f"{date.today()}"},
+                                   indent=1) + "\n")
 
 
 if __name__ == "__main__":

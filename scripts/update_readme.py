@@ -23,6 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
 BENCHMARKS = ROOT / "docs" / "benchmarks"
+FIGURES = ROOT / "docs" / "figures"
 MARKER = re.compile(r"(<!-- generated: (?P<name>[\w-]+) .*?-->\n)(?P<body>.*?)"
                     r"(<!-- end generated: (?P=name) -->)", re.DOTALL)
 
@@ -180,6 +181,146 @@ def longtime() -> str:
             f"{soft['full_run']['wall_s']:.0f} s ({recorded(report)}).\n")
 
 
+def _sci(value: float, digits: int = 0) -> str:
+    """``value`` in the README's exponent style: 1e-6, 1.4e-11, 1e5."""
+    mantissa, exponent = f"{value:.{digits}e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def _ranged(values, scale: float = 1.0, digits: int = 0) -> str:
+    """``low-high`` of ``values`` times ``scale``, rounded to ``digits`` (one value if equal)."""
+    low, high = (f"{scale * value:.{digits}f}" for value in (min(values), max(values)))
+    return low if low == high else f"{low}-{high}"
+
+
+def longtime_profile() -> str:
+    """Where a long-time run's time goes, from the profiled cells of ``longtime.json``."""
+    report = _results("longtime")
+    profile = report["profile"]
+    search_us = [row["search_us_per_segment"] for row in profile]
+    omegas = ", ".join(f"{row['omega']:g}" for row in profile)
+    return (f"Where the time goes now (profile of {len(profile)} cells at Omega = {omegas} "
+            "rad/s, "
+            f"{profile[0]['periods']} periods each): the certified event search, "
+            f"{_ranged([row['search_fraction'] for row in profile], 100)} % of a run "
+            f"({_ranged([us['free'] for us in search_us])} us per free phase, "
+            f"{_ranged([us['contact'] for us in search_us])} us per contact), switches "
+            f"{_ranged([row['switches_s'] / row['run_s'] for row in profile], 100)} %, the "
+            "closed-form propagation to each segment's end "
+            f"{_ranged([row['propagation_us_per_segment'] for row in profile])} us "
+            f"({recorded(report)}). On 2 threads the diagram takes "
+            f"{report['full_run']['cpu_s'] / report['diagram_one_core_s'] - 1:.0%} more CPU "
+            "time than on one core: the two threads slow each other.\n")
+
+
+def spring_precision() -> str:
+    """The spring law against solve_ivp, and its cost per simulated second (spring.json)."""
+    report = _results("spring")
+    case, stiff = report["cases"]
+    dop853 = {point["rtol"]: point for point in case["points"]
+              if point["method"] == "solve_ivp DOP853"}
+    finest, coarsest = min(dop853), max(dop853)
+    matched = {m["time"]: m for m in stiff["matched"] if m["method"] == "solve_ivp DOP853"}
+    cost = report["cost"]
+    config = report["config"]
+
+    def per_second(key: str) -> str:
+        return ", ".join(f"{row['per_simulated_second'][key]:.2g}" for row in cost)
+
+    return (
+        "impactbeams' contact table sits below what DOP853 at rtol "
+        f"{_sci(config['tight_rtol'])} can confirm (its distance from rtol {_sci(finest)} is "
+        f"{_sci(dop853[finest]['errors']['onset_max'], 1)} s on onsets, "
+        f"{_sci(dop853[finest]['errors']['peak_rel_max'])} relative on peaks), so the speed-ups "
+        f"are lower bounds; DOP853 gets only "
+        f"{dop853[finest]['seconds'] / dop853[coarsest]['seconds']:.0f}x cheaper from rtol "
+        f"{_sci(finest)} to {_sci(coarsest)} (the fastest mode limits its steps). At k = "
+        f"{_sci(stiff['stiffness'])} ({stiff['t_max']:g} s, {stiff['impactbeams']['contacts']} "
+        f"contacts, {stiff['impactbeams']['n_modes']} modes): >= "
+        f"{matched['events']['speedup']:.0f}x (event-driven run), >= "
+        f"{matched['simulate']['speedup']:.0f}x (`simulate()`, which then always computed the "
+        f"work of F; {recorded(report)}). Cost per simulated second at k = "
+        f"{_sci(config['cost_stiffness'])} ({config['cost_t_max']:g} s, "
+        f"{_ranged([row['contacts'] for row in cost])} contacts), re-measured "
+        f"{report['run']['cost_date']}: {per_second('events')} s for the event-driven run at "
+        f"{', '.join(str(row['n_modes']) for row in cost)} modes, {per_second('simulate')} s "
+        "through `simulate()`.\n")
+
+
+def map_threads() -> str:
+    """The two-thread speed-ups of the Fig. 5a map (columns.json)."""
+    report = _results("columns")
+    gain = report["speedup_2_threads"]
+    over = report["speedup_columns_over_cells"]
+    return (f"Two threads give {gain['columns']:.1f}x by columns ({gain['cells']:.1f}x cell by "
+            "cell: a column is one thread's); columns are "
+            f"{over['1']:.1f}x faster than cell by cell on one thread, {over['2']:.1f}x on two "
+            f"([columns](docs/benchmarks/columns.md); date and machine: {recorded(report)}).\n")
+
+
+def lyapunov_fig4() -> dict[int, dict]:
+    """n_modes -> the long window's exponent, from scripts/lyapunov_fig4.py's results file."""
+    report = json.loads((FIGURES / "lyapunov_fig4.json").read_text())
+    return {row["n_modes"]: {**row, "horizon_s": report["horizon_s"], "date": report["date"]}
+            for row in report["windows"] if row["window"] == "long"}
+
+
+def fig4() -> str:
+    """Fig. 4's distances (scripts/make_figures.py's fig4.json) and its Lyapunov exponent."""
+    report = json.loads((FIGURES / "fig4.json").read_text())
+    spring, tied = report["spring"], report["tied"]
+    exponents = lyapunov_fig4()
+    um = 1e6
+    return (
+        f"Fig. 4 (uplift 0 vs {_sci(spring['uplift_m'])} m): with the default spring law "
+        f"({spring['n_modes']} modes) the two trajectories of beam 1's tip differ by at most "
+        f"{um * spring['distance_max_first_0.1s_m']:.1f} um (the perturbation) over the first "
+        f"0.1 s, then by up to {um * spring['distance_max_m']:.0f} um over the "
+        f"{spring['t_max_s']:g} s (tip amplitude {um * spring['tip_amplitude_m']:.0f} um): a "
+        "slow growth, not the paper's exponential divergence. These distances, like every "
+        "quantity of this undamped run after its first rattle, follow round-off: they are those "
+        f"of the figure's runs (`docs/figures/fig4.json`, written by `scripts/make_figures.py` "
+        f"on {report['date']}). Yet the motion is chaotic: its largest Lyapunov exponent over "
+        f"{next(iter(exponents.values()))['t_start']:.0f}-"
+        f"{next(iter(exponents.values()))['horizon_s']:g} s is "
+        + " and ".join(f"{row['exponent']:.0f} ± {row['error']:.0f} 1/s at {n} modes"
+                       for n, row in exponents.items())
+        + " (`docs/figures/lyapunov_fig4.json`, written by `scripts/lyapunov_fig4.py` on "
+        f"{next(iter(exponents.values()))['date']}; [Lyapunov exponents](docs/lyapunov.md)); a "
+        f"{_sci(spring['tiny_uplift_m'])} m uplift already moves the tip by "
+        f"{um * spring['tiny_uplift_distance_at_first_episode_end_m']:.2f} um by the end of the "
+        f"first impact episode ({1e3 * spring['first_episode_end_s']:.0f} ms), so a "
+        f"{um * spring['uplift_m']:.0f} um perturbation starts where the growth has saturated. "
+        f"Under the tied law at {tied['n_modes']} modes they stay within "
+        f"{um * tied['distance_max_m']:.1f} um of each other over {tied['t_max_s']:g} s.\n")
+
+
+def spring_limits() -> str:
+    """The resolution rule's modes over k, and the cost per simulated second (spring.json).
+
+    Indented by two spaces: the section sits inside an item of the Limits list.
+    """
+    import impactbeams as ib
+    from impactbeams.compliant import required_modes
+    from impactbeams.params import MAX_MODES
+
+    default = ib.Params().contact_stiffness
+    stiffnesses = (1e4, 1e5, default, 1e6, 1e7, 1e8)
+    modes = [required_modes(ib.Params(contact_stiffness=k)) for k in stiffnesses]
+    grid = [10 ** (exponent / 20) for exponent in range(160, 240)]  # 20 per decade
+    beyond = next(k for k in grid if required_modes(ib.Params(contact_stiffness=k)) > MAX_MODES)
+    report = _results("spring")
+    cost = report["cost"]
+    names = [f"{_sci(k, 2)} (default)" if k == default else _sci(k) for k in stiffnesses]
+    return (f"  {', '.join(map(str, modes))} modes at k = {', '.join(names)} N/m; above about "
+            f"{_sci(beyond)} N/m it asks for more than the package's {MAX_MODES} modes per "
+            "beam. The run time per simulated second grows faster than the number of modes ("
+            + ", ".join(f"{row['per_simulated_second']['events']:.2g}" for row in cost)
+            + " s at " + ", ".join(str(row["n_modes"]) for row in cost) + " modes for k = "
+            f"{_sci(report['config']['cost_stiffness'])}, "
+            "[benchmarks](docs/benchmarks/README.md)).\n  ")
+
+
 SECTIONS: dict[str, Callable[[], str]] = {
     "longtime": longtime,
     "bad-input": lambda: transcript("modes", "--clearance=-1e-5"),
@@ -187,6 +328,11 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "spring-convergence": spring_convergence,
     "tied-convergence": tied_convergence,
     "performance": performance,
+    "longtime-profile": longtime_profile,
+    "spring-precision": spring_precision,
+    "map-threads": map_threads,
+    "fig4": fig4,
+    "spring-limits": spring_limits,
 }
 
 

@@ -142,3 +142,42 @@ def test_benchmarks_page_is_generated_from_the_results_files():
     if run_all.page(out) != (out / "README.md").read_text():
         pytest.fail("docs/benchmarks/README.md differs from its results files: run "
                     "`python benchmarks/run_all.py --report-only`")
+
+
+SWEEP_OUTPUT = re.compile(r"impactbeams run \S+ -o (results/\S+\.nc)"
+                          r"|output=\"(results/[^\"]+\.nc)\"")
+
+
+def test_pages_delete_the_sweep_outputs_they_are_about_to_write():
+    # A map in results/ left by other code is refused (its code digest differs), so a local
+    # rebuild after a code change would fail: each page deletes, in a block before, every map
+    # it writes (a simulate() output is simply overwritten).
+    missing = []
+    for path in PAGES[1:]:  # README.md's blocks run in a fresh folder (test above)
+        earlier = []
+        for _, executed, source in fenced_blocks(path):
+            if not executed:
+                continue
+            for match in SWEEP_OUTPUT.finditer(source):
+                output = match[1] or match[2]
+                if not any(f'"{name}' in block and ("unlink" in block or "rmtree" in block)
+                           for block in earlier for name in (output, str(Path(output).parent))
+                           if name != "results"):
+                    missing.append(f"{path.relative_to(ROOT)}: {output}")
+            earlier.append(source)
+    assert not missing, f"maps written without deleting a leftover first: {missing}"
+
+
+def test_the_accuracy_table_names_tests_that_exist():
+    # The README's accuracy table states the tolerance each named test asserts; a renamed or
+    # removed test would leave a claim that CI no longer checks.
+    section = (ROOT / "README.md").read_text().split("## Accuracy", 1)[1].split("\n## ", 1)[0]
+    named, current = [], None
+    for module, function in re.findall(r"`(?:(test_\w+\.py))?::(\w+)`", section):
+        current = module or current
+        named.append((current, function))
+    assert len(named) >= 20
+    missing = [f"{module}::{function}" for module, function in named
+               if not re.search(rf"^def {function}\(", (ROOT / "tests" / module).read_text(),
+                                re.MULTILINE)]
+    assert not missing, f"README's accuracy table names tests that do not exist: {missing}"
