@@ -172,6 +172,9 @@ CASES = {
         {"s.toml": sweep_file(top='observables = ["impact_count"]', params='contact_law = "tied"',
                               axes='[axes.contact_law]\nvalues = ["tied", "spring"]\n')},
         ["contact_law is given both"]),
+    "sweep-num-2-63": (  # its cost is estimated without building the axis' 2^63 values
+        ["run", "s.toml"], {"s.toml": sweep_file(axes=axis("uplift1", -1e-5, 1e-5, 2**63 - 1))},
+        ["is not allowed: the run needs about", "of disk space"]),
     "sweep-num-1-range": (["run", "s.toml"], {"s.toml": sweep_file(axes=axis("omega", 10, 400, 1))},
                           ["num in [axes.omega] of s.toml = 1", "num >= 2, or max = min"]),
     "sweep-observables-string": (["run", "s.toml"],
@@ -293,6 +296,9 @@ CASES = {
          "-o", "r.nc"], {},
         ["contact_damping = 1000000.0 is not allowed: with contact_stiffness = 10000 N/m",
          "at most about 1.35 N s/m"]),
+    "simulate-contact-damping-beyond-float-range": (  # c_e w w^T overflows: overdamped too
+        ["simulate", "--t-max", "0.05", "--contact-damping", "1e308", "-o", "r.nc"], {},
+        ["contact_damping = 1e+308 is not allowed", "at most about"]),
     "run-contact-damping-overdamped": (  # 4 modes: before its plan is printed or a file made
         ["run", "s.toml"],
         {"s.toml": sweep_file(top='observables = ["impact_count"]',

@@ -135,7 +135,7 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
                         progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner,
                         discard_corrupt=args.discard_corrupt)
     except KeyboardInterrupt:
-        print(f"\nimpactbeams: interrupted; finished chunks are kept in {output}.partial/ "
+        print(f"\nimpactbeams: finished chunks are kept in {output}.partial/ "
               "and the same command resumes from them", file=sys.stderr)
         raise
     print(f"reused {output}: it already holds the result of this sweep (nothing computed)"

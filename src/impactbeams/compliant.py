@@ -195,15 +195,18 @@ def _damped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
                   damping_matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Complex modes of (q, q')' = [[0, I], [-K, -C]] (q, q'), balanced.
 
-    None if a mode pair is overdamped (real eigenvalues).
+    None if a mode pair is overdamped (real eigenvalues), or the damping overflows.
 
     Solved in the undamped modes p = V^T q with the scaled state s = (Omega p, p'), where the
     first-order matrix [[0, Omega], [-Omega, -V^T C V]] has entries of one size.
     """
     omega, vectors = rank_one_modes(omega, stiffness, weights)
     m = omega.size
-    block = np.block([[np.zeros((m, m)), np.diag(omega)],
-                      [-np.diag(omega), -vectors.T @ damping_matrix @ vectors]])
+    with np.errstate(over="ignore", invalid="ignore"):
+        block = np.block([[np.zeros((m, m)), np.diag(omega)],
+                          [-np.diag(omega), -vectors.T @ damping_matrix @ vectors]])
+    if not np.all(np.isfinite(block)):  # damping beyond float range: no oscillation left
+        return None
     values, modes = scipy.linalg.eig(block)
     rising = np.abs(values.imag) > _OVERDAMPED * np.abs(values)
     if np.count_nonzero(rising) != 2 * m:
@@ -230,7 +233,8 @@ def spring_contact(free: FreePhase, tip_compliance: tuple[float, float], damping
     else:
         def modes(contact_damping: float) -> tuple[np.ndarray, ...] | None:
             c_e = contact_damping / (1.0 + stiffness * residual) ** 2
-            matrix = np.diag(2.0 * damping_ratio * free.omega) + c_e * np.outer(w, w)
+            with np.errstate(over="ignore"):  # a dashpot beyond float range: overdamped
+                matrix = np.diag(2.0 * damping_ratio * free.omega) + c_e * np.outer(w, w)
             return _damped_modes(free.omega, k_e, w, matrix)
 
         damped = modes(damping)

@@ -87,6 +87,9 @@ _AXIS_KEYS = ("min", "max", "num", "scale")
 MAX_GEOMETRIES = 10_000
 
 
+EXACT_VALUES = 2**20  # the longest axis whose values Axis.value builds
+
+
 @dataclasses.dataclass(frozen=True)
 class Axis:
     """One swept parameter: ``num`` values from ``min`` to ``max`` on a linear or log scale.
@@ -117,8 +120,19 @@ class Axis:
         return self.choices[0] if self.choices else self.min
 
     def value(self, index: int) -> float | str:
-        """The parameter value at ``index`` along the axis (a float, or a law's name)."""
-        return self.choices[index] if self.choices else float(self.values[index])
+        """The parameter value at ``index`` along the axis (a float, or a law's name).
+
+        Exactly ``values[index]``; on an axis too long to build (more than ``EXACT_VALUES``
+        values, only ever sampled by the cost estimate), from the spacing's formula.
+        """
+        if self.choices:
+            return self.choices[index]
+        if self.num <= EXACT_VALUES:
+            return float(self.values[index])
+        share = index / (self.num - 1)
+        if self.scale == "log":
+            return self.min * (self.max / self.min) ** share
+        return self.min + (self.max - self.min) * share
 
     def definition(self) -> dict[str, Any]:
         """The axis as in the TOML file."""
@@ -556,10 +570,21 @@ def sample_points(sweep: Sweep, start: int = 0, stop: int | None = None,
                   limit: int = COST_SAMPLES) -> list[Params]:
     """Parameters of at most ``limit`` cells spread evenly over the flat cells start..stop."""
     stop = sweep.size if stop is None else stop
-    flat = np.unique(np.linspace(start, stop - 1, min(limit, stop - start)).astype(np.int64))
-    return [sweep.params_at({axis.name: axis.value(int(i)) for axis, i in
-                             zip(sweep.axes, np.unravel_index(cell, sweep.shape), strict=True)})
+    count = min(limit, stop - start)
+    # Python integers: a grid may have more cells than int64 holds (it is refused afterwards)
+    flat = sorted({start + (stop - 1 - start) * k // max(count - 1, 1) for k in range(count)})
+    return [sweep.params_at({axis.name: axis.value(i) for axis, i in
+                             zip(sweep.axes, _grid_index(cell, sweep.shape), strict=True)})
             for cell in flat]
+
+
+def _grid_index(cell: int, shape: tuple[int, ...]) -> list[int]:
+    """The index along each axis of flat (C-order) ``cell`` of a grid of ``shape``."""
+    index = []
+    for length in reversed(shape):
+        cell, along = divmod(cell, length)
+        index.append(along)
+    return index[::-1]
 
 
 def chunk_memory(sweep: Sweep) -> int:
