@@ -42,7 +42,7 @@ from impactbeams.params import MAX_MODES, ParameterError, Params, require, requi
 from impactbeams.trajectory.episodes import default_separation, episode_labels
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory, run, sample
-from impactbeams.trajectory.start import checked_state, free_state, phase_state
+from impactbeams.trajectory.start import checked_state, final_state, phase_state
 
 # Samples per forcing period of the gap and the tips, before each extremum is refined by
 # Brent's method: T / 512 resolves the motion up to 64 Omega (the beams' first modes, which
@@ -131,9 +131,7 @@ class PeriodMap:
         if trajectory.status != "complete":
             raise RuntimeError(f"the period map's run stopped at t = {trajectory.t_end!r} s "
                                f"before {self.horizon!r} s: status {trajectory.status!r}")
-        last = trajectory.time.size - 1
-        end = free_state(self.packed, int(trajectory.phase[last]), trajectory.t_end,
-                         trajectory.end_q[last], trajectory.end_v[last])
+        end = final_state(self.packed, trajectory)
         jacobian = None if columns is None else self._jacobian(trajectory, columns)
         onsets = trajectory.time[trajectory.phase == CONTACT]
         contacts = int(np.count_nonzero(onsets < self.horizon))
