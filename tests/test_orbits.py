@@ -11,10 +11,13 @@ import pytest
 
 from impactbeams import ParameterError, Params, simulate
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, ROW_FREQUENCY
-from impactbeams.orbits import PeriodMap
+from impactbeams.orbits import OrbitNotConverged, PeriodMap, periodic_orbit
 from impactbeams.packing import pack_run
 from impactbeams.trajectory import InitialFields
 from impactbeams.trajectory.start import phase_state, projected_fields
+from orbit_reference import energy_scale as reference_energy_scale
+from orbit_reference import reference_orbit
+from spring_modal_reference import SpringModal
 
 N_MODES = 12
 PERIODIC = {"contact_stiffness": 1e4, "damping_ratio": 0.05}
@@ -195,3 +198,99 @@ def test_bad_initial_states_are_refused_in_one_line():
                               np.zeros(weights.size)])
     with pytest.raises(ParameterError, match="tied law starts from an open gap"):
         simulate(tied, PERIOD, n_modes=5, initial_state=overlap)
+
+
+# --- periodic orbits ----------------------------------------------------------------------------
+
+REFERENCE_CASE = {"contact_stiffness": 1e4, "damping_ratio": 0.05, "omega": 60.0}
+
+
+@pytest.mark.slow
+def test_orbit_matches_the_independent_reference():
+    """4 modes per beam, Omega = 60 rad/s (7 contacts per period, no dashpot): the orbit by
+    Newton with the exact monodromy against tests/orbit_reference.py (DOP853 at rtol 1e-13
+    with refined events, Newton with central-difference Jacobians at relative step 1e-5,
+    started from the package's state). Their maps differ by 2e-13 over the period; the section
+    state agrees to 1e-10 relative (energy norm), the multipliers to 1e-6 (the differences'
+    truncation and round-off, ~1e-8)."""
+    params = Params(**REFERENCE_CASE)
+    orbit = periodic_orbit(params, n_modes=4, method="newton", tolerance=1e-13)
+    model = SpringModal.build(params, 4, params.contact_stiffness, 0.0)
+    state, multipliers = reference_orbit(model, orbit.state, 2 * math.pi / params.omega)
+    scale = reference_energy_scale(model)
+    assert (np.linalg.norm(scale * (orbit.state - state))
+            < 1e-10 * np.linalg.norm(scale * state))
+    assert np.abs(orbit.multipliers - multipliers).max() < 1e-6
+
+
+@pytest.fixture(scope="module")
+def newton_orbit():
+    """The dashpot orbit by Newton from a rough guess (3 periods from rest)."""
+    return periodic_orbit(Params(**DASHPOT), n_modes=N_MODES, method="newton",
+                          transient_periods=3, tolerance=1e-12)
+
+
+def test_newton_converges_quadratically_to_a_fixed_point_of_the_map(newton_orbit):
+    orbit = newton_orbit
+    assert orbit.residual <= 1e-12 and orbit.iterations >= 2
+    history = np.array(orbit.history)
+    # quadratic: each residual at most ~ the square of the previous (relative), once small
+    small = history[:-1] < 1e-3
+    assert np.all(history[1:][small] <= 10 * history[:-1][small] ** 2 + 1e-14)
+    period_map = PeriodMap(Params(**DASHPOT), n_modes=N_MODES)
+    end = period_map(orbit.state, measures=False).state
+    assert np.linalg.norm(energy_scale(period_map) * (end - orbit.state)) <= 1e-12 * (
+        np.linalg.norm(energy_scale(period_map) * orbit.state))
+    assert orbit.stable and orbit.contacts >= 1 and orbit.episodes >= 1
+    leading = orbit.multipliers[:8]  # far above round-off (the rest reach 0: exponent -inf)
+    assert np.allclose(orbit.exponents[:8], np.log(np.abs(leading)) / PERIOD, rtol=1e-14)
+
+
+def test_newton_picard_equals_newton(newton_orbit):
+    """6 leading directions exactly, the rest by Picard: the same state (1e-10 relative) and
+    leading multipliers (1e-8: the subspace is invariant to 1e-9) as the full Newton."""
+    orbit = periodic_orbit(Params(**DASHPOT), n_modes=N_MODES, method="newton-picard",
+                           transient_periods=3, tolerance=1e-12)
+    reference = newton_orbit
+    scale = np.abs(reference.state).max()
+    assert np.abs(orbit.state - reference.state).max() < 1e-10 * scale
+    assert orbit.multipliers.size == 6 and orbit.subspace_residual <= 1e-9
+    assert np.abs(orbit.multipliers - reference.multipliers[:6]).max() < 1e-8
+    # the others are smaller than the smallest computed
+    assert np.abs(reference.multipliers[6]) <= np.abs(orbit.multipliers[-1]) * (1 + 1e-8)
+
+
+def test_floquet_exponent_is_the_lyapunov_exponent(newton_orbit):
+    """The largest Floquet exponent (exact) against Benettin's estimate from a run started on
+    the orbit, within the latter's standard error."""
+    orbit = newton_orbit
+    run_dataset = simulate(orbit.params, 40 * PERIOD, n_modes=N_MODES, dt_output=PERIOD,
+                           lyapunov=True, initial_state=orbit.state)
+    error = float(run_dataset.lyapunov_exponent_error)
+    assert orbit.exponents[0] == pytest.approx(float(run_dataset.lyapunov_exponent),
+                                               abs=3 * error)
+
+
+def test_orbit_dataset_has_one_period_with_units(newton_orbit):
+    dataset = newton_orbit.to_dataset(samples_per_period=64)
+    assert dataset.time.size == 65 and float(dataset.time[-1]) == pytest.approx(PERIOD)
+    assert dataset.tip_deflection_1.attrs["units"] == "m"
+    assert dataset.floquet_exponent.attrs["units"] == "s-1"
+    assert dataset.impact.size == newton_orbit.contacts
+    # periodic: the end is the start
+    assert float(dataset.tip_deflection_1[-1]) == pytest.approx(
+        float(dataset.tip_deflection_1[0]), abs=1e-10 * float(abs(dataset.tip_deflection_1).max()))
+    assert dataset.attrs["orbit_stable"] == 1
+
+
+def test_shooting_failures_are_errors_not_results():
+    params = Params(**DASHPOT)
+    with pytest.raises(OrbitNotConverged, match="did not reach tolerance"):
+        periodic_orbit(params, n_modes=N_MODES, transient_periods=0, max_iterations=1,
+                       method="newton")
+    with pytest.raises(ParameterError, match="spring contact law"):
+        periodic_orbit(Params(contact_law="tied"))
+    with pytest.raises(ParameterError, match="method"):
+        periodic_orbit(params, n_modes=N_MODES, method="secant")
+    with pytest.raises(ParameterError, match="guess"):
+        periodic_orbit(params, n_modes=N_MODES, guess=np.zeros(3))

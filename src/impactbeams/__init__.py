@@ -19,6 +19,7 @@ _LAZY = {
     "simulate": "impactbeams.trajectory",
     "InitialFields": "impactbeams.trajectory",
     "PeriodMap": "impactbeams.orbits",
+    "periodic_orbit": "impactbeams.orbits",
     "plot_dataset": "impactbeams.plotting",
 }
 

@@ -315,6 +315,25 @@ VARIABLES.update({
 })
 
 
+# a periodic orbit's Floquet multipliers (impactbeams.orbits.PeriodicOrbit.to_dataset)
+VARIABLES.update({
+    "multiplier": Variable(("multiplier",), "1", "Floquet multiplier number",
+                           "index of the Floquet multiplier, by decreasing modulus",
+                           dtype="int64"),
+    "floquet_multiplier_real": Variable(
+        ("multiplier",), "1", "real part of the Floquet multipliers",
+        "eigenvalues mu of the orbit's monodromy matrix (the period map's Jacobian over p "
+        "forcing periods), by decreasing modulus; Newton-Picard: the leading ones only"),
+    "floquet_multiplier_imag": Variable(
+        ("multiplier",), "1", "imaginary part of the Floquet multipliers",
+        "see floquet_multiplier_real"),
+    "floquet_exponent": Variable(
+        ("multiplier",), "s-1", "Floquet exponents of the orbit",
+        "ln|mu| / (p 2 pi / Omega): the orbit's Lyapunov exponents, exact (no averaging)",
+        symbol=r"$\lambda$"),
+})
+
+
 # long-time response (impactbeams.longtime): stroboscopic samples along "period", after a
 # transient; in a map "*" is the swept axes, in simulate() nothing
 VARIABLES.update({
