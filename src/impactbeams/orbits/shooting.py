@@ -114,13 +114,15 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
     """The periodic orbit z = P^p(z) of ``params`` (spring law, Omega > 0) near ``guess``.
 
     Args:
-        params: the model; n_modes: per beam (default: the number that resolves the
-            contact, as in `simulate`).
+        params: the model.
+        n_modes: modes per beam (default: the number that resolves the contact, as in
+            `simulate`).
         period: p, the orbit's period in forcing periods.
         guess: a section state z (2 N values), an earlier `PeriodicOrbit` (its state, and its
             Newton-Picard basis), or None: the state after ``transient_periods`` forcing
             periods from ``params.start`` (a stable orbit's basin is then reached by simply
             running).
+        transient_periods: forcing periods run from ``params.start`` when ``guess`` is None.
         tolerance: on the relative residual |P^p(z) - z| / |z| in the energy norm.
         max_iterations: shooting steps before `OrbitNotConverged`.
         method: "newton" (full monodromy), "newton-picard" (``subspace`` leading directions
