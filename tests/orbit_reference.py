@@ -69,18 +69,22 @@ def energy_scale(model: SpringModal) -> np.ndarray:
     return np.concatenate([model.omega, np.ones(model.omega.size)])
 
 
-def reference_jacobian(model: SpringModal, z: np.ndarray, t_end: float, step: float,
-                       ) -> np.ndarray:
-    """dP/dz by central differences, step ``step`` relative to |z| in the energy norm."""
-    scale = energy_scale(model)
+def central_jacobian(function, z: np.ndarray, scale: np.ndarray, step: float) -> np.ndarray:
+    """d function / dz by central differences: steps ``step`` |D z| / D_j (D = ``scale``)."""
     size = step * np.linalg.norm(scale * z)
     columns = []
     for j in range(z.size):
         e = np.zeros(z.size)
         e[j] = size / scale[j]
-        columns.append((reference_map(model, z + e, t_end) - reference_map(model, z - e, t_end))
-                       / (2 * e[j]))
+        columns.append((function(z + e) - function(z - e)) / (2 * e[j]))
     return np.array(columns).T
+
+
+def reference_jacobian(model: SpringModal, z: np.ndarray, t_end: float, step: float,
+                       ) -> np.ndarray:
+    """dP/dz by central differences, step ``step`` relative to |z| in the energy norm."""
+    return central_jacobian(lambda x: reference_map(model, x, t_end), z, energy_scale(model),
+                            step)
 
 
 def reference_orbit(model: SpringModal, z: np.ndarray, t_end: float, tolerance: float = 1e-13,

@@ -15,8 +15,8 @@ from impactbeams.orbits import OrbitNotConverged, PeriodMap, periodic_orbit
 from impactbeams.packing import pack_run
 from impactbeams.trajectory import InitialFields
 from impactbeams.trajectory.start import phase_state, projected_fields
+from orbit_reference import central_jacobian, reference_orbit
 from orbit_reference import energy_scale as reference_energy_scale
-from orbit_reference import reference_orbit
 from spring_modal_reference import SpringModal
 
 N_MODES = 12
@@ -45,16 +45,9 @@ def dashpot_map():
 
 
 def central_differences(period_map, z, step):
-    """dP/dz by central differences of the nonlinear map, steps ``step`` / D per coordinate."""
-    scale = energy_scale(period_map)
-    size = step * np.linalg.norm(scale * z)
-    columns = []
-    for j in range(z.size):
-        e = np.zeros(z.size)
-        e[j] = size / scale[j]
-        columns.append((period_map(z + e, measures=False).state
-                        - period_map(z - e, measures=False).state) / (2 * e[j]))
-    return np.array(columns).T
+    """dP/dz by central differences of the nonlinear map (relative step in the energy norm)."""
+    return central_jacobian(lambda x: period_map(x, measures=False).state, z,
+                            energy_scale(period_map), step)
 
 
 def test_monodromy_matches_finite_differences(dashpot_map):

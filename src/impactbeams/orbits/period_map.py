@@ -94,7 +94,7 @@ class PeriodMap:
         check_law(params)
         require("omega", params.omega, params.omega > 0,
                 "a period map needs a forcing period: omega > 0", "rad/s")
-        self.periods = require_integer("period", periods, 1)
+        self.periods = require_integer("periods", periods, 1)
         if n_modes is None:
             n_modes = min(required_modes(params), MAX_MODES)
         self.n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
@@ -138,6 +138,17 @@ class PeriodMap:
         summary = self._measures(trajectory) if measures else (math.nan,) * 6
         return PeriodMapResult(end, jacobian, contacts, self._episodes(trajectory), *summary,
                                trajectory.status, trajectory)
+
+    def jacobian(self, result: PeriodMapResult, directions: np.ndarray | str) -> np.ndarray:
+        """dP^p/dz of an earlier evaluation ``result`` applied to more ``directions``.
+
+        The tangent propagation along ``result``'s recorded run: no new run (a Newton-Picard
+        step, or a bordered system of a continuation, asks for directions it only knows once
+        it has the residual). ``directions`` as in `__call__`, not None.
+        """
+        require("directions", directions, directions is not None,
+                "must be 'all' or an array of directions (2 N, k)")
+        return self._jacobian(result.trajectory, self._directions(directions))
 
     def _directions(self, directions: np.ndarray | str | None) -> np.ndarray | None:
         if directions is None:

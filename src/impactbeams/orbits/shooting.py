@@ -204,31 +204,36 @@ class _Shooting:
     def newton(self, z: np.ndarray) -> PeriodicOrbit:
         history: list[float] = []
         identity = np.eye(z.size)
+        result = self.map(z, measures=False)
         for _ in range(self.max_iterations + 1):
-            result = self.map(z, directions="all", measures=False)
+            jacobian = self.map.jacobian(result, "all")
             residual = self.relative(result, z)
             history.append(residual)
             if residual <= self.tolerance:
-                return self._orbit(z, np.linalg.eigvals(result.jacobian), history, "newton",
-                                   0.0, result.jacobian, None)
+                return self._orbit(z, np.linalg.eigvals(jacobian), history, "newton", 0.0,
+                                   jacobian, None)
             if len(history) > self.max_iterations:
                 break
-            step = np.linalg.solve(identity - result.jacobian, result.state - z)
-            z = self._damped(z, step, residual)
+            step = np.linalg.solve(identity - jacobian, result.state - z)
+            z, result = self._damped(z, step, residual)
         raise self._failure(history, "newton")
 
     def newton_picard(self, z: np.ndarray, basis: np.ndarray | None, m: int) -> PeriodicOrbit:
-        """Newton-Picard iterations; V in energy coordinates, orthonormal."""
+        """Newton-Picard iterations; V in energy coordinates, orthonormal.
+
+        One run of the map per iteration (the step's trial run is the next iterate's): M V
+        and M Q r come from tangents carried along it.
+        """
         v = self._initial_basis(basis, m, z.size)
         history: list[float] = []
         previous = np.full(m, np.inf + 0j)
+        result = self.map(z, measures=False)
         for _ in range(self.max_iterations + 1):
-            plain = self.map(z, measures=False)
-            r = self.scale * (plain.state - z)
-            residual = self.norm(plain.state - z) / max(self.norm(z), np.finfo(float).tiny)
+            r = self.scale * (result.state - z)
+            residual = self.relative(result, z)
             history.append(residual)
             q_r = r - v @ (v.T @ r)
-            images = self._products(z, np.column_stack([v, q_r]))  # M V, M Q r
+            images = self._products(result, np.column_stack([v, q_r]))  # M V, M Q r
             mv, m_qr = images[:, :-1], images[:, -1]
             h = v.T @ mv
             ritz = _by_modulus(np.linalg.eigvals(h))
@@ -243,15 +248,14 @@ class _Shooting:
                 dp = np.linalg.solve(np.eye(m) - h, v.T @ r + v.T @ m_qr)
                 coupled = mv @ dp + m_qr
                 dq = q_r + coupled - v @ (v.T @ coupled)
-                z = self._damped(z, (v @ dp + dq) / self.scale, residual)
+                z, result = self._damped(z, (v @ dp + dq) / self.scale, residual)
             previous = ritz
             v = _orthonormal(mv)
         raise self._failure(history, "newton-picard")
 
-    def _products(self, z: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    def _products(self, result: PeriodMapResult, columns: np.ndarray) -> np.ndarray:
         """M applied to ``columns`` given in energy coordinates, back in energy coordinates."""
-        result = self.map(z, directions=columns / self.scale[:, None], measures=False)
-        return self.scale[:, None] * result.jacobian
+        return self.scale[:, None] * self.map.jacobian(result, columns / self.scale[:, None])
 
     def _initial_basis(self, basis: np.ndarray | None, m: int, size: int) -> np.ndarray:
         if basis is not None and basis.shape == (size, m):
@@ -259,17 +263,25 @@ class _Shooting:
         # fixed pseudo-random directions: the same orbit on every machine
         return _orthonormal(np.random.default_rng(0).standard_normal((size, m)))
 
-    def _damped(self, z: np.ndarray, step: np.ndarray, residual: float) -> np.ndarray:
-        """Z + step, halved while that does not reduce the residual (or the run fails)."""
+    def _damped(self, z: np.ndarray, step: np.ndarray, residual: float,
+                ) -> tuple[np.ndarray, PeriodMapResult]:
+        """Z + step, halved while that does not reduce the residual; with its map's result.
+
+        After ``MAX_HALVINGS`` halvings the last trial is taken as it is (if its run
+        completes): the next iterate then starts from there.
+        """
         for _ in range(MAX_HALVINGS):
             candidate = z + step
             try:
-                if self.relative(self.map(candidate, measures=False), candidate) < residual:
-                    return candidate
+                result = self.map(candidate, measures=False)
             except RuntimeError:  # the run did not complete: too far
-                pass
+                step = 0.5 * step
+                continue
+            if self.relative(result, candidate) < residual:
+                return candidate, result
             step = 0.5 * step
-        return z + step
+        candidate = z + step
+        return candidate, self.map(candidate, measures=False)
 
     def _failure(self, history: list[float], method: str) -> OrbitNotConverged:
         shown = ", ".join(f"{value:.2e}" for value in history[-5:])
