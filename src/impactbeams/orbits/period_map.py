@@ -38,7 +38,14 @@ from impactbeams.kernels.records import Tangent
 from impactbeams.kernels.stroboscope import tip_motions
 from impactbeams.kernels.tangent import carry_tangents
 from impactbeams.packing import Packed, pack_run
-from impactbeams.params import MAX_MODES, ParameterError, Params, require, require_integer
+from impactbeams.params import (
+    MAX_MODES,
+    ParameterError,
+    Params,
+    require,
+    require_integer,
+    require_type,
+)
 from impactbeams.trajectory.episodes import default_separation, episode_labels
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory, run, sample
@@ -91,6 +98,7 @@ class PeriodMap:
 
     def __init__(self, params: Params, n_modes: int | None = None, periods: int = 1,
                  max_events: int = MAX_EVENTS) -> None:
+        require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
         check_law(params)
         require("omega", params.omega, params.omega > 0,
                 "a period map needs a forcing period: omega > 0", "rad/s")
