@@ -304,3 +304,22 @@ def test_monodromy_against_a_stop_on_a_shaker(shaker):
     carried = scale[:, None] * orbit.monodromy / scale[None, :]
     reference = scale[:, None] * central_differences(period_map, orbit.state, 1e-5) / scale[None, :]
     assert np.linalg.norm(carried - reference, 2) < 3e-7 * np.linalg.norm(reference, 2)
+
+
+def test_a_branch_reuses_the_geometry_bit_for_bit():
+    """Maps at another Omega, F0 or clearance reuse the geometry's modes and contact phase:
+    the same bits as a map built afresh."""
+    from impactbeams.orbits import period_map as module
+
+    first = Params(**DASHPOT)
+    z = PeriodMap(first, n_modes=N_MODES).rest_state()
+    for change in ({"omega": 51.0}, {"force_amplitude": 2e-3}, {"clearance": 2e-5}):
+        params = first.replace(**change)
+        reused = PeriodMap(params, n_modes=N_MODES)
+        assert reused.packed.dynamics.spring is PeriodMap(first, N_MODES).packed.dynamics.spring
+        module._geometry.cache_clear()
+        fresh = PeriodMap(params, n_modes=N_MODES)
+        assert fresh.packed.dynamics.spring is not reused.packed.dynamics.spring
+        a, b = reused(z, directions="all"), fresh(z, directions="all")
+        assert np.array_equal(a.state, b.state) and np.array_equal(a.jacobian, b.jacobian)
+        assert a.peak_force == b.peak_force and a.max_tip1 == b.max_tip1

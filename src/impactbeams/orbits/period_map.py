@@ -16,6 +16,7 @@ for Lyapunov exponents. SI units throughout.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -37,7 +38,7 @@ from impactbeams.kernels.layout import (
 from impactbeams.kernels.records import Tangent
 from impactbeams.kernels.stroboscope import tip_motions
 from impactbeams.kernels.tangent import carry_tangents
-from impactbeams.packing import Packed, pack_run
+from impactbeams.packing import Dynamics, Packed, dynamics_arrays, pack_run
 from impactbeams.params import (
     MAX_MODES,
     ParameterError,
@@ -110,7 +111,8 @@ class PeriodMap:
         self.params = params
         self.forcing_period = 2.0 * math.pi / params.omega
         self.horizon = self.periods * self.forcing_period
-        self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon)
+        self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
+                                       geometry_arrays(params, self.n_modes))
 
     @property
     def dimension(self) -> int:
@@ -263,6 +265,27 @@ class PeriodMap:
         if result.fun < best:
             return float(result.fun), float(result.x)
         return best, best_t
+
+
+# the cell's parameters (`packing.cell_rows`) that the geometry's arrays do not depend on; the
+# damping ratio is one too, but the spring law's contact modes are solved for it
+_CELL_ONLY = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "base_amplitude")
+
+
+def geometry_arrays(params: Params, n_modes: int) -> Dynamics:
+    """`packing.dynamics_arrays` of ``params``, reused while only the cell's parameters change.
+
+    Along a branch in Omega, F0, U0 or the clearance the modes and the spring law's contact
+    phase (an eigenproblem, the larger part of building a map at 32 modes) stay the same.
+    """
+    defaults = {name: getattr(Params(), name) for name in _CELL_ONLY}
+    dynamics = _geometry(dataclasses.replace(params, **defaults), n_modes)
+    return dataclasses.replace(dynamics, params=params)
+
+
+@functools.lru_cache(maxsize=4)
+def _geometry(params: Params, n_modes: int) -> Dynamics:
+    return dynamics_arrays(params, n_modes)
 
 
 def check_law(params: Params) -> None:
