@@ -68,8 +68,10 @@ def reporting_compiles(expected: float, stream: TextIO | None = None) -> Iterato
 
     ``expected``: the measured cold compile time (s) announced. Each outermost compile (a
     kernel called from Python, with every kernel it calls) of at least ``REPORTED_COMPILE``
-    seconds ends with a line ``compiled N kernels in S s``; on a terminal a line counts the
-    nested kernels as they finish. Nothing is printed when every kernel loads from the cache.
+    seconds ends with a line ``compiled N kernels in S s``; on a terminal one line shows the
+    group being compiled (the kernels' module: ``events``, ``dynamics``...), the kernels done
+    and the time since the first compile started. Nothing is printed when every kernel loads
+    from the cache (Numba signals a compile only on a cache miss).
     """
     from numba.core import event
 
@@ -91,21 +93,23 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
             self.local = threading.local()  # each thread's compile depth (Dask, long runs)
             self.lock = threading.Lock()
             self.announced = False
-            self.start = 0.0
+            self.first = self.start = 0.0
             self.kernels = 0
 
-        def on_start(self, _: Any) -> None:
+        def on_start(self, compile_event: Any) -> None:
             depth = getattr(self.local, "depth", 0)
             self.local.depth = depth + 1
             with self.lock:
                 if depth == 0:
                     self.start, self.kernels = time.perf_counter(), 0
                 if not self.announced:
-                    self.announced = True
+                    self.announced, self.first = True, self.start
                     self._write(f"compiling kernels (once per install), about {expected:.0f} s",
                                 final=not self.interactive)
+                elif self.interactive:
+                    self._progress(compile_event)
 
-        def on_end(self, _: Any) -> None:
+        def on_end(self, compile_event: Any) -> None:
             self.local.depth -= 1
             with self.lock:
                 self.kernels += 1
@@ -114,8 +118,12 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
                     self._write(f"compiled {self.kernels} kernels in {elapsed:.1f} s (cached "
                                 "for later runs)", final=True)
                 elif self.interactive:
-                    self._write(f"compiling kernels (once per install), about {expected:.0f} "
-                                f"s: {self.kernels} compiled, {elapsed:.0f} s", final=False)
+                    self._progress(compile_event)
+
+        def _progress(self, compile_event: Any) -> None:
+            self._write(f"compiling kernels (once per install), about {expected:.0f} s: "
+                        f"{_group(compile_event)}, {self.kernels} compiled, "
+                        f"{time.perf_counter() - self.first:.0f} s", final=False)
 
         def _write(self, line: str, final: bool) -> None:
             if self.interactive:  # rewrite the line in place; end it when final
@@ -125,3 +133,9 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
             stream.flush()
 
     return CompileReport()
+
+
+def _group(compile_event: Any) -> str:
+    """The group of the kernel a compile event is about: its module (``events``, ``numba``)."""
+    module = compile_event.data["dispatcher"].py_func.__module__
+    return module.removeprefix("impactbeams.kernels.").split(".")[0]
