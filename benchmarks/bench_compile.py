@@ -30,23 +30,11 @@ import numba
 import numpy as np
 
 from impactbeams import __version__
+from run_all import SMALL_SWEEP
 
 ROOT = Path(__file__).parents[1]
 OUT = ROOT / "docs" / "benchmarks"
-FIRST_MAP = """t_max = 1.0
-n_modes = 5
-[params]
-clearance = 1.1e-5
-[axes.omega]
-min = 10.0
-max = 400.0
-num = 10
-[axes.force_amplitude]
-min = 1e-6
-max = 1e-3
-num = 10
-scale = "log"
-"""
+FIRST_MAP = SMALL_SWEEP.replace("num = 100", "num = 10")  # 10 x 10 cells of Fig. 5a's plane
 # issue 24's "before" (main 4467146, 2 cores, machine partly loaded): wall seconds
 ISSUE_BEFORE = {"first map, cold": 35.8, "simulate, cold": 56.0}
 # runs one command in this process and writes what it compiled to the file argv[1]

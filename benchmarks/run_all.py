@@ -456,7 +456,9 @@ def first_run_table(compile_report: dict, startup: dict) -> str:
     previous = compile_report.get("baseline", {}).get("cases", {})
     lines = ["| run | wall (CPU) | previous code | issue 24 (main 4467146) | measured |",
              "|---|---|---|---|---|"]
-    when = ", ".join(dict.fromkeys(recorded(compile_report)))
+    load = compile_report["load_average"]
+    when = (", ".join(dict.fromkeys(recorded(compile_report)))
+            + f", load {load['before']:.1f} to {load['after']:.1f}")
     for case, row in compile_report["cases"].items():
         before = previous.get(case)
         lines.append(f"| {case} | {row['wall_s']:.1f} s ({row['cpu_s']:.1f} s) | "
