@@ -103,14 +103,15 @@ from numba.core import event
 from impactbeams.sweep import run_sweep
 with event.install_recorder("numba:compile") as recorder:
     run_sweep(sys.argv[1], threads=2)
+from impactbeams.compilation import kernels_cached
 print(json.dumps([(e.data["dispatcher"].py_func.__module__, e.data["dispatcher"].__name__)
-                  for _, e in recorder.buffer if e.is_start]))
+                  for _, e in recorder.buffer if e.is_start] + [kernels_cached("first_impact")]))
 """
 
 
 @pytest.mark.slow
 def test_a_cold_first_map_compiles_each_kernel_once_and_no_dynamics(tmp_path):
-    """A 100-cell map with an empty cache (about 20 s of compile on 2 cores)."""
+    """A 100-cell map with an empty cache (about 20 s of compile on 2 cores), then cached."""
     sweep = tmp_path / "map.toml"
     sweep.write_text("t_max = 1.0\nn_modes = 5\n[params]\nclearance = 1.1e-5\n[axes.omega]\n"
                      "min = 10.0\nmax = 400.0\nnum = 10\n[axes.force_amplitude]\nmin = 1e-6\n"
@@ -118,7 +119,9 @@ def test_a_cold_first_map_compiles_each_kernel_once_and_no_dynamics(tmp_path):
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
     result = subprocess.run([sys.executable, "-c", COLD_MAP, str(sweep)], env=env, check=True,
                             capture_output=True, text=True)
-    compiled = [tuple(pair) for pair in json.loads(result.stdout.splitlines()[-1])]
+    *pairs, cached = json.loads(result.stdout.splitlines()[-1])
+    assert cached, "the next run would announce a compile"
+    compiled = [tuple(pair) for pair in pairs]
     ours = [(module.rsplit(".", 1)[1], name) for module, name in compiled
             if module.startswith("impactbeams.kernels.")]
     assert {module for module, _ in ours} & DYNAMICS_ONLY == set()
