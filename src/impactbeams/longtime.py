@@ -93,6 +93,45 @@ class LongTime:
         return transient_periods + np.arange(self.sampled_periods)
 
 
+STEPPINGS = {"up": ("up",), "down": ("down",), "both": ("up", "down")}  # the rows of each
+# axes along which a stepped sweep may carry its state: the drive's (a cell's forcing and gap;
+# the modes, and so the carried coordinates, stay those of the row's geometry)
+STEPPED_AXES = ("omega", "force_amplitude", "base_amplitude", "clearance")
+
+
+@dataclasses.dataclass(frozen=True)
+class Stepping:
+    """A stepped-sine sweep, as on a shaker (docs/model.md, "Stepped-sine sweeps").
+
+    Along ``axis`` each cell starts from the state its neighbour ended in at its horizon, on
+    the stroboscopic section (t = 0 mod 2 pi / Omega, which is phase 0 of the next cell's
+    forcing too), instead of from the sweep's ``start``; the first cell of a row starts from
+    ``start``. ``direction``: ``"up"`` (increasing values), ``"down"`` or ``"both"`` (two rows,
+    a ``sweep_direction`` dimension of the map). The other axes stay parallel rows.
+
+    Attributes:
+        direction: "up", "down" or "both".
+        axis: the swept parameter stepped along, one of ``STEPPED_AXES`` (default omega).
+    """
+
+    direction: str
+    axis: str = "omega"
+
+    def __post_init__(self) -> None:
+        require("stepping", self.direction,
+                isinstance(self.direction, str) and self.direction in STEPPINGS,
+                f"must be one of {', '.join(map(repr, STEPPINGS))}")
+        require("stepped_axis", self.axis,
+                isinstance(self.axis, str) and self.axis in STEPPED_AXES,
+                f"must be one of {', '.join(STEPPED_AXES)} (a drive parameter: the carried "
+                "modal state needs the same modes from step to step)")
+
+    @property
+    def directions(self) -> tuple[str, ...]:
+        """The rows' directions, in the order of the ``sweep_direction`` dimension."""
+        return STEPPINGS[self.direction]
+
+
 def response_period(deflection1: np.ndarray, deflection2: np.ndarray, velocity1: np.ndarray,
                     velocity2: np.ndarray, omega: float | np.ndarray, tolerance: float,
                     max_period: int) -> np.ndarray:
