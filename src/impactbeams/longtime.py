@@ -26,11 +26,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from impactbeams.kernels import layout
 from impactbeams.params import is_integer, is_real, require
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 DEFAULT_PERIOD_TOLERANCE = 1e-4
 LARGEST_MAX_PERIOD = 16  # the default max_period, when the samples allow it
@@ -188,3 +192,35 @@ def long_time_values(long_time: LongTime, transient_periods: int, omega: np.ndar
                                            reached),
         "dynamics_status": summary[:, layout.STROBE_STATUS],
     }
+
+
+def hysteresis(dataset: xr.Dataset) -> xr.DataArray:
+    """Where the up and down rows of a stepped sweep (``stepping = "both"``) differ.
+
+    True at the cells whose stroboscopic samples, x = (y1, v1 / Omega[, y2, v2 / Omega]) as in
+    `response_period`, are not the same set in both directions: the Hausdorff distance of the
+    two sets of samples exceeds the sweep's ``period_tolerance`` times their scale (a cyclic
+    shift of a period-p orbit's samples is the same response). Two coexisting attractors (the
+    band between the folds of a resonance, where a shaker sweep jumps) differ by a sizeable
+    fraction of the scale; one attractor reached from both sides agrees to its transient's
+    leftover. The up sweep jumps after the band's last cell in its direction, the down sweep
+    after its first. Cells where either run stopped early (NaN samples) are False.
+    """
+    state = _section_samples(dataset)
+    up, down = (state.sel(sweep_direction=direction) for direction in ("up", "down"))
+    scale = np.maximum(abs(up).max(("period", "component")), abs(down).max(("period", "component")))
+    # every sample of one set to its nearest in the other, both ways
+    apart = abs(up - down.rename(period="other")).max("component")
+    distance = np.maximum(apart.min("other").max("period"), apart.min("period").max("other"))
+    return (distance > dataset.attrs["period_tolerance"] * scale).rename("hysteresis")
+
+
+def _section_samples(dataset: xr.Dataset) -> xr.DataArray:
+    """The samples x of `response_period` along a ``component`` dimension (m)."""
+    import xarray as xr
+
+    omega = dataset["omega"] if "omega" in dataset.coords else dataset.attrs["omega"]
+    parts = [dataset[f"poincare_{kind}{beam}"] / (omega if kind == "velocity" else 1.0)
+             for beam in "12" for kind in ("deflection", "velocity")
+             if f"poincare_{kind}{beam}" in dataset]
+    return xr.concat(parts, "component")

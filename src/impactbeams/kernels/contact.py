@@ -63,7 +63,7 @@ def observed_state(phase, y, y_rate, t, spring, drives, settings, q, v):
 
 @kernel
 def phase_state(phase, q, v, t, spring, drives, settings, y, y_rate):
-    """Write into (y, y') an observed state (q, v) of ``phase`` at time t in the phase's own coordinates.
+    """Write into (y, y') the observed state (q, v) of ``phase`` at time t in its own coordinates.
 
     The inverse of ``observed_state``: the spring law's contact coordinates from the free
     ones (with the run's own ``drives``, so a state observed in one run starts another with

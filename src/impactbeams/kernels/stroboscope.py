@@ -243,7 +243,7 @@ def cell_stroboscope(cell, tables, overlap, shifts, spring, geometry, times, hor
 def _stroboscope_map(cells, tables, overlaps, shifts, spring_left, spring_right, spring_modes,
                      geometry, times, horizons, capacity, max_phases_per_period, samples,
                      summary):
-    """Fill samples[i] and summary[i] for cells[i], each from its own start; iteration i owns row i."""
+    """Fill samples[i] and summary[i] for cells[i], each from its own start; i owns row i."""
     for i in prange(cells.shape[0]):
         g = int(cells[i, CELL_GEOMETRY])
         spring = (spring_left[g], spring_right[g], spring_modes[g])

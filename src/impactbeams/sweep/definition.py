@@ -619,9 +619,14 @@ def sample_points(sweep: Sweep, start: int = 0, stop: int | None = None,
     count = min(limit, stop - start)
     # Python integers: a grid may have more cells than int64 holds (it is refused afterwards)
     flat = sorted({start + (stop - 1 - start) * k // max(count - 1, 1) for k in range(count)})
-    return [sweep.params_at({axis.name: axis.value(i) for axis, i in  # rows' directions: last
-                             zip(sweep.axes[::-1], _grid_index(cell, sweep.shape)[::-1])})
+    return [sweep.params_at({axis.name: axis.value(i) for axis, i in
+                             zip(sweep.axes, _axis_indices(sweep, cell), strict=True)})
             for cell in flat]
+
+
+def _axis_indices(sweep: Sweep, cell: int) -> list[int]:
+    """The index along each axis of flat ``cell`` (a stepped sweep's direction left out)."""
+    return _grid_index(cell, sweep.shape)[-len(sweep.axes):]
 
 
 def _grid_index(cell: int, shape: tuple[int, ...]) -> list[int]:
