@@ -10,15 +10,19 @@ is period 1. Five modes resolve this contact (`contact.spring.required_modes`).
 """
 
 import math
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
+from matplotlib.figure import Figure
 
 from impactbeams.cli import main
 from impactbeams.kernels import layout, stroboscope
 from impactbeams.longtime import hysteresis
 from impactbeams.params import ParameterError
+from impactbeams.plotting import draw
 from impactbeams.sweep import run_sweep, sweep_from_mapping, write_sweep
 from impactbeams.sweep.definition import LONG_TIME_OBSERVABLES
 from impactbeams.sweep.plan import (
@@ -248,3 +252,46 @@ def test_a_down_row_is_the_up_row_reversed_in_order_only():
     cells = chunk_cells(sweep, plan, 0, sweep.size)
     np.testing.assert_array_equal(cells[:12], cells[12:])
     assert math.isclose(cells[rows[2][0], layout.CELL_FORCING_FREQUENCY], 300.0)
+
+
+SHIPPED = Path(__file__).resolve().parent.parent / "sweeps" / "stepped-stop-shaker.toml"
+# the shipped stepped sweep on a reduced grid: its keys as shipped, a few cells and periods
+REDUCED = {"n_modes = 28": "n_modes = 6", "num = 400": "num = 12",
+           "transient_periods = 500": "transient_periods = 30",
+           "sampled_periods = 200": "sampled_periods = 10"}
+
+
+def test_the_shipped_stepped_sweep_runs_and_plots_both_directions(tmp_path, monkeypatch):
+    text = SHIPPED.read_text()
+    for old, new in REDUCED.items():
+        assert old in text
+        text = text.replace(old, new)
+    monkeypatch.chdir(tmp_path)
+    Path("stepped.toml").write_text(text)
+    with warnings.catch_warnings():  # 6 modes do not resolve the Hertz contact: a reduced grid
+        warnings.simplefilter("ignore", RuntimeWarning)
+        assert main(["run", "stepped.toml", "-o", "out.nc", "--quiet"]) == 0
+    assert main(["plot", "out.nc", "-o", "out.png"]) == 0
+    assert Path("out.png").stat().st_size > 10_000
+    with xr.open_dataset("out.nc") as result:
+        assert result.poincare_deflection1.dims == ("sweep_direction", "omega", "period")
+        assert result.attrs["stepping"] == "both"
+        assert (result.steady_impact_rate > 0).any()
+        assert (result.dynamics_status == 0).all()
+
+
+def test_plot_overlays_the_directions_in_two_colours(fold):
+    stepped, _ = fold
+    for variable, kind in (("poincare_deflection1", "None"), ("steady_impact_rate", "-")):
+        figure = Figure()
+        axes = figure.subplots()
+        draw(axes, stepped, variable)
+        lines = [line for line in axes.get_lines() if line.get_label().startswith("swept")]
+        assert [line.get_label() for line in lines] == ["swept up", "swept down"]
+        assert lines[0].get_color() != lines[1].get_color()
+        assert {line.get_linestyle() for line in lines} == {kind}
+        legend = [text.get_text() for text in axes.get_legend().get_texts()]
+        assert legend == ["swept up", "swept down"]
+        assert "300 dwell + 8 sampled periods" in axes.get_title(loc="left")
+    with pytest.raises(ParameterError, match="a bifurcation diagram needs one swept axis"):
+        draw(Figure().subplots(), run_sweep(sweep_from_mapping(ROWS)), "poincare_deflection1")
