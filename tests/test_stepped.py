@@ -99,8 +99,12 @@ SHAKER = {"n_modes": 5, "transient_periods": 40, "sampled_periods": 4, "stepping
           "axes": {"omega": {"min": 150.0, "max": 450.0, "num": 16}}}
 
 
+TIED = {**FOLD, "stepping": "up", "params": {**FOLD["params"], "contact_law": "tied"}}
+
+
 @pytest.mark.parametrize(("definition", "phases"), [(FOLD, {layout.FREE}),
-                                                    (SHAKER, {layout.FREE, layout.CONTACT})])
+                                                    (SHAKER, {layout.FREE, layout.CONTACT}),
+                                                    (TIED, {layout.FREE})])
 def test_each_cell_starts_from_its_predecessors_end_state_bitwise(definition, phases):
     """Cell k's start is cell k-1's end, bit for bit; run alone from that state, cell k gives
     the same samples and end bit for bit; the first cell of a row starts from rest
@@ -159,6 +163,21 @@ def _alone(sweep, plan, cell, start_phase, start_state):
                                  MAX_PHASES_PER_PERIOD, start_phase, start_state, samples,
                                  summary, end)
     return samples, end
+
+
+def test_stepping_along_the_force_jumps_at_the_folds_in_force():
+    """The fold case at 275 rad/s (inside the band above), stepped along F0 from 10 to 200 uN:
+    up stays off the stop up to 63 uN and impacts from 80 uN; down impacts down to 25 uN."""
+    definition = {**FOLD, "stepped_axis": "force_amplitude",
+                  "params": {**{key: value for key, value in FOLD["params"].items()
+                                if key != "force_amplitude"}, "omega": 275.0},
+                  "axes": {"force_amplitude": {"min": 1e-5, "max": 2e-4, "num": 14,
+                                               "scale": "log"}}}
+    stepped = run_sweep(sweep_from_mapping(definition))
+    impacting = (stepped.steady_impact_rate > 0).values
+    np.testing.assert_array_equal(impacting, [[False] * 9 + [True] * 5,
+                                              [False] * 4 + [True] * 10])
+    np.testing.assert_array_equal(hysteresis(stepped).values, impacting[1] & ~impacting[0])
 
 
 # a stepped sweep of two parallel rows per direction: four chunks of one row each
@@ -261,7 +280,8 @@ REDUCED = {"n_modes = 28": "n_modes = 6", "num = 400": "num = 12",
            "sampled_periods = 200": "sampled_periods = 10"}
 
 
-def test_the_shipped_stepped_sweep_runs_and_plots_both_directions(tmp_path, monkeypatch):
+def test_the_shipped_stepped_sweep_runs_and_plots_both_directions(tmp_path, monkeypatch,
+                                                                  capsys):
     text = SHIPPED.read_text()
     for old, new in REDUCED.items():
         assert old in text
@@ -271,6 +291,8 @@ def test_the_shipped_stepped_sweep_runs_and_plots_both_directions(tmp_path, monk
     with warnings.catch_warnings():  # 6 modes do not resolve the Hertz contact: a reduced grid
         warnings.simplefilter("ignore", RuntimeWarning)
         assert main(["run", "stepped.toml", "-o", "out.nc", "--quiet"]) == 0
+    assert ("2 x 12 = 24 cells over omega (stepped up and down along omega)"
+            in capsys.readouterr().err)
     assert main(["plot", "out.nc", "-o", "out.png"]) == 0
     assert Path("out.png").stat().st_size > 10_000
     with xr.open_dataset("out.nc") as result:
