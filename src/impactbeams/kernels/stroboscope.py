@@ -12,6 +12,11 @@ sampled window ``[t_first, t_max)``: contact onsets and impact episodes (a conta
 episode unless the free interval since the previous release is shorter than ``separation``,
 the rule of `impactbeams.trajectory.episodes`), in ``STROBOSCOPE_COLUMNS``. Arrays are
 named in `impactbeams.kernels.layout`; SI units.
+
+A run starts from its cell's own initial state or from a given state and phase, and hands
+on its state at its horizon: a stepped-sine row (`stepped_map_parallel`) runs its cells one
+after the other, each from the state its predecessor ended in (docs/model.md, "Stepped-sine
+sweeps").
 """
 
 import math
