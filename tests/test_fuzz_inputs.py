@@ -64,8 +64,8 @@ ODD_VALUES = ["", "abc", "1e-5", "nan", "spring", "tied", "linear", "log", True,
               ["x"], [[]], [{}], {}, {"a": 1}, {"min": 1.0, "max": 2.0, "num": 2},
               {"values": ["tied"]}]
 KEYS = sorted({"t_max", "n_modes", "observables", "params", "axes", "transient_periods",
-               *LONG_TIME_KEYS, *STEPPING_KEYS, *PARAMETERS, "min", "max", "num", "scale", "values", "step",
-               "bogus"})
+               *LONG_TIME_KEYS, *STEPPING_KEYS, *PARAMETERS, "min", "max", "num", "scale",
+               "values", "step", "bogus"})
 STUB_ATTRIBUTES = {"status": "complete"}
 
 
