@@ -317,3 +317,16 @@ def test_plot_overlays_the_directions_in_two_colours(fold):
         assert "300 dwell + 8 sampled periods" in axes.get_title(loc="left")
     with pytest.raises(ParameterError, match="a bifurcation diagram needs one swept axis"):
         draw(Figure().subplots(), run_sweep(sweep_from_mapping(ROWS)), "poincare_deflection1")
+
+
+@pytest.mark.slow  # compiles the parallel row kernel (about 45 s), which only Dask workers use
+def test_parallel_rows_equal_serial_rows_bitwise():
+    sweep = sweep_from_mapping(ROWS)
+    plan = build_plan(sweep)
+    cells, rows = chunk_cells(sweep, plan, 0, sweep.size), stepped_rows(sweep, 0, sweep.size)
+    serial, parallel = (_stepped_run(sweep, plan, cells, rows, parallel=flag)
+                        for flag in (False, True))
+    for name in ("poincare_deflection1", "response_period", "dynamics_status"):
+        np.testing.assert_array_equal(serial[0][name], parallel[0][name])
+    for name in serial[1]:
+        np.testing.assert_array_equal(serial[1][name], parallel[1][name])
