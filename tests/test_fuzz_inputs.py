@@ -27,7 +27,7 @@ import xarray as xr
 import impactbeams.sweep
 import impactbeams.trajectory.simulation
 from impactbeams.cli import main
-from impactbeams.sweep.definition import LONG_TIME_KEYS, OBSERVABLES
+from impactbeams.sweep.definition import LONG_TIME_KEYS, OBSERVABLES, STEPPING_KEYS
 from impactbeams.variables import PARAMETERS
 
 # a warning (an unresolved spring contact) is one line of the command line's, as for a user;
@@ -64,8 +64,8 @@ ODD_VALUES = ["", "abc", "1e-5", "nan", "spring", "tied", "linear", "log", True,
               ["x"], [[]], [{}], {}, {"a": 1}, {"min": 1.0, "max": 2.0, "num": 2},
               {"values": ["tied"]}]
 KEYS = sorted({"t_max", "n_modes", "observables", "params", "axes", "transient_periods",
-               *LONG_TIME_KEYS, *PARAMETERS, "min", "max", "num", "scale", "values", "step",
-               "bogus"})
+               *LONG_TIME_KEYS, *STEPPING_KEYS, *PARAMETERS, "min", "max", "num", "scale",
+               "values", "step", "bogus"})
 STUB_ATTRIBUTES = {"status": "complete"}
 
 

@@ -192,8 +192,11 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     long_time = sweep.long_time
     horizon = (f"t_max = {sweep.t_max} s" if long_time is None else
                f"{sweep.transient_periods} + {long_time.sampled_periods} forcing periods")
+    stepping = sweep.stepping
+    rows = ("" if stepping is None else
+            f" (stepped {' and '.join(stepping.directions)} along {stepping.axis})")
     print(f"{sweep.source}: {' x '.join(map(str, sweep.shape))} = {sweep.size} cells over "
-          f"{', '.join(a.name for a in sweep.axes)}; {horizon}, "
+          f"{', '.join(a.name for a in sweep.axes)}{rows}; {horizon}, "
           f"{sweep.n_modes} modes per beam -> {output}\nexpected: "
           f"{expected_cost(sweep, args.threads).describe()}"
           + ("" if kernels_cached(run_kind(sweep)) else

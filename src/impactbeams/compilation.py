@@ -29,7 +29,7 @@ ENTRY_KERNELS = {
                                        "first_impact_map_serial")),),
     "dynamics": (("observables", ("observables_map_parallel",)),),
     "lyapunov": (("lyapunov", ("lyapunov_map_parallel",)),),
-    "long_time": (("stroboscope", ("stroboscope_map_serial",)),),
+    "long_time": (("stroboscope", ("stroboscope_map_serial", "stepped_map_serial")),),
     "simulate": (("dynamics", ("run_events",)), ("dynamics", ("sample_states",)),
                  ("dynamics", ("observed_states",)), ("stroboscope", ("tip_motions",)),
                  ("records", ("segments",))),

@@ -26,11 +26,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from impactbeams.kernels import layout
 from impactbeams.params import is_integer, is_real, require
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 DEFAULT_PERIOD_TOLERANCE = 1e-4
 LARGEST_MAX_PERIOD = 16  # the default max_period, when the samples allow it
@@ -93,6 +97,45 @@ class LongTime:
         return transient_periods + np.arange(self.sampled_periods)
 
 
+STEPPINGS = {"up": ("up",), "down": ("down",), "both": ("up", "down")}  # the rows of each
+# axes along which a stepped sweep may carry its state: the drive's (a cell's forcing and gap;
+# the modes, and so the carried coordinates, stay those of the row's geometry)
+STEPPED_AXES = ("omega", "force_amplitude", "base_amplitude", "clearance")
+
+
+@dataclasses.dataclass(frozen=True)
+class Stepping:
+    """A stepped-sine sweep, as on a shaker (docs/model.md, "Stepped-sine sweeps").
+
+    Along ``axis`` each cell starts from the state its neighbour ended in at its horizon, on
+    the stroboscopic section (t = 0 mod 2 pi / Omega, which is phase 0 of the next cell's
+    forcing too), instead of from the sweep's ``start``; the first cell of a row starts from
+    ``start``. ``direction``: ``"up"`` (increasing values), ``"down"`` or ``"both"`` (two rows,
+    a ``sweep_direction`` dimension of the map). The other axes stay parallel rows.
+
+    Attributes:
+        direction: "up", "down" or "both".
+        axis: the swept parameter stepped along, one of ``STEPPED_AXES`` (default omega).
+    """
+
+    direction: str
+    axis: str = "omega"
+
+    def __post_init__(self) -> None:
+        require("stepping", self.direction,
+                isinstance(self.direction, str) and self.direction in STEPPINGS,
+                f"must be one of {', '.join(map(repr, STEPPINGS))}")
+        require("stepped_axis", self.axis,
+                isinstance(self.axis, str) and self.axis in STEPPED_AXES,
+                f"must be one of {', '.join(STEPPED_AXES)} (a drive parameter: the carried "
+                "modal state needs the same modes from step to step)")
+
+    @property
+    def directions(self) -> tuple[str, ...]:
+        """The rows' directions, in the order of the ``sweep_direction`` dimension."""
+        return STEPPINGS[self.direction]
+
+
 def response_period(deflection1: np.ndarray, deflection2: np.ndarray, velocity1: np.ndarray,
                     velocity2: np.ndarray, omega: float | np.ndarray, tolerance: float,
                     max_period: int) -> np.ndarray:
@@ -149,3 +192,35 @@ def long_time_values(long_time: LongTime, transient_periods: int, omega: np.ndar
                                            reached),
         "dynamics_status": summary[:, layout.STROBE_STATUS],
     }
+
+
+def hysteresis(dataset: xr.Dataset) -> xr.DataArray:
+    """Where the up and down rows of a stepped sweep (``stepping = "both"``) differ.
+
+    True at the cells whose stroboscopic samples, x = (y1, v1 / Omega[, y2, v2 / Omega]) as in
+    `response_period`, are not the same set in both directions: the Hausdorff distance of the
+    two sets of samples exceeds the sweep's ``period_tolerance`` times their scale (a cyclic
+    shift of a period-p orbit's samples is the same response). Two coexisting attractors (the
+    band between the folds of a resonance, where a shaker sweep jumps) differ by a sizeable
+    fraction of the scale; one attractor reached from both sides agrees to its transient's
+    leftover. The up sweep jumps after the band's last cell in its direction, the down sweep
+    after its first. Cells where either run stopped early (NaN samples) are False.
+    """
+    state = _section_samples(dataset)
+    up, down = (state.sel(sweep_direction=direction) for direction in ("up", "down"))
+    scale = np.maximum(abs(up).max(("period", "component")), abs(down).max(("period", "component")))
+    # every sample of one set to its nearest in the other, both ways
+    apart = abs(up - down.rename(period="other")).max("component")
+    distance = np.maximum(apart.min("other").max("period"), apart.min("period").max("other"))
+    return (distance > dataset.attrs["period_tolerance"] * scale).rename("hysteresis")
+
+
+def _section_samples(dataset: xr.Dataset) -> xr.DataArray:
+    """The samples x of `response_period` along a ``component`` dimension (m)."""
+    import xarray as xr
+
+    omega = dataset["omega"] if "omega" in dataset.coords else dataset.attrs["omega"]
+    parts = [dataset[f"poincare_{kind}{beam}"] / (omega if kind == "velocity" else 1.0)
+             for beam in "12" for kind in ("deflection", "velocity")
+             if f"poincare_{kind}{beam}" in dataset]
+    return xr.concat(parts, "component")

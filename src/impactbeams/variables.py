@@ -341,6 +341,11 @@ VARIABLES.update({
         ("period",), "1", "forcing periods before the sample",
         "number of forcing periods 2 pi / Omega from t = 0 to the stroboscopic sample: "
         "transient_periods + k for the k-th sample", dtype="int64"),
+    "sweep_direction": Variable(
+        ("sweep_direction",), "1", "direction of a stepped-sine sweep",
+        "up: the stepped axis' values in increasing order, each cell starting from the state "
+        "the previous (lower) one ended in; down: in decreasing order (docs/model.md, "
+        "Stepped-sine sweeps)", dtype="str"),
     "poincare_deflection1": Variable(
         ("*", "period"), "m", "stroboscopic tip deflection of beam 1",
         "y1(l1, t) once per forcing period at forcing phase 0, t = period * 2 pi / Omega "
@@ -472,7 +477,9 @@ def _check_variable(name: str, variable: Variable, found: Description, strict: b
     if variable.flags and (strict or "flag_meanings" in attrs or "flag_values" in attrs):
         keys += ["flag_values", "flag_meanings"]
     _check_attributes(name, attrs, expected, keys)
-    if dtype != np.dtype(variable.dtype):
+    if variable.dtype == "str" and dtype.kind in "OUS":  # text: any NumPy or netCDF string
+        pass
+    elif dtype != np.dtype(variable.dtype):
         raise ValueError(f"variable {name!r} has dtype {dtype}, expected {variable.dtype}")
     if not _dims_match(dims, variable.dims):
         wanted = ("(the swept axes, " + ", ".join(variable.dims[1:]) + ")"

@@ -62,6 +62,21 @@ def observed_state(phase, y, y_rate, t, spring, drives, settings, q, v):
 
 
 @kernel
+def phase_state(phase, q, v, t, spring, drives, settings, y, y_rate):
+    """Write into (y, y') the observed state (q, v) of ``phase`` at time t in its own coordinates.
+
+    The inverse of ``observed_state``: the spring law's contact coordinates from the free
+    ones (with the run's own ``drives``, so a state observed in one run starts another with
+    other drives); otherwise unchanged.
+    """
+    if phase == CONTACT and keeps_free_coordinates(settings.contact_law):
+        contact_spring.switch_state(q, v, t, CONTACT, spring, drives, settings, y, y_rate)
+    else:
+        y[:] = q
+        y_rate[:] = v
+
+
+@kernel
 def tip_loads(phase, t, settings, load1, rate1):
     """Quasi-static tip loads (Q1, Q1', Q2, Q2') (N, N/s) of an observed state of ``phase``.
 

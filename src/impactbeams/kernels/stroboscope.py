@@ -12,6 +12,11 @@ sampled window ``[t_first, t_max)``: contact onsets and impact episodes (a conta
 episode unless the free interval since the previous release is shorter than ``separation``,
 the rule of `impactbeams.trajectory.episodes`), in ``STROBOSCOPE_COLUMNS``. Arrays are
 named in `impactbeams.kernels.layout`; SI units.
+
+A run starts from its cell's own initial state or from a given state and phase, and hands
+on its state at its horizon: a stepped-sine row (`stepped_map_parallel`) runs its cells one
+after the other, each from the state its predecessor ended in (docs/model.md, "Stepped-sine
+sweeps").
 """
 
 import math
@@ -23,6 +28,7 @@ from impactbeams.kernels import contact
 from impactbeams.kernels.cells import cell_run, settings_of
 from impactbeams.kernels.drive import clamp_motion, tip_load
 from impactbeams.kernels.dynamics import (
+    COMPLETE,
     EVENT_LIMIT,
     instantaneous,
     run_events,
@@ -47,6 +53,8 @@ from impactbeams.kernels.layout import (
     TIP_Y2,
 )
 from impactbeams.kernels.records import segments
+
+NO_STATE = -1  # a phase index for no state: a run's own start, or a run that stopped early
 
 
 @kernel
@@ -141,15 +149,19 @@ def _count_onsets(seg_time, seg_phase, count, keep, window_start, window_end, se
 
 
 @kernel
-def sampled_run(run, overlap, shifts, spring, times, separation, capacity, max_phases, samples,
-                summary):
+def sampled_run(run, overlap, shifts, spring, start_phase, q_start, v_start, times, separation,
+                capacity, max_phases, samples, summary, end_state):
     """Run `RunInputs` ``run`` from t = 0 to its settings' ``t_max``; tip samples at ``times``.
 
+    The run starts in ``start_phase`` from the state ``(q_start, v_start)`` as observed
+    (`contact.observed_state`; ``run.q0``, ``run.v0`` in ``FREE`` for its own start).
     ``times`` (s): ascending sample times, the sampled window being ``[times[0], t_max)``;
     ``separation`` (s): the episode rule's free interval; ``capacity``: segments held at once;
     ``max_phases``: cap on the run's phases (status ``EVENT_LIMIT`` beyond). Writes
-    ``samples[k]`` (``TIP_COLUMNS``, NaN past the point the run reached) and ``summary``
-    (``STROBOSCOPE_COLUMNS``).
+    ``samples[k]`` (``TIP_COLUMNS``, NaN past the point the run reached), ``summary``
+    (``STROBOSCOPE_COLUMNS``) and ``end_state``, rows (q, q') of the state at t_max as
+    observed. Returns the phase at t_max, ``NO_STATE`` if the run stopped before it
+    (``end_state`` is then NaN).
     """
     tables, forces, phase_scalars, drives = run.tables, run.forces, run.phase_scalars, run.drives
     settings = settings_of(run)
@@ -161,11 +173,12 @@ def sampled_run(run, overlap, shifts, spring, times, separation, capacity, max_p
     residual2 = contact.residual_flexibility2(tables[FREE], settings)
     samples[:] = np.nan
     summary[STROBE_ONSETS] = summary[STROBE_EPISODES] = 0.0
-    t0, q, v = 0.0, run.q0.copy(), run.v0.copy()
+    t0, q, v, phase = 0.0, np.empty(n_coords), np.empty(n_coords), start_phase
+    contact.phase_state(phase, q_start, v_start, t0, spring, drives, settings, q, v)
     done, phases, last_release = 0, 0, -math.inf
     while True:
         count, status, t_end = run_events(tables, forces, phase_scalars, overlap, shifts,
-                                          spring, drives, settings, q, v, recorded, t0, FREE)
+                                          spring, drives, settings, q, v, recorded, t0, phase)
         keep, final = count, True
         if status == EVENT_LIMIT:
             resume = resume_point(seg_time, seg_phase, count)
@@ -186,37 +199,95 @@ def sampled_run(run, overlap, shifts, spring, times, separation, capacity, max_p
         if final:
             summary[STROBE_STATUS] = status
             summary[STROBE_T_END] = t_end
-            return
-        t0 = seg_time[keep]
+            return _end_state(status, recorded, count, t_end, spring, drives, settings,
+                              end_state)
+        t0, phase = seg_time[keep], FREE  # a resume point starts a free segment
         q[:] = seg_q[keep]
         v[:] = seg_v[keep]
 
 
 @kernel
+def _end_state(status, recorded, count, t_end, spring, drives, settings, end_state):
+    """The observed state at ``t_end`` (s) of a complete run into ``end_state``; its phase.
+
+    ``NO_STATE`` (and NaN) if the run stopped before its horizon (``status`` not complete).
+    """
+    if status != COMPLETE:
+        end_state[:] = np.nan
+        return NO_STATE
+    phase = recorded.phase[count - 1]
+    contact.observed_state(phase, recorded.end_q[count - 1], recorded.end_v[count - 1], t_end,
+                           spring, drives, settings, end_state[0], end_state[1])
+    return phase
+
+
+@kernel
 def cell_stroboscope(cell, tables, overlap, shifts, spring, geometry, times, horizon, capacity,
-                     max_phases_per_period, samples, summary):
+                     max_phases_per_period, start_phase, start_state, samples, summary,
+                     end_state):
     """One map cell's long run to ``horizon`` (s), sampled at ``times`` (s): ``sampled_run``.
 
-    The episode rule's separation is a quarter period of the slowest free mode; the cap on
-    phases is ``max_phases_per_period`` per forcing period of the horizon.
+    From the cell's own start (``start``, uplifts) if ``start_phase`` is ``NO_STATE``, else
+    from ``start_state`` (rows q, q', as observed) in that phase at t = 0. The episode rule's
+    separation is a quarter period of the slowest free mode; the cap on phases is
+    ``max_phases_per_period`` per forcing period of the horizon. Returns the phase at the
+    horizon (``sampled_run``).
     """
     separation = 0.5 * math.pi / np.min(tables[FREE, ROW_FREQUENCY])
     periods = horizon * cell[CELL_FORCING_FREQUENCY] / (2.0 * math.pi)
     max_phases = int(max_phases_per_period * math.ceil(periods))
-    sampled_run(cell_run(cell, tables, geometry, spring, horizon, horizon), overlap, shifts,
-                spring, times, separation, capacity, max_phases, samples, summary)
+    run = cell_run(cell, tables, geometry, spring, horizon, horizon)
+    if start_phase == NO_STATE:
+        return sampled_run(run, overlap, shifts, spring, FREE, run.q0, run.v0, times,
+                           separation, capacity, max_phases, samples, summary, end_state)
+    return sampled_run(run, overlap, shifts, spring, start_phase, start_state[0],
+                       start_state[1], times, separation, capacity, max_phases, samples,
+                       summary, end_state)
 
 
 def _stroboscope_map(cells, tables, overlaps, shifts, spring_left, spring_right, spring_modes,
                      geometry, times, horizons, capacity, max_phases_per_period, samples,
                      summary):
-    """Fill samples[i] and summary[i] for cells[i]; each iteration owns row i."""
+    """Fill samples[i] and summary[i] for cells[i], each from its own start; i owns row i."""
     for i in prange(cells.shape[0]):
         g = int(cells[i, CELL_GEOMETRY])
         spring = (spring_left[g], spring_right[g], spring_modes[g])
+        end_state = np.empty((2, tables[g].shape[-1]))
         cell_stroboscope(cells[i], tables[g], overlaps[g], shifts[g], spring, geometry[g],
-                         times[i], horizons[i], capacity, max_phases_per_period, samples[i],
-                         summary[i])
+                         times[i], horizons[i], capacity, max_phases_per_period, NO_STATE,
+                         end_state, samples[i], summary[i], end_state)
 
 
 stroboscope_map_parallel, stroboscope_map_serial = parallel_kernel(_stroboscope_map)
+
+
+def _stepped_map(cells, steps, tables, overlaps, shifts, spring_left, spring_right,
+                 spring_modes, geometry, times, horizons, capacity, max_phases_per_period,
+                 samples, summary, start_phases, start_states, end_phases, end_states):
+    """Stepped-sine rows: cells ``steps[r, 0], steps[r, 1], ...`` of row r one after the other.
+
+    The first from its own start, each next one from the state its predecessor ended in
+    (``end_states[i]``, rows q, q' as observed, in ``end_phases[i]``), copied into its
+    ``start_states`` at t = 0: the stroboscopic section, phase 0 of every forcing frequency.
+    After a run that stopped before its horizon (``NO_STATE``) the next cell starts afresh.
+    Rows run in parallel; iteration r owns the cells of row r.
+    """
+    for r in prange(steps.shape[0]):
+        phase = NO_STATE
+        for k in range(steps.shape[1]):
+            i = steps[r, k]
+            g = int(cells[i, CELL_GEOMETRY])
+            spring = (spring_left[g], spring_right[g], spring_modes[g])
+            start_phases[i] = phase
+            if phase == NO_STATE:
+                start_states[i] = np.nan
+            else:
+                start_states[i] = end_states[steps[r, k - 1]]
+            phase = cell_stroboscope(cells[i], tables[g], overlaps[g], shifts[g], spring,
+                                     geometry[g], times[i], horizons[i], capacity,
+                                     max_phases_per_period, phase, start_states[i], samples[i],
+                                     summary[i], end_states[i])
+            end_phases[i] = phase
+
+
+stepped_map_parallel, stepped_map_serial = parallel_kernel(_stepped_map)

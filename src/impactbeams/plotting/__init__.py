@@ -20,6 +20,7 @@ from impactbeams.plotting.files import save_figure
 from impactbeams.plotting.labels import case_title
 from impactbeams.plotting.missing import note_empty
 from impactbeams.plotting.selection import (
+    OVERLAID_DIMENSIONS,
     SAMPLE_DIMENSIONS,
     choose_variable,
     parse_assignments,
@@ -40,10 +41,11 @@ def draw(axes: Axes, dataset: xr.Dataset, variable: str | None = None, *,
     ``values`` slices dimensions at the grid values nearest the given ones (SI units, in log
     distance on log axes), ``indices`` at grid indices; the rest decides the figure: two
     swept dimensions give a colour map (with a colour bar), one a line, one plus ``period``
-    (Poincare samples) a bifurcation diagram. ``scale``: "log" or "linear" colours (or y axis
-    of a line), None to choose (log when positive data span more than 1.5 decades).
-    ``contours``: labelled contour lines on a map, a number of round levels or the levels.
-    ``title``: None for the fixed parameters and slices, "" for none.
+    (Poincare samples) a bifurcation diagram; a stepped sweep's directions
+    (``sweep_direction``) over one axis are overlaid, one colour each. ``scale``: "log" or
+    "linear" colours (or y axis of a line), None to choose (log when positive data span more
+    than 1.5 decades). ``contours``: labelled contour lines on a map, a number of round levels
+    or the levels. ``title``: None for the fixed parameters and slices, "" for none.
 
     Returns one note per slice saying which grid value it used. Raises ParameterError for an
     unknown variable or dimension, or a shape that cannot be drawn.
@@ -51,11 +53,16 @@ def draw(axes: Axes, dataset: xr.Dataset, variable: str | None = None, *,
     name = choose_variable(dataset, variable)
     data, notes = select(dataset, name, values or {}, indices or {})
     field = data[name]
-    grid = [d for d in field.dims if d not in SAMPLE_DIMENSIONS]
+    grid = [d for d in field.dims if d not in (*SAMPLE_DIMENSIONS, *OVERLAID_DIMENSIONS)]
+    overlaid = len(grid) == 1 and any(d in field.dims for d in OVERLAID_DIMENSIONS)
     if contours is not None and len(field.dims) != 2:
         raise ParameterError(f"contour lines need a map of two dimensions; {name} has "
                              f"{_dimensions(field)}")
-    if grid and len(grid) < field.ndim:
+    if overlaid:  # a stepped sweep's directions over one axis: a curve each
+        from impactbeams.plotting.lines import draw_directions
+
+        draw_directions(axes, data, name, scale)
+    elif grid and len(grid) < field.ndim:
         if len(grid) > 1:
             raise ParameterError(f"a bifurcation diagram needs one swept axis: {name} has "
                                  f"{_dimensions(field)}; slice all but one (--slice "

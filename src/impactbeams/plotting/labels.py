@@ -108,7 +108,8 @@ def _run_settings(attrs: Mapping[str, Any], law: bool, long_time: bool) -> list[
     parts = []
     if long_time:  # not over [0, t_max]: over the sampled periods after the transient
         if "transient_periods" in attrs and "sampled_periods" in attrs:
-            parts.append(f"{attrs['transient_periods']} transient + "
+            parts.append(f"{attrs['transient_periods']} "
+                         f"{'dwell' if 'stepping' in attrs else 'transient'} + "
                          f"{attrs['sampled_periods']} sampled periods")
     elif "t_max" in attrs:
         parts.append(f"$t_\\max$ = {format_number(float(attrs['t_max']))} s")

@@ -12,6 +12,8 @@ from impactbeams.params import ParameterError
 DEFAULT_VARIABLE = "first_impact_time"
 # dimensions of samples within one cell (stroboscopic Poincare samples), not grid axes
 SAMPLE_DIMENSIONS = ("period",)
+# dimensions drawn as overlaid curves, one colour each, over one swept axis
+OVERLAID_DIMENSIONS = ("sweep_direction",)
 
 
 def choose_variable(dataset: xr.Dataset, variable: str | None) -> str:

@@ -9,6 +9,8 @@ A sweep file (names as in `impactbeams.params`)::
     sampled_periods = 200                # stroboscopic samples (long-time observables only)
     period_tolerance = 1e-4              # of the period detection (module longtime)
     max_period = 16
+    stepping = "both"                    # stepped-sine rows: "up", "down", "both" (long-time)
+    stepped_axis = "omega"               # the axis they step along (default omega)
     [params]                             # fixed parameters; the rest take the defaults
     clearance = 1.1e-5
     [axes.omega]                         # one table per swept parameter, in order
@@ -32,7 +34,7 @@ import numpy as np
 
 from impactbeams import __version__
 from impactbeams.kernels.layout import CELL_COLUMNS
-from impactbeams.longtime import LongTime
+from impactbeams.longtime import LongTime, Stepping
 from impactbeams.params import (
     CHOICES,
     CONTACT_LAWS,
@@ -80,8 +82,9 @@ OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV, *LONG_TIME_OBSERVA
 # parameters that change a cell but not its geometry (its modes): the packed cell columns
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
 LONG_TIME_KEYS = ("sampled_periods", "period_tolerance", "max_period")  # of LongTime
+STEPPING_KEYS = ("stepping", "stepped_axis")  # of Stepping
 _TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes", "transient_periods",
-              *LONG_TIME_KEYS)
+              *LONG_TIME_KEYS, *STEPPING_KEYS)
 _AXIS_KEYS = ("min", "max", "num", "scale")
 # Distinct geometries (values of the axes that change the modes) per sweep: each one's modes are
 # computed serially before the map runs, 0.4 ms (5 modes, first impact) to 2 s (200 modes, tied
@@ -155,11 +158,20 @@ class Sweep:
     source: str = "sweep"
     transient_periods: int = 0
     long_time: LongTime | None = None  # how long-time observables sample the run
+    stepping: Stepping | None = None  # stepped-sine rows instead of independent cells
 
     @property
     def shape(self) -> tuple[int, ...]:
-        """Grid shape, one entry per axis."""
-        return tuple(axis.num for axis in self.axes)
+        """Grid shape, one entry per axis; a stepped sweep's rows' directions first."""
+        directions = (len(self.stepping.directions),) if self.stepping else ()
+        return (*directions, *(axis.num for axis in self.axes))
+
+    @property
+    def stepped_dimension(self) -> int | None:
+        """The position in ``shape`` of the axis a stepped sweep steps along (None if not)."""
+        if self.stepping is None:
+            return None
+        return 1 + [axis.name for axis in self.axes].index(self.stepping.axis)
 
     @property
     def size(self) -> int:
@@ -190,9 +202,12 @@ class Sweep:
         transient = {"transient_periods": self.transient_periods} if self.transient_periods else {}
         long_time = ({} if self.long_time is None else
                      {key: getattr(self.long_time, key) for key in LONG_TIME_KEYS})
+        stepping = ({} if self.stepping is None else
+                    {"stepping": self.stepping.direction, "stepped_axis": self.stepping.axis})
         return {"t_max": self.t_max, "n_modes": self.n_modes,
                 "observables": list(self.observables), "params": dict(self.fixed),
-                "axes": {a.name: a.definition() for a in self.axes}, **transient, **long_time}
+                "axes": {a.name: a.definition() for a in self.axes}, **transient, **long_time,
+                **stepping}
 
     @property
     def base(self) -> Params:
@@ -259,8 +274,9 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
     if fixed.get("counterpart") == "stop":  # a stop has no beam 2: its keys are mistakes
         refuse_beam2(fixed, f"[params] of {source}")
         refuse_beam2([axis.name for axis in axes], f"[axes] of {source}")
-    sweep = Sweep(t_max, int(n_modes), observables, fixed, axes, source, transient,
-                  _long_time(data, observables, source))
+    long_time = _long_time(data, observables, source)
+    sweep = Sweep(t_max, int(n_modes), observables, fixed, axes, source, transient, long_time,
+                  _stepping(data, long_time, axes, source))
     _check_grid(sweep)
     _check_lyapunov(sweep)
     _check_cost(sweep)
@@ -299,6 +315,29 @@ def _long_time(data: Mapping[str, Any], observables: tuple[str, ...],
         return LongTime(**given)
     except ParameterError as error:
         raise ParameterError(f"{error} (in {source})") from None
+
+
+def _stepping(data: Mapping[str, Any], long_time: LongTime | None, axes: tuple[Axis, ...],
+              source: str) -> Stepping | None:
+    """Stepped-sine rows: only for long-time observables, along a swept drive axis."""
+    given = {key: data[key] for key in STEPPING_KEYS if key in data}
+    if not given:
+        return None
+    keys = ", ".join(given)
+    require(f"{keys} in {source}", list(given.values()), long_time is not None,
+            "stepped-sine sweeps carry a long run's state: only long-time observables use it "
+            f"({', '.join(LONG_TIME_OBSERVABLES)})")
+    require(f"stepped_axis in {source}", given.get("stepped_axis"), "stepping" in given,
+            'needs stepping = "up", "down" or "both"')
+    try:
+        stepping = Stepping(given["stepping"], given.get("stepped_axis", "omega"))
+    except ParameterError as error:
+        raise ParameterError(f"{error} (in {source})") from None
+    swept = [axis.name for axis in axes]
+    require(f"stepped_axis in {source}", stepping.axis, stepping.axis in swept,
+            f"is not swept: step along one of the swept axes ({', '.join(swept)}), given by "
+            "stepped_axis, or add [axes." + stepping.axis + "]")
+    return stepping
 
 
 def _number(value: Any, name: str) -> float:
@@ -581,8 +620,13 @@ def sample_points(sweep: Sweep, start: int = 0, stop: int | None = None,
     # Python integers: a grid may have more cells than int64 holds (it is refused afterwards)
     flat = sorted({start + (stop - 1 - start) * k // max(count - 1, 1) for k in range(count)})
     return [sweep.params_at({axis.name: axis.value(i) for axis, i in
-                             zip(sweep.axes, _grid_index(cell, sweep.shape), strict=True)})
+                             zip(sweep.axes, _axis_indices(sweep, cell), strict=True)})
             for cell in flat]
+
+
+def _axis_indices(sweep: Sweep, cell: int) -> list[int]:
+    """The index along each axis of flat ``cell`` (a stepped sweep's direction left out)."""
+    return _grid_index(cell, sweep.shape)[-len(sweep.axes):]
 
 
 def _grid_index(cell: int, shape: tuple[int, ...]) -> list[int]:

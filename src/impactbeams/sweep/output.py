@@ -36,8 +36,10 @@ ChunkWriter = Callable[[int, int, Mapping[str, np.ndarray]], None]
 
 def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
     """The map's coordinates, variables and attributes; ``chunks``: its blocks on disk."""
-    coords = {axis.name: (axis.values, {**parameter_attributes(axis.name), "scale": axis.scale})
-              for axis in sweep.axes}
+    coords = {} if sweep.stepping is None else {
+        "sweep_direction": (np.array(sweep.stepping.directions), attributes("sweep_direction"))}
+    coords.update({axis.name: (axis.values, {**parameter_attributes(axis.name),
+                                             "scale": axis.scale}) for axis in sweep.axes})
     grid = tuple(coords)
     variables = {name: (dtype, attributes(name), grid + VARIABLES[name].dims[1:])
                  for name, (dtype, _) in cell_values(sweep).items()}
@@ -51,6 +53,8 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
         long_time = sweep.long_time
         run.update({key: getattr(long_time, key) for key in LONG_TIME_KEYS},
                    transient_periods=sweep.transient_periods)
+        if sweep.stepping is not None:
+            run.update(stepping=sweep.stepping.direction, stepped_axis=sweep.stepping.axis)
         if any("period" in dims for _, _, dims in variables.values()):
             coords["period"] = (long_time.period_numbers(sweep.transient_periods).astype(
                 _dtype("period"), copy=False), attributes("period"))

@@ -193,7 +193,10 @@ def build_plan(sweep: Sweep) -> Plan:
 
 
 def chunk_cells(sweep: Sweep, plan: Plan, start: int, stop: int) -> np.ndarray:
-    """The packed cell rows (kernels.layout.CELL_COLUMNS) of flat cells start..stop."""
+    """The packed cell rows (kernels.layout.CELL_COLUMNS) of flat cells start..stop.
+
+    A stepped sweep's rows of every direction hold the same cells.
+    """
     rows = [_box_cells(sweep, plan, box) for box in flat_boxes(start, stop, sweep.shape)]
     return rows[0] if len(rows) == 1 else np.concatenate(rows)
 
@@ -201,6 +204,11 @@ def chunk_cells(sweep: Sweep, plan: Plan, start: int, stop: int) -> np.ndarray:
 def _box_cells(sweep: Sweep, plan: Plan, box: tuple[slice, ...]) -> np.ndarray:
     """The cell rows of one box of the grid, in C order, from the axis values by broadcasting."""
     from impactbeams import packing
+
+    if sweep.stepping is not None:  # the rows' directions first: the same cells in each
+        box, directions = box[1:], box[0].stop - box[0].start
+        return np.tile(_box_cells(dataclasses.replace(sweep, stepping=None), plan, box),
+                       (directions, 1))
 
     columns: dict[str, float | np.ndarray] = {name: getattr(plan.base, name)
                                               for name in CELL_PARAMETERS}
@@ -307,9 +315,21 @@ def default_chunk_cells(sweep: Sweep) -> int:
     a hundredth of the sweep, 1 to 64 cells, so that progress shows, an interrupt loses little
     and the threads, each running a chunk of its own (``run.local_runner``), finish together.
     """
+    if sweep.stepping is not None:
+        return row_cells(sweep)
     if sweep.long_time is not None:
         return int(min(max(sweep.size // 100, 1), 64))
     return 2**16 if sweep.needs_dynamics else 2**20
+
+
+def row_cells(sweep: Sweep) -> int:
+    """The cells of a stepped sweep's chunk of one row: the stepped axis and every later axis.
+
+    A row's cells run one after the other, each from its predecessor's state: a chunk holds
+    whole rows (the later axes' rows run beside it), so that it is computed, saved and
+    resumed as a unit and a resumed run gives the same file.
+    """
+    return math.prod(sweep.shape[sweep.stepped_dimension:])
 
 
 MAX_COLUMN_CELLS = 4096  # a first-impact map's columns: at most this many cells each
@@ -405,7 +425,10 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     if LYAPUNOV in sweep.observables:
         columns.update(_lyapunov_columns(sweep, plan, cells, parallel, columns))
     if sweep.long_time is not None:
-        long_run = _long_run(sweep.long_time, sweep.transient_periods, plan, cells, parallel)
+        long_run = (_long_run(sweep.long_time, sweep.transient_periods, plan, cells, parallel)
+                    if sweep.stepping is None else
+                    _stepped_run(sweep, plan, cells, stepped_rows(sweep, start, stop),
+                                 parallel)[0])
         long_run["dynamics_status"] = np.maximum(
             long_run["dynamics_status"], columns.get("dynamics_status", 0))
         columns.update(long_run)
@@ -437,6 +460,57 @@ def _long_run(long_time: LongTime, transient_periods: int, plan: Plan, cells: np
                MAX_PHASES_PER_PERIOD, samples, summary)
     return long_time_values(long_time, transient_periods, omega,
                             cells[:, layout.CELL_CLEARANCE], samples, summary)
+
+
+def stepped_rows(sweep: Sweep, start: int, stop: int) -> np.ndarray:
+    """The stepped rows of flat cells ``start..stop`` (whole rows), as cell indices from start.
+
+    Row r runs cells ``rows[r, 0], rows[r, 1], ...`` in that order: increasing along the
+    stepped axis up, decreasing down.
+    """
+    blocks, offset = [], 0
+    step = sweep.stepped_dimension
+    for box in flat_boxes(start, stop, sweep.shape):
+        shape = tuple(s.stop - s.start for s in box)
+        cells = np.moveaxis(offset + np.arange(math.prod(shape)).reshape(shape), step, -1)
+        directions = np.moveaxis(np.broadcast_to(
+            np.arange(box[0].start, box[0].stop).reshape((-1,) + (1,) * (len(shape) - 1)),
+            shape), step, -1)[..., 0].ravel()
+        if shape[step] != sweep.shape[step]:
+            raise ValueError(f"cells {start}..{stop} do not hold whole stepped rows")
+        rows = cells.reshape(-1, shape[step])
+        down = np.array(sweep.stepping.directions)[directions] == "down"
+        rows[down] = rows[down, ::-1]
+        blocks.append(rows)
+        offset += math.prod(shape)
+    return np.ascontiguousarray(np.concatenate(blocks), dtype=np.int64)
+
+
+def _stepped_run(sweep: Sweep, plan: Plan, cells: np.ndarray, rows: np.ndarray,
+                 parallel: bool) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The long-time observables of stepped ``rows`` of ``cells`` (`stepped_rows`).
+
+    Also the carried states: each cell's start and end phase (``NO_STATE``: its own start,
+    or a run that stopped early) and state (rows q, q' as observed; NaN with ``NO_STATE``).
+    """
+    from impactbeams.kernels import stroboscope
+    from impactbeams.longtime import long_time_values
+
+    long_time, transient = sweep.long_time, sweep.transient_periods
+    kernel = stroboscope.stepped_map_parallel if parallel else stroboscope.stepped_map_serial
+    omega = cells[:, layout.CELL_FORCING_FREQUENCY]
+    samples = np.empty((cells.shape[0], long_time.sampled_periods, len(layout.TIP_COLUMNS)))
+    summary = np.empty((cells.shape[0], len(layout.STROBOSCOPE_COLUMNS)))
+    carried = {name: np.empty(cells.shape[0], dtype=np.int64)
+               for name in ("start_phase", "end_phase")}
+    carried.update({name: np.empty((cells.shape[0], 2, plan.tables.shape[-1]))
+                    for name in ("start_state", "end_state")})
+    kernel(cells, rows, plan.tables, *plan.switching, plan.geometry,
+           long_time.sample_times(omega, transient), long_time.horizon(omega, transient),
+           LONG_RUN_CAPACITY, MAX_PHASES_PER_PERIOD, samples, summary, carried["start_phase"],
+           carried["start_state"], carried["end_phase"], carried["end_state"])
+    return (long_time_values(long_time, transient, omega, cells[:, layout.CELL_CLEARANCE],
+                             samples, summary), carried)
 
 
 def _lyapunov_columns(sweep: Sweep, plan: Plan, cells: np.ndarray, parallel: bool,

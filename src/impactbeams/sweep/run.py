@@ -31,6 +31,7 @@ from impactbeams.sweep.plan import (
     compute_chunk,
     contact_resolution,
     default_chunk_cells,
+    row_cells,
 )
 from impactbeams.sweep.progress import Progress, chunk_progress
 from impactbeams.sweep.store import ChunkStore, finished_output, reporting_kept_chunks
@@ -114,6 +115,11 @@ def _chunking(sweep: Sweep, chunk_cells: int | None) -> Chunking:
     require("chunk_cells", chunk_cells, chunk_cells is None or (
         isinstance(chunk_cells, int) and 1 <= chunk_cells <= MAX_CHUNK_CELLS),
         f"must be an integer from 1 to {MAX_CHUNK_CELLS}")
+    if sweep.stepping is not None:
+        rows = row_cells(sweep)
+        require("chunk_cells", chunk_cells, chunk_cells is None or chunk_cells >= rows,
+                f"a stepped sweep's chunk holds whole rows along {sweep.stepping.axis}: at "
+                f"least {rows} cells")
     return Chunking.at_most(sweep.shape, chunk_cells or default_chunk_cells(sweep))
 
 
