@@ -298,6 +298,23 @@ VARIABLES.update({
 })
 
 
+# a run's final modal state (simulate's initial_state of a run that continues it)
+_MODAL_UNITS = "kg^1/2 m^1/2"  # q_n = rhoA int y Y_n dx, Y_n mass-normalised
+VARIABLES.update({
+    "coordinate": Variable(
+        ("coordinate",), "1", "free modal coordinate number",
+        "index of the free modal coordinates: beam 1's n_modes cantilever modes, then beam 2's "
+        "(none against a stop)", dtype="int64"),
+    "final_displacement": Variable(
+        ("coordinate",), _MODAL_UNITS, "modal displacements at t_end",
+        "free modal coordinates q at the run's end t_end, the quasi-static part of the tip "
+        "force taken out (docs/model.md); NaN if a tied-law run ends in contact"),
+    "final_velocity": Variable(
+        ("coordinate",), _MODAL_UNITS + " s-1", "modal velocities at t_end",
+        "dq/dt of the free modal coordinates at the run's end t_end (see final_displacement)"),
+})
+
+
 # long-time response (impactbeams.longtime): stroboscopic samples along "period", after a
 # transient; in a map "*" is the swept axes, in simulate() nothing
 VARIABLES.update({

@@ -1,0 +1,197 @@
+"""Periodic orbits: the period map and its monodromy, shooting, Floquet multipliers.
+
+The orbit of the tests: k = 1e4 N/m resolved by 12 modes per beam, zeta = 0.05, a stable
+period-1 orbit with 6 contacts (one episode) per period (tests/test_lyapunov.py).
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from impactbeams import ParameterError, Params, simulate
+from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, ROW_FREQUENCY
+from impactbeams.orbits import PeriodMap
+from impactbeams.packing import pack_run
+from impactbeams.trajectory import InitialFields
+from impactbeams.trajectory.start import phase_state, projected_fields
+
+N_MODES = 12
+PERIODIC = {"contact_stiffness": 1e4, "damping_ratio": 0.05}
+DASHPOT = {**PERIODIC, "contact_damping": 0.5}
+
+
+def energy_scale(period_map):
+    """D with D z = (omega q, q'): the energy norm's coordinates."""
+    omega = period_map.packed.tables[FREE, ROW_FREQUENCY]
+    return np.concatenate([omega, np.ones(omega.size)])
+
+
+def settled(period_map, periods=60):
+    """The section state after ``periods`` maps from the run's start."""
+    z = period_map.rest_state()
+    for _ in range(periods):
+        z = period_map(z, measures=False).state
+    return z
+
+
+@pytest.fixture(scope="module")
+def dashpot_map():
+    period_map = PeriodMap(Params(**DASHPOT), n_modes=N_MODES)
+    return period_map, settled(period_map)
+
+
+def central_differences(period_map, z, step):
+    """dP/dz by central differences of the nonlinear map, steps ``step`` / D per coordinate."""
+    scale = energy_scale(period_map)
+    size = step * np.linalg.norm(scale * z)
+    columns = []
+    for j in range(z.size):
+        e = np.zeros(z.size)
+        e[j] = size / scale[j]
+        columns.append((period_map(z + e, measures=False).state
+                        - period_map(z - e, measures=False).state) / (2 * e[j]))
+    return np.array(columns).T
+
+
+def test_monodromy_matches_finite_differences(dashpot_map):
+    """With a dashpot (saltation at the onsets): the tangent Jacobian against central
+    differences of the map at relative step 1e-4 in the energy norm (the differences' round-off,
+    ~2e-10 / 1e-4, dominates: measured 2e-6, as for tests/test_lyapunov.py's flow map)."""
+    period_map, z = dashpot_map
+    result = period_map(z, directions="all", measures=False)
+    scale = energy_scale(period_map)
+    carried = scale[:, None] * result.jacobian / scale[None, :]
+    reference = scale[:, None] * central_differences(period_map, z, 1e-4) / scale[None, :]
+    assert np.linalg.norm(carried - reference, 2) < 2e-5 * np.linalg.norm(reference, 2)
+
+
+def test_jacobian_columns_are_the_monodromy_applied_to_directions(dashpot_map):
+    """A block of directions gets the same tangent propagation as the identity's columns:
+    equal to round-off of the sums (the rows are carried independently, 1e-12 relative)."""
+    period_map, z = dashpot_map
+    full = period_map(z, directions="all", measures=False).jacobian
+    block = np.random.default_rng(1).standard_normal((z.size, 3))
+    carried = period_map(z, directions=block, measures=False).jacobian
+    assert np.allclose(carried, full @ block, rtol=0, atol=1e-12 * np.abs(full @ block).max())
+
+
+def test_period_map_counts_and_measures(dashpot_map):
+    period_map, z = dashpot_map
+    result = period_map(z)
+    assert result.status == "complete"
+    assert result.contacts >= 1 and result.episodes >= 1
+    assert result.peak_force > 0 and result.impulse > 0
+    assert result.max_tip1 > 0 and result.max_tip2 > 0
+    two = PeriodMap(Params(**DASHPOT), n_modes=N_MODES, periods=2)(z)
+    assert two.contacts == 2 * result.contacts  # a period-1 orbit
+    assert two.impulse == pytest.approx(2 * result.impulse, rel=1e-8)
+
+
+def test_period_map_refuses_what_it_cannot_do():
+    with pytest.raises(ParameterError, match="spring contact law"):
+        PeriodMap(Params(contact_law="tied"))
+    with pytest.raises(ParameterError, match="omega"):
+        PeriodMap(Params(**PERIODIC, omega=0.0), n_modes=N_MODES)
+    period_map = PeriodMap(Params(**PERIODIC), n_modes=N_MODES)
+    with pytest.raises(ParameterError, match=r"state = \(3,\): must be a finite modal state"):
+        period_map(np.zeros(3))
+    bad = period_map.rest_state()
+    bad[0] = math.nan
+    with pytest.raises(ParameterError, match="state"):
+        period_map(bad)
+    with pytest.raises(ParameterError, match="directions"):
+        period_map(period_map.rest_state(), directions=np.zeros((5, 2)))
+
+
+# --- start from a state -------------------------------------------------------------------------
+
+PERIOD = 2 * math.pi / Params().omega
+
+
+def test_restart_from_the_final_state_continues_the_run():
+    """0 -> 2T against 0 -> T then T -> 2T from the first run's final state (given as its
+    Dataset, on the section t = T): the restart differs in the forcing's time argument only,
+    sin(Omega (t + T)) against sin(Omega t), round-off that a stable orbit does not amplify
+    (measured 2e-15 relative on the tips, 7e-15 on the final state)."""
+    params = Params(**DASHPOT)
+    whole = simulate(params, 2 * PERIOD, n_modes=N_MODES, dt_output=PERIOD / 64)
+    first = simulate(params, PERIOD, n_modes=N_MODES, dt_output=PERIOD / 64)
+    second = simulate(params, PERIOD, n_modes=N_MODES, dt_output=PERIOD / 64,
+                      initial_state=first)
+    tail = whole.tip_deflection_1.values[64:]
+    scale = np.abs(tail).max()
+    assert np.abs(second.tip_deflection_1.values - tail).max() < 1e-13 * scale
+    assert second.impact.size == whole.impact.size - first.impact.size
+    end = np.concatenate([whole.final_displacement, whole.final_velocity])
+    restarted = np.concatenate([second.final_displacement, second.final_velocity])
+    assert np.abs(restarted - end).max() < 1e-13 * np.abs(end).max()
+    # the same state given as an array: bit for bit the Dataset's
+    state = np.concatenate([first.final_displacement, first.final_velocity])
+    again = simulate(params, PERIOD, n_modes=N_MODES, dt_output=PERIOD / 64,
+                     initial_state=state)
+    assert np.array_equal(again.tip_deflection_1, second.tip_deflection_1)
+
+
+@pytest.mark.parametrize("extra", [{}, {"base_amplitude": 1e-6}, {"counterpart": "stop"}])
+def test_fields_of_the_rest_state_start_as_rest(extra):
+    """Zero deflection and velocity fields (at rest in the absolute frame) project on q = 0
+    and the rest velocity of the tip force and the shaker: bit for bit start = "rest"."""
+    params = Params(**PERIODIC, **extra)
+    rest = simulate(params, 0.3 * PERIOD, n_modes=N_MODES)
+    zero = lambda x: np.zeros_like(x)  # noqa: E731
+    fields = InitialFields(deflection1=zero, velocity1=zero)
+    started = simulate(params, 0.3 * PERIOD, n_modes=N_MODES, initial_state=fields)
+    assert np.array_equal(rest.tip_deflection_1, started.tip_deflection_1)
+    assert np.array_equal(rest.gap, started.gap)
+
+
+def test_fields_project_on_the_modes_with_the_mass_matrix():
+    """A field that is a combination of the modes' shapes projects on its coefficients (to
+    the quadrature's round-off, 1e-12)."""
+    params = Params(**PERIODIC)
+    packed = pack_run(params, N_MODES, PERIOD, PERIOD)
+    free = packed.dynamics.free
+    rng = np.random.default_rng(3)
+    a, b = rng.standard_normal(N_MODES) * 1e-6, rng.standard_normal(N_MODES) * 1e-6
+    fields = InitialFields(deflection1=lambda x: a @ free.beam1.shapes(x),
+                           velocity2=lambda x: b @ free.beam2.shapes(x))
+    z = projected_fields(packed, fields)
+    expected_q = np.concatenate([a, np.zeros(N_MODES)])
+    expected_v = np.concatenate([np.zeros(N_MODES), b]) + packed.v0
+    assert np.allclose(z[:2 * N_MODES], expected_q, rtol=0, atol=1e-12 * np.abs(a).max())
+    assert np.allclose(z[2 * N_MODES:], expected_v, rtol=0, atol=1e-12 * np.abs(b).max())
+
+
+def test_a_start_in_contact_begins_with_the_contact_phase():
+    """A state whose tips overlap while closing (the spring pushes) starts in contact."""
+    params = Params(**PERIODIC)
+    packed = pack_run(params, N_MODES, PERIOD, PERIOD)
+    weights = packed.tables[FREE, ROW_EVENT]
+    z = np.concatenate([-2 * params.clearance * weights / (weights @ weights),
+                        -1e-3 * weights / np.linalg.norm(weights)])
+    assert phase_state(packed, z)[2] == CONTACT
+    run_dataset = simulate(params, 0.1 * PERIOD, n_modes=N_MODES, initial_state=z)
+    assert bool(run_dataset.in_contact[0])
+
+
+def test_bad_initial_states_are_refused_in_one_line():
+    params = Params(**PERIODIC)
+    with pytest.raises(ParameterError, match=r"initial_state = \(5,\): must be a finite modal"):
+        simulate(params, PERIOD, n_modes=N_MODES, initial_state=np.zeros(5))
+    with pytest.raises(ParameterError, match="initial_state replaces params.start"):
+        simulate(Params(**PERIODIC, uplift1=1e-6), PERIOD, n_modes=N_MODES,
+                 initial_state=np.zeros(4 * N_MODES))
+    with pytest.raises(ParameterError, match="whole number of periods"):
+        short = simulate(params, 0.5 * PERIOD, n_modes=N_MODES)
+        simulate(params, PERIOD, n_modes=N_MODES, initial_state=short)
+    with pytest.raises(ParameterError, match="deflection1: must return"):
+        simulate(params, PERIOD, n_modes=N_MODES,
+                 initial_state=InitialFields(deflection1=lambda x: 0.0))
+    tied = Params(contact_law="tied")
+    packed = pack_run(tied, 5, PERIOD, PERIOD)
+    weights = packed.tables[FREE, ROW_EVENT]
+    overlap = np.concatenate([-2 * tied.clearance * weights / (weights @ weights),
+                              np.zeros(weights.size)])
+    with pytest.raises(ParameterError, match="tied law starts from an open gap"):
+        simulate(tied, PERIOD, n_modes=5, initial_state=overlap)
