@@ -258,13 +258,13 @@ class ReducedModel:
     contact force R >= 0 (pushing beam 1 up, beam 2 down):
 
         eta'' + diag(damping) eta' + diag(frequencies^2) eta = tip1 (R - F) - tip2 R,
-        y1(l1) = tip1 . eta - residual1 F,   y2(l2) = tip2 . eta,
-        R = max(0, -effective_stiffness (clearance + y1(l1) - y2(l2)))   (no dashpot).
+        y1(l1) = tip1 . eta + residual1 (R - F),   y2(l2) = tip2 . eta - residual2 R,
+        R = max(0, -stiffness (clearance + y1(l1) - y2(l2)))   (no dashpot).
 
-    The same equations are a massless point at each tip, on a spring 1 / residual_i to the
-    modes' tip tip_i . eta and loaded by F (beam 1) and R, with the contact spring ``stiffness``
-    between the two points: the series springs give effective_stiffness (docs/model.md, the
-    static correction), and beam 1's point sits at y1(l1) + residual1 R.
+    That is, a massless point at each tip (the tip the engine reports), on a spring
+    1 / residual_i to the modes' tip tip_i . eta and loaded by F (beam 1) and R, with the
+    contact spring ``stiffness`` between the two points; in series they give
+    effective_stiffness (docs/model.md, the static correction).
     All SI units: rad/s, 1/s, m per unit eta, m/N, N/m, m, N.
     """
 
