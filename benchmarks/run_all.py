@@ -31,6 +31,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
+import bench_harmonic_balance as harmonic_balance  # noqa: E402
 import bench_longtime as longtime  # noqa: E402
 import scaling  # noqa: E402
 import spring_precision as spring  # noqa: E402
@@ -412,6 +413,8 @@ def page(out: Path) -> str:
         readme += "\n" + spring.markdown(_load(out, "spring"))
     if (out / "longtime.json").exists():  # the long-time diagram's cost, in brief
         readme += "\n" + longtime.headline(_load(out, "longtime"))
+    if (out / "harmonic_balance.json").exists():  # the harmonic-balance peer (pyHarm)
+        readme += "\n" + harmonic_balance.section(_load(out, "harmonic_balance"))
     return readme + "\n" + results_files(out)
 
 
