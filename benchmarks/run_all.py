@@ -33,6 +33,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
+import bench_harmonic_balance as harmonic_balance  # noqa: E402
 import bench_longtime as longtime  # noqa: E402
 import scaling  # noqa: E402
 import spring_precision as spring  # noqa: E402
@@ -433,6 +434,8 @@ def page(out: Path) -> str:
                    "per-kernel compile times in [compile.md](compile.md)) and "
                    "`bench_startup.py` (each command's start-up, warm cache):\n\n"
                    + first_run_table(_load(out, "compile"), _load(out, "startup")))
+    if (out / "harmonic_balance.json").exists():  # the harmonic-balance peer (pyHarm)
+        readme += "\n" + harmonic_balance.section(_load(out, "harmonic_balance"))
     return readme + "\n" + results_files(out)
 
 

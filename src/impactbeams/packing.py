@@ -253,3 +253,58 @@ def pack_run(params: Params, n_modes: int, t_max: float, search_span: float,
     damped, forces, scalars, settings, q0, v0, drives = run_inputs(
         cell, dynamics.tables, dynamics.geometry, dynamics.spring_arrays, t_max, search_span)
     return Packed(dynamics, damped, forces, scalars, drives, settings[0], q0, v0)
+
+
+@dataclasses.dataclass(frozen=True)
+class ReducedModel:
+    """The spring law's reduced model, for peers that take linear modes plus a gap element.
+
+    Coordinates: the free modes' whole coordinates eta_n = <y, Y_n> (beam 1's modes, then beam
+    2's), unit modal masses. With the tip force F(t) = F0 sin(Omega t) (downward) and the
+    contact force R >= 0 (pushing beam 1 up, beam 2 down):
+
+        eta'' + diag(damping) eta' + diag(frequencies^2) eta = tip1 (R - F) - tip2 R,
+        y1(l1) = tip1 . eta + residual1 (R - F),   y2(l2) = tip2 . eta - residual2 R,
+        R = max(0, -stiffness (clearance + y1(l1) - y2(l2)))   (no dashpot).
+
+    That is, a massless point at each tip (the tip the engine reports), on a spring
+    1 / residual_i to the modes' tip tip_i . eta and loaded by F (beam 1) and R, with the
+    contact spring ``stiffness`` between the two points; in series they give
+    effective_stiffness (docs/model.md, the static correction).
+    All SI units: rad/s, 1/s, m per unit eta, m/N, N/m, m, N.
+    """
+
+    frequencies: np.ndarray
+    damping: np.ndarray
+    tip1: np.ndarray
+    tip2: np.ndarray
+    residual1: float
+    residual2: float
+    stiffness: float
+    effective_stiffness: float
+    clearance: float
+    force_amplitude: float
+    omega: float
+
+
+def reduced_model(params: Params, n_modes: int) -> ReducedModel:
+    """The reduced model of ``params`` with ``n_modes`` per beam (spring law, tip force only).
+
+    Raises ParameterError for what it cannot express: the tied law, a dashpot, base excitation.
+    """
+    from impactbeams.contact import build_free_phase, spring_contact
+    from impactbeams.params import ParameterError
+
+    for name, value, allowed in (("contact_law", params.contact_law, "spring"),
+                                 ("contact_damping", params.contact_damping, 0.0),
+                                 ("base_amplitude", params.base_amplitude, 0.0)):
+        if value != allowed:
+            raise ParameterError(f"reduced_model: {name} = {value!r}; it supports {allowed!r}"
+                                 " only (a linear modal model with a spring gap element)")
+    free = build_free_phase(params, n_modes)
+    spring = spring_contact(free, params.tip_compliance, params.damping_ratio,
+                            params.contact_stiffness)
+    return ReducedModel(free.frequencies, 2.0 * params.damping_ratio * free.frequencies,
+                        free.tip1, free.tip2, spring.residual1, spring.residual2,
+                        params.contact_stiffness, spring.effective_stiffness,
+                        params.clearance, params.force_amplitude, params.omega)
