@@ -1,0 +1,1 @@
+"""Continuation of periodic orbits: branches, stability, bifurcations, frequency responses."""
