@@ -28,11 +28,13 @@ class Map:
     def residual(self, z, p):
         return self._iterate(z, p)[0] - z
 
-    def evaluate(self, z, p):
+    def evaluate(self, z, p, jacobian=True):
         end, monodromy = self._iterate(z, p)
-        jacobian = monodromy - np.eye(len(z))
+        jacobian = monodromy - np.eye(len(z)) if jacobian else np.empty((0, 0))
         gap = math.nan if self.gap is None else self.gap(z, p)
-        return Evaluation(end - z, jacobian, multipliers_of(jacobian), grazing=gap,
+        return Evaluation(end - z, jacobian,
+                          multipliers_of(jacobian) if jacobian.size else np.empty(0),
+                          grazing=gap,
                           contacts=int(gap <= 0) if self.gap else 0,
                           measures={"amplitude": float(np.max(np.abs(z)))})
 

@@ -24,6 +24,9 @@ from impactbeams.continuation.problem import Evaluation, Problem, parameter_deri
 from impactbeams.params import ParameterError
 
 
+GRADIENT_STEP = 1e-7  # x~ units
+
+
 @dataclasses.dataclass(frozen=True)
 class Settings:
     """How a branch is followed; lengths and tolerances in the scaled unknowns x~.
@@ -83,7 +86,7 @@ class Scaling:
         return x[:-1] / self.state, float(x[-1] / self.parameter)
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, eq=False)
 class Point:
     """A point of a branch: x~, its unit tangent, what was read there, how it was found.
 
@@ -171,6 +174,21 @@ class Follower:
     def at_arclength(self, start: Point, s: float) -> Correction:
         """The point at arclength ``s`` along ``start``'s tangent (the secant plane)."""
         return self.correct(start.x + s * start.tangent, start.tangent, start.tangent)
+
+    def grazing_gradient(self, x: np.ndarray) -> np.ndarray:
+        """The gradient in x~ of the grazing value, by forward differences of step
+        ``GRADIENT_STEP`` (x~ is of order 1: the error is ~1e-7 relative, enough for the
+        direction of a plane)."""
+        z, p = self.scaling.unscaled(x)
+        value = self.problem.evaluate(z, p, jacobian=False).grazing
+        gradient = np.empty_like(x)
+        for j in range(len(x)):
+            shifted = x.copy()
+            shifted[j] += GRADIENT_STEP
+            z, p = self.scaling.unscaled(shifted)
+            gradient[j] = (self.problem.evaluate(z, p, jacobian=False).grazing - value) / (
+                GRADIENT_STEP)
+        return gradient
 
     def step(self, start: Point, ds: float) -> tuple[Point | None, float, tuple[float, ...]]:
         """The next point from ``start`` with a step ``ds`` (halved as needed).

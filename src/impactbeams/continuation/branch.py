@@ -109,21 +109,22 @@ def _follow(follower: Follower, branch: Branch, span: Span,
         low, high = span.low * follower.scaling.parameter, span.high * follower.scaling.parameter
         if point is not None and not low <= point.x[-1] <= high:
             end = _at_bound(follower, current, point, low if point.x[-1] < low else high)
-            _append(branch, _between(follower, current, end, progress), progress)
+            _append(branch, _between(follower, current, end), progress)
             branch.ending = BOUND
             break
         crossing = (point is not None and _grazes(current, point)) or (
             point is None and _any_crossing(current, grazing))
-        if crossing:
-            current, ds = _cross_grazing(follower, branch, current, taken, point, progress)
-            if current is None:
-                branch.ending = MIN_STEP
-                break
+        resumed = crossing and _cross_grazing(follower, branch, current, taken, point, progress)
+        if resumed:
+            current, ds = resumed
+            continue
+        if point is None and crossing and taken / 2.0 >= settings.min_step:
+            ds = taken / 2.0  # an iterate crossed, not the branch: a smaller step
             continue
         if point is None:
             branch.ending = MIN_STEP
             break
-        _append(branch, _between(follower, current, point, progress), progress)
+        _append(branch, _between(follower, current, point), progress)
         current, ds = point, follower.next_step(taken, point.iterations)
     else:
         branch.ending = MAX_POINTS
@@ -137,19 +138,28 @@ def _append(branch: Branch, points: list[Point], progress: Progress | None) -> N
             progress(branch, point)
 
 
-def _between(follower: Follower, a: Point, b: Point, progress: Progress | None) -> list[Point]:
-    """The bifurcations located between ``a`` and ``b`` (in arclength order), then ``b``."""
-    s_end = float(a.tangent @ (b.x - a.x))
+def _between(follower: Follower, a: Point, b: Point,
+             plane: tuple[np.ndarray, np.ndarray] | None = None) -> list[Point]:
+    """The bifurcations located between ``a`` and ``b`` (in order), then ``b``.
+
+    Points between are corrected on planes s along ``a``'s tangent from ``a``, or along
+    ``plane`` = (origin, unit normal) when given.
+    """
+    origin, normal = plane if plane is not None else (a.x, a.tangent)
+
+    def point_at(s: float) -> Point | None:
+        return follower.correct(origin + s * normal, normal, normal).point
+
     located = []
     for label, test in detected(a, b):
         if not (math.isfinite(test(a)) and math.isfinite(test(b))
                 and (test(a) > 0) != (test(b) > 0)):
             continue  # a signature changed without its multiplier crossing (a collision)
-        before, _ = locate(follower, a, s_end, b, test)
-        if before is not None and before is not a:
-            located.append(dataclasses.replace(before, label=label))
-    located.sort(key=lambda point: float(a.tangent @ (point.x - a.x)))
-    return [*located, b]
+        s, before, _ = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
+                              follower.settings.locate_tolerance)
+        if before is not a:
+            located.append((s, dataclasses.replace(before, label=label)))
+    return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
 
 
 def _grazes(a: Point, b: Point) -> bool:
@@ -162,35 +172,44 @@ def _any_crossing(a: Point, values: tuple[float, ...]) -> bool:
     return math.isfinite(g0) and any(math.isfinite(g) and (g > 0) != (g0 > 0) for g in values)
 
 
+# distances beyond a grazing tried for the first point of the new contact sequence, as
+# fractions of the step that crossed it
+BEYOND = (1e-2, 4e-2, 0.16, 0.64, 2.5e-3, 6.25e-4, 1.6e-4)
+
+
 def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: float,
-                   end: Point | None, progress: Progress | None) -> tuple[Point | None, float]:
+                   end: Point | None, progress: Progress | None) -> tuple[Point, float] | None:
     """Locate the grazing ahead of ``current``, label it, resume beyond it.
 
-    Returns the point to resume from (None if no corrected point beyond was found) and the
-    step to take from it.
+    The grazing is bracketed on secant planes of ``current``. Beyond it the branch may turn
+    within a sliver of the parameter (a multiplier jumps): the first point of the new contact
+    sequence is corrected on a plane across the grazing value's gradient, at a distance where
+    the gap has changed sign, so that it exists whichever way the branch turns. Returns that
+    point and the step to take from it; None, labelling nothing, if none is found (a Newton
+    iterate crossed, not the branch).
     """
-    before, beyond = locate(follower, current, taken, end, grazing_test)
-    if before is current:  # within the tolerance of the grazing already
-        branch.points[-1] = dataclasses.replace(current, label=GRAZING)
-        before = current
+    _, grazing, _ = locate(lambda s: follower.at_arclength(current, s).point, current, taken,
+                           end, grazing_test, follower.settings.locate_tolerance)
+    gradient = follower.grazing_gradient(grazing.x)
+    # across the grazing surface, toward the other sign of the gap
+    normal = -np.sign(current.evaluation.grazing) * gradient
+    normal /= np.linalg.norm(normal)
+    for fraction in BEYOND:
+        distance = max(fraction * taken, follower.settings.min_step)
+        beyond = follower.correct(grazing.x + distance * normal, normal, normal).point
+        if beyond is not None and _grazes(current, beyond):
+            break
     else:
-        _append(branch, [*_between(follower, current, before, progress)[:-1],
-                         dataclasses.replace(before, label=GRAZING)], progress)
-    s_grazing = float(current.tangent @ (before.x - current.x))
-    step = follower.settings.min_step
-    while beyond is None and s_grazing + step <= taken * 2.0:
-        beyond = follower.at_arclength(current, s_grazing + step).point
-        step *= 4.0
-    if beyond is None:
-        return None, step
-    # the new contact sequence's own tangent, oriented as the branch went
-    beyond = dataclasses.replace(beyond, tangent=_reoriented(beyond.tangent, current.tangent))
-    _append(branch, [beyond], progress)
-    return beyond, follower.settings.min_step * 16.0
-
-
-def _reoriented(tangent: np.ndarray, previous: np.ndarray) -> np.ndarray:
-    return tangent if tangent @ previous >= 0 else -tangent
+        return None
+    if grazing is current:  # within the tolerance of the grazing already
+        branch.points[-1] = dataclasses.replace(current, label=GRAZING)
+    else:
+        _append(branch, [*_between(follower, current, grazing)[:-1],
+                         dataclasses.replace(grazing, label=GRAZING)], progress)
+    if grazing.tangent @ normal < 0:  # oriented into the new contact sequence, as beyond's
+        grazing = dataclasses.replace(grazing, tangent=-grazing.tangent)
+    _append(branch, _between(follower, grazing, beyond, (grazing.x, normal)), progress)
+    return beyond, distance
 
 
 def _at_bound(follower: Follower, a: Point, b: Point, bound: float) -> Point:

@@ -24,11 +24,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from impactbeams.continuation.arclength import Follower, Point
+from impactbeams.continuation.arclength import Point
+from impactbeams.variables import BIFURCATIONS
 
 FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, GRAZING = (
     "fold", "period_doubling", "neimark_sacker", "grazing")
-LABELS = ("none", FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, GRAZING)  # the flag codes 0, 1, ...
+LABELS = BIFURCATIONS  # the registry's flags: "none", then the labels above, codes 0, 1, ...
 MAX_LOCATING = 60  # corrector solves per located event (bisection from 1 to 1e-18 of a step)
 
 
@@ -75,24 +76,29 @@ def grazing_test(point: Point) -> float:
     return point.evaluation.grazing
 
 
-def locate(follower: Follower, start: Point, s_end: float, end: Point | None,
-           test: Callable[[Point], float]) -> tuple[Point | None, Point | None]:
-    """The points on both sides of the root of ``test`` between ``start`` and arclength
-    ``s_end`` (``end``, None if the corrector failed there: it then counts as beyond).
+PointAt = Callable[[float], "Point | None"]
 
-    Returns (the last point on ``start``'s side, the first beyond), the bracket within
-    ``locate_tolerance`` in the parameter; the second is None if no corrected point beyond
-    was found. A failed corrector inside the bracket counts as beyond the root, as at
-    ``end``: it happens past a grazing, where the period map is not smooth.
+
+def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
+           test: Callable[[Point], float],
+           tolerance: float) -> tuple[float, Point, Point | None]:
+    """The points on both sides of the root of ``test`` between ``start`` (s = 0) and ``end``
+    (s = ``s_end``; None if the corrector failed there: it then counts as beyond).
+
+    ``point_at(s)``: the corrected point at s (None if Newton fails). Returns (the s and the
+    point of the last on ``start``'s side, the first beyond, None if no corrected point beyond
+    was found), the bracket pinning the parameter to ``tolerance`` in x~. A failed corrector inside the
+    bracket counts as beyond the root, as at ``end``: it happens past a grazing, where the
+    period map is not smooth.
     """
-    low = (0.0, test(start), start)
-    high = (s_end, test(end) if end is not None else math.nan, end)
+    low: Bracket = (0.0, test(start), start)
+    high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
     side = 0  # which end kept its place last (Illinois halves its value the second time)
     for _ in range(MAX_LOCATING):
-        if _known(follower, low, high):
+        if _known(low, high, tolerance):
             break
         s = _next_arclength(low, high)
-        point = follower.at_arclength(start, s).point
+        point = point_at(s)
         value = test(point) if point is not None else math.nan
         if point is not None and math.isfinite(value) and (value > 0) == (low[1] > 0):
             low = (s, value, point)
@@ -104,18 +110,18 @@ def locate(follower: Follower, start: Point, s_end: float, end: Point | None,
             if side == 1:
                 low = (low[0], low[1] / 2.0, low[2])
             side = 1
-    return low[2], high[2]
+    return low[0], low[2], high[2]
 
 
 Bracket = tuple[float, float, Point | None]
 
 
-def _known(follower: Follower, low: Bracket, high: Bracket) -> bool:
-    """Whether the bracket pins the parameter to ``locate_tolerance`` (x~ units)."""
-    if high[2] is None:
+def _known(low: Bracket, high: Bracket, tolerance: float) -> bool:
+    """Whether the bracket pins the parameter to ``tolerance`` (x~ units)."""
+    if high[2] is None or low[2] is None:
         return False
     rate = max(abs(low[2].tangent[-1]), abs(high[2].tangent[-1]))
-    return (high[0] - low[0]) * rate <= follower.settings.locate_tolerance
+    return (high[0] - low[0]) * rate <= tolerance
 
 
 def _next_arclength(low: Bracket, high: Bracket) -> float:

@@ -22,7 +22,7 @@ import numpy as np
 PARAMETER_STEP = np.finfo(float).eps ** (1.0 / 3.0)
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, eq=False)
 class Evaluation:
     """The residual at (z, p) and what is read along a branch there.
 
@@ -46,11 +46,9 @@ class Problem(Protocol):
 
     period: int  # forcing periods per orbit (1 for a plain fixed point)
 
-    def residual(self, z: np.ndarray, p: float) -> np.ndarray:
-        """r(z, p), without the Jacobian (the finite differences in p)."""
-
-    def evaluate(self, z: np.ndarray, p: float) -> Evaluation:
-        """r(z, p) with dr/dz, the multipliers and the observables."""
+    def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True) -> Evaluation:
+        """r(z, p) with the observables; with dr/dz and the multipliers if ``jacobian``
+        (else ``jacobian`` and ``multipliers`` are empty)."""
 
     def iterated(self, times: int) -> Problem:
         """The same family for ``times`` times the period (P applied ``times`` times)."""
@@ -70,6 +68,7 @@ def parameter_derivative(problem: Problem, z: np.ndarray, p: float, scale: float
     amplitude) the difference is taken forward, to error ~ sqrt(eps).
     """
     h = PARAMETER_STEP * max(abs(p), scale)
+    ahead = problem.evaluate(z, p + h, jacobian=False).residual
     if p - h < lowest:
-        return (problem.residual(z, p + h) - problem.residual(z, p)) / h
-    return (problem.residual(z, p + h) - problem.residual(z, p - h)) / (2.0 * h)
+        return (ahead - problem.evaluate(z, p, jacobian=False).residual) / h
+    return (ahead - problem.evaluate(z, p - h, jacobian=False).residual) / (2.0 * h)
