@@ -28,7 +28,7 @@ class Map:
     def residual(self, z, p):
         return self._iterate(z, p)[0] - z
 
-    def evaluate(self, z, p, jacobian=True):
+    def evaluate(self, z, p, jacobian=True, measures=True):
         end, monodromy = self._iterate(z, p)
         jacobian = monodromy - np.eye(len(z)) if jacobian else np.empty((0, 0))
         gap = math.nan if self.gap is None else self.gap(z, p)

@@ -392,9 +392,12 @@ VARIABLES.update({
                                 "periods"),
     "contacts_per_orbit": Variable(("branch_point",), "1", "contacts per orbit",
                                    "contact onsets over one period of the orbit", dtype="int32"),
-    "min_gap": Variable(("branch_point",), "m", "smallest free-flight gap of the orbit",
-                        "the smallest local minimum of the gap g over the orbit's free flight; "
-                        "its sign changes at a grazing"),
+    "grazing_gap": Variable(
+        ("branch_point",), "m", "signed distance of the orbit from grazing",
+        "the smallest local minimum of the gap in free flight (> 0), or minus the overlap of "
+        "the orbit's shallowest contact, its peak force over the contact stiffness (< 0), "
+        "whichever is nearer 0: it passes through 0 where a contact appears or vanishes "
+        "(docs/continuation.md); NaN if neither exists"),
 })
 
 # what the long-time response gives: computed over sampled_periods forcing periods after

@@ -143,7 +143,7 @@ class Follower:
         for iteration in range(1, self.settings.max_iterations + 1):
             try:
                 evaluation, jacobian = self.linearised(x)
-            except ParameterError:  # the iterate left the parameter's allowed values
+            except (ParameterError, RuntimeError):  # out of the allowed values, or a run stopped
                 break
             grazing.append(evaluation.grazing)
             system = np.vstack([jacobian, direction])

@@ -48,7 +48,7 @@ def branches_dataset(branches: list[Branch], parameter: str,
                                       dtype=np.int32),
         "contacts_per_orbit": np.array([point.evaluation.contacts for _, _, point in rows],
                                        dtype=np.int32),
-        "min_gap": np.array([point.evaluation.grazing for _, _, point in rows]),
+        "grazing_gap": np.array([point.evaluation.grazing for _, _, point in rows]),
         **_measures([point for _, _, point in rows]),
     }
     variables = {name: ("branch_point", values) for name, values in data.items()}

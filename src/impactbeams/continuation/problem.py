@@ -46,9 +46,13 @@ class Problem(Protocol):
 
     period: int  # forcing periods per orbit (1 for a plain fixed point)
 
-    def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True) -> Evaluation:
-        """r(z, p) with the observables; with dr/dz and the multipliers if ``jacobian``
-        (else ``jacobian`` and ``multipliers`` are empty)."""
+    def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,
+                 measures: bool = True) -> Evaluation:
+        """r(z, p) and the contacts.
+
+        With dr/dz and the multipliers if ``jacobian`` (else both are empty); with the grazing
+        value if ``measures`` (else NaN) and the named measures if both.
+        """
 
     def iterated(self, times: int) -> Problem:
         """The same family for ``times`` times the period (P applied ``times`` times)."""
@@ -68,7 +72,7 @@ def parameter_derivative(problem: Problem, z: np.ndarray, p: float, scale: float
     amplitude) the difference is taken forward, to error ~ sqrt(eps).
     """
     h = PARAMETER_STEP * max(abs(p), scale)
-    ahead = problem.evaluate(z, p + h, jacobian=False).residual
+    ahead = problem.evaluate(z, p + h, jacobian=False, measures=False).residual
     if p - h < lowest:
-        return (ahead - problem.evaluate(z, p, jacobian=False).residual) / h
-    return (ahead - problem.evaluate(z, p - h, jacobian=False).residual) / (2.0 * h)
+        return (ahead - problem.evaluate(z, p, False, False).residual) / h
+    return (ahead - problem.evaluate(z, p - h, False, False).residual) / (2.0 * h)
