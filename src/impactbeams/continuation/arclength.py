@@ -23,7 +23,6 @@ import numpy as np
 from impactbeams.continuation.problem import Evaluation, Problem, parameter_derivative
 from impactbeams.params import ParameterError
 
-
 GRADIENT_STEP = 1e-7  # x~ units
 
 
@@ -176,9 +175,11 @@ class Follower:
         return self.correct(start.x + s * start.tangent, start.tangent, start.tangent)
 
     def grazing_gradient(self, x: np.ndarray) -> np.ndarray:
-        """The gradient in x~ of the grazing value, by forward differences of step
-        ``GRADIENT_STEP`` (x~ is of order 1: the error is ~1e-7 relative, enough for the
-        direction of a plane)."""
+        """The gradient in x~ of the grazing value, by forward differences.
+
+        Steps of ``GRADIENT_STEP``: x~ is of order 1, so the error is ~1e-7 relative, enough
+        for the direction of a plane.
+        """
         z, p = self.scaling.unscaled(x)
         value = self.problem.evaluate(z, p, jacobian=False).grazing
         gradient = np.empty_like(x)
@@ -216,8 +217,7 @@ class Follower:
 
 
 def tangent_of(jacobian: np.ndarray, orientation: np.ndarray) -> np.ndarray:
-    """The unit null vector of ``jacobian`` (n x n+1) with a positive projection on
-    ``orientation``."""
+    """The unit null vector of ``jacobian`` (n x n+1), its projection on ``orientation`` > 0."""
     system = np.vstack([jacobian, orientation])
     rhs = np.zeros(len(orientation))
     rhs[-1] = 1.0

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from impactbeams.continuation.problem import Evaluation, multipliers_of
-from impactbeams.kernels.layout import FREE, ROW_FREQUENCY
+from impactbeams.kernels.layout import FREE, ROW_FREQUENCY, TIP_Y1
 from impactbeams.orbits import PeriodMap, PeriodMapResult
 from impactbeams.params import Params
 from impactbeams.trajectory.impacts import impact_table
@@ -43,9 +43,7 @@ class BeamOrbits:
 
     def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,
                  measures: bool = True) -> Evaluation:
-        """r(z, p), with the monodromy if ``jacobian``, with the orbit's measures if
-        ``measures``.
-        """
+        """r(z, p); with the monodromy if ``jacobian``, the orbit's measures if ``measures``."""
         period_map = self.period_map(p)
         result = period_map(z, directions="all" if jacobian else None, measures=measures)
         residual = result.state - z
@@ -56,7 +54,7 @@ class BeamOrbits:
         drz = result.jacobian - np.eye(len(z))
         return Evaluation(residual, drz, multipliers_of(drz),
                           grazing_value(period_map, result) if measures else math.nan,
-                          result.contacts, orbit_measures(result, self.period))
+                          result.contacts, orbit_measures(period_map, result))
 
     def iterated(self, times: int) -> BeamOrbits:
         """The orbits of ``times`` times the period."""
@@ -78,8 +76,11 @@ def grazing_value(period_map: PeriodMap, result: PeriodMapResult) -> float:
     return min(candidates, key=abs) if candidates else math.nan
 
 
-def orbit_measures(result: PeriodMapResult, period: int) -> dict[str, float]:
+def orbit_measures(period_map: PeriodMap, result: PeriodMapResult) -> dict[str, float]:
     """The amplitude measures of the registry (impactbeams.variables) of one orbit."""
+    # the tips at t = 0 by the period map's own sampling of its run (the section's y1)
+    section = period_map._tips(result.trajectory, np.zeros(1))[0, TIP_Y1]
     return {"tip_amplitude_1": result.max_tip1, "tip_amplitude_2": result.max_tip2,
             "peak_contact_force": result.peak_force,
-            "contact_impulse": result.impulse / period}
+            "contact_impulse": result.impulse / period_map.periods,
+            "section_deflection_1": float(section)}

@@ -1,5 +1,4 @@
-"""Follow branches: steps, bifurcations located and labelled, grazing crossed, period doubling
-switched.
+"""Follow branches: steps, bifurcations located, grazings crossed, period doublings switched.
 
 A grazing is an event of the branch, not a place to shrink the step: when the orbit's
 smallest free-flight gap changes sign over a step (at the corrected point or at any Newton
@@ -50,7 +49,12 @@ class Branch:
 
 
 class ContinuationInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a continuation: ``branches`` holds what was computed (the last one cut)."""
+    """Ctrl-C during a continuation: ``branches`` holds what was computed (the last one cut).
+
+    `impactbeams.continuation.continue_orbits` adds their ``dataset``.
+    """
+
+    dataset = None
 
     def __init__(self, branches: list[Branch]) -> None:
         super().__init__("continuation interrupted")

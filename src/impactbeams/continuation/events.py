@@ -82,14 +82,14 @@ PointAt = Callable[[float], "Point | None"]
 def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
            test: Callable[[Point], float],
            tolerance: float) -> tuple[float, Point, Point | None]:
-    """The points on both sides of the root of ``test`` between ``start`` (s = 0) and ``end``
-    (s = ``s_end``; None if the corrector failed there: it then counts as beyond).
+    """The points on both sides of the root of ``test`` between ``start`` and ``end``.
 
-    ``point_at(s)``: the corrected point at s (None if Newton fails). Returns (the s and the
-    point of the last on ``start``'s side, the first beyond, None if no corrected point beyond
-    was found), the bracket pinning the parameter to ``tolerance`` in x~. A failed corrector inside the
-    bracket counts as beyond the root, as at ``end``: it happens past a grazing, where the
-    period map is not smooth.
+    ``start`` is at s = 0, ``end`` at s = ``s_end`` (None if the corrector failed there: it
+    then counts as beyond). ``point_at(s)``: the corrected point at s (None if Newton fails).
+    Returns (the s and the point of the last on ``start``'s side, the first beyond, None if no
+    corrected point beyond was found), the bracket pinning the parameter to ``tolerance`` in
+    x~. A failed corrector inside the bracket counts as beyond the root, as at ``end``: it
+    happens past a grazing, where the period map is not smooth.
     """
     low: Bracket = (0.0, test(start), start)
     high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
