@@ -27,6 +27,7 @@ from impactbeams.continuation.branch import (
     continue_branches,
 )
 from impactbeams.continuation.output import branches_dataset
+from impactbeams.orbits.period_map import check_law
 from impactbeams.params import (
     RANGES,
     Params,
@@ -75,6 +76,7 @@ class Continuation:
     state_scale: float | None = None
 
     def __post_init__(self) -> None:
+        check_law(self.params)
         require("parameter", self.parameter, self.parameter in CONTINUABLE,
                 f"must be one of {', '.join(CONTINUABLE)}")
         for name in ("low", "high"):
