@@ -5,5 +5,7 @@ Jacobian; `shooting`: periodic orbits by Newton (and Newton-Picard) on z = P^p(z
 """
 
 from impactbeams.orbits.period_map import PeriodMap, PeriodMapResult
+from impactbeams.orbits.shooting import OrbitNotConverged, PeriodicOrbit, periodic_orbit
 
-__all__ = ["PeriodMap", "PeriodMapResult"]
+__all__ = ["OrbitNotConverged", "PeriodMap", "PeriodMapResult", "PeriodicOrbit",
+           "periodic_orbit"]

@@ -42,7 +42,7 @@ from impactbeams.params import MAX_MODES, ParameterError, Params, require, requi
 from impactbeams.trajectory.episodes import default_separation, episode_labels
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory, run, sample
-from impactbeams.trajectory.start import checked_state, free_state, phase_state
+from impactbeams.trajectory.start import checked_state, final_state, phase_state
 
 # Samples per forcing period of the gap and the tips, before each extremum is refined by
 # Brent's method: T / 512 resolves the motion up to 64 Omega (the beams' first modes, which
@@ -94,7 +94,7 @@ class PeriodMap:
         check_law(params)
         require("omega", params.omega, params.omega > 0,
                 "a period map needs a forcing period: omega > 0", "rad/s")
-        self.periods = require_integer("period", periods, 1)
+        self.periods = require_integer("periods", periods, 1)
         if n_modes is None:
             n_modes = min(required_modes(params), MAX_MODES)
         self.n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
@@ -131,15 +131,24 @@ class PeriodMap:
         if trajectory.status != "complete":
             raise RuntimeError(f"the period map's run stopped at t = {trajectory.t_end!r} s "
                                f"before {self.horizon!r} s: status {trajectory.status!r}")
-        last = trajectory.time.size - 1
-        end = free_state(self.packed, int(trajectory.phase[last]), trajectory.t_end,
-                         trajectory.end_q[last], trajectory.end_v[last])
+        end = final_state(self.packed, trajectory)
         jacobian = None if columns is None else self._jacobian(trajectory, columns)
         onsets = trajectory.time[trajectory.phase == CONTACT]
         contacts = int(np.count_nonzero(onsets < self.horizon))
         summary = self._measures(trajectory) if measures else (math.nan,) * 6
         return PeriodMapResult(end, jacobian, contacts, self._episodes(trajectory), *summary,
                                trajectory.status, trajectory)
+
+    def jacobian(self, result: PeriodMapResult, directions: np.ndarray | str) -> np.ndarray:
+        """dP^p/dz of an earlier evaluation ``result`` applied to more ``directions``.
+
+        The tangent propagation along ``result``'s recorded run: no new run (a Newton-Picard
+        step, or a bordered system of a continuation, asks for directions it only knows once
+        it has the residual). ``directions`` as in `__call__`, not None.
+        """
+        require("directions", directions, directions is not None,
+                "must be 'all' or an array of directions (2 N, k)")
+        return self._jacobian(result.trajectory, self._directions(directions))
 
     def _directions(self, directions: np.ndarray | str | None) -> np.ndarray | None:
         if directions is None:
