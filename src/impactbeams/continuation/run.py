@@ -30,6 +30,7 @@ from impactbeams.continuation.output import branches_dataset
 from impactbeams.orbits.period_map import check_law
 from impactbeams.params import (
     RANGES,
+    ParameterError,
     Params,
     check_range,
     require,
@@ -152,17 +153,17 @@ def _modes(c: Continuation) -> int:
 
 
 def _start_state(problem: BeamOrbits, c: Continuation) -> np.ndarray:
-    period_map = problem.period_map(c.first)
-    if c.state is not None:
-        state = np.asarray(c.state, dtype=float)
-        require("state", state.shape, state.shape == (period_map.dimension,),
-                f"must hold {period_map.dimension} values (q then q' of {problem.n_modes} modes "
-                "per beam)")
-        return state
-    state = period_map.rest_state()
-    for _ in range(c.transient_periods):
-        state = period_map(state, measures=False).state
-    return state
+    """The periodic orbit at the first value by shooting from ``state`` or the transient."""
+    from impactbeams.orbits import OrbitNotConverged, periodic_orbit
+
+    try:
+        orbit = periodic_orbit(problem.params, problem.n_modes, c.period,
+                               None if c.state is None else np.asarray(c.state, dtype=float),
+                               transient_periods=c.transient_periods, measures=False)
+    except OrbitNotConverged as error:
+        raise ParameterError(f"the start at {c.parameter} = {c.first!r} did not converge "
+                             f"({error}): give a state, or more transient_periods") from None
+    return orbit.state
 
 
 def _scaling(problem: BeamOrbits, c: Continuation, state: np.ndarray) -> Scaling:
