@@ -75,4 +75,5 @@ def _draw_diagram(axes: Axes, diagram: xr.Dataset, parameter: str) -> None:
                              f"long-time sweep's {DIAGRAM_SAMPLES} along ({parameter}, period)")
     samples = diagram[DIAGRAM_SAMPLES]
     x = np.broadcast_to(diagram[parameter].values[:, None], samples.shape)
-    axes.plot(x.ravel(), samples.values.ravel(), ",", color="0.6", label="from rest (sweep)")
+    axes.plot(x.ravel(), samples.values.ravel(), ".", markersize=3, color="0.55", zorder=0,
+              label="from rest (long-time sweep)")
