@@ -103,3 +103,43 @@ def test_example_folds_and_grazings_against_references(tmp_path):
         first = float(branch.omega[grazings[0]])
         assert first == pytest.approx(
             reference.stop_grazing(continuation.params, 5, 195.0, 210.0), abs=LOCATED)
+
+
+@pytest.mark.slow
+def test_period_doubling_where_the_diagram_from_rest_changes_period():
+    """Beam 1 against a stiffer stop (k = 1e4 N/m, 12 modes, F0 = 0.4 mN): going down in
+    Omega the impacting period-1 orbit doubles its period; a diagram from rest (400 transient
+    periods, period tolerance 1e-4) is period 1 at 302.5 rad/s and period 2 at 300.5 rad/s. The
+    switched branch is period 2, stable there, and its section sample is one of the diagram's
+    two (the transient has decayed to ~1e-12 of the orbit's size: its multipliers are below 0.9
+    per two periods)."""
+    from impactbeams import Params
+    from impactbeams.continuation import Continuation, continue_orbits
+    from impactbeams.sweep import run_sweep
+    from impactbeams.sweep.definition import sweep_from_mapping
+
+    fixed = {"counterpart": "stop", "contact_stiffness": 1e4, "damping_ratio": 0.02,
+             "force_amplitude": 4e-4}
+    branches = continue_orbits(Continuation(Params(**fixed), "omega", 300.5, 312.0,
+                                            direction="down", step=1.0, max_step=3.0,
+                                            n_modes=12))
+    doubling = np.flatnonzero(branches.bifurcation.values == BIFURCATIONS.index(
+        "period_doubling"))
+    assert len(doubling) >= 1
+    first = doubling[0]
+    assert branches.branch[first] == 0 and 300.5 < float(branches.omega[first]) < 302.5
+    assert float(branches.multiplier_modulus[first, 0]) == pytest.approx(1.0, abs=1e-6)
+    assert float(branches.multiplier_argument[first, 0]) == pytest.approx(np.pi, abs=1e-6)
+    assert branches.attrs["branch_origins"] == f"- 0:{first}"
+    ends = [np.flatnonzero(branches.branch.values == b)[-1] for b in (0, 1)]
+    assert [int(branches.orbit_period[end]) for end in ends] == [1, 2]
+    assert [float(branches.omega[end]) for end in ends] == [300.5, 300.5]
+    assert [int(branches.stable[end]) for end in ends] == [0, 1]
+    diagram = run_sweep(sweep_from_mapping({
+        "n_modes": 12, "observables": ["poincare_deflection1", "response_period"],
+        "transient_periods": 400, "sampled_periods": 32, "params": fixed,
+        "axes": {"omega": {"min": 300.5, "max": 302.5, "num": 2}}}))
+    assert diagram.response_period.values.tolist() == [2, 1]
+    samples = diagram.poincare_deflection1.sel(omega=300.5).values
+    orbit = float(branches.section_deflection_1[ends[1]])
+    assert np.min(np.abs(samples - orbit)) < 1e-8 * np.max(np.abs(samples))

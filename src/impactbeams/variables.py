@@ -384,9 +384,7 @@ VARIABLES.update({
     "orbit_period": Variable(("branch_point",), "1", "period of the orbit in forcing periods",
                              "the orbit repeats after this many forcing periods 2 pi / Omega",
                              dtype="int32"),
-    "multiplier": Variable(("multiplier",), "1", "Floquet multiplier number",
-                           "index of the multiplier, from the largest modulus (0)",
-                           dtype="int64"),
+    # "multiplier": the coordinate of impactbeams.orbits' multipliers (below), shared
     "multiplier_modulus": Variable(
         ("branch_point", "multiplier"), "1", "modulus of the Floquet multiplier",
         "|mu| of the eigenvalues mu of the orbit's monodromy matrix (the Jacobian of its "

@@ -47,14 +47,17 @@ def _outside(moduli: np.ndarray) -> int:
     return int(np.count_nonzero(moduli > 1.0))
 
 
-def _crossing_modulus(moduli: Callable[[Point], np.ndarray], a: Point,
-                      b: Point) -> Callable[[Point], float]:
-    """|mu| - 1 of the multiplier that crosses: the (k+1)-th largest, k outside on both ends."""
+def _crossing_modulus(moduli: Callable[[Point], np.ndarray], a: Point, b: Point,
+                      missing: float = math.nan) -> Callable[[Point], float]:
+    """|mu| - 1 of the multiplier that crosses: the (k+1)-th largest, k outside on both ends.
+
+    ``missing``: the value where there is no such multiplier (NaN: not located).
+    """
     rank = min(_outside(moduli(a)), _outside(moduli(b)))
 
     def test(point: Point) -> float:
         values = moduli(point)
-        return float(values[rank]) - 1.0 if rank < len(values) else math.nan
+        return float(values[rank]) - 1.0 if rank < len(values) else missing
 
     return test
 
@@ -65,7 +68,9 @@ def detected(a: Point, b: Point) -> list[tuple[str, Callable[[Point], float]]]:
     if (a.tangent[-1] > 0) != (b.tangent[-1] > 0):
         found.append((FOLD, lambda point: float(point.tangent[-1])))
     if _outside(_real_negative(a)) % 2 != _outside(_real_negative(b)) % 2:
-        found.append((PERIOD_DOUBLING, _crossing_modulus(_real_negative, a, b)))
+        # a real multiplier < 0 may be born in the step from a complex pair meeting on the
+        # negative axis inside the circle: before that, none is outside (-1 = |mu| of 0)
+        found.append((PERIOD_DOUBLING, _crossing_modulus(_real_negative, a, b, missing=-1.0)))
     if _outside(_complex_pairs(a)) != _outside(_complex_pairs(b)):
         found.append((NEIMARK_SACKER, _crossing_modulus(_complex_pairs, a, b)))
     return found
