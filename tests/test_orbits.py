@@ -90,7 +90,8 @@ def test_period_map_refuses_what_it_cannot_do():
     with pytest.raises(ParameterError, match="omega"):
         PeriodMap(Params(**PERIODIC, omega=0.0), n_modes=N_MODES)
     period_map = PeriodMap(Params(**PERIODIC), n_modes=N_MODES)
-    with pytest.raises(ParameterError, match=r"state = \(3,\): must be a finite modal state"):
+    with pytest.raises(ParameterError, match=r"state = array\(\[0\., 0\., 0\.\]\) \(shape "
+                       r"\(3,\)\) is not allowed: must be 48"):
         period_map(np.zeros(3))
     bad = period_map.rest_state()
     bad[0] = math.nan
@@ -173,7 +174,8 @@ def test_a_start_in_contact_begins_with_the_contact_phase():
 
 def test_bad_initial_states_are_refused_in_one_line():
     params = Params(**PERIODIC)
-    with pytest.raises(ParameterError, match=r"initial_state = \(5,\): must be a finite modal"):
+    with pytest.raises(ParameterError, match=r"initial_state = array.* \(shape \(5,\)\) is "
+                       r"not allowed: must be 48 finite"):
         simulate(params, PERIOD, n_modes=N_MODES, initial_state=np.zeros(5))
     with pytest.raises(ParameterError, match="initial_state replaces params.start"):
         simulate(Params(**PERIODIC, uplift1=1e-6), PERIOD, n_modes=N_MODES,
@@ -302,3 +304,22 @@ def test_monodromy_against_a_stop_on_a_shaker(shaker):
     carried = scale[:, None] * orbit.monodromy / scale[None, :]
     reference = scale[:, None] * central_differences(period_map, orbit.state, 1e-5) / scale[None, :]
     assert np.linalg.norm(carried - reference, 2) < 3e-7 * np.linalg.norm(reference, 2)
+
+
+def test_a_branch_reuses_the_geometry_bit_for_bit():
+    """Maps at another Omega, F0 or clearance reuse the geometry's modes and contact phase:
+    the same bits as a map built afresh."""
+    from impactbeams.orbits import period_map as module
+
+    first = Params(**DASHPOT)
+    z = PeriodMap(first, n_modes=N_MODES).rest_state()
+    for change in ({"omega": 51.0}, {"force_amplitude": 2e-3}, {"clearance": 2e-5}):
+        params = first.replace(**change)
+        reused = PeriodMap(params, n_modes=N_MODES)
+        assert reused.packed.dynamics.spring is PeriodMap(first, N_MODES).packed.dynamics.spring
+        module._geometry.cache_clear()
+        fresh = PeriodMap(params, n_modes=N_MODES)
+        assert fresh.packed.dynamics.spring is not reused.packed.dynamics.spring
+        a, b = reused(z, directions="all"), fresh(z, directions="all")
+        assert np.array_equal(a.state, b.state) and np.array_equal(a.jacobian, b.jacobian)
+        assert a.peak_force == b.peak_force and a.max_tip1 == b.max_tip1

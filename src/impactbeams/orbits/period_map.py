@@ -16,6 +16,7 @@ for Lyapunov exponents. SI units throughout.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -37,8 +38,15 @@ from impactbeams.kernels.layout import (
 from impactbeams.kernels.records import Tangent
 from impactbeams.kernels.stroboscope import tip_motions
 from impactbeams.kernels.tangent import carry_tangents
-from impactbeams.packing import Packed, pack_run
-from impactbeams.params import MAX_MODES, ParameterError, Params, require, require_integer
+from impactbeams.packing import Dynamics, Packed, dynamics_arrays, pack_run
+from impactbeams.params import (
+    MAX_MODES,
+    ParameterError,
+    Params,
+    require,
+    require_integer,
+    require_type,
+)
 from impactbeams.trajectory.episodes import default_separation, episode_labels
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory, run, sample
@@ -91,6 +99,7 @@ class PeriodMap:
 
     def __init__(self, params: Params, n_modes: int | None = None, periods: int = 1,
                  max_events: int = MAX_EVENTS) -> None:
+        require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
         check_law(params)
         require("omega", params.omega, params.omega > 0,
                 "a period map needs a forcing period: omega > 0", "rad/s")
@@ -102,7 +111,8 @@ class PeriodMap:
         self.params = params
         self.forcing_period = 2.0 * math.pi / params.omega
         self.horizon = self.periods * self.forcing_period
-        self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon)
+        self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
+                                       geometry_arrays(params, self.n_modes))
 
     @property
     def dimension(self) -> int:
@@ -255,6 +265,27 @@ class PeriodMap:
         if result.fun < best:
             return float(result.fun), float(result.x)
         return best, best_t
+
+
+# the cell's parameters (`packing.cell_rows`) that the geometry's arrays do not depend on; the
+# damping ratio is one too, but the spring law's contact modes are solved for it
+_CELL_ONLY = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "base_amplitude")
+
+
+def geometry_arrays(params: Params, n_modes: int) -> Dynamics:
+    """`packing.dynamics_arrays` of ``params``, reused while only the cell's parameters change.
+
+    Along a branch in Omega, F0, U0 or the clearance the modes and the spring law's contact
+    phase (an eigenproblem, the larger part of building a map at 32 modes) stay the same.
+    """
+    defaults = {name: getattr(Params(), name) for name in _CELL_ONLY}
+    dynamics = _geometry(dataclasses.replace(params, **defaults), n_modes)
+    return dataclasses.replace(dynamics, params=params)
+
+
+@functools.lru_cache(maxsize=4)
+def _geometry(params: Params, n_modes: int) -> Dynamics:
+    return dynamics_arrays(params, n_modes)
 
 
 def check_law(params: Params) -> None:

@@ -145,7 +145,7 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
     Raises ParameterError for bad arguments (the tied law included: no tangent flow) and
     `OrbitNotConverged` when the residual does not reach ``tolerance``.
     """
-    period_map = PeriodMap(params, n_modes, period)
+    period_map = PeriodMap(params, n_modes, require_integer("period", period, 1))
     method = _checked_method(method, period_map.dimension)
     tolerance = float(tolerance)
     require("tolerance", tolerance, 0 < tolerance < 1, "must be in (0, 1)")

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import reprlib
 from collections.abc import Callable
 
 import numpy as np
@@ -23,7 +24,7 @@ from impactbeams.kernels.events import event_sine, event_value
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, SCALAR_CONST
 from impactbeams.modes import BeamShapes
 from impactbeams.packing import Packed
-from impactbeams.params import ParameterError
+from impactbeams.params import ParameterError, require_type
 from impactbeams.trajectory.phases import Trajectory
 
 # a Dataset's final state restarts a run if its t_end is a whole number of forcing periods to
@@ -34,18 +35,20 @@ SECTION_TOLERANCE = 1e-9
 def checked_state(packed: Packed, state: object, name: str = "initial_state") -> np.ndarray:
     """``state`` as a float array z = (q, q') of the run's 2 N free coordinates.
 
-    ParameterError in one line unless it is a finite vector of that size.
+    ArgumentTypeError unless it is numbers, ParameterError (one line) unless they are 2 N
+    finite values.
     """
     size = 2 * packed.q0.size
     try:
         z = np.asarray(state, dtype=float)
     except (TypeError, ValueError):
         z = None
-    if z is None or z.shape != (size,) or not np.all(np.isfinite(z)):
-        shown = np.shape(z) if z is not None else type(state).__name__
-        raise ParameterError(f"{name} = {shown}: must be a finite modal state (q, q') of "
-                             f"{size} values (2 x {packed.q0.size} free coordinates of this "
-                             "model's n_modes and counterpart)")
+    allowed = (f"{size} finite numbers, the modal state (q, q') of this model's "
+               f"2 x {packed.q0.size} free coordinates (n_modes, counterpart)")
+    require_type(name, state, z is not None, allowed)
+    if z.shape != (size,) or not np.all(np.isfinite(z)):
+        raise ParameterError(f"{name} = {reprlib.repr(state)} (shape {z.shape}) is not "
+                             f"allowed: must be {allowed}")
     return z
 
 
@@ -111,6 +114,12 @@ class InitialFields:
     velocity1: Callable[[np.ndarray], np.ndarray] | None = None
     deflection2: Callable[[np.ndarray], np.ndarray] | None = None
     velocity2: Callable[[np.ndarray], np.ndarray] | None = None
+
+    def __post_init__(self) -> None:
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            require_type(field.name, value, value is None or callable(value),
+                         "None or a function of the positions x (m)")
 
 
 def _projection(field: Callable[[np.ndarray], np.ndarray] | None, name: str, shapes: BeamShapes,
