@@ -143,3 +143,21 @@ def test_period_doubling_where_the_diagram_from_rest_changes_period():
     samples = diagram.poincare_deflection1.sel(omega=300.5).values
     orbit = float(branches.section_deflection_1[ends[1]])
     assert np.min(np.abs(samples - orbit)) < 1e-8 * np.max(np.abs(samples))
+
+
+def test_interrupt_writes_the_points_computed(tmp_path, capsys, monkeypatch):
+    """Ctrl-C (here in the progress report of the 5th point): exit 130, the file holds the
+    start and the 5 points, its branch ending 'interrupted'."""
+    import impactbeams.cli as cli
+
+    def interrupting(branch, point):
+        if len(branch.points) == 6:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_branch_progress", interrupting)
+    output = tmp_path / "cut.nc"
+    assert main(["continue", str(reduced(tmp_path, 195.0, 210.0)), "-o", str(output)]) == 130
+    assert "branch points computed are in" in capsys.readouterr().err
+    with xr.open_dataset(output) as branch:
+        assert branch.branch_point.size == 6
+        assert branch.attrs["branch_endings"] == "interrupted"
