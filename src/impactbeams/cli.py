@@ -480,7 +480,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     cont = commands.add_parser("continue",
                                help="continue periodic orbits along a parameter (see sweeps/)")
-    cont.add_argument("file", metavar="CONTINUATION.toml")
+    cont.add_argument("file", metavar="CONTINUATION.toml",
+                      help="continuation file, e.g. sweeps/continuation-stop-fold.toml")
     cont.add_argument("-o", "--output", metavar="OUT.nc",
                       help="netCDF result (default results/<file name>.nc)")
     cont.add_argument("--quiet", action="store_true", help="no progress lines")
