@@ -82,3 +82,12 @@ def grazing(stiffness=100.0):
         return np.array([[0.5 + 1.5 * stiffness * math.sqrt(max(0.0, z[0] - 1.0))]])
 
     return Map(step, jacobian, gap=lambda z, p: 1.0 - z[0])
+
+
+def colliding_pair(k=5.0):
+    """z -> A(p) z, A = [[-1/2, 1], [k^2 p, -1/2]]: multipliers -1/2 +- i k sqrt(-p) for p < 0
+    meet on the negative axis at p = 0 and split; -1/2 - k sqrt(p) reaches -1 at p = 1/(4 k^2)."""
+    def matrix(p):
+        return np.array([[-0.5, 1.0], [k * k * p, -0.5]])
+
+    return Map(lambda z, p: matrix(p) @ z, lambda z, p: matrix(p))

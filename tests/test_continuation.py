@@ -125,3 +125,14 @@ def test_settings_refused_in_one_line(changes, message):
 def test_start_that_does_not_converge():
     with pytest.raises(ParameterError, match="did not converge"):
         follow(toys.fold(), [1.0, 0.4], -1.0, -2.0, 2.0)  # no solution at p = -1
+
+
+def test_period_doubling_just_after_a_collision_in_the_same_step():
+    """The complex pair meets on the negative axis (p = 0) and a multiplier crosses -1
+    (p = 0.01) within one step of 0.05: still located."""
+    (branch,) = follow(toys.colliding_pair(), [0.0, 0.0], -0.21, -0.21, 0.2,
+                       settings=Settings(step=0.05, max_step=0.1, max_branches=1))
+    (point,) = labelled(branch, "period_doubling")
+    assert point.x[-1] == pytest.approx(0.01, abs=LOCATED)
+    before = branch.points[branch.points.index(point) - 1]
+    assert before.x[-1] < 0 and np.all(before.evaluation.multipliers.imag != 0)
