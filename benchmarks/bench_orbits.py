@@ -7,8 +7,8 @@ orbit, at 8, 16 and 32 modes per beam (2 N = 32, 64, 128 coordinates). Medians o
 
 * the period map alone, with the Newton-Picard block (m + 1 = 9 tangent columns) and with the
   full monodromy (2 N columns);
-* a Newton step (full monodromy and the linear solve) and a Newton-Picard step (the plain map,
-  the map with 9 columns, the small solve);
+* a Newton step (full monodromy and the linear solve) and a Newton-Picard step (the map, then
+  9 tangent columns along its run);
 * an orbit from the state 100 periods after rest, each method, without the amplitude measures;
 * a branch point: the orbit at Omega + 0.1 rad/s from the orbit at Omega as the guess (and its
   Newton-Picard basis), as a continuation's corrector would, with and without the measures
@@ -62,9 +62,9 @@ def case(n_modes: int, repeats: int) -> dict:
         result = period_map(z, directions="all", measures=False)
         np.linalg.solve(np.eye(z.size) - result.jacobian, result.state - z)
 
-    def picard_step():
-        period_map(z, measures=False)
-        period_map(z, directions=block, measures=False)
+    def picard_step():  # one run; the 9 columns carried along it
+        result = period_map(z, measures=False)
+        period_map.jacobian(result, block)
 
     times = median_times({
         "map": lambda: period_map(z, measures=False),
