@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
 
 import numpy as np
 
@@ -235,5 +234,3 @@ def crosses(before: float, values: tuple[float, ...]) -> bool:
     return math.isfinite(before) and any(
         math.isfinite(v) and (v > 0) != (before > 0) for v in values)
 
-
-ProgressCallback = Callable[[Point, int], None]

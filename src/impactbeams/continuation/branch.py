@@ -17,7 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from impactbeams.continuation.arclength import Follower, Point, Scaling, Settings
+from impactbeams.continuation.arclength import Follower, Point, Scaling, Settings, crosses
 from impactbeams.continuation.events import (
     GRAZING,
     PERIOD_DOUBLING,
@@ -117,7 +117,7 @@ def _follow(follower: Follower, branch: Branch, span: Span,
             branch.ending = BOUND
             break
         crossing = (point is not None and _grazes(current, point)) or (
-            point is None and _any_crossing(current, grazing))
+            point is None and crosses(current.evaluation.grazing, grazing))
         resumed = crossing and _cross_grazing(follower, branch, current, taken, point, progress)
         if resumed:
             current, ds = resumed
@@ -167,13 +167,7 @@ def _between(follower: Follower, a: Point, b: Point,
 
 
 def _grazes(a: Point, b: Point) -> bool:
-    g0, g1 = a.evaluation.grazing, b.evaluation.grazing
-    return math.isfinite(g0) and math.isfinite(g1) and (g0 > 0) != (g1 > 0)
-
-
-def _any_crossing(a: Point, values: tuple[float, ...]) -> bool:
-    g0 = a.evaluation.grazing
-    return math.isfinite(g0) and any(math.isfinite(g) and (g > 0) != (g0 > 0) for g in values)
+    return crosses(a.evaluation.grazing, (b.evaluation.grazing,))
 
 
 # distances beyond a grazing tried for the first point of the new contact sequence, as
