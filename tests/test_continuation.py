@@ -136,3 +136,22 @@ def test_period_doubling_just_after_a_collision_in_the_same_step():
     assert point.x[-1] == pytest.approx(0.01, abs=LOCATED)
     before = branch.points[branch.points.index(point) - 1]
     assert before.x[-1] < 0 and np.all(before.evaluation.multipliers.imag != 0)
+
+
+def test_branches_drawn_as_a_frequency_response(tmp_path):
+    """Every branch, stability runs and labels drawn from the saved Dataset; the bad --var and
+    a diagram under a file without branches refused in one line."""
+    import xarray as xr
+
+    from impactbeams.plotting import plot_dataset
+
+    branches = follow(toys.period_doubling(), [0.0, 0.0], -0.5, -0.5, 0.5)
+    branches_dataset(branches, "omega", {"title": "toy"}).to_netcdf(tmp_path / "b.nc")
+    with xr.open_dataset(tmp_path / "b.nc") as dataset:
+        assert plot_dataset(dataset, tmp_path / "b.png", "amplitude") == []
+        with pytest.raises(ParameterError, match="'grazing_ga' is not a variable along"):
+            plot_dataset(dataset, tmp_path / "c.png", "grazing_ga")
+        with pytest.raises(ParameterError, match="for a continuation's file only"):
+            plot_dataset(dataset.drop_dims("branch_point"), tmp_path / "d.png",
+                         diagram=dataset)
+    assert (tmp_path / "b.png").stat().st_size > 10_000

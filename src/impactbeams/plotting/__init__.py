@@ -137,8 +137,9 @@ def plot_dataset(dataset: xr.Dataset, path: str | Path, variable: str | None = N
     _check_arguments(dataset, path, variable, values, indices, title, dpi)
     if "branch_point" in dataset.dims:
         return _plot_branches(dataset, path, variable, title, dpi, diagram)
-    require("diagram", diagram, diagram is None,
-            "only a continuation's branches are drawn over a bifurcation diagram")
+    if diagram is not None:
+        raise ParameterError("diagram (--over) is for a continuation's file only: this Dataset "
+                             "has no branch_point dimension")
     options = values or indices or scale or contours is not None or title is not None
     if "time" in dataset.dims and variable is None and not options:
         from impactbeams.plotting.trajectories import plot_run
