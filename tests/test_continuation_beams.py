@@ -161,3 +161,10 @@ def test_interrupt_writes_the_points_computed(tmp_path, capsys, monkeypatch):
     with xr.open_dataset(output) as branch:
         assert branch.branch_point.size == 6
         assert branch.attrs["branch_endings"] == "interrupted"
+
+
+@pytest.mark.parametrize("path", sorted(EXAMPLE.parent.glob("continuation-*.toml")),
+                         ids=lambda p: p.name)
+def test_shipped_continuation_files_are_valid(path):
+    continuation = load_continuation(path)
+    assert continuation.high > continuation.low and continuation.params.damping_ratio > 0

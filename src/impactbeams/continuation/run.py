@@ -36,6 +36,7 @@ from impactbeams.params import (
     require,
     require_finite,
     require_integer,
+    require_type,
 )
 from impactbeams.variables import global_attributes
 
@@ -77,6 +78,8 @@ class Continuation:
     state_scale: float | None = None
 
     def __post_init__(self) -> None:
+        require_type("params", self.params, isinstance(self.params, Params),
+                     "an impactbeams.Params")
         check_law(self.params)
         require("parameter", self.parameter, self.parameter in CONTINUABLE,
                 f"must be one of {', '.join(CONTINUABLE)}")
@@ -126,6 +129,8 @@ def continue_orbits(continuation: Continuation,
     On Ctrl-C raises `ContinuationInterrupted` whose ``dataset`` holds what was computed.
     ParameterError if the start does not converge or an input is not allowed.
     """
+    require_type("continuation", continuation, isinstance(continuation, Continuation),
+                 "an impactbeams.Continuation")
     c = continuation
     if c.parameter == "omega":
         require("low", c.low, c.low > 0, "a periodic orbit needs omega > 0", "rad/s")
