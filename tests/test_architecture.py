@@ -26,7 +26,8 @@ FLOORS = {
     "packing": 6, "preflight": 6, "costs": 6, "compilation": 6, "progress": 6,
     "sweep": 7, "trajectory": 7, "plotting": 7,
     "orbits": 8,
-    "cli": 9,
+    "continuation": 9,
+    "cli": 10,
 }
 # What kernels may import from outside the package: NumPy and Numba, ``math``, and the standard
 # library modules jit.py (``types``), __init__.py (``hashlib``, ``pathlib``) and records.py

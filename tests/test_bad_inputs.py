@@ -688,6 +688,12 @@ def _public_calls():
                              "allowed: must be an impactbeams.Params"),
         "periodic_orbit-period": (lambda: ib.periodic_orbit(Params(), period=0),
                                   "period = 0 is not allowed"),
+        "Continuation-params": (lambda: ib.Continuation(None, "omega", 1.0, 2.0),
+                                "params = None (NoneType) is not allowed: must be an "
+                                "impactbeams.Params"),
+        "continue_orbits-continuation": (lambda: ib.continue_orbits("omega"),
+                                         "continuation = 'omega' (str) is not allowed: must be "
+                                         "an impactbeams.Continuation"),
         "plot_dataset-dataset": (lambda: ib.plot_dataset(5, "x.png"),
                                  "dataset = 5 (int) is not allowed: must be an xarray.Dataset"),
         "plot_dataset-dpi": (lambda: ib.plot_dataset(xr.Dataset(), "x.png", dpi=-1),

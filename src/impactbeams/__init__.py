@@ -20,6 +20,8 @@ _LAZY = {
     "InitialFields": "impactbeams.trajectory",
     "PeriodMap": "impactbeams.orbits",
     "periodic_orbit": "impactbeams.orbits",
+    "Continuation": "impactbeams.continuation",
+    "continue_orbits": "impactbeams.continuation",
     "plot_dataset": "impactbeams.plotting",
 }
 

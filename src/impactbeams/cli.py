@@ -2,8 +2,9 @@
 
 The command-line interface, a thin argparse layer over the library; the line above is the
 description `impactbeams --help` opens with. Subcommands: ``modes`` (natural frequencies),
-``run`` (a sweep from a TOML file), ``simulate`` (one full trajectory), ``plot`` (draw a saved
-Dataset). Every model parameter is an option named like the parameter, with dashes
+``run`` (a sweep from a TOML file), ``simulate`` (one full trajectory), ``continue`` (periodic
+orbits along a parameter, from a TOML file), ``plot`` (draw a saved Dataset). Every model
+parameter is an option named like the parameter, with dashes
 (``--force-amplitude``, ``--EI1``, ``--thickness2``).
 
 Every input (options, files, paths, values, the run's size) is checked before any work starts
@@ -36,6 +37,8 @@ from impactbeams.variables import DAMPING_LAW, PARAMETERS
 if TYPE_CHECKING:
     import xarray as xr
 
+    from impactbeams.continuation.arclength import Point
+    from impactbeams.continuation.branch import Branch
     from impactbeams.sweep import ChunkRunner, Sweep
 
 EXIT_SYSTEM_ERROR = 1  # a file could not be written (full disk, ...) or memory ran out
@@ -275,16 +278,68 @@ def _plot(args: argparse.Namespace) -> int:
 
     dataset = read_netcdf(args.dataset, "input")
     output = image_output(args.output, "-o/--output")
-    with dataset:
+    diagram = read_netcdf(args.over, "--over") if args.over else None
+    with dataset, diagram or contextlib.nullcontext():
         notes = plot_dataset(dataset, output, args.var,
                              values=parse_assignments(args.slice, "--slice"),
                              indices=parse_assignments(args.slice_index, "--slice-index"),
                              scale=args.scale, contours=parse_levels(args.contours),
-                             title=args.title, dpi=args.dpi)
+                             title=args.title, dpi=args.dpi, diagram=diagram)
     for note in notes:
         print(f"impactbeams: {note}", file=sys.stderr)
     print(f"wrote {output}", file=sys.stderr)
     return 0
+
+
+def _continue(args: argparse.Namespace) -> int:
+    from impactbeams.continuation import (
+        ContinuationInterrupted,
+        continue_orbits,
+        load_continuation,
+    )
+    from impactbeams.io import write_netcdf
+    from impactbeams.preflight import require_input_file, require_output_file
+    from impactbeams.sweep.lock import output_lock
+
+    continuation = load_continuation(require_input_file(args.file, "continuation file"))
+    output = require_output_file(args.output or Path("results") / (Path(args.file).stem + ".nc"),
+                                 "-o/--output", {".nc"}, "netCDF")
+    with output_lock(output):
+        print(f"{args.file}: periodic orbits of period {continuation.period} along "
+              f"{continuation.parameter} from {continuation.low:g} to {continuation.high:g} "
+              f"({continuation.direction}) -> {output}", file=sys.stderr)
+        try:
+            with _compile_report("simulate"):
+                dataset = continue_orbits(continuation,
+                                          None if args.quiet else _branch_progress)
+        except ContinuationInterrupted as interrupted:
+            write_netcdf(interrupted.dataset, output)
+            print(f"\nimpactbeams: the {interrupted.dataset.branch_point.size} branch points "
+                  f"computed are in {output}", file=sys.stderr)
+            raise
+        write_netcdf(dataset, output)
+    print(f"wrote {output}: {_branch_summary(dataset)}", file=sys.stderr)
+    return 0
+
+
+def _branch_progress(branch: Branch, point: Point) -> None:
+    """One line on stderr per labelled point, and every 20th point."""
+    count = len(branch.points)
+    if point.label or count % 20 == 0:
+        print(f"  point {count}: {point.parameter(branch.scaling):.10g}, largest |mu| "
+              f"{abs(point.evaluation.multipliers[0]):.4g}, {point.evaluation.contacts} "
+              f"contacts per orbit {point.label}", file=sys.stderr)
+
+
+def _branch_summary(dataset: xr.Dataset) -> str:
+    """Points, branches, how they ended, bifurcations found."""
+    from impactbeams.variables import BIFURCATIONS
+
+    codes = dataset["bifurcation"].values
+    found = ", ".join(f"{int((codes == code).sum())} {name}"
+                      for code, name in enumerate(BIFURCATIONS) if code and (codes == code).any())
+    return (f"{dataset.branch_point.size} points on {int(dataset.branch.max()) + 1} branch(es) "
+            f"(ended: {dataset.attrs['branch_endings']}); {found or 'no bifurcation'}")
 
 
 def _simulate(args: argparse.Namespace) -> int:
@@ -426,6 +481,15 @@ def build_parser() -> argparse.ArgumentParser:
                          help="run the chunks on a Dask LocalCluster of N worker processes")
     run.set_defaults(handler=_run)
 
+    cont = commands.add_parser("continue",
+                               help="continue periodic orbits along a parameter (see sweeps/)")
+    cont.add_argument("file", metavar="CONTINUATION.toml",
+                      help="continuation file, e.g. sweeps/continuation-stop-fold.toml")
+    cont.add_argument("-o", "--output", metavar="OUT.nc",
+                      help="netCDF result (default results/<file name>.nc)")
+    cont.add_argument("--quiet", action="store_true", help="no progress lines")
+    cont.set_defaults(handler=_continue)
+
     plot = commands.add_parser("plot", help="draw a saved sweep map or simulated run")
     plot.add_argument("dataset", metavar="IN.nc")
     plot.add_argument("-o", "--output", required=True, metavar="OUT.png")
@@ -448,6 +512,9 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--title", help="title instead of the fixed parameters ('' for none)")
     plot.add_argument("--dpi", type=_positive_float, default=150,
                       help="resolution of raster formats (default 150)")
+    plot.add_argument("--over", metavar="DIAGRAM.nc",
+                      help="a continuation's branches over this bifurcation diagram (a "
+                           "long-time sweep along the continued parameter)")
     plot.set_defaults(handler=_plot)
     return parser
 

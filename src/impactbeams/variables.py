@@ -375,6 +375,75 @@ VARIABLES.update({
         "per second"),
 })
 
+# continuation (impactbeams.continuation): periodic orbits along a branch ("branch_point"), in
+# the order they were found, branches one after the other
+STABILITY = ("unstable", "stable")
+BIFURCATIONS = ("none", "fold", "period_doubling", "neimark_sacker", "grazing")  # events.LABELS
+VARIABLES.update({
+    "branch_point": Variable(("branch_point",), "1", "branch point number",
+                             "index of the periodic orbit along the continuation, from 0",
+                             dtype="int64"),
+    "branch": Variable(("branch_point",), "1", "branch number",
+                       "0 for the branch started from the guess; each period doubling followed "
+                       "starts the next (attribute branch_origins)", dtype="int32"),
+    "orbit_period": Variable(("branch_point",), "1", "period of the orbit in forcing periods",
+                             "the orbit repeats after this many forcing periods 2 pi / Omega",
+                             dtype="int32"),
+    # "multiplier": the coordinate of impactbeams.orbits' multipliers (below), shared
+    "multiplier_modulus": Variable(
+        ("branch_point", "multiplier"), "1", "modulus of the Floquet multiplier",
+        "|mu| of the eigenvalues mu of the orbit's monodromy matrix (the Jacobian of its "
+        "period map), largest first; < 1 for all: stable", symbol=r"$|\mu|$"),
+    "multiplier_argument": Variable(
+        ("branch_point", "multiplier"), "rad", "argument of the Floquet multiplier",
+        "arg mu in (-pi, pi]: 0 real positive, pi real negative"),
+    "stable": Variable(("branch_point",), "1", "stability of the periodic orbit",
+                       "1 if every Floquet multiplier has |mu| < 1, else 0", dtype="int8",
+                       flags=STABILITY),
+    "bifurcation": Variable(
+        ("branch_point",), "1", "bifurcation located at the branch point",
+        "0 none; 1 fold (a multiplier through +1, the branch turns back in the parameter); 2 "
+        "period_doubling (a real multiplier through -1); 3 neimark_sacker (a complex pair "
+        "through |mu| = 1); 4 grazing (the orbit's smallest free-flight gap through 0, the "
+        "contact sequence changes): each located to the attribute locate_tolerance in the "
+        "parameter", dtype="int8", flags=BIFURCATIONS),
+    "newton_iterations": Variable(("branch_point",), "1", "Newton iterations",
+                                  "corrector iterations that found the branch point",
+                                  dtype="int32"),
+    "state": Variable(("state",), "1", "state component",
+                      "index into the section state: the modal coordinates, then their "
+                      "velocities", dtype="int64"),
+    "section_state": Variable(
+        ("branch_point", "state"), "1", "state of the orbit on the stroboscopic section",
+        "the orbit's state at t = 0 mod the forcing period, forcing phase 0: the modal "
+        "coordinates q (units kg^(1/2) m) then their rates (kg^(1/2) m/s) of the free modes, "
+        "beam 1's then beam 2's (docs/continuation.md)"),
+    "tip_amplitude_1": Variable(("branch_point",), "m", "largest tip deflection of beam 1",
+                                "max |y1(l1, t)| over the orbit", symbol=r"$\max|y_1(l_1)|$"),
+    "tip_amplitude_2": Variable(("branch_point",), "m", "largest tip deflection of beam 2",
+                                "max |y2(l2, t)| over the orbit (0 against a stop)",
+                                symbol=r"$\max|y_2(l_2)|$"),
+    "peak_contact_force": Variable(("branch_point",), "N", "largest contact force",
+                                   "max R(t) over the orbit; 0 without contact",
+                                   symbol=r"$R_\max$"),
+    "contact_impulse": Variable(("branch_point",), "N s", "contact impulse per forcing period",
+                                "integral of R over the orbit divided by its period in forcing "
+                                "periods"),
+    "section_deflection_1": Variable(
+        ("branch_point",), "m", "tip deflection of beam 1 on the section",
+        "y1(l1) at t = 0 mod the forcing period (forcing phase 0): the orbit's first "
+        "stroboscopic sample, as poincare_deflection1 of a bifurcation diagram",
+        symbol="$y_1(l_1)$"),
+    "contacts_per_orbit": Variable(("branch_point",), "1", "contacts per orbit",
+                                   "contact onsets over one period of the orbit", dtype="int32"),
+    "grazing_gap": Variable(
+        ("branch_point",), "m", "signed distance of the orbit from grazing",
+        "the smallest local minimum of the gap in free flight (> 0), or minus the overlap of "
+        "the orbit's shallowest contact, its peak force over the contact stiffness (< 0), "
+        "whichever is nearer 0: it passes through 0 where a contact appears or vanishes "
+        "(docs/continuation.md); NaN if neither exists"),
+})
+
 # what the long-time response gives: computed over sampled_periods forcing periods after
 # transient_periods, not over [0, t_max] (the sweeps' long-time observables; plot titles name
 # that window instead of t_max)

@@ -109,6 +109,22 @@ def _check_arguments(dataset: object, path: object, variable: object, values: ob
     require("dpi", dpi, is_real(dpi) and 0 < dpi < float("inf"), "must be a finite number > 0")
 
 
+def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
+                   title: str | None, dpi: float, diagram: xr.Dataset | None) -> list[str]:
+    """A continuation's frequency-response curve into ``path``."""
+    from impactbeams.plotting.branches import draw_branches
+
+    if diagram is not None:
+        registered(diagram, "diagram")
+    figure = Figure(figsize=(7, 5), layout="constrained")
+    axes = figure.subplots()
+    draw_branches(axes, dataset, variable, diagram)
+    axes.set_title(case_title(dataset, variable or "tip_amplitude_1", ("branch_point",))
+                   if title is None else title, loc="left", fontsize="medium")
+    save_figure(figure, path, dpi)
+    return []
+
+
 def _dimensions(field: xr.DataArray) -> str:
     return "dimensions " + ", ".join(f"{d} ({field.sizes[d]})" for d in field.dims)
 
@@ -117,13 +133,20 @@ def plot_dataset(dataset: xr.Dataset, path: str | Path, variable: str | None = N
                  values: Mapping[str, float | str] | None = None,
                  indices: Mapping[str, int | str] | None = None, scale: str | None = None,
                  contours: int | Sequence[float] | None = None, title: str | None = None,
-                 dpi: float = 150) -> list[str]:
+                 dpi: float = 150, diagram: xr.Dataset | None = None) -> list[str]:
     """Draw ``dataset`` into the image file ``path`` (format from its extension).
 
-    A simulated run without options gets its overview (tips, force, restitution, energy);
-    anything else is drawn by [`draw`][], whose options these are. Returns its notes.
+    A simulated run without options gets its overview (tips, force, restitution, energy); a
+    continuation's branches their frequency-response curve (over the bifurcation diagram
+    ``diagram`` if given); anything else is drawn by [`draw`][], whose options these are.
+    Returns its notes.
     """
     _check_arguments(dataset, path, variable, values, indices, title, dpi)
+    if "branch_point" in dataset.dims:
+        return _plot_branches(dataset, path, variable, title, dpi, diagram)
+    if diagram is not None:
+        raise ParameterError("diagram (--over) is for a continuation's file only: this Dataset "
+                             "has no branch_point dimension")
     options = values or indices or scale or contours is not None or title is not None
     if "time" in dataset.dims and variable is None and not options:
         from impactbeams.plotting.trajectories import plot_run

@@ -1,0 +1,13 @@
+"""Continuation of periodic orbits: branches, stability, bifurcations, frequency responses.
+
+`continue_orbits` follows the beams' periodic orbits along one parameter
+(`Continuation` says what), `load_continuation` reads a continuation file; the engine
+(`arclength`, `events`, `branch`) is generic over a `problem.Problem`.
+"""
+
+from impactbeams.continuation.branch import ContinuationInterrupted
+from impactbeams.continuation.definition import load_continuation
+from impactbeams.continuation.run import CONTINUABLE, Continuation, continue_orbits
+
+__all__ = ["CONTINUABLE", "Continuation", "ContinuationInterrupted", "continue_orbits",
+           "load_continuation"]

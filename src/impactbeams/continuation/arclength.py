@@ -1,0 +1,236 @@
+"""Pseudo-arclength continuation: predictor along the tangent, Newton corrector, step control.
+
+The unknowns are x = (z, p), scaled to x~ = (z w_z, p w_p) by a [`Scaling`][] so that the
+state and the parameter count alike in the arclength. A branch point carries its unit tangent
+t (in x~), the null vector of the Jacobian [dr/dz, dr/dp] oriented like the previous one.
+A step of length ds predicts x~ + ds t and corrects by Newton on
+
+    r(z, p) = 0,    t . (x~ - x~_predicted) = 0     (Keller's pseudo-arclength condition).
+
+The step halves when Newton fails to converge within ``max_iterations`` (or stops
+contracting) and when the angle between consecutive tangents exceeds ``max_angle``; it grows
+by 1.5 after a step that took at most 3 iterations, up to ``max_step``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from impactbeams.continuation.problem import Evaluation, Problem, parameter_derivative
+from impactbeams.params import ParameterError
+
+GRADIENT_STEP = 1e-7  # x~ units
+
+
+@dataclasses.dataclass(frozen=True)
+class Settings:
+    """How a branch is followed; lengths and tolerances in the scaled unknowns x~.
+
+    ``step``, ``min_step``, ``max_step``: the first, smallest and largest arclength steps.
+    ``tolerance``: Newton stops when its correction's largest component is below it (the
+    residual is then ~ tolerance^2 at quadratic convergence). ``max_angle`` (rad): between the
+    tangents of consecutive points. ``locate_tolerance``: a bifurcation or grazing is located
+    until the parameter is known to this much (in x~ units, i.e. times 1 / w_p in the
+    parameter). ``switch_distance``: how far from a period-doubling point the period-2 branch
+    starts. ``max_branches``: branches in all, the started one included (each period doubling
+    found starts one, while there is room).
+    """
+
+    step: float = 1e-2
+    min_step: float = 1e-7
+    max_step: float = 0.1
+    max_points: int = 1000
+    tolerance: float = 1e-10
+    max_iterations: int = 8
+    max_angle: float = 0.25
+    locate_tolerance: float = 1e-11
+    switch_distance: float = 1e-3
+    max_branches: int = 2
+
+    def __post_init__(self) -> None:
+        for name in ("step", "min_step", "max_step", "tolerance", "max_angle",
+                     "locate_tolerance", "switch_distance"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ParameterError(f"{name} = {value!r} is not allowed: must be a finite "
+                                     "number > 0")
+        if not self.min_step <= self.step <= self.max_step:
+            raise ParameterError(f"step = {self.step!r} is not allowed: must lie from min_step "
+                                 f"= {self.min_step!r} to max_step = {self.max_step!r}")
+        for name in ("max_points", "max_iterations", "max_branches"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= 1):
+                raise ParameterError(f"{name} = {value!r} is not allowed: must be an integer "
+                                     ">= 1")
+
+
+@dataclasses.dataclass(frozen=True)
+class Scaling:
+    """x~ = (z * state, p * parameter); ``lowest``: the parameter's smallest allowed value."""
+
+    state: np.ndarray
+    parameter: float
+    lowest: float = -math.inf
+
+    def scaled(self, z: np.ndarray, p: float) -> np.ndarray:
+        """x~ of (z, p)."""
+        return np.append(z * self.state, p * self.parameter)
+
+    def unscaled(self, x: np.ndarray) -> tuple[np.ndarray, float]:
+        """(z, p) of x~."""
+        return x[:-1] / self.state, float(x[-1] / self.parameter)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Point:
+    """A point of a branch: x~, its unit tangent, what was read there, how it was found.
+
+    ``label``: "" for a regular point, else the bifurcation located there.
+    """
+
+    x: np.ndarray
+    tangent: np.ndarray
+    evaluation: Evaluation
+    iterations: int
+    label: str = ""
+
+    def state(self, scaling: Scaling) -> np.ndarray:
+        """The section state z."""
+        return scaling.unscaled(self.x)[0]
+
+    def parameter(self, scaling: Scaling) -> float:
+        """The parameter p."""
+        return scaling.unscaled(self.x)[1]
+
+
+@dataclasses.dataclass(frozen=True)
+class Correction:
+    """A corrector's outcome: the point (None if Newton failed) and every iterate's grazing."""
+
+    point: Point | None
+    grazing: tuple[float, ...]
+
+
+class Follower:
+    """Corrects and steps along one problem's branch (one period, one scaling)."""
+
+    def __init__(self, problem: Problem, scaling: Scaling, settings: Settings) -> None:
+        self.problem, self.scaling, self.settings = problem, scaling, settings
+
+    def linearised(self, x: np.ndarray) -> tuple[Evaluation, np.ndarray]:
+        """The evaluation at x~ and the Jacobian of the scaled residual in x~ (n x n+1)."""
+        z, p = self.scaling.unscaled(x)
+        evaluation = self.problem.evaluate(z, p)
+        rate = parameter_derivative(self.problem, z, p, 1.0 / self.scaling.parameter,
+                                    self.scaling.lowest)
+        w = self.scaling.state
+        jacobian = np.hstack([w[:, None] * evaluation.jacobian / w[None, :],
+                              (w * rate / self.scaling.parameter)[:, None]])
+        return evaluation, jacobian
+
+    def correct(self, predicted: np.ndarray, direction: np.ndarray,
+                orientation: np.ndarray) -> Correction:
+        """Newton from ``predicted`` on r = 0, direction . (x~ - predicted) = 0.
+
+        The tangent of the point found is oriented along ``orientation``.
+        """
+        x, grazing, previous = predicted.copy(), [], math.inf
+        for iteration in range(1, self.settings.max_iterations + 1):
+            try:
+                evaluation, jacobian = self.linearised(x)
+            except (ParameterError, RuntimeError):  # out of the allowed values, or a run stopped
+                break
+            grazing.append(evaluation.grazing)
+            system = np.vstack([jacobian, direction])
+            rhs = np.append(evaluation.residual * self.scaling.state,
+                            direction @ (x - predicted))
+            if not np.all(np.isfinite(system)) or not np.all(np.isfinite(rhs)):
+                break
+            try:
+                delta = np.linalg.solve(system, -rhs)
+            except np.linalg.LinAlgError:
+                break
+            size = float(np.max(np.abs(delta)))
+            if size <= self.settings.tolerance:
+                tangent = tangent_of(jacobian, orientation)
+                point = Point(x + delta, tangent, evaluation, iteration)
+                return Correction(point, tuple(grazing))
+            if iteration > 2 and size > previous:  # not contracting: a smaller step will do
+                break
+            x, previous = x + delta, size
+        return Correction(None, tuple(grazing))
+
+    def at_parameter(self, x: np.ndarray, orientation: np.ndarray) -> Correction:
+        """Newton at the fixed parameter of x~ (a start, or the end at a bound)."""
+        along_p = np.zeros_like(x)
+        along_p[-1] = 1.0
+        return self.correct(x, along_p, orientation)
+
+    def at_arclength(self, start: Point, s: float) -> Correction:
+        """The point at arclength ``s`` along ``start``'s tangent (the secant plane)."""
+        return self.correct(start.x + s * start.tangent, start.tangent, start.tangent)
+
+    def grazing_gradient(self, x: np.ndarray) -> np.ndarray:
+        """The gradient in x~ of the grazing value, by forward differences.
+
+        Steps of ``GRADIENT_STEP``: x~ is of order 1, so the error is ~1e-7 relative, enough
+        for the direction of a plane.
+        """
+        z, p = self.scaling.unscaled(x)
+        value = self.problem.evaluate(z, p, jacobian=False).grazing
+        gradient = np.empty_like(x)
+        for j in range(len(x)):
+            shifted = x.copy()
+            shifted[j] += GRADIENT_STEP
+            z, p = self.scaling.unscaled(shifted)
+            gradient[j] = (self.problem.evaluate(z, p, jacobian=False).grazing - value) / (
+                GRADIENT_STEP)
+        return gradient
+
+    def step(self, start: Point, ds: float) -> tuple[Point | None, float, tuple[float, ...]]:
+        """The next point from ``start`` with a step ``ds`` (halved as needed).
+
+        Returns the point (None below ``min_step``), the step taken, and the grazing values of
+        the iterates of the last attempt (which tell whether a grazing lies ahead).
+        """
+        while True:
+            correction = self.at_arclength(start, ds)
+            point = correction.point
+            if point is not None and (angle(point.tangent, start.tangent)
+                                      <= self.settings.max_angle
+                                      or ds <= self.settings.min_step):
+                return point, ds, correction.grazing
+            if crosses(start.evaluation.grazing, correction.grazing):
+                return None, ds, correction.grazing
+            ds /= 2.0
+            if ds < self.settings.min_step:
+                return None, ds, correction.grazing
+
+    def next_step(self, taken: float, iterations: int) -> float:
+        """The step after one of length ``taken`` that converged in ``iterations``."""
+        factor = 1.5 if iterations <= 3 else (1.0 if iterations <= 5 else 0.7)
+        return min(max(taken * factor, self.settings.min_step), self.settings.max_step)
+
+
+def tangent_of(jacobian: np.ndarray, orientation: np.ndarray) -> np.ndarray:
+    """The unit null vector of ``jacobian`` (n x n+1), its projection on ``orientation`` > 0."""
+    system = np.vstack([jacobian, orientation])
+    rhs = np.zeros(len(orientation))
+    rhs[-1] = 1.0
+    tangent = np.linalg.solve(system, rhs)
+    return tangent / np.linalg.norm(tangent)
+
+
+def angle(a: np.ndarray, b: np.ndarray) -> float:
+    """The angle (rad) between two unit vectors."""
+    return math.acos(min(1.0, max(-1.0, float(a @ b))))
+
+
+def crosses(before: float, values: tuple[float, ...]) -> bool:
+    """Whether a grazing value changes sign from ``before`` to any of ``values``."""
+    return math.isfinite(before) and any(
+        math.isfinite(v) and (v > 0) != (before > 0) for v in values)
+

@@ -1,0 +1,79 @@
+"""A continuation file (TOML), read and checked: `load_continuation`.
+
+::
+
+    n_modes = 5                # free modes per beam (default: those that resolve the contact)
+    period = 1                 # forcing periods of the orbit
+    transient_periods = 300    # the guess: period maps from the run's start at the first value
+    [params]                   # fixed parameters; the rest take the defaults
+    counterpart = "stop"
+    [continuation]
+    parameter = "omega"        # any numeric parameter but the uplifts
+    min = 150.0
+    max = 450.0
+    direction = "up"           # "up": from min (or start) upward; "down": from max (or start)
+    step = 2.0                 # first step, in the parameter's units (default range / 100)
+    min_step = 1e-7            # default range * 1e-9
+    max_step = 10.0            # default range / 20
+    max_points = 1000          # per branch
+    max_branches = 2           # the started branch and the period-2 branches it switches to
+    state_scale = 1.1e-4       # m of tip motion counted like the whole range (default 10
+                               # clearances; docs/continuation.md)
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from impactbeams.continuation.run import Continuation
+from impactbeams.params import (
+    ParameterError,
+    Params,
+    is_integer,
+    is_real,
+    read_toml,
+    require,
+    require_table,
+)
+
+_TOP_LEVEL = ("n_modes", "period", "transient_periods", "params", "continuation")
+_RANGE_KEYS = {"parameter": "parameter", "min": "low", "max": "high", "direction": "direction",
+               "start": "start", "step": "step", "min_step": "min_step", "max_step": "max_step",
+               "max_points": "max_points", "max_branches": "max_branches",
+               "state_scale": "state_scale"}
+_INTEGERS = ("n_modes", "period", "transient_periods", "max_points", "max_branches")
+
+
+def load_continuation(path: str | os.PathLike[str]) -> Continuation:
+    """Read and check the continuation file ``path`` (ParameterError naming what is wrong)."""
+    data = read_toml(path)
+    source = str(path)
+    for key in data:
+        require(f"{key!r} in {source}", key, key in _TOP_LEVEL,
+                f"unknown key; allowed: {', '.join(_TOP_LEVEL)}")
+    table = require_table(data, "continuation", source)
+    require(f"[continuation] of {source}", None, "parameter" in table and "min" in table
+            and "max" in table, "needs parameter, min and max")
+    for key in table:
+        require(f"{key!r} in [continuation] of {source}", key, key in _RANGE_KEYS,
+                f"unknown key; allowed: {', '.join(_RANGE_KEYS)}")
+    values: dict[str, Any] = {_RANGE_KEYS[key]: value for key, value in table.items()}
+    values.update({key: data[key] for key in ("n_modes", "period", "transient_periods")
+                   if key in data})
+    for key, value in values.items():
+        _check_type(key, value, source)
+    params = Params.from_mapping(require_table(data, "params", source),
+                                 source=f"[params] of {source}")
+    return Continuation(params, **values)
+
+
+def _check_type(key: str, value: Any, source: str) -> None:
+    """A number where a number is expected, an integer where an integer, a name for the rest."""
+    where = f"{key} in {source}"
+    if key in _INTEGERS:
+        require(where, value, is_integer(value), "must be an integer")
+    elif key in ("parameter", "direction"):
+        require(where, value, isinstance(value, str), "must be a name (a string)")
+    elif not is_real(value):
+        raise ParameterError(f"{where} = {value!r} is not allowed: must be a number")

@@ -1,0 +1,140 @@
+"""Bifurcations along a branch: detected between consecutive points, located by Illinois.
+
+Each kind has an integer signature, whose change between two points detects it, and a test
+function, continuous near the crossing, whose root locates it:
+
+=================  ============================================  ===============================
+label              detected by a change of                       located at the root of
+=================  ============================================  ===============================
+fold               the sign of the tangent's parameter part      that part (a multiplier at +1)
+period_doubling    the parity of the real multipliers < -1       |mu| - 1 of that real mu < 0
+neimark_sacker     the complex pairs outside the unit circle     |mu| - 1 of that pair
+grazing            the sign of the orbit's smallest free gap     that gap
+=================  ============================================  ===============================
+
+The root is sought on the secant plane of the first point (`Follower.at_arclength`), by the
+Illinois variant of regula falsi, until the parameter is known to ``locate_tolerance``: the
+arclength bracket times the largest parameter rate |t_p| at its ends.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from impactbeams.continuation.arclength import Point
+from impactbeams.variables import BIFURCATIONS
+
+FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, GRAZING = (
+    "fold", "period_doubling", "neimark_sacker", "grazing")
+LABELS = BIFURCATIONS  # the registry's flags: "none", then the labels above, codes 0, 1, ...
+MAX_LOCATING = 60  # corrector solves per located event (bisection from 1 to 1e-18 of a step)
+
+
+def _real_negative(point: Point) -> np.ndarray:
+    mu = point.evaluation.multipliers
+    return np.sort(np.abs(mu[(mu.imag == 0) & (mu.real < 0)]))[::-1]
+
+
+def _complex_pairs(point: Point) -> np.ndarray:
+    mu = point.evaluation.multipliers
+    return np.sort(np.abs(mu[mu.imag > 0]))[::-1]
+
+
+def _outside(moduli: np.ndarray) -> int:
+    return int(np.count_nonzero(moduli > 1.0))
+
+
+def _crossing_modulus(moduli: Callable[[Point], np.ndarray], a: Point, b: Point,
+                      missing: float = math.nan) -> Callable[[Point], float]:
+    """|mu| - 1 of the multiplier that crosses: the (k+1)-th largest, k outside on both ends.
+
+    ``missing``: the value where there is no such multiplier (NaN: not located).
+    """
+    rank = min(_outside(moduli(a)), _outside(moduli(b)))
+
+    def test(point: Point) -> float:
+        values = moduli(point)
+        return float(values[rank]) - 1.0 if rank < len(values) else missing
+
+    return test
+
+
+def detected(a: Point, b: Point) -> list[tuple[str, Callable[[Point], float]]]:
+    """The smooth bifurcations between two points of a branch, with their test functions."""
+    found: list[tuple[str, Callable[[Point], float]]] = []
+    if (a.tangent[-1] > 0) != (b.tangent[-1] > 0):
+        found.append((FOLD, lambda point: float(point.tangent[-1])))
+    if _outside(_real_negative(a)) % 2 != _outside(_real_negative(b)) % 2:
+        # a real multiplier < 0 may be born in the step from a complex pair meeting on the
+        # negative axis inside the circle: before that, none is outside (-1 = |mu| of 0)
+        found.append((PERIOD_DOUBLING, _crossing_modulus(_real_negative, a, b, missing=-1.0)))
+    if _outside(_complex_pairs(a)) != _outside(_complex_pairs(b)):
+        found.append((NEIMARK_SACKER, _crossing_modulus(_complex_pairs, a, b)))
+    return found
+
+
+def grazing_test(point: Point) -> float:
+    """The orbit's smallest free-flight gap (its sign changes at a grazing)."""
+    return point.evaluation.grazing
+
+
+PointAt = Callable[[float], "Point | None"]
+
+
+def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
+           test: Callable[[Point], float],
+           tolerance: float) -> tuple[float, Point, Point | None]:
+    """The points on both sides of the root of ``test`` between ``start`` and ``end``.
+
+    ``start`` is at s = 0, ``end`` at s = ``s_end`` (None if the corrector failed there: it
+    then counts as beyond). ``point_at(s)``: the corrected point at s (None if Newton fails).
+    Returns (the s and the point of the last on ``start``'s side, the first beyond, None if no
+    corrected point beyond was found), the bracket pinning the parameter to ``tolerance`` in
+    x~. A failed corrector inside the bracket counts as beyond the root, as at ``end``: it
+    happens past a grazing, where the period map is not smooth.
+    """
+    low: Bracket = (0.0, test(start), start)
+    high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
+    side = 0  # which end kept its place last (Illinois halves its value the second time)
+    for _ in range(MAX_LOCATING):
+        if _known(low, high, tolerance):
+            break
+        s = _next_arclength(low, high)
+        point = point_at(s)
+        value = test(point) if point is not None else math.nan
+        if point is not None and math.isfinite(value) and (value > 0) == (low[1] > 0):
+            low = (s, value, point)
+            if side == -1:
+                high = (high[0], high[1] / 2.0, high[2])
+            side = -1
+        else:
+            high = (s, value, point)
+            if side == 1:
+                low = (low[0], low[1] / 2.0, low[2])
+            side = 1
+    return low[0], low[2], high[2]
+
+
+Bracket = tuple[float, float, Point | None]
+
+
+def _known(low: Bracket, high: Bracket, tolerance: float) -> bool:
+    """Whether the bracket pins the parameter to ``tolerance`` (x~ units)."""
+    if high[2] is None or low[2] is None:
+        return False
+    rate = max(abs(low[2].tangent[-1]), abs(high[2].tangent[-1]))
+    return (high[0] - low[0]) * rate <= tolerance
+
+
+def _next_arclength(low: Bracket, high: Bracket) -> float:
+    """Regula falsi between the ends, bisection when a value is missing or it leaves them."""
+    (s0, f0, _), (s1, f1, _) = low, high
+    middle = 0.5 * (s0 + s1)
+    if not (math.isfinite(f0) and math.isfinite(f1)) or f0 == f1:
+        return middle
+    s = s0 - f0 * (s1 - s0) / (f1 - f0)
+    margin = 1e-3 * (s1 - s0)
+    return s if s0 + margin < s < s1 - margin else middle

@@ -1,0 +1,93 @@
+"""The branches as one xarray Dataset along ``branch_point`` (registry: impactbeams.variables)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from impactbeams.continuation.arclength import Point
+from impactbeams.continuation.branch import Branch
+from impactbeams.continuation.events import LABELS
+from impactbeams.variables import (
+    PARAMETERS,
+    VARIABLES,
+    attributes,
+    parameter_attributes,
+    validate,
+)
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+STORED_MULTIPLIERS = 8  # the leading ones by modulus: the rest decay with the damped modes
+
+
+def branches_dataset(branches: list[Branch], parameter: str,
+                     attrs: Mapping[str, Any]) -> xr.Dataset:
+    """The points of every branch, in order, with their parameter ``parameter`` as coordinate.
+
+    ``attrs``: the global attributes (the caller's parameters and settings); the branches'
+    endings and origins are added.
+    """
+    import xarray as xr
+
+    rows = [(number, branch, point) for number, branch in enumerate(branches)
+            for point in branch.points]
+    scaling = branches[0].scaling
+    states = np.array([point.state(scaling) for _, _, point in rows])
+    multipliers = _multipliers([point for _, _, point in rows])
+    data: dict[str, Any] = {
+        "branch": np.array([number for number, _, _ in rows], dtype=np.int32),
+        "orbit_period": np.array([branch.period for _, branch, _ in rows], dtype=np.int32),
+        "stable": (np.nan_to_num(np.abs(multipliers), nan=0.0).max(axis=1) < 1.0).astype(np.int8),
+        "bifurcation": np.array([LABELS.index(point.label or "none") for _, _, point in rows],
+                                dtype=np.int8),
+        "newton_iterations": np.array([point.iterations for _, _, point in rows],
+                                      dtype=np.int32),
+        "contacts_per_orbit": np.array([point.evaluation.contacts for _, _, point in rows],
+                                       dtype=np.int32),
+        "grazing_gap": np.array([point.evaluation.grazing for _, _, point in rows]),
+        **_measures([point for _, _, point in rows]),
+    }
+    variables = {name: ("branch_point", values) for name, values in data.items()}
+    variables["multiplier_modulus"] = (("branch_point", "multiplier"), np.abs(multipliers))
+    variables["multiplier_argument"] = (("branch_point", "multiplier"), np.angle(multipliers))
+    variables["section_state"] = (("branch_point", "state"), states)
+    coords = {"branch_point": np.arange(len(rows), dtype=np.int64),
+              "multiplier": np.arange(multipliers.shape[1], dtype=np.int64),
+              "state": np.arange(states.shape[1], dtype=np.int64),
+              parameter: ("branch_point",
+                          np.array([point.parameter(scaling) for _, _, point in rows]))}
+    dataset = xr.Dataset(variables, coords=coords, attrs={
+        **attrs, "continued_parameter": parameter,
+        "branch_endings": " ".join(branch.ending for branch in branches),
+        "branch_origins": " ".join("-" if branch.origin is None else
+                                   f"{branch.origin[0]}:{branch.origin[1]}"
+                                   for branch in branches)})
+    for name in dataset.variables:
+        if name in VARIABLES:
+            dataset[name].attrs.update(attributes(str(name)))
+    if parameter in PARAMETERS:
+        dataset[parameter].attrs.update(parameter_attributes(parameter))
+    validate(dataset)
+    return dataset
+
+
+def _multipliers(points: list[Point]) -> np.ndarray:
+    """The leading multipliers of each point (NaN where a point has fewer)."""
+    count = min(STORED_MULTIPLIERS, max(len(point.evaluation.multipliers) for point in points))
+    table = np.full((len(points), count), np.nan, dtype=complex)
+    for row, point in zip(table, points, strict=True):
+        mu = point.evaluation.multipliers[:count]
+        row[:len(mu)] = mu
+    return table
+
+
+def _measures(points: list[Point]) -> dict[str, np.ndarray]:
+    """The problem's named amplitudes, one array each (NaN where a point lacks one)."""
+    names = dict.fromkeys(name for point in points for name in point.evaluation.measures)
+    return {name: np.array([point.evaluation.measures.get(name, np.nan) for point in points])
+            for name in names}
+

@@ -1,0 +1,78 @@
+"""What the continuation engine continues: zeros of r(z, p) = P(z, p) - z, and what it reads.
+
+The engine ([`impactbeams.continuation.arclength`][]) knows nothing of beams: it asks a
+[`Problem`][] for [`Evaluation`][]s of the residual at a state ``z`` and a parameter ``p``.
+The beams' periodic orbits are one problem (`impactbeams.continuation.beams`); the tests hold
+small ones with exact answers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Protocol
+
+import numpy as np
+
+# Central differences in the parameter: the truncation error ~ h^2 |r'''| and the round-off
+# ~ eps |r| / h balance at h ~ eps^(1/3) times the parameter's scale, where both are ~ eps^(2/3)
+# ~ 4e-11 relative. dr/dp only steers the corrector and the tangent: a converged point solves
+# r = 0 to the tolerance whatever the error of dr/dp.
+PARAMETER_STEP = np.finfo(float).eps ** (1.0 / 3.0)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Evaluation:
+    """The residual at (z, p) and what is read along a branch there.
+
+    ``jacobian``: dr/dz (n x n), for a map r = P - z the monodromy minus the identity.
+    ``multipliers``: the Floquet multipliers (eigenvalues of dr/dz + I when the problem does
+    not give them, e.g. from a Newton-Picard subspace), leading first. ``grazing``: a number
+    whose sign change along the branch is a grazing (the orbit's smallest free-flight gap), NaN
+    if the problem has none. ``contacts``: contacts per orbit. ``measures``: named amplitudes.
+    """
+
+    residual: np.ndarray
+    jacobian: np.ndarray
+    multipliers: np.ndarray
+    grazing: float = math.nan
+    contacts: int = 0
+    measures: Mapping[str, float] = dataclasses.field(default_factory=dict)
+
+
+class Problem(Protocol):
+    """A family of fixed-point problems P(z, p) = z, one per value of the parameter p."""
+
+    period: int  # forcing periods per orbit (1 for a plain fixed point)
+
+    def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,
+                 measures: bool = True) -> Evaluation:
+        """r(z, p) and the contacts.
+
+        With dr/dz and the multipliers if ``jacobian`` (else both are empty); with the grazing
+        value if ``measures`` (else NaN) and the named measures if both.
+        """
+
+    def iterated(self, times: int) -> Problem:
+        """The same family for ``times`` times the period (P applied ``times`` times)."""
+
+
+def multipliers_of(jacobian: np.ndarray) -> np.ndarray:
+    """The eigenvalues of dr/dz + I (the monodromy of a map), largest modulus first."""
+    values = np.linalg.eigvals(jacobian + np.eye(len(jacobian)))
+    return values[np.argsort(-np.abs(values), kind="stable")]
+
+
+def parameter_derivative(problem: Problem, z: np.ndarray, p: float, scale: float,
+                         lowest: float = -math.inf) -> np.ndarray:
+    """dr/dp by central differences with the step ``PARAMETER_STEP * max(|p|, scale)``.
+
+    Within a step of ``lowest`` (the parameter's smallest allowed value, e.g. 0 for a force
+    amplitude) the difference is taken forward, to error ~ sqrt(eps).
+    """
+    h = PARAMETER_STEP * max(abs(p), scale)
+    ahead = problem.evaluate(z, p + h, jacobian=False, measures=False).residual
+    if p - h < lowest:
+        return (ahead - problem.evaluate(z, p, False, False).residual) / h
+    return (ahead - problem.evaluate(z, p - h, False, False).residual) / (2.0 * h)

@@ -1,0 +1,196 @@
+"""Continuation of the beams' periodic orbits in one parameter: `continue_orbits`.
+
+The guess is the section state after ``transient_periods`` period maps from the run's start
+(``params.start``, rest by default) at the first parameter value, or a given ``state``.
+Lengths along the branch count the parameter in units of its range (max - min) and the state in
+the energy norm (omega q, q') in units of ``state_scale``: the norm of the start orbit's state
+scaled to a tip motion of ``state_scale`` metres (default ten clearances), so that a step of
+``max_step`` moves the parameter by at most ``max_step`` and the state by at most the same
+fraction of ``state_scale``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from impactbeams.continuation.arclength import Point, Scaling, Settings
+from impactbeams.continuation.beams import BeamOrbits
+from impactbeams.continuation.branch import (
+    Branch,
+    ContinuationInterrupted,
+    Span,
+    continue_branches,
+)
+from impactbeams.continuation.output import branches_dataset
+from impactbeams.orbits.period_map import check_law
+from impactbeams.params import (
+    RANGES,
+    ParameterError,
+    Params,
+    check_range,
+    require,
+    require_finite,
+    require_integer,
+    require_type,
+)
+from impactbeams.variables import global_attributes
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+# what can be continued: every numeric parameter but the uplifts, which only set a run's start
+CONTINUABLE = tuple(name for name in Params.numeric_names() if not name.startswith("uplift"))
+DIRECTIONS = ("up", "down")
+STATE_SCALE_CLEARANCES = 10.0  # the default state_scale, in clearances
+
+
+@dataclasses.dataclass(frozen=True)
+class Continuation:
+    """What to continue: ``parameter`` of ``params`` from ``low`` to ``high`` (its units).
+
+    ``direction``: "up" starts at ``start`` (default ``low``) going up, "down" at ``start``
+    (default ``high``) going down. ``period``: forcing periods of the orbit. ``n_modes``: per
+    beam (default: the number that resolves the contact). ``state``: the start's section
+    state; without it, ``transient_periods`` period maps from the run's start. Steps in the
+    parameter's units; ``state_scale`` in m (module docstring).
+    """
+
+    params: Params
+    parameter: str
+    low: float
+    high: float
+    direction: str = "up"
+    start: float | None = None
+    period: int = 1
+    n_modes: int | None = None
+    transient_periods: int = 300
+    state: np.ndarray | None = None
+    step: float | None = None
+    min_step: float | None = None
+    max_step: float | None = None
+    max_points: int = 1000
+    max_branches: int = 2
+    state_scale: float | None = None
+
+    def __post_init__(self) -> None:
+        require_type("params", self.params, isinstance(self.params, Params),
+                     "an impactbeams.Params")
+        check_law(self.params)
+        require("parameter", self.parameter, self.parameter in CONTINUABLE,
+                f"must be one of {', '.join(CONTINUABLE)}")
+        for name in ("low", "high"):
+            value = require_finite(name, getattr(self, name))
+            check_range(self.parameter, value)
+        require("high", self.high, self.high > self.low,
+                f"the range [{self.low!r}, {self.high!r}] is empty: need high > low")
+        require("direction", self.direction, self.direction in DIRECTIONS,
+                f"must be one of {', '.join(map(repr, DIRECTIONS))}")
+        if self.start is not None:
+            require("start", self.start, self.low <= require_finite("start", self.start)
+                    <= self.high, f"must lie in [{self.low!r}, {self.high!r}]")
+        require_integer("period", self.period, 1)
+        require_integer("transient_periods", self.transient_periods, 0)
+        for name in ("step", "min_step", "max_step", "state_scale"):
+            value = getattr(self, name)
+            if value is not None:
+                require(name, value, require_finite(name, value) > 0, "must be > 0")
+
+    @property
+    def first(self) -> float:
+        """The parameter's value at the start."""
+        if self.start is not None:
+            return self.start
+        return self.low if self.direction == "up" else self.high
+
+    def settings(self) -> Settings:
+        """The engine's settings, steps in units of the range."""
+        width = self.high - self.low
+        step = self.step if self.step is not None else width / 100.0
+        return Settings(step=step / width,
+                        min_step=(self.min_step if self.min_step is not None else 1e-9 * width)
+                        / width,
+                        max_step=(self.max_step if self.max_step is not None
+                                  else max(step, width / 20.0)) / width,
+                        max_points=self.max_points, max_branches=self.max_branches)
+
+
+Progress = Callable[[Branch, Point], None]
+
+
+def continue_orbits(continuation: Continuation,
+                    progress: Progress | None = None) -> xr.Dataset:
+    """Follow the periodic orbits of ``continuation`` and return the branches' Dataset.
+
+    On Ctrl-C raises `ContinuationInterrupted` whose ``dataset`` holds what was computed.
+    ParameterError if the start does not converge or an input is not allowed.
+    """
+    require_type("continuation", continuation, isinstance(continuation, Continuation),
+                 "an impactbeams.Continuation")
+    c = continuation
+    if c.parameter == "omega":
+        require("low", c.low, c.low > 0, "a periodic orbit needs omega > 0", "rad/s")
+    params = c.params.replace(**{c.parameter: c.first})
+    problem = BeamOrbits(params, c.parameter, _modes(c), c.period)
+    state = _start_state(problem, c)
+    scaling = _scaling(problem, c, state)
+    settings = c.settings()
+    span = Span(c.low, c.high, 1 if c.direction == "up" else -1)
+    attrs = _attributes(c, problem)
+    try:
+        branches = continue_branches(problem, state, c.first, span, scaling, settings, progress)
+    except ContinuationInterrupted as interrupted:
+        interrupted.dataset = branches_dataset(interrupted.branches, c.parameter, attrs)
+        raise
+    return branches_dataset(branches, c.parameter, attrs)
+
+
+def _modes(c: Continuation) -> int:
+    from impactbeams.contact import recommended_modes
+
+    if c.n_modes is not None:
+        return require_integer("n_modes", c.n_modes, 1)
+    return recommended_modes(c.params)
+
+
+def _start_state(problem: BeamOrbits, c: Continuation) -> np.ndarray:
+    """The periodic orbit at the first value by shooting from ``state`` or the transient."""
+    from impactbeams.orbits import OrbitNotConverged, periodic_orbit
+
+    try:
+        orbit = periodic_orbit(problem.params, problem.n_modes, c.period,
+                               None if c.state is None else np.asarray(c.state, dtype=float),
+                               transient_periods=c.transient_periods, measures=False)
+    except OrbitNotConverged as error:
+        raise ParameterError(f"the start at {c.parameter} = {c.first!r} did not converge "
+                             f"({error}): give a state, or more transient_periods") from None
+    return orbit.state
+
+
+def _scaling(problem: BeamOrbits, c: Continuation, state: np.ndarray) -> Scaling:
+    """x~ of the module's docstring: the state per ``state_scale`` of tip motion."""
+    weights = problem.state_weights()
+    tip = problem.period_map(c.first)(state).max_tip1
+    size = np.linalg.norm(weights * state)
+    scale = c.state_scale if c.state_scale is not None else (
+        STATE_SCALE_CLEARANCES * c.params.clearance)
+    per_metre = size / tip if tip > 0 and size > 0 else 1.0
+    lowest = 0.0 if RANGES[c.parameter].sign else -math.inf
+    return Scaling(weights / (per_metre * scale), 1.0 / (c.high - c.low), lowest)
+
+
+def _attributes(c: Continuation, problem: BeamOrbits) -> dict[str, object]:
+    params = {name: value for name, value in c.params.as_dict().items()
+              if name != c.parameter}
+    settings = c.settings()
+    return global_attributes(
+        "Periodic orbits of two impacting beams along a parameter (continuation)",
+        f"continue {c.parameter} from {c.low!r} to {c.high!r}", params,
+        n_modes=problem.n_modes, start_period=c.period, direction=c.direction,
+        locate_tolerance=settings.locate_tolerance * (c.high - c.low),
+        newton_tolerance=settings.tolerance)
+

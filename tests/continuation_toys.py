@@ -1,0 +1,93 @@
+"""Small fixed-point problems with exact answers, for the continuation engine's tests.
+
+Each is a map z -> P(z, p) with r = P - z, its multipliers the eigenvalues of dP/dz.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from impactbeams.continuation.problem import Evaluation, multipliers_of
+
+
+class Map:
+    """A map given by ``step(z, p)`` and its Jacobian ``jacobian(z, p)``; optional grazing."""
+
+    def __init__(self, step, jacobian, gap=None, period=1):
+        self.step, self.jac, self.gap, self.period = step, jacobian, gap, period
+
+    def _iterate(self, z, p):
+        jacobian = np.eye(len(z))
+        for _ in range(self.period):
+            jacobian = self.jac(z, p) @ jacobian
+            z = self.step(z, p)
+        return z, jacobian
+
+    def residual(self, z, p):
+        return self._iterate(z, p)[0] - z
+
+    def evaluate(self, z, p, jacobian=True, measures=True):
+        end, monodromy = self._iterate(z, p)
+        jacobian = monodromy - np.eye(len(z)) if jacobian else np.empty((0, 0))
+        gap = math.nan if self.gap is None else self.gap(z, p)
+        return Evaluation(end - z, jacobian,
+                          multipliers_of(jacobian) if jacobian.size else np.empty(0),
+                          grazing=gap,
+                          contacts=int(gap <= 0) if self.gap else 0,
+                          measures={"amplitude": float(np.max(np.abs(z)))})
+
+    def iterated(self, times):
+        return Map(self.step, self.jac, self.gap, self.period * times)
+
+
+def fold():
+    """r1 = z1^2 + 0.04 z1 - p at z2 = 0.4 z1: a fold at z1 = -0.02, p = -4e-4 exactly."""
+    return Map(lambda z, p: z + np.array([z[0] ** 2 - p + 0.1 * z[1], -0.5 * z[1] + 0.2 * z[0]]),
+               lambda z, p: np.eye(2) + np.array([[2 * z[0], 0.1], [0.2, -0.5]]))
+
+
+def period_doubling():
+    """z1 -> -(1 + p) z1 + z1^3, z2 -> z2 / 2 + z1^2: the multiplier -(1 + p) crosses -1 at
+    p = 0; the period-2 orbit is z1 = +-sqrt(p), z2 = 2 p."""
+    return Map(lambda z, p: np.array([-(1 + p) * z[0] + z[0] ** 3, 0.5 * z[1] + z[0] ** 2]),
+               lambda z, p: np.array([[-(1 + p) + 3 * z[0] ** 2, 0.0], [2 * z[0], 0.5]]))
+
+
+THETA = 0.7
+
+
+def neimark_sacker():
+    """z -> (1 + p - |z|^2) R(theta) z: multipliers (1 + p) e^(+-i theta), |mu| = 1 at p = 0."""
+    rotation = np.array([[math.cos(THETA), -math.sin(THETA)], [math.sin(THETA), math.cos(THETA)]])
+
+    def step(z, p):
+        return (1 + p - z @ z) * rotation @ z
+
+    def jacobian(z, p):
+        return (1 + p - z @ z) * rotation - 2 * np.outer(rotation @ z, z)
+
+    return Map(step, jacobian)
+
+
+def grazing(stiffness=100.0):
+    """z -> z / 2 + p + K max(0, z - 1)^(3/2), gap 1 - z: grazing at p = 1/2, then a fold at
+    z = 1 + 1/(9 K^2), p = 1/2 + 1/(54 K^2), where the multiplier 1/2 + 3/2 K sqrt(z - 1)
+    reaches 1."""
+    def step(z, p):
+        return np.array([0.5 * z[0] + p + stiffness * max(0.0, z[0] - 1.0) ** 1.5])
+
+    def jacobian(z, p):
+        return np.array([[0.5 + 1.5 * stiffness * math.sqrt(max(0.0, z[0] - 1.0))]])
+
+    return Map(step, jacobian, gap=lambda z, p: 1.0 - z[0])
+
+
+def colliding_pair(k=5.0):
+    """z -> A(p) z, A = [[-1/2, 1], [k^2 p, -1/2]]: multipliers -1/2 +- i k sqrt(-p) for p < 0
+    meet on the negative axis at p = 0 and split; -1/2 - k sqrt(p) reaches -1 at p = 1/(4 k^2)."""
+    def matrix(p):
+        return np.array([[-0.5, 1.0], [k * k * p, -0.5]])
+
+    return Map(lambda z, p: matrix(p) @ z, lambda z, p: matrix(p))

@@ -1,0 +1,157 @@
+"""The continuation engine on small problems with exact answers (tests/continuation_toys.py)."""
+
+import math
+
+import numpy as np
+import pytest
+
+import continuation_toys as toys
+from impactbeams.continuation.arclength import Scaling, Settings
+from impactbeams.continuation.branch import (
+    ContinuationInterrupted,
+    Span,
+    continue_branches,
+)
+from impactbeams.continuation.output import branches_dataset
+from impactbeams.params import ParameterError
+
+SETTINGS = Settings(step=0.05, max_step=0.1)
+# the location stops when the parameter is known to locate_tolerance (1e-11 at unit scaling);
+# the Newton corrector's own error (tolerance 1e-10 on the correction, quadratic: ~1e-20) is
+# far below
+LOCATED = 2e-11
+
+
+def follow(problem, z0, p0, low, high, direction=1, settings=SETTINGS):
+    return continue_branches(problem, np.asarray(z0, float), p0, Span(low, high, direction),
+                             Scaling(np.ones(len(z0)), 1.0), settings)
+
+
+def labelled(branch, label):
+    return [point for point in branch.points if point.label == label]
+
+
+def test_fold_located_where_the_determinant_vanishes():
+    branches = follow(toys.fold(), [1.0, 0.4], 1.04, -1.0, 2.0, direction=-1,
+                      settings=Settings(step=0.05, max_step=0.1, max_branches=1))
+    (fold,) = labelled(branches[0], "fold")
+    assert fold.x[-1] == pytest.approx(-4e-4, abs=LOCATED)
+    assert fold.x[0] == pytest.approx(-0.02, abs=1e-5)  # p is quadratic in z1 there
+    # the branch turned back: it ends at the upper bound on the other side (z1 < 0)
+    end = branches[0].points[-1]
+    assert branches[0].ending == "bound" and end.x[-1] == pytest.approx(2.0, abs=1e-12)
+    assert end.x[0] == pytest.approx(-0.02 - math.sqrt(4e-4 + 2.0), abs=1e-9)
+    # every point solves r = 0 to Newton's tolerance
+    for point in branches[0].points:
+        assert np.max(np.abs(point.x[0] ** 2 + 0.04 * point.x[0] - point.x[-1])) < 1e-12
+
+
+def test_period_doubling_located_and_switched_to_the_period_2_orbit():
+    main, doubled = follow(toys.period_doubling(), [0.0, 0.0], -0.5, -0.5, 0.5)
+    (doubling,) = labelled(main, "period_doubling")
+    assert doubling.x[-1] == pytest.approx(0.0, abs=LOCATED)
+    assert doubled.period == 2 and doubled.origin == (0, main.points.index(doubling))
+    assert doubled.ending == "bound" and doubled.points[-1].x[-1] == pytest.approx(0.5)
+    for point in doubled.points:  # the exact period-2 orbit z1^2 = p, z2 = 2 p
+        z1, z2, p = point.x
+        assert z1**2 == pytest.approx(p, abs=1e-13) and z2 == pytest.approx(2 * p, abs=1e-13)
+    # not the period-1 orbit: a single application of the map moves the state
+    z1, _, p = doubled.points[0].x
+    once = toys.period_doubling().residual(doubled.points[0].x[:2], p)
+    assert abs(z1) > 1e-4 and abs(once[0]) > 1e-4
+
+
+def test_neimark_sacker_located():
+    (branch,) = follow(toys.neimark_sacker(), [0.0, 0.0], -0.5, -0.5, 0.5)
+    (point,) = labelled(branch, "neimark_sacker")
+    assert point.x[-1] == pytest.approx(0.0, abs=LOCATED)
+    assert np.abs(point.evaluation.multipliers) == pytest.approx([1.0, 1.0], abs=LOCATED)
+    assert abs(np.angle(point.evaluation.multipliers[0])) == pytest.approx(toys.THETA)
+
+
+@pytest.mark.parametrize("stiffness", [100.0, 1e4])
+def test_grazing_is_an_event_of_the_branch(stiffness):
+    """The multiplier jumps from 1/2 to 1 within 1/(54 K^2) of the grazing (1.9e-6 and
+    1.9e-10 in p): located as events, in a bounded number of points."""
+    (branch,) = follow(toys.grazing(stiffness), [0.0], 0.0, -1.0, 2.0)
+    (grazing,) = labelled(branch, "grazing")
+    assert grazing.x[-1] == pytest.approx(0.5, abs=LOCATED)
+    assert grazing.evaluation.contacts == 0
+    after = branch.points[branch.points.index(grazing) + 1]
+    assert after.evaluation.contacts == 1
+    (fold,) = labelled(branch, "fold")
+    assert fold.x[-1] == pytest.approx(0.5 + 1 / (54 * stiffness**2), abs=LOCATED)
+    assert branch.ending == "bound" and len(branch.points) < 120
+
+
+def test_dataset_along_branch_points(tmp_path):
+    branches = follow(toys.period_doubling(), [0.0, 0.0], -0.5, -0.5, 0.5)
+    dataset = branches_dataset(branches, "omega", {"title": "toy"})
+    points = sum(len(branch.points) for branch in branches)
+    assert dataset.sizes == {"branch_point": points, "multiplier": 2, "state": 2}
+    assert dataset.bifurcation.attrs["flag_meanings"].split()[2] == "period_doubling"
+    assert (dataset.bifurcation == 2).sum() == 1  # the period-2 orbit's (1 - 2p)^2 stays > -1
+    assert set(dataset.orbit_period.values) == {1, 2}
+    before = dataset.where(dataset.omega < -1e-9, drop=True)
+    assert (before.stable == 1).all() and before.multiplier_modulus.max() < 1
+    dataset.to_netcdf(tmp_path / "branch.nc")
+
+
+def test_interrupt_keeps_the_points():
+    seen = []
+
+    def progress(branch, point):
+        seen.append(point)
+        if len(seen) == 5:
+            raise KeyboardInterrupt
+
+    with pytest.raises(ContinuationInterrupted) as caught:
+        continue_branches(toys.fold(), np.array([1.0, 0.4]), 1.04, Span(-1, 2, -1),
+                          Scaling(np.ones(2), 1.0), SETTINGS, progress)
+    (branch,) = caught.value.branches
+    assert branch.ending == "interrupted" and len(branch.points) == 6  # the start and 5
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"step": 0.0}, "step = 0.0 is not allowed"),
+    ({"step": 1.0, "max_step": 0.5}, "step = 1.0 is not allowed: must lie from min_step"),
+    ({"max_points": 0}, "max_points = 0 is not allowed"),
+])
+def test_settings_refused_in_one_line(changes, message):
+    with pytest.raises(ParameterError, match=message):
+        Settings(**changes)
+
+
+def test_start_that_does_not_converge():
+    with pytest.raises(ParameterError, match="did not converge"):
+        follow(toys.fold(), [1.0, 0.4], -1.0, -2.0, 2.0)  # no solution at p = -1
+
+
+def test_period_doubling_just_after_a_collision_in_the_same_step():
+    """The complex pair meets on the negative axis (p = 0) and a multiplier crosses -1
+    (p = 0.01) within one step of 0.05: still located."""
+    (branch,) = follow(toys.colliding_pair(), [0.0, 0.0], -0.21, -0.21, 0.2,
+                       settings=Settings(step=0.05, max_step=0.1, max_branches=1))
+    (point,) = labelled(branch, "period_doubling")
+    assert point.x[-1] == pytest.approx(0.01, abs=LOCATED)
+    before = branch.points[branch.points.index(point) - 1]
+    assert before.x[-1] < 0 and np.all(before.evaluation.multipliers.imag != 0)
+
+
+def test_branches_drawn_as_a_frequency_response(tmp_path):
+    """Every branch, stability runs and labels drawn from the saved Dataset; the bad --var and
+    a diagram under a file without branches refused in one line."""
+    import xarray as xr
+
+    from impactbeams.plotting import plot_dataset
+
+    branches = follow(toys.period_doubling(), [0.0, 0.0], -0.5, -0.5, 0.5)
+    branches_dataset(branches, "omega", {"title": "toy"}).to_netcdf(tmp_path / "b.nc")
+    with xr.open_dataset(tmp_path / "b.nc") as dataset:
+        assert plot_dataset(dataset, tmp_path / "b.png", "amplitude") == []
+        with pytest.raises(ParameterError, match="'grazing_ga' is not a variable along"):
+            plot_dataset(dataset, tmp_path / "c.png", "grazing_ga")
+        with pytest.raises(ParameterError, match="for a continuation's file only"):
+            plot_dataset(dataset.drop_dims("branch_point"), tmp_path / "d.png",
+                         diagram=dataset)
+    assert (tmp_path / "b.png").stat().st_size > 10_000

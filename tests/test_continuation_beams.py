@@ -1,0 +1,170 @@
+"""Continuation of the beams' periodic orbits: the command, the file, and the located events
+checked against independent computations (tests/continuation_reference.py).
+
+The case is the shipped sweeps/continuation-stop-fold.toml: a cantilever against a soft stop
+(k = 100 N/m, 5 modes, zeta = 0.02, F0 = 0.1 mN), whose resonance grazes the stop, bends to a
+fold and returns, unstable, to a second fold.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import continuation_reference as reference
+from impactbeams.cli import main
+from impactbeams.continuation import load_continuation
+from impactbeams.variables import BIFURCATIONS
+
+EXAMPLE = Path(__file__).parents[1] / "sweeps" / "continuation-stop-fold.toml"
+GRAZING, FOLD = BIFURCATIONS.index("grazing"), BIFURCATIONS.index("fold")
+# located to locate_tolerance = 1e-11 of the range (3e-9 rad/s on 150-450 rad/s); the
+# references converge to ~1e-12: the brief's 1e-8 rad/s holds with room
+LOCATED = 1e-8
+
+
+def reduced(tmp_path, low, high, **extra):
+    """The example file over [low, high] (other keys added or replaced by ``extra``)."""
+    text = EXAMPLE.read_text().replace("min = 150.0", f"min = {low}").replace(
+        "max = 450.0", f"max = {high}")
+    for key, value in extra.items():
+        text += f"{key} = {value}\n"
+    path = tmp_path / "branch.toml"
+    path.write_text(text)
+    return path
+
+
+def test_grazing_located_and_crossed(tmp_path, capsys):
+    """Up to the first grazing (the linear resonance touching the stop) and past it."""
+    path = reduced(tmp_path, 195.0, 210.0)
+    assert main(["continue", str(path), "-o", str(tmp_path / "b.nc"), "--quiet"]) == 0
+    assert "1 grazing" in capsys.readouterr().err
+    with xr.open_dataset(tmp_path / "b.nc") as branch:
+        (index,) = np.flatnonzero(branch.bifurcation.values == GRAZING)
+        omega = float(branch.omega[index])
+        params = load_continuation(path).params
+        assert omega == pytest.approx(reference.stop_grazing(params, 5, 195.0, 210.0),
+                                      abs=LOCATED)
+        assert branch.contacts_per_orbit[index] == 0 and branch.contacts_per_orbit[index + 1] == 1
+        assert (branch.contacts_per_orbit[:index] == 0).all()
+        assert branch.attrs["branch_endings"] == "bound" and float(branch.omega[-1]) == 210.0
+        assert (branch.stable == 1).all()  # the multipliers stay inside the unit circle here
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("[continuation]\nparameter = 'uplift1'\nmin = 0.0\nmax = 1.0\n",
+     "parameter = 'uplift1' is not allowed: must be one of"),
+    ("[continuation]\nparameter = 'omega'\nmin = 10.0\nmax = 5.0\n",
+     "high = 5.0 is not allowed: the range [10.0, 5.0] is empty"),
+    ("[continuation]\nparameter = 'omega'\nmin = 1.0\nmax = 5.0\nspeed = 1\n",
+     "'speed' in [continuation] of"),
+    ("[continuation]\nparameter = 'omega'\nmin = 1.0\nmax = 5.0\n[params]\ncontact_law = 'tied'\n",
+     "periodic orbits need the spring contact law"),
+    ("period = 0\n[continuation]\nparameter = 'omega'\nmin = 1.0\nmax = 5.0\n",
+     "period = 0 is not allowed"),
+    ("[continuation]\nparameter = 'omega'\nmin = 1.0\n", "needs parameter, min and max"),
+])
+def test_bad_files_exit_2_in_one_line(tmp_path, capsys, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    assert main(["continue", str(path), "-o", str(tmp_path / "out.nc")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("impactbeams: error: ") and message in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "out.nc").exists()
+
+
+@pytest.mark.slow
+def test_example_folds_and_grazings_against_references(tmp_path):
+    """The shipped example: two folds (hysteresis), each a multiplier at +1, the upper one
+    checked against the vertex of the branch parametrised by a state component (Newton with
+    finite differences); the grazings against the steady amplitude's root."""
+    output = tmp_path / "fold.nc"
+    assert main(["continue", str(EXAMPLE), "-o", str(output), "--quiet"]) == 0
+    continuation = load_continuation(EXAMPLE)
+    with xr.open_dataset(output) as branch:
+        folds = np.flatnonzero(branch.bifurcation.values == FOLD)
+        grazings = np.flatnonzero(branch.bifurcation.values == GRAZING)
+        assert len(folds) == 2 and len(grazings) == 2
+        upper, lower = (float(branch.omega[i]) for i in folds)
+        assert 300 < upper < 330 and 270 < lower < 290  # the hysteresis band
+        for i in folds:  # a real multiplier at +1
+            mu = branch.multiplier_modulus[i].values * np.exp(
+                1j * branch.multiplier_argument[i].values)
+            assert np.min(np.abs(mu - 1.0)) < 1e-4
+        # stable below the upper fold's band, unstable between the folds (the returning part)
+        assert branch.stable[folds[0] - 1] == 1 and branch.stable[folds[0] + 1] == 0
+        assert branch.stable[folds[1] + 2] == 1
+        z = branch.section_state.values
+        k = int(np.argmax(np.abs(z[folds[0] + 1] - z[folds[0] - 1])))
+        vertex = reference.fold_vertex(continuation.params, "omega", 5, z[folds[0]], upper, k,
+                                       3e-4 * abs(z[folds[0], k]))
+        assert upper == pytest.approx(vertex, abs=LOCATED)
+        first = float(branch.omega[grazings[0]])
+        assert first == pytest.approx(
+            reference.stop_grazing(continuation.params, 5, 195.0, 210.0), abs=LOCATED)
+
+
+@pytest.mark.slow
+def test_period_doubling_where_the_diagram_from_rest_changes_period():
+    """Beam 1 against a stiffer stop (k = 1e4 N/m, 12 modes, F0 = 0.4 mN): going down in
+    Omega the impacting period-1 orbit doubles its period; a diagram from rest (400 transient
+    periods, period tolerance 1e-4) is period 1 at 302.5 rad/s and period 2 at 300.5 rad/s. The
+    switched branch is period 2, stable there, and its section sample is one of the diagram's
+    two (the transient has decayed to ~1e-12 of the orbit's size: its multipliers are below 0.9
+    per two periods)."""
+    from impactbeams import Params
+    from impactbeams.continuation import Continuation, continue_orbits
+    from impactbeams.sweep import run_sweep
+    from impactbeams.sweep.definition import sweep_from_mapping
+
+    fixed = {"counterpart": "stop", "contact_stiffness": 1e4, "damping_ratio": 0.02,
+             "force_amplitude": 4e-4}
+    branches = continue_orbits(Continuation(Params(**fixed), "omega", 300.5, 312.0,
+                                            direction="down", step=1.0, max_step=3.0,
+                                            n_modes=12))
+    doubling = np.flatnonzero(branches.bifurcation.values == BIFURCATIONS.index(
+        "period_doubling"))
+    assert len(doubling) >= 1
+    first = doubling[0]
+    assert branches.branch[first] == 0 and 300.5 < float(branches.omega[first]) < 302.5
+    assert float(branches.multiplier_modulus[first, 0]) == pytest.approx(1.0, abs=1e-6)
+    assert float(branches.multiplier_argument[first, 0]) == pytest.approx(np.pi, abs=1e-6)
+    assert branches.attrs["branch_origins"] == f"- 0:{first}"
+    ends = [np.flatnonzero(branches.branch.values == b)[-1] for b in (0, 1)]
+    assert [int(branches.orbit_period[end]) for end in ends] == [1, 2]
+    assert [float(branches.omega[end]) for end in ends] == [300.5, 300.5]
+    assert [int(branches.stable[end]) for end in ends] == [0, 1]
+    diagram = run_sweep(sweep_from_mapping({
+        "n_modes": 12, "observables": ["poincare_deflection1", "response_period"],
+        "transient_periods": 400, "sampled_periods": 32, "params": fixed,
+        "axes": {"omega": {"min": 300.5, "max": 302.5, "num": 2}}}))
+    assert diagram.response_period.values.tolist() == [2, 1]
+    samples = diagram.poincare_deflection1.sel(omega=300.5).values
+    orbit = float(branches.section_deflection_1[ends[1]])
+    assert np.min(np.abs(samples - orbit)) < 1e-8 * np.max(np.abs(samples))
+
+
+def test_interrupt_writes_the_points_computed(tmp_path, capsys, monkeypatch):
+    """Ctrl-C (here in the progress report of the 5th point): exit 130, the file holds the
+    start and the 5 points, its branch ending 'interrupted'."""
+    import impactbeams.cli as cli
+
+    def interrupting(branch, point):
+        if len(branch.points) == 6:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_branch_progress", interrupting)
+    output = tmp_path / "cut.nc"
+    assert main(["continue", str(reduced(tmp_path, 195.0, 210.0)), "-o", str(output)]) == 130
+    assert "branch points computed are in" in capsys.readouterr().err
+    with xr.open_dataset(output) as branch:
+        assert branch.branch_point.size == 6
+        assert branch.attrs["branch_endings"] == "interrupted"
+
+
+@pytest.mark.parametrize("path", sorted(EXAMPLE.parent.glob("continuation-*.toml")),
+                         ids=lambda p: p.name)
+def test_shipped_continuation_files_are_valid(path):
+    continuation = load_continuation(path)
+    assert continuation.high > continuation.low and continuation.params.damping_ratio > 0
