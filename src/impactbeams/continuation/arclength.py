@@ -108,10 +108,10 @@ class Point:
 
 @dataclasses.dataclass(frozen=True)
 class Correction:
-    """A corrector's outcome: the point (None if Newton failed) and every iterate's grazing."""
+    """A corrector's outcome: the point (None if Newton failed) and its iterates x~."""
 
     point: Point | None
-    grazing: tuple[float, ...]
+    iterates: tuple[np.ndarray, ...]
 
 
 class Follower:
@@ -120,30 +120,41 @@ class Follower:
     def __init__(self, problem: Problem, scaling: Scaling, settings: Settings) -> None:
         self.problem, self.scaling, self.settings = problem, scaling, settings
 
-    def linearised(self, x: np.ndarray) -> tuple[Evaluation, np.ndarray]:
-        """The evaluation at x~ and the Jacobian of the scaled residual in x~ (n x n+1)."""
+    def linearised(self, x: np.ndarray, rate: np.ndarray | None = None,
+                   ) -> tuple[Evaluation, np.ndarray, np.ndarray]:
+        """The evaluation at x~ (no measures), its scaled Jacobian in x~ and dr/dp.
+
+        The Jacobian of the scaled residual is n x n+1; dr/dp is ``rate`` if given, else
+        taken by differences at x~.
+        """
         z, p = self.scaling.unscaled(x)
-        evaluation = self.problem.evaluate(z, p)
-        rate = parameter_derivative(self.problem, z, p, 1.0 / self.scaling.parameter,
-                                    self.scaling.lowest)
+        evaluation = self.problem.evaluate(z, p, measures=False)
+        if rate is None:
+            rate = parameter_derivative(self.problem, z, p, 1.0 / self.scaling.parameter,
+                                        self.scaling.lowest)
         w = self.scaling.state
         jacobian = np.hstack([w[:, None] * evaluation.jacobian / w[None, :],
                               (w * rate / self.scaling.parameter)[:, None]])
-        return evaluation, jacobian
+        return evaluation, jacobian, rate
 
     def correct(self, predicted: np.ndarray, direction: np.ndarray,
                 orientation: np.ndarray) -> Correction:
         """Newton from ``predicted`` on r = 0, direction . (x~ - predicted) = 0.
 
-        The tangent of the point found is oriented along ``orientation``.
+        The tangent of the point found is oriented along ``orientation``. The measures (and
+        the grazing value) are read at the point found only. A problem whose dr/dz is an
+        approximation (``approximate``: Newton-Picard) keeps the first iterate's dr/dp for the
+        whole corrector: its iteration is a chord one anyway, and the tangent's parameter
+        part still vanishes exactly where dr/dz is singular (a fold), whatever dr/dp.
         """
-        x, grazing, previous = predicted.copy(), [], math.inf
+        x, iterates, previous, rate = predicted.copy(), [], math.inf, None
+        frozen = getattr(self.problem, "approximate", False)
         for iteration in range(1, self.settings.max_iterations + 1):
             try:
-                evaluation, jacobian = self.linearised(x)
+                evaluation, jacobian, rate = self.linearised(x, rate if frozen else None)
             except (ParameterError, RuntimeError):  # out of the allowed values, or a run stopped
                 break
-            grazing.append(evaluation.grazing)
+            iterates.append(x.copy())
             system = np.vstack([jacobian, direction])
             rhs = np.append(evaluation.residual * self.scaling.state,
                             direction @ (x - predicted))
@@ -156,12 +167,27 @@ class Follower:
             size = float(np.max(np.abs(delta)))
             if size <= self.settings.tolerance:
                 tangent = tangent_of(jacobian, orientation)
-                point = Point(x + delta, tangent, evaluation, iteration)
-                return Correction(point, tuple(grazing))
+                point = Point(x + delta, tangent, self._measured(x, evaluation), iteration)
+                return Correction(point, tuple(iterates))
             if iteration > 2 and size > previous:  # not contracting: a smaller step will do
                 break
             x, previous = x + delta, size
-        return Correction(None, tuple(grazing))
+        return Correction(None, tuple(iterates))
+
+    def _measured(self, x: np.ndarray, evaluation: Evaluation) -> Evaluation:
+        """``evaluation`` with the grazing value and the measures read at x~."""
+        z, p = self.scaling.unscaled(x)
+        measured = self.problem.evaluate(z, p, jacobian=False)
+        return dataclasses.replace(evaluation, grazing=measured.grazing,
+                                   measures=measured.measures)
+
+    def grazing_values(self, correction: Correction) -> tuple[float, ...]:
+        """The grazing values of a correction's iterates (read only when a step failed)."""
+        values = []
+        for x in correction.iterates:
+            z, p = self.scaling.unscaled(x)
+            values.append(self.problem.evaluate(z, p, jacobian=False).grazing)
+        return tuple(values)
 
     def at_parameter(self, x: np.ndarray, orientation: np.ndarray) -> Correction:
         """Newton at the fixed parameter of x~ (a start, or the end at a bound)."""
@@ -194,7 +220,8 @@ class Follower:
         """The next point from ``start`` with a step ``ds`` (halved as needed).
 
         Returns the point (None below ``min_step``), the step taken, and the grazing values of
-        the iterates of the last attempt (which tell whether a grazing lies ahead).
+        the iterates of the last attempt when it failed (they tell whether a grazing lies
+        ahead; empty when a point was found).
         """
         while True:
             correction = self.at_arclength(start, ds)
@@ -202,12 +229,13 @@ class Follower:
             if point is not None and (angle(point.tangent, start.tangent)
                                       <= self.settings.max_angle
                                       or ds <= self.settings.min_step):
-                return point, ds, correction.grazing
-            if crosses(start.evaluation.grazing, correction.grazing):
-                return None, ds, correction.grazing
+                return point, ds, ()
+            grazing = self.grazing_values(correction)
+            if crosses(start.evaluation.grazing, grazing):
+                return None, ds, grazing
             ds /= 2.0
             if ds < self.settings.min_step:
-                return None, ds, correction.grazing
+                return None, ds, grazing
 
     def next_step(self, taken: float, iterations: int) -> float:
         """The step after one of length ``taken`` that converged in ``iterations``."""

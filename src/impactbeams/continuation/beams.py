@@ -12,25 +12,53 @@ overlap).
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
 from impactbeams.continuation.problem import Evaluation, multipliers_of
 from impactbeams.kernels.layout import FREE, ROW_FREQUENCY, TIP_Y1
 from impactbeams.orbits import PeriodMap, PeriodMapResult
-from impactbeams.params import Params
-from impactbeams.trajectory.impacts import impact_table
+from impactbeams.orbits.shooting import (
+    DEFAULT_SUBSPACE,
+    by_modulus,
+    checked_method,
+    leading,
+    orthonormal,
+)
+from impactbeams.params import Params, require_integer
 
 CACHED_MAPS = 8  # period maps kept by parameter value (a corrector asks for 3 values a step)
 
 
 class BeamOrbits:
-    """Periodic orbits of ``period`` forcing periods of ``params`` with ``parameter`` = p."""
+    """Periodic orbits of ``period`` forcing periods of ``params`` with ``parameter`` = p.
 
-    def __init__(self, params: Params, parameter: str, n_modes: int, period: int = 1) -> None:
+    ``method``: how dr/dz is formed, as `periodic_orbit`'s: "newton" (the full monodromy,
+    2 N tangent columns), "newton-picard" (M exactly on a carried basis V of ``subspace``
+    directions and on the residual's component outside it, 0 on the rest: m + 1 columns) or
+    "auto" (Newton up to `shooting.AUTO_NEWTON_DIMENSION` coordinates). With Newton-Picard the
+    multipliers are the leading Ritz values of V^T M V (the bifurcations' test functions only
+    need those near the unit circle) and V takes one subspace iteration per evaluation, from
+    point to point along the branch.
+    """
+
+    def __init__(self, params: Params, parameter: str, n_modes: int, period: int = 1,
+                 method: str = "auto", subspace: int = DEFAULT_SUBSPACE) -> None:
         self.params, self.parameter, self.n_modes, self.period = (
             params, parameter, n_modes, period)
         self._maps: dict[float, PeriodMap] = {}
+        self._last: tuple[float, bytes, PeriodMapResult] | None = None
+        dimension = self.period_map(getattr(params, parameter)).dimension
+        self.method = checked_method(method, dimension)
+        self.subspace = require_integer("subspace", subspace, 3, dimension)
+        self.basis: np.ndarray | None = None  # V: orthonormal in the energy coordinates
+        self._warned = False
+
+    @property
+    def approximate(self) -> bool:
+        """Whether dr/dz is Newton-Picard's approximation (the engine then keeps dr/dp)."""
+        return self.method == "newton-picard"
 
     def period_map(self, p: float) -> PeriodMap:
         """The period map at parameter value ``p`` (ParameterError if not allowed)."""
@@ -43,22 +71,89 @@ class BeamOrbits:
 
     def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,
                  measures: bool = True) -> Evaluation:
-        """r(z, p); with the monodromy if ``jacobian``, the orbit's measures if ``measures``."""
+        """r(z, p), the contacts, and what is asked.
+
+        With dr/dz and the multipliers if ``jacobian``; with the orbit's grazing value and
+        measures if ``measures``.
+        """
         period_map = self.period_map(p)
-        result = period_map(z, directions="all" if jacobian else None, measures=measures)
+        result = self._run(period_map, z, p, measures)
         residual = result.state - z
+        grazing = grazing_value(period_map, result) if measures else math.nan
+        named = orbit_measures(period_map, result) if measures else {}
         if not jacobian:
-            return Evaluation(residual, np.empty((0, 0)), np.empty(0),
-                              grazing_value(period_map, result) if measures else math.nan,
-                              result.contacts)
-        drz = result.jacobian - np.eye(len(z))
-        return Evaluation(residual, drz, multipliers_of(drz),
-                          grazing_value(period_map, result) if measures else math.nan,
-                          result.contacts, orbit_measures(period_map, result))
+            return Evaluation(residual, np.empty((0, 0)), np.empty(0), grazing,
+                              result.contacts, named)
+        if self.method == "newton":
+            drz = period_map.jacobian(result, "all") - np.eye(len(z))
+            multipliers = multipliers_of(drz)
+        else:
+            drz, multipliers = self._subspace_jacobian(period_map, result, residual)
+        return Evaluation(residual, drz, multipliers, grazing, result.contacts, named)
+
+    def _run(self, period_map: PeriodMap, z: np.ndarray, p: float,
+             measures: bool) -> PeriodMapResult:
+        """The map's run from z, the last one again if it is the same (a point's measures)."""
+        key = z.tobytes()
+        if self._last is not None and self._last[:2] == (p, key) and (
+                not measures or math.isfinite(self._last[2].max_tip1)):
+            return self._last[2]
+        result = period_map(z, measures=measures)
+        self._last = (p, key, result)
+        return result
+
+    def _subspace_jacobian(self, period_map: PeriodMap, result: PeriodMapResult,
+                           residual: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Newton-Picard's dr/dz and the leading Ritz values; V advanced one iteration.
+
+        M is applied exactly to V and to the residual's direction outside span V (so that the
+        corrector is Newton on that span and Picard, M ~ 0, on the contracting rest).
+        """
+        w = self.state_weights()
+        v = self._current_basis(len(residual))
+        r = w * residual
+        outside = r - v @ (v.T @ r)
+        size = np.linalg.norm(outside)
+        columns = v if size <= 1e-14 * max(np.linalg.norm(r), 1e-300) else np.column_stack(
+            [v, outside / size])
+        images = w[:, None] * period_map.jacobian(result, columns / w[:, None])
+        m = v.shape[1]
+        ritz = by_modulus(np.linalg.eigvals(v.T @ images[:, :m]))
+        self._check_complement(ritz)
+        self.basis = orthonormal(images[:, :m])
+        drz = (images @ columns.T) / w[:, None] * w[None, :] - np.eye(len(residual))
+        return drz, ritz[:leading(ritz)]
+
+    def _current_basis(self, size: int) -> np.ndarray:
+        if self.basis is None or self.basis.shape != (size, self.subspace):
+            # fixed pseudo-random directions: the same branch on every machine
+            self.basis = orthonormal(np.random.default_rng(0).standard_normal(
+                (size, self.subspace)))
+        return self.basis
+
+    def _check_complement(self, ritz: np.ndarray) -> None:
+        """Warn when span V may leave a multiplier on or outside the unit circle out.
+
+        Subspace iteration converges to the m dominant multipliers' space, so the complement's
+        are at most |mu_m|, the smallest Ritz value's modulus: below 1, none of them can
+        cross the unit circle and the subspace's multipliers decide every bifurcation.
+        """
+        if abs(ritz[-1]) >= 1.0 and not self._warned:
+            self._warned = True
+            warnings.warn(f"newton-picard: the smallest of the {ritz.size} Ritz values has "
+                          f"modulus {abs(ritz[-1]):.3g} >= 1: a multiplier outside the "
+                          "subspace may cross the unit circle unseen (raise subspace, or use "
+                          "method='newton')", RuntimeWarning, stacklevel=2)
+
+    def start_basis(self, basis: np.ndarray | None) -> None:
+        """Carry a periodic orbit's Newton-Picard basis (free coordinates) as V."""
+        if basis is not None and basis.shape[1] == self.subspace:
+            self.basis = orthonormal(self.state_weights()[:, None] * basis)
 
     def iterated(self, times: int) -> BeamOrbits:
         """The orbits of ``times`` times the period."""
-        return BeamOrbits(self.params, self.parameter, self.n_modes, self.period * times)
+        return BeamOrbits(self.params, self.parameter, self.n_modes, self.period * times,
+                          self.method, self.subspace)
 
     def state_weights(self) -> np.ndarray:
         """D with D z = (omega q, q'): the energy norm's coordinates (one per component)."""
@@ -71,7 +166,7 @@ def grazing_value(period_map: PeriodMap, result: PeriodMapResult) -> float:
     """The signed grazing value (m): see the module's docstring; NaN if neither exists."""
     candidates = [result.min_gap] if math.isfinite(result.min_gap) else []
     if result.contacts:
-        peaks = impact_table(period_map.packed, result.trajectory)["impact_peak_force"]
+        peaks = result.peak_forces
         candidates.append(-float(np.min(peaks)) / period_map.params.contact_stiffness)
     return min(candidates, key=abs) if candidates else math.nan
 
@@ -79,7 +174,7 @@ def grazing_value(period_map: PeriodMap, result: PeriodMapResult) -> float:
 def orbit_measures(period_map: PeriodMap, result: PeriodMapResult) -> dict[str, float]:
     """The amplitude measures of the registry (impactbeams.variables) of one orbit."""
     # the tips at t = 0 by the period map's own sampling of its run (the section's y1)
-    section = period_map._tips(result.trajectory, np.zeros(1))[0, TIP_Y1]
+    section = period_map.tip_motions(result, np.zeros(1))[0, TIP_Y1]
     return {"tip_amplitude_1": result.max_tip1, "tip_amplitude_2": result.max_tip2,
             "peak_contact_force": result.peak_force,
             "contact_impulse": result.impulse / period_map.periods,

@@ -57,7 +57,8 @@ class Continuation:
     (default ``high``) going down. ``period``: forcing periods of the orbit. ``n_modes``: per
     beam (default: the number that resolves the contact). ``state``: the start's section
     state; without it, ``transient_periods`` period maps from the run's start. Steps in the
-    parameter's units; ``state_scale`` in m (module docstring).
+    parameter's units; ``state_scale`` in m (module docstring). ``method``: the corrector's
+    dr/dz, "newton" (full monodromy), "newton-picard" or "auto" (`BeamOrbits`).
     """
 
     params: Params
@@ -76,6 +77,7 @@ class Continuation:
     max_points: int = 1000
     max_branches: int = 2
     state_scale: float | None = None
+    method: str = "auto"
 
     def __post_init__(self) -> None:
         require_type("params", self.params, isinstance(self.params, Params),
@@ -135,7 +137,7 @@ def continue_orbits(continuation: Continuation,
     if c.parameter == "omega":
         require("low", c.low, c.low > 0, "a periodic orbit needs omega > 0", "rad/s")
     params = c.params.replace(**{c.parameter: c.first})
-    problem = BeamOrbits(params, c.parameter, _modes(c), c.period)
+    problem = BeamOrbits(params, c.parameter, _modes(c), c.period, c.method)
     state = _start_state(problem, c)
     scaling = _scaling(problem, c, state)
     settings = c.settings()
@@ -164,10 +166,12 @@ def _start_state(problem: BeamOrbits, c: Continuation) -> np.ndarray:
     try:
         orbit = periodic_orbit(problem.params, problem.n_modes, c.period,
                                None if c.state is None else np.asarray(c.state, dtype=float),
-                               transient_periods=c.transient_periods, measures=False)
+                               transient_periods=c.transient_periods, measures=False,
+                               method=problem.method)
     except OrbitNotConverged as error:
         raise ParameterError(f"the start at {c.parameter} = {c.first!r} did not converge "
                              f"({error}): give a state, or more transient_periods") from None
+    problem.start_basis(orbit.basis)
     return orbit.state
 
 

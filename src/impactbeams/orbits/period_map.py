@@ -72,7 +72,9 @@ class PeriodMapResult:
     the gap has no interior minimum), located to round-off in t. ``peak_force`` (N) and
     ``impulse`` (N s, summed) of the contacts, 0 without contact. ``max_tip1``,
     ``max_tip2``: max |y1(l1)|, max |y2(l2)| (m) over [0, pT]. ``status``: the run's
-    (``dynamics.STATUS_NAMES``). ``trajectory``: the recorded segments.
+    (``dynamics.STATUS_NAMES``). ``trajectory``: the recorded segments. ``peak_forces`` (N):
+    each contact phase's peak force, in order (empty without measures): the grazing value of
+    a continuation reads the shallowest one without a second search.
     """
 
     state: np.ndarray
@@ -87,6 +89,7 @@ class PeriodMapResult:
     max_tip2: float
     status: str
     trajectory: Trajectory
+    peak_forces: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
 
 
 class PeriodMap:
@@ -145,9 +148,11 @@ class PeriodMap:
         jacobian = None if columns is None else self._jacobian(trajectory, columns)
         onsets = trajectory.time[trajectory.phase == CONTACT]
         contacts = int(np.count_nonzero(onsets < self.horizon))
-        summary = self._measures(trajectory) if measures else (math.nan,) * 6
+        impacts = impact_table(self.packed, trajectory) if measures else None
+        peaks = np.empty(0) if impacts is None else impacts["impact_peak_force"]
+        summary = (math.nan,) * 6 if impacts is None else self._measures(trajectory, impacts)
         return PeriodMapResult(end, jacobian, contacts, self._episodes(trajectory), *summary,
-                               trajectory.status, trajectory)
+                               trajectory.status, trajectory, peaks)
 
     def jacobian(self, result: PeriodMapResult, directions: np.ndarray | str) -> np.ndarray:
         """dP^p/dz of an earlier evaluation ``result`` applied to more ``directions``.
@@ -208,8 +213,8 @@ class PeriodMap:
         labels = episode_labels(trajectory.time[k], release, default_separation(self.packed))
         return int(labels[-1]) + 1 if labels.size else 0
 
-    def _measures(self, trajectory: Trajectory) -> tuple[float, ...]:
-        impacts = impact_table(self.packed, trajectory)
+    def _measures(self, trajectory: Trajectory, impacts: dict[str, np.ndarray],
+                  ) -> tuple[float, ...]:
         peak = float(np.max(impacts["impact_peak_force"], initial=0.0))
         impulse = float(np.sum(impacts["impact_impulse"]))
         min_gap, min_gap_time = self._min_gap(trajectory)
@@ -238,6 +243,10 @@ class PeriodMap:
         i = 1 + int(np.argmin(np.where(interior, gap[1:-1], np.inf)))
         return self._refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
                              times[i - 1], times[i + 1], gap[i], times[i])
+
+    def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
+        """The tips' motion (``kernels.layout`` TIP_* columns) of ``result``'s run at ``times``."""
+        return self._tips(result.trajectory, np.asarray(times, dtype=float))
 
     def _tips(self, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
         phase, q, v = sample(self.packed, trajectory, times)

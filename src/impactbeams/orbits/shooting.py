@@ -146,7 +146,7 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
     `OrbitNotConverged` when the residual does not reach ``tolerance``.
     """
     period_map = PeriodMap(params, n_modes, require_integer("period", period, 1))
-    method = _checked_method(method, period_map.dimension)
+    method = checked_method(method, period_map.dimension)
     tolerance = float(tolerance)
     require("tolerance", tolerance, 0 < tolerance < 1, "must be in (0, 1)")
     max_iterations = require_integer("max_iterations", max_iterations, 1)
@@ -160,7 +160,8 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
     return solver.newton_picard(z, basis, subspace)
 
 
-def _checked_method(method: str, dimension: int) -> str:
+def checked_method(method: str, dimension: int) -> str:
+    """``method`` checked, "auto" resolved for a map of ``dimension`` coordinates."""
     require("method", method, method in ("auto", "newton", "newton-picard"),
             "must be 'auto', 'newton' or 'newton-picard'")
     if method == "auto":
@@ -236,8 +237,8 @@ class _Shooting:
             images = self._products(result, np.column_stack([v, q_r]))  # M V, M Q r
             mv, m_qr = images[:, :-1], images[:, -1]
             h = v.T @ mv
-            ritz = _by_modulus(np.linalg.eigvals(h))
-            reported = _leading(ritz)
+            ritz = by_modulus(np.linalg.eigvals(h))
+            reported = leading(ritz)
             settled = np.max(np.abs(ritz[:reported] - previous[:reported])) <= RITZ_TOLERANCE
             if residual <= self.tolerance and settled:
                 return self._orbit(z, ritz[:reported], history, "newton-picard",
@@ -250,7 +251,7 @@ class _Shooting:
                 dq = q_r + coupled - v @ (v.T @ coupled)
                 z, result = self._damped(z, (v @ dp + dq) / self.scale, residual)
             previous = ritz
-            v = _orthonormal(mv)
+            v = orthonormal(mv)
         raise self._failure(history, "newton-picard")
 
     def _products(self, result: PeriodMapResult, columns: np.ndarray) -> np.ndarray:
@@ -259,9 +260,9 @@ class _Shooting:
 
     def _initial_basis(self, basis: np.ndarray | None, m: int, size: int) -> np.ndarray:
         if basis is not None and basis.shape == (size, m):
-            return _orthonormal(self.scale[:, None] * basis)
+            return orthonormal(self.scale[:, None] * basis)
         # fixed pseudo-random directions: the same orbit on every machine
-        return _orthonormal(np.random.default_rng(0).standard_normal((size, m)))
+        return orthonormal(np.random.default_rng(0).standard_normal((size, m)))
 
     def _damped(self, z: np.ndarray, step: np.ndarray, residual: float,
                 ) -> tuple[np.ndarray, PeriodMapResult]:
@@ -295,7 +296,7 @@ class _Shooting:
                method: str, invariance: float, monodromy: np.ndarray | None,
                basis: np.ndarray | None) -> PeriodicOrbit:
         result = self.map(z, measures=self.measures)
-        multipliers = _by_modulus(multipliers)
+        multipliers = by_modulus(multipliers)
         duration = self.map.horizon
         with np.errstate(divide="ignore"):
             exponents = np.log(np.abs(multipliers)) / duration
@@ -307,7 +308,7 @@ class _Shooting:
             len(history) - 1, tuple(history), method, invariance, monodromy, basis)
 
 
-def _leading(ritz: np.ndarray) -> int:
+def leading(ritz: np.ndarray) -> int:
     """How many leading Ritz values to report: all but ``GUARD``, a conjugate pair kept whole."""
     count = max(ritz.size - GUARD, 1)
     if count < ritz.size and ritz[count - 1].imag > 0 and ritz[count] == np.conj(
@@ -316,12 +317,13 @@ def _leading(ritz: np.ndarray) -> int:
     return max(count, 1)
 
 
-def _by_modulus(values: np.ndarray) -> np.ndarray:
+def by_modulus(values: np.ndarray) -> np.ndarray:
     """Complex values by decreasing modulus, a conjugate pair's positive imaginary part first."""
     return values[np.lexsort((-values.imag, -np.abs(values)))]
 
 
-def _orthonormal(columns: np.ndarray) -> np.ndarray:
+def orthonormal(columns: np.ndarray) -> np.ndarray:
+    """An orthonormal basis of the columns' span (QR)."""
     q, _ = np.linalg.qr(columns)
     return q
 
