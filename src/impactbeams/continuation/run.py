@@ -27,6 +27,7 @@ from impactbeams.continuation.branch import (
     continue_branches,
 )
 from impactbeams.continuation.output import branches_dataset
+from impactbeams.orbits.shooting import DEFAULT_SUBSPACE
 from impactbeams.orbits.period_map import check_law
 from impactbeams.params import (
     RANGES,
@@ -58,7 +59,8 @@ class Continuation:
     beam (default: the number that resolves the contact). ``state``: the start's section
     state; without it, ``transient_periods`` period maps from the run's start. Steps in the
     parameter's units; ``state_scale`` in m (module docstring). ``method``: the corrector's
-    dr/dz, "newton" (full monodromy), "newton-picard" or "auto" (`BeamOrbits`).
+    dr/dz, "newton" (full monodromy), "newton-picard" (on ``subspace`` carried directions)
+    or "auto" (`BeamOrbits`).
     """
 
     params: Params
@@ -78,6 +80,7 @@ class Continuation:
     max_branches: int = 2
     state_scale: float | None = None
     method: str = "auto"
+    subspace: int = DEFAULT_SUBSPACE
 
     def __post_init__(self) -> None:
         require_type("params", self.params, isinstance(self.params, Params),
@@ -137,7 +140,8 @@ def continue_orbits(continuation: Continuation,
     if c.parameter == "omega":
         require("low", c.low, c.low > 0, "a periodic orbit needs omega > 0", "rad/s")
     params = c.params.replace(**{c.parameter: c.first})
-    problem = BeamOrbits(params, c.parameter, _modes(c), c.period, c.method)
+    problem = BeamOrbits(params, c.parameter, _modes(c), c.period, c.method,
+                         c.subspace)
     state = _start_state(problem, c)
     scaling = _scaling(problem, c, state)
     settings = c.settings()
@@ -167,7 +171,7 @@ def _start_state(problem: BeamOrbits, c: Continuation) -> np.ndarray:
         orbit = periodic_orbit(problem.params, problem.n_modes, c.period,
                                None if c.state is None else np.asarray(c.state, dtype=float),
                                transient_periods=c.transient_periods, measures=False,
-                               method=problem.method)
+                               method=problem.method, subspace=problem.subspace)
     except OrbitNotConverged as error:
         raise ParameterError(f"the start at {c.parameter} = {c.first!r} did not converge "
                              f"({error}): give a state, or more transient_periods") from None
@@ -196,5 +200,5 @@ def _attributes(c: Continuation, problem: BeamOrbits) -> dict[str, object]:
         f"continue {c.parameter} from {c.low!r} to {c.high!r}", params,
         n_modes=problem.n_modes, start_period=c.period, direction=c.direction,
         locate_tolerance=settings.locate_tolerance * (c.high - c.low),
-        newton_tolerance=settings.tolerance)
+        newton_tolerance=settings.tolerance, corrector=problem.method)
 

@@ -1,0 +1,113 @@
+"""Benchmark: time per branch point of the continuation, Newton-Picard against full Newton.
+
+The default Hertz contact (linearised, k = 2.2e5 N/m) with zeta = 0.05, a period-1 impacting
+branch in Omega from 50 rad/s up, at 8, 16 and 32 modes per beam (2 N = 32, 64, 128
+coordinates), each with ``method="newton"`` (the full monodromy at every corrector iteration)
+and ``method="newton-picard"`` (m = 8 carried directions plus the residual's, `BeamOrbits`).
+A branch point's time is the wall time between the first and the last point reported by
+`continue_orbits`' progress, over the points between: the corrector with its dr/dp and the
+point's measures (grazing gap, peak force, impulse, tips). The measures alone (the contacts'
+peak-force searches) are timed apart, at the start orbit. All in one process after a warm-up
+branch (compilation); BLAS on one thread (``OPENBLAS_NUM_THREADS=1``, set before NumPy loads).
+Writes docs/benchmarks/continuation.json and docs/benchmarks/continuation.md.
+
+    python benchmarks/bench_continuation.py [--points 12]
+"""
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from impactbeams import Params, __version__  # noqa: E402
+from impactbeams.continuation import Continuation, continue_orbits  # noqa: E402
+from impactbeams.orbits import PeriodMap  # noqa: E402
+
+ROOT = Path(__file__).parents[1]
+OUT = ROOT / "docs" / "benchmarks"
+PARAMS = Params(damping_ratio=0.05)
+MODES = (8, 16, 32)
+METHODS = ("newton", "newton-picard")
+LOW, HIGH = 50.0, 60.0  # rad/s: the branch's range (it ends at max points well before HIGH)
+TRANSIENT = 100  # forcing periods from rest to the start orbit's guess
+
+
+def branch(n_modes: int, method: str, points: int) -> dict:
+    """Seconds per branch point (between the first and the last) and what the branch read."""
+    stamps: list[float] = []
+    continuation = Continuation(PARAMS, "omega", LOW, HIGH, n_modes=n_modes, method=method,
+                                transient_periods=TRANSIENT, max_points=points,
+                                max_branches=1)
+    dataset = continue_orbits(continuation, lambda *_: stamps.append(time.perf_counter()))
+    return {"seconds_per_point": (stamps[-1] - stamps[0]) / (len(stamps) - 1),
+            "points": len(stamps), "omega_end": float(dataset.omega[-1]),
+            "iterations": float(dataset.newton_iterations.mean()),
+            "contacts": int(dataset.contacts_per_orbit[0]),
+            "leading_multipliers_abs": dataset.multiplier_modulus[0, :4].values.tolist()}
+
+
+def measures_seconds(n_modes: int, repeats: int = 3) -> float:
+    """The measures of one orbit (minus the map's run): what every accepted point adds."""
+    period_map = PeriodMap(PARAMS, n_modes)
+    z = period_map.rest_state()
+    for _ in range(TRANSIENT):
+        z = period_map(z, measures=False).state
+    times = []
+    for measures in (True, False) * repeats:
+        start = time.perf_counter()
+        period_map(z, measures=measures)
+        times.append((time.perf_counter() - start) * (1 if measures else -1))
+    return float(np.median(np.add(times[0::2], times[1::2])))
+
+
+def markdown(report: dict) -> str:
+    """The report as a short Markdown page."""
+    lines = ["# Continuation: time per branch point", "",
+             f"`python benchmarks/bench_continuation.py`; {report['machine']}, impactbeams "
+             f"{report['version']}, {report['date']}, load average {report['load']:.1f} on "
+             f"{report['cores']} cores (a shared machine: absolute times are noisy). Default "
+             f"Hertz contact, zeta = {PARAMS.damping_ratio}, the period-1 impacting branch in "
+             f"Omega from {LOW} rad/s, {report['points']} points; in ms per point.", "",
+             "| n_modes | 2N | contacts | Newton | Newton-Picard | of which measures | "
+             "iterations (N / N-P) |", "|---" * 6 + "|"]
+    for row in report["cases"]:
+        newton, picard = row["newton"], row["newton-picard"]
+        lines.append(
+            f"| {row['n_modes']} | {4 * row['n_modes']} | {picard['contacts']} | "
+            f"{1e3 * newton['seconds_per_point']:.0f} | "
+            f"{1e3 * picard['seconds_per_point']:.0f} | {1e3 * row['measures']:.0f} | "
+            f"{newton['iterations']:.1f} / {picard['iterations']:.1f} |")
+    lines += ["", "A point's time includes its measures (the contacts' peak-force searches, "
+              "timed apart at the start orbit: \"of which measures\"), read once per accepted "
+              "point; the corrector's iterations read none."]
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--points", type=int, default=12)
+    args = parser.parse_args()
+    report = {"version": __version__, "date": time.strftime("%Y-%m-%d %H:%M"),
+              "machine": f"{platform.machine()}, Python {platform.python_version()}",
+              "cores": os.cpu_count(), "points": args.points, "cases": []}
+    branch(MODES[0], METHODS[1], 3)  # warm-up: compilation
+    for n_modes in MODES:
+        row = {"n_modes": n_modes, "measures": measures_seconds(n_modes)}
+        row.update({method: branch(n_modes, method, args.points) for method in METHODS})
+        report["cases"].append(row)
+        print(json.dumps(row), flush=True)
+    report["load"] = os.getloadavg()[0]
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / "continuation.json").write_text(json.dumps(report, indent=1) + "\n")
+    (OUT / "continuation.md").write_text(markdown(report))
+
+
+if __name__ == "__main__":
+    main()
