@@ -63,6 +63,10 @@ def test_grazing_located_and_crossed(tmp_path, capsys):
      "periodic orbits need the spring contact law"),
     ("period = 0\n[continuation]\nparameter = 'omega'\nmin = 1.0\nmax = 5.0\n",
      "period = 0 is not allowed"),
+    ("[continuation]\nparameter = 'omega'\nmin = 1.0\nmax = 5.0\nmethod = 'picard'\n",
+     "method = 'picard' is not allowed: must be one of 'auto', 'newton', 'newton-picard'"),
+    ("[continuation]\nparameter = 'omega'\nmin = 1.0\nmax = 5.0\nsubspace = 2\n",
+     "subspace = 2 is not allowed"),
     ("[continuation]\nparameter = 'omega'\nmin = 1.0\n", "needs parameter, min and max"),
 ])
 def test_bad_files_exit_2_in_one_line(tmp_path, capsys, text, message):

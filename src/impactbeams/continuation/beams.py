@@ -21,6 +21,7 @@ from impactbeams.kernels.layout import FREE, ROW_FREQUENCY, TIP_Y1
 from impactbeams.orbits import PeriodMap, PeriodMapResult
 from impactbeams.orbits.shooting import (
     DEFAULT_SUBSPACE,
+    GUARD,
     by_modulus,
     checked_method,
     leading,
@@ -51,7 +52,7 @@ class BeamOrbits:
         self._last: tuple[float, bytes, PeriodMapResult] | None = None
         dimension = self.period_map(getattr(params, parameter)).dimension
         self.method = checked_method(method, dimension)
-        self.subspace = require_integer("subspace", subspace, 3, dimension)
+        self.subspace = require_integer("subspace", subspace, GUARD + 1, dimension)
         self.basis: np.ndarray | None = None  # V: orthonormal in the energy coordinates
         self._warned = False
 

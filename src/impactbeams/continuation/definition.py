@@ -19,6 +19,9 @@
     max_branches = 2           # the started branch and the period-2 branches it switches to
     state_scale = 1.1e-4       # m of tip motion counted like the whole range (default 10
                                # clearances; docs/continuation.md)
+    method = "auto"            # the corrector: "newton", "newton-picard" or "auto" (Newton up
+                               # to 48 coordinates 2 N, Newton-Picard above)
+    subspace = 8               # Newton-Picard's carried directions
 """
 
 from __future__ import annotations
@@ -41,8 +44,9 @@ _TOP_LEVEL = ("n_modes", "period", "transient_periods", "params", "continuation"
 _RANGE_KEYS = {"parameter": "parameter", "min": "low", "max": "high", "direction": "direction",
                "start": "start", "step": "step", "min_step": "min_step", "max_step": "max_step",
                "max_points": "max_points", "max_branches": "max_branches",
-               "state_scale": "state_scale"}
-_INTEGERS = ("n_modes", "period", "transient_periods", "max_points", "max_branches")
+               "state_scale": "state_scale", "method": "method", "subspace": "subspace"}
+_INTEGERS = ("n_modes", "period", "transient_periods", "max_points", "max_branches",
+             "subspace")
 
 
 def load_continuation(path: str | os.PathLike[str]) -> Continuation:
@@ -73,7 +77,7 @@ def _check_type(key: str, value: Any, source: str) -> None:
     where = f"{key} in {source}"
     if key in _INTEGERS:
         require(where, value, is_integer(value), "must be an integer")
-    elif key in ("parameter", "direction"):
+    elif key in ("parameter", "direction", "method"):
         require(where, value, isinstance(value, str), "must be a name (a string)")
     elif not is_real(value):
         raise ParameterError(f"{where} = {value!r} is not allowed: must be a number")

@@ -27,8 +27,8 @@ from impactbeams.continuation.branch import (
     continue_branches,
 )
 from impactbeams.continuation.output import branches_dataset
-from impactbeams.orbits.shooting import DEFAULT_SUBSPACE
 from impactbeams.orbits.period_map import check_law
+from impactbeams.orbits.shooting import DEFAULT_SUBSPACE, GUARD, METHODS
 from impactbeams.params import (
     RANGES,
     ParameterError,
@@ -99,6 +99,9 @@ class Continuation:
             require("start", self.start, self.low <= require_finite("start", self.start)
                     <= self.high, f"must lie in [{self.low!r}, {self.high!r}]")
         require_integer("period", self.period, 1)
+        require("method", self.method, self.method in METHODS,
+                f"must be one of {', '.join(map(repr, METHODS))}")
+        require_integer("subspace", self.subspace, GUARD + 1)
         require_integer("transient_periods", self.transient_periods, 0)
         for name in ("step", "min_step", "max_step", "state_scale"):
             value = getattr(self, name)

@@ -45,6 +45,7 @@ GUARD = 2
 # most this between two subspace iterations
 RITZ_TOLERANCE = 1e-10
 AUTO_NEWTON_DIMENSION = 48  # "auto": the full monodromy up to this many coordinates (2 N)
+METHODS = ("auto", "newton", "newton-picard")
 
 
 class OrbitNotConverged(RuntimeError):
@@ -162,7 +163,7 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
 
 def checked_method(method: str, dimension: int) -> str:
     """``method`` checked, "auto" resolved for a map of ``dimension`` coordinates."""
-    require("method", method, method in ("auto", "newton", "newton-picard"),
+    require("method", method, method in METHODS,
             "must be 'auto', 'newton' or 'newton-picard'")
     if method == "auto":
         return "newton" if dimension <= AUTO_NEWTON_DIMENSION else "newton-picard"
