@@ -76,7 +76,7 @@ def markdown(report: dict) -> str:
              f"Hertz contact, zeta = {PARAMS.damping_ratio}, the period-1 impacting branch in "
              f"Omega from {LOW} rad/s, {report['points']} points; in ms per point.", "",
              "| n_modes | 2N | contacts | Newton | Newton-Picard | of which measures | "
-             "iterations (N / N-P) |", "|---" * 6 + "|"]
+             "iterations (N / N-P) |", "|---" * 7 + "|"]
     for row in report["cases"]:
         newton, picard = row["newton"], row["newton-picard"]
         lines.append(

@@ -8,11 +8,13 @@ and as a command), ``bench_cube.py`` (an (Omega, clearance, F0) cube streamed in
 work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics;
 ``spring_precision.py``: full dynamics of the spring law against solve_ivp), the scaling
 series (``scaling.py``), ``bench_distributed.py`` (Dask overhead, if installed),
-``bench_longtime.py`` (the long-time bifurcation diagram), ``bench_compile.py`` (the first
+``bench_longtime.py`` (the long-time bifurcation diagram), ``bench_continuation.py`` (the time
+per branch point of a continuation), ``bench_compile.py`` (the first
 run's compile, cold and warm) and ``bench_startup.py`` (each command's start-up). Results go to
 ``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
 ``sweep.json``/``sweep.md`` from bench_sweep, ``cube.json``/``cube.md`` from bench_cube,
-``distributed.json``/``.md``, ``longtime.json``/``.md``, ``compile.json``/``.md``,
+``distributed.json``/``.md``, ``longtime.json``/``.md``, ``continuation.json``/``.md``,
+``compile.json``/``.md``,
 ``startup.json``); the plots are drawn from those JSON
 files only; ``README.md`` holds the headline table.
 """
@@ -99,6 +101,14 @@ def run_bench_longtime(quick: bool) -> None:
     command = [sys.executable, str(HERE / "bench_longtime.py")]
     if quick:
         command += ["--stride", "100", "--no-profile"]
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+
+
+def run_bench_continuation(quick: bool) -> None:
+    """The continuation's time per branch point (its own JSON and markdown)."""
+    command = [sys.executable, str(HERE / "bench_continuation.py")]
+    if quick:
+        command += ["--points", "4"]
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
 
 
@@ -351,6 +361,7 @@ def main() -> None:
     parser.add_argument("--skip-bench-sweep", action="store_true")
     parser.add_argument("--skip-distributed", action="store_true")
     parser.add_argument("--skip-longtime", action="store_true")
+    parser.add_argument("--skip-continuation", action="store_true")
     parser.add_argument("--skip-first-run", action="store_true",
                         help="keep compile.json and startup.json")
     parser.add_argument("--report-only", action="store_true",
@@ -381,6 +392,9 @@ def main() -> None:
     if not args.skip_longtime:
         log("bench_longtime.py")
         run_bench_longtime(args.quick)
+    if not args.skip_continuation:
+        log("bench_continuation.py")
+        run_bench_continuation(args.quick)
     if not args.skip_first_run:
         log("bench_compile.py, bench_startup.py")
         run_bench_first_run(args.quick)

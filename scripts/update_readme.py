@@ -138,7 +138,8 @@ def tied_convergence() -> str:
 def performance() -> str:
     """Headline costs, each read from its results file with its date and machine."""
     columns, sweep, cube = _results("columns"), _results("sweep"), _results("cube")
-    scale = _results("scaling")
+    scale, continuation = _results("scaling"), _results("continuation")
+    branch = next(row for row in continuation["cases"] if row["n_modes"] == 32)
     best = columns["best_s"]
     full = next(run for run in cube["runs"] if run["cells"] == 10**9)
     rows = [
@@ -161,6 +162,12 @@ def performance() -> str:
          f"{full['wall_s']:.0f} s, {full['cpu_s']:.0f} s of CPU, peak memory "
          f"{full['peak_rss_mb']:.0f} MB, {full['file_mb']:.0f} MB file",
          recorded({**cube, "date": full.get("date", cube.get("date"))})),
+        ("a continuation's branch point, default Hertz contact, zeta = 0.05, 32 modes per beam, "
+         "period-1 impacting branch in Omega ([continuation](docs/benchmarks/continuation.md))",
+         f"{1e3 * branch['newton-picard']['seconds_per_point']:.0f} ms by Newton-Picard "
+         f"(of which {1e3 * branch['measures']:.0f} ms the point's measures), "
+         f"{1e3 * branch['newton']['seconds_per_point']:.0f} ms by Newton",
+         recorded(continuation)),
         ("Fig. 5a map, 10^6 cells, in the full suite's last scaling series (`scaling.json`)",
          ", ".join(f"{row['seconds']:.2f} s on {row['threads']} thread(s)"
                     for row in scale["threads"]), recorded(scale)),
