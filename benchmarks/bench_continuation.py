@@ -22,18 +22,14 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 import platform  # noqa: E402
 import time  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from impactbeams import Params, __version__  # noqa: E402
+from bench_orbits import MODES, OUT, PARAMS  # noqa: E402  (the same model as the orbits')
+from impactbeams import __version__  # noqa: E402
 from impactbeams.continuation import Continuation, continue_orbits  # noqa: E402
 from impactbeams.orbits import PeriodMap  # noqa: E402
 
-ROOT = Path(__file__).parents[1]
-OUT = ROOT / "docs" / "benchmarks"
-PARAMS = Params(damping_ratio=0.05)
-MODES = (8, 16, 32)
 METHODS = ("newton", "newton-picard")
 LOW, HIGH = 50.0, 60.0  # rad/s: the branch's range (it ends at max points well before HIGH)
 TRANSIENT = 100  # forcing periods from rest to the start orbit's guess

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from impactbeams import ParameterError, Params, simulate
-from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, ROW_FREQUENCY
+from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, ROW_FREQUENCY, TIP_Y1
 from impactbeams.orbits import OrbitNotConverged, PeriodMap, periodic_orbit
 from impactbeams.packing import pack_run
 from impactbeams.trajectory import InitialFields
@@ -79,6 +79,12 @@ def test_period_map_counts_and_measures(dashpot_map):
     assert result.contacts >= 1 and result.episodes >= 1
     assert result.peak_force > 0 and result.impulse > 0
     assert result.max_tip1 > 0 and result.max_tip2 > 0
+    # one peak per contact, the same searches as the impact table's
+    assert result.peak_forces.size == result.contacts
+    assert result.peak_force == result.peak_forces.max()
+    assert period_map(z, measures=False).peak_forces.size == 0
+    tips = period_map.tip_motions(result, np.linspace(0.0, period_map.horizon, 7))
+    assert 0 < np.abs(tips[:, TIP_Y1]).max() <= result.max_tip1  # the maximum bounds them
     two = PeriodMap(Params(**DASHPOT), n_modes=N_MODES, periods=2)(z)
     assert two.contacts == 2 * result.contacts  # a period-1 orbit
     assert two.impulse == pytest.approx(2 * result.impulse, rel=1e-8)
