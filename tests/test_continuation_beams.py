@@ -210,3 +210,21 @@ def test_newton_picard_branch_is_the_newton_branch():
     assert picard.attrs["branch_endings"] == newton.attrs["branch_endings"] == "bound"
     assert (newton.attrs["corrector"], picard.attrs["corrector"]) == ("newton", "newton-picard")
     assert picard.sizes["multiplier"] == 4  # the leading m - GUARD Ritz values
+
+
+def test_newton_picard_warns_when_the_complement_may_hold_a_crossing():
+    """The smallest Ritz value bounds the complement's multipliers: at or outside the unit
+    circle it may hide a crossing, and the problem says so (once)."""
+    import warnings
+
+    from impactbeams.continuation.beams import BeamOrbits
+
+    problem = BeamOrbits(load_continuation(EXAMPLE).params, "omega", 5,
+                         method="newton-picard", subspace=3)
+    with pytest.warns(RuntimeWarning, match="modulus 1.02 >= 1"):
+        problem._check_complement(np.array([1.5, 1.2, 1.02 + 0j]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        problem._check_complement(np.array([1.5, 1.2, 1.02 + 0j]))  # once per problem
+        BeamOrbits(problem.params, "omega", 5, method="newton-picard",
+                   subspace=3)._check_complement(np.array([1.5, 0.99 + 0j]))
