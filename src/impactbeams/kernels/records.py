@@ -10,6 +10,13 @@ fields read by name; Python code gets the same namedtuple back. SI units.
   one record holding those segments alone (`recorded_prefix` of a larger allocation).
 * `RunInputs`: one run's inputs (`impactbeams.kernels.forcing.run_inputs`), with the
   settings as their one-element array, see `RunInputs`.
+* `Oscillators`: a phase's modes as driven oscillators, ``q'' + 2 zeta omega q' + omega^2 q =
+  Im(A e^(i Omega t))``: ``frequencies`` omega (rad/s) and ``zeta`` per mode, ``force`` their
+  complex drive amplitudes A, ``forcing_frequency`` Omega (rad/s)
+  (`impactbeams.kernels.propagation.advance`).
+* `EventFunction`: ``e(t) = const + Im(sine_amp e^(i Omega t)) + weights . q(t)``, the
+  functional whose roots the searches of `impactbeams.kernels.events` locate; ``sine_amp`` a
+  float (a sine alone) or a complex (sine + i cosine), ``forcing_frequency`` Omega (rad/s).
 * `Rotor`: the arrays of an event function's rotor (`impactbeams.kernels.rotor`).
 * `Tangent`: the tangent vectors of a run and Benettin's sums
   (`impactbeams.kernels.tangent.carry_tangents`); ``clock[CLOCK_TIME]`` is the time (s) the
@@ -33,6 +40,10 @@ frees an array after its last use in the frame that owns it: a kernel that built
 passes it on whole, and only a kernel that received it as an argument (whose caller holds it
 for the whole call) reads ``run.settings_array[0]``. `impactbeams.kernels.cells` does both.
 """
+
+Oscillators = namedtuple("Oscillators", ("frequencies", "zeta", "force", "forcing_frequency"))
+
+EventFunction = namedtuple("EventFunction", ("weights", "const", "sine_amp", "forcing_frequency"))
 
 Rotor = namedtuple("Rotor", ("amplitudes", "eigenvalues", "driven", "levels", "factors", "rates"))
 

@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 
+from impactbeams.kernels.drive import compiled_modal_acceleration
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.propagation import advance_mode
 from impactbeams.kernels.records import Rotor
@@ -67,7 +68,7 @@ def rotor_arrays(capacity):
 
 
 @kernel
-def rotor_load(rotor, q, v, t, frequencies, zeta, force, weights, forcing_frequency):
+def rotor_load(rotor, q, v, t, oscillators, weights):
     """Set the rotor's amplitudes from the modal state (q, v) at t (s); return the driven count.
 
     The stored step factors are kept if the eigenvalues are those they were computed for.
@@ -76,6 +77,8 @@ def rotor_load(rotor, q, v, t, frequencies, zeta, force, weights, forcing_freque
     """
     z, lam, driven = rotor.amplitudes, rotor.eigenvalues, rotor.driven
     levels, rates = rotor.levels, rotor.rates
+    frequencies, zeta, force = oscillators.frequencies, oscillators.zeta, oscillators.force
+    forcing_frequency = oscillators.forcing_frequency
     same = levels[LEVELS] == frequencies.size
     count = 0
     for j in range(frequencies.size):
@@ -163,13 +166,15 @@ def rotor_step(rotor, step):
 
 
 @kernel
-def rotor_event(rotor, q_s, v_s, t_s, t, frequencies, zeta, force, weights, const, sine_amp,
-                forcing_frequency):
+def rotor_event(rotor, q_s, v_s, t_s, t, oscillators, event):
     """e, e', its evaluation scale and e'' at time t (s), from the rotor.
 
     As ``events.evaluate`` and ``events.event_acceleration``, with the undriven modes taken from
     the rotor and the driven ones propagated exactly from their state (q_s, v_s) at t_s (s).
     """
+    frequencies, zeta, force = oscillators.frequencies, oscillators.zeta, oscillators.force
+    weights, const, sine_amp = event.weights, event.const, event.sine_amp
+    forcing_frequency = event.forcing_frequency
     z, driven, levels, rates = rotor.amplitudes, rotor.driven, rotor.levels, rotor.rates
     n = frequencies.size
     sine, cosine = z[n].imag, z[n].real  # the forcing's phasor
@@ -216,6 +221,6 @@ def rotor_event(rotor, q_s, v_s, t_s, t, frequencies, zeta, force, weights, cons
             value += term
             scale += abs(term)
             slope += weights[j] * vj
-            acceleration += weights[j] * (force[j].real * sine + force[j].imag * cosine
-                                          - 2.0 * zeta[j] * w * vj - w * w * qj)
+            acceleration += weights[j] * compiled_modal_acceleration(force[j], w, zeta[j], qj,
+                                                                     vj, sine, cosine)
     return value, slope, scale, acceleration
