@@ -29,7 +29,7 @@ from impactbeams.kernels.events import (
     phase_oscillators,
     root_after_rise,
 )
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import inlined_kernel, kernel
 from impactbeams.kernels.layout import (
     CONTACT,
     FREE,
@@ -141,7 +141,7 @@ def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings
     return GAVE_UP
 
 
-@kernel
+@inlined_kernel
 def _opposite(table, scalars, forcing_frequency):
     """-e of the phase's event function: its roots from above are where e rises through 0."""
     return EventFunction(-table[ROW_EVENT], -scalars[SCALAR_CONST], -event_sine(scalars),

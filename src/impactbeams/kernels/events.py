@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from impactbeams.kernels.drive import compiled_modal_acceleration
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import inlined_kernel, kernel
 from impactbeams.kernels.layout import (
     ROW_EVENT,
     ROW_FREQUENCY,
@@ -94,14 +94,14 @@ def event_sine(scalars):
     return complex(scalars[SCALAR_SINE], scalars[SCALAR_COSINE])
 
 
-@kernel
+@inlined_kernel
 def phase_event_function(table, scalars, forcing_frequency):
     """The `records.EventFunction` of the phase with ``table`` and ``scalars``."""
     return EventFunction(table[ROW_EVENT], scalars[SCALAR_CONST], event_sine(scalars),
                          forcing_frequency)
 
 
-@kernel
+@inlined_kernel
 def phase_oscillators(table, force, forcing_frequency):
     """The `records.Oscillators` of the phase with ``table`` and drive amplitudes ``force``."""
     return Oscillators(table[ROW_FREQUENCY], table[ROW_ZETA], force, forcing_frequency)
@@ -352,7 +352,7 @@ def first_root(q_s, v_s, t_s, t_end, oscillators, event, q, v, rotor):
                        rotor)
 
 
-@kernel
+@inlined_kernel
 def _unsplit_copy(q_s, v_s, oscillators):
     """Copies of the state and of the oscillators' drives, for ``split_steady_states``."""
     return q_s.copy(), v_s.copy(), Oscillators(oscillators.frequencies, oscillators.zeta,
