@@ -44,12 +44,17 @@ def oscillators(seed=1, n=64, driven=(3, 40)):
     return omega, zeta, force, rng.normal(size=n), q, v
 
 
+def gap(weights):
+    """An event function of these weights alone (what the rotor's load reads)."""
+    return EventFunction(weights, 0.0, 0j, FORCING)
+
+
 @pytest.mark.parametrize("step", [3e-9, 1e-7, 0.7e-6, 0.75e-6, 0.99e-6, 1e-6, 2.5e-3, 1e9])
 def test_a_step_is_rounded_down_to_two_factors(step):
     """2^k or 3 2^(k-1), the largest not above the request (capped at the table's top)."""
     omega, zeta, force, weights, q, v = oscillators()
     rotor = rotor_arrays(omega.size)
-    rotor_load(rotor, q, v, 0.0, Oscillators(omega, zeta, force, FORCING), weights)
+    rotor_load(rotor, q, v, 0.0, Oscillators(omega, zeta, force, FORCING), gap(weights))
     taken = rotor_step(rotor, step)
     fraction, exponent = math.frexp(taken)
     assert fraction in (0.5, 0.75) and taken <= step
@@ -59,7 +64,7 @@ def test_a_step_is_rounded_down_to_two_factors(step):
 def test_a_step_below_the_table_moves_nothing():
     omega, zeta, force, weights, q, v = oscillators()
     rotor = rotor_arrays(omega.size)
-    rotor_load(rotor, q, v, 0.0, Oscillators(omega, zeta, force, FORCING), weights)
+    rotor_load(rotor, q, v, 0.0, Oscillators(omega, zeta, force, FORCING), gap(weights))
     before = rotor.amplitudes.copy()
     assert rotor_step(rotor, 2.0**LOWEST) == 0.0  # it would need the factor of 2^(LOWEST - 1)
     assert np.array_equal(rotor.amplitudes, before)
@@ -74,7 +79,7 @@ def test_the_rotor_follows_exact_propagation():
     rotor = rotor_arrays(omega.size)
     modes = Oscillators(omega, zeta, force, FORCING)
     event = EventFunction(weights, const, sine_amp, FORCING)
-    rotor_load(rotor, q_s, v_s, t_s, modes, weights)
+    rotor_load(rotor, q_s, v_s, t_s, modes, event)
     rng = np.random.default_rng(2)
     offset = 0.0
     q, v = np.empty_like(q_s), np.empty_like(q_s)
@@ -98,10 +103,11 @@ def test_stored_factors_are_cleared_when_the_modes_change():
     """A rotor reused for other eigenvalues steps as a fresh one does, bit for bit."""
     omega, zeta, force, weights, q, v = oscillators()
     used, fresh = rotor_arrays(omega.size), rotor_arrays(omega.size)
-    rotor_load(used, q, v, 0.0, Oscillators(omega, zeta, force, FORCING), weights)
+    rotor_load(used, q, v, 0.0, Oscillators(omega, zeta, force, FORCING), gap(weights))
     rotor_step(used, 1e-6)
     for rotor in (used, fresh):
-        rotor_load(rotor, q, v, 0.0, Oscillators(1.5 * omega, zeta, force, FORCING), weights)
+        rotor_load(rotor, q, v, 0.0, Oscillators(1.5 * omega, zeta, force, FORCING),
+                   gap(weights))
         rotor_step(rotor, 1e-6)
     assert np.array_equal(used.amplitudes[:omega.size], fresh.amplitudes[:omega.size])
 

@@ -65,7 +65,7 @@ def evaluate(q, v, t, event):
     rounding error is a few eps times it: a value within ``tolerance`` eps of the scale is zero
     to within its own evaluation error (the round-off rule of ``search_root``).
     """
-    weights, const, sine_amp = event.weights, event.const, event.sine_amp
+    const, sine_amp = event.const, event.sine_amp
     forcing_frequency = event.forcing_frequency
     sine, cosine = math.sin(forcing_frequency * t), math.cos(forcing_frequency * t)
     sine_term, cosine_term = sine_amp.real * sine, sine_amp.imag * cosine
@@ -74,10 +74,10 @@ def evaluate(q, v, t, event):
              - sine_amp.imag * forcing_frequency * sine)
     scale = abs(const) + abs(sine_term) + abs(cosine_term)
     for j in range(q.size):
-        term = weights[j] * q[j]
+        term = event.weights[j] * q[j]
         value += term
         scale += abs(term)
-        slope += weights[j] * v[j]
+        slope += event.weights[j] * v[j]
     return value, slope, scale
 
 
@@ -116,16 +116,16 @@ def phase_event(table, scalars, q, v, t, forcing_frequency):
 @kernel
 def event_acceleration(q, v, t, oscillators, event):
     """e''(t) from the modal equations: q'' = Im(A e^(i Omega t)) - 2 zeta omega q' - omega^2 q."""
-    frequencies, zeta, force = oscillators.frequencies, oscillators.zeta, oscillators.force
-    weights, sine_amp = event.weights, event.sine_amp
+    sine_amp = event.sine_amp
     forcing_frequency = event.forcing_frequency
     sine = math.sin(forcing_frequency * t)
     cosine = math.cos(forcing_frequency * t)
     value = (-sine_amp.real * forcing_frequency**2 * sine
              - sine_amp.imag * forcing_frequency**2 * cosine)
     for j in range(q.size):
-        value += weights[j] * compiled_modal_acceleration(force[j], frequencies[j], zeta[j], q[j],
-                                                          v[j], sine, cosine)
+        value += event.weights[j] * compiled_modal_acceleration(
+            oscillators.force[j], oscillators.frequencies[j], oscillators.zeta[j], q[j], v[j], sine,
+            cosine)
     return value
 
 
@@ -172,23 +172,22 @@ def phase_bounds(q, v, t, span, oscillators, event):
     would miss. ``any_span`` is True when no mode
     needed the span-limited growth bound, so that the split holds for every s >= 0.
     """
-    frequencies, zeta, force = oscillators.frequencies, oscillators.zeta, oscillators.force
-    weights, sine_amp = event.weights, event.sine_amp
+    sine_amp = event.sine_amp
     forcing_frequency = event.forcing_frequency
     rotation = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
     coherent = complex(sine_amp.real, sine_amp.imag)
     band = curvature = jerk = 0.0
     any_span = True
     for j in range(q.size):
-        steady, amplitude, mode_curvature = _mode_split(q[j], v[j], frequencies[j], zeta[j],
-                                                        force[j], forcing_frequency, rotation,
-                                                        span)
-        if steady == 0 and force[j] != 0:
+        steady, amplitude, mode_curvature = _mode_split(
+            q[j], v[j], oscillators.frequencies[j], oscillators.zeta[j], oscillators.force[j],
+            forcing_frequency, rotation, span)
+        if steady == 0 and oscillators.force[j] != 0:
             any_span = False
-        coherent += weights[j] * steady
-        band += abs(weights[j]) * amplitude
-        curvature += abs(weights[j]) * mode_curvature
-        jerk += abs(weights[j]) * frequencies[j] * mode_curvature
+        coherent += event.weights[j] * steady
+        band += abs(event.weights[j]) * amplitude
+        curvature += abs(event.weights[j]) * mode_curvature
+        jerk += abs(event.weights[j]) * oscillators.frequencies[j] * mode_curvature
     forced = abs(coherent)
     return (coherent, band, curvature + forcing_frequency**2 * forced,
             jerk + forcing_frequency**3 * forced, any_span)
@@ -230,20 +229,20 @@ def split_steady_states(q_s, v_s, t_s, oscillators, event):
     propagation is then a free oscillation, about 2-3 times cheaper than the driven one.
     ``q_s``, ``v_s`` and ``oscillators.force`` are changed in place.
     """
-    frequencies, zeta, force = oscillators.frequencies, oscillators.zeta, oscillators.force
-    weights, sine_amp = event.weights, event.sine_amp
+    sine_amp = event.sine_amp
     forcing_frequency = event.forcing_frequency
     rotation = complex(math.cos(forcing_frequency * t_s), math.sin(forcing_frequency * t_s))
-    for j in range(frequencies.size):
-        steady = steady_phasor(frequencies[j], zeta[j], force[j], forcing_frequency)
+    for j in range(oscillators.frequencies.size):
+        steady = steady_phasor(oscillators.frequencies[j], oscillators.zeta[j],
+                               oscillators.force[j], forcing_frequency)
         if steady == 0:
             continue
         phasor = steady * rotation
         q_s[j] -= phasor.imag
         v_s[j] -= forcing_frequency * phasor.real
-        sine_amp += weights[j] * steady
-        force[j] = 0.0
-    return EventFunction(weights, event.const, sine_amp, forcing_frequency)
+        sine_amp += event.weights[j] * steady
+        oscillators.force[j] = 0.0
+    return EventFunction(event.weights, event.const, sine_amp, forcing_frequency)
 
 
 @kernel
@@ -419,9 +418,9 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
     entry (NaN: at no time) and on return, which is ``(root, t_state)``, so that a search
     starting where the previous one ended need not propagate to its start.
     """
-    frequencies, weights = oscillators.frequencies, event.weights
     const, forcing_frequency = event.const, event.forcing_frequency
-    span_cap = 2.0 * math.pi / np.min(frequencies)  # bounds hold over a step of at most this span
+    # bounds hold over a step of at most this span
+    span_cap = 2.0 * math.pi / np.min(oscillators.frequencies)
     coherent, band, curvature, jerk, any_span = bounds
     floor = const - band - abs(coherent)
     if floor > tolerance * _EPS * (abs(const) + band + abs(coherent)):
@@ -441,7 +440,7 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
     acceleration = event_acceleration(q, v, t, oscillators, event)
     # Between exact states the walk's own steps rotate the undriven modes (rotor), unless the
     # bounds need the exact state at every step.
-    driven = 0 if per_step else rotor_load(rotor, q, v, t, oscillators, weights)
+    driven = 0 if per_step else rotor_load(rotor, q, v, t, oscillators, event)
     t_origin, offset = t, 0.0  # t = t_origin + offset, offset a sum of the rotor's steps
     steps = 0
     while steps < max_steps:
@@ -454,7 +453,7 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
                                                                      oscillators, event)
         elif driven == 0 and steps % REFRESH_STEPS == 0:  # the fast transients have decayed
             coherent, band, curvature, jerk, any_span = rotor_bounds(
-                rotor, frequencies, weights, coherent, forcing_frequency)
+                rotor, oscillators, event, coherent)
         margin = value - noise  # certify e > noise over the step
         step = min(certified_step(margin, slope, curvature), span_cap)
         if not per_step:  # third order with the exact local e'': wide steps through minima
@@ -494,6 +493,6 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
         value, slope, scale = evaluate(q, v, t, event)
         acceleration = event_acceleration(q, v, t, oscillators, event)
         if not per_step:
-            rotor_load(rotor, q, v, t, oscillators, weights)
+            rotor_load(rotor, q, v, t, oscillators, event)
             t_origin, offset = t, 0.0
     return GAVE_UP, t_state
