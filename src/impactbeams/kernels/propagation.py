@@ -60,7 +60,7 @@ def advance(q0, v0, t0, h, frequencies, zeta, force, forcing_frequency, q, v):
                                   forcing_frequency, phase_plus, step_plus)
 
 
-@kernel
+@inlined_kernel
 def advance_to(oscillators, q_s, v_s, t_s, t, q, v):
     """``advance`` the `records.Oscillators` from (q_s, v_s) at t_s (s) to time t (s)."""
     forcing_frequency, h = oscillators.forcing_frequency, t - t_s
