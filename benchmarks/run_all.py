@@ -7,11 +7,13 @@ Steps: ``bench_sweep.py`` (the Fig. 5a map: compile and run time, 1 and 2 thread
 and as a command), ``bench_cube.py`` (an (Omega, clearance, F0) cube streamed into netCDF), the
 work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics;
 ``spring_precision.py``: full dynamics of the spring law against solve_ivp), the scaling
-series (``scaling.py``), ``bench_distributed.py`` (Dask overhead, if installed) and
-``bench_longtime.py`` (the long-time bifurcation diagram). Results go to
+series (``scaling.py``), ``bench_distributed.py`` (Dask overhead, if installed),
+``bench_longtime.py`` (the long-time bifurcation diagram), ``bench_compile.py`` (the first
+run's compile, cold and warm) and ``bench_startup.py`` (each command's start-up). Results go to
 ``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
 ``sweep.json``/``sweep.md`` from bench_sweep, ``cube.json``/``cube.md`` from bench_cube,
-``distributed.json``/``.md``, ``longtime.json``/``.md``); the plots are drawn from those JSON
+``distributed.json``/``.md``, ``longtime.json``/``.md``, ``compile.json``/``.md``,
+``startup.json``); the plots are drawn from those JSON
 files only; ``README.md`` holds the headline table.
 """
 
@@ -97,6 +99,14 @@ def run_bench_longtime(quick: bool) -> None:
     if quick:
         command += ["--stride", "100", "--no-profile"]
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+
+
+def run_bench_first_run(quick: bool) -> None:
+    """The first run's compile (cold and warm) and every command's start-up (their JSON)."""
+    repeats = "1" if quick else "3"
+    for script in ("bench_compile.py", "bench_startup.py"):
+        subprocess.run([sys.executable, str(HERE / script), "--repeats", repeats], check=True,
+                       stdout=subprocess.DEVNULL)
 
 
 def run_bench_distributed(quick: bool) -> None:
@@ -340,6 +350,8 @@ def main() -> None:
     parser.add_argument("--skip-bench-sweep", action="store_true")
     parser.add_argument("--skip-distributed", action="store_true")
     parser.add_argument("--skip-longtime", action="store_true")
+    parser.add_argument("--skip-first-run", action="store_true",
+                        help="keep compile.json and startup.json")
     parser.add_argument("--report-only", action="store_true",
                         help="redraw plots and README from the JSON already in --out")
     args = parser.parse_args()
@@ -368,6 +380,9 @@ def main() -> None:
     if not args.skip_longtime:
         log("bench_longtime.py")
         run_bench_longtime(args.quick)
+    if not args.skip_first_run:
+        log("bench_compile.py, bench_startup.py")
+        run_bench_first_run(args.quick)
     about = {"quick": args.quick, **machine()}
     for name, data in (("work_precision", first), ("dynamics", dynamics), ("scaling", scale),
                        ("spring", springs)):
@@ -412,6 +427,12 @@ def page(out: Path) -> str:
         readme += "\n" + spring.markdown(_load(out, "spring"))
     if (out / "longtime.json").exists():  # the long-time diagram's cost, in brief
         readme += "\n" + longtime.headline(_load(out, "longtime"))
+    if (out / "compile.json").exists() and (out / "startup.json").exists():
+        readme += ("\n## First run and start-up\n\n`bench_compile.py` (a first map of 100 "
+                   "cells and a first `simulate`, fresh processes, empty or warm Numba cache; "
+                   "per-kernel compile times in [compile.md](compile.md)) and "
+                   "`bench_startup.py` (each command's start-up, warm cache):\n\n"
+                   + first_run_table(_load(out, "compile"), _load(out, "startup")))
     return readme + "\n" + results_files(out)
 
 
@@ -426,6 +447,30 @@ def columns_section(report: dict) -> str:
             f"{report['max_time_difference_s']:.1e} s. The table above (`scaling.json`) is the "
             "full suite's older series. Details: [columns.md](columns.md).\n\n"
             "| kernel, threads | best time |\n|---|---|\n" + "\n".join(rows) + "\n")
+
+
+def first_run_table(compile_report: dict, startup: dict) -> str:
+    """First run (``compile.json``) and start-up of each command (``startup.json``), each
+    against the previous code measured back to back, and issue 24's figures."""
+    issue = compile_report["issue_before_s"]
+    previous = compile_report.get("baseline", {}).get("cases", {})
+    lines = ["| run | wall (CPU) | previous code | issue 24 (main 4467146) | measured |",
+             "|---|---|---|---|---|"]
+    load = compile_report["load_average"]
+    when = (", ".join(dict.fromkeys(recorded(compile_report)))
+            + f", load {load['before']:.1f} to {load['after']:.1f}")
+    for case, row in compile_report["cases"].items():
+        before = previous.get(case)
+        lines.append(f"| {case} | {row['wall_s']:.1f} s ({row['cpu_s']:.1f} s) | "
+                     + (f"{before['wall_s']:.1f} s ({before['cpu_s']:.1f} s)" if before else "-")
+                     + f" | {f'{issue[case]:.1f} s' if case in issue else '-'} | {when} |")
+    previous = startup.get("baseline", {}).get("median_s", {})
+    when = ", ".join(dict.fromkeys(recorded(startup)))
+    for command, seconds in startup["median_s"].items():
+        if command in previous:
+            lines.append(f"| `impactbeams {command}`, warm (median) | {seconds:.2f} s | "
+                         f"{previous[command]:.2f} s | - | {when} |")
+    return "\n".join(lines) + "\n"
 
 
 def report(out: Path) -> None:

@@ -32,14 +32,19 @@ def _results(name: str) -> dict:
     return json.loads((BENCHMARKS / f"{name}.json").read_text())
 
 
-def recorded(report: dict) -> str:
-    """When and where a results file was measured (the benchmarks page's rule)."""
+def _run_all():
+    """benchmarks/run_all.py, whose helpers render the benchmarks page's rows."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
     try:
-        from run_all import recorded as date_and_machine
+        import run_all
     finally:
         sys.path.remove(str(ROOT / "benchmarks"))
-    return ", ".join(dict.fromkeys(date_and_machine(report)))  # "not recorded" once
+    return run_all
+
+
+def recorded(report: dict) -> str:
+    """When and where a results file was measured (the benchmarks page's rule)."""
+    return ", ".join(dict.fromkeys(_run_all().recorded(report)))  # "not recorded" once
 
 
 def transcript(*arguments: str) -> str:
@@ -163,6 +168,11 @@ def performance() -> str:
     lines = ["| quantity | value | measured |", "|---|---|---|"]
     lines += [f"| {what} | {value} | {when} |" for what, value, when in rows]
     return "\n".join(lines) + "\n"
+
+
+def first_run() -> str:
+    """The first run's compile and each command's start-up (compile.json, startup.json)."""
+    return _run_all().first_run_table(_results("compile"), _results("startup"))
 
 
 def longtime() -> str:
@@ -328,6 +338,7 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "spring-convergence": spring_convergence,
     "tied-convergence": tied_convergence,
     "performance": performance,
+    "first-run": first_run,
     "longtime-profile": longtime_profile,
     "spring-precision": spring_precision,
     "map-threads": map_threads,

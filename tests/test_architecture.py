@@ -25,7 +25,8 @@ FLOORS = {
     "drive": 5,
     "packing": 6, "preflight": 6, "costs": 6, "compilation": 6, "progress": 6,
     "sweep": 7, "trajectory": 7, "plotting": 7,
-    "cli": 8,
+    "orbits": 8,
+    "cli": 9,
 }
 # What kernels may import from outside the package: NumPy and Numba, ``math``, and the standard
 # library modules jit.py (``types``), __init__.py (``hashlib``, ``pathlib``) and records.py

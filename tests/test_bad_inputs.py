@@ -677,6 +677,17 @@ def _public_calls():
                                "impactbeams.LongTime"),
         "simulate-transient_periods": (lambda: simulate(Params(), 0.1, transient_periods=2.5),
                                        "transient_periods = 2.5"),
+        "simulate-initial_state": (lambda: simulate(Params(contact_law="tied"), 0.1, n_modes=2,
+                                                    initial_state="rest"),
+                                   "initial_state = 'rest' (str) is not allowed: must be 8 "
+                                   "finite numbers"),
+        "InitialFields-deflection1": (lambda: ib.InitialFields(deflection1=0.0),
+                                      "deflection1 = 0.0 (float) is not allowed: must be None "
+                                      "or a function"),
+        "PeriodMap-params": (lambda: ib.PeriodMap(None), "params = None (NoneType) is not "
+                             "allowed: must be an impactbeams.Params"),
+        "periodic_orbit-period": (lambda: ib.periodic_orbit(Params(), period=0),
+                                  "period = 0 is not allowed"),
         "plot_dataset-dataset": (lambda: ib.plot_dataset(5, "x.png"),
                                  "dataset = 5 (int) is not allowed: must be an xarray.Dataset"),
         "plot_dataset-dpi": (lambda: ib.plot_dataset(xr.Dataset(), "x.png", dpi=-1),

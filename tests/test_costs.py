@@ -147,6 +147,30 @@ def test_a_compile_is_announced_and_timed(monkeypatch):
     assert lines[1].startswith("impactbeams: compiled 1 kernels in ") and len(lines) == 2
 
 
+def test_a_terminal_shows_the_group_being_compiled():
+    """On a terminal the line names the kernels' module and counts the kernels done."""
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    stream = Terminal()
+
+    @numba.njit(cache=False)
+    def inner(x):
+        return x + 1
+
+    @numba.njit(cache=False)
+    def outer(x):
+        return 2 * inner(x)
+
+    with reporting_compiles(12.0, stream):
+        outer(1)
+    group = outer.py_func.__module__.split(".")[0]
+    assert f"\rimpactbeams: compiling kernels (once per install), about 12 s: {group}, 1 " \
+           "compiled, " in stream.getvalue()
+
+
 def test_a_loaded_kernel_prints_nothing():
     stream = io.StringIO()
     with reporting_compiles(12.0, stream):

@@ -17,6 +17,9 @@ _LAZY = {
     "load_sweep": "impactbeams.sweep",
     "run_sweep": "impactbeams.sweep",
     "simulate": "impactbeams.trajectory",
+    "InitialFields": "impactbeams.trajectory",
+    "PeriodMap": "impactbeams.orbits",
+    "periodic_orbit": "impactbeams.orbits",
     "plot_dataset": "impactbeams.plotting",
 }
 

@@ -20,15 +20,19 @@ from typing import Any, TextIO
 REPORTED_COMPILE = 1.0  # s: an outermost compile at least this long ends with a line
 
 # The kernels called from Python by each kind of run (their callees compile with them, and
-# load with them from the cache): (module in impactbeams.kernels, kernel name).
+# load with them from the cache): (module in impactbeams.kernels, kernel names). Of several
+# names, the run calls one: a first-impact map calls its serial twin for a chunk of one block
+# (`sweep.plan.compute_chunk`); either twin cached means its callees are, and the other one
+# compiles in about a second.
 ENTRY_KERNELS = {
-    "first_impact": (("first_impact", "first_impact_map_parallel"),),
-    "dynamics": (("observables", "observables_map_parallel"),),
-    "lyapunov": (("lyapunov", "lyapunov_map_parallel"),),
-    "long_time": (("stroboscope", "stroboscope_map_serial"),),
-    "simulate": (("dynamics", "run_events"), ("dynamics", "sample_states"),
-                 ("dynamics", "observed_states"), ("stroboscope", "tip_motions"),
-                 ("records", "segments")),
+    "first_impact": (("first_impact", ("first_impact_map_parallel",
+                                       "first_impact_map_serial")),),
+    "dynamics": (("observables", ("observables_map_parallel",)),),
+    "lyapunov": (("lyapunov", ("lyapunov_map_parallel",)),),
+    "long_time": (("stroboscope", ("stroboscope_map_serial",)),),
+    "simulate": (("dynamics", ("run_events",)), ("dynamics", ("sample_states",)),
+                 ("dynamics", ("observed_states",)), ("stroboscope", ("tip_motions",)),
+                 ("records", ("segments",))),
 }
 
 
@@ -42,9 +46,9 @@ def kernels_cached(kind: str) -> bool:
     """
     import importlib
 
-    for module, name in ENTRY_KERNELS[kind]:
-        dispatcher = getattr(importlib.import_module(f"impactbeams.kernels.{module}"), name)
-        if not _has_machine_code(dispatcher):
+    for module, names in ENTRY_KERNELS[kind]:
+        kernels = importlib.import_module(f"impactbeams.kernels.{module}")
+        if not any(_has_machine_code(getattr(kernels, name)) for name in names):
             return False
     return True
 
@@ -68,8 +72,10 @@ def reporting_compiles(expected: float, stream: TextIO | None = None) -> Iterato
 
     ``expected``: the measured cold compile time (s) announced. Each outermost compile (a
     kernel called from Python, with every kernel it calls) of at least ``REPORTED_COMPILE``
-    seconds ends with a line ``compiled N kernels in S s``; on a terminal a line counts the
-    nested kernels as they finish. Nothing is printed when every kernel loads from the cache.
+    seconds ends with a line ``compiled N kernels in S s``; on a terminal one line shows the
+    group being compiled (the kernels' module: ``events``, ``dynamics``...), the kernels done
+    and the time since the first compile started. Nothing is printed when every kernel loads
+    from the cache (Numba signals a compile only on a cache miss).
     """
     from numba.core import event
 
@@ -91,21 +97,23 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
             self.local = threading.local()  # each thread's compile depth (Dask, long runs)
             self.lock = threading.Lock()
             self.announced = False
-            self.start = 0.0
+            self.first = self.start = 0.0
             self.kernels = 0
 
-        def on_start(self, _: Any) -> None:
+        def on_start(self, compile_event: Any) -> None:
             depth = getattr(self.local, "depth", 0)
             self.local.depth = depth + 1
             with self.lock:
                 if depth == 0:
                     self.start, self.kernels = time.perf_counter(), 0
                 if not self.announced:
-                    self.announced = True
+                    self.announced, self.first = True, self.start
                     self._write(f"compiling kernels (once per install), about {expected:.0f} s",
                                 final=not self.interactive)
+                elif self.interactive:
+                    self._progress(compile_event)
 
-        def on_end(self, _: Any) -> None:
+        def on_end(self, compile_event: Any) -> None:
             self.local.depth -= 1
             with self.lock:
                 self.kernels += 1
@@ -114,8 +122,12 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
                     self._write(f"compiled {self.kernels} kernels in {elapsed:.1f} s (cached "
                                 "for later runs)", final=True)
                 elif self.interactive:
-                    self._write(f"compiling kernels (once per install), about {expected:.0f} "
-                                f"s: {self.kernels} compiled, {elapsed:.0f} s", final=False)
+                    self._progress(compile_event)
+
+        def _progress(self, compile_event: Any) -> None:
+            self._write(f"compiling kernels (once per install), about {expected:.0f} s: "
+                        f"{_group(compile_event)}, {self.kernels} compiled, "
+                        f"{time.perf_counter() - self.first:.0f} s", final=False)
 
         def _write(self, line: str, final: bool) -> None:
             if self.interactive:  # rewrite the line in place; end it when final
@@ -125,3 +137,9 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
             stream.flush()
 
     return CompileReport()
+
+
+def _group(compile_event: Any) -> str:
+    """The group of the kernel a compile event is about: its module (``events``, ``numba``)."""
+    module = compile_event.data["dispatcher"].py_func.__module__
+    return module.removeprefix("impactbeams.kernels.").split(".")[0]

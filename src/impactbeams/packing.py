@@ -237,11 +237,17 @@ class Packed:
         return d.overlap, d.shifts, d.spring_arrays, self.drives
 
 
-def pack_run(params: Params, n_modes: int, t_max: float, search_span: float) -> Packed:
-    """Pack one run of ``params`` with ``n_modes`` per beam; ``t_max``, ``search_span`` in s."""
+def pack_run(params: Params, n_modes: int, t_max: float, search_span: float,
+             dynamics: Dynamics | None = None) -> Packed:
+    """Pack one run of ``params`` with ``n_modes`` per beam; ``t_max``, ``search_span`` in s.
+
+    ``dynamics``: the geometry's arrays if already built for these ``params`` (those of a run
+    that differs in the cell's parameters only, `impactbeams.orbits` reuses them along a
+    branch), else None.
+    """
     from impactbeams.drive import check_steady
 
-    dynamics = dynamics_arrays(params, n_modes)
+    dynamics = dynamics_arrays(params, n_modes) if dynamics is None else dynamics
     check_steady(params, dynamics.free)
     cell = cell_rows({**params.as_dict(), "geometry": 0.0}, 1)[0]
     damped, forces, scalars, settings, q0, v0, drives = run_inputs(

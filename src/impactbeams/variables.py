@@ -298,6 +298,42 @@ VARIABLES.update({
 })
 
 
+# a run's final modal state (simulate's initial_state of a run that continues it)
+_MODAL_UNITS = "kg^1/2 m^1/2"  # q_n = rhoA int y Y_n dx, Y_n mass-normalised
+VARIABLES.update({
+    "coordinate": Variable(
+        ("coordinate",), "1", "free modal coordinate number",
+        "index of the free modal coordinates: beam 1's n_modes cantilever modes, then beam 2's "
+        "(none against a stop)", dtype="int64"),
+    "final_displacement": Variable(
+        ("coordinate",), _MODAL_UNITS, "modal displacements at t_end",
+        "free modal coordinates q at the run's end t_end, the quasi-static part of the tip "
+        "force taken out (docs/model.md); NaN if a tied-law run ends in contact"),
+    "final_velocity": Variable(
+        ("coordinate",), _MODAL_UNITS + " s-1", "modal velocities at t_end",
+        "dq/dt of the free modal coordinates at the run's end t_end (see final_displacement)"),
+})
+
+
+# a periodic orbit's Floquet multipliers (impactbeams.orbits.PeriodicOrbit.to_dataset)
+VARIABLES.update({
+    "multiplier": Variable(("multiplier",), "1", "Floquet multiplier number",
+                           "index of the Floquet multiplier, by decreasing modulus",
+                           dtype="int64"),
+    "floquet_multiplier_real": Variable(
+        ("multiplier",), "1", "real part of the Floquet multipliers",
+        "eigenvalues mu of the orbit's monodromy matrix (the period map's Jacobian over p "
+        "forcing periods), by decreasing modulus; Newton-Picard: the leading ones only"),
+    "floquet_multiplier_imag": Variable(
+        ("multiplier",), "1", "imaginary part of the Floquet multipliers",
+        "see floquet_multiplier_real"),
+    "floquet_exponent": Variable(
+        ("multiplier",), "s-1", "Floquet exponents of the orbit",
+        "ln|mu| / (p 2 pi / Omega): the orbit's Lyapunov exponents, exact (no averaging)",
+        symbol=r"$\lambda$"),
+})
+
+
 # long-time response (impactbeams.longtime): stroboscopic samples along "period", after a
 # transient; in a map "*" is the swept axes, in simulate() nothing
 VARIABLES.update({

@@ -97,9 +97,10 @@ def first_impact_time(cell, table, geo, t_max, t_start, work, force, rotor):
     if sine == 0.0 and q_s[0] == 0.0 and v_s[0] == 0.0 and force[0] == 0 and active == 1:
         return np.nan  # nothing moves: the gap stays open
     frequencies = work[_FREQUENCY, :active]
+    # the harmonic as a complex amplitude, as the columns pass it: one compiled search for both
     return search_root(q_s, v_s, 0.0, t_start, t_max, frequencies, work[_ZETA, :active],
                        force[:active], work[_WEIGHTS, :active], cell[CELL_CLEARANCE],
-                       sine, cell[CELL_FORCING_FREQUENCY], TOUCH_TOLERANCE,
+                       complex(sine, 0.0), cell[CELL_FORCING_FREQUENCY], TOUCH_TOLERANCE,
                        step_limit(0.0, t_max, frequencies), work[_Q, :active], work[_V, :active],
                        rotor)
 

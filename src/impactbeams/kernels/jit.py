@@ -6,14 +6,40 @@ and ``nnan`` would let LLVM delete the NaN checks.
 
 import types
 
-from numba import njit
+from numba import njit, typeof
+from numba.core import types as numba_types
+from numba.core.registry import CPUDispatcher
 
 _OPTIONS = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": True}
 
 
+class _Kernel(CPUDispatcher):
+    """A dispatcher that one kernel calling another compiles once per plain signature.
+
+    Numba types a call between kernels with its constant arguments as literals
+    (``Literal[bool](True)``) and an omitted argument as its default: each combination would be
+    compiled as its own specialisation, with every kernel it calls (``find_switch`` twice, for
+    example). Typed by their plain types (the default's type for an omitted argument), the
+    calls share one compile; the values are passed at run time, and the results are the same.
+    """
+
+    def get_call_template(self, args, kws):
+        pysig, folded = self._compiler.fold_argument_types(args, kws)
+        return super().get_call_template(tuple(map(_plain_type, folded)), {})
+
+
+def _plain_type(argument):
+    if isinstance(argument, numba_types.Omitted):
+        return typeof(argument.value)
+    return numba_types.unliteral(argument)
+
+
 def kernel(function):
     """Compile a serial kernel with the package's options."""
-    return njit(**_OPTIONS)(function)
+    options = njit(**_OPTIONS)(function).targetoptions  # the options as njit completes them
+    dispatcher = _Kernel(py_func=function, locals={}, targetoptions=options)
+    dispatcher.enable_caching()
+    return dispatcher
 
 
 def inlined_kernel(function):

@@ -377,10 +377,13 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     if plan.fingerprint != sweep.fingerprint():
         raise ValueError("the plan was built for another sweep")
     if plan.switching is None:
-        kernel = (first_impact.first_impact_map_parallel if parallel
-                  else first_impact.first_impact_map_serial)
         columns = first_impact_columns(sweep, start, stop)
         cells = chunk_cells(sweep, plan, columns.start, columns.stop)
+        # a chunk of one block runs on one thread either way: the serial kernel, which compiles
+        # faster (a small first map need not compile the parallel one)
+        kernel = (first_impact.first_impact_map_parallel
+                  if parallel and cells.shape[0] > first_impact._BLOCK
+                  else first_impact.first_impact_map_serial)
         out = np.empty(cells.shape[0])
         kernel(cells, columns.bounds, columns.key, plan.tables, plan.geometry, sweep.t_max, out)
         out = out[start - columns.start:stop - columns.start]

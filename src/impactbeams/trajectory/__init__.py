@@ -13,5 +13,7 @@ from impactbeams.packing import Packed, pack_run
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory, run, sample
 from impactbeams.trajectory.simulation import simulate
+from impactbeams.trajectory.start import InitialFields
 
-__all__ = ["Packed", "Trajectory", "observables", "pack_run", "run", "sample", "simulate"]
+__all__ = ["InitialFields", "Packed", "Trajectory", "observables", "pack_run", "run", "sample",
+           "simulate"]

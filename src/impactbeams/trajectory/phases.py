@@ -53,8 +53,12 @@ class Trajectory:
 
 
 def run(packed: Packed, max_events: int,
-        report: Callable[[float], None] | None = None) -> Trajectory:
+        report: Callable[[float], None] | None = None,
+        start: tuple[np.ndarray, np.ndarray, int] | None = None) -> Trajectory:
     """Run the event kernel, in windows of segments, up to ``max_events`` segments.
+
+    ``start``: the state ``(q, q', phase)`` at t = 0 in that phase's coordinates
+    (`impactbeams.trajectory.start.phase_state`); default ``(packed.q0, packed.v0, FREE)``.
 
     Each window ends where the run can resume exactly (``stroboscope.resume_point``: a free
     segment after a contact of positive length, where no history carries over), so that the
@@ -64,29 +68,31 @@ def run(packed: Packed, max_events: int,
     from impactbeams.kernels.stroboscope import resume_point
 
     arrays = segments(min(_INITIAL_CAPACITY, max_events), packed.q0.size)
-    start, window = 0, _WINDOW
-    q0, v0, t0 = packed.q0, packed.v0, 0.0
+    q0, v0, phase0 = (packed.q0, packed.v0, FREE) if start is None else start
+    first, window = 0, _WINDOW
+    t0 = 0.0
     while True:
-        stop = min(start + window, max_events)
+        stop = min(first + window, max_events)
         if stop > arrays.time.size:
             arrays = _grown(arrays, min(max(2 * arrays.time.size, stop), max_events))
-        views = Segments(*(array[start:stop] for array in arrays))
+        views = Segments(*(array[first:stop] for array in arrays))
         began = time.perf_counter()
         count, status, t_end = dyn.run_events(packed.tables, packed.forces,
                                               packed.phase_scalars, *packed.switching(),
-                                              packed.settings, q0, v0, views, t0, FREE)
+                                              packed.settings, q0, v0, views, t0, phase0)
         if status != dyn.EVENT_LIMIT or stop >= max_events:
             break
         resume = resume_point(views.time, views.phase, count)
         if resume == 0:  # no point to resume from in this window: run it longer
             window *= 2
             continue
-        start += resume
-        q0, v0, t0 = arrays.q[start].copy(), arrays.v[start].copy(), float(arrays.time[start])
+        first += resume
+        q0, v0, t0 = arrays.q[first].copy(), arrays.v[first].copy(), float(arrays.time[first])
+        phase0 = FREE  # a resume point is a free segment
         window = _next_window(window, resume, time.perf_counter() - began)
         if report is not None:
             report(t0)
-    count += start
+    count += first
     time_, phase, sustained, q, v, end_q, end_v = (array[:count] for array in arrays)
     return Trajectory(time_, phase, sustained, q, v, end_q, end_v, dyn.STATUS_NAMES[status],
                       float(t_end))

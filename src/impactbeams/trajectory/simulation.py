@@ -31,6 +31,7 @@ from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.lyapunov import Exponents, check_request, lyapunov_exponents
 from impactbeams.trajectory.phases import Trajectory, run
 from impactbeams.trajectory.poincare import long_time_variables
+from impactbeams.trajectory.start import InitialFields, final_state, initial_phase_state
 from impactbeams.variables import attributes, global_attributes, validate
 
 # The event search restarts at least every search_span seconds; a span below this fraction of
@@ -95,7 +96,9 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
              episode_separation: float | None = None,
              energy_balance: bool = False, lyapunov: bool | int = False,
              transient_periods: int = 0, long_time: LongTime | None = None,
-             progress: bool = False) -> xr.Dataset:
+             progress: bool = False,
+             initial_state: np.ndarray | xr.Dataset | InitialFields | None = None,
+             ) -> xr.Dataset:
     """Simulate the impacting beams from t = 0 to ``t_max`` (s); return an xarray Dataset.
 
     Args:
@@ -137,6 +140,17 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
             Omega > 0 and t_max at least (transient_periods + sampled_periods) 2 pi / Omega.
         progress: print the expected time, then progress bars with an ETA over the simulated
             time and over the impacts' peak forces, on stderr (the results are the same).
+        initial_state: start from this state at t = 0 instead of ``params.start`` (which must
+            then be "rest", without uplifts): t = 0 is the stroboscopic section, where the
+            forcing and the clamps' motion are at phase 0. Either the modal state
+            z = (q, q') in the run's free coordinates (2 N values: beam 1's n_modes, then beam
+            2's; q without the quasi-static part, as ``final_displacement``), or an earlier
+            run's Dataset (its ``final_displacement``, ``final_velocity``; it must end at a
+            whole number of forcing periods), or deflection and velocity fields
+            ([`impactbeams.trajectory.start.InitialFields`][], projected on the modes with
+            the mass matrix). Spring law: the run starts in contact if the tips overlap and
+            the contact force -k_e g - c_e g' is positive; the tied law starts from an open gap
+            only. Restarting from a run's final state continues it to round-off.
 
     The output grid never influences the dynamics: events are located by the kernel on its
     own, and the outputs are evaluated from the exact segment states.
@@ -159,10 +173,11 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         check_request(params, n_modes, t_max, lyapunov, transient_periods)
     out_times = run_inputs.times
     packed = pack_run(params, n_modes, t_max, run_inputs.search_span)
+    start = None if initial_state is None else initial_phase_state(packed, initial_state)
     if progress:
         _announce(params, run_inputs)
     bar = Progress(t_max, enabled=progress, unit="s simulated")
-    trajectory = run(packed, run_inputs.max_events, bar.reach)
+    trajectory = run(packed, run_inputs.max_events, bar.reach, start)
     bar.reach(t_max)
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
@@ -182,6 +197,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         dataset = _with_exponents(dataset, exponents, transient_periods)
     if long_time is not None:
         dataset = long_time_variables(packed, trajectory, dataset, long_time, transient_periods)
+    dataset = _with_final_state(dataset, final_state(packed, trajectory))
     dataset.attrs.update(_global_attributes(params, n_modes, t_max, trajectory))
     if params.contact_law == "spring":
         dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
@@ -329,6 +345,16 @@ def _with_exponents(dataset: xr.Dataset, exponents: Exponents, transient: int) -
                                         {**attributes("lyapunov_spectrum"), **averaging})
         dataset["lyapunov_spectrum_error"] = ("exponent", exponents.errors,
                                               attributes("lyapunov_spectrum_error"))
+    return dataset
+
+
+def _with_final_state(dataset: xr.Dataset, z: np.ndarray) -> xr.Dataset:
+    """The run's state at t_end (``initial_state`` of a run that continues it)."""
+    n = z.size // 2
+    dataset = dataset.assign_coords(coordinate=("coordinate", np.arange(n),
+                                                 attributes("coordinate")))
+    dataset["final_displacement"] = ("coordinate", z[:n], attributes("final_displacement"))
+    dataset["final_velocity"] = ("coordinate", z[n:], attributes("final_velocity"))
     return dataset
 
 

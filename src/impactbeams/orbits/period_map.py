@@ -1,0 +1,296 @@
+"""The period map of the spring law and its exact Jacobian (the monodromy matrix).
+
+``P^p``: p forcing periods of the event-driven run from a state z = (q, q') on the
+stroboscopic section t = 0 (`impactbeams.trajectory.start`) to the state at t = p T,
+T = 2 pi / Omega. The run is the package's exact one (`impactbeams.kernels.dynamics`), and
+the Jacobian dz(pT)/dz(0) is carried by the tangent kernel along the same recorded segments,
+with the saltation matrix at every onset (`impactbeams.kernels.tangent.carry_tangents`): exact
+up to round-off, the same Jacobian whose one-period version agrees with finite differences of
+the nonlinear run (tests/test_lyapunov.py). Columns may be requested as a block of directions
+(Newton-Picard needs a few), each costing one tangent propagation.
+
+The tied law has no tangent flow (its switches project onto other bases) and is refused, as
+for Lyapunov exponents. SI units throughout.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from impactbeams.contact.spring import required_modes
+from impactbeams.kernels import contact
+from impactbeams.kernels.layout import (
+    CONTACT,
+    FREE,
+    ROW_EVENT,
+    SCALAR_CONST,
+    SCALAR_COSINE,
+    SCALAR_SINE,
+    SPRING_DRIVE_ROWS,
+    TIP_Y1,
+    TIP_Y2,
+)
+from impactbeams.kernels.records import Tangent
+from impactbeams.kernels.stroboscope import tip_motions
+from impactbeams.kernels.tangent import carry_tangents
+from impactbeams.packing import Dynamics, Packed, dynamics_arrays, pack_run
+from impactbeams.params import (
+    MAX_MODES,
+    ParameterError,
+    Params,
+    require,
+    require_integer,
+    require_type,
+)
+from impactbeams.trajectory.episodes import default_separation, episode_labels
+from impactbeams.trajectory.impacts import impact_table
+from impactbeams.trajectory.phases import Trajectory, run, sample
+from impactbeams.trajectory.start import checked_state, final_state, phase_state
+
+# Samples per forcing period of the gap and the tips, before each extremum is refined by
+# Brent's method: T / 512 resolves the motion up to 64 Omega (the beams' first modes, which
+# carry the gap's and the tips' bulk motion); a local extremum narrower than the spacing may
+# be missed.
+SAMPLES_PER_PERIOD = 512
+MAX_EVENTS = 200_000  # phases per map evaluation
+
+
+@dataclasses.dataclass(frozen=True)
+class PeriodMapResult:
+    """One evaluation of the period map from the section state z0 (SI units).
+
+    ``state``: z(pT) = (q, q') (2 N values). ``jacobian``: dz(pT)/dz(0) times the requested
+    directions, (2 N, k) (all of it, k = 2 N, for ``directions="all"``; None if none asked).
+    ``contacts``, ``episodes``: contact phases and impact episodes (default episode
+    separation) that start in [0, pT). ``min_gap``, ``min_gap_time``: the smallest local
+    minimum of the gap g (m, s) inside the free phases (the approach to grazing; NaN, NaN if
+    the gap has no interior minimum), located to round-off in t. ``peak_force`` (N) and
+    ``impulse`` (N s, summed) of the contacts, 0 without contact. ``max_tip1``,
+    ``max_tip2``: max |y1(l1)|, max |y2(l2)| (m) over [0, pT]. ``status``: the run's
+    (``dynamics.STATUS_NAMES``). ``trajectory``: the recorded segments.
+    """
+
+    state: np.ndarray
+    jacobian: np.ndarray | None
+    contacts: int
+    episodes: int
+    min_gap: float
+    min_gap_time: float
+    peak_force: float
+    impulse: float
+    max_tip1: float
+    max_tip2: float
+    status: str
+    trajectory: Trajectory
+
+
+class PeriodMap:
+    """The map z(0) -> z(p T) of ``params`` (spring law, Omega > 0) with ``n_modes`` per beam.
+
+    ``n_modes``: default the number that resolves the contact (as in `simulate`). ``periods``:
+    p, forcing periods per map. Call it with a section state z = (q, q') (2 N values,
+    ``dimension``); see `__call__`.
+    """
+
+    def __init__(self, params: Params, n_modes: int | None = None, periods: int = 1,
+                 max_events: int = MAX_EVENTS) -> None:
+        require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
+        check_law(params)
+        require("omega", params.omega, params.omega > 0,
+                "a period map needs a forcing period: omega > 0", "rad/s")
+        self.periods = require_integer("periods", periods, 1)
+        if n_modes is None:
+            n_modes = min(required_modes(params), MAX_MODES)
+        self.n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
+        self.max_events = require_integer("max_events", max_events, 1)
+        self.params = params
+        self.forcing_period = 2.0 * math.pi / params.omega
+        self.horizon = self.periods * self.forcing_period
+        self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
+                                       geometry_arrays(params, self.n_modes))
+
+    @property
+    def dimension(self) -> int:
+        """Size of a section state z = (q, q'): 2 N."""
+        return 2 * self.packed.q0.size
+
+    def rest_state(self) -> np.ndarray:
+        """The run's initial state of ``params.start`` (and uplifts) as a section state."""
+        return np.concatenate([self.packed.q0, self.packed.v0])
+
+    def __call__(self, state: np.ndarray, directions: np.ndarray | str | None = None,
+                 measures: bool = True) -> PeriodMapResult:
+        """P^p(z) from the section state ``state``, with dP^p/dz applied to ``directions``.
+
+        ``directions``: None (no Jacobian), ``"all"`` (the monodromy matrix, 2 N tangent
+        propagations) or an array (2 N, k) of k directions (k tangent propagations).
+        ``measures``: also the gap's minimum, the contacts' peak force and impulse and the
+        tips' maxima (else NaN; the contacts are always counted). ParameterError for a state
+        of the wrong size or not finite; RuntimeError if the run does not complete (an
+        event or search limit).
+        """
+        z0 = checked_state(self.packed, state, "state")
+        columns = self._directions(directions)
+        start = phase_state(self.packed, z0)
+        trajectory = run(self.packed, self.max_events, start=start)
+        if trajectory.status != "complete":
+            raise RuntimeError(f"the period map's run stopped at t = {trajectory.t_end!r} s "
+                               f"before {self.horizon!r} s: status {trajectory.status!r}")
+        end = final_state(self.packed, trajectory)
+        jacobian = None if columns is None else self._jacobian(trajectory, columns)
+        onsets = trajectory.time[trajectory.phase == CONTACT]
+        contacts = int(np.count_nonzero(onsets < self.horizon))
+        summary = self._measures(trajectory) if measures else (math.nan,) * 6
+        return PeriodMapResult(end, jacobian, contacts, self._episodes(trajectory), *summary,
+                               trajectory.status, trajectory)
+
+    def jacobian(self, result: PeriodMapResult, directions: np.ndarray | str) -> np.ndarray:
+        """dP^p/dz of an earlier evaluation ``result`` applied to more ``directions``.
+
+        The tangent propagation along ``result``'s recorded run: no new run (a Newton-Picard
+        step, or a bordered system of a continuation, asks for directions it only knows once
+        it has the residual). ``directions`` as in `__call__`, not None.
+        """
+        require("directions", directions, directions is not None,
+                "must be 'all' or an array of directions (2 N, k)")
+        return self._jacobian(result.trajectory, self._directions(directions))
+
+    def _directions(self, directions: np.ndarray | str | None) -> np.ndarray | None:
+        if directions is None:
+            return None
+        if isinstance(directions, str):
+            require("directions", directions, directions == "all",
+                    "must be None, 'all' or an array of directions (2 N, k)")
+            return np.eye(self.dimension)
+        array = np.asarray(directions, dtype=float)
+        if array.ndim == 1:
+            array = array[:, None]
+        require("directions", array.shape, array.ndim == 2 and array.shape[0] == self.dimension
+                and array.shape[1] >= 1 and bool(np.all(np.isfinite(array))),
+                f"must be a finite array of shape ({self.dimension}, k), k >= 1")
+        return array
+
+    def _jacobian(self, trajectory: Trajectory, columns: np.ndarray) -> np.ndarray:
+        """dz(pT)/dz(0) @ columns by the tangent kernel on the recorded segments."""
+        packed, n = self.packed, self.packed.q0.size
+        rows_q = np.ascontiguousarray(columns[:n].T)
+        rows_v = np.ascontiguousarray(columns[n:].T)
+        rows_q, rows_v = self._switched(rows_q, rows_v, int(trajectory.phase[0]), CONTACT)
+        state = Tangent(rows_q, rows_v, np.zeros(2), np.zeros((1, rows_q.shape[0])),
+                        np.zeros(1, np.int64))
+        count = trajectory.time.size
+        carry_tangents(packed.tables, packed.phase_scalars, packed.dynamics.spring_arrays,
+                       packed.settings, trajectory.time, trajectory.phase, trajectory.end_q,
+                       trajectory.end_v, count, trajectory.t_end, (math.inf, self.horizon, 0, 0),
+                       state)
+        rows_q, rows_v = self._switched(state.q, state.v, int(trajectory.phase[-1]), FREE)
+        return np.hstack([rows_q, rows_v]).T
+
+    def _switched(self, rows_q: np.ndarray, rows_v: np.ndarray, phase: int, to_phase: int,
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        """Tangent rows into ``to_phase``'s coordinates if the run is in contact there."""
+        if phase != CONTACT:
+            return rows_q, rows_v
+        no_drive = np.zeros((len(SPRING_DRIVE_ROWS), rows_q.shape[1]), complex)
+        out_q, out_v = np.empty_like(rows_q), np.empty_like(rows_v)
+        contact.tangent_switch(rows_q, rows_v, to_phase, self.packed.dynamics.spring_arrays,
+                               no_drive, out_q, out_v)
+        return out_q, out_v
+
+    def _episodes(self, trajectory: Trajectory) -> int:
+        k = np.flatnonzero((trajectory.phase == CONTACT) & (trajectory.time < self.horizon))
+        release = np.append(trajectory.time[1:], np.nan)[k]
+        labels = episode_labels(trajectory.time[k], release, default_separation(self.packed))
+        return int(labels[-1]) + 1 if labels.size else 0
+
+    def _measures(self, trajectory: Trajectory) -> tuple[float, ...]:
+        impacts = impact_table(self.packed, trajectory)
+        peak = float(np.max(impacts["impact_peak_force"], initial=0.0))
+        impulse = float(np.sum(impacts["impact_impulse"]))
+        min_gap, min_gap_time = self._min_gap(trajectory)
+        max_tip1, max_tip2 = (self._max_tip(trajectory, column) for column in (TIP_Y1, TIP_Y2))
+        return min_gap, min_gap_time, peak, impulse, max_tip1, max_tip2
+
+    def _grid(self) -> np.ndarray:
+        return np.linspace(0.0, self.horizon, SAMPLES_PER_PERIOD * self.periods + 1)
+
+    def _gap(self, trajectory: Trajectory, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The gap (m) at ``times`` and whether each lies in a free phase."""
+        phase, q, _ = sample(self.packed, trajectory, times)
+        scalars = self.packed.phase_scalars[FREE]
+        omega_t = self.params.omega * times
+        gap = (scalars[SCALAR_CONST] + scalars[SCALAR_SINE] * np.sin(omega_t)
+               + scalars[SCALAR_COSINE] * np.cos(omega_t) + q @ self.packed.tables[FREE, ROW_EVENT])
+        return gap, phase == FREE
+
+    def _min_gap(self, trajectory: Trajectory) -> tuple[float, float]:
+        times = self._grid()
+        gap, free = self._gap(trajectory, times)
+        interior = free[1:-1] & free[:-2] & free[2:] & (gap[1:-1] <= gap[:-2]) & (
+            gap[1:-1] <= gap[2:])
+        if not np.any(interior):
+            return math.nan, math.nan
+        i = 1 + int(np.argmin(np.where(interior, gap[1:-1], np.inf)))
+        return self._refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
+                             times[i - 1], times[i + 1], gap[i], times[i])
+
+    def _tips(self, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
+        phase, q, v = sample(self.packed, trajectory, times)
+        out = np.empty((times.size, 4))
+        p = self.packed
+        tip_motions(p.tables, p.forces, p.phase_scalars, p.settings, phase, times, q, v, out)
+        return out
+
+    def _max_tip(self, trajectory: Trajectory, column: int) -> float:
+        times = self._grid()
+        size = np.abs(self._tips(trajectory, times)[:, column])
+        i = int(np.argmax(size))
+        lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
+        value, _ = self._refined(
+            lambda t: -abs(self._tips(trajectory, np.array([t]))[0, column]), lo, hi,
+            -size[i], times[i])
+        return -value
+
+    @staticmethod
+    def _refined(function, lo: float, hi: float, best: float, best_t: float,
+                 ) -> tuple[float, float]:
+        """The minimum of ``function`` on [lo, hi] by Brent's method, or the sample if lower."""
+        result = minimize_scalar(function, bounds=(lo, hi), method="bounded",
+                                 options={"xatol": 1e-14 * max(hi, 1.0)})
+        if result.fun < best:
+            return float(result.fun), float(result.x)
+        return best, best_t
+
+
+# the cell's parameters (`packing.cell_rows`) that the geometry's arrays do not depend on; the
+# damping ratio is one too, but the spring law's contact modes are solved for it
+_CELL_ONLY = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "base_amplitude")
+
+
+def geometry_arrays(params: Params, n_modes: int) -> Dynamics:
+    """`packing.dynamics_arrays` of ``params``, reused while only the cell's parameters change.
+
+    Along a branch in Omega, F0, U0 or the clearance the modes and the spring law's contact
+    phase (an eigenproblem, the larger part of building a map at 32 modes) stay the same.
+    """
+    defaults = {name: getattr(Params(), name) for name in _CELL_ONLY}
+    dynamics = _geometry(dataclasses.replace(params, **defaults), n_modes)
+    return dataclasses.replace(dynamics, params=params)
+
+
+@functools.lru_cache(maxsize=4)
+def _geometry(params: Params, n_modes: int) -> Dynamics:
+    return dynamics_arrays(params, n_modes)
+
+
+def check_law(params: Params) -> None:
+    """Raise ParameterError unless the law has tangent dynamics (the spring law)."""
+    if params.contact_law != "spring":
+        raise ParameterError("periodic orbits need the spring contact law: the tied law's "
+                             "projections, instantaneous impacts and accumulations are not a "
+                             "flow whose linearisation converges in n_modes (docs/model.md)")

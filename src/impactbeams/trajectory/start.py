@@ -1,0 +1,202 @@
+"""Modal states of a run: its start from a given state, and its final state.
+
+A state is the free coordinates z = (q, q') of both beams (2 N values, N = 2 n_modes, or
+n_modes with ``counterpart = "stop"``) at t = 0, the stroboscopic section (the forcing
+F0 sin(Omega t) and the clamps' motion U0 sin(Omega t) are at phase 0 there). q is the
+dynamic part of the deflection, the quasi-static part F(t) s(x) taken out (docs/model.md).
+The contact phase at the start follows from the state (spring law): in contact iff the tips
+overlap (g < 0) and the contact force -k_e g - c_e g' pushes them apart (> 0).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import reprlib
+from collections.abc import Callable
+
+import numpy as np
+import xarray as xr
+
+from impactbeams.contact.free import quadrature
+from impactbeams.kernels import contact
+from impactbeams.kernels.events import event_sine, event_value
+from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, SCALAR_CONST
+from impactbeams.modes import BeamShapes
+from impactbeams.packing import Packed
+from impactbeams.params import ParameterError, require_type
+from impactbeams.trajectory.phases import Trajectory
+
+# a Dataset's final state restarts a run if its t_end is a whole number of forcing periods to
+# this relative tolerance (round-off of t_end = k 2 pi / Omega is ~1e-15 k)
+SECTION_TOLERANCE = 1e-9
+
+
+def checked_state(packed: Packed, state: object, name: str = "initial_state") -> np.ndarray:
+    """``state`` as a float array z = (q, q') of the run's 2 N free coordinates.
+
+    ArgumentTypeError unless it is numbers, ParameterError (one line) unless they are 2 N
+    finite values.
+    """
+    size = 2 * packed.q0.size
+    try:
+        z = np.asarray(state, dtype=float)
+    except (TypeError, ValueError):
+        z = None
+    allowed = (f"{size} finite numbers, the modal state (q, q') of this model's "
+               f"2 x {packed.q0.size} free coordinates (n_modes, counterpart)")
+    require_type(name, state, z is not None, allowed)
+    if z.shape != (size,) or not np.all(np.isfinite(z)):
+        raise ParameterError(f"{name} = {reprlib.repr(state)} (shape {z.shape}) is not "
+                             f"allowed: must be {allowed}")
+    return z
+
+
+def phase_state(packed: Packed, z: np.ndarray, t: float = 0.0,
+                ) -> tuple[np.ndarray, np.ndarray, int]:
+    """The free state z = (q, q') at time t (s) as (state, rate, phase) in that phase's coordinates.
+
+    Spring law: contact iff g < 0 and -k_e g - c_e g' > 0 (see the module doc); the contact
+    state is the same physical state in the contact oscillators' coordinates.
+    """
+    n = packed.q0.size
+    q, v = z[:n].copy(), z[n:].copy()
+    if not packed.spring_law:
+        return q, v, FREE
+    s = packed.settings
+    gap, gap_rate = section_gap(packed, z, t)
+    force = -s["contact_stiffness"] * gap - s["contact_damping"] * gap_rate
+    if not (gap < 0.0 and force > 0.0):
+        return q, v, FREE
+    y, y_rate = np.empty(n), np.empty(n)
+    contact.switch_state(q, v, t, CONTACT, *packed.switching(), s, y, y_rate)
+    return y, y_rate, CONTACT
+
+
+def free_state(packed: Packed, phase: int, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The state (q, q') of ``phase`` at time t (s) as free coordinates z = (q, q')."""
+    q_out, v_out = np.empty_like(q), np.empty_like(v)
+    contact.observed_state(phase, q, v, t, packed.dynamics.spring_arrays, packed.drives,
+                           packed.settings, q_out, v_out)
+    return np.concatenate([q_out, v_out])
+
+
+def final_state(packed: Packed, trajectory: Trajectory) -> np.ndarray:
+    """The run's state z = (q, q') at ``t_end`` in the free coordinates.
+
+    NaN if it ends in a tied contact, whose coordinates are the contact modes'.
+    """
+    last = trajectory.time.size - 1
+    phase = int(trajectory.phase[last])
+    if phase == CONTACT and not packed.spring_law:
+        return np.full(2 * packed.q0.size, np.nan)
+    return free_state(packed, phase, trajectory.t_end, trajectory.end_q[last],
+                      trajectory.end_v[last])
+
+
+@dataclasses.dataclass(frozen=True)
+class InitialFields:
+    """Deflection and velocity fields of both beams at t = 0, as functions of x (m).
+
+    Each of ``deflection1(x)``, ``velocity1(x)`` (beam 1, m and m/s at positions x in
+    [0, l1], absolute frame) and ``deflection2``, ``velocity2`` (beam 2) takes an array of
+    positions and returns the field there; None is zero. ``simulate`` projects them on the
+    run's free modes with the mass matrix, ``q_n = rhoA int y Y_n dx`` and
+    ``q_n' = rhoA int y' Y_n dx`` plus the quasi-static and base parts of the rest velocity
+    (docs/model.md; at t = 0 the tip force and the clamps are at their zero, so the
+    displacements need no such part). The truncation keeps the mass-weighted least-squares fit
+    of each field by the n_modes shapes: what the shapes miss (a kink, a concentrated load's
+    local shape, anything shorter than the last mode's half wave) is lost, and the fitted
+    tips differ from the given ones by that much.
+    """
+
+    deflection1: Callable[[np.ndarray], np.ndarray] | None = None
+    velocity1: Callable[[np.ndarray], np.ndarray] | None = None
+    deflection2: Callable[[np.ndarray], np.ndarray] | None = None
+    velocity2: Callable[[np.ndarray], np.ndarray] | None = None
+
+    def __post_init__(self) -> None:
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            require_type(field.name, value, value is None or callable(value),
+                         "None or a function of the positions x (m)")
+
+
+def _projection(field: Callable[[np.ndarray], np.ndarray] | None, name: str, shapes: BeamShapes,
+                rhoA: float) -> np.ndarray:
+    """RhoA int field Y_n dx of every mode of one beam (kg^1/2 m^1/2 per unit of the field)."""
+    if field is None or shapes.k.size == 0:
+        return np.zeros(shapes.k.size)
+    x, weights = quadrature(shapes.length, 2.0 * float(np.max(shapes.k)))
+    values = np.asarray(field(x), dtype=float)
+    if values.shape != x.shape or not np.all(np.isfinite(values)):
+        raise ParameterError(f"initial_state.{name}: must return {x.size} finite values for "
+                             f"{x.size} positions x in [0, {shapes.length!r}] m")
+    return rhoA * (shapes(x) @ (weights * values))
+
+
+def projected_fields(packed: Packed, fields: InitialFields) -> np.ndarray:
+    """The section state z = (q, q') of ``fields`` (see `InitialFields`)."""
+    p, free = packed.params, packed.dynamics.free
+    q = np.concatenate([_projection(fields.deflection1, "deflection1", free.beam1.shapes,
+                                    p.rhoA1),
+                        _projection(fields.deflection2, "deflection2", free.beam2.shapes,
+                                    p.rhoA2)])
+    v = np.concatenate([_projection(fields.velocity1, "velocity1", free.beam1.shapes, p.rhoA1),
+                        _projection(fields.velocity2, "velocity2", free.beam2.shapes, p.rhoA2)])
+    return np.concatenate([q, v + packed.v0])  # packed.v0: the rest velocity (no uplift)
+
+
+def dataset_final_state(packed: Packed, dataset: xr.Dataset) -> np.ndarray:
+    """The final state of an earlier run's Dataset, at a whole number of forcing periods."""
+    if "final_displacement" not in dataset:
+        raise ParameterError("initial_state: the Dataset has no final_displacement (not a "
+                             "simulate() result of this version)")
+    t_end, omega = float(dataset.attrs["t_end"]), packed.params.omega
+    turns = omega * t_end / (2.0 * math.pi)
+    if abs(turns - round(turns)) > SECTION_TOLERANCE * max(turns, 1.0):
+        raise ParameterError(f"initial_state: the Dataset ends at t_end = {t_end!r} s, "
+                             f"{turns:.9g} forcing periods; a run starts on the section "
+                             "t = 0 mod 2 pi / omega: need a whole number of periods")
+    return np.concatenate([dataset["final_displacement"].values,
+                           dataset["final_velocity"].values])
+
+
+def initial_phase_state(packed: Packed, initial_state: object,
+                        ) -> tuple[np.ndarray, np.ndarray, int]:
+    """`phases.run`'s start from ``simulate``'s ``initial_state`` (checked, ParameterError).
+
+    An array z = (q, q'), an earlier run's Dataset (its final state) or `InitialFields`.
+    It replaces ``params.start`` and the uplifts, which must be left at their defaults. The
+    tied law starts free only (its contact phase has the contact modes' coordinates): a state
+    whose tips overlap is refused.
+    """
+    p = packed.params
+    if p.start != "rest" or p.uplift1 != 0.0 or p.uplift2 != 0.0:
+        raise ParameterError("initial_state replaces params.start and the uplifts: leave "
+                             f"start = 'rest' and uplift1 = uplift2 = 0 (got start = "
+                             f"{p.start!r}, uplift1 = {p.uplift1!r}, uplift2 = {p.uplift2!r})")
+    if isinstance(initial_state, InitialFields):
+        z = projected_fields(packed, initial_state)
+    elif isinstance(initial_state, xr.Dataset):
+        z = dataset_final_state(packed, initial_state)
+    else:
+        z = initial_state
+    z = checked_state(packed, z)
+    start = phase_state(packed, z)
+    if not packed.spring_law:
+        gap, _ = section_gap(packed, z)
+        if not gap > 0.0:
+            raise ParameterError(f"initial_state: the tips overlap (gap {gap!r} m at t = 0); "
+                                 "the tied law starts from an open gap only")
+    return start
+
+
+def section_gap(packed: Packed, z: np.ndarray, t: float = 0.0) -> tuple[float, float]:
+    """The gap g (m) and its rate g' (m/s) of the free state z = (q, q') at time t (s)."""
+    n = packed.q0.size
+    scalars = packed.phase_scalars[FREE]
+    gap, rate = event_value(z[:n], z[n:], t, packed.tables[FREE, ROW_EVENT],
+                            scalars[SCALAR_CONST], event_sine(scalars),
+                            packed.settings["forcing_frequency"])
+    return float(gap), float(rate)

@@ -1,0 +1,133 @@
+"""A run compiles only the kernels it needs, each once (issue 24: the first run's compile).
+
+The fast checks read the kernels' call graph from their source (a kernel calls another through
+a name its module imports, which Numba resolves when it compiles); the slow one runs a first
+map in a fresh process with an empty Numba cache and lists what Numba reports compiling.
+"""
+
+import ast
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+KERNELS = Path(__file__).parents[1] / "src" / "impactbeams" / "kernels"
+# the kernels of the full dynamics and what only they use: a first-impact map needs none
+DYNAMICS_ONLY = {"dynamics", "contact", "contact_spring", "contact_tied", "reductions",
+                 "observables", "stroboscope", "lyapunov", "tangent", "cells"}
+FIRST_IMPACT_ENTRIES = {("first_impact", "first_impact_map_parallel"),
+                        ("first_impact", "first_impact_map_serial"),
+                        ("first_impact", "first_impact_cells")}
+
+
+def _module_graph(module: str) -> dict[tuple[str, str], set[tuple[str, str]]]:
+    """Each function of a kernels module -> the (module, name) it calls, names resolved."""
+    tree = ast.parse((KERNELS / f"{module}.py").read_text())
+    names: dict[str, tuple[str, str]] = {}  # a local name -> (module, name)
+    modules: dict[str, str] = {}  # a local name -> a kernels module
+    for node in tree.body:
+        if isinstance(node, ast.ImportFrom) and node.module == "impactbeams.kernels":
+            modules.update((alias.asname or alias.name, alias.name) for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith(
+                "impactbeams.kernels."):
+            source = node.module.rsplit(".", 1)[1]
+            names.update((alias.asname or alias.name, (source, alias.name))
+                         for alias in node.names)
+        elif isinstance(node, ast.FunctionDef):
+            names[node.name] = (module, node.name)
+    graph = {}
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            graph[(module, node.name)] = {
+                callee for call in ast.walk(node) if isinstance(call, ast.Call)
+                for callee in [_callee(call.func, names, modules)] if callee}
+        elif isinstance(node, ast.Assign) and isinstance(node.value, ast.Call):
+            # ``parallel, serial = parallel_kernel(function)``: each target compiles function
+            wrapped = {_callee(argument, names, modules) for argument in node.value.args} - {None}
+            for target in ast.walk(node):
+                if isinstance(target, ast.Name) and isinstance(target.ctx, ast.Store):
+                    graph[(module, target.id)] = wrapped
+    return graph
+
+
+def _callee(function: ast.expr, names: dict, modules: dict) -> tuple[str, str] | None:
+    if isinstance(function, ast.Name):
+        return names.get(function.id)
+    if isinstance(function, ast.Attribute) and isinstance(function.value, ast.Name):
+        module = modules.get(function.value.id)
+        return (module, function.attr) if module else None
+    return None
+
+
+def call_graph() -> dict[tuple[str, str], set[tuple[str, str]]]:
+    """Every kernel module's functions and what each calls."""
+    graph = {}
+    for path in sorted(KERNELS.glob("*.py")):
+        graph.update(_module_graph(path.stem))
+    return graph
+
+
+def reachable(graph: dict, entries: set) -> set[tuple[str, str]]:
+    """The functions compiled with ``entries``: everything they call, transitively."""
+    seen, todo = set(), list(entries)
+    while todo:
+        function = todo.pop()
+        if function not in seen:
+            seen.add(function)
+            todo.extend(graph.get(function, ()))
+    return seen
+
+
+def test_the_call_graph_reads_the_kernels_calls():
+    """The graph knows a few calls of each form (a name, a module's attribute, a twin)."""
+    graph = call_graph()
+    assert ("events", "walk") in graph[("events", "search_root")]
+    assert ("contact", "switch_state") in graph[("dynamics", "run_events")]
+    assert graph[("first_impact", "first_impact_map_serial")] == {
+        ("first_impact", "_first_impact_map")}
+    assert ("dynamics", "run_events") in reachable(graph, {("observables",
+                                                             "observables_map_parallel")})
+
+
+def test_a_first_impact_map_compiles_no_dynamics_kernel():
+    compiled = reachable(call_graph(), FIRST_IMPACT_ENTRIES)
+    assert {module for module, _ in compiled} & DYNAMICS_ONLY == set()
+
+
+COLD_MAP = """
+import json, sys
+from numba.core import event
+from impactbeams.sweep import run_sweep
+with event.install_recorder("numba:compile") as recorder:
+    run_sweep(sys.argv[1], threads=2)
+from impactbeams.compilation import kernels_cached
+print(json.dumps([(e.data["dispatcher"].py_func.__module__, e.data["dispatcher"].__name__)
+                  for _, e in recorder.buffer if e.is_start] + [kernels_cached("first_impact")]))
+"""
+
+
+@pytest.mark.slow
+def test_a_cold_first_map_compiles_each_kernel_once_and_no_dynamics(tmp_path):
+    """A 100-cell map with an empty cache (about 20 s of compile on 2 cores), then cached."""
+    sweep = tmp_path / "map.toml"
+    sweep.write_text("t_max = 1.0\nn_modes = 5\n[params]\nclearance = 1.1e-5\n[axes.omega]\n"
+                     "min = 10.0\nmax = 400.0\nnum = 10\n[axes.force_amplitude]\nmin = 1e-6\n"
+                     "max = 1e-3\nnum = 10\nscale = \"log\"\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    result = subprocess.run([sys.executable, "-c", COLD_MAP, str(sweep)], env=env, check=True,
+                            capture_output=True, text=True)
+    *pairs, cached = json.loads(result.stdout.splitlines()[-1])
+    assert cached, "the next run would announce a compile"
+    compiled = [tuple(pair) for pair in pairs]
+    ours = [(module.rsplit(".", 1)[1], name) for module, name in compiled
+            if module.startswith("impactbeams.kernels.")]
+    assert {module for module, _ in ours} & DYNAMICS_ONLY == set()
+    assert len(ours) == len(set(ours)), "a kernel compiled twice (two signatures)"
+    # 100 cells are one block of work: the serial twin, not the parallel one
+    assert ("first_impact", "_first_impact_map_serial") in ours
+    assert ("first_impact", "_first_impact_map") not in ours
+    assert set(ours) <= reachable(call_graph(), FIRST_IMPACT_ENTRIES) | {
+        ("first_impact", "_first_impact_map_serial")}
