@@ -86,8 +86,7 @@ def costs(params: Params, n_modes: int, t_max: float, repeats: int) -> dict:
     def tangent(count: int):
         return recorded_run_sums(
             packed.tables, packed.phase_scalars, d.spring_arrays, packed.settings,
-            trajectory.time, trajectory.phase, trajectory.end_q, trajectory.end_v,
-            trajectory.time.size, trajectory.t_end, count, 0, 16)
+            trajectory.segments, trajectory.t_end, count, 0, 16)
 
     def map_cell():
         cell_observables(cell, d.tables, d.overlap, d.shifts, d.spring_arrays, d.geometry,

@@ -38,8 +38,7 @@ def reference_states(packed, trajectory, times):
     q, v = np.empty((times.size, n)), np.empty((times.size, n))
     phase = np.empty(times.size, dtype=np.int64)
     dyn.sample_states(packed.tables, packed.forces, packed.dynamics.spring_arrays, packed.drives,
-                      packed.settings, trajectory.time, trajectory.phase, trajectory.q,
-                      trajectory.v, trajectory.time.size, times, q, v, phase)
+                      packed.settings, trajectory.segments, times, q, v, phase)
     return q, v
 
 

@@ -15,7 +15,7 @@ from impactbeams.kernels import lyapunov as lyapunov_kernels
 from impactbeams.kernels import tangent
 from impactbeams.kernels.contact_spring import to_contact, to_free
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_FREQUENCY, SPRING_DRIVE_ROWS
-from impactbeams.kernels.records import Tangent
+from impactbeams.kernels.records import Segments, Tangent
 from impactbeams.packing import cell_rows, pack_run
 from impactbeams.params import Params
 from impactbeams.sweep import run_sweep, sweep_from_mapping
@@ -78,10 +78,10 @@ def tangent_jacobian(packed, trajectory, t0, t1, settings=None):
         _map_rows(rows_q, rows_v, CONTACT, spring)
     state = Tangent(rows_q, rows_v, np.array([t0, 0.0]), np.zeros((1, 2 * m)),
                     np.zeros(1, np.int64))
+    cut = Segments(seg_time, seg_phase, *(array[first:stop].copy() for array in (
+        trajectory.sustained, trajectory.q, trajectory.v, trajectory.end_q, trajectory.end_v)))
     tangent.carry_tangents(packed.tables, packed.phase_scalars, spring,
-                           packed.settings if settings is None else settings, seg_time,
-                           seg_phase, trajectory.end_q[first:stop].copy(),
-                           trajectory.end_v[first:stop].copy(), seg_time.size, t1,
+                           packed.settings if settings is None else settings, cut, t1,
                            (math.inf, t1, 0, 0), state)
     if seg_phase[-1] == CONTACT:
         _map_rows(rows_q, rows_v, FREE, spring)

@@ -92,10 +92,10 @@ def phase_energy_drift(params, t_max, n_modes, count=20_001):
     times = np.unique(np.concatenate([np.linspace(0.0, t_max, count), traj.time]))
     phase, q, v = sample(packed, traj, times)
     obs = observables(packed, phase, times, q, v)
-    work, loss = np.empty(times.size), np.empty(times.size)
+    work, loss = energies = np.empty((2, times.size))
     work_of_force(packed.tables, packed.forces, packed.phase_scalars,
-                  packed.dynamics.spring_arrays, packed.drives, packed.settings, traj.time,
-                  traj.phase, traj.q, traj.v, traj.time.size, traj.t_end, times, work, loss)
+                  packed.dynamics.spring_arrays, packed.drives, packed.settings, traj.segments,
+                  traj.t_end, times, energies)
     balance = obs["energy"] - obs["unresolved_kinetic_energy"] - work + loss
     segment = np.searchsorted(traj.time, times, side="right") - 1
     start = balance[np.searchsorted(times, traj.time)][segment]

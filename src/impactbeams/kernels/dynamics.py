@@ -338,22 +338,23 @@ def _segment_index(seg_time, count, t, start):
 
 
 @kernel
-def sample_states(tables, forces, spring, drives, settings, seg_time, seg_phase, seg_q, seg_v,
-                  count, times, q_out, v_out, phase_out):
+def sample_states(tables, forces, spring, drives, settings, recorded, times, q_out, v_out,
+                  phase_out):
     """Modal state and phase at each of the ascending ``times`` (s), in closed form.
 
-    At an event time the state after the switch is returned, in the coordinates it is observed
-    in (``contact.observed_state``: the spring law's free ones, the tied law's phase's own).
+    ``recorded``: the run's `records.Segments`, all of them recorded ones. At an event time the
+    state after the switch is returned, in the coordinates it is observed in
+    (``contact.observed_state``: the spring law's free ones, the tied law's phase's own).
     """
     k = 0
-    n_coords = seg_q.shape[1]
+    n_coords = recorded.q.shape[1]
     y, y_rate = np.empty(n_coords), np.empty(n_coords)
     for i in range(times.size):
-        k = _segment_index(seg_time, count, times[i], k)
-        phase = seg_phase[k]
+        k = _segment_index(recorded.time, recorded.time.size, times[i], k)
+        phase = recorded.phase[k]
         phase_out[i] = phase
-        propagate(tables[phase], forces[phase], seg_q[k], seg_v[k], seg_time[k], times[i],
-                  settings, y, y_rate)
+        propagate(tables[phase], forces[phase], recorded.q[k], recorded.v[k], recorded.time[k],
+                  times[i], settings, y, y_rate)
         contact.observed_state(phase, y, y_rate, times[i], spring, drives, settings, q_out[i],
                                v_out[i])
 

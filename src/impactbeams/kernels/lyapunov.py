@@ -25,7 +25,7 @@ from impactbeams.kernels.layout import (
     GEO_LAW,
     ROW_FREQUENCY,
 )
-from impactbeams.kernels.records import segments
+from impactbeams.kernels.records import recorded_prefix, segments
 from impactbeams.kernels.tangent import (
     carry_tangents,
     interval_count,
@@ -79,9 +79,8 @@ def _exponent(run, overlap, shifts, spring, t_max, schedule, max_segments):
         if status != COMPLETE:
             break
         t = settings.t_max
-        carry_tangents(run.tables, run.phase_scalars, spring, settings, recorded.time,
-                       recorded.phase, recorded.end_q, recorded.end_v, count, t, schedule,
-                       tangent)
+        carry_tangents(run.tables, run.phase_scalars, spring, settings,
+                       recorded_prefix(recorded, count), t, schedule, tangent)
         q, v = recorded.end_q[count - 1].copy(), recorded.end_v[count - 1].copy()
         phase = recorded.phase[count - 1]
     sums, counts = tangent.sums, tangent.counts

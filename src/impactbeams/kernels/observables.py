@@ -17,7 +17,7 @@ from impactbeams.kernels.cells import cell_run, settings_of
 from impactbeams.kernels.dynamics import run_events
 from impactbeams.kernels.jit import kernel, parallel_kernel
 from impactbeams.kernels.layout import CELL_GEOMETRY
-from impactbeams.kernels.records import segments
+from impactbeams.kernels.records import recorded_prefix, segments
 from impactbeams.kernels.reductions import summarize_run
 
 
@@ -35,8 +35,8 @@ def _observe(run, overlap, shifts, spring, max_segments, out):
     recorded = segments(max_segments, run.q0.size)
     count, status, t_end = run_events(run.tables, run.forces, run.phase_scalars, overlap, shifts,
                                       spring, run.drives, settings, run.q0, run.v0, recorded)
-    summarize_run(run.tables, run.forces, run.phase_scalars, settings, recorded, count, status,
-                  t_end, out)
+    summarize_run(run.tables, run.forces, run.phase_scalars, settings,
+                  recorded_prefix(recorded, count), status, t_end, out)
 
 
 def _observables_map(cells, tables, overlaps, shifts, spring_left, spring_right, spring_modes,

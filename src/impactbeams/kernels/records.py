@@ -6,7 +6,8 @@ fields read by name; Python code gets the same namedtuple back. SI units.
 * `Segments`: the recorded phases of a run as `impactbeams.kernels.dynamics.run_events`
   fills them; segment k starts at ``time[k]`` (s) in ``phase[k]`` (``sustained[k]``: a contact
   entered by the accumulation rule) in state ``q[k], v[k]`` and ends in ``end_q[k], end_v[k]``.
-  Allocated by `segments` only.
+  Allocated by `segments` only; the kernels that read a run's recorded segments take them as
+  one record holding those segments alone (`recorded_prefix` of a larger allocation).
 * `RunInputs`: one run's inputs (`impactbeams.kernels.forcing.run_inputs`), with the
   settings as their one-element array, see `RunInputs`.
 * `Rotor`: the arrays of an event function's rotor (`impactbeams.kernels.rotor`).
@@ -47,3 +48,11 @@ def segments(capacity, n_coords):
                     np.empty(capacity, dtype=np.bool_), np.empty((capacity, n_coords)),
                     np.empty((capacity, n_coords)), np.empty((capacity, n_coords)),
                     np.empty((capacity, n_coords)))
+
+
+@kernel
+def recorded_prefix(recorded, count):
+    """The first ``count`` segments of `Segments` ``recorded``, as views."""
+    return Segments(recorded.time[:count], recorded.phase[:count], recorded.sustained[:count],
+                    recorded.q[:count], recorded.v[:count], recorded.end_q[:count],
+                    recorded.end_v[:count])

@@ -46,9 +46,8 @@ _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
 
 @kernel
-def _power(tables, forces, phase_scalars, spring, drives, settings, phase, q_s, v_s, t_s, t, q,
-           v, free_q, free_v):
-    """Power of the drives (W) and damping dissipation rate (W) at time t within one segment.
+def _power(tables, forces, phase_scalars, spring, drives, settings, recorded, k, t, work_arrays):
+    """Power of the drives (W) and damping dissipation rate (W) at time t within segment k.
 
     The damping acts on each mode's whole coordinate, whose rate is ``q' - F' b``; the
     shaker's inertial load ``-rhoA u_b''`` does work on it through ``Gamma_n`` (the energy is
@@ -56,10 +55,14 @@ def _power(tables, forces, phase_scalars, spring, drives, settings, phase, q_s, 
     a spring contact's force works: ``-R (u_b1' - u_b2')``. The state is taken to the
     coordinates it is observed in (`contact.observed_state`); beam 1's tip also moves by
     ``r_1 R'`` (its residual flexibility under the contact force, where the law has one), and
-    the law adds its own dissipation (`contact.extra_dissipation`).
+    the law adds its own dissipation (`contact.extra_dissipation`). ``recorded``: the run's
+    `records.Segments`; ``work_arrays``: scratch rows (q, v, free q, free v).
     """
+    q, v, free_q, free_v = work_arrays[0], work_arrays[1], work_arrays[2], work_arrays[3]
+    phase = recorded.phase[k]
     table, scalars = tables[phase], phase_scalars[phase]
-    propagate(table, forces[phase], q_s, v_s, t_s, t, settings, q, v)
+    propagate(table, forces[phase], recorded.q[k], recorded.v[k], recorded.time[k], t, settings,
+              q, v)
     # R' moves beam 1's tip through the flexibility its modes miss
     contact_force, contact_force_rate = contact.residual_force(phase, table, scalars, q, v, t,
                                                                settings)
@@ -90,17 +93,16 @@ def _power(tables, forces, phase_scalars, spring, drives, settings, phase, q_s, 
 
 
 @kernel
-def _integrate_power(tables, forces, phase_scalars, spring, drives, settings, phase, q_s, v_s,
-                     t_s, a, b, work_arrays):
-    """Integrals (J) of the power of F and of the dissipation over [a, b] in one segment.
+def _integrate_power(tables, forces, phase_scalars, spring, drives, settings, recorded, k, a, b,
+                     work_arrays):
+    """Integrals (J) of the power of F and of the dissipation over [a, b] in segment k.
 
     Composite 12-point Gauss-Legendre with panels no longer than half the shortest period
     (of the modes and of the forcing): relative error below 1e-18 per panel.
     """
     if b <= a:
         return 0.0, 0.0
-    q, v, free_q, free_v = work_arrays[0], work_arrays[1], work_arrays[2], work_arrays[3]
-    fastest = max(np.max(tables[phase, ROW_FREQUENCY]), settings.forcing_frequency)
+    fastest = max(np.max(tables[recorded.phase[k], ROW_FREQUENCY]), settings.forcing_frequency)
     n_panels = max(1, int(math.ceil((b - a) * fastest / math.pi)))
     width = (b - a) / n_panels
     work, dissipated = 0.0, 0.0
@@ -109,36 +111,36 @@ def _integrate_power(tables, forces, phase_scalars, spring, drives, settings, ph
         for j in range(_GAUSS_NODES.size):
             t = middle + 0.5 * width * _GAUSS_NODES[j]
             power, loss = _power(tables, forces, phase_scalars, spring, drives, settings,
-                                 phase, q_s, v_s, t_s, t, q, v, free_q, free_v)
+                                 recorded, k, t, work_arrays)
             work += 0.5 * width * _GAUSS_WEIGHTS[j] * power
             dissipated += 0.5 * width * _GAUSS_WEIGHTS[j] * loss
     return work, dissipated
 
 
 @kernel
-def work_of_force(tables, forces, phase_scalars, spring, drives, settings, seg_time, seg_phase,
-                  seg_q, seg_v, count, t_end, times, work_out, dissipation_out):
+def work_of_force(tables, forces, phase_scalars, spring, drives, settings, recorded, t_end,
+                  times, out):
     """Work done by F and energy dissipated by damping from t = 0 to each of ``times`` (J).
 
-    ``times`` ascending in [0, t_end]; ``t_end`` is where the last segment stops.
+    ``recorded``: the run's `records.Segments`, all of them recorded ones; ``times`` ascending
+    in [0, t_end], ``t_end`` where the last segment stops; ``out``: rows ``(work,
+    dissipation)``, a column per time.
     """
-    work_arrays = np.empty((4, seg_q.shape[1]))
+    work_arrays = np.empty((4, recorded.q.shape[1]))
     work, dissipated, t_done, i = 0.0, 0.0, 0.0, 0
+    count = recorded.time.size
     for k in range(count):
-        phase = seg_phase[k]
-        seg_end = seg_time[k + 1] if k + 1 < count else t_end
-        work = contact.onset_work(work, phase, tables, phase_scalars, settings, seg_q[k],
-                                  seg_v[k], seg_time[k])
+        seg_end = recorded.time[k + 1] if k + 1 < count else t_end
+        work = contact.onset_work(work, recorded.phase[k], tables, phase_scalars, settings,
+                                  recorded.q[k], recorded.v[k], recorded.time[k])
         while i < times.size and (times[i] < seg_end or k + 1 == count):
             dw, dd = _integrate_power(tables, forces, phase_scalars, spring, drives, settings,
-                                      phase, seg_q[k], seg_v[k], seg_time[k], t_done, times[i],
-                                      work_arrays)
+                                      recorded, k, t_done, times[i], work_arrays)
             work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, times[i])
-            work_out[i], dissipation_out[i] = work, dissipated
+            out[0, i], out[1, i] = work, dissipated
             i += 1
         dw, dd = _integrate_power(tables, forces, phase_scalars, spring, drives, settings,
-                                  phase, seg_q[k], seg_v[k], seg_time[k], t_done, seg_end,
-                                  work_arrays)
+                                  recorded, k, t_done, seg_end, work_arrays)
         work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, seg_end)
 
 
@@ -191,14 +193,17 @@ def _gap_rate(table, scalars, q, v, t, forcing_frequency):
 
 
 @kernel
-def summarize_run(tables, forces, phase_scalars, settings, recorded, count, status, t_end, out):
+def summarize_run(tables, forces, phase_scalars, settings, recorded, status, t_end, out):
     """Write a run's ``OUT_COLUMNS`` (layout) into ``out`` from its recorded `Segments`.
+
+    ``recorded`` holds the run's recorded segments alone (`records.recorded_prefix`).
 
     First impact time (s, NaN if none), contact onsets, largest contact force (N, 0 if none),
     mean coefficient of restitution (NaN if no impact separated), fraction of [0, t_max] in
     contact, run status.
     """
     seg_time, seg_phase, _, seg_q, seg_v, end_q, end_v = recorded
+    count = seg_time.size
     impacts, in_contact, largest = 0, 0.0, 0.0
     separation_sum, approach_sum = 0.0, 0.0
     forcing_frequency = settings.forcing_frequency

@@ -52,7 +52,7 @@ from impactbeams.kernels.layout import (
     TIP_Y1,
     TIP_Y2,
 )
-from impactbeams.kernels.records import segments
+from impactbeams.kernels.records import recorded_prefix, segments
 
 NO_STATE = -1  # a phase index for no state: a run's own start, or a run that stopped early
 
@@ -188,9 +188,9 @@ def sampled_run(run, overlap, shifts, spring, start_phase, q_start, v_start, tim
         first = done
         while done < times.size and (times[done] < t_end or (final and times[done] <= t_end)):
             done += 1
-        sample_states(tables, forces, spring, drives, settings, seg_time, seg_phase, seg_q,
-                      seg_v, count, times[first:done], sample_q[first:done],
-                      sample_v[first:done], sample_phase[first:done])
+        sample_states(tables, forces, spring, drives, settings, recorded_prefix(recorded, count),
+                      times[first:done], sample_q[first:done], sample_v[first:done],
+                      sample_phase[first:done])
         for k in range(first, done):
             tip_motion(tables, forces, phase_scalars, settings, residual2, sample_phase[k],
                        times[k], sample_q[k], sample_v[k], samples[k])

@@ -158,19 +158,19 @@ def _record(sums, counts, log_growth, i, schedule):
 
 
 @kernel
-def carry_tangents(tables, phase_scalars, spring, settings, seg_time, seg_phase, end_q, end_v,
-                   count, t_end, schedule, tangent):
-    """Carry the tangent vectors through the recorded segments 0..count-1 of a spring-law run.
+def carry_tangents(tables, phase_scalars, spring, settings, recorded, t_end, schedule, tangent):
+    """Carry the tangent vectors through the recorded segments of a spring-law run.
 
+    ``recorded``: the run's `records.Segments`, all of them recorded ones (each segment's end
+    state ``end_q``, ``end_v`` gives the onsets' saltation).
     ``tangent``, a `records.Tangent` ``(q, v, clock, sums, counts)``: k tangent rows in the
-    coordinates of ``seg_phase[0]`` at ``clock[CLOCK_TIME] = seg_time[0]`` (s),
+    coordinates of ``recorded.phase[0]`` at ``clock[CLOCK_TIME] = recorded.time[0]`` (s),
     ``clock[CLOCK_RENORMALIZATIONS]``
     renormalisations done; on return at ``t_end`` in the last segment's coordinates.
     ``schedule = (interval, t_max, transient, total)``: renormalise at ``i interval`` (s) for
     i = 1 .. total (the run's complete intervals to ``t_max``), and add the logs of the growth
     of intervals ``transient + 1 .. total`` into ``sums[batch, row]``, ``counts[batch]``
     (spread evenly over the batches).
-    ``end_q``, ``end_v``: each segment's state at its end (for the onsets' saltation).
     """
     tangent_q, tangent_v, clock, sums, counts = tangent
     interval, t_max, _, total = schedule
@@ -180,6 +180,7 @@ def carry_tangents(tables, phase_scalars, spring, settings, seg_time, seg_phase,
     no_drive = np.zeros((len(SPRING_DRIVE_ROWS), m), dtype=np.complex128)
     scratch_q, scratch_v = np.empty((columns, m)), np.empty((columns, m))
     log_growth = np.empty(columns)
+    seg_time, seg_phase, count = recorded.time, recorded.phase, recorded.time.size
     for k in range(count):
         phase = seg_phase[k]
         seg_end = seg_time[k + 1] if k + 1 < count else t_end
@@ -201,7 +202,7 @@ def carry_tangents(tables, phase_scalars, spring, settings, seg_time, seg_phase,
             continue
         if phase == FREE:
             contact.onset_saltation(tangent_q, tangent_v, tables, phase_scalars, settings,
-                                    end_q[k], end_v[k], seg_end)
+                                    recorded.end_q[k], recorded.end_v[k], seg_end)
         contact.tangent_switch(tangent_q, tangent_v, seg_phase[k + 1], spring, no_drive,
                             scratch_q, scratch_v)
         tangent_q[:, :] = scratch_q
@@ -227,9 +228,9 @@ def new_tangent(columns, free_frequencies, batches):
 
 
 @kernel
-def recorded_run_sums(tables, phase_scalars, spring, settings, seg_time, seg_phase, end_q,
-                      end_v, count, t_end, columns, transient, batches):
-    """Lyapunov sums of a recorded spring-law run from t = 0 (all its segments in memory).
+def recorded_run_sums(tables, phase_scalars, spring, settings, recorded, t_end, columns,
+                      transient, batches):
+    """Lyapunov sums of a recorded spring-law run from t = 0 (all its `records.Segments`).
 
     Returns ``(sums, counts, interval)``: ``sums[batch, row]`` the summed log growths of the
     ``columns`` leading directions over ``counts[batch]`` intervals of ``interval`` s.
@@ -237,6 +238,5 @@ def recorded_run_sums(tables, phase_scalars, spring, settings, seg_time, seg_pha
     schedule = lyapunov_schedule(settings.forcing_frequency, tables[FREE, ROW_FREQUENCY],
                                  settings.t_max, transient)
     tangent = new_tangent(columns, tables[FREE, ROW_FREQUENCY], batches)
-    carry_tangents(tables, phase_scalars, spring, settings, seg_time, seg_phase, end_q, end_v,
-                   count, t_end, schedule, tangent)
+    carry_tangents(tables, phase_scalars, spring, settings, recorded, t_end, schedule, tangent)
     return tangent.sums, tangent.counts, schedule[0]

@@ -188,11 +188,9 @@ class PeriodMap:
         rows_q, rows_v = self._switched(rows_q, rows_v, int(trajectory.phase[0]), CONTACT)
         state = Tangent(rows_q, rows_v, np.zeros(2), np.zeros((1, rows_q.shape[0])),
                         np.zeros(1, np.int64))
-        count = trajectory.time.size
         carry_tangents(packed.tables, packed.phase_scalars, packed.dynamics.spring_arrays,
-                       packed.settings, trajectory.time, trajectory.phase, trajectory.end_q,
-                       trajectory.end_v, count, trajectory.t_end, (math.inf, self.horizon, 0, 0),
-                       state)
+                       packed.settings, trajectory.segments, trajectory.t_end,
+                       (math.inf, self.horizon, 0, 0), state)
         rows_q, rows_v = self._switched(state.q, state.v, int(trajectory.phase[-1]), FREE)
         return np.hstack([rows_q, rows_v]).T
 

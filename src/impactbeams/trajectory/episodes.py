@@ -104,11 +104,10 @@ def _episode_energetics(packed: Packed, trajectory: Trajectory, k: np.ndarray,
             approach[labels[j]] -= compression
             separation_work[labels[j]] += restitution
     bounds = np.sort(np.concatenate([start, np.where(closed, end, trajectory.t_end)]))
-    work, dissipation = np.empty(bounds.size), np.empty(bounds.size)
+    work, dissipation = energies = np.empty((2, bounds.size))
     work_of_force(packed.tables, packed.forces, packed.phase_scalars,
-                  packed.dynamics.spring_arrays, packed.drives, packed.settings, trajectory.time,
-                  trajectory.phase, trajectory.q, trajectory.v, trajectory.time.size,
-                  trajectory.t_end, bounds, work, dissipation)
+                  packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                  trajectory.segments, trajectory.t_end, bounds, energies)
     at = dict(zip(bounds, dissipation, strict=True))
     return {
         "episode_dissipated_energy": np.array(

@@ -36,11 +36,10 @@ def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray, energ
         out["in_contact"][index] = phase
     if not energy:
         return out
-    work, dissipation = np.empty(reached.size), np.empty(reached.size)
+    work, dissipation = energies = np.empty((2, reached.size))
     work_of_force(packed.tables, packed.forces, packed.phase_scalars,
                   packed.dynamics.spring_arrays, packed.drives, packed.settings,
-                  trajectory.time, trajectory.phase, trajectory.q, trajectory.v,
-                  trajectory.time.size, trajectory.t_end, times[reached], work, dissipation)
+                  trajectory.segments, trajectory.t_end, times[reached], energies)
     out["work_of_force"][reached], out["damping_dissipation"][reached] = work, dissipation
     return out
 

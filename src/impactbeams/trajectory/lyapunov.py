@@ -75,8 +75,7 @@ def lyapunov_exponents(packed: Packed, trajectory: Trajectory, count: int,
     """The ``count`` leading exponents of the recorded spring-law run (1/s)."""
     sums, counts, interval = recorded_run_sums(
         packed.tables, packed.phase_scalars, packed.dynamics.spring_arrays, packed.settings,
-        trajectory.time, trajectory.phase, trajectory.end_q, trajectory.end_v,
-        trajectory.time.size, trajectory.t_end, count, transient_periods, BATCHES)
+        trajectory.segments, trajectory.t_end, count, transient_periods, BATCHES)
     periods = int(counts.sum())
     if periods == 0:
         return Exponents(np.full(count, np.nan), np.full(count, np.nan), interval, 0)

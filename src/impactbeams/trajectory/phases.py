@@ -41,6 +41,12 @@ class Trajectory:
     t_end: float
 
     @property
+    def segments(self) -> Segments:
+        """The recorded segments as the kernels' `records.Segments` record."""
+        return Segments(self.time, self.phase, self.sustained, self.q, self.v, self.end_q,
+                        self.end_v)
+
+    @property
     def segment_end(self) -> np.ndarray:
         """End time of every segment (s)."""
         return np.append(self.time[1:], self.t_end)
@@ -116,9 +122,7 @@ def sample(packed: Packed, trajectory: Trajectory, times: np.ndarray,
     q, v = np.empty((times.size, n_coords)), np.empty((times.size, n_coords))
     phase = np.empty(times.size, dtype=np.int64)
     dyn.sample_states(packed.tables, packed.forces, packed.dynamics.spring_arrays,
-                      packed.drives, packed.settings, trajectory.time,
-                      trajectory.phase, trajectory.q, trajectory.v, trajectory.time.size, times,
-                      q, v, phase)
+                      packed.drives, packed.settings, trajectory.segments, times, q, v, phase)
     return phase, q, v
 
 
