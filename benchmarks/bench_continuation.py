@@ -66,7 +66,8 @@ def measures_seconds(n_modes: int, repeats: int = 3) -> float:
 def markdown(report: dict) -> str:
     """The report as a short Markdown page."""
     lines = ["# Continuation: time per branch point", "",
-             f"`python benchmarks/bench_continuation.py`; {report['machine']}, impactbeams "
+             f"`python benchmarks/bench_continuation.py`; {report['machine']}, Python "
+             f"{report['python']}, impactbeams "
              f"{report['version']}, {report['date']}, load average {report['load']:.1f} on "
              f"{report['cores']} cores (a shared machine: absolute times are noisy). Default "
              f"Hertz contact, zeta = {PARAMS.damping_ratio}, the period-1 impacting branch in "
@@ -91,7 +92,8 @@ def main() -> None:
     parser.add_argument("--points", type=int, default=12)
     args = parser.parse_args()
     report = {"version": __version__, "date": time.strftime("%Y-%m-%d %H:%M"),
-              "machine": f"{platform.machine()}, Python {platform.python_version()}",
+              "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+              "python": platform.python_version(),
               "cores": os.cpu_count(), "points": args.points, "cases": []}
     branch(MODES[0], METHODS[1], 3)  # warm-up: compilation
     for n_modes in MODES:
