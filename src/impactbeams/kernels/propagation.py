@@ -62,14 +62,13 @@ def advance(q0, v0, t0, h, frequencies, zeta, force, forcing_frequency, q, v):
 
 @inlined_kernel
 def advance_to(oscillators, q_s, v_s, t_s, t, q, v):
-    """``advance`` the `records.Oscillators` from (q_s, v_s) at t_s (s) to time t (s)."""
-    forcing_frequency, h = oscillators.forcing_frequency, t - t_s
-    phase_plus = complex(math.cos(forcing_frequency * t_s), math.sin(forcing_frequency * t_s))
-    step_plus = complex(math.cos(forcing_frequency * h), math.sin(forcing_frequency * h))
-    for j in range(oscillators.frequencies.size):
-        q[j], v[j] = advance_mode(q_s[j], v_s[j], h, oscillators.frequencies[j],
-                                  oscillators.zeta[j], oscillators.force[j], forcing_frequency,
-                                  phase_plus, step_plus)
+    """``advance`` the `records.Oscillators` from (q_s, v_s) at t_s (s) to time t (s).
+
+    Inlined as one call of the ``advance`` kernel with the fields read in place: each search
+    compiles a call, not its own copy of the per-mode propagation (cold compile).
+    """
+    advance(q_s, v_s, t_s, t - t_s, oscillators.frequencies, oscillators.zeta, oscillators.force,
+            oscillators.forcing_frequency, q, v)
 
 
 @inlined_kernel
