@@ -61,17 +61,6 @@ def advance(q0, v0, t0, h, frequencies, zeta, force, forcing_frequency, q, v):
 
 
 @inlined_kernel
-def advance_to(oscillators, q_s, v_s, t_s, t, q, v):
-    """``advance`` the `records.Oscillators` from (q_s, v_s) at t_s (s) to time t (s).
-
-    Inlined as one call of the ``advance`` kernel with the fields read in place: each search
-    compiles a call, not its own copy of the per-mode propagation (cold compile).
-    """
-    advance(q_s, v_s, t_s, t - t_s, oscillators.frequencies, oscillators.zeta, oscillators.force,
-            oscillators.forcing_frequency, q, v)
-
-
-@inlined_kernel
 def advance_mode(q0, v0, h, w, z, f, forcing_frequency, phase_plus, step_plus):
     """One mode of ``advance``: (q, q') after ``h`` (s) from (q0, v0) at t0.
 
