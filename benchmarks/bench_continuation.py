@@ -20,13 +20,11 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
 import json  # noqa: E402
-import platform  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from bench_orbits import MODES, OUT, PARAMS  # noqa: E402  (the same model as the orbits')
-from impactbeams import __version__  # noqa: E402
+from bench_orbits import MODES, PARAMS, report_header, write_report  # noqa: E402  (the orbits' model)
 from impactbeams.continuation import Continuation, continue_orbits  # noqa: E402
 from impactbeams.orbits import PeriodMap  # noqa: E402
 
@@ -66,8 +64,7 @@ def measures_seconds(n_modes: int, repeats: int = 3) -> float:
 def markdown(report: dict) -> str:
     """The report as a short Markdown page."""
     lines = ["# Continuation: time per branch point", "",
-             f"`python benchmarks/bench_continuation.py`; {report['machine']}, Python "
-             f"{report['python']}, impactbeams "
+             f"`python benchmarks/bench_continuation.py`; {report['machine']}, impactbeams "
              f"{report['version']}, {report['date']}, load average {report['load']:.1f} on "
              f"{report['cores']} cores (a shared machine: absolute times are noisy). Default "
              f"Hertz contact, zeta = {PARAMS.damping_ratio}, the period-1 impacting branch in "
@@ -91,20 +88,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--points", type=int, default=12)
     args = parser.parse_args()
-    report = {"version": __version__, "date": time.strftime("%Y-%m-%d %H:%M"),
-              "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-              "python": platform.python_version(),
-              "cores": os.cpu_count(), "points": args.points, "cases": []}
+    report = report_header(points=args.points)
     branch(MODES[0], METHODS[1], 3)  # warm-up: compilation
     for n_modes in MODES:
         row = {"n_modes": n_modes, "measures": measures_seconds(n_modes)}
         row.update({method: branch(n_modes, method, args.points) for method in METHODS})
         report["cases"].append(row)
         print(json.dumps(row), flush=True)
-    report["load"] = os.getloadavg()[0]
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "continuation.json").write_text(json.dumps(report, indent=1) + "\n")
-    (OUT / "continuation.md").write_text(markdown(report))
+    write_report("continuation", report, markdown)
 
 
 if __name__ == "__main__":

@@ -127,20 +127,30 @@ def markdown(report: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def report_header(**settings) -> dict:
+    """The head of a benchmark's report: version, date, machine, the run's settings."""
+    return {"version": __version__, "date": time.strftime("%Y-%m-%d %H:%M"),
+            "machine": f"{platform.machine()}, Python {platform.python_version()}",
+            "cores": os.cpu_count(), **settings, "cases": []}
+
+
+def write_report(name: str, report: dict, markdown) -> None:
+    """Write ``name``.json and ``name``.md under docs/benchmarks, with the load at the end."""
+    report["load"] = os.getloadavg()[0]
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / f"{name}.json").write_text(json.dumps(report, indent=1) + "\n")
+    (OUT / f"{name}.md").write_text(markdown(report))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
-    report = {"version": __version__, "date": time.strftime("%Y-%m-%d %H:%M"),
-              "machine": f"{platform.machine()}, Python {platform.python_version()}",
-              "cores": os.cpu_count(), "repeats": args.repeats, "cases": []}
+    report = report_header(repeats=args.repeats)
     for n_modes in MODES:
         report["cases"].append(case(n_modes, args.repeats))
         print(json.dumps(report["cases"][-1]), flush=True)
-    report["load"] = os.getloadavg()[0]
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "orbits.json").write_text(json.dumps(report, indent=1) + "\n")
-    (OUT / "orbits.md").write_text(markdown(report))
+    write_report("orbits", report, markdown)
 
 
 if __name__ == "__main__":
