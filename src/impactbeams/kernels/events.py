@@ -326,7 +326,10 @@ def step_limit(t_s, t_end, frequencies):
     it passes in a logarithmic number of steps), so 64 per period plus 2^20 is never reached
     unless the bounds degenerate; the search then ends with ``GAVE_UP`` instead of spinning.
     """
-    return 2.0**20 + 64.0 * (t_end - t_s) * np.max(frequencies) / (2.0 * math.pi)
+    highest = frequencies[0]
+    for j in range(1, frequencies.size):  # not np.max, which compiles take_impl
+        highest = max(highest, frequencies[j])
+    return 2.0**20 + 64.0 * (t_end - t_s) * highest / (2.0 * math.pi)
 
 
 @kernel
@@ -419,8 +422,11 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
     starting where the previous one ended need not propagate to its start.
     """
     const, forcing_frequency = event.const, event.forcing_frequency
-    # bounds hold over a step of at most this span
-    span_cap = 2.0 * math.pi / np.min(oscillators.frequencies)
+    # bounds hold over a step of at most this span (a loop, not np.min: compile time)
+    lowest = oscillators.frequencies[0]
+    for j in range(1, oscillators.frequencies.size):
+        lowest = min(lowest, oscillators.frequencies[j])
+    span_cap = 2.0 * math.pi / lowest
     coherent, band, curvature, jerk, any_span = bounds
     floor = const - band - abs(coherent)
     if floor > tolerance * _EPS * (abs(const) + band + abs(coherent)):
@@ -431,8 +437,8 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
     per_step = not any_span
     t = t_start
     if t == t_s:
-        q[:] = q_s
-        v[:] = v_s
+        for j in range(q.size):  # not q[:] = q_s, whose shape check compiles string formatting
+            q[j], v[j] = q_s[j], v_s[j]
     elif t != t_state:
         advance_to(oscillators, q_s, v_s, t_s, t, q, v)
     t_state = t
@@ -464,7 +470,8 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
         if step <= 4.0 * _EPS * max(abs(t), span_cap):
             return t, t_state  # the event function is at round-off level: touching
         if slope < 0.0:  # approaching: try to bracket a crossing beyond the linear estimate
-            reach = min(2.0 * value / -slope, span_cap, t_end - t)
+            # min of two floats, as everywhere in the search: each signature compiles its own
+            reach = min(min(2.0 * value / -slope, span_cap), t_end - t)
             if reach > step and slope + curvature * reach < 0.0:  # e monotone on the bracket
                 t_probe = t + reach
                 advance_to(oscillators, q_s, v_s, t_s, t_probe, q, v)

@@ -150,7 +150,8 @@ def rotor_step(rotor, step):
     fraction, exponent = math.frexp(step)  # step = fraction 2^exponent, 1/2 <= fraction < 1
     if exponent - 2 < LOWEST:
         return 0.0
-    exponent = min(exponent, LOWEST + LEVELS)
+    if exponent > LOWEST + LEVELS:  # not min(): frexp's int32 against an int64 compiles its own
+        exponent = LOWEST + LEVELS
     first = _factor(rotor, exponent - 1)
     taken = math.ldexp(1.0, exponent - 1)
     # every mode turns (a driven mode's z is never read), which the compiler can vectorise
