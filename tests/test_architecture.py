@@ -225,3 +225,28 @@ def test_the_record_check_sees_a_bound_field():
     code = ("frequencies, zeta = oscillators.frequencies, oscillators.zeta\n"
             "weights = event.weights\nconst = event.const\nw = oscillators.frequencies[j]\n")
     assert _bound_record_arrays(ast.parse(code)) == [1, 1, 2]
+
+
+# The argument groups that travel as records in the event search (issue 21): any two of a
+# group among one kernel's arguments mean the group travels loose again.
+LOOSE_GROUPS = ({"frequencies", "zeta", "force"}, {"weights", "const", "sine_amp"})
+
+
+def _loose_group_kernels(tree: ast.AST) -> list[str]:
+    """Functions that take two or more arguments of an `Oscillators`/`EventFunction` group."""
+    return [node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)
+            and any(len(group & {a.arg for a in node.args.args}) >= 2 for group in LOOSE_GROUPS)]
+
+
+@pytest.mark.parametrize("name", ["events.py", "rotor.py"])
+def test_the_event_search_takes_the_records(name):
+    """No kernel of the event search takes (frequencies, zeta, ...) or (weights, const, ...)."""
+    path = PACKAGE / "kernels" / name
+    assert not _loose_group_kernels(ast.parse(path.read_text(), str(path)))
+
+
+def test_the_loose_group_check_sees_loose_arguments():
+    code = ("def walk(q, frequencies, zeta, force):\n    pass\n"
+            "def evaluate(q, v, t, weights, const, sine_amp):\n    pass\n"
+            "def walk2(q, oscillators, event):\n    pass\n")
+    assert _loose_group_kernels(ast.parse(code)) == ["walk", "evaluate"]
