@@ -33,7 +33,7 @@ import math
 import numpy as np
 
 from impactbeams.kernels.drive import compiled_modal_acceleration
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import inlined_kernel, kernel
 from impactbeams.kernels.propagation import advance_mode
 from impactbeams.kernels.records import Rotor
 
@@ -125,7 +125,7 @@ def rotor_bounds(rotor, oscillators, event, coherent):
             jerk + forcing_frequency**3 * forced, True)
 
 
-@kernel
+@inlined_kernel
 def _factor(rotor, exponent):
     """e^(lambda 2^exponent) of every mode, computed on first use."""
     lam, levels, factors = rotor.eigenvalues, rotor.levels, rotor.factors
@@ -140,7 +140,7 @@ def _factor(rotor, exponent):
     return factors[level]
 
 
-@kernel
+@inlined_kernel
 def rotor_step(rotor, step):
     """Rotate the undriven modes by the largest 2^k or 3 * 2^(k-1) not above ``step`` (s > 0).
 
@@ -166,7 +166,7 @@ def rotor_step(rotor, step):
     return taken
 
 
-@kernel
+@inlined_kernel
 def rotor_event(rotor, q_s, v_s, t_s, t, oscillators, event):
     """e, e', its evaluation scale and e'' at time t (s), from the rotor.
 
