@@ -42,11 +42,12 @@ from impactbeams.kernels.layout import (
 from impactbeams.kernels.propagation import advance_to, steady_phasor
 from impactbeams.kernels.records import EventFunction, Oscillators
 from impactbeams.kernels.rotor import (
+    free_event,
     modulus_bound,
     rotor_bounds,
     rotor_event,
     rotor_load,
-    rotor_step,
+    turn,
 )
 
 _EPS = np.finfo(np.float64).eps
@@ -525,14 +526,20 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
                                               jerk if any_span else np.inf)
         if t + step >= t_end:
             return NO_EVENT, t_state
-        taken = 0.0 if per_step else rotor_step(rotor, step)
+        # the rotor's arrays passed loose, not the record: fewer reference counts per step
+        taken = 0.0 if per_step else turn(rotor.amplitudes, rotor.eigenvalues, rotor.levels,
+                                          rotor.factors, step)
         if taken == 0.0:  # (a step below the rotor's table: exact)
             t += step
         else:
             offset += taken
             t = t_origin + offset
-            value, slope, scale, acceleration = rotor_event(rotor, q_s, v_s, t_s, t, oscillators,
-                                                            event)
+            if driven == 0:
+                value, slope, scale, acceleration = free_event(
+                    rotor.amplitudes, rotor.rates, oscillators.frequencies.size, event)
+            else:
+                value, slope, scale, acceleration = rotor_event(rotor, q_s, v_s, t_s, t,
+                                                                oscillators, event)
             if value > tolerance * _EPS * scale:
                 continue
             # at round-off level of a root: decide on the exact state, and go on from it
