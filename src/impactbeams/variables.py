@@ -429,11 +429,14 @@ VARIABLES.update({
     "contact_impulse": Variable(("branch_point",), "N s", "contact impulse per forcing period",
                                 "integral of R over the orbit divided by its period in forcing "
                                 "periods"),
+    "section": Variable(("section",), "1", "stroboscopic section of the orbit",
+                        "k of the orbit's k-th stroboscopic sample, at t = k 2 pi / Omega, "
+                        "from 0 to its period minus 1", dtype="int64"),
     "section_deflection_1": Variable(
-        ("branch_point",), "m", "tip deflection of beam 1 on the section",
-        "y1(l1) at t = 0 mod the forcing period (forcing phase 0): the orbit's first "
-        "stroboscopic sample, as poincare_deflection1 of a bifurcation diagram",
-        symbol="$y_1(l_1)$"),
+        ("branch_point", "section"), "m", "tip deflection of beam 1 on the sections",
+        "y1(l1) at t = k 2 pi / Omega (forcing phase 0), k from 0 to the orbit's period minus "
+        "1 (NaN beyond): the orbit's stroboscopic samples, as poincare_deflection1 of a "
+        "bifurcation diagram", symbol="$y_1(l_1)$"),
     "contacts_per_orbit": Variable(("branch_point",), "1", "contacts per orbit",
                                    "contact onsets over one period of the orbit", dtype="int32"),
     "grazing_gap": Variable(

@@ -122,8 +122,8 @@ def _follow(follower: Follower, branch: Branch, span: Span,
         if resumed:
             current, ds = resumed
             continue
-        if point is None and crossing and taken / 2.0 >= settings.min_step:
-            ds = taken / 2.0  # an iterate crossed, not the branch: a smaller step
+        if crossing and taken / 2.0 >= settings.min_step:
+            ds = taken / 2.0  # an iterate crossed, not the branch, or no way across: smaller
             continue
         if point is None:
             branch.ending = MIN_STEP
@@ -186,8 +186,10 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     point and the step to take from it; None, labelling nothing, if none is found (a Newton
     iterate crossed, not the branch).
     """
-    _, grazing, _ = locate(lambda s: follower.at_arclength(current, s).point, current, taken,
-                           end, grazing_test, follower.settings.locate_tolerance)
+    _, grazing, past = locate(lambda s: follower.at_arclength(current, s).point, current,
+                              taken, end, grazing_test, follower.settings.locate_tolerance)
+    if past is None or past.evaluation.contacts == grazing.evaluation.contacts:
+        return _short_of_grazing(follower, branch, current, grazing, past, taken, progress)
     gradient = follower.grazing_gradient(grazing.x)
     # across the grazing surface, toward the other sign of the gap
     normal = -np.sign(current.evaluation.grazing) * gradient
@@ -208,6 +210,25 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
         grazing = dataclasses.replace(grazing, tangent=-grazing.tangent)
     _append(branch, _between(follower, grazing, beyond, (grazing.x, normal)), progress)
     return beyond, distance
+
+
+def _short_of_grazing(follower: Follower, branch: Branch, current: Point, last: Point,
+                      past: Point | None, taken: float,
+                      progress: Progress | None) -> tuple[Point, float] | None:
+    """Resume where the grazing value changed sign without a grazing located.
+
+    Either no corrected point beyond was found (``past`` None: the branch turned back across
+    ``current``'s planes, at a fold, before reaching the grazing) and the branch resumes from
+    ``last``, the farthest point reached, to cross the grazing on planes of its own; or the
+    value jumped across 0 between two orbits of the same contacts (it is the gap of whichever
+    of a free-flight minimum and the shallowest contact is nearer 0) and the branch resumes
+    from ``past``. Returns None if neither moved from ``current``.
+    """
+    resume = last if past is None else past
+    if resume is current:
+        return None
+    _append(branch, _between(follower, current, resume), progress)
+    return resume, max(taken / 2.0, follower.settings.min_step)
 
 
 def _at_bound(follower: Follower, a: Point, b: Point, bound: float) -> Point:

@@ -94,7 +94,10 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
     Returns (the s and the point of the last on ``start``'s side, the first beyond, None if no
     corrected point beyond was found), the bracket pinning the parameter to ``tolerance`` in
     x~. A failed corrector inside the bracket counts as beyond the root, as at ``end``: it
-    happens past a grazing, where the period map is not smooth.
+    happens past a grazing, where the period map is not smooth, but also where the branch
+    turns back across the planes (a fold between: the planes along ``start``'s tangent reach
+    no farther than where the branch's tangent is orthogonal to it). The first point beyond is
+    then None: the root is not bracketed, and the last point on ``start``'s side is no root.
     """
     low: Bracket = (0.0, test(start), start)
     high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
@@ -122,10 +125,13 @@ Bracket = tuple[float, float, Point | None]
 
 
 def _known(low: Bracket, high: Bracket, tolerance: float) -> bool:
-    """Whether the bracket pins the parameter to ``tolerance`` (x~ units)."""
-    if high[2] is None or low[2] is None:
-        return False
-    rate = max(abs(low[2].tangent[-1]), abs(high[2].tangent[-1]))
+    """Whether the bracket pins the parameter to ``tolerance`` (x~ units).
+
+    Without a corrected point beyond, the parameter's rate there is unknown: the bound 1 of a
+    unit tangent's part stands for it (the bracket then ends unbracketed, see `locate`).
+    """
+    ends = [point for _, _, point in (low, high) if point is not None]
+    rate = max(abs(point.tangent[-1]) for point in ends) if len(ends) == 2 else 1.0
     return (high[0] - low[0]) * rate <= tolerance
 
 
