@@ -84,6 +84,15 @@ def grazing(stiffness=100.0):
     return Map(step, jacobian, gap=lambda z, p: 1.0 - z[0])
 
 
+def fold_then_grazing(offset=0.4, slant=0.0):
+    """z -> z + (p - z^2) / 2: a fold at z = p = 0; the gap -(z + offset) + slant (z^2 - p),
+    whose sign the branch p = z^2 changes at z = -offset, p = offset^2 only, past the fold
+    coming from z > 0. Off the branch, ``slant`` > 0 makes the gap positive on the far side of
+    the fold's parabola (where a step's predictor lands when it overshoots the fold)."""
+    return Map(lambda z, p: z + 0.5 * (p - z ** 2), lambda z, p: np.array([[1.0 - z[0]]]),
+               gap=lambda z, p: -(z[0] + offset) + slant * (z[0] ** 2 - p))
+
+
 def colliding_pair(k=5.0):
     """z -> A(p) z, A = [[-1/2, 1], [k^2 p, -1/2]]: multipliers -1/2 +- i k sqrt(-p) for p < 0
     meet on the negative axis at p = 0 and split; -1/2 - k sqrt(p) reaches -1 at p = 1/(4 k^2)."""

@@ -84,6 +84,26 @@ def test_grazing_is_an_event_of_the_branch(stiffness):
     assert branch.ending == "bound" and len(branch.points) < 120
 
 
+@pytest.mark.parametrize(("offset", "slant", "step"), [
+    (0.4, 0.0, 1.5), (0.4, 5.0, 1.5), (0.2, 0.0, 1.5), (0.3, 0.0, 2.0), (0.4, 0.0, 1.0)])
+def test_grazing_just_past_a_fold_is_located_on_the_branch(offset, slant, step):
+    """Coming down p = z^2 from z = 1 with a step that overshoots the fold (z = p = 0): the
+    secant planes of the points before the fold reach no farther than z = -1/(4 z_0), short of
+    the grazing at z = -offset. The grazing is labelled at p = offset^2 (not at the end of the
+    planes' reach, as before: a point still in contact, its gap offset - 1/(4 z_0) < 0), once,
+    with the contacts changing across it; the fold is located at p = 0."""
+    (branch,) = follow(toys.fold_then_grazing(offset, slant), [1.0], 1.0, -1.0, 30.0,
+                       direction=-1, settings=Settings(step=step, max_step=step))
+    (grazing,) = labelled(branch, "grazing")
+    assert grazing.x[-1] == pytest.approx(offset ** 2, abs=LOCATED)
+    assert abs(grazing.evaluation.grazing) < LOCATED
+    after = branch.points[branch.points.index(grazing) + 1]
+    assert (grazing.evaluation.contacts, after.evaluation.contacts) == (1, 0)
+    (fold,) = labelled(branch, "fold")
+    assert fold.x[-1] == pytest.approx(0.0, abs=LOCATED)
+    assert branch.ending == "bound"
+
+
 def test_dataset_along_branch_points(tmp_path):
     branches = follow(toys.period_doubling(), [0.0, 0.0], -0.5, -0.5, 0.5)
     dataset = branches_dataset(branches, "omega", {"title": "toy"})

@@ -306,11 +306,13 @@ VARIABLES.update({
         "index of the free modal coordinates: beam 1's n_modes cantilever modes, then beam 2's "
         "(none against a stop)", dtype="int64"),
     "final_displacement": Variable(
-        ("coordinate",), _MODAL_UNITS, "modal displacements at t_end",
+        ("*", "coordinate"), _MODAL_UNITS, "modal displacements at t_end",
         "free modal coordinates q at the run's end t_end, the quasi-static part of the tip "
-        "force taken out (docs/model.md); NaN if a tied-law run ends in contact"),
+        "force taken out (docs/model.md); NaN if a tied-law run ends in contact; in a "
+        "stepped-sine sweep, each cell's at its horizon (the state the next cell starts from; "
+        "NaN if the run stopped early)"),
     "final_velocity": Variable(
-        ("coordinate",), _MODAL_UNITS + " s-1", "modal velocities at t_end",
+        ("*", "coordinate"), _MODAL_UNITS + " s-1", "modal velocities at t_end",
         "dq/dt of the free modal coordinates at the run's end t_end (see final_displacement)"),
 })
 
