@@ -19,24 +19,27 @@ class Map:
         self.step, self.jac, self.gap, self.period = step, jacobian, gap, period
 
     def _iterate(self, z, p):
-        jacobian = np.eye(len(z))
+        """The end, the Jacobian, and z1 at each of the period's sections."""
+        jacobian, sections = np.eye(len(z)), []
         for _ in range(self.period):
+            sections.append(z[0])
             jacobian = self.jac(z, p) @ jacobian
             z = self.step(z, p)
-        return z, jacobian
+        return z, jacobian, np.array(sections)
 
     def residual(self, z, p):
         return self._iterate(z, p)[0] - z
 
     def evaluate(self, z, p, jacobian=True, measures=True):
-        end, monodromy = self._iterate(z, p)
+        end, monodromy, sections = self._iterate(z, p)
         jacobian = monodromy - np.eye(len(z)) if jacobian else np.empty((0, 0))
         gap = math.nan if self.gap is None else self.gap(z, p)
         return Evaluation(end - z, jacobian,
                           multipliers_of(jacobian) if jacobian.size else np.empty(0),
                           grazing=gap,
                           contacts=int(gap <= 0) if self.gap else 0,
-                          measures={"amplitude": float(np.max(np.abs(z)))})
+                          measures={"amplitude": float(np.max(np.abs(z))),
+                                    "section_deflection_1": sections})
 
     def iterated(self, times):
         return Map(self.step, self.jac, self.gap, self.period * times)

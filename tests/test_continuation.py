@@ -108,12 +108,19 @@ def test_dataset_along_branch_points(tmp_path):
     branches = follow(toys.period_doubling(), [0.0, 0.0], -0.5, -0.5, 0.5)
     dataset = branches_dataset(branches, "omega", {"title": "toy"})
     points = sum(len(branch.points) for branch in branches)
-    assert dataset.sizes == {"branch_point": points, "multiplier": 2, "state": 2}
+    assert dataset.sizes == {"branch_point": points, "multiplier": 2, "state": 2, "section": 2}
     assert dataset.bifurcation.attrs["flag_meanings"].split()[2] == "period_doubling"
     assert (dataset.bifurcation == 2).sum() == 1  # the period-2 orbit's (1 - 2p)^2 stays > -1
     assert set(dataset.orbit_period.values) == {1, 2}
     before = dataset.where(dataset.omega < -1e-9, drop=True)
     assert (before.stable == 1).all() and before.multiplier_modulus.max() < 1
+    # a period-p orbit's p section samples; NaN past a period-1 orbit's one
+    sections = dataset.section_deflection_1
+    assert sections.dims == ("branch_point", "section")
+    single, double = (sections[dataset.orbit_period == p] for p in (1, 2))
+    assert np.isnan(single[:, 1]).all() and np.isfinite(single[:, 0]).all()
+    np.testing.assert_array_equal(double[:, 0], dataset.section_state[dataset.orbit_period == 2, 0])
+    np.testing.assert_allclose(double[:, 1], -double[:, 0], atol=1e-9)  # z1 = +-sqrt(p)
     dataset.to_netcdf(tmp_path / "branch.nc")
 
 

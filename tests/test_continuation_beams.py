@@ -114,11 +114,13 @@ def test_period_doubling_where_the_diagram_from_rest_changes_period():
     """Beam 1 against a stiffer stop (k = 1e4 N/m, 12 modes, F0 = 0.4 mN): going down in
     Omega the impacting period-1 orbit doubles its period; a diagram from rest (400 transient
     periods, period tolerance 1e-4) is period 1 at 302.5 rad/s and period 2 at 300.5 rad/s. The
-    switched branch is period 2, stable there, and its section sample is one of the diagram's
+    switched branch is period 2, stable there, and its two section samples are the diagram's
     two (the transient has decayed to ~1e-12 of the orbit's size: its multipliers are below 0.9
-    per two periods)."""
+    per two periods). The orbit's Dataset (`to_dataset`) holds both periods: it passes through
+    both samples, at t = 0 and T, and closes at 2 T."""
     from impactbeams import Params
     from impactbeams.continuation import Continuation, continue_orbits
+    from impactbeams.orbits import periodic_orbit
     from impactbeams.sweep import run_sweep
     from impactbeams.sweep.definition import sweep_from_mapping
 
@@ -145,8 +147,17 @@ def test_period_doubling_where_the_diagram_from_rest_changes_period():
         "axes": {"omega": {"min": 300.5, "max": 302.5, "num": 2}}}))
     assert diagram.response_period.values.tolist() == [2, 1]
     samples = diagram.poincare_deflection1.sel(omega=300.5).values
-    orbit = float(branches.section_deflection_1[ends[1]])
-    assert np.min(np.abs(samples - orbit)) < 1e-8 * np.max(np.abs(samples))
+    scale = np.max(np.abs(samples))
+    orbit = branches.section_deflection_1[ends[1]].values
+    assert np.isnan(branches.section_deflection_1[ends[0], 1])  # period 1: one sample
+    assert abs(orbit[1] - orbit[0]) > 0.1 * scale  # two distinct samples
+    for sample in orbit:
+        assert np.min(np.abs(samples - sample)) < 1e-8 * scale
+    period_2 = periodic_orbit(Params(**fixed, omega=300.5), 12, period=2,
+                              guess=branches.section_state[ends[1]].values)
+    tips = period_2.to_dataset(samples_per_period=16).tip_deflection_1.values
+    assert tips.size == 33
+    np.testing.assert_allclose(tips[[0, 16, 32]], [*orbit, orbit[0]], rtol=0, atol=1e-10 * scale)
 
 
 def test_interrupt_writes_the_points_computed(tmp_path, capsys, monkeypatch):
