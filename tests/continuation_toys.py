@@ -96,6 +96,14 @@ def fold_then_grazing(offset=0.4, slant=0.0):
                gap=lambda z, p: -(z[0] + offset) + slant * (z[0] ** 2 - p))
 
 
+def pitchfork():
+    """z1 -> z1 + (p z1 - z1^3) / 2, z2 -> z2 / 2 + z1^2: the branch z = 0 for every p, its
+    multiplier 1 + p / 2 through +1 at p = 0, where the branch z1^2 = p, z2 = 2 p crosses it
+    (symmetric under z1 -> -z1: a symmetry-breaking pitchfork); the branch never turns."""
+    return Map(lambda z, p: np.array([z[0] + 0.5 * (p * z[0] - z[0] ** 3), 0.5 * z[1] + z[0] ** 2]),
+               lambda z, p: np.array([[1.0 + 0.5 * (p - 3.0 * z[0] ** 2), 0.0], [2.0 * z[0], 0.5]]))
+
+
 def colliding_pair(k=5.0):
     """z -> A(p) z, A = [[-1/2, 1], [k^2 p, -1/2]]: multipliers -1/2 +- i k sqrt(-p) for p < 0
     meet on the negative axis at p = 0 and split; -1/2 - k sqrt(p) reaches -1 at p = 1/(4 k^2)."""

@@ -36,6 +36,7 @@ def test_fold_located_where_the_determinant_vanishes():
                       settings=Settings(step=0.05, max_step=0.1, max_branches=1))
     (fold,) = labelled(branches[0], "fold")
     assert fold.x[-1] == pytest.approx(-4e-4, abs=LOCATED)
+    assert not labelled(branches[0], "branch_point")  # its multiplier at +1 is the fold's
     assert fold.x[0] == pytest.approx(-0.02, abs=1e-5)  # p is quadratic in z1 there
     # the branch turned back: it ends at the upper bound on the other side (z1 < 0)
     end = branches[0].points[-1]
@@ -59,6 +60,17 @@ def test_period_doubling_located_and_switched_to_the_period_2_orbit():
     z1, _, p = doubled.points[0].x
     once = toys.period_doubling().residual(doubled.points[0].x[:2], p)
     assert abs(z1) > 1e-4 and abs(once[0]) > 1e-4
+
+
+def test_branch_point_located_where_a_multiplier_crosses_plus_1_without_a_fold():
+    """The symmetric branch z = 0 of the pitchfork: a real multiplier through +1 at p = 0
+    while the branch goes on in p: labelled branch_point (not fold), located to 1e-11."""
+    (branch,) = follow(toys.pitchfork(), [0.0, 0.0], -0.5, -0.5, 0.5)
+    (point,) = labelled(branch, "branch_point")
+    assert point.x[-1] == pytest.approx(0.0, abs=LOCATED)
+    assert np.max(point.evaluation.multipliers.real) == pytest.approx(1.0, abs=LOCATED)
+    assert not labelled(branch, "fold") and branch.ending == "bound"
+    assert all(abs(p.x[0]) < 1e-12 for p in branch.points)  # stays on the symmetric branch
 
 
 def test_neimark_sacker_located():

@@ -380,7 +380,8 @@ VARIABLES.update({
 # continuation (impactbeams.continuation): periodic orbits along a branch ("branch_point"), in
 # the order they were found, branches one after the other
 STABILITY = ("unstable", "stable")
-BIFURCATIONS = ("none", "fold", "period_doubling", "neimark_sacker", "grazing")  # events.LABELS
+BIFURCATIONS = ("none", "fold", "period_doubling", "neimark_sacker", "grazing",
+                "branch_point")  # events.LABELS
 VARIABLES.update({
     "branch_point": Variable(("branch_point",), "1", "branch point number",
                              "index of the periodic orbit along the continuation, from 0",
@@ -407,8 +408,9 @@ VARIABLES.update({
         "0 none; 1 fold (a multiplier through +1, the branch turns back in the parameter); 2 "
         "period_doubling (a real multiplier through -1); 3 neimark_sacker (a complex pair "
         "through |mu| = 1); 4 grazing (the orbit's smallest free-flight gap through 0, the "
-        "contact sequence changes): each located to the attribute locate_tolerance in the "
-        "parameter", dtype="int8", flags=BIFURCATIONS),
+        "contact sequence changes); 5 branch_point (a real multiplier through +1 where the "
+        "branch does not turn: another branch crosses it): each located to the attribute "
+        "locate_tolerance in the parameter", dtype="int8", flags=BIFURCATIONS),
     "newton_iterations": Variable(("branch_point",), "1", "Newton iterations",
                                   "corrector iterations that found the branch point",
                                   dtype="int32"),

@@ -10,7 +10,13 @@ fold               the sign of the tangent's parameter part      that part (a mu
 period_doubling    the parity of the real multipliers < -1       |mu| - 1 of that real mu < 0
 neimark_sacker     the complex pairs outside the unit circle     |mu| - 1 of that pair
 grazing            the sign of the orbit's smallest free gap     that gap
+branch_point       the parity of the real multipliers > 1, the   mu - 1 of that real mu > 0
+                   tangent's parameter part keeping its sign
 =================  ============================================  ===============================
+
+A real multiplier through +1 is a fold where the branch turns back in the parameter, else a
+branch point, where another branch crosses (e.g. the symmetry-breaking pitchfork of a
+symmetric orbit, docs/continuation.md).
 
 The root is sought on the secant plane of the first point (`Follower.at_arclength`), by the
 Illinois variant of regula falsi, until the parameter is known to ``locate_tolerance``: the
@@ -27,8 +33,8 @@ import numpy as np
 from impactbeams.continuation.arclength import Point
 from impactbeams.variables import BIFURCATIONS
 
-FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, GRAZING = (
-    "fold", "period_doubling", "neimark_sacker", "grazing")
+FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, GRAZING, BRANCH_POINT = (
+    "fold", "period_doubling", "neimark_sacker", "grazing", "branch_point")
 LABELS = BIFURCATIONS  # the registry's flags: "none", then the labels above, codes 0, 1, ...
 MAX_LOCATING = 60  # corrector solves per located event (bisection from 1 to 1e-18 of a step)
 
@@ -36,6 +42,11 @@ MAX_LOCATING = 60  # corrector solves per located event (bisection from 1 to 1e-
 def _real_negative(point: Point) -> np.ndarray:
     mu = point.evaluation.multipliers
     return np.sort(np.abs(mu[(mu.imag == 0) & (mu.real < 0)]))[::-1]
+
+
+def _real_positive(point: Point) -> np.ndarray:
+    mu = point.evaluation.multipliers
+    return np.sort(np.abs(mu[(mu.imag == 0) & (mu.real > 0)]))[::-1]
 
 
 def _complex_pairs(point: Point) -> np.ndarray:
@@ -65,8 +76,12 @@ def _crossing_modulus(moduli: Callable[[Point], np.ndarray], a: Point, b: Point,
 def detected(a: Point, b: Point) -> list[tuple[str, Callable[[Point], float]]]:
     """The smooth bifurcations between two points of a branch, with their test functions."""
     found: list[tuple[str, Callable[[Point], float]]] = []
-    if (a.tangent[-1] > 0) != (b.tangent[-1] > 0):
+    turned = (a.tangent[-1] > 0) != (b.tangent[-1] > 0)
+    if turned:
         found.append((FOLD, lambda point: float(point.tangent[-1])))
+    if turned != (_outside(_real_positive(a)) % 2 != _outside(_real_positive(b)) % 2):
+        # a real multiplier through +1 without the branch turning (or turning without one)
+        found.append((BRANCH_POINT, _crossing_modulus(_real_positive, a, b)))
     if _outside(_real_negative(a)) % 2 != _outside(_real_negative(b)) % 2:
         # a real multiplier < 0 may be born in the step from a complex pair meeting on the
         # negative axis inside the circle: before that, none is outside (-1 = |mu| of 0)

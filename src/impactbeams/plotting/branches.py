@@ -21,7 +21,7 @@ OVERLAY_MEASURE = "section_deflection_1"  # what a diagram's poincare_deflection
 DIAGRAM_SAMPLES = "poincare_deflection1"
 ALONG = (("branch_point",), ("branch_point", "section"))  # what can be drawn
 MARKERS = {"fold": ("o", "F"), "period_doubling": ("s", "PD"), "neimark_sacker": ("D", "NS"),
-           "grazing": ("^", "G")}
+           "grazing": ("^", "G"), "branch_point": ("v", "BP")}
 
 
 def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
