@@ -6,6 +6,7 @@ The case is the shipped sweeps/continuation-stop-fold.toml: a cantilever against
 fold and returns, unstable, to a second fold.
 """
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,7 @@ import xarray as xr
 
 import continuation_reference as reference
 from impactbeams.cli import main
-from impactbeams.continuation import load_continuation
+from impactbeams.continuation import continue_orbits, load_continuation
 from impactbeams.variables import BIFURCATIONS
 
 EXAMPLE = Path(__file__).parents[1] / "sweeps" / "continuation-stop-fold.toml"
@@ -107,6 +108,17 @@ def test_example_folds_and_grazings_against_references(tmp_path):
         first = float(branch.omega[grazings[0]])
         assert first == pytest.approx(
             reference.stop_grazing(continuation.params, 5, 195.0, 210.0), abs=LOCATED)
+        # started at 260 rad/s (once labelled a grazing on an orbit still in contact, just
+        # past the lower fold): the same folds and second grazing
+        later = continue_orbits(dataclasses.replace(continuation, low=260.0))
+        for label, expected in ((FOLD, branch.omega[folds]), (GRAZING, branch.omega[grazings[1:]])):
+            np.testing.assert_allclose(
+                np.sort(later.omega.values[later.bifurcation.values == label]),
+                np.sort(expected.values), rtol=0.0, atol=LOCATED)
+        for dataset in (branch, later):
+            contacts = dataset.contacts_per_orbit.values
+            for i in np.flatnonzero(dataset.bifurcation.values == GRAZING):
+                assert contacts[i - 1] != contacts[i + 1]
 
 
 @pytest.mark.slow
