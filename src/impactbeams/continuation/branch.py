@@ -4,9 +4,11 @@ A grazing is an event of the branch, not a place to shrink the step: when the or
 smallest free-flight gap changes sign over a step (at the corrected point or at any Newton
 iterate of a failed step), the grazing is located on the secant plane, labelled, and the
 branch resumes from the first corrected point beyond it, with the new contact sequence and a
-tangent of its own. At a period doubling, while ``max_branches`` allows, the period-2 branch is
-started from the doubling point displaced along the multiplier's -1 eigenvector and followed
-after the branch it left.
+tangent of its own. A grazing is labelled only where corrected points on both sides bracket it
+and their contacts per orbit differ; otherwise the branch resumes short of it (a fold before it
+can put it out of reach of the secant planes). At a period doubling, while ``max_branches``
+allows, the period-2 branch is started from the doubling point displaced along the
+multiplier's -1 eigenvector and followed after the branch it left.
 """
 
 from __future__ import annotations
@@ -184,7 +186,8 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     sequence is corrected on a plane across the grazing value's gradient, at a distance where
     the gap has changed sign, so that it exists whichever way the branch turns. Returns that
     point and the step to take from it; None, labelling nothing, if none is found (a Newton
-    iterate crossed, not the branch).
+    iterate crossed, not the branch). Not bracketed, or no change of the contacts: labels
+    nothing and resumes short of it (`_short_of_grazing`).
     """
     _, grazing, past = locate(lambda s: follower.at_arclength(current, s).point, current,
                               taken, end, grazing_test, follower.settings.locate_tolerance)
