@@ -6,13 +6,15 @@ import numpy as np
 import pytest
 
 import continuation_toys as toys
-from impactbeams.continuation.arclength import Scaling, Settings
+from impactbeams.continuation.arclength import Point, Scaling, Settings
 from impactbeams.continuation.branch import (
     ContinuationInterrupted,
     Span,
     continue_branches,
 )
+from impactbeams.continuation.events import grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
+from impactbeams.continuation.problem import Evaluation
 from impactbeams.params import ParameterError
 
 SETTINGS = Settings(step=0.05, max_step=0.1)
@@ -194,3 +196,19 @@ def test_branches_drawn_as_a_frequency_response(tmp_path):
             plot_dataset(dataset.drop_dims("branch_point"), tmp_path / "d.png",
                          diagram=dataset)
     assert (tmp_path / "b.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(("reach", "root", "located"), [(0.6, 0.6, True), (0.6, 1.0, False)])
+def test_locate_without_a_corrected_point_beyond(reach, root, located):
+    """The corrector fails past ``reach``: past a grazing where the map is not smooth (the
+    root is located, ``root`` True, its near end at it) or where the branch turns back across
+    the planes before the grazing (no root: the bracket ends at the reach)."""
+    def point_at(s):
+        if s > reach:
+            return None
+        evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)), np.ones(1), grazing=s - root)
+        return Point(np.array([0.0, s]), np.array([0.0, 1.0]), evaluation, 1)
+
+    found = locate(point_at, point_at(0.0), 2.0, None, grazing_test, 1e-11)
+    assert found.beyond is None and found.root == located
+    assert found.s == pytest.approx(min(root, reach), abs=1e-11)

@@ -161,8 +161,8 @@ def _between(follower: Follower, a: Point, b: Point,
         if not (math.isfinite(test(a)) and math.isfinite(test(b))
                 and (test(a) > 0) != (test(b) > 0)):
             continue  # a signature changed without its multiplier crossing (a collision)
-        s, before, _ = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
-                              follower.settings.locate_tolerance)
+        s, before, _, _ = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
+                                 follower.settings.locate_tolerance)
         if before is not a:
             located.append((s, dataclasses.replace(before, label=label)))
     return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
@@ -189,9 +189,10 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     iterate crossed, not the branch). Not bracketed, or no change of the contacts: labels
     nothing and resumes short of it (`_short_of_grazing`).
     """
-    _, grazing, past = locate(lambda s: follower.at_arclength(current, s).point, current,
-                              taken, end, grazing_test, follower.settings.locate_tolerance)
-    if past is None or past.evaluation.contacts == grazing.evaluation.contacts:
+    _, grazing, past, root = locate(lambda s: follower.at_arclength(current, s).point,
+                                    current, taken, end, grazing_test,
+                                    follower.settings.locate_tolerance)
+    if not root or (past is not None and _same_contacts(grazing, past)):
         return _short_of_grazing(follower, branch, current, grazing, past, taken, progress)
     gradient = follower.grazing_gradient(grazing.x)
     # across the grazing surface, toward the other sign of the gap
@@ -200,7 +201,8 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     for fraction in BEYOND:
         distance = max(fraction * taken, follower.settings.min_step)
         beyond = follower.correct(grazing.x + distance * normal, normal, normal).point
-        if beyond is not None and _grazes(current, beyond):
+        if beyond is not None and _grazes(current, beyond) and not _same_contacts(grazing,
+                                                                                   beyond):
             break
     else:
         return None
@@ -215,17 +217,22 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     return beyond, distance
 
 
+def _same_contacts(a: Point, b: Point) -> bool:
+    return a.evaluation.contacts == b.evaluation.contacts
+
+
 def _short_of_grazing(follower: Follower, branch: Branch, current: Point, last: Point,
                       past: Point | None, taken: float,
                       progress: Progress | None) -> tuple[Point, float] | None:
     """Resume where the grazing value changed sign without a grazing located.
 
-    Either no corrected point beyond was found (``past`` None: the branch turned back across
-    ``current``'s planes, at a fold, before reaching the grazing) and the branch resumes from
-    ``last``, the farthest point reached, to cross the grazing on planes of its own; or the
-    value jumped across 0 between two orbits of the same contacts (it is the gap of whichever
-    of a free-flight minimum and the shallowest contact is nearer 0) and the branch resumes
-    from ``past``. Returns None if neither moved from ``current``.
+    Either no corrected point beyond was found and the root is not within the bracket
+    (``past`` None: the branch turned back across ``current``'s planes, at a fold, before
+    reaching the grazing) and the branch resumes from ``last``, the farthest point reached, to
+    cross the grazing on planes of its own; or the value jumped across 0 between two orbits of
+    the same contacts (it is the gap of whichever of a free-flight minimum and the shallowest
+    contact is nearer 0) and the branch resumes from ``past``. Returns None if neither moved
+    from ``current``.
     """
     resume = last if past is None else past
     if resume is current:

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
@@ -97,22 +98,37 @@ def grazing_test(point: Point) -> float:
 
 
 PointAt = Callable[[float], "Point | None"]
+# an unbracketed end (no corrected point beyond) is a root if the test's value there is within
+# this many times the secant's slope from the start times the bracket's width (a root in it)
+ROOT_MARGIN = 1e3
+
+
+class Located(NamedTuple):
+    """A root bracketed by `locate`.
+
+    ``s`` and ``before``: the last point on the start's side; ``beyond``: the first corrected
+    point past it (None if none was found); ``root``: whether the root lies within the bracket.
+    """
+
+    s: float
+    before: Point
+    beyond: Point | None
+    root: bool
 
 
 def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
-           test: Callable[[Point], float],
-           tolerance: float) -> tuple[float, Point, Point | None]:
+           test: Callable[[Point], float], tolerance: float) -> Located:
     """The points on both sides of the root of ``test`` between ``start`` and ``end``.
 
     ``start`` is at s = 0, ``end`` at s = ``s_end`` (None if the corrector failed there: it
     then counts as beyond). ``point_at(s)``: the corrected point at s (None if Newton fails).
-    Returns (the s and the point of the last on ``start``'s side, the first beyond, None if no
-    corrected point beyond was found), the bracket pinning the parameter to ``tolerance`` in
-    x~. A failed corrector inside the bracket counts as beyond the root, as at ``end``: it
-    happens past a grazing, where the period map is not smooth, but also where the branch
-    turns back across the planes (a fold between: the planes along ``start``'s tangent reach
-    no farther than where the branch's tangent is orthogonal to it). The first point beyond is
-    then None: the root is not bracketed, and the last point on ``start``'s side is no root.
+    The bracket pins the parameter to ``tolerance`` in x~. A failed corrector inside the
+    bracket counts as beyond the root, as at ``end``: it happens past a grazing, where the
+    period map is not smooth, but also where the branch turns back across the planes (a fold
+    between: the planes along ``start``'s tangent reach no farther than where the branch's
+    tangent is orthogonal to it). Without a corrected point beyond, the bracket holds a root
+    only if the test's value at its near end is as small as the secant from ``start``
+    predicts over the bracket's width (``ROOT_MARGIN``): at a fold's reach it is not.
     """
     low: Bracket = (0.0, test(start), start)
     high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
@@ -133,7 +149,17 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
             if side == 1:
                 low = (low[0], low[1] / 2.0, low[2])
             side = 1
-    return low[0], low[2], high[2]
+    return Located(low[0], low[2], high[2], high[2] is not None or _pinned(low, high, start,
+                                                                          test))
+
+
+def _pinned(low: Bracket, high: Bracket, start: Point, test: Callable[[Point], float]) -> bool:
+    """Whether the secant from ``start`` to ``low`` puts the root within the bracket."""
+    (s0, f0, _), s1 = low, high[0]
+    if s0 <= 0.0 or not math.isfinite(f0):
+        return False
+    slope = abs(test(start) - f0) / s0
+    return abs(f0) <= ROOT_MARGIN * slope * (s1 - s0)
 
 
 Bracket = tuple[float, float, Point | None]
