@@ -188,7 +188,8 @@ def test_lean_loading_gives_numbas_results(kind, tmp_path):
     """A sweep whose kernels load lean (after this process has cached them) writes the map
     Numba's own loading writes, bit for bit; the registries and scipy.linalg stay unloaded,
     and a later compile in that process works."""
-    (tmp_path / "sweep.toml").write_text(KINDS[kind])
+    # fewer cells than test_resume's (the same kernels: both laws in the dynamics)
+    (tmp_path / "sweep.toml").write_text(KINDS[kind].replace("num = 20", "num = 4"))
     write_sweep(tmp_path / "sweep.toml", tmp_path / "numba.nc")  # compiles or loads: cached
     result = subprocess.run([sys.executable, "-c", LEAN_RUN], check=True, capture_output=True,
                             text=True, cwd=tmp_path)
