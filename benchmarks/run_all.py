@@ -484,6 +484,9 @@ def first_run_table(compile_report: dict, startup: dict) -> str:
                      + f" | {f'{issue[case]:.1f} s' if case in issue else '-'} | {when} |")
     previous = startup.get("baseline", {})
     when = ", ".join(dict.fromkeys(recorded(startup)))
+    if "load_average" in startup:
+        load = startup["load_average"]
+        when += f", load {load['before']:.1f} to {load['after']:.1f}"
     for command, seconds in startup["median_s"].items():
         if command in previous.get("median_s", {}):
             lines.append(f"| `impactbeams {command}`, warm (median) | "
