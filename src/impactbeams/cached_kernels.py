@@ -32,8 +32,8 @@ _BLAS = "scipy.linalg.cython_blas"
 def load_cached_kernels_lean() -> None:
     """Make this process load cached kernels without Numba's registries or ``scipy.linalg``.
 
-    Safe to call more than once; does nothing to a Numba whose cache differs from the one
-    this was written for (0.6x: ``Cache._load_overload`` and its I/O guard).
+    Safe to call more than once; does nothing with a Numba whose cache lacks what this relies
+    on (``Cache._load_overload`` and its I/O guard, as in Numba 0.68): it then loads as usual.
     """
     from numba.core import caching
     from numba.core.runtime import nrt
