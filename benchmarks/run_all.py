@@ -446,7 +446,8 @@ def page(out: Path) -> str:
         readme += ("\n## First run and start-up\n\n`bench_compile.py` (a first map of 100 "
                    "cells and a first `simulate`, fresh processes, empty or warm Numba cache; "
                    "per-kernel compile times in [compile.md](compile.md)) and "
-                   "`bench_startup.py` (each command's start-up, warm cache):\n\n"
+                   "`bench_startup.py` (each command's start-up, warm cache, bytecode "
+                   "cached; medians of wall time and, in brackets, CPU time):\n\n"
                    + first_run_table(_load(out, "compile"), _load(out, "startup")))
     if (out / "harmonic_balance.json").exists():  # the harmonic-balance peer (pyHarm)
         readme += "\n" + harmonic_balance.section(_load(out, "harmonic_balance"))
@@ -481,13 +482,24 @@ def first_run_table(compile_report: dict, startup: dict) -> str:
         lines.append(f"| {case} | {row['wall_s']:.1f} s ({row['cpu_s']:.1f} s) | "
                      + (f"{before['wall_s']:.1f} s ({before['cpu_s']:.1f} s)" if before else "-")
                      + f" | {f'{issue[case]:.1f} s' if case in issue else '-'} | {when} |")
-    previous = startup.get("baseline", {}).get("median_s", {})
+    previous = startup.get("baseline", {})
     when = ", ".join(dict.fromkeys(recorded(startup)))
+    if "load_average" in startup:
+        load = startup["load_average"]
+        when += f", load {load['before']:.1f} to {load['after']:.1f}"
     for command, seconds in startup["median_s"].items():
-        if command in previous:
-            lines.append(f"| `impactbeams {command}`, warm (median) | {seconds:.2f} s | "
-                         f"{previous[command]:.2f} s | - | {when} |")
+        if command in previous.get("median_s", {}):
+            lines.append(f"| `impactbeams {command}`, warm (median) | "
+                         f"{_with_cpu(seconds, startup, command)} | "
+                         f"{_with_cpu(previous['median_s'][command], previous, command)} | - | "
+                         f"{when} |")
     return "\n".join(lines) + "\n"
+
+
+def _with_cpu(wall: float, startup: dict, command: str) -> str:
+    """``wall`` and, where bench_startup measured it, the command's median CPU time."""
+    cpu = startup.get("cpu_median_s", {}).get(command)
+    return f"{wall:.2f} s" + (f" ({cpu:.2f} s)" if cpu is not None else "")
 
 
 def report(out: Path) -> None:

@@ -1,9 +1,10 @@
 """Start-up of every command (issue 24): each imports only the heavy libraries it uses.
 
 A budget is a list of modules, not a time, so it cannot flake on a loaded machine; the times
-are measured by benchmarks/bench_startup.py. Also here: the two replacements that keep heavy
-libraries out — Brent's method without ``scipy.optimize`` gives SciPy's roots bit for bit, and
-the CLI's netCDF writer (no xarray) writes what xarray's writer writes.
+are measured by benchmarks/bench_startup.py. Also here: the replacements that keep heavy
+libraries out — Brent's method without ``scipy.optimize`` gives SciPy's roots bit for bit, the
+CLI's netCDF writer (no xarray) writes what xarray's writer writes, and kernels loaded from
+Numba's cache without its compile registries or ``scipy.linalg`` give Numba's results bit for bit.
 """
 
 import json
@@ -22,27 +23,35 @@ from impactbeams.params import Params
 from impactbeams.sweep import load_sweep, run_sweep, write_sweep
 from test_resume import KINDS, assert_same_map
 
-# what a command's cost is made of (docs/benchmarks/startup.json); dask is left out: xarray
-# imports it, when installed, on its own
+# what a command's cost is made of (docs/benchmarks/startup.json)
 HEAVY = {"scipy", "scipy.linalg", "scipy.optimize", "numba", "xarray", "pandas", "netCDF4",
-         "matplotlib", "matplotlib.pyplot"}
-NUMBA = {"numba", "scipy", "scipy.linalg"}  # Numba checks SciPy's BLAS on its first kernel
+         "matplotlib", "matplotlib.pyplot", "dask"}
+# Numba imports SciPy's top package to check its version; its cached kernels load without
+# scipy.linalg in the command's own process (impactbeams.cached_kernels)
+NUMBA = {"numba", "scipy"}
 NETCDF_MAP = {"xarray", "pandas", "netCDF4"}
 
 
 def _modules_after(code, cwd):
     """The `HEAVY` modules a fresh interpreter has imported after running ``code`` in ``cwd``."""
-    check = (f"import json, sys\n{code}\n"
-             f"print(json.dumps(sorted(set(sys.modules) & set({sorted(HEAVY)!r}))))")
+    check = (f"import json, sys\n{code}\n"  # a module hidden as None was not imported
+             f"print(json.dumps(sorted(name for name, module in sys.modules.items() "
+             f"if module is not None and name in {sorted(HEAVY)!r})))")
     result = subprocess.run([sys.executable, "-c", check], check=True, capture_output=True,
                             text=True, cwd=cwd)
     return set(json.loads(result.stdout.strip().splitlines()[-1]))
 
 
 def _command(*argv):
-    """Code running ``impactbeams ARGV`` (argparse's --help and errors exit)."""
-    return (f"from impactbeams.cli import main\ntry:\n    main({list(argv)!r})\n"
-            "except SystemExit:\n    pass")
+    """Code running ``impactbeams ARGV`` as the console script does, in the command's own
+    process (argparse's --help and errors exit)."""
+    return (f"import sys\nsys.argv = ['impactbeams', *{list(argv)!r}]\n"
+            "from impactbeams.cli import main\ntry:\n    main()\nexcept SystemExit:\n    pass")
+
+
+def _called(*argv):
+    """Code calling ``main(ARGV)`` in a caller's process: nothing is set up for a quick start."""
+    return f"from impactbeams.cli import main\nmain({list(argv)!r})"
 
 
 @pytest.fixture(scope="module")
@@ -58,6 +67,8 @@ BUDGETS = {  # command: the heavy modules it imports, exactly
     "import": ("import impactbeams, impactbeams.cli, impactbeams.sweep", set()),
     "help": (_command("--help"), set()),
     "run --help": (_command("run", "--help"), set()),
+    "plot --help": (_command("plot", "--help"), set()),
+    "simulate --help": (_command("simulate", "--help"), set()),
     "argument error": (_command("run", "tiny.toml", "--threads", "0"), set()),
     "missing file": (_command("run", "missing.toml"), set()),
     "modes tied": (_command("modes", "--contact-law", "tied"), set()),
@@ -65,7 +76,10 @@ BUDGETS = {  # command: the heavy modules it imports, exactly
     "modes spring": (_command("modes"), {"scipy", "scipy.linalg"}),
     "run": (_command("run", "tiny.toml", "-o", "new.nc"), NUMBA | {"netCDF4"}),
     "run, finished": (_command("run", "tiny.toml", "-o", "warm.nc"), {"netCDF4"}),
-    # xarray reads the file; Figure and the Agg canvas draw it, not pyplot; no SciPy
+    # in a caller's process Numba loads its kernels as it does (scipy.linalg for BLAS)
+    "run, called": (_called("run", "tiny.toml", "-o", "new.nc"),
+                    NUMBA | {"scipy.linalg", "netCDF4"}),
+    # xarray reads the file; Figure and the Agg canvas draw it, not pyplot; no SciPy, no Dask
     "plot": (_command("plot", "warm.nc", "-o", "map.png"), NETCDF_MAP | {"matplotlib"}),
 }
 
@@ -151,3 +165,51 @@ def test_the_cli_writer_writes_what_xarray_writes(kind, tmp_path):
     write_sweep(sweep, tmp_path / "direct.nc")
     write_netcdf(run_sweep(sweep), tmp_path / "xarray.nc")
     assert_same_map(tmp_path / "direct.nc", tmp_path / "xarray.nc")
+
+
+# --- kernels loaded from the cache without Numba's compile registries (the CLI's own process) ---
+
+LEAN_RUN = """
+import json, sys
+from impactbeams.cached_kernels import load_cached_kernels_lean
+from impactbeams.sweep import write_sweep
+load_cached_kernels_lean()
+write_sweep("sweep.toml", "lean.nc")
+loaded = {name: name in sys.modules for name in ("numba.np.random.generator_methods",
+                                               "numba.typed.typeddict", "scipy.linalg")}
+import numba, numpy as np  # a compile after a lean load refreshes Numba's context itself
+total = numba.njit(lambda x: np.sum(np.sort(x)) + x.size)(np.arange(4.0))
+print(json.dumps({"loaded": loaded, "total": total}))
+"""
+
+
+@pytest.mark.parametrize("kind", ["first-impact", "dynamics"])
+def test_lean_loading_gives_numbas_results(kind, tmp_path):
+    """A sweep whose kernels load lean (after this process has cached them) writes the map
+    Numba's own loading writes, bit for bit; the registries and scipy.linalg stay unloaded,
+    and a later compile in that process works."""
+    # fewer cells than test_resume's (the same kernels: both laws in the dynamics)
+    (tmp_path / "sweep.toml").write_text(KINDS[kind].replace("num = 20", "num = 4"))
+    write_sweep(tmp_path / "sweep.toml", tmp_path / "numba.nc")  # compiles or loads: cached
+    result = subprocess.run([sys.executable, "-c", LEAN_RUN], check=True, capture_output=True,
+                            text=True, cwd=tmp_path)
+    report = json.loads(result.stdout.strip().splitlines()[-1])
+    assert report == {"loaded": {"numba.np.random.generator_methods": False,
+                                 "numba.typed.typeddict": False,
+                                 # the spring law's contact modes are SciPy's (contact.spring)
+                                 "scipy.linalg": kind == "dynamics"},
+                      "total": 10.0}
+    assert_same_map(tmp_path / "lean.nc", tmp_path / "numba.nc")
+
+
+def test_blas_alone_is_scipys_module():
+    """The BLAS extension loaded alone is the one ``import scipy.linalg`` then uses."""
+    code = ("import sys\nfrom impactbeams import cached_kernels\n"
+            "cached_kernels._load_blas_alone()\nalone = sys.modules['scipy.linalg.cython_blas']\n"
+            "assert 'scipy.linalg' not in sys.modules and alone.__pyx_capi__\n"
+            "import scipy.linalg\nfrom scipy.linalg import cython_blas\n"
+            "assert cython_blas is alone and scipy.linalg.eigvals([[2.0]])[0] == 2.0\n"
+            "print('ok')")
+    result = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                            text=True)
+    assert result.stdout.strip() == "ok"

@@ -148,7 +148,8 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
         _announce(sweep, output, args)
     try:
         # a reused output computes nothing: Numba need not load to watch for compiles
-        compiling = contextlib.nullcontext() if reuse else _compile_report(run_kind(sweep))
+        compiling = (contextlib.nullcontext() if reuse
+                     else _running_kernels(run_kind(sweep), args))
         with _cluster_runner(args) as runner, compiling:
             write_sweep(sweep, output, threads=None if runner else args.threads,
                         progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner,
@@ -207,11 +208,20 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
              f"{format_time(COMPILE[run_kind(sweep)])}"), file=sys.stderr)
 
 
-def _compile_report(kind: str) -> contextlib.AbstractContextManager[None]:
-    """Lines on stderr while the kernels of a run of ``kind`` compile (if they do)."""
+def _running_kernels(kind: str, args: argparse.Namespace,
+                     ) -> contextlib.AbstractContextManager[None]:
+    """Lines on stderr while the kernels of a run of ``kind`` compile (if they do).
+
+    In the command's own process, cached kernels load with only what running them needs
+    (`impactbeams.cached_kernels`).
+    """
     from impactbeams.compilation import reporting_compiles
     from impactbeams.costs import COMPILE
 
+    if args.own_process:
+        from impactbeams.cached_kernels import load_cached_kernels_lean
+
+        load_cached_kernels_lean()
     return reporting_compiles(COMPILE[kind])
 
 
@@ -273,6 +283,8 @@ def _cluster_runner(args: argparse.Namespace) -> Iterator[ChunkRunner | None]:
 
 
 def _plot(args: argparse.Namespace) -> int:
+    if args.own_process:
+        _hide_dask()
     from impactbeams.plotting import parse_assignments, parse_levels, plot_dataset
     from impactbeams.preflight import image_output, read_netcdf
 
@@ -289,6 +301,15 @@ def _plot(args: argparse.Namespace) -> int:
         print(f"impactbeams: {note}", file=sys.stderr)
     print(f"wrote {output}", file=sys.stderr)
     return 0
+
+
+def _hide_dask() -> None:
+    """Make Dask look absent to xarray in this process (a plot never computes with it).
+
+    xarray, finding Dask installed, imports it (0.2-0.3 s) to ask of every array whether it is
+    one of Dask's, and keeps the answer for the process: hence only in the command's own one.
+    """
+    sys.modules.setdefault("dask", None)  # type: ignore[arg-type]  # importlib: "not found"
 
 
 def _continue(args: argparse.Namespace) -> int:
@@ -309,7 +330,7 @@ def _continue(args: argparse.Namespace) -> int:
               f"{continuation.parameter} from {continuation.low:g} to {continuation.high:g} "
               f"({continuation.direction}) -> {output}", file=sys.stderr)
         try:
-            with _compile_report("simulate"):
+            with _running_kernels("simulate", args):
                 dataset = continue_orbits(continuation,
                                           None if args.quiet else _branch_progress)
         except ContinuationInterrupted as interrupted:
@@ -350,7 +371,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
     with output_lock(output):  # a second simulate on this output would silently replace it
-        with _compile_report("simulate"):
+        with _running_kernels("simulate", args):
             dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
                                dt_output=args.dt_output, fields=args.fields,
                                energy_balance=args.energy_balance, lyapunov=args.lyapunov,
@@ -535,10 +556,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     0: done; 1 (`EXIT_SYSTEM_ERROR`): a file could not be written or memory ran out;
     2 (`EXIT_USER_ERROR`): an input was rejected before any work; 3
     (`EXIT_INCOMPLETE`): written, but some runs stopped before t_max; 130: interrupted.
+
+    Without ``argv`` (the console script, ``python -m impactbeams.cli``) the process is the
+    command's own, and is set up for a quick start: cached kernels load without Numba's
+    compile registries (`impactbeams.cached_kernels`), and ``plot`` hides Dask from xarray.
+    With ``argv`` (a caller's process) neither is done: the results are the same.
     """
     try:
         args = build_parser().parse_args(
             _attach_negative_values(sys.argv[1:] if argv is None else argv))
+        args.own_process = argv is None
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
             return args.handler(args)

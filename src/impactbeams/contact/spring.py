@@ -38,8 +38,6 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import scipy.linalg
-import scipy.linalg.lapack
 
 from impactbeams.contact.free import FreePhase, build_free_phase
 from impactbeams.params import MAX_MODES, ParameterError, Params
@@ -180,6 +178,8 @@ def _secular_root(i: int, d: np.ndarray, z: np.ndarray) -> tuple[float, np.ndarr
     iteration's stopping test has an absolute part: seen for the last root of a stiff contact
     on a beam whose modes reach 4e11 rad/s); roots that converge are left exactly as they are.
     """
+    import scipy.linalg.lapack  # here, not at the top: a first-impact map needs no SciPy
+
     delta, sigma, work, info = scipy.linalg.lapack.dlasd4(i, d, z, 1.0)
     if info != 0:
         scale = d[-1]
@@ -215,6 +215,8 @@ def _damped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
                           [-np.diag(omega), -vectors.T @ damping_matrix @ vectors]])
     if not np.all(np.isfinite(block)):  # damping beyond float range: no oscillation left
         return None
+    import scipy.linalg  # here, not at the top: a first-impact map needs no SciPy
+
     values, modes = scipy.linalg.eig(block)
     rising = np.abs(values.imag) > _OVERDAMPED * np.abs(values)
     if np.count_nonzero(rising) != 2 * m:

@@ -391,7 +391,7 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     run each cell over (transient + sampled) forcing periods (`impactbeams.longtime`);
     ``dynamics_status`` is then the worse of the runs'.
     """
-    from impactbeams.kernels import first_impact, observables
+    from impactbeams.kernels import first_impact
 
     if plan is None:
         plan = build_plan(sweep)
@@ -417,6 +417,8 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     cells = chunk_cells(sweep, plan, start, stop)
     columns = {}
     if any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables):
+        from impactbeams.kernels import observables  # not for a first-impact map
+
         kernel = (observables.observables_map_parallel if parallel
                   else observables.observables_map_serial)
         out = np.empty((cells.shape[0], len(layout.OUT_COLUMNS)))
