@@ -231,6 +231,38 @@ def _column_states(t, work, drives, n, forcing_frequency):
     return turn
 
 
+# Newton's corrections turn the state by e^(lambda h) where |lambda h| is at most this (rad):
+# sines and cosines of small arguments, cheaper than of the phase from t = 0
+_SHORT_TURN = 1.0 / 16.0
+
+
+@kernel
+def _turn_states(h, turn, work, drives, n, forcing_frequency):
+    """Both responses' states h (s) on from the column's current ones (at t); e^(i Omega (t + h)).
+
+    ``omega |h|`` and ``Omega |h|`` at most ``_SHORT_TURN``; ``turn`` is e^(i Omega t). An
+    undriven mode turns by e^(lambda h) as ``propagation.advance_mode``
+    propagates it; a driven one is propagated by ``advance_mode`` from its current state.
+    """
+    step = complex(math.cos(forcing_frequency * h), math.sin(forcing_frequency * h))
+    for j in range(n):
+        w, z = work[_FREQUENCY, j], work[_ZETA, j]
+        if drives[_A, j] != 0 or drives[_B, j] != 0:
+            for row, now in ((_A, _Q_AT), (_B, _Q_BT)):
+                work[now, j], work[now + 1, j] = advance_mode(
+                    work[now, j], work[now + 1, j], h, w, z, drives[row, j], forcing_frequency,
+                    turn, step)
+            continue
+        sigma, wd = z * w, w if z == 0.0 else w * math.sqrt(1.0 - z * z)
+        decay = 1.0 if sigma == 0.0 else math.exp(-sigma * h)
+        rotation = complex(decay * math.cos(wd * h), decay * math.sin(wd * h))
+        for now in (_Q_AT, _Q_BT):
+            q0, v0 = work[now, j], work[now + 1, j]
+            work[now, j] = rotation.real * q0 + (v0 + sigma * q0) / wd * rotation.imag
+            work[now + 1, j] = rotation.real * v0 - (w * w * q0 + sigma * v0) / wd * rotation.imag
+    return turn * step
+
+
 @kernel
 def _cell_gap(x, const, harmonics, turn, work, drives, n, forcing_frequency):
     """A cell's gap e, e', its evaluation scale and e'' from the column's states (x: its F0).
@@ -259,14 +291,16 @@ def _cell_gap(x, const, harmonics, turn, work, drives, n, forcing_frequency):
 
 @kernel
 def _follow_flank(t, turn, x, const, curvature, t_max, harmonics, work, drives, n,
-                  forcing_frequency):
+                  forcing_frequency, fastest):
     """A cell's first root on the falling flank it is on at t: ``(root, t_state, turn)``.
 
     The column's states are at t on entry (``turn`` = e^(i Omega t)) and at ``t_state`` on
     return (``turn`` then e^(i Omega t_state)). With |e''| <= curvature,
     e falls on [t, t - e'(t) / curvature]: there it has one root, which safeguarded Newton
     (the stops of ``events._newton_in_bracket``) finds from the root of e's local quadratic,
-    mostly in one or two evaluations. Returns root NaN (unresolved) with ``t_state`` the last
+    mostly in one or two evaluations: the first at its exact state (``_column_states``), the
+    corrections by turning that state (``_turn_states``; ``fastest`` is the largest of the
+    modes' frequencies and Omega, rad/s). Returns root NaN (unresolved) with ``t_state`` the last
     time where e was above its round-off, if the root is not on that certified flank.
     """
     value, slope, scale, acceleration = _cell_gap(x, const, harmonics, turn, work, drives, n,
@@ -283,7 +317,10 @@ def _follow_flank(t, turn, x, const, curvature, t_max, harmonics, work, drives, 
             if not bracketed:
                 return np.nan, t_state, turn
             step = 0.5 * (lo + hi)
-        turn = _column_states(step, work, drives, n, forcing_frequency)
+        # the first point exactly; Newton's short corrections turn the state from there
+        turn = (_column_states(step, work, drives, n, forcing_frequency)
+                if t_state == t or fastest * abs(step - t_state) > _SHORT_TURN else
+                _turn_states(step - t_state, turn, work, drives, n, forcing_frequency))
         t_state = step
         value, slope, scale, _ = _cell_gap(x, const, harmonics, turn, work, drives, n,
                                            forcing_frequency)
@@ -330,6 +367,7 @@ def _shared_column(cells, first, stride, count, key, table, geo, t_max, work, dr
     (coherent_a, band_a, curvature_a, jerk_a, any_a), (coherent_b, band_b, curvature_b, jerk_b,
                                                        any_b) = bounds[0], bounds[1]
     max_steps = step_limit(0.0, t_max, frequencies)
+    fastest = max(np.max(frequencies), omega)
     t, t_states, turn = 0.0, np.nan, 1.0 + 0.0j
     i = first
     for _ in range(count):
@@ -346,7 +384,7 @@ def _shared_column(cells, first, stride, count, key, table, geo, t_max, work, dr
             turn = _column_states(t, work, drives, active, omega)
             t_states = t
         root, t_states, turn = _follow_flank(t, turn, x, const, cell_bounds[2], t_max,
-                                             harmonics, work, drives, active, omega)
+                                             harmonics, work, drives, active, omega, fastest)
         if np.isnan(root):
             for j in range(active):
                 work[_Q_S, j] = work[_Q_A0, j] + x * work[_Q_B0, j]
