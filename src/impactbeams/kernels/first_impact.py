@@ -432,8 +432,17 @@ def _scratch(n_modes):
             np.empty((3, n_modes), dtype=np.complex128), rotor_arrays(n_modes))
 
 
+@kernel
+def _residue(block, n_blocks):
+    """The bit reversal of ``block`` among ``n_blocks`` (a power of two)."""
+    residue, half = 0, n_blocks // 2
+    while half > 0:
+        residue, block, half = 2 * residue + block % 2, block // 2, half // 2
+    return residue
+
+
 _BLOCK = 256  # cells per unit of parallel work at least: scratch allocated once per block
-_MAX_BLOCKS = 64  # each a sample of the whole grid: equal work for up to 64 threads
+_MAX_BLOCKS = 64  # blocks of interleaved columns, a power of two
 
 
 def _first_impact_map(cells, columns, key, tables, geometry, t_max, out):
@@ -442,17 +451,22 @@ def _first_impact_map(cells, columns, key, tables, geometry, t_max, out):
     Column c is ``cells[columns[c]:columns[c + 1]]``, cells that differ in column ``key`` of
     ``CELL_COLUMNS`` alone (``CELL_F0``, ``CELL_U0`` or ``CELL_CLEARANCE``, axes in which the
     gap is affine);
-    columns of one cell are searched on their own. Block b takes columns b, b + n_blocks, ...
-    (at most ``_MAX_BLOCKS`` blocks): interleaved, so that the costly regions of a grid (near
+    columns of one cell are searched on their own. The columns are dealt to n_blocks blocks
+    (a power of two, at most ``_MAX_BLOCKS``) so that the costly regions of a grid (near
     resonances and the no-impact boundary) are shared evenly between the threads of prange's
-    static schedule, which gives each thread a contiguous range of blocks. Each iteration owns
-    its columns, so the result does not depend on the number of threads.
+    static schedule, which gives each of T threads a contiguous range of blocks: block b takes
+    columns r, r + n_blocks, ... with r the bit reversal of b (``_residue``), so that for T a
+    power of two thread k takes the columns c = k mod T (with one block per column, as before,
+    Fig. 5a's resonance fell to one thread: 1.38 times the mean work). Each iteration owns its
+    columns, so the result does not depend on the number of threads.
     """
     n_columns = columns.size - 1
-    n_blocks = min(n_columns, (cells.shape[0] + _BLOCK - 1) // _BLOCK, _MAX_BLOCKS)
+    n_blocks = 1
+    while 2 * n_blocks <= min(n_columns, (cells.shape[0] + _BLOCK - 1) // _BLOCK, _MAX_BLOCKS):
+        n_blocks *= 2
     for block in prange(n_blocks):
         work, drives, rotor = _scratch(tables.shape[3])
-        for c in range(block, n_columns, n_blocks):
+        for c in range(_residue(block, n_blocks), n_columns, n_blocks):
             _column(cells, columns[c], columns[c + 1], key, tables, geometry, t_max, work,
                     drives, rotor, out)
 
