@@ -90,14 +90,19 @@ def test_columns_equal_the_cell_by_cell_search_on_the_shipped_sweeps(name, thinn
         sweep = sweep_from_mapping({"t_max": sweep.t_max, "n_modes": sweep.n_modes,
                                     "observables": list(sweep.observables),
                                     "params": {"clearance": sweep.base.clearance}, "axes": axes})
+    assert_columns_match_cells(sweep, 200)
+
+
+def assert_columns_match_cells(sweep, checked):
+    """The same classification by columns as cell by cell, over 20 % of the cells impacting,
+    and the times within the gap's round-off band (the ``checked`` largest differences)."""
     cells, plan, by_column, by_cell = maps(sweep)
-    assert np.array_equal(np.isnan(by_column), np.isnan(by_cell))  # the same classification
+    assert np.array_equal(np.isnan(by_column), np.isnan(by_cell))
     assert not np.isinf(by_column).any()
     hit = np.flatnonzero(~np.isnan(by_cell))
     assert hit.size > 0.2 * sweep.size
-    # the times differ only within the gap's round-off band; check the 200 largest differences
     difference = np.abs(by_column[hit] - by_cell[hit])
-    for i in hit[np.argsort(difference)[-200:]]:
+    for i in hit[np.argsort(difference)[-checked:]]:
         assert abs(by_column[i] - by_cell[i]) <= round_off_band(cells[i], plan, by_cell[i]), i
 
 
@@ -120,15 +125,7 @@ def thinned(path, axis, keep):
 def test_columns_equal_the_cell_by_cell_search_on_the_benchmark_maps(name, axis):
     """Issue 24's maps (benchmarks/maps/), every 100th column: uplifted beams (two responses
     per column), a stop, a shaker, columns along the clearance."""
-    sweep = thinned(BENCHMARK_MAPS / name, axis, 100)
-    cells, plan, by_column, by_cell = maps(sweep)
-    assert np.array_equal(np.isnan(by_column), np.isnan(by_cell))
-    assert not np.isinf(by_column).any()
-    hit = np.flatnonzero(~np.isnan(by_cell))
-    assert hit.size > 0.2 * sweep.size
-    difference = np.abs(by_column[hit] - by_cell[hit])
-    for i in hit[np.argsort(difference)[-100:]]:
-        assert abs(by_column[i] - by_cell[i]) <= round_off_band(cells[i], plan, by_cell[i]), i
+    assert_columns_match_cells(thinned(BENCHMARK_MAPS / name, axis, 100), 100)
 
 
 def test_an_uplifted_column_is_shared_and_follows_its_flanks():
