@@ -165,7 +165,8 @@ def markdown(report: dict, previous: dict | None) -> str:
         check = entry.get("against_reference")
         lines.append(
             f"| `{entry['map']}` | {entry['impacted_fraction']:.0%} | "
-            f"{seconds['1']:.3f} s | {seconds['2']:.3f} s | {entry['speedup_2_threads']:.2f}x | "
+            f"{seconds['1']:.3f} s (CPU {entry['best_cpu_1_thread_s']:.3f} s) | "
+            f"{seconds['2']:.3f} s | {entry['speedup_2_threads']:.2f}x | "
             f"{per_cell['1']:.0f} / {per_cell['2']:.0f} | {ratio['1']:.2f} / {ratio['2']:.2f} | "
             + (f"{old['1']:.3f} / {old['2']:.3f} s" if old else "-") + " | "
             + (f"{check['same_classification']}, {check['max_time_difference_s']:.1e} s"
