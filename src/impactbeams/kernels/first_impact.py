@@ -54,6 +54,7 @@ from impactbeams.kernels.layout import (
     ROW_UNIT2,
 )
 from impactbeams.kernels.propagation import advance_mode
+from impactbeams.kernels.records import EventFunction, Oscillators
 from impactbeams.kernels.rotor import rotor_arrays
 
 # rows of the per-mode scratch of the moving modes (private to this kernel)
@@ -108,10 +109,12 @@ def first_impact_time(cell, table, geo, t_max, t_start, work, force, rotor):
     if sine == 0.0 and q_s[0] == 0.0 and v_s[0] == 0.0 and force[0] == 0 and active == 1:
         return np.nan  # nothing moves: the gap stays open
     frequencies = work[_FREQUENCY, :active]
-    # the harmonic as a complex amplitude, as the columns pass it: one compiled search for both
-    return search_root(q_s, v_s, 0.0, t_start, t_max, frequencies, work[_ZETA, :active],
-                       force[:active], work[_WEIGHTS, :active], cell[CELL_CLEARANCE],
-                       complex(sine, 0.0), cell[CELL_FORCING_FREQUENCY], TOUCH_TOLERANCE,
+    oscillators = Oscillators(frequencies, work[_ZETA, :active], force[:active],
+                              cell[CELL_FORCING_FREQUENCY])
+    gap = EventFunction(work[_WEIGHTS, :active], cell[CELL_CLEARANCE],
+                        complex(sine, 0.0),
+                        cell[CELL_FORCING_FREQUENCY])
+    return search_root(q_s, v_s, 0.0, t_start, t_max, oscillators, gap, TOUCH_TOLERANCE,
                        step_limit(0.0, t_max, frequencies), work[_Q, :active], work[_V, :active],
                        rotor)
 
@@ -357,12 +360,12 @@ def _shared_column(cells, first, stride, count, key, table, geo, t_max, work, dr
     bounds = []
     split = []
     for row, state in ((_A, _Q_A0), (_B, _Q_B0)):
-        q_s, v_s, force = work[state, :active], work[state + 1, :active], drives[row, :active]
-        sine_amp = split_steady_states(q_s, v_s, 0.0, frequencies, zeta, force, weights,
-                                       harmonics[row - _A], omega)
-        split.append(sine_amp)
-        bounds.append(phase_bounds(q_s, v_s, 0.0, t_max, frequencies, zeta, force, weights,
-                                   sine_amp, omega))
+        q_s, v_s = work[state, :active], work[state + 1, :active]
+        oscillators = Oscillators(frequencies, zeta, drives[row, :active], omega)
+        event = split_steady_states(q_s, v_s, 0.0, oscillators, EventFunction(
+            weights, 0.0, harmonics[row - _A], omega))
+        split.append(event.sine_amp)
+        bounds.append(phase_bounds(q_s, v_s, 0.0, t_max, oscillators, event))
     harmonics = (split[0], split[1])
     (coherent_a, band_a, curvature_a, jerk_a, any_a), (coherent_b, band_b, curvature_b, jerk_b,
                                                        any_b) = bounds[0], bounds[1]
@@ -391,9 +394,10 @@ def _shared_column(cells, first, stride, count, key, table, geo, t_max, work, dr
                 work[_V_S, j] = work[_V_A0, j] + x * work[_V_B0, j]
                 drives[_CELL, j] = drives[_A, j] + x * drives[_B, j]
             root, _ = walk(work[_Q_S, :active], work[_V_S, :active], 0.0, t_states, t_max,
-                           frequencies, zeta, drives[_CELL, :active], weights, const,
-                           harmonics[0] + x * harmonics[1], omega, TOUCH_TOLERANCE, max_steps,
-                           cell_bounds, np.nan, work[_Q, :active], work[_V, :active], rotor)
+                           Oscillators(frequencies, zeta, drives[_CELL, :active], omega),
+                           EventFunction(weights, const, harmonics[0] + x * harmonics[1], omega),
+                           TOUCH_TOLERANCE, max_steps, cell_bounds, np.nan, work[_Q, :active],
+                           work[_V, :active], rotor)
             t_states = np.nan
         out[i] = root
         t = 0.0 if root == GAVE_UP else root  # NaN ends the column
