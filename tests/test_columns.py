@@ -227,3 +227,19 @@ def test_a_search_that_reaches_its_step_cap_says_so(free):
     work = np.empty(1), np.empty(1), rotor_arrays(1)
     assert search_root(*args, 1, *work) == GAVE_UP
     assert 0.0 < search_root(*args, 10**6, *work) < 1.0
+
+
+@pytest.mark.parametrize("n_blocks", [1, 2, 8, 64])
+def test_blocks_deal_every_thread_an_interleaved_share_of_the_columns(n_blocks):
+    """prange's static schedule gives each of T threads (a power of two up to n_blocks) a
+    contiguous range of blocks; by bit reversal thread k then takes the columns c = k mod T
+    (at one block per column, Fig. 5a's resonance fell to one of two threads)."""
+    residues = [fi._residue(block, n_blocks) for block in range(n_blocks)]
+    assert sorted(residues) == list(range(n_blocks))  # every column in exactly one block
+    threads = 1
+    while threads <= n_blocks:
+        per_thread = n_blocks // threads
+        for k in range(threads):
+            share = residues[k * per_thread:(k + 1) * per_thread]
+            assert all(r % threads == residues[k * per_thread] % threads for r in share)
+        threads *= 2
