@@ -42,11 +42,12 @@ from impactbeams.kernels.layout import (
 from impactbeams.kernels.propagation import advance_to, steady_phasor
 from impactbeams.kernels.records import EventFunction, Oscillators
 from impactbeams.kernels.rotor import (
+    free_event,
     modulus_bound,
     rotor_bounds,
     rotor_event,
     rotor_load,
-    rotor_step,
+    turn,
 )
 
 _EPS = np.finfo(np.float64).eps
@@ -283,14 +284,42 @@ def cubic_step(value, slope, acceleration, jerk, start):
 
 
 @kernel
+def _quadratic_root(value, slope, acceleration, curvature, jerk, t):
+    """The root of e near t (s) from e's exact local quadratic, past it by its error; NaN if unsure.
+
+    With e(t) = value, e'(t) = slope < 0 and e''(t) = acceleration, and |e''| <= curvature,
+    |e'''| <= jerk around t: at the root t + d of value + slope d + acceleration d^2 / 2,
+    |e| <= jerk |d|^3 / 6 and |e'| >= m ~ |slope| - 2 curvature |d|, so the root of e lies
+    within err = jerk |d|^3 / (6 m) of it. Returned (plus err and 2 eps t: past the root) only
+    where err is below an ulp of t, as a converged Newton iteration would end.
+    """
+    if not slope < 0.0:
+        return np.nan
+    if value > 0.0:
+        d = _first_positive_root(value, slope, 0.5 * acceleration)
+    else:  # past the root: the same parabola backwards
+        d = -_first_positive_root(-value, slope, -0.5 * acceleration)
+    m = -slope - curvature * (2.0 * abs(d) + 4.0 * _EPS * abs(t))  # over [t + d -+ err]
+    if not m > -0.5 * slope:
+        return np.nan
+    error = jerk * abs(d) ** 3 / (6.0 * m)
+    if not error <= _EPS * abs(t):
+        return np.nan
+    return t + d + error + 2.0 * _EPS * abs(t)
+
+
+@kernel
 def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, guess, oscillators, event, tolerance,
-                       q, v):
+                       q, v, curvature=np.inf, jerk=np.inf):
     """The single root of a monotone e on [lo, hi] (e(lo) > 0, e(hi) <= round-off).
 
     Safeguarded Newton, started from ``guess`` if it is inside the bracket, else from the
     secant point; it stops at a few ulps of time or, with ``tolerance`` > 0, as soon as |e| is
     within the round-off rule (Newton steps inside e's noise band wander: they would cost
-    evaluations and change nothing). Returns the root and the time of the state left in q, v.
+    evaluations and change nothing). With ``tolerance`` = 0 and bounds ``curvature`` >= |e''|
+    and ``jerk`` >= |e'''| on the bracket, an iterate whose exact local quadratic pins the root
+    to an ulp ends it (``_quadratic_root``): one evaluation, where Newton takes two or three.
+    Returns the root and the time of the state left in q, v.
     """
     t = guess if lo < guess < hi else lo + (hi - lo) * e_lo / (e_lo - e_hi)
     if not lo < t < hi:
@@ -306,6 +335,11 @@ def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, guess, oscillators, ev
             return hi, t
         if abs(value) <= tolerance * _EPS * scale:
             return t, t
+        if tolerance == 0.0 and jerk < np.inf:
+            root = _quadratic_root(value, slope, event_acceleration(q, v, t, oscillators, event),
+                                   curvature, jerk, t)
+            if lo < root:
+                return min(root, hi), t
         step = t - value / slope if slope != 0.0 else lo - 1.0
         # converged to within an ulp (tested before the safeguard, which would otherwise
         # replace a step that stays at t = lo or hi by a bisection far from the root): the
@@ -473,25 +507,39 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
             # min of two floats, as everywhere in the search: each signature compiles its own
             reach = min(min(2.0 * value / -slope, span_cap), t_end - t)
             if reach > step and slope + curvature * reach < 0.0:  # e monotone on the bracket
+                # start Newton at the root of e's local quadratic: error ~ jerk s^3
+                guess = t + _first_positive_root(value, slope, 0.5 * acceleration)
+                # e <= value + slope s + curvature s^2 / 2, which may reach 0 on the bracket:
+                # then the root is certified there, with no probe
+                below = _first_positive_root(value, slope, 0.5 * curvature)
+                if tolerance == 0.0 and below <= reach:
+                    return _newton_in_bracket(q_s, v_s, t_s, t, t + below, value, 0.0, guess,
+                                              oscillators, event, tolerance, q, v, curvature,
+                                              jerk if any_span else np.inf)
                 t_probe = t + reach
                 advance_to(oscillators, q_s, v_s, t_s, t_probe, q, v)
                 t_state = t_probe
                 probe, _, probe_scale = evaluate(q, v, t_probe, event)
                 if probe <= tolerance * _EPS * probe_scale:
-                    # start Newton at the root of e's local quadratic: error ~ jerk s^3
-                    guess = t + _first_positive_root(value, slope, 0.5 * acceleration)
                     return _newton_in_bracket(q_s, v_s, t_s, t, t_probe, value, probe, guess,
-                                              oscillators, event, tolerance, q, v)
+                                              oscillators, event, tolerance, q, v, curvature,
+                                              jerk if any_span else np.inf)
         if t + step >= t_end:
             return NO_EVENT, t_state
-        taken = 0.0 if per_step else rotor_step(rotor, step)
+        # the rotor's arrays passed loose, not the record: fewer reference counts per step
+        taken = 0.0 if per_step else turn(rotor.amplitudes, rotor.eigenvalues, rotor.levels,
+                                          rotor.factors, step)
         if taken == 0.0:  # (a step below the rotor's table: exact)
             t += step
         else:
             offset += taken
             t = t_origin + offset
-            value, slope, scale, acceleration = rotor_event(rotor, q_s, v_s, t_s, t, oscillators,
-                                                            event)
+            if driven == 0:
+                value, slope, scale, acceleration = free_event(
+                    rotor.amplitudes, rotor.rates, oscillators.frequencies.size, event)
+            else:
+                value, slope, scale, acceleration = rotor_event(rotor, q_s, v_s, t_s, t,
+                                                                oscillators, event)
             if value > tolerance * _EPS * scale:
                 continue
             # at round-off level of a root: decide on the exact state, and go on from it

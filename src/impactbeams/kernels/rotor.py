@@ -126,18 +126,15 @@ def rotor_bounds(rotor, oscillators, event, coherent):
 
 
 @kernel
-def _factor(rotor, exponent):
-    """e^(lambda 2^exponent) of every mode, computed on first use."""
-    lam, levels, factors = rotor.eigenvalues, rotor.levels, rotor.factors
+def _compute_factor(eigenvalues, levels, factors, exponent):
+    """Store e^(lambda 2^exponent) of every mode (``factors[exponent - LOWEST]``)."""
     level = exponent - LOWEST
-    if levels[level] == 0:
-        levels[level] = 1
-        h = math.ldexp(1.0, exponent)
-        for j in range(levels[LEVELS] + 1):
-            growth = lam[j] * h
-            factors[level, j] = math.exp(growth.real) * complex(math.cos(growth.imag),
-                                                                math.sin(growth.imag))
-    return factors[level]
+    levels[level] = 1
+    h = math.ldexp(1.0, exponent)
+    for j in range(levels[LEVELS] + 1):
+        growth = eigenvalues[j] * h
+        factors[level, j] = math.exp(growth.real) * complex(math.cos(growth.imag),
+                                                            math.sin(growth.imag))
 
 
 @kernel
@@ -146,58 +143,67 @@ def rotor_step(rotor, step):
 
     Returns the step taken (s), 0 if ``step`` is below the table's smallest (nothing moved).
     """
-    z, n_modes = rotor.amplitudes, rotor.levels[LEVELS]
+    return turn(rotor.amplitudes, rotor.eigenvalues, rotor.levels, rotor.factors, step)
+
+
+@kernel
+def turn(amplitudes, eigenvalues, levels, factors, step):
+    """``rotor_step`` on the rotor's arrays that it uses.
+
+    The walk calls this form at every step: a kernel increfs and decrefs each array it
+    receives (an atomic update each, `records`), and a whole `records.Rotor` is six of them.
+    Each factor e^(lambda 2^k) is computed on first use.
+    """
     fraction, exponent = math.frexp(step)  # step = fraction 2^exponent, 1/2 <= fraction < 1
     if exponent - 2 < LOWEST:
         return 0.0
     if exponent > LOWEST + LEVELS:  # not min(): frexp's int32 against an int64 compiles its own
         exponent = LOWEST + LEVELS
-    first = _factor(rotor, exponent - 1)
+    first = exponent - 1 - LOWEST
+    if levels[first] == 0:
+        _compute_factor(eigenvalues, levels, factors, exponent - 1)
     taken = math.ldexp(1.0, exponent - 1)
     # every mode turns (a driven mode's z is never read), which the compiler can vectorise
     if fraction >= 0.75:
-        second = _factor(rotor, exponent - 2)
+        if levels[first - 1] == 0:
+            _compute_factor(eigenvalues, levels, factors, exponent - 2)
         taken += math.ldexp(1.0, exponent - 2)
-        for j in range(n_modes + 1):
-            z[j] = z[j] * first[j] * second[j]
+        for j in range(levels[LEVELS] + 1):
+            amplitudes[j] = amplitudes[j] * factors[first, j] * factors[first - 1, j]
         return taken
-    for j in range(n_modes + 1):
-        z[j] = z[j] * first[j]
+    for j in range(levels[LEVELS] + 1):
+        amplitudes[j] = amplitudes[j] * factors[first, j]
     return taken
 
 
 @kernel
-def rotor_event(rotor, q_s, v_s, t_s, t, oscillators, event):
-    """e, e', its evaluation scale and e'' at time t (s), from the rotor.
+def free_event(amplitudes, rates, n, event):
+    """e, e', its evaluation scale and e'' of the forcing and the ``n`` undriven modes.
 
-    As ``events.evaluate`` and ``events.event_acceleration``, with the undriven modes taken from
-    the rotor and the driven ones propagated exactly from their state (q_s, v_s) at t_s (s).
+    ``rotor_event`` without the driven modes, on the rotor's arrays that it uses (see ``turn``).
     """
-    const, sine_amp = event.const, event.sine_amp
-    forcing_frequency = event.forcing_frequency
-    z, driven, levels, rates = rotor.amplitudes, rotor.driven, rotor.levels, rotor.rates
-    n = oscillators.frequencies.size
-    sine, cosine = z[n].imag, z[n].real  # the forcing's phasor
+    const, sine_amp, forcing_frequency = event.const, event.sine_amp, event.forcing_frequency
+    sine, cosine = amplitudes[n].imag, amplitudes[n].real  # the forcing's phasor
     sine_term, cosine_term = sine_amp.real * sine, sine_amp.imag * cosine
     # the undriven modes (weight 0 for the driven): q = Re z, w q' = Re(w lambda z), w q'' =
     # Re(w lambda^2 z); two partial sums of each, in a fixed order, so that the additions do
     # not each wait for the previous one
     v0 = v1 = s0 = s1 = d0 = d1 = a0 = a1 = 0.0
     for j in range(0, n - 1, 2):
-        x, y = z[j].real, z[j].imag
+        x, y = amplitudes[j].real, amplitudes[j].imag
         term = rates[0, j].real * x
         v0 += term
         s0 += abs(term)
         d0 += rates[1, j].real * x - rates[1, j].imag * y
         a0 += rates[2, j].real * x - rates[2, j].imag * y
-        x, y = z[j + 1].real, z[j + 1].imag
+        x, y = amplitudes[j + 1].real, amplitudes[j + 1].imag
         term = rates[0, j + 1].real * x
         v1 += term
         s1 += abs(term)
         d1 += rates[1, j + 1].real * x - rates[1, j + 1].imag * y
         a1 += rates[2, j + 1].real * x - rates[2, j + 1].imag * y
     if n % 2 == 1:
-        x, y = z[n - 1].real, z[n - 1].imag
+        x, y = amplitudes[n - 1].real, amplitudes[n - 1].imag
         term = rates[0, n - 1].real * x
         v0 += term
         s0 += abs(term)
@@ -207,13 +213,28 @@ def rotor_event(rotor, q_s, v_s, t_s, t, oscillators, event):
     scale = abs(const) + abs(sine_term) + abs(cosine_term) + (s0 + s1)
     slope = forcing_frequency * (sine_amp.real * cosine - sine_amp.imag * sine) + (d0 + d1)
     acceleration = -forcing_frequency**2 * (sine_term + cosine_term) + (a0 + a1)
-    if levels[LEVELS + 1] == 0:
+    return value, slope, scale, acceleration
+
+
+@kernel
+def rotor_event(rotor, q_s, v_s, t_s, t, oscillators, event):
+    """e, e', its evaluation scale and e'' at time t (s), from the rotor.
+
+    As ``events.evaluate`` and ``events.event_acceleration``, with the undriven modes taken from
+    the rotor (``free_event``) and the driven ones propagated exactly from their state (q_s,
+    v_s) at t_s (s).
+    """
+    forcing_frequency = event.forcing_frequency
+    n = oscillators.frequencies.size
+    value, slope, scale, acceleration = free_event(rotor.amplitudes, rotor.rates, n, event)
+    sine, cosine = rotor.amplitudes[n].imag, rotor.amplitudes[n].real
+    if rotor.levels[LEVELS + 1] == 0:
         return value, slope, scale, acceleration
     h = t - t_s
     phase_plus = complex(math.cos(forcing_frequency * t_s), math.sin(forcing_frequency * t_s))
     step_plus = complex(math.cos(forcing_frequency * h), math.sin(forcing_frequency * h))
     for j in range(n):
-        if driven[j]:
+        if rotor.driven[j]:
             w, zeta, f = oscillators.frequencies[j], oscillators.zeta[j], oscillators.force[j]
             qj, vj = advance_mode(q_s[j], v_s[j], h, w, zeta, f, forcing_frequency, phase_plus,
                                   step_plus)
