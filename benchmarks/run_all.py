@@ -464,7 +464,24 @@ def columns_section(report: dict) -> str:
             f"{report['same_classification']}, largest difference in t* "
             f"{report['max_time_difference_s']:.1e} s. The table above (`scaling.json`) is the "
             "full suite's older series. Details: [columns.md](columns.md).\n\n"
-            "| kernel, threads | best time |\n|---|---|\n" + "\n".join(rows) + "\n")
+            "| kernel, threads | best time |\n|---|---|\n" + "\n".join(rows) + "\n"
+            + ("\n" + maps_table(report) if "maps" in report else ""))
+
+
+def maps_table(report: dict) -> str:
+    """Every benchmark map of ``bench_columns.py`` per impacting cell, on 1 and 2 threads."""
+    lines = [f"Load average {report['load_average']:.1f} at the end of the run (2 cores); CPU "
+             "time on 1 thread beside the wall time, which the load inflates.\n",
+             "| map | impacting | 1 thread | 2 threads | per impacting cell, 1 / 2 threads "
+             "| over Fig. 5a |", "|---|---|---|---|---|---|"]
+    for entry in report["maps"]:
+        seconds, per_cell = entry["best_s"], entry["ns_per_impacting_cell"]
+        ratio = entry["per_impacting_cell_over_fig5a"]
+        lines.append(f"| `{entry['map']}` ({entry['what']}) | {entry['impacted_fraction']:.0%} | "
+                     f"{seconds['1']:.3f} s (CPU {entry['best_cpu_1_thread_s']:.3f} s) | "
+                     f"{seconds['2']:.3f} s | {per_cell['1']:.0f} / "
+                     f"{per_cell['2']:.0f} ns | {ratio['1']:.2f} / {ratio['2']:.2f} |")
+    return "\n".join(lines) + "\n"
 
 
 def first_run_table(compile_report: dict, startup: dict) -> str:

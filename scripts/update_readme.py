@@ -265,14 +265,16 @@ def spring_precision() -> str:
 
 
 def map_threads() -> str:
-    """The two-thread speed-ups of the Fig. 5a map (columns.json)."""
+    """The two-thread speed-ups of the Fig. 5a map and every benchmark map (columns.json)."""
     report = _results("columns")
     gain = report["speedup_2_threads"]
     over = report["speedup_columns_over_cells"]
     return (f"Two threads give {gain['columns']:.1f}x by columns ({gain['cells']:.1f}x cell by "
             "cell: a column is one thread's); columns are "
             f"{over['1']:.1f}x faster than cell by cell on one thread, {over['2']:.1f}x on two "
-            f"([columns](docs/benchmarks/columns.md); date and machine: {recorded(report)}).\n")
+            f"([columns](docs/benchmarks/columns.md); date and machine: {recorded(report)}).\n"
+            + ("\nEvery benchmark map (`benchmarks/maps/`), by columns:\n\n"
+               + _run_all().maps_table(report) if "maps" in report else ""))
 
 
 def lyapunov_fig4() -> dict[int, dict]:

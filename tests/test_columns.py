@@ -1,6 +1,7 @@
 """First-impact maps by columns (one shared modal response per column) against the
 cell-by-cell search, on the shipped sweeps and on grazing cells."""
 
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -8,6 +9,7 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 from impactbeams.kernels import first_impact as fi
+from impactbeams.kernels.drive import gap_harmonic
 from impactbeams.kernels.events import GAVE_UP, evaluate, search_root
 from impactbeams.kernels.layout import (
     CELL_CLEARANCE,
@@ -15,6 +17,7 @@ from impactbeams.kernels.layout import (
     CELL_FORCING_FREQUENCY,
     FREE,
     GEO_C1,
+    GEO_START,
     ROW_EVENT,
     ROW_FREQUENCY,
 )
@@ -57,17 +60,18 @@ def round_off_band(cell, plan, t):
     table = plan.tables[g, FREE]
     work = np.empty((7, table.shape[1]))
     force = np.empty(table.shape[1], dtype=complex)
-    n = fi._load_moving_modes(cell, table, work, force)
+    n = fi._load_moving_modes(cell, table, work, force, plan.geometry[g, GEO_START])
     q, v = np.empty(n), np.empty(n)
     advance(work[0, :n], work[1, :n], 0.0, t, work[2, :n], work[3, :n], force[:n],
             cell[CELL_FORCING_FREQUENCY], q, v)
-    _, slope, scale = evaluate(q, v, t, EventFunction(
-        work[4, :n], cell[CELL_CLEARANCE], complex(-plan.geometry[g, GEO_C1] * cell[CELL_F0], 0.0),
-        cell[CELL_FORCING_FREQUENCY]))
+    harmonic = gap_harmonic(cell, plan.geometry[g])  # -c1 F0, and the shaker's U0 term
+    _, slope, scale = evaluate(q, v, t, EventFunction(work[4, :n], cell[CELL_CLEARANCE],
+                                                      complex(harmonic, 0.0),
+                                                      cell[CELL_FORCING_FREQUENCY]))
     omega, zeta, big_omega = work[2, :n], work[3, :n], cell[CELL_FORCING_FREQUENCY]
     steady = np.abs(work[4, :n] * force[:n]
                     / (omega**2 - big_omega**2 + 2j * zeta * omega * big_omega))
-    forced = abs(plan.geometry[g, GEO_C1] * cell[CELL_F0]) + steady.sum()
+    forced = abs(harmonic) + steady.sum()
     scale += forced
     damped = omega * np.sqrt(1.0 - zeta**2)
     transient = np.abs(work[4, :n]) * np.hypot(q, (v + zeta * omega * q) / damped)
@@ -88,15 +92,64 @@ def test_columns_equal_the_cell_by_cell_search_on_the_shipped_sweeps(name, thinn
         sweep = sweep_from_mapping({"t_max": sweep.t_max, "n_modes": sweep.n_modes,
                                     "observables": list(sweep.observables),
                                     "params": {"clearance": sweep.base.clearance}, "axes": axes})
+    assert_columns_match_cells(sweep, 200)
+
+
+def assert_columns_match_cells(sweep, checked):
+    """The same classification by columns as cell by cell, over 20 % of the cells impacting,
+    and the times within the gap's round-off band (the ``checked`` largest differences)."""
     cells, plan, by_column, by_cell = maps(sweep)
-    assert np.array_equal(np.isnan(by_column), np.isnan(by_cell))  # the same classification
+    assert np.array_equal(np.isnan(by_column), np.isnan(by_cell))
     assert not np.isinf(by_column).any()
     hit = np.flatnonzero(~np.isnan(by_cell))
     assert hit.size > 0.2 * sweep.size
-    # the times differ only within the gap's round-off band; check the 200 largest differences
     difference = np.abs(by_column[hit] - by_cell[hit])
-    for i in hit[np.argsort(difference)[-200:]]:
+    for i in hit[np.argsort(difference)[-checked:]]:
         assert abs(by_column[i] - by_cell[i]) <= round_off_band(cells[i], plan, by_cell[i]), i
+
+
+BENCHMARK_MAPS = Path(__file__).parents[1] / "benchmarks" / "maps"
+
+
+def thinned(path, axis, keep):
+    """The sweep of ``path`` with every ``keep``-th value of ``axis`` (its ends kept)."""
+    with open(path, "rb") as file:
+        mapping = tomllib.load(file)
+    spec = mapping["axes"][axis]
+    spec["num"] = (spec["num"] - 1) // keep + 1
+    return sweep_from_mapping(mapping)
+
+
+@pytest.mark.parametrize(("name", "axis"), [("uplift-omega-force.toml", "omega"),
+                                            ("stop-omega-force.toml", "omega"),
+                                            ("shaker-omega-amplitude.toml", "omega"),
+                                            ("force-clearance.toml", "force_amplitude")])
+def test_columns_equal_the_cell_by_cell_search_on_the_benchmark_maps(name, axis):
+    """Issue 24's maps (benchmarks/maps/), every 100th column: uplifted beams (two responses
+    per column), a stop, a shaker, columns along the clearance."""
+    assert_columns_match_cells(thinned(BENCHMARK_MAPS / name, axis, 100), 100)
+
+
+def test_an_uplifted_column_is_shared_and_follows_its_flanks():
+    """With uplifts the column's cells share two responses (``_load_column``): cell F0's
+    state is a + F0 b, to round-off of the cell's own initial state and drives."""
+    sweep = thinned(BENCHMARK_MAPS / "uplift-omega-force.toml", "omega", 100)
+    plan = build_plan(sweep)
+    cells = chunk_cells(sweep, plan, 0, 1000)
+    table, geo = plan.tables[0, FREE], plan.geometry[0]
+    work, drives, _ = fi._scratch(table.shape[1])
+    active, harmonics = fi._load_column(cells[0], CELL_F0, table, geo, work, drives)
+    own = np.empty((7, table.shape[1])), np.empty(table.shape[1], dtype=complex)
+    for cell in cells[::97]:
+        assert fi._load_moving_modes(cell, table, *own) == active == 10  # both beams move
+        f0 = cell[CELL_F0]
+        np.testing.assert_allclose(work[fi._Q_A0, :active] + f0 * work[fi._Q_B0, :active],
+                                   own[0][fi._Q_S, :active], rtol=1e-15, atol=1e-25)
+        np.testing.assert_allclose(work[fi._V_A0, :active] + f0 * work[fi._V_B0, :active],
+                                   own[0][fi._V_S, :active], rtol=1e-15, atol=1e-25)
+        np.testing.assert_allclose(drives[fi._A, :active] + f0 * drives[fi._B, :active],
+                                   own[1][:active], rtol=1e-15)
+        assert harmonics[0] + f0 * harmonics[1] == -geo[GEO_C1] * f0
 
 
 @pytest.fixture(scope="module")
@@ -174,3 +227,19 @@ def test_a_search_that_reaches_its_step_cap_says_so(free):
     work = np.empty(1), np.empty(1), rotor_arrays(1)
     assert search_root(*args, 1, *work) == GAVE_UP
     assert 0.0 < search_root(*args, 10**6, *work) < 1.0
+
+
+@pytest.mark.parametrize("n_blocks", [1, 2, 8, 64])
+def test_blocks_deal_every_thread_an_interleaved_share_of_the_columns(n_blocks):
+    """prange's static schedule gives each of T threads (a power of two up to n_blocks) a
+    contiguous range of blocks; by bit reversal thread k then takes the columns c = k mod T
+    (at one block per column, Fig. 5a's resonance fell to one of two threads)."""
+    residues = [fi._residue(block, n_blocks) for block in range(n_blocks)]
+    assert sorted(residues) == list(range(n_blocks))  # every column in exactly one block
+    threads = 1
+    while threads <= n_blocks:
+        per_thread = n_blocks // threads
+        for k in range(threads):
+            share = residues[k * per_thread:(k + 1) * per_thread]
+            assert all(r % threads == residues[k * per_thread] % threads for r in share)
+        threads *= 2
