@@ -9,9 +9,12 @@ A branch point's time is the wall time between the first and the last point repo
 point's measures (grazing gap, peak force, impulse, tips). The measures alone (the contacts'
 peak-force searches) are timed apart, at the start orbit. All in one process after a warm-up
 branch (compilation); BLAS on one thread (``OPENBLAS_NUM_THREADS=1``, set before NumPy loads).
-Writes docs/benchmarks/continuation.json and docs/benchmarks/continuation.md.
+``--baseline TREE`` times an earlier version too (TREE: its source tree, e.g. ``git worktree
+add TREE v0.1.0``): the same cases in a child process on TREE/src, run right after each mode
+count's own (so both see the same load), with its own Numba cache. Writes
+docs/benchmarks/continuation.json and docs/benchmarks/continuation.md.
 
-    python benchmarks/bench_continuation.py [--points 12]
+    python benchmarks/bench_continuation.py [--points 12] [--baseline TREE]
 """
 
 import os
@@ -20,7 +23,11 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -61,8 +68,25 @@ def measures_seconds(n_modes: int, repeats: int = 3) -> float:
     return float(np.median(np.add(times[0::2], times[1::2])))
 
 
+def case(n_modes: int, points: int) -> dict:
+    """One mode count's row: the measures and a branch with each method."""
+    row = {"n_modes": n_modes, "measures": measures_seconds(n_modes)}
+    row.update({method: branch(n_modes, method, points) for method in METHODS})
+    return row
+
+
+def baseline_case(tree: Path, n_modes: int, points: int, cache: str) -> dict:
+    """``case`` run by the version in ``tree`` (its src/ first on the path), in a child."""
+    env = {**os.environ, "PYTHONPATH": str(tree / "src"), "NUMBA_CACHE_DIR": cache,
+           "PYTHONDONTWRITEBYTECODE": "1"}
+    done = subprocess.run([sys.executable, __file__, "--row", str(n_modes), "--points",
+                           str(points)], env=env, check=True, capture_output=True, text=True)
+    return json.loads(done.stdout.splitlines()[-1])
+
+
 def markdown(report: dict) -> str:
     """The report as a short Markdown page."""
+    before = all("baseline" in row for row in report["cases"])
     lines = ["# Continuation: time per branch point", "",
              f"`python benchmarks/bench_continuation.py`; {report['machine']}, impactbeams "
              f"{report['version']}, {report['date']}, load average {report['load']:.1f} on "
@@ -70,31 +94,52 @@ def markdown(report: dict) -> str:
              f"Hertz contact, zeta = {PARAMS.damping_ratio}, the period-1 impacting branch in "
              f"Omega from {LOW} rad/s, {report['points']} points; in ms per point.", "",
              "| n_modes | 2N | contacts | Newton | Newton-Picard | of which measures | "
-             "iterations (N / N-P) |", "|---" * 7 + "|"]
+             "iterations (N / N-P) |" + (" before: Newton / N-P / measures |" if before else ""),
+             "|---" * (8 if before else 7) + "|"]
     for row in report["cases"]:
         newton, picard = row["newton"], row["newton-picard"]
-        lines.append(
-            f"| {row['n_modes']} | {4 * row['n_modes']} | {picard['contacts']} | "
-            f"{1e3 * newton['seconds_per_point']:.0f} | "
-            f"{1e3 * picard['seconds_per_point']:.0f} | {1e3 * row['measures']:.0f} | "
-            f"{newton['iterations']:.1f} / {picard['iterations']:.1f} |")
+        line = (f"| {row['n_modes']} | {4 * row['n_modes']} | {picard['contacts']} | "
+                f"{1e3 * newton['seconds_per_point']:.0f} | "
+                f"{1e3 * picard['seconds_per_point']:.0f} | {1e3 * row['measures']:.0f} | "
+                f"{newton['iterations']:.1f} / {picard['iterations']:.1f} |")
+        if before:
+            old = row["baseline"]
+            line += (f" {1e3 * old['newton']['seconds_per_point']:.0f} / "
+                     f"{1e3 * old['newton-picard']['seconds_per_point']:.0f} / "
+                     f"{1e3 * old['measures']:.0f} |")
+        lines.append(line)
     lines += ["", "A point's time includes its measures (the contacts' peak-force searches, "
-              "timed apart at the start orbit: \"of which measures\"), read once per accepted "
-              "point; the corrector's iterations read none."]
+              "the gap's minimum and the tips' maxima, timed apart at the start orbit: \"of "
+              "which measures\"), read once per accepted point from the corrector's last run; "
+              "the corrector's iterations read none."]
+    if before:
+        lines += ["", f"\"before\": the same cases by {report['baseline']}, each run in a child "
+                  "process right after this version's."]
     return "\n".join(lines) + "\n"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--points", type=int, default=12)
+    parser.add_argument("--baseline", type=Path, help="an earlier version's source tree")
+    parser.add_argument("--row", type=int, help=argparse.SUPPRESS)  # a child: one row, as JSON
     args = parser.parse_args()
-    report = report_header(points=args.points)
     branch(MODES[0], METHODS[1], 3)  # warm-up: compilation
-    for n_modes in MODES:
-        row = {"n_modes": n_modes, "measures": measures_seconds(n_modes)}
-        row.update({method: branch(n_modes, method, args.points) for method in METHODS})
-        report["cases"].append(row)
-        print(json.dumps(row), flush=True)
+    if args.row is not None:
+        print(json.dumps(case(args.row, args.points)), flush=True)
+        return
+    report = report_header(points=args.points)
+    if args.baseline is not None:
+        report["baseline"] = subprocess.run(
+            ["git", "-C", str(args.baseline), "describe", "--always", "--dirty"],
+            capture_output=True, text=True).stdout.strip() or str(args.baseline)
+    with tempfile.TemporaryDirectory() as cache:
+        for n_modes in MODES:
+            row = case(n_modes, args.points)
+            if args.baseline is not None:
+                row["baseline"] = baseline_case(args.baseline, n_modes, args.points, cache)
+            report["cases"].append(row)
+            print(json.dumps(row), flush=True)
     write_report("continuation", report, markdown)
 
 
