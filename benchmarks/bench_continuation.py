@@ -4,7 +4,8 @@ The default Hertz contact (linearised, k = 2.2e5 N/m) with zeta = 0.05, a period
 branch in Omega from 50 rad/s up, at 8, 16 and 32 modes per beam (2 N = 32, 64, 128
 coordinates), each with ``method="newton"`` (the full monodromy at every corrector iteration)
 and ``method="newton-picard"`` (m = 8 carried directions plus the residual's, `BeamOrbits`).
-A branch point's time is the wall time between the first and the last point reported by
+A branch point's time is the wall time (and the process's CPU time: on a loaded machine, what
+one free core would take) between the first and the last point reported by
 `continue_orbits`' progress, over the points between: the corrector with its dr/dp and the
 point's measures (grazing gap, peak force, impulse, tips). The measures alone (the contacts'
 peak-force searches) are timed apart, at the start orbit. All in one process after a warm-up
@@ -42,12 +43,14 @@ TRANSIENT = 100  # forcing periods from rest to the start orbit's guess
 
 def branch(n_modes: int, method: str, points: int) -> dict:
     """Seconds per branch point (between the first and the last) and what the branch read."""
-    stamps: list[float] = []
+    stamps: list[tuple[float, float]] = []
     continuation = Continuation(PARAMS, "omega", LOW, HIGH, n_modes=n_modes, method=method,
                                 transient_periods=TRANSIENT, max_points=points,
                                 max_branches=1)
-    dataset = continue_orbits(continuation, lambda *_: stamps.append(time.perf_counter()))
-    return {"seconds_per_point": (stamps[-1] - stamps[0]) / (len(stamps) - 1),
+    dataset = continue_orbits(
+        continuation, lambda *_: stamps.append((time.perf_counter(), time.process_time())))
+    wall, cpu = (np.diff(np.array(stamps)[[0, -1]], axis=0)[0] / (len(stamps) - 1)).tolist()
+    return {"seconds_per_point": wall, "cpu_seconds_per_point": cpu,
             "points": len(stamps), "omega_end": float(dataset.omega[-1]),
             "iterations": float(dataset.newton_iterations.mean()),
             "contacts": int(dataset.contacts_per_orbit[0]),
@@ -84,13 +87,21 @@ def baseline_case(tree: Path, n_modes: int, points: int, cache: str) -> dict:
     return json.loads(done.stdout.splitlines()[-1])
 
 
+def point_times(method: dict) -> str:
+    """A method's wall time per point (ms) and, where measured, its CPU time in brackets."""
+    wall = f"{1e3 * method['seconds_per_point']:.0f}"
+    cpu = method.get("cpu_seconds_per_point")
+    return wall if cpu is None else f"{wall} ({1e3 * cpu:.0f})"
+
+
 def markdown(report: dict) -> str:
     """The report as a short Markdown page."""
     before = all("baseline" in row for row in report["cases"])
     lines = ["# Continuation: time per branch point", "",
              f"`python benchmarks/bench_continuation.py`; {report['machine']}, impactbeams "
              f"{report['version']}, {report['date']}, load average {report['load']:.1f} on "
-             f"{report['cores']} cores (a shared machine: absolute times are noisy). Default "
+             f"{report['cores']} cores (a shared machine: absolute times are noisy; the CPU "
+             f"time, in brackets, is what one free core would take). Default "
              f"Hertz contact, zeta = {PARAMS.damping_ratio}, the period-1 impacting branch in "
              f"Omega from {LOW} rad/s, {report['points']} points; in ms per point.", "",
              "| n_modes | 2N | contacts | Newton | Newton-Picard | of which measures | "
@@ -99,13 +110,12 @@ def markdown(report: dict) -> str:
     for row in report["cases"]:
         newton, picard = row["newton"], row["newton-picard"]
         line = (f"| {row['n_modes']} | {4 * row['n_modes']} | {picard['contacts']} | "
-                f"{1e3 * newton['seconds_per_point']:.0f} | "
-                f"{1e3 * picard['seconds_per_point']:.0f} | {1e3 * row['measures']:.0f} | "
+                f"{point_times(newton)} | {point_times(picard)} | "
+                f"{1e3 * row['measures']:.0f} | "
                 f"{newton['iterations']:.1f} / {picard['iterations']:.1f} |")
         if before:
             old = row["baseline"]
-            line += (f" {1e3 * old['newton']['seconds_per_point']:.0f} / "
-                     f"{1e3 * old['newton-picard']['seconds_per_point']:.0f} / "
+            line += (f" {point_times(old['newton'])} / {point_times(old['newton-picard'])} / "
                      f"{1e3 * old['measures']:.0f} |")
         lines.append(line)
     lines += ["", "A point's time includes its measures (the contacts' peak-force searches, "

@@ -314,9 +314,15 @@ def geometry_arrays(params: Params, n_modes: int) -> Dynamics:
     Along a branch in Omega, F0, U0 or the clearance the modes and the spring law's contact
     phase (an eigenproblem, the larger part of building a map at 32 modes) stay the same.
     """
-    defaults = {name: getattr(Params(), name) for name in _CELL_ONLY}
-    dynamics = _geometry(dataclasses.replace(params, **defaults), n_modes)
+    dynamics = _geometry(dataclasses.replace(params, **_cell_defaults()), n_modes)
     return dataclasses.replace(dynamics, params=params)
+
+
+@functools.cache
+def _cell_defaults() -> dict[str, float]:
+    """The default values of the cell's parameters (``_CELL_ONLY``)."""
+    defaults = Params()
+    return {name: getattr(defaults, name) for name in _CELL_ONLY}
 
 
 @functools.lru_cache(maxsize=4)
