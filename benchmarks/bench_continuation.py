@@ -58,16 +58,19 @@ def branch(n_modes: int, method: str, points: int) -> dict:
 
 
 def measures_seconds(n_modes: int, repeats: int = 3) -> float:
-    """The measures of one orbit (minus the map's run): what every accepted point adds."""
+    """The measures of one orbit (minus the map's run): what every accepted point adds.
+
+    CPU time (s), a median of ``repeats`` pairs with and without the measures.
+    """
     period_map = PeriodMap(PARAMS, n_modes)
     z = period_map.rest_state()
     for _ in range(TRANSIENT):
         z = period_map(z, measures=False).state
     times = []
     for measures in (True, False) * repeats:
-        start = time.perf_counter()
+        start = time.process_time()
         period_map(z, measures=measures)
-        times.append((time.perf_counter() - start) * (1 if measures else -1))
+        times.append((time.process_time() - start) * (1 if measures else -1))
     return float(np.median(np.add(times[0::2], times[1::2])))
 
 
@@ -119,9 +122,9 @@ def markdown(report: dict) -> str:
                      f"{1e3 * old['measures']:.0f} |")
         lines.append(line)
     lines += ["", "A point's time includes its measures (the contacts' peak-force searches, "
-              "the gap's minimum and the tips' maxima, timed apart at the start orbit: \"of "
-              "which measures\"), read once per accepted point from the corrector's last run; "
-              "the corrector's iterations read none."]
+              "the gap's minimum and the tips' maxima, timed apart at the start orbit, in CPU "
+              "time: \"of which measures\"), read once per accepted point from the corrector's "
+              "last run; the corrector's iterations read none."]
     if before:
         lines += ["", f"\"before\": the same cases by {report['baseline']}, each run in a child "
                   "process right after this version's."]

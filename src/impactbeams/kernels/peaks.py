@@ -19,11 +19,11 @@ and the best split puts mode j in the slow group when omega_j h < 4 (its share
 ``|w_j| A_j min(omega_j^2 h^2 / 8, 2)`` is then the smaller). A fast mode costs only its
 amplitude, however fast it is, so a long contact is cut in pieces on the time scale of the
 motion that carries R, not on the fastest mode's: an interval whose bound is below the best
-value found is dropped, the others are bisected, best first. The search ends when every
-interval is dropped: the value returned is the largest R to within ``PEAK_TOLERANCE`` eps of R's
-evaluation scale (its own rounding), at a time located to that level, and no peak can have been
-skipped between samples (the bound holds between them). Each evaluation is one propagation
-of the split modes from the contact's start.
+value found is dropped, the others are bisected (depth first, the more promising half first).
+The search ends when every interval is dropped: the value returned is the largest R to within
+``PEAK_TOLERANCE`` eps of R's evaluation scale (its own rounding), at a time located to that
+level, and no peak can have been skipped between samples (the bound holds between them). Each
+evaluation is one propagation of the split modes from the contact's start.
 """
 
 import math
@@ -99,7 +99,7 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
     # a bisection stops at intervals of 4 eps: a pop pushes two halves, so the stack holds at
     # most one interval per halving, plus one
     halvings = math.log2(max(t_e - t_s, _EPS) / (4.0 * _EPS))
-    stack = np.empty((int(halvings) + 3, 4))
+    stack = np.empty((int(halvings) + 8, 4))  # a margin for midpoints rounded at the last ulps
     stack[0] = t_s, t_e, r_s, r_e
     size = 1
     while size > 0:
