@@ -145,7 +145,7 @@ def main() -> None:
     if args.baseline is not None:
         report["baseline"] = subprocess.run(
             ["git", "-C", str(args.baseline), "describe", "--always", "--dirty"],
-            capture_output=True, text=True).stdout.strip() or str(args.baseline)
+            capture_output=True, text=True).stdout.strip() or args.baseline.name
     with tempfile.TemporaryDirectory() as cache:
         for n_modes in MODES:
             row = case(n_modes, args.points)
