@@ -20,10 +20,12 @@ and the best split puts mode j in the slow group when omega_j h < 4 (its share
 amplitude, however fast it is, so a long contact is cut in pieces on the time scale of the
 motion that carries R, not on the fastest mode's: an interval whose bound is below the best
 value found is dropped, the others are bisected (depth first, the more promising half first).
-The search ends when every interval is dropped: the value returned is the largest R to within
+The search ends when every interval is dropped: it has the largest R of the split form to within
 ``PEAK_TOLERANCE`` eps of R's evaluation scale (its own rounding), at a time located to that
-level, and no peak can have been skipped between samples (the bound holds between them). Each
-evaluation is one propagation of the split modes from the contact's start.
+level, and no peak can have been skipped between samples (the bound holds between them). The
+value returned is R there from the unsplit state, as the dynamics evaluate it: the two forms
+round differently, by a few eps of the scale. Each evaluation is one propagation of the split
+modes from the contact's start.
 """
 
 import math
@@ -76,9 +78,10 @@ def _slack(a, h, t_s, frequencies, reach, curvature, decay, sine_curvature):
 def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
     """Largest contact force (N) over the contact segment [t_s, t_e] and its time (s).
 
-    Certified branch and bound (the module's docstring): the value is the maximum of R over the
-    segment to within ``PEAK_TOLERANCE`` eps of R's evaluation scale; the returned value is R
-    at the returned time, as the phase's event function gives it from (q_s, v_s) at t_s.
+    Certified branch and bound (the module's docstring): the maximum of R over the segment to
+    within R's rounding (``PEAK_TOLERANCE`` eps of its evaluation scale, plus the difference of
+    the split and unsplit forms); the value returned is R at the returned time, as the phase's
+    event function gives it from (q_s, v_s) at t_s.
     """
     frequencies, zeta, weights = table[ROW_FREQUENCY], table[ROW_ZETA], table[ROW_EVENT]
     omega = settings.forcing_frequency
