@@ -123,8 +123,8 @@ def markdown(report: dict) -> str:
         lines.append(line)
     lines += ["", "A point's time includes its measures (the contacts' peak-force searches, "
               "the gap's minimum and the tips' maxima, timed apart at the start orbit, in CPU "
-              "time: \"of which measures\"), read once per accepted point from the corrector's "
-              "last run; the corrector's iterations read none."]
+              "time: \"of which measures\"), read once per accepted point; the corrector's "
+              "iterations read none."]
     if before:
         lines += ["", f"\"before\": the same cases by {report['baseline']}, each run in a child "
                   "process right after this version's."]
