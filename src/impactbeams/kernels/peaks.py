@@ -32,31 +32,40 @@ import math
 
 import numpy as np
 
-from impactbeams.kernels.events import evaluate, event_sine, phase_bounds, split_steady_states
+from impactbeams.kernels.events import (
+    evaluate,
+    phase_bounds,
+    phase_event_function,
+    phase_oscillators,
+    split_steady_states,
+)
 from impactbeams.kernels.jit import kernel
-from impactbeams.kernels.layout import ROW_EVENT, ROW_FREQUENCY, ROW_ZETA, SCALAR_CONST
-from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.propagation import advance_to
+from impactbeams.kernels.records import EventFunction, Oscillators
 
 _EPS = np.finfo(np.float64).eps
 PEAK_TOLERANCE = 4.0  # eps of R's evaluation scale: the search's resolution, R's own rounding
 
 
 @kernel
-def _mode_bounds(q, v, t_s, span, frequencies, zeta, force, weights, forcing_frequency):
+def _mode_bounds(q, v, t_s, span, oscillators, event):
     """Per mode over [t_s, t_s + span]: ``(coherent, reach, curvature, decay)``.
 
     ``coherent``: the steady states `events.phase_bounds` splits off the driven modes, summed
     (complex, N); per mode, ``reach`` bounds |w_j x_j| and ``curvature`` |w_j x_j''| (N/s^2)
     of the rest, which decays at least like e^(-decay_j (t - t_s)) (decay_j = sigma_j for an
-    undriven mode, 0 for a driven one: its bounds hold as they are).
+    undriven mode, 0 for a driven one: its bounds hold as they are). ``oscillators``,
+    ``event``: the `records` of the phase with its steady states split off.
     """
+    frequencies, zeta, force = oscillators.frequencies, oscillators.zeta, oscillators.force
+    omega = oscillators.forcing_frequency
     n = frequencies.size
     reach, curvature, decay = np.empty(n), np.empty(n), np.zeros(n)
     coherent = 0j
     for j in range(n):
-        steady, band, bend, _, _ = phase_bounds(
-            q[j:j + 1], v[j:j + 1], t_s, span, frequencies[j:j + 1], zeta[j:j + 1],
-            force[j:j + 1], weights[j:j + 1], 0j, forcing_frequency)
+        mode = Oscillators(frequencies[j:j + 1], zeta[j:j + 1], force[j:j + 1], omega)
+        weight = EventFunction(event.weights[j:j + 1], 0.0, 0j, omega)
+        steady, band, bend, _, _ = phase_bounds(q[j:j + 1], v[j:j + 1], t_s, span, mode, weight)
         coherent += steady
         reach[j], curvature[j] = band, bend  # bend counts the steady part's too: an upper bound
         if force[j] == 0:
@@ -83,19 +92,19 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
     the split and unsplit forms); the value returned is R at the returned time, as the phase's
     event function gives it from (q_s, v_s) at t_s.
     """
-    frequencies, zeta, weights = table[ROW_FREQUENCY], table[ROW_ZETA], table[ROW_EVENT]
     omega = settings.forcing_frequency
-    const = scalars[SCALAR_CONST]
-    x_s, u_s, drives = q_s.copy(), v_s.copy(), force.copy()
-    sine = split_steady_states(x_s, u_s, t_s, frequencies, zeta, drives, weights,
-                               event_sine(scalars), omega)
-    coherent, reach, curvature, decay = _mode_bounds(x_s, u_s, t_s, t_e - t_s, frequencies,
-                                                     zeta, drives, weights, omega)
-    sine_curvature = omega * omega * abs(sine + coherent)
+    x_s, u_s = q_s.copy(), v_s.copy()
+    split_modes = phase_oscillators(table, force.copy(), omega)
+    split = split_steady_states(x_s, u_s, t_s, split_modes, phase_event_function(table, scalars,
+                                                                                 omega))
+    coherent, reach, curvature, decay = _mode_bounds(x_s, u_s, t_s, t_e - t_s, split_modes,
+                                                     split)
+    frequencies = split_modes.frequencies
+    sine_curvature = omega * omega * abs(split.sine_amp + coherent)
     q, v = np.empty(q_s.size), np.empty(q_s.size)
-    split = (x_s, u_s, t_s, frequencies, zeta, drives, weights, const, sine, omega)
-    r_s, scale_s = _force_at(split, t_s, q, v)
-    r_e, scale_e = _force_at(split, t_e, q, v)
+    start = (x_s, u_s, t_s)
+    r_s, scale_s = _force_at(split_modes, split, start, t_s, q, v)
+    r_e, scale_e = _force_at(split_modes, split, start, t_e, q, v)
     best, best_t = (r_s, t_s) if r_s >= r_e else (r_e, t_e)
     tolerance = PEAK_TOLERANCE * _EPS * max(scale_s, scale_e)
     # depth-first, the more promising half first: intervals (a, b, R(a), R(b))
@@ -114,7 +123,7 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
                 or h <= 4.0 * _EPS * max(abs(b), 1.0)):
             continue
         middle = a + 0.5 * h
-        r_m, scale = _force_at(split, middle, q, v)
+        r_m, scale = _force_at(split_modes, split, start, middle, q, v)
         tolerance = max(tolerance, PEAK_TOLERANCE * _EPS * scale)
         if r_m > best:
             best, best_t = r_m, middle
@@ -123,22 +132,18 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
         stack[size] = second
         stack[size + 1] = first
         size += 2
-    return _event_at(table, force, scalars, omega, q_s, v_s, t_s, best_t, q, v), best_t
+    advance_to(phase_oscillators(table, force, omega), q_s, v_s, t_s, best_t, q, v)
+    value, _, _ = evaluate(q, v, best_t, phase_event_function(table, scalars, omega))
+    return value, best_t
 
 
 @kernel
-def _force_at(split, t, q, v):
-    """R (N) and its evaluation scale at t (s) from the split modes ``split`` (their start)."""
-    x_s, u_s, t_s, frequencies, zeta, drives, weights, const, sine, omega = split
-    advance(x_s, u_s, t_s, t - t_s, frequencies, zeta, drives, omega, q, v)
-    value, _, scale = evaluate(q, v, t, weights, const, sine, omega)
+def _force_at(oscillators, event, start, t, q, v):
+    """R (N) and its evaluation scale at t (s) of the phase's ``oscillators`` and ``event``.
+
+    ``start``: their state (q_s, v_s, t_s).
+    """
+    q_s, v_s, t_s = start
+    advance_to(oscillators, q_s, v_s, t_s, t, q, v)
+    value, _, scale = evaluate(q, v, t, event)
     return value, scale
-
-
-@kernel
-def _event_at(table, force, scalars, omega, q_s, v_s, t_s, t, q, v):
-    """R(t) (N) from the phase's unsplit state (q_s, v_s) at t_s, as the dynamics evaluate it."""
-    advance(q_s, v_s, t_s, t - t_s, table[ROW_FREQUENCY], table[ROW_ZETA], force, omega, q, v)
-    value, _, _ = evaluate(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST], event_sine(scalars),
-                           omega)
-    return value
