@@ -57,19 +57,19 @@ def _mode_bounds(q, v, t_s, span, oscillators, event):
     undriven mode, 0 for a driven one: its bounds hold as they are). ``oscillators``,
     ``event``: the `records` of the phase with its steady states split off.
     """
-    frequencies, zeta, force = oscillators.frequencies, oscillators.zeta, oscillators.force
     omega = oscillators.forcing_frequency
-    n = frequencies.size
+    n = oscillators.frequencies.size
     reach, curvature, decay = np.empty(n), np.empty(n), np.zeros(n)
     coherent = 0j
     for j in range(n):
-        mode = Oscillators(frequencies[j:j + 1], zeta[j:j + 1], force[j:j + 1], omega)
+        mode = Oscillators(oscillators.frequencies[j:j + 1], oscillators.zeta[j:j + 1],
+                           oscillators.force[j:j + 1], omega)
         weight = EventFunction(event.weights[j:j + 1], 0.0, 0j, omega)
         steady, band, bend, _, _ = phase_bounds(q[j:j + 1], v[j:j + 1], t_s, span, mode, weight)
         coherent += steady
         reach[j], curvature[j] = band, bend  # bend counts the steady part's too: an upper bound
-        if force[j] == 0:
-            decay[j] = zeta[j] * frequencies[j]
+        if oscillators.force[j] == 0:
+            decay[j] = oscillators.zeta[j] * oscillators.frequencies[j]
     return coherent, reach, curvature, decay
 
 
@@ -99,7 +99,6 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
                                                                                  omega))
     coherent, reach, curvature, decay = _mode_bounds(x_s, u_s, t_s, t_e - t_s, split_modes,
                                                      split)
-    frequencies = split_modes.frequencies
     sine_curvature = omega * omega * abs(split.sine_amp + coherent)
     q, v = np.empty(q_s.size), np.empty(q_s.size)
     start = (x_s, u_s, t_s)
@@ -118,8 +117,8 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
         size -= 1
         a, b, r_a, r_b = stack[size]
         h = b - a
-        if (max(r_a, r_b) + _slack(a, h, t_s, frequencies, reach, curvature, decay,
-                                   sine_curvature) <= best + tolerance
+        if (max(r_a, r_b) + _slack(a, h, t_s, split_modes.frequencies, reach, curvature,
+                                   decay, sine_curvature) <= best + tolerance
                 or h <= 4.0 * _EPS * max(abs(b), 1.0)):
             continue
         middle = a + 0.5 * h
