@@ -12,7 +12,7 @@ orbit, at 8, 16 and 32 modes per beam (2 N = 32, 64, 128 coordinates). Medians o
 * an orbit from the state 100 periods after rest, each method, without the amplitude measures;
 * a branch point: the orbit at Omega + 0.1 rad/s from the orbit at Omega as the guess (and its
   Newton-Picard basis), as a continuation's corrector would, with and without the measures
-  (the contacts' peak-force searches dominate those);
+  (the contacts' peak forces, the gap's minimum and the tips' maxima);
 * the largest difference of the leading multipliers, Newton-Picard against Newton.
 
 BLAS runs on one thread (``OPENBLAS_NUM_THREADS=1``, set here before NumPy loads): the

@@ -94,12 +94,15 @@ class BeamOrbits:
 
     def _run(self, period_map: PeriodMap, z: np.ndarray, p: float,
              measures: bool) -> PeriodMapResult:
-        """The map's run from z, the last one again if it is the same (a point's measures)."""
+        """The map's run from z, the last one again if it is the same (a point's measures).
+
+        Measures asked of the last run are read from it (`PeriodMap.measured`), not run again.
+        """
         key = z.tobytes()
-        if self._last is not None and self._last[:2] == (p, key) and (
-                not measures or math.isfinite(self._last[2].max_tip1)):
-            return self._last[2]
-        result = period_map(z, measures=measures)
+        if self._last is not None and self._last[:2] == (p, key):
+            result = period_map.measured(self._last[2]) if measures else self._last[2]
+        else:
+            result = period_map(z, measures=measures)
         self._last = (p, key, result)
         return result
 

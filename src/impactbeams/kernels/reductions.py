@@ -1,7 +1,8 @@
 """Reductions over a recorded run, apart from the state machine that records it.
 
-Work of the drives, damping dissipation, peak contact force, and the per-cell summary of a
-dynamics map (impacts, largest force, restitution, contact time).
+Work of the drives, damping dissipation, and the per-cell summary of a dynamics map (impacts,
+largest force, restitution, contact time); the peak contact force is
+`impactbeams.kernels.peaks`'.
 
 They use the state machine's propagation (`impactbeams.kernels.dynamics`); arrays are
 named in `impactbeams.kernels.layout`.
@@ -32,8 +33,8 @@ from impactbeams.kernels.layout import (
     ROW_ZETA,
     SCALAR_LOAD_RATE,
 )
+from impactbeams.kernels.peaks import peak_force
 
-_EPS = np.finfo(np.float64).eps
 _GAUSS_NODES = np.array([
     -0.9815606342467192, -0.9041172563704749, -0.7699026741943047, -0.5873179542866175,
     -0.3678314989981802, -0.1252334085114689, 0.1252334085114689, 0.3678314989981802,
@@ -42,7 +43,6 @@ _GAUSS_WEIGHTS = np.array([
     0.0471753363865118, 0.1069393259953184, 0.1600783285433462, 0.2031674267230659,
     0.2334925365383548, 0.2491470458134028, 0.2491470458134028, 0.2334925365383548,
     0.2031674267230659, 0.1600783285433462, 0.1069393259953184, 0.0471753363865118])
-_GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
 
 @kernel
@@ -142,47 +142,6 @@ def work_of_force(tables, forces, phase_scalars, spring, drives, settings, recor
         dw, dd = _integrate_power(tables, forces, phase_scalars, spring, drives, settings,
                                   recorded, k, t_done, seg_end, work_arrays)
         work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, seg_end)
-
-
-@kernel
-def _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t, q, v):
-    """Contact force R(t) (N) within a contact segment."""
-    propagate(table, force, q_s, v_s, t_s, t, settings, q, v)
-    value, _ = phase_event(table, scalars, q, v, t, settings.forcing_frequency)
-    return value
-
-
-@kernel
-def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
-    """Largest contact force (N) over the contact segment [t_s, t_e] and its time (s).
-
-    R is sampled eight times per period of the fastest mode, then the best sample is refined
-    by golden-section search on its two neighbouring intervals (to a few ulps of time).
-    """
-    q, v = np.empty(q_s.size), np.empty(q_s.size)
-    fastest = max(np.max(table[ROW_FREQUENCY]), settings.forcing_frequency)
-    n_steps = max(2, int(math.ceil((t_e - t_s) * fastest * 4.0 / math.pi)))
-    step = (t_e - t_s) / n_steps
-    best_t, best = t_s, _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t_s, q, v)
-    for i in range(1, n_steps + 1):
-        t = t_s + i * step
-        value = _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t, q, v)
-        if value > best:
-            best_t, best = t, value
-    lo, hi = max(t_s, best_t - step), min(t_e, best_t + step)
-    while hi - lo > 4.0 * _EPS * max(abs(hi), 1.0):
-        a = hi - _GOLDEN * (hi - lo)
-        b = lo + _GOLDEN * (hi - lo)
-        if (_contact_force(table, force, scalars, settings, q_s, v_s, t_s, a, q, v)
-                >= _contact_force(table, force, scalars, settings, q_s, v_s, t_s, b, q, v)):
-            hi = b
-        else:
-            lo = a
-    t_mid = 0.5 * (lo + hi)
-    value = _contact_force(table, force, scalars, settings, q_s, v_s, t_s, t_mid, q, v)
-    if value > best:
-        return value, t_mid
-    return best, best_t
 
 
 @kernel

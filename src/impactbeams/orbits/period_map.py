@@ -148,11 +148,26 @@ class PeriodMap:
         jacobian = None if columns is None else self._jacobian(trajectory, columns)
         onsets = trajectory.time[trajectory.phase == CONTACT]
         contacts = int(np.count_nonzero(onsets < self.horizon))
-        impacts = impact_table(self.packed, trajectory) if measures else None
-        peaks = np.empty(0) if impacts is None else impacts["impact_peak_force"]
-        summary = (math.nan,) * 6 if impacts is None else self._measures(trajectory, impacts)
-        return PeriodMapResult(end, jacobian, contacts, self._episodes(trajectory), *summary,
-                               trajectory.status, trajectory, peaks)
+        result = PeriodMapResult(end, jacobian, contacts, self._episodes(trajectory),
+                                 *(math.nan,) * 6, trajectory.status, trajectory)
+        return self.measured(result) if measures else result
+
+    def measured(self, result: PeriodMapResult) -> PeriodMapResult:
+        """``result`` (an evaluation of this map) with its measures, read from its run.
+
+        The same values as ``measures=True`` in `__call__` gives, without a second run: a
+        continuation reads them once its corrector has converged on a run without them.
+        """
+        if math.isfinite(result.max_tip1):
+            return result
+        impacts = impact_table(self.packed, result.trajectory)
+        peaks = impacts["impact_peak_force"]
+        min_gap, min_gap_time, max_tip1, max_tip2 = self._extrema(result.trajectory)
+        return dataclasses.replace(
+            result, min_gap=min_gap, min_gap_time=min_gap_time,
+            peak_force=float(np.max(peaks, initial=0.0)),
+            impulse=float(np.sum(impacts["impact_impulse"])), max_tip1=max_tip1,
+            max_tip2=max_tip2, peak_forces=peaks)
 
     def jacobian(self, result: PeriodMapResult, directions: np.ndarray | str) -> np.ndarray:
         """dP^p/dz of an earlier evaluation ``result`` applied to more ``directions``.
@@ -211,13 +226,19 @@ class PeriodMap:
         labels = episode_labels(trajectory.time[k], release, default_separation(self.packed))
         return int(labels[-1]) + 1 if labels.size else 0
 
-    def _measures(self, trajectory: Trajectory, impacts: dict[str, np.ndarray],
-                  ) -> tuple[float, ...]:
-        peak = float(np.max(impacts["impact_peak_force"], initial=0.0))
-        impulse = float(np.sum(impacts["impact_impulse"]))
-        min_gap, min_gap_time = self._min_gap(trajectory)
-        max_tip1, max_tip2 = (self._max_tip(trajectory, column) for column in (TIP_Y1, TIP_Y2))
-        return min_gap, min_gap_time, peak, impulse, max_tip1, max_tip2
+    def _extrema(self, trajectory: Trajectory) -> tuple[float, float, float, float]:
+        """The gap's smallest interior minimum and its time, max |y1| and max |y2|.
+
+        The gap and the tips come from one sampling of the run on the grid (``_grid``).
+        """
+        times = self._grid()
+        phase, q, v = sample(self.packed, trajectory, times)
+        gap = self._gap_of(times, q)
+        tips = self._tips_of(phase, times, q, v)
+        min_gap, min_gap_time = self._min_gap(trajectory, times, gap, phase == FREE)
+        max_tip1, max_tip2 = (self._max_tip(trajectory, times, np.abs(tips[:, column]), column)
+                              for column in (TIP_Y1, TIP_Y2))
+        return min_gap, min_gap_time, max_tip1, max_tip2
 
     def _grid(self) -> np.ndarray:
         return np.linspace(0.0, self.horizon, SAMPLES_PER_PERIOD * self.periods + 1)
@@ -225,15 +246,18 @@ class PeriodMap:
     def _gap(self, trajectory: Trajectory, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The gap (m) at ``times`` and whether each lies in a free phase."""
         phase, q, _ = sample(self.packed, trajectory, times)
+        return self._gap_of(times, q), phase == FREE
+
+    def _gap_of(self, times: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """The gap (m) of the sampled free coordinates ``q`` at ``times``."""
         scalars = self.packed.phase_scalars[FREE]
         omega_t = self.params.omega * times
-        gap = (scalars[SCALAR_CONST] + scalars[SCALAR_SINE] * np.sin(omega_t)
-               + scalars[SCALAR_COSINE] * np.cos(omega_t) + q @ self.packed.tables[FREE, ROW_EVENT])
-        return gap, phase == FREE
+        return (scalars[SCALAR_CONST] + scalars[SCALAR_SINE] * np.sin(omega_t)
+                + scalars[SCALAR_COSINE] * np.cos(omega_t)
+                + q @ self.packed.tables[FREE, ROW_EVENT])
 
-    def _min_gap(self, trajectory: Trajectory) -> tuple[float, float]:
-        times = self._grid()
-        gap, free = self._gap(trajectory, times)
+    def _min_gap(self, trajectory: Trajectory, times: np.ndarray, gap: np.ndarray,
+                 free: np.ndarray) -> tuple[float, float]:
         interior = free[1:-1] & free[:-2] & free[2:] & (gap[1:-1] <= gap[:-2]) & (
             gap[1:-1] <= gap[2:])
         if not np.any(interior):
@@ -248,14 +272,19 @@ class PeriodMap:
 
     def _tips(self, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
         phase, q, v = sample(self.packed, trajectory, times)
+        return self._tips_of(phase, times, q, v)
+
+    def _tips_of(self, phase: np.ndarray, times: np.ndarray, q: np.ndarray, v: np.ndarray,
+                 ) -> np.ndarray:
+        """The tips' motion (TIP_* columns) of the sampled states at ``times``."""
         out = np.empty((times.size, 4))
         p = self.packed
         tip_motions(p.tables, p.forces, p.phase_scalars, p.settings, phase, times, q, v, out)
         return out
 
-    def _max_tip(self, trajectory: Trajectory, column: int) -> float:
-        times = self._grid()
-        size = np.abs(self._tips(trajectory, times)[:, column])
+    def _max_tip(self, trajectory: Trajectory, times: np.ndarray, size: np.ndarray,
+                 column: int) -> float:
+        """The largest |tip| of ``column`` from its samples ``size`` at ``times``, refined."""
         i = int(np.argmax(size))
         lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
         value, _ = self._refined(
@@ -285,9 +314,15 @@ def geometry_arrays(params: Params, n_modes: int) -> Dynamics:
     Along a branch in Omega, F0, U0 or the clearance the modes and the spring law's contact
     phase (an eigenproblem, the larger part of building a map at 32 modes) stay the same.
     """
-    defaults = {name: getattr(Params(), name) for name in _CELL_ONLY}
-    dynamics = _geometry(dataclasses.replace(params, **defaults), n_modes)
+    dynamics = _geometry(dataclasses.replace(params, **_cell_defaults()), n_modes)
     return dataclasses.replace(dynamics, params=params)
+
+
+@functools.cache
+def _cell_defaults() -> dict[str, float]:
+    """The default values of the cell's parameters (``_CELL_ONLY``)."""
+    defaults = Params()
+    return {name: getattr(defaults, name) for name in _CELL_ONLY}
 
 
 @functools.lru_cache(maxsize=4)
