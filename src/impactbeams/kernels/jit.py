@@ -7,25 +7,97 @@ and ``nnan`` would let LLVM delete the NaN checks.
 import types
 
 from numba import njit, typeof
+from numba.core import compiler, errors, event, sigutils, typing
 from numba.core import types as numba_types
+from numba.core.codegen import JITCodeLibrary
+from numba.core.compiler_lock import global_compiler_lock
 from numba.core.registry import CPUDispatcher
 
 _OPTIONS = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": True}
 
 
 class _Kernel(CPUDispatcher):
-    """A dispatcher that one kernel calling another compiles once per plain signature.
+    """A dispatcher that one kernel calling another compiles once per plain signature, to link.
 
     Numba types a call between kernels with its constant arguments as literals
     (``Literal[bool](True)``) and an omitted argument as its default: each combination would be
     compiled as its own specialisation, with every kernel it calls (``find_switch`` twice, for
     example). Typed by their plain types (the default's type for an omitted argument), the
     calls share one compile; the values are passed at run time, and the results are the same.
+
+    A kernel compiled for a calling kernel is only linked into the caller's code: it gets no
+    machine code, no Python or C wrappers and no cache entry of its own (a third of a cold
+    compile's time), since its callers' machine code holds it and the kernels called from
+    Python are cached with everything they call. A call from Python compiles it in full.
     """
 
     def get_call_template(self, args, kws):
         pysig, folded = self._compiler.fold_argument_types(args, kws)
-        return super().get_call_template(tuple(map(_plain_type, folded)), {})
+        args = tuple(map(_plain_type, folded))
+        if self._can_compile and args not in self.overloads:
+            self._compile_to_link(args)
+        name = self.py_func.__name__
+        template = typing.make_concrete_template(f"CallTemplate({name})", key=name,
+                                                 signatures=self.nopython_signatures)
+        return template, pysig, args, {}
+
+    def compile(self, sig):
+        """Compile for a call from Python: in full, replacing a compile only to link."""
+        existing = self.overloads.get(tuple(_signature_args(sig)))
+        if existing is not None and isinstance(existing.entry_point, _LinkedEntry):
+            del self.overloads[tuple(_signature_args(sig))]
+        return super().compile(sig)
+
+    def _compile_to_link(self, args):
+        with global_compiler_lock, self._compiling_counter:
+            cres = self._cache.load_overload(args, self.targetctx)  # a Python call's, cached
+            if cres is not None:
+                self.targetctx.insert_user_function(cres.entry_point, cres.fndesc,
+                                                    [cres.library])
+                self.add_overload(cres)
+                return
+            details = {"dispatcher": self, "args": args, "return_type": None}
+            with event.trigger_event("numba:compile", data=details):
+                cres = self._compile_linked(args)
+            self.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
+            self.overloads[args] = cres  # not callable from Python: `compile` replaces it
+
+    def _compile_linked(self, args):
+        flags = compiler.Flags()
+        self.targetdescr.options.parse_as_flags(flags, self.targetoptions)
+        flags.no_cpython_wrapper = flags.no_cfunc_wrapper = flags.no_compile = True
+        library = _LinkedLibrary(self.targetctx.codegen(), self.py_func.__qualname__)
+        try:
+            cres = compiler.compile_extra(
+                self.targetdescr.typing_context, self.targetctx, self.py_func, args=args,
+                return_type=None, flags=flags, locals=self.locals, library=library,
+                pipeline_class=self._compiler.pipeline_class)
+        except errors.ForceLiteralArg as request:
+            raise request.bind_fold_arguments(
+                lambda args, kws: self._compiler.fold_argument_types(args, kws)[1])
+        return cres._replace(entry_point=_LinkedEntry(cres.fndesc.mangled_name))
+
+
+class _LinkedEntry:
+    """The key under which a kernel compiled only to link is known to the target context."""
+
+    __slots__ = ("name",)
+
+    def __init__(self, name):
+        self.name = name
+
+
+class _LinkedLibrary(JITCodeLibrary):
+    """Optimised LLVM IR to link into callers' code, never turned into machine code itself."""
+
+    def _finalize_final_module(self):
+        self._finalize_dynamic_globals()
+        self._verify_declare_only_symbols()
+        self._finalized = True
+
+
+def _signature_args(sig):
+    return sigutils.normalize_signature(sig)[0]
 
 
 def _plain_type(argument):
