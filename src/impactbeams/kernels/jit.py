@@ -90,6 +90,11 @@ class _LinkedEntry:
 class _LinkedLibrary(JITCodeLibrary):
     """Optimised LLVM IR to link into callers' code, never turned into machine code itself."""
 
+    import os
+    if os.environ.get("C24_NOMOD"):
+        def _optimize_final_module(self):
+            pass
+
     def _finalize_final_module(self):
         self._finalize_dynamic_globals()
         self._verify_declare_only_symbols()
