@@ -11,6 +11,7 @@ from numba.core import compiler, event, sigutils, typing
 from numba.core import types as numba_types
 from numba.core.codegen import JITCodeLibrary
 from numba.core.compiler_lock import global_compiler_lock
+from numba.core.environment import lookup_environment
 from numba.core.registry import CPUDispatcher
 
 _OPTIONS = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": True}
@@ -43,10 +44,13 @@ class _Kernel(CPUDispatcher):
 
     def compile(self, sig):
         """Compile for a call from Python: in full, replacing a compile only to link."""
-        existing = self.overloads.get(tuple(_signature_args(sig)))
+        args = tuple(sigutils.normalize_signature(sig)[0])
+        existing = self.overloads.get(args)
         if existing is not None and isinstance(existing.entry_point, _LinkedEntry):
-            del self.overloads[tuple(_signature_args(sig))]
-        return super().compile(sig)
+            del self.overloads[args]
+        entry_point = super().compile(sig)
+        _set_environments(self.overloads[args].library)
+        return entry_point
 
     def _compile_to_link(self, args):
         with global_compiler_lock, self._compiling_counter:
@@ -96,8 +100,16 @@ class _LinkedLibrary(JITCodeLibrary):
         self._finalized = True
 
 
-def _signature_args(sig):
-    return sigutils.normalize_signature(sig)[0]
+def _set_environments(library):
+    """Point the Environment globals of the kernels ``library`` links at their Environments.
+
+    Numba sets a kernel's global when it makes the kernel's machine code, which a linked kernel
+    never gets; its code reads it to call Python (``print``): as a cache load does, set each.
+    """
+    for variable in library._final_module.global_variables:
+        environment = lookup_environment(variable.name)
+        if environment is not None:
+            library.codegen.set_env(variable.name, environment)
 
 
 def _plain_type(argument):
@@ -108,7 +120,11 @@ def _plain_type(argument):
 
 def kernel(function):
     """Compile a serial kernel with the package's options."""
-    options = njit(**_OPTIONS)(function).targetoptions  # the options as njit completes them
+    return _dispatcher(function)
+
+
+def _dispatcher(function, **options):
+    options = njit(**_OPTIONS, **options)(function).targetoptions  # as njit completes them
     dispatcher = _Kernel(py_func=function, locals={}, targetoptions=options)
     dispatcher.enable_caching()
     return dispatcher
@@ -131,4 +147,4 @@ def parallel_kernel(function):
                                 function.__name__ + "_serial", function.__defaults__,
                                 function.__closure__)
     serial.__qualname__ = function.__qualname__ + "_serial"
-    return njit(parallel=True, **_OPTIONS)(function), njit(parallel=False, **_OPTIONS)(serial)
+    return _dispatcher(function, parallel=True), _dispatcher(serial, parallel=False)
