@@ -20,8 +20,8 @@ import numpy as np
 
 from impactbeams.kernels import dynamics as dyn
 from impactbeams.kernels.contact_spring import to_contact, to_free
-from impactbeams.kernels.events import event_sine, event_value
-from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, ROW_FREQUENCY, SCALAR_CONST
+from impactbeams.kernels.events import event_value, phase_event_function
+from impactbeams.kernels.layout import CONTACT, FREE, ROW_FREQUENCY
 from impactbeams.kernels.records import segments
 
 _CAPACITY = 4096  # segments of one perturbed step, doubled as needed
@@ -49,8 +49,8 @@ def _phase_state(packed, q, v, t):
     """
     s = packed.settings
     scalars = packed.phase_scalars[FREE]
-    gap, gap_rate = event_value(q, v, t, packed.tables[FREE, ROW_EVENT], scalars[SCALAR_CONST],
-                                event_sine(scalars), s["forcing_frequency"])
+    gap, gap_rate = event_value(q, v, t, phase_event_function(packed.tables[FREE], scalars,
+                                                              s["forcing_frequency"]))
     force = -s["contact_stiffness"] * gap - s["contact_damping"] * gap_rate
     if not (gap < 0.0 and force > 0.0):
         return FREE, q, v

@@ -19,24 +19,27 @@ class Map:
         self.step, self.jac, self.gap, self.period = step, jacobian, gap, period
 
     def _iterate(self, z, p):
-        jacobian = np.eye(len(z))
+        """The end, the Jacobian, and z1 at each of the period's sections."""
+        jacobian, sections = np.eye(len(z)), []
         for _ in range(self.period):
+            sections.append(z[0])
             jacobian = self.jac(z, p) @ jacobian
             z = self.step(z, p)
-        return z, jacobian
+        return z, jacobian, np.array(sections)
 
     def residual(self, z, p):
         return self._iterate(z, p)[0] - z
 
     def evaluate(self, z, p, jacobian=True, measures=True):
-        end, monodromy = self._iterate(z, p)
+        end, monodromy, sections = self._iterate(z, p)
         jacobian = monodromy - np.eye(len(z)) if jacobian else np.empty((0, 0))
         gap = math.nan if self.gap is None else self.gap(z, p)
         return Evaluation(end - z, jacobian,
                           multipliers_of(jacobian) if jacobian.size else np.empty(0),
                           grazing=gap,
                           contacts=int(gap <= 0) if self.gap else 0,
-                          measures={"amplitude": float(np.max(np.abs(z)))})
+                          measures={"amplitude": float(np.max(np.abs(z))),
+                                    "section_deflection_1": sections})
 
     def iterated(self, times):
         return Map(self.step, self.jac, self.gap, self.period * times)
@@ -82,6 +85,23 @@ def grazing(stiffness=100.0):
         return np.array([[0.5 + 1.5 * stiffness * math.sqrt(max(0.0, z[0] - 1.0))]])
 
     return Map(step, jacobian, gap=lambda z, p: 1.0 - z[0])
+
+
+def fold_then_grazing(offset=0.4, slant=0.0):
+    """z -> z + (p - z^2) / 2: a fold at z = p = 0; the gap -(z + offset) + slant (z^2 - p),
+    whose sign the branch p = z^2 changes at z = -offset, p = offset^2 only, past the fold
+    coming from z > 0. Off the branch, ``slant`` > 0 makes the gap positive on the far side of
+    the fold's parabola (where a step's predictor lands when it overshoots the fold)."""
+    return Map(lambda z, p: z + 0.5 * (p - z ** 2), lambda z, p: np.array([[1.0 - z[0]]]),
+               gap=lambda z, p: -(z[0] + offset) + slant * (z[0] ** 2 - p))
+
+
+def pitchfork():
+    """z1 -> z1 + (p z1 - z1^3) / 2, z2 -> z2 / 2 + z1^2: the branch z = 0 for every p, its
+    multiplier 1 + p / 2 through +1 at p = 0, where the branch z1^2 = p, z2 = 2 p crosses it
+    (symmetric under z1 -> -z1: a symmetry-breaking pitchfork); the branch never turns."""
+    return Map(lambda z, p: np.array([z[0] + 0.5 * (p * z[0] - z[0] ** 3), 0.5 * z[1] + z[0] ** 2]),
+               lambda z, p: np.array([[1.0 + 0.5 * (p - 3.0 * z[0] ** 2), 0.0], [2.0 * z[0], 0.5]]))
 
 
 def colliding_pair(k=5.0):

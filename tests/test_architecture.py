@@ -189,3 +189,64 @@ def test_the_code_digest_covers_every_module_that_decides_a_number():
                          if p.exists()]
     assert reached - hashed <= {PACKAGE / "variables.py"}, sorted(
         str(p.relative_to(PACKAGE)) for p in reached - hashed)
+
+
+# The array fields of the event searches' records (`kernels.records`): read in place only.
+RECORD_ARRAYS = {"oscillators": {"frequencies", "zeta", "force"}, "event": {"weights"}}
+
+
+def _bound_record_arrays(tree: ast.AST) -> list[int]:
+    """Lines that bind an array field of a record to a name (``zeta = oscillators.zeta``)."""
+    lines = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Assign):
+            continue
+        values = node.value.elts if isinstance(node.value, ast.Tuple) else [node.value]
+        lines.extend(node.lineno for value in values
+                     if isinstance(value, ast.Attribute) and isinstance(value.value, ast.Name)
+                     and value.attr in RECORD_ARRAYS.get(value.value.id, ()))
+    return lines
+
+
+@pytest.mark.parametrize("path", sorted((PACKAGE / "kernels").glob("*.py")),
+                         ids=lambda p: p.name)
+def test_record_arrays_are_read_in_place(path):
+    """No kernel binds an `Oscillators`/`EventFunction` array field to a local name.
+
+    Numba keeps an atomic incref/decref pair for every array variable that lives across a
+    call: bound fields slowed the Fig. 5a columns by 4-26% (docs/architecture.md, issue 21).
+    """
+    lines = _bound_record_arrays(ast.parse(path.read_text(), str(path)))
+    assert not lines, (f"kernels/{path.name}:{lines[0]} binds a record's array field: read it "
+                       "in place (oscillators.zeta[j])")
+
+
+def test_the_record_check_sees_a_bound_field():
+    code = ("frequencies, zeta = oscillators.frequencies, oscillators.zeta\n"
+            "weights = event.weights\nconst = event.const\nw = oscillators.frequencies[j]\n")
+    assert _bound_record_arrays(ast.parse(code)) == [1, 1, 2]
+
+
+# The argument groups that travel as records in the event search (issue 21): any two of a
+# group among one kernel's arguments mean the group travels loose again.
+LOOSE_GROUPS = ({"frequencies", "zeta", "force"}, {"weights", "const", "sine_amp"})
+
+
+def _loose_group_kernels(tree: ast.AST) -> list[str]:
+    """Functions that take two or more arguments of an `Oscillators`/`EventFunction` group."""
+    return [node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)
+            and any(len(group & {a.arg for a in node.args.args}) >= 2 for group in LOOSE_GROUPS)]
+
+
+@pytest.mark.parametrize("name", ["events.py", "rotor.py"])
+def test_the_event_search_takes_the_records(name):
+    """No kernel of the event search takes (frequencies, zeta, ...) or (weights, const, ...)."""
+    path = PACKAGE / "kernels" / name
+    assert not _loose_group_kernels(ast.parse(path.read_text(), str(path)))
+
+
+def test_the_loose_group_check_sees_loose_arguments():
+    code = ("def walk(q, frequencies, zeta, force):\n    pass\n"
+            "def evaluate(q, v, t, weights, const, sine_amp):\n    pass\n"
+            "def walk2(q, oscillators, event):\n    pass\n")
+    assert _loose_group_kernels(ast.parse(code)) == ["walk", "evaluate"]

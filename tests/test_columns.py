@@ -19,6 +19,7 @@ from impactbeams.kernels.layout import (
     ROW_FREQUENCY,
 )
 from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.records import EventFunction, Oscillators
 from impactbeams.kernels.rotor import rotor_arrays
 from impactbeams.model import build_free_phase
 from impactbeams.packing import free_tables, geometry_row
@@ -60,9 +61,9 @@ def round_off_band(cell, plan, t):
     q, v = np.empty(n), np.empty(n)
     advance(work[0, :n], work[1, :n], 0.0, t, work[2, :n], work[3, :n], force[:n],
             cell[CELL_FORCING_FREQUENCY], q, v)
-    _, slope, scale = evaluate(q, v, t, work[4, :n], cell[CELL_CLEARANCE],
-                               complex(-plan.geometry[g, GEO_C1] * cell[CELL_F0], 0.0),
-                               cell[CELL_FORCING_FREQUENCY])
+    _, slope, scale = evaluate(q, v, t, EventFunction(
+        work[4, :n], cell[CELL_CLEARANCE], complex(-plan.geometry[g, GEO_C1] * cell[CELL_F0], 0.0),
+        cell[CELL_FORCING_FREQUENCY]))
     omega, zeta, big_omega = work[2, :n], work[3, :n], cell[CELL_FORCING_FREQUENCY]
     steady = np.abs(work[4, :n] * force[:n]
                     / (omega**2 - big_omega**2 + 2j * zeta * omega * big_omega))
@@ -168,8 +169,8 @@ def test_a_search_that_reaches_its_step_cap_says_so(free):
     drive = np.array([1e-3 + 0j])
     steady = abs(weights[0] * drive[0] / (omega[0] ** 2 - 100.0**2))
     rest = np.zeros(1)
-    args = (rest, rest, 0.0, 0.0, 1.0, omega, np.zeros(1), drive, weights, 0.5 * steady, 0j,
-            100.0, fi.TOUCH_TOLERANCE)
+    args = (rest, rest, 0.0, 0.0, 1.0, Oscillators(omega, np.zeros(1), drive, 100.0),
+            EventFunction(weights, 0.5 * steady, 0j, 100.0), fi.TOUCH_TOLERANCE)
     work = np.empty(1), np.empty(1), rotor_arrays(1)
     assert search_root(*args, 1, *work) == GAVE_UP
     assert 0.0 < search_root(*args, 10**6, *work) < 1.0

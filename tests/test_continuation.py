@@ -6,13 +6,15 @@ import numpy as np
 import pytest
 
 import continuation_toys as toys
-from impactbeams.continuation.arclength import Scaling, Settings
+from impactbeams.continuation.arclength import Point, Scaling, Settings
 from impactbeams.continuation.branch import (
     ContinuationInterrupted,
     Span,
     continue_branches,
 )
+from impactbeams.continuation.events import grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
+from impactbeams.continuation.problem import Evaluation
 from impactbeams.params import ParameterError
 
 SETTINGS = Settings(step=0.05, max_step=0.1)
@@ -36,6 +38,7 @@ def test_fold_located_where_the_determinant_vanishes():
                       settings=Settings(step=0.05, max_step=0.1, max_branches=1))
     (fold,) = labelled(branches[0], "fold")
     assert fold.x[-1] == pytest.approx(-4e-4, abs=LOCATED)
+    assert not labelled(branches[0], "branch_point")  # its multiplier at +1 is the fold's
     assert fold.x[0] == pytest.approx(-0.02, abs=1e-5)  # p is quadratic in z1 there
     # the branch turned back: it ends at the upper bound on the other side (z1 < 0)
     end = branches[0].points[-1]
@@ -61,6 +64,17 @@ def test_period_doubling_located_and_switched_to_the_period_2_orbit():
     assert abs(z1) > 1e-4 and abs(once[0]) > 1e-4
 
 
+def test_branch_point_located_where_a_multiplier_crosses_plus_1_without_a_fold():
+    """The symmetric branch z = 0 of the pitchfork: a real multiplier through +1 at p = 0
+    while the branch goes on in p: labelled branch_point (not fold), located to 1e-11."""
+    (branch,) = follow(toys.pitchfork(), [0.0, 0.0], -0.5, -0.5, 0.5)
+    (point,) = labelled(branch, "branch_point")
+    assert point.x[-1] == pytest.approx(0.0, abs=LOCATED)
+    assert np.max(point.evaluation.multipliers.real) == pytest.approx(1.0, abs=LOCATED)
+    assert not labelled(branch, "fold") and branch.ending == "bound"
+    assert all(abs(p.x[0]) < 1e-12 for p in branch.points)  # stays on the symmetric branch
+
+
 def test_neimark_sacker_located():
     (branch,) = follow(toys.neimark_sacker(), [0.0, 0.0], -0.5, -0.5, 0.5)
     (point,) = labelled(branch, "neimark_sacker")
@@ -84,16 +98,43 @@ def test_grazing_is_an_event_of_the_branch(stiffness):
     assert branch.ending == "bound" and len(branch.points) < 120
 
 
+@pytest.mark.parametrize(("offset", "slant", "step"), [
+    (0.4, 0.0, 1.5), (0.4, 5.0, 1.5), (0.2, 0.0, 1.5), (0.3, 0.0, 2.0), (0.4, 0.0, 1.0)])
+def test_grazing_just_past_a_fold_is_located_on_the_branch(offset, slant, step):
+    """Coming down p = z^2 from z = 1 with a step that overshoots the fold (z = p = 0): the
+    secant planes of the points before the fold reach no farther than z = -1/(4 z_0), short of
+    the grazing at z = -offset. The grazing is labelled at p = offset^2 (not at the end of the
+    planes' reach, as before: a point still in contact, its gap offset - 1/(4 z_0) < 0), once,
+    with the contacts changing across it; the fold is located at p = 0."""
+    (branch,) = follow(toys.fold_then_grazing(offset, slant), [1.0], 1.0, -1.0, 30.0,
+                       direction=-1, settings=Settings(step=step, max_step=step))
+    (grazing,) = labelled(branch, "grazing")
+    assert grazing.x[-1] == pytest.approx(offset ** 2, abs=LOCATED)
+    assert abs(grazing.evaluation.grazing) < LOCATED
+    after = branch.points[branch.points.index(grazing) + 1]
+    assert (grazing.evaluation.contacts, after.evaluation.contacts) == (1, 0)
+    (fold,) = labelled(branch, "fold")
+    assert fold.x[-1] == pytest.approx(0.0, abs=LOCATED)
+    assert branch.ending == "bound"
+
+
 def test_dataset_along_branch_points(tmp_path):
     branches = follow(toys.period_doubling(), [0.0, 0.0], -0.5, -0.5, 0.5)
     dataset = branches_dataset(branches, "omega", {"title": "toy"})
     points = sum(len(branch.points) for branch in branches)
-    assert dataset.sizes == {"branch_point": points, "multiplier": 2, "state": 2}
+    assert dataset.sizes == {"branch_point": points, "multiplier": 2, "state": 2, "section": 2}
     assert dataset.bifurcation.attrs["flag_meanings"].split()[2] == "period_doubling"
     assert (dataset.bifurcation == 2).sum() == 1  # the period-2 orbit's (1 - 2p)^2 stays > -1
     assert set(dataset.orbit_period.values) == {1, 2}
     before = dataset.where(dataset.omega < -1e-9, drop=True)
     assert (before.stable == 1).all() and before.multiplier_modulus.max() < 1
+    # a period-p orbit's p section samples; NaN past a period-1 orbit's one
+    sections = dataset.section_deflection_1
+    assert sections.dims == ("branch_point", "section")
+    single, double = (sections[dataset.orbit_period == p] for p in (1, 2))
+    assert np.isnan(single[:, 1]).all() and np.isfinite(single[:, 0]).all()
+    np.testing.assert_array_equal(double[:, 0], dataset.section_state[dataset.orbit_period == 2, 0])
+    np.testing.assert_allclose(double[:, 1], -double[:, 0], atol=1e-9)  # z1 = +-sqrt(p)
     dataset.to_netcdf(tmp_path / "branch.nc")
 
 
@@ -155,3 +196,19 @@ def test_branches_drawn_as_a_frequency_response(tmp_path):
             plot_dataset(dataset.drop_dims("branch_point"), tmp_path / "d.png",
                          diagram=dataset)
     assert (tmp_path / "b.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(("reach", "root", "located"), [(0.6, 0.6, True), (0.6, 1.0, False)])
+def test_locate_without_a_corrected_point_beyond(reach, root, located):
+    """The corrector fails past ``reach``: past a grazing where the map is not smooth (the
+    root is located, ``root`` True, its near end at it) or where the branch turns back across
+    the planes before the grazing (no root: the bracket ends at the reach)."""
+    def point_at(s):
+        if s > reach:
+            return None
+        evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)), np.ones(1), grazing=s - root)
+        return Point(np.array([0.0, s]), np.array([0.0, 1.0]), evaluation, 1)
+
+    found = locate(point_at, point_at(0.0), 2.0, None, grazing_test, 1e-11)
+    assert found.beyond is None and found.root == located
+    assert found.s == pytest.approx(min(root, reach), abs=1e-11)

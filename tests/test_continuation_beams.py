@@ -6,6 +6,7 @@ The case is the shipped sweeps/continuation-stop-fold.toml: a cantilever against
 fold and returns, unstable, to a second fold.
 """
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,7 @@ import xarray as xr
 
 import continuation_reference as reference
 from impactbeams.cli import main
-from impactbeams.continuation import load_continuation
+from impactbeams.continuation import continue_orbits, load_continuation
 from impactbeams.variables import BIFURCATIONS
 
 EXAMPLE = Path(__file__).parents[1] / "sweeps" / "continuation-stop-fold.toml"
@@ -107,6 +108,17 @@ def test_example_folds_and_grazings_against_references(tmp_path):
         first = float(branch.omega[grazings[0]])
         assert first == pytest.approx(
             reference.stop_grazing(continuation.params, 5, 195.0, 210.0), abs=LOCATED)
+        # started at 260 rad/s (once labelled a grazing on an orbit still in contact, just
+        # past the lower fold): the same folds and second grazing
+        later = continue_orbits(dataclasses.replace(continuation, low=260.0))
+        for label, expected in ((FOLD, branch.omega[folds]), (GRAZING, branch.omega[grazings[1:]])):
+            np.testing.assert_allclose(
+                np.sort(later.omega.values[later.bifurcation.values == label]),
+                np.sort(expected.values), rtol=0.0, atol=LOCATED)
+        for dataset in (branch, later):
+            contacts = dataset.contacts_per_orbit.values
+            for i in np.flatnonzero(dataset.bifurcation.values == GRAZING):
+                assert contacts[i - 1] != contacts[i + 1]
 
 
 @pytest.mark.slow
@@ -114,11 +126,13 @@ def test_period_doubling_where_the_diagram_from_rest_changes_period():
     """Beam 1 against a stiffer stop (k = 1e4 N/m, 12 modes, F0 = 0.4 mN): going down in
     Omega the impacting period-1 orbit doubles its period; a diagram from rest (400 transient
     periods, period tolerance 1e-4) is period 1 at 302.5 rad/s and period 2 at 300.5 rad/s. The
-    switched branch is period 2, stable there, and its section sample is one of the diagram's
+    switched branch is period 2, stable there, and its two section samples are the diagram's
     two (the transient has decayed to ~1e-12 of the orbit's size: its multipliers are below 0.9
-    per two periods)."""
+    per two periods). The orbit's Dataset (`to_dataset`) holds both periods: it passes through
+    both samples, at t = 0 and T, and closes at 2 T."""
     from impactbeams import Params
     from impactbeams.continuation import Continuation, continue_orbits
+    from impactbeams.orbits import periodic_orbit
     from impactbeams.sweep import run_sweep
     from impactbeams.sweep.definition import sweep_from_mapping
 
@@ -145,8 +159,17 @@ def test_period_doubling_where_the_diagram_from_rest_changes_period():
         "axes": {"omega": {"min": 300.5, "max": 302.5, "num": 2}}}))
     assert diagram.response_period.values.tolist() == [2, 1]
     samples = diagram.poincare_deflection1.sel(omega=300.5).values
-    orbit = float(branches.section_deflection_1[ends[1]])
-    assert np.min(np.abs(samples - orbit)) < 1e-8 * np.max(np.abs(samples))
+    scale = np.max(np.abs(samples))
+    orbit = branches.section_deflection_1[ends[1]].values
+    assert np.isnan(branches.section_deflection_1[ends[0], 1])  # period 1: one sample
+    assert abs(orbit[1] - orbit[0]) > 1e-3 * scale  # two distinct samples (3.5e-2 measured)
+    for sample in orbit:
+        assert np.min(np.abs(samples - sample)) < 1e-8 * scale
+    period_2 = periodic_orbit(Params(**fixed, omega=300.5), 12, period=2,
+                              guess=branches.section_state[ends[1]].values)
+    tips = period_2.to_dataset(samples_per_period=16).tip_deflection_1.values
+    assert tips.size == 33
+    np.testing.assert_allclose(tips[[0, 16, 32]], [*orbit, orbit[0]], rtol=0, atol=1e-10 * scale)
 
 
 def test_interrupt_writes_the_points_computed(tmp_path, capsys, monkeypatch):
@@ -228,3 +251,26 @@ def test_newton_picard_warns_when_the_complement_may_hold_a_crossing():
         problem._check_complement(np.array([1.5, 1.2, 1.02 + 0j]))  # once per problem
         BeamOrbits(problem.params, "omega", 5, method="newton-picard",
                    subspace=3)._check_complement(np.array([1.5, 0.99 + 0j]))
+
+
+def test_equal_beams_on_one_shaker_impact_only_in_their_unforced_difference():
+    """The one configuration with a symmetry (docs/continuation.md, Symmetry): equal beams on
+    one shaker, no tip force. The in-phase motion y1 + y2 is the linear response whatever the
+    contacts (7 here, from an asymmetric start): equal to the run without contact to 1e-12 of
+    its amplitude (measured 3e-14: both phases' modal bases, round-off); the contact lives in
+    the difference, which nothing drives and the damping empties."""
+    from impactbeams import Params, simulate
+
+    equal = {"l2": 0.1, "force_amplitude": 0.0, "base_amplitude": 2e-6, "damping_ratio": 0.02,
+             "contact_stiffness": 100.0, "omega": 240.0, "uplift1": 3e-5}
+    duration = 40 * 2 * np.pi / 240.0
+    times = np.linspace(0.0, duration, 2001)
+    runs = [simulate(Params(**equal, clearance=clearance), duration, n_modes=5, times=times)
+            for clearance in (1.1e-5, 1e-2)]
+    in_phase = [run.tip_deflection_1 + run.tip_deflection_2 + run.attrs["clearance"]
+                for run in runs]
+    assert runs[0].impact.size > 0 and runs[1].impact.size == 0
+    scale = float(abs(in_phase[1]).max())
+    assert float(abs(in_phase[0] - in_phase[1]).max()) < 1e-12 * scale
+    difference = (runs[0].tip_deflection_1 - runs[0].tip_deflection_2).values
+    assert abs(difference[-500:]).max() < 0.5 * abs(difference[:500]).max()

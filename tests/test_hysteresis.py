@@ -40,6 +40,12 @@ STEPPED = {"n_modes": 5, "transient_periods": DWELL, "sampled_periods": 2, "step
 # Bound: the scale times that decay times a margin of 10 for the transient's non-normal growth,
 # and no less than 1e-10 of the scale (the orbits' Newton tolerance, 1e-11, and round-off).
 MARGIN, FLOOR = 10.0, 1e-10
+# folds and grazings located to locate_tolerance = 1e-11 of the range (5e-10 to 2e-9 rad/s
+# here) on orbits corrected to 1e-10 of state_scale; measured spread over the starts: 1.4e-9
+LOCATED = 1e-8  # rad/s
+# the grazing gap at a grazing label: its rate along the branch, 3.2e-7 m per rad/s near
+# 282.74 rad/s, times LOCATED is 3e-15 m, 3e-10 of the clearance (measured: at most 5e-16 m)
+GRAZING_GAP = 1e-9  # of the clearance
 
 
 @pytest.fixture(scope="module")
@@ -56,6 +62,41 @@ def stepped() -> xr.Dataset:
     fixed = {key: params[key] for key in ("counterpart", "contact_stiffness", "damping_ratio",
                                           "force_amplitude")}
     return run_sweep(sweep_from_mapping({**STEPPED, "params": fixed}))
+
+
+@pytest.fixture(scope="module")
+def other_starts() -> dict[str, xr.Dataset]:
+    """The example's branch through the band from other starts and directions."""
+    continuation = load_continuation(EXAMPLE)
+    return {
+        # up from 260 over 260..450: its steps once overshot the lower fold and stopped
+        # short of the grazing behind it, labelling a point still in contact (gap -1.02e-8 m)
+        "up from 260": continue_orbits(dataclasses.replace(continuation, low=260.0)),
+        # down from the non-impacting orbit: the grazing first, then the fold behind it
+        "down from 340": continue_orbits(dataclasses.replace(
+            continuation, low=LOW, high=340.0, direction="down")),
+    }
+
+
+def located(branch: xr.Dataset, label: str) -> np.ndarray:
+    """The parameter values labelled ``label``, in increasing order."""
+    return np.sort(branch.omega.values[branch.bifurcation.values == BIFURCATIONS.index(label)])
+
+
+def test_the_same_folds_and_grazing_whichever_start(branch, other_starts):
+    """The two folds and the grazing just above the lower fold (282.7394 rad/s, where the
+    returning branch leaves the stop) are the same from every start; every grazing label
+    has a gap of zero (to GRAZING_GAP) and neighbours with different contacts per orbit."""
+    clearance = load_continuation(EXAMPLE).params.clearance
+    for name, other in {"up from 275": branch, **other_starts}.items():
+        for label in ("fold", "grazing"):
+            np.testing.assert_allclose(located(other, label), located(branch, label),
+                                       rtol=0.0, atol=LOCATED, err_msg=f"{name}: {label}")
+        contacts = other.contacts_per_orbit.values
+        for i in np.flatnonzero(other.bifurcation.values == BIFURCATIONS.index("grazing")):
+            assert abs(float(other.grazing_gap[i])) < GRAZING_GAP * clearance, name
+            assert contacts[i - 1] != contacts[i + 1], name
+    assert located(branch, "grazing").size == 1
 
 
 def folds(branch: xr.Dataset) -> tuple[float, float]:

@@ -22,7 +22,7 @@ import xarray as xr
 from impactbeams.cli import EXIT_INTERRUPTED, main
 from impactbeams.params import ParameterError
 from impactbeams.sweep import Chunking, load_sweep, sweep_from_mapping, write_sweep
-from impactbeams.sweep.definition import LONG_TIME_OBSERVABLES, OBSERVABLES
+from impactbeams.sweep.definition import LONG_TIME_OBSERVABLES, OBSERVABLES, STEPPED_END_STATE
 from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.store import NAMED_DAMAGED, ChunkStore
 from impactbeams.variables import MAP_VARIABLES, VARIABLES
@@ -41,14 +41,18 @@ IN_CHUNKS = [name for name in MAP_VARIABLES if name not in NOT_IN_CHUNKS]
 def test_every_map_variable_is_stored_in_chunks_or_derived():
     """A new map variable of the registry is a sweep observable (and so tested below) or is
     listed in NOT_IN_CHUNKS with the reason."""
-    assert set(IN_CHUNKS) == {*OBSERVABLES, "dynamics_status"}
+    assert set(IN_CHUNKS) == {*OBSERVABLES, "dynamics_status", *STEPPED_END_STATE}
     assert set(NOT_IN_CHUNKS) < set(MAP_VARIABLES)
 
 
 def _storing(name):
-    """A three-cell sweep whose chunks store ``name`` (four samples along ``period``)."""
+    """A three-cell sweep whose chunks store ``name`` (four samples along ``period``, four
+    coordinates: 2 modes per beam)."""
     observable = "impact_count" if name == "dynamics_status" else name  # comes with dynamics
     long_time = {"sampled_periods": 4} if name in LONG_TIME_OBSERVABLES else {}
+    if name in STEPPED_END_STATE:  # a stepped sweep's, with its long-time samples
+        observable = "poincare_deflection1"
+        long_time = {"sampled_periods": 4, "stepping": "up", "n_modes": 2}
     return sweep_from_mapping({"observables": [observable], **long_time,
                                "axes": {"omega": {"min": 100.0, "max": 300.0, "num": 3}}})
 
@@ -92,7 +96,8 @@ def test_every_stored_observable_round_trips_with_its_registered_dtype_and_shape
     assert not store.damaged
     with map_file(sweep, out, store.building, chunking) as write:
         write(0, sweep.size, values)
-    grid_dims = tuple(axis.name for axis in sweep.axes) + VARIABLES[name].dims[1:]
+    grid_dims = (*(("sweep_direction",) if sweep.stepping else ()),
+                 *(axis.name for axis in sweep.axes), *VARIABLES[name].dims[1:])
     expected = _bits(values[name].reshape(sweep.shape + shape))
     with xr.open_dataset(out) as written:
         assert written[name].dims == grid_dims
@@ -137,7 +142,8 @@ def test_the_matrix_covers_every_observable(tmp_path):
     for kind, text in KINDS.items():
         (tmp_path / f"{kind}.toml").write_text(text)
         stored |= set(load_sweep(tmp_path / f"{kind}.toml").stored)
-    assert stored == set(IN_CHUNKS)
+    # a stepped sweep's end states: resumed in tests/test_stepped.py
+    assert stored | set(STEPPED_END_STATE) == set(IN_CHUNKS)
 
 
 @pytest.fixture(scope="module")

@@ -6,9 +6,16 @@ import numpy as np
 import pytest
 
 from impactbeams.kernels import dynamics as dyn
-from impactbeams.kernels.events import evaluate, event_acceleration, event_sine, event_value
-from impactbeams.kernels.layout import CONTACT, ROW_EVENT, ROW_FREQUENCY, ROW_ZETA, SCALAR_CONST
+from impactbeams.kernels.events import (
+    evaluate,
+    event_acceleration,
+    event_value,
+    phase_event_function,
+    phase_oscillators,
+)
+from impactbeams.kernels.layout import CONTACT
 from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.records import EventFunction, Oscillators
 from impactbeams.kernels.rotor import (
     LEVELS,
     LOWEST,
@@ -37,12 +44,17 @@ def oscillators(seed=1, n=64, driven=(3, 40)):
     return omega, zeta, force, rng.normal(size=n), q, v
 
 
+def gap(weights):
+    """An event function of these weights alone (what the rotor's load reads)."""
+    return EventFunction(weights, 0.0, 0j, FORCING)
+
+
 @pytest.mark.parametrize("step", [3e-9, 1e-7, 0.7e-6, 0.75e-6, 0.99e-6, 1e-6, 2.5e-3, 1e9])
 def test_a_step_is_rounded_down_to_two_factors(step):
     """2^k or 3 2^(k-1), the largest not above the request (capped at the table's top)."""
     omega, zeta, force, weights, q, v = oscillators()
     rotor = rotor_arrays(omega.size)
-    rotor_load(rotor, q, v, 0.0, omega, zeta, force, weights, FORCING)
+    rotor_load(rotor, q, v, 0.0, Oscillators(omega, zeta, force, FORCING), gap(weights))
     taken = rotor_step(rotor, step)
     fraction, exponent = math.frexp(taken)
     assert fraction in (0.5, 0.75) and taken <= step
@@ -52,7 +64,7 @@ def test_a_step_is_rounded_down_to_two_factors(step):
 def test_a_step_below_the_table_moves_nothing():
     omega, zeta, force, weights, q, v = oscillators()
     rotor = rotor_arrays(omega.size)
-    rotor_load(rotor, q, v, 0.0, omega, zeta, force, weights, FORCING)
+    rotor_load(rotor, q, v, 0.0, Oscillators(omega, zeta, force, FORCING), gap(weights))
     before = rotor.amplitudes.copy()
     assert rotor_step(rotor, 2.0**LOWEST) == 0.0  # it would need the factor of 2^(LOWEST - 1)
     assert np.array_equal(rotor.amplitudes, before)
@@ -65,19 +77,19 @@ def test_the_rotor_follows_exact_propagation():
     omega, zeta, force, weights, q_s, v_s = oscillators()
     t_s, const, sine_amp = 0.37, 2e-7, 1e-7 + 3e-8j
     rotor = rotor_arrays(omega.size)
-    rotor_load(rotor, q_s, v_s, t_s, omega, zeta, force, weights, FORCING)
+    modes = Oscillators(omega, zeta, force, FORCING)
+    event = EventFunction(weights, const, sine_amp, FORCING)
+    rotor_load(rotor, q_s, v_s, t_s, modes, event)
     rng = np.random.default_rng(2)
     offset = 0.0
     q, v = np.empty_like(q_s), np.empty_like(q_s)
     for step in rng.uniform(1e-8, 2e-5, 200):
         offset += rotor_step(rotor, step)
         t = t_s + offset
-        value, slope, scale, acceleration = rotor_event(rotor, q_s, v_s, t_s, t, omega, zeta,
-                                                        force, weights, const, sine_amp, FORCING)
+        value, slope, scale, acceleration = rotor_event(rotor, q_s, v_s, t_s, t, modes, event)
         advance(q_s, v_s, t_s, t - t_s, omega, zeta, force, FORCING, q, v)
-        exact, exact_slope, exact_scale = evaluate(q, v, t, weights, const, sine_amp, FORCING)
-        exact_acceleration = event_acceleration(q, v, t, omega, zeta, force, weights, sine_amp,
-                                                FORCING)
+        exact, exact_slope, exact_scale = evaluate(q, v, t, event)
+        exact_acceleration = event_acceleration(q, v, t, modes, event)
         assert abs(value - exact) <= 1e-13 * exact_scale
         slope_scale = np.sum(np.abs(weights * v)) + FORCING * abs(sine_amp)
         assert abs(slope - exact_slope) <= 1e-13 * slope_scale
@@ -91,10 +103,11 @@ def test_stored_factors_are_cleared_when_the_modes_change():
     """A rotor reused for other eigenvalues steps as a fresh one does, bit for bit."""
     omega, zeta, force, weights, q, v = oscillators()
     used, fresh = rotor_arrays(omega.size), rotor_arrays(omega.size)
-    rotor_load(used, q, v, 0.0, omega, zeta, force, weights, FORCING)
+    rotor_load(used, q, v, 0.0, Oscillators(omega, zeta, force, FORCING), gap(weights))
     rotor_step(used, 1e-6)
     for rotor in (used, fresh):
-        rotor_load(rotor, q, v, 0.0, 1.5 * omega, zeta, force, weights, FORCING)
+        rotor_load(rotor, q, v, 0.0, Oscillators(1.5 * omega, zeta, force, FORCING),
+                   gap(weights))
         rotor_step(rotor, 1e-6)
     assert np.array_equal(used.amplitudes[:omega.size], fresh.amplitudes[:omega.size])
 
@@ -132,8 +145,8 @@ def test_the_certified_rise_finds_the_peak_following_search_root(hertz_run):
     checked = 0
     for k in np.flatnonzero(trajectory.phase[:-1] == CONTACT):
         q_s, v_s, t_s = trajectory.q[k], trajectory.v[k], trajectory.time[k]
-        value, slope = event_value(q_s, v_s, t_s, table[ROW_EVENT], scalars[SCALAR_CONST],
-                                       event_sine(scalars), settings["forcing_frequency"])
+        event = phase_event_function(table, scalars, settings["forcing_frequency"])
+        value, slope = event_value(q_s, v_s, t_s, event)
         if value > 0.0 or slope <= 0.0:
             continue
         risen = dyn.find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor,
@@ -141,20 +154,17 @@ def test_the_certified_rise_finds_the_peak_following_search_root(hertz_run):
         assert risen != dyn.NOT_RISEN
         peak = dyn.rate_root(table, force, scalars, 1.0, q_s, v_s, t_s, settings["t_max"],
                              settings, q, v, rotor)
-        t_up = dyn.first_root(q_s, v_s, t_s, peak, table[ROW_FREQUENCY], table[ROW_ZETA], force,
-                              -table[ROW_EVENT], -scalars[SCALAR_CONST],
-                              -event_sine(scalars), settings["forcing_frequency"], q, v,
+        t_up = dyn.first_root(q_s, v_s, t_s, peak,
+                              phase_oscillators(table, force, settings["forcing_frequency"]),
+                              dyn._opposite(table, scalars, settings["forcing_frequency"]), q, v,
                               rotor)
         t_up = dyn._step_until(table, force, scalars, q_s, v_s, t_s, t_up, False, settings, q,
                                v)
         followed = dyn.find_event(table, force, scalars, q.copy(), v.copy(), t_up, settings, q,
                                   v, rotor)
         dyn.propagate(table, force, q_s, v_s, t_s, risen, settings, q, v)
-        release_slope = abs(event_value(q, v, risen, table[ROW_EVENT],
-                                            scalars[SCALAR_CONST], event_sine(scalars),
-                                            settings["forcing_frequency"])[1])
-        _, _, scale = evaluate(q, v, risen, table[ROW_EVENT], scalars[SCALAR_CONST],
-                               event_sine(scalars), settings["forcing_frequency"])
+        release_slope = abs(event_value(q, v, risen, event)[1])
+        _, _, scale = evaluate(q, v, risen, event)
         band = 16 * EPS * scale / release_slope + 8 * np.spacing(risen)
         assert abs(risen - followed) <= band, k
         checked += 1

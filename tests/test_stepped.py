@@ -18,6 +18,7 @@ import pytest
 import xarray as xr
 from matplotlib.figure import Figure
 
+from impactbeams import simulate
 from impactbeams.cli import main
 from impactbeams.kernels import layout, stroboscope
 from impactbeams.longtime import hysteresis
@@ -178,6 +179,80 @@ def test_stepping_along_the_force_jumps_at_the_folds_in_force():
     np.testing.assert_array_equal(impacting, [[False] * 9 + [True] * 5,
                                               [False] * 4 + [True] * 10])
     np.testing.assert_array_equal(hysteresis(stepped).values, impacting[1] & ~impacting[0])
+
+
+# Stepping along the drive's other axes at 240 rad/s, just below the free resonance (246 rad/s):
+# along the clearance (3 to 12 um; F0 = 30 uN: the linear response's tip reaches 8.8 um), and
+# along the base amplitude U0 (0.2 to 1.6 um, F0 = 0). Damped more than the fold case (zeta =
+# 0.05, zeta omega_1 = 12.3 /s), so that 100 periods of dwell leave e^-32 = 1e-14 of a jump's
+# offset: no hysteresis along either axis here (up, down and from rest agree to 8e-14 of the
+# scale, measured), impacting and non-impacting cells both.
+AXES_CASE = {"n_modes": 5, "transient_periods": 100, "sampled_periods": 4,
+             "observables": ["poincare_deflection1", "poincare_velocity1", "steady_impact_rate"],
+             "params": {"counterpart": "stop", "contact_stiffness": 100.0, "damping_ratio": 0.05,
+                        "omega": 240.0}}
+ALONG = {
+    "clearance": {**AXES_CASE, "params": {**AXES_CASE["params"], "force_amplitude": 3e-5},
+                  "axes": {"clearance": {"min": 3e-6, "max": 1.2e-5, "num": 10}}},
+    "base_amplitude": {**AXES_CASE, "params": {**AXES_CASE["params"], "force_amplitude": 0.0},
+                       "axes": {"base_amplitude": {"min": 2e-7, "max": 1.6e-6, "num": 8}}},
+}
+# a linear response (no contact) from rest, along an axis it does not depend on or scales
+# with: equal to round-off of the samples (measured 0 along the clearance, 2e-16 along U0)
+LINEAR = 1e-13
+
+
+@pytest.fixture(scope="module", params=sorted(ALONG))
+def along(request):
+    """(axis, the stepped sweep up and down along it, the same cells from rest)."""
+    definition = ALONG[request.param]
+    stepped = run_sweep(sweep_from_mapping({**definition, "stepping": "both",
+                                            "stepped_axis": request.param}))
+    return request.param, stepped, run_sweep(sweep_from_mapping(definition))
+
+
+def test_stepping_along_the_clearance_and_the_base_amplitude(along):
+    """Up and down equal the cells from rest (one attractor per cell here); where the tip
+    does not reach the stop, the response is the linear one: the same at every clearance, and
+    proportional to U0."""
+    axis, stepped, rest = along
+    scale = np.abs(_section(rest)).max()
+    for direction in ("up", "down"):
+        row = stepped.sel(sweep_direction=direction)
+        assert np.abs(_section(row) - _section(rest)).max() < SAME_ATTRACTOR * scale, direction
+    assert not hysteresis(stepped).any()
+    free = (rest.steady_impact_rate == 0).values
+    assert 2 < free.sum() < free.size  # both kinds of cells
+    linear = _section(rest)[:, free]
+    if axis == "base_amplitude":
+        linear = linear / rest.base_amplitude.values[free][:, None]
+    assert np.abs(linear - linear[:, :1]).max() < LINEAR * np.abs(linear).max(), axis
+
+
+def test_a_restart_from_a_cells_stored_end_state_is_the_next_cell(along):
+    """The stepped Dataset stores each cell's end state (final_displacement, final_velocity,
+    as simulate() does): simulate() from it with the next cell's parameters gives that
+    cell's samples and end state (measured: bit for bit, but for the end velocity along U0,
+    2.3e-13 of its largest component: round-off of the clamp's motion, taken out in another
+    order)."""
+    axis, stepped, _ = along
+    up = stepped.sel(sweep_direction="up")
+    assert up.final_displacement.dims == (axis, "coordinate")
+    assert up.final_velocity.attrs["units"] == "kg^1/2 m^1/2 s-1"
+    sweep = sweep_from_mapping(ALONG[axis])
+    for cell in (0, up.sizes[axis] // 2):
+        state = np.concatenate([up.final_displacement[cell], up.final_velocity[cell]])
+        following = up.isel({axis: cell + 1})
+        params = sweep.base.replace(**{axis: float(following[axis])})
+        run = simulate(params, (sweep.transient_periods + 4) * 2 * math.pi / params.omega,
+                       n_modes=5, initial_state=state, transient_periods=sweep.transient_periods,
+                       long_time=sweep.long_time)
+        scale = np.abs(following.poincare_deflection1).max().item()
+        assert np.abs(run.poincare_deflection1 - following.poincare_deflection1).max() < (
+            1e-13 * scale)
+        for name in ("final_displacement", "final_velocity"):
+            end = following[name].values
+            assert np.abs(run[name].values - end).max() < 1e-12 * np.abs(end).max()
 
 
 # a stepped sweep of two parallel rows per direction: four chunks of one row each

@@ -306,11 +306,13 @@ VARIABLES.update({
         "index of the free modal coordinates: beam 1's n_modes cantilever modes, then beam 2's "
         "(none against a stop)", dtype="int64"),
     "final_displacement": Variable(
-        ("coordinate",), _MODAL_UNITS, "modal displacements at t_end",
+        ("*", "coordinate"), _MODAL_UNITS, "modal displacements at t_end",
         "free modal coordinates q at the run's end t_end, the quasi-static part of the tip "
-        "force taken out (docs/model.md); NaN if a tied-law run ends in contact"),
+        "force taken out (docs/model.md); NaN if a tied-law run ends in contact; in a "
+        "stepped-sine sweep, each cell's at its horizon (the state the next cell starts from; "
+        "NaN if the run stopped early)"),
     "final_velocity": Variable(
-        ("coordinate",), _MODAL_UNITS + " s-1", "modal velocities at t_end",
+        ("*", "coordinate"), _MODAL_UNITS + " s-1", "modal velocities at t_end",
         "dq/dt of the free modal coordinates at the run's end t_end (see final_displacement)"),
 })
 
@@ -378,7 +380,8 @@ VARIABLES.update({
 # continuation (impactbeams.continuation): periodic orbits along a branch ("branch_point"), in
 # the order they were found, branches one after the other
 STABILITY = ("unstable", "stable")
-BIFURCATIONS = ("none", "fold", "period_doubling", "neimark_sacker", "grazing")  # events.LABELS
+BIFURCATIONS = ("none", "fold", "period_doubling", "neimark_sacker", "grazing",
+                "branch_point")  # events.LABELS
 VARIABLES.update({
     "branch_point": Variable(("branch_point",), "1", "branch point number",
                              "index of the periodic orbit along the continuation, from 0",
@@ -405,8 +408,9 @@ VARIABLES.update({
         "0 none; 1 fold (a multiplier through +1, the branch turns back in the parameter); 2 "
         "period_doubling (a real multiplier through -1); 3 neimark_sacker (a complex pair "
         "through |mu| = 1); 4 grazing (the orbit's smallest free-flight gap through 0, the "
-        "contact sequence changes): each located to the attribute locate_tolerance in the "
-        "parameter", dtype="int8", flags=BIFURCATIONS),
+        "contact sequence changes); 5 branch_point (a real multiplier through +1 where the "
+        "branch does not turn: another branch crosses it): each located to the attribute "
+        "locate_tolerance in the parameter", dtype="int8", flags=BIFURCATIONS),
     "newton_iterations": Variable(("branch_point",), "1", "Newton iterations",
                                   "corrector iterations that found the branch point",
                                   dtype="int32"),
@@ -429,11 +433,14 @@ VARIABLES.update({
     "contact_impulse": Variable(("branch_point",), "N s", "contact impulse per forcing period",
                                 "integral of R over the orbit divided by its period in forcing "
                                 "periods"),
+    "section": Variable(("section",), "1", "stroboscopic section of the orbit",
+                        "k of the orbit's k-th stroboscopic sample, at t = k 2 pi / Omega, "
+                        "from 0 to its period minus 1", dtype="int64"),
     "section_deflection_1": Variable(
-        ("branch_point",), "m", "tip deflection of beam 1 on the section",
-        "y1(l1) at t = 0 mod the forcing period (forcing phase 0): the orbit's first "
-        "stroboscopic sample, as poincare_deflection1 of a bifurcation diagram",
-        symbol="$y_1(l_1)$"),
+        ("branch_point", "section"), "m", "tip deflection of beam 1 on the sections",
+        "y1(l1) at t = k 2 pi / Omega (forcing phase 0), k from 0 to the orbit's period minus "
+        "1 (NaN beyond): the orbit's stroboscopic samples, as poincare_deflection1 of a "
+        "bifurcation diagram", symbol="$y_1(l_1)$"),
     "contacts_per_orbit": Variable(("branch_point",), "1", "contacts per orbit",
                                    "contact onsets over one period of the orbit", dtype="int32"),
     "grazing_gap": Variable(

@@ -167,7 +167,8 @@ class Follower:
             size = float(np.max(np.abs(delta)))
             if size <= self.settings.tolerance:
                 tangent = tangent_of(jacobian, orientation)
-                point = Point(x + delta, tangent, self._measured(x, evaluation), iteration)
+                point = Point(x + delta, tangent, self._measured(x + delta, evaluation),
+                              iteration)
                 return Correction(point, tuple(iterates))
             if iteration > 2 and size > previous:  # not contracting: a smaller step will do
                 break
@@ -175,11 +176,17 @@ class Follower:
         return Correction(None, tuple(iterates))
 
     def _measured(self, x: np.ndarray, evaluation: Evaluation) -> Evaluation:
-        """``evaluation`` with the grazing value and the measures read at x~."""
+        """``evaluation`` with the contacts, the grazing value and the measures read at x~.
+
+        x~ is the point found, after Newton's last correction: its run costs what a run
+        at the last iterate with measures would, and the grazing value there is the orbit's
+        to round-off, not to the correction (up to 1e-10 of ``state_scale``: 1e-14 m of gap,
+        3e-8 rad/s of a grazing's frequency on the shipped example).
+        """
         z, p = self.scaling.unscaled(x)
         measured = self.problem.evaluate(z, p, jacobian=False)
         return dataclasses.replace(evaluation, grazing=measured.grazing,
-                                   measures=measured.measures)
+                                   contacts=measured.contacts, measures=measured.measures)
 
     def grazing_values(self, correction: Correction) -> tuple[float, ...]:
         """The grazing values of a correction's iterates (read only when a step failed)."""

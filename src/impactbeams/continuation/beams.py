@@ -172,11 +172,16 @@ def grazing_value(period_map: PeriodMap, result: PeriodMapResult) -> float:
     return min(candidates, key=abs) if candidates else math.nan
 
 
-def orbit_measures(period_map: PeriodMap, result: PeriodMapResult) -> dict[str, float]:
-    """The amplitude measures of the registry (impactbeams.variables) of one orbit."""
-    # the tips at t = 0 by the period map's own sampling of its run (the section's y1)
-    section = period_map.tip_motions(result, np.zeros(1))[0, TIP_Y1]
+def orbit_measures(period_map: PeriodMap, result: PeriodMapResult,
+                   ) -> dict[str, float | np.ndarray]:
+    """The amplitude measures of the registry (impactbeams.variables) of one orbit.
+
+    ``section_deflection_1``: the orbit's p stroboscopic samples of y1, at t = k T, k < p.
+    """
+    # the tips on the sections by the period map's own sampling of its run
+    sections = period_map.forcing_period * np.arange(period_map.periods)
+    section = period_map.tip_motions(result, sections)[:, TIP_Y1]
     return {"tip_amplitude_1": result.max_tip1, "tip_amplitude_2": result.max_tip2,
             "peak_contact_force": result.peak_force,
             "contact_impulse": result.impulse / period_map.periods,
-            "section_deflection_1": float(section)}
+            "section_deflection_1": section}

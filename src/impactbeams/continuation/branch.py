@@ -4,9 +4,11 @@ A grazing is an event of the branch, not a place to shrink the step: when the or
 smallest free-flight gap changes sign over a step (at the corrected point or at any Newton
 iterate of a failed step), the grazing is located on the secant plane, labelled, and the
 branch resumes from the first corrected point beyond it, with the new contact sequence and a
-tangent of its own. At a period doubling, while ``max_branches`` allows, the period-2 branch is
-started from the doubling point displaced along the multiplier's -1 eigenvector and followed
-after the branch it left.
+tangent of its own. A grazing is labelled only where corrected points on both sides bracket it
+and their contacts per orbit differ; otherwise the branch resumes short of it (a fold before it
+can put it out of reach of the secant planes). At a period doubling, while ``max_branches``
+allows, the period-2 branch is started from the doubling point displaced along the
+multiplier's -1 eigenvector and followed after the branch it left.
 """
 
 from __future__ import annotations
@@ -122,8 +124,8 @@ def _follow(follower: Follower, branch: Branch, span: Span,
         if resumed:
             current, ds = resumed
             continue
-        if point is None and crossing and taken / 2.0 >= settings.min_step:
-            ds = taken / 2.0  # an iterate crossed, not the branch: a smaller step
+        if crossing and taken / 2.0 >= settings.min_step:
+            ds = taken / 2.0  # an iterate crossed, not the branch, or no way across: smaller
             continue
         if point is None:
             branch.ending = MIN_STEP
@@ -159,8 +161,8 @@ def _between(follower: Follower, a: Point, b: Point,
         if not (math.isfinite(test(a)) and math.isfinite(test(b))
                 and (test(a) > 0) != (test(b) > 0)):
             continue  # a signature changed without its multiplier crossing (a collision)
-        s, before, _ = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
-                              follower.settings.locate_tolerance)
+        s, before, _, _ = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
+                                 follower.settings.locate_tolerance)
         if before is not a:
             located.append((s, dataclasses.replace(before, label=label)))
     return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
@@ -184,10 +186,14 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     sequence is corrected on a plane across the grazing value's gradient, at a distance where
     the gap has changed sign, so that it exists whichever way the branch turns. Returns that
     point and the step to take from it; None, labelling nothing, if none is found (a Newton
-    iterate crossed, not the branch).
+    iterate crossed, not the branch). Not bracketed, or no change of the contacts: labels
+    nothing and resumes short of it (`_short_of_grazing`).
     """
-    _, grazing, _ = locate(lambda s: follower.at_arclength(current, s).point, current, taken,
-                           end, grazing_test, follower.settings.locate_tolerance)
+    _, grazing, past, root = locate(lambda s: follower.at_arclength(current, s).point,
+                                    current, taken, end, grazing_test,
+                                    follower.settings.locate_tolerance)
+    if not root or (past is not None and _same_contacts(grazing, past)):
+        return _short_of_grazing(follower, branch, current, grazing, past, taken, progress)
     gradient = follower.grazing_gradient(grazing.x)
     # across the grazing surface, toward the other sign of the gap
     normal = -np.sign(current.evaluation.grazing) * gradient
@@ -195,7 +201,8 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     for fraction in BEYOND:
         distance = max(fraction * taken, follower.settings.min_step)
         beyond = follower.correct(grazing.x + distance * normal, normal, normal).point
-        if beyond is not None and _grazes(current, beyond):
+        if beyond is not None and _grazes(current, beyond) and not _same_contacts(grazing,
+                                                                                   beyond):
             break
     else:
         return None
@@ -208,6 +215,30 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
         grazing = dataclasses.replace(grazing, tangent=-grazing.tangent)
     _append(branch, _between(follower, grazing, beyond, (grazing.x, normal)), progress)
     return beyond, distance
+
+
+def _same_contacts(a: Point, b: Point) -> bool:
+    return a.evaluation.contacts == b.evaluation.contacts
+
+
+def _short_of_grazing(follower: Follower, branch: Branch, current: Point, last: Point,
+                      past: Point | None, taken: float,
+                      progress: Progress | None) -> tuple[Point, float] | None:
+    """Resume where the grazing value changed sign without a grazing located.
+
+    Either no corrected point beyond was found and the root is not within the bracket
+    (``past`` None: the branch turned back across ``current``'s planes, at a fold, before
+    reaching the grazing) and the branch resumes from ``last``, the farthest point reached, to
+    cross the grazing on planes of its own; or the value jumped across 0 between two orbits of
+    the same contacts (it is the gap of whichever of a free-flight minimum and the shallowest
+    contact is nearer 0) and the branch resumes from ``past``. Returns None if neither moved
+    from ``current``.
+    """
+    resume = last if past is None else past
+    if resume is current:
+        return None
+    _append(branch, _between(follower, current, resume), progress)
+    return resume, max(taken / 2.0, follower.settings.min_step)
 
 
 def _at_bound(follower: Follower, a: Point, b: Point, bound: float) -> Point:

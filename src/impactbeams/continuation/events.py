@@ -10,7 +10,13 @@ fold               the sign of the tangent's parameter part      that part (a mu
 period_doubling    the parity of the real multipliers < -1       |mu| - 1 of that real mu < 0
 neimark_sacker     the complex pairs outside the unit circle     |mu| - 1 of that pair
 grazing            the sign of the orbit's smallest free gap     that gap
+branch_point       the parity of the real multipliers > 1, the   mu - 1 of that real mu > 0
+                   tangent's parameter part keeping its sign
 =================  ============================================  ===============================
+
+A real multiplier through +1 is a fold where the branch turns back in the parameter, else a
+branch point, where another branch crosses (e.g. the symmetry-breaking pitchfork of a
+symmetric orbit, docs/continuation.md).
 
 The root is sought on the secant plane of the first point (`Follower.at_arclength`), by the
 Illinois variant of regula falsi, until the parameter is known to ``locate_tolerance``: the
@@ -21,14 +27,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
 from impactbeams.continuation.arclength import Point
 from impactbeams.variables import BIFURCATIONS
 
-FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, GRAZING = (
-    "fold", "period_doubling", "neimark_sacker", "grazing")
+FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, GRAZING, BRANCH_POINT = (
+    "fold", "period_doubling", "neimark_sacker", "grazing", "branch_point")
 LABELS = BIFURCATIONS  # the registry's flags: "none", then the labels above, codes 0, 1, ...
 MAX_LOCATING = 60  # corrector solves per located event (bisection from 1 to 1e-18 of a step)
 
@@ -36,6 +43,11 @@ MAX_LOCATING = 60  # corrector solves per located event (bisection from 1 to 1e-
 def _real_negative(point: Point) -> np.ndarray:
     mu = point.evaluation.multipliers
     return np.sort(np.abs(mu[(mu.imag == 0) & (mu.real < 0)]))[::-1]
+
+
+def _real_positive(point: Point) -> np.ndarray:
+    mu = point.evaluation.multipliers
+    return np.sort(np.abs(mu[(mu.imag == 0) & (mu.real > 0)]))[::-1]
 
 
 def _complex_pairs(point: Point) -> np.ndarray:
@@ -65,8 +77,12 @@ def _crossing_modulus(moduli: Callable[[Point], np.ndarray], a: Point, b: Point,
 def detected(a: Point, b: Point) -> list[tuple[str, Callable[[Point], float]]]:
     """The smooth bifurcations between two points of a branch, with their test functions."""
     found: list[tuple[str, Callable[[Point], float]]] = []
-    if (a.tangent[-1] > 0) != (b.tangent[-1] > 0):
+    turned = (a.tangent[-1] > 0) != (b.tangent[-1] > 0)
+    if turned:
         found.append((FOLD, lambda point: float(point.tangent[-1])))
+    if turned != (_outside(_real_positive(a)) % 2 != _outside(_real_positive(b)) % 2):
+        # a real multiplier through +1 without the branch turning (or turning without one)
+        found.append((BRANCH_POINT, _crossing_modulus(_real_positive, a, b)))
     if _outside(_real_negative(a)) % 2 != _outside(_real_negative(b)) % 2:
         # a real multiplier < 0 may be born in the step from a complex pair meeting on the
         # negative axis inside the circle: before that, none is outside (-1 = |mu| of 0)
@@ -82,19 +98,37 @@ def grazing_test(point: Point) -> float:
 
 
 PointAt = Callable[[float], "Point | None"]
+# an unbracketed end (no corrected point beyond) is a root if the test's value there is within
+# this many times the secant's slope from the start times the bracket's width (a root in it)
+ROOT_MARGIN = 1e3
+
+
+class Located(NamedTuple):
+    """A root bracketed by `locate`.
+
+    ``s`` and ``before``: the last point on the start's side; ``beyond``: the first corrected
+    point past it (None if none was found); ``root``: whether the root lies within the bracket.
+    """
+
+    s: float
+    before: Point
+    beyond: Point | None
+    root: bool
 
 
 def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
-           test: Callable[[Point], float],
-           tolerance: float) -> tuple[float, Point, Point | None]:
+           test: Callable[[Point], float], tolerance: float) -> Located:
     """The points on both sides of the root of ``test`` between ``start`` and ``end``.
 
     ``start`` is at s = 0, ``end`` at s = ``s_end`` (None if the corrector failed there: it
     then counts as beyond). ``point_at(s)``: the corrected point at s (None if Newton fails).
-    Returns (the s and the point of the last on ``start``'s side, the first beyond, None if no
-    corrected point beyond was found), the bracket pinning the parameter to ``tolerance`` in
-    x~. A failed corrector inside the bracket counts as beyond the root, as at ``end``: it
-    happens past a grazing, where the period map is not smooth.
+    The bracket pins the parameter to ``tolerance`` in x~. A failed corrector inside the
+    bracket counts as beyond the root, as at ``end``: it happens past a grazing, where the
+    period map is not smooth, but also where the branch turns back across the planes (a fold
+    between: the planes along ``start``'s tangent reach no farther than where the branch's
+    tangent is orthogonal to it). Without a corrected point beyond, the bracket holds a root
+    only if the test's value at its near end is as small as the secant from ``start``
+    predicts over the bracket's width (``ROOT_MARGIN``): at a fold's reach it is not.
     """
     low: Bracket = (0.0, test(start), start)
     high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
@@ -115,17 +149,30 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
             if side == 1:
                 low = (low[0], low[1] / 2.0, low[2])
             side = 1
-    return low[0], low[2], high[2]
+    return Located(low[0], low[2], high[2], high[2] is not None or _pinned(low, high, start,
+                                                                          test))
+
+
+def _pinned(low: Bracket, high: Bracket, start: Point, test: Callable[[Point], float]) -> bool:
+    """Whether the secant from ``start`` to ``low`` puts the root within the bracket."""
+    (s0, f0, _), s1 = low, high[0]
+    if s0 <= 0.0 or not math.isfinite(f0):
+        return False
+    slope = abs(test(start) - f0) / s0
+    return abs(f0) <= ROOT_MARGIN * slope * (s1 - s0)
 
 
 Bracket = tuple[float, float, Point | None]
 
 
 def _known(low: Bracket, high: Bracket, tolerance: float) -> bool:
-    """Whether the bracket pins the parameter to ``tolerance`` (x~ units)."""
-    if high[2] is None or low[2] is None:
-        return False
-    rate = max(abs(low[2].tangent[-1]), abs(high[2].tangent[-1]))
+    """Whether the bracket pins the parameter to ``tolerance`` (x~ units).
+
+    Without a corrected point beyond, the parameter's rate there is unknown: the bound 1 of a
+    unit tangent's part stands for it (the bracket then ends unbracketed, see `locate`).
+    """
+    ends = [point for _, _, point in (low, high) if point is not None]
+    rate = max(abs(point.tangent[-1]) for point in ends) if len(ends) == 2 else 1.0
     return (high[0] - low[0]) * rate <= tolerance
 
 

@@ -21,6 +21,7 @@ from impactbeams.variables import (
 if TYPE_CHECKING:
     import xarray as xr
 
+SECTION = "section"  # the stroboscopic sections of a period-p orbit, t = k T for k < p
 STORED_MULTIPLIERS = 8  # the leading ones by modulus: the rest decay with the damped modes
 
 
@@ -51,11 +52,12 @@ def branches_dataset(branches: list[Branch], parameter: str,
         "grazing_gap": np.array([point.evaluation.grazing for _, _, point in rows]),
         **_measures([point for _, _, point in rows]),
     }
-    variables = {name: ("branch_point", values) for name, values in data.items()}
+    variables = {name: (_dims(name), values) for name, values in data.items()}
     variables["multiplier_modulus"] = (("branch_point", "multiplier"), np.abs(multipliers))
     variables["multiplier_argument"] = (("branch_point", "multiplier"), np.angle(multipliers))
     variables["section_state"] = (("branch_point", "state"), states)
     coords = {"branch_point": np.arange(len(rows), dtype=np.int64),
+              **_sections(data),
               "multiplier": np.arange(multipliers.shape[1], dtype=np.int64),
               "state": np.arange(states.shape[1], dtype=np.int64),
               parameter: ("branch_point",
@@ -86,8 +88,33 @@ def _multipliers(points: list[Point]) -> np.ndarray:
 
 
 def _measures(points: list[Point]) -> dict[str, np.ndarray]:
-    """The problem's named amplitudes, one array each (NaN where a point lacks one)."""
+    """The problem's named amplitudes, one array each (NaN where a point lacks one).
+
+    A measure per section (registered along ``section``) is a row per point, as long as the
+    longest period, NaN past each orbit's own.
+    """
     names = dict.fromkeys(name for point in points for name in point.evaluation.measures)
-    return {name: np.array([point.evaluation.measures.get(name, np.nan) for point in points])
-            for name in names}
+    measures = {}
+    for name in names:
+        rows = [np.atleast_1d(point.evaluation.measures.get(name, np.nan)) for point in points]
+        if _dims(name)[-1] != SECTION:
+            measures[name] = np.concatenate(rows)
+            continue
+        table = np.full((len(rows), max(row.size for row in rows)), np.nan)
+        for values, row in zip(table, rows, strict=True):
+            values[:row.size] = row
+        measures[name] = table
+    return measures
+
+
+def _dims(name: str) -> tuple[str, ...]:
+    """The registry's dimensions of ``name``; ("branch_point",) for a problem's own measure."""
+    return VARIABLES[name].dims if name in VARIABLES else ("branch_point",)
+
+
+def _sections(data: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The ``section`` coordinate (k of the samples at t = k T), if a variable is along it."""
+    widths = [values.shape[1] for name, values in data.items()
+              if _dims(name)[-1] == SECTION]
+    return {SECTION: np.arange(max(widths), dtype=np.int64)} if widths else {}
 

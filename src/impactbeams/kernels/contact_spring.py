@@ -24,7 +24,12 @@ import math
 import numpy as np
 
 from impactbeams.kernels.drive import tip_load
-from impactbeams.kernels.events import event_acceleration, event_sine, phase_event
+from impactbeams.kernels.events import (
+    event_acceleration,
+    phase_event,
+    phase_event_function,
+    phase_oscillators,
+)
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.layout import (
     CONTACT,
@@ -38,7 +43,6 @@ from impactbeams.kernels.layout import (
     ROW_EVENT,
     ROW_FREQUENCY,
     ROW_TIP1,
-    ROW_ZETA,
     SPRING_DRIVE_ROWS,
     TIP_V1,
     TIP_V2,
@@ -175,9 +179,9 @@ def gap_and_force(tables, forces, phase_scalars, settings, t, q, v):
     force = -stiffness * gap - damping * gap_rate
     if damping == 0.0:
         return gap, force, -stiffness * gap_rate
-    gap_acceleration = event_acceleration(q, v, t, table[ROW_FREQUENCY], table[ROW_ZETA],
-                                          forces[FREE], weights, event_sine(scalars),
-                                          settings.forcing_frequency)
+    gap_acceleration = event_acceleration(
+        q, v, t, phase_oscillators(table, forces[FREE], settings.forcing_frequency),
+        phase_event_function(table, scalars, settings.forcing_frequency))
     gap_acceleration += force * np.dot(weights, weights)
     return gap, force, -stiffness * gap_rate - damping * gap_acceleration
 

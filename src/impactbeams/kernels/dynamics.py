@@ -25,9 +25,11 @@ from impactbeams.kernels.events import (
     event_sine,
     first_root,
     phase_event,
+    phase_event_function,
+    phase_oscillators,
     root_after_rise,
 )
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import inlined_kernel, kernel
 from impactbeams.kernels.layout import (
     CONTACT,
     FREE,
@@ -39,6 +41,7 @@ from impactbeams.kernels.layout import (
     SCALAR_SINE,
 )
 from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.records import EventFunction, Oscillators
 from impactbeams.kernels.rotor import rotor_arrays
 
 COMPLETE, EVENT_LIMIT, STUCK, SEARCH_LIMIT = 0, 1, 2, 3
@@ -77,9 +80,8 @@ def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor, risi
     cannot be certified.
     """
     t_max, span = settings.t_max, settings.search_span
-    frequencies, zeta, weights = table[ROW_FREQUENCY], table[ROW_ZETA], table[ROW_EVENT]
-    const, sine_amp = scalars[SCALAR_CONST], event_sine(scalars)
-    forcing_frequency = settings.forcing_frequency
+    oscillators = phase_oscillators(table, force, settings.forcing_frequency)
+    event = phase_event_function(table, scalars, settings.forcing_frequency)
     q_a, v_a = q_s.copy(), v_s.copy()
     t_a = t_s
     while t_a < t_max:
@@ -87,15 +89,11 @@ def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor, risi
         if t_b <= t_a:
             t_b = t_max
         if rising and t_a == t_s:
-            root, risen = root_after_rise(q_a, v_a, t_a, t_b, frequencies, zeta, force, weights,
-                                          const,
-                                          sine_amp, forcing_frequency, q, v, rotor)
+            root, risen = root_after_rise(q_a, v_a, t_a, t_b, oscillators, event, q, v, rotor)
             if not risen:
                 return NOT_RISEN
         else:
-            root = first_root(q_a, v_a, t_a, t_b, frequencies, zeta, force, weights, const,
-                              sine_amp,
-                              forcing_frequency, q, v, rotor)
+            root = first_root(q_a, v_a, t_a, t_b, oscillators, event, q, v, rotor)
         if not math.isnan(root):
             return root
         propagate(table, force, q_s, v_s, t_s, t_b, settings, q_a, v_a)
@@ -116,9 +114,10 @@ def rate_root(table, force, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v,
     frequencies, zeta = table[ROW_FREQUENCY], table[ROW_ZETA]
     shift = 0.5 * math.pi / forcing_frequency if forcing_frequency > 0.0 else 0.0
     acceleration = modal_acceleration_at(force, frequencies, zeta, q_s, v_s, forcing_frequency, t_s)
-    root = first_root(v_s, acceleration, t_s + shift, t_end + shift, frequencies, zeta,
-                      force * forcing_frequency, sign * table[ROW_EVENT], 0.0,
-                      sign * event_sine(scalars) * forcing_frequency, forcing_frequency, q, v,
+    rates = Oscillators(frequencies, zeta, force * forcing_frequency, forcing_frequency)
+    event_rate = EventFunction(sign * table[ROW_EVENT], 0.0,
+                               sign * event_sine(scalars) * forcing_frequency, forcing_frequency)
+    root = first_root(v_s, acceleration, t_s + shift, t_end + shift, rates, event_rate, q, v,
                       rotor)
     return root - shift
 
@@ -140,6 +139,13 @@ def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings
         t += step
         step *= 2.0
     return GAVE_UP
+
+
+@inlined_kernel
+def _opposite(table, scalars, forcing_frequency):
+    """-e of the phase's event function: its roots from above are where e rises through 0."""
+    return EventFunction(-table[ROW_EVENT], -scalars[SCALAR_CONST], -event_sine(scalars),
+                         forcing_frequency)
 
 
 @kernel
@@ -184,9 +190,9 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     if t_peak == GAVE_UP:
         return GAVE_UP
     t_limit = t_max if math.isnan(t_peak) else t_peak
-    t_up = first_root(q_a, v_a, t_a, t_limit, table[ROW_FREQUENCY], table[ROW_ZETA], force,
-                      -table[ROW_EVENT], -scalars[SCALAR_CONST], -event_sine(scalars),
-                      settings.forcing_frequency, q, v, rotor)
+    t_up = first_root(q_a, v_a, t_a, t_limit,
+                      phase_oscillators(table, force, settings.forcing_frequency),
+                      _opposite(table, scalars, settings.forcing_frequency), q, v, rotor)
     if t_up == GAVE_UP:
         return GAVE_UP
     if math.isnan(t_up) or t_up >= t_limit:
@@ -222,9 +228,9 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
     force_scalars[SCALAR_SINE], force_scalars[SCALAR_COSINE] = harmonic.real, harmonic.imag
     t_onset = find_switch(table, impedance * force, force_scalars, y, y_rate, t_s, True, False,
                           settings, q, v, rotor)
-    t_open = first_root(q_s, v_s, t_s, settings.t_max, frequencies, zeta, force, -table[ROW_EVENT],
-                        -scalars[SCALAR_CONST], -event_sine(scalars), forcing_frequency, q, v,
-                        rotor)
+    t_open = first_root(q_s, v_s, t_s, settings.t_max,
+                        Oscillators(frequencies, zeta, force, forcing_frequency),
+                        _opposite(table, scalars, forcing_frequency), q, v, rotor)
     if t_open == GAVE_UP:
         return GAVE_UP, False
     if math.isnan(t_open) or t_onset <= t_open:

@@ -30,9 +30,17 @@ import math
 import numpy as np
 
 from impactbeams.kernels.drive import compiled_modal_acceleration
-from impactbeams.kernels.jit import kernel
-from impactbeams.kernels.layout import ROW_EVENT, SCALAR_CONST, SCALAR_COSINE, SCALAR_SINE
-from impactbeams.kernels.propagation import advance, steady_phasor
+from impactbeams.kernels.jit import inlined_kernel, kernel
+from impactbeams.kernels.layout import (
+    ROW_EVENT,
+    ROW_FREQUENCY,
+    ROW_ZETA,
+    SCALAR_CONST,
+    SCALAR_COSINE,
+    SCALAR_SINE,
+)
+from impactbeams.kernels.propagation import advance_to, steady_phasor
+from impactbeams.kernels.records import EventFunction, Oscillators
 from impactbeams.kernels.rotor import (
     modulus_bound,
     rotor_bounds,
@@ -49,13 +57,16 @@ REFRESH_STEPS = 8  # a walk's bounds are recomputed from its rotor every this ma
 
 
 @kernel
-def evaluate(q, v, t, weights, const, sine_amp, forcing_frequency):
+def evaluate(q, v, t, event):
     """Return e(t), e'(t) and e's evaluation scale for modal state (q, v) at time t.
 
+    ``event``: the `records.EventFunction`.
     The scale, the sum of the magnitudes of the terms summed into e, bounds them, so e's
     rounding error is a few eps times it: a value within ``tolerance`` eps of the scale is zero
     to within its own evaluation error (the round-off rule of ``search_root``).
     """
+    const, sine_amp = event.const, event.sine_amp
+    forcing_frequency = event.forcing_frequency
     sine, cosine = math.sin(forcing_frequency * t), math.cos(forcing_frequency * t)
     sine_term, cosine_term = sine_amp.real * sine, sine_amp.imag * cosine
     value = const + sine_term + cosine_term
@@ -63,17 +74,17 @@ def evaluate(q, v, t, weights, const, sine_amp, forcing_frequency):
              - sine_amp.imag * forcing_frequency * sine)
     scale = abs(const) + abs(sine_term) + abs(cosine_term)
     for j in range(q.size):
-        term = weights[j] * q[j]
+        term = event.weights[j] * q[j]
         value += term
         scale += abs(term)
-        slope += weights[j] * v[j]
+        slope += event.weights[j] * v[j]
     return value, slope, scale
 
 
 @kernel
-def event_value(q, v, t, weights, const, sine_amp, forcing_frequency):
-    """Return e(t) and e'(t) for modal displacements q and velocities v at time t."""
-    value, slope, _ = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
+def event_value(q, v, t, event):
+    """Return e(t) and e'(t) of `records.EventFunction` ``event`` for modal state (q, v) at t."""
+    value, slope, _ = evaluate(q, v, t, event)
     return value, slope
 
 
@@ -83,23 +94,38 @@ def event_sine(scalars):
     return complex(scalars[SCALAR_SINE], scalars[SCALAR_COSINE])
 
 
+@inlined_kernel
+def phase_event_function(table, scalars, forcing_frequency):
+    """The `records.EventFunction` of the phase with ``table`` and ``scalars``."""
+    return EventFunction(table[ROW_EVENT], scalars[SCALAR_CONST], event_sine(scalars),
+                         forcing_frequency)
+
+
+@inlined_kernel
+def phase_oscillators(table, force, forcing_frequency):
+    """The `records.Oscillators` of the phase with ``table`` and drive amplitudes ``force``."""
+    return Oscillators(table[ROW_FREQUENCY], table[ROW_ZETA], force, forcing_frequency)
+
+
 @kernel
 def phase_event(table, scalars, q, v, t, forcing_frequency):
     """e(t), e'(t) of the event function of the phase with ``table`` and ``scalars``."""
-    return event_value(q, v, t, table[ROW_EVENT], scalars[SCALAR_CONST], event_sine(scalars),
-                       forcing_frequency)
+    return event_value(q, v, t, phase_event_function(table, scalars, forcing_frequency))
 
 
 @kernel
-def event_acceleration(q, v, t, frequencies, zeta, force, weights, sine_amp, forcing_frequency):
+def event_acceleration(q, v, t, oscillators, event):
     """e''(t) from the modal equations: q'' = Im(A e^(i Omega t)) - 2 zeta omega q' - omega^2 q."""
+    sine_amp = event.sine_amp
+    forcing_frequency = event.forcing_frequency
     sine = math.sin(forcing_frequency * t)
     cosine = math.cos(forcing_frequency * t)
     value = (-sine_amp.real * forcing_frequency**2 * sine
              - sine_amp.imag * forcing_frequency**2 * cosine)
     for j in range(q.size):
-        value += weights[j] * compiled_modal_acceleration(force[j], frequencies[j], zeta[j], q[j],
-                                                          v[j], sine, cosine)
+        value += event.weights[j] * compiled_modal_acceleration(
+            oscillators.force[j], oscillators.frequencies[j], oscillators.zeta[j], q[j], v[j], sine,
+            cosine)
     return value
 
 
@@ -134,7 +160,7 @@ def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
 
 
 @kernel
-def phase_bounds(q, v, t, span, frequencies, zeta, force, weights, sine_amp, forcing_frequency):
+def phase_bounds(q, v, t, span, oscillators, event):
     """Split e over [t, t + span] into an exact sinusoid at Omega and a bounded rest.
 
     Returns ``(coherent, band, curvature, jerk, any_span)``: over the window,
@@ -146,20 +172,22 @@ def phase_bounds(q, v, t, span, frequencies, zeta, force, weights, sine_amp, for
     would miss. ``any_span`` is True when no mode
     needed the span-limited growth bound, so that the split holds for every s >= 0.
     """
+    sine_amp = event.sine_amp
+    forcing_frequency = event.forcing_frequency
     rotation = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
     coherent = complex(sine_amp.real, sine_amp.imag)
     band = curvature = jerk = 0.0
     any_span = True
     for j in range(q.size):
-        steady, amplitude, mode_curvature = _mode_split(q[j], v[j], frequencies[j], zeta[j],
-                                                        force[j], forcing_frequency, rotation,
-                                                        span)
-        if steady == 0 and force[j] != 0:
+        steady, amplitude, mode_curvature = _mode_split(
+            q[j], v[j], oscillators.frequencies[j], oscillators.zeta[j], oscillators.force[j],
+            forcing_frequency, rotation, span)
+        if steady == 0 and oscillators.force[j] != 0:
             any_span = False
-        coherent += weights[j] * steady
-        band += abs(weights[j]) * amplitude
-        curvature += abs(weights[j]) * mode_curvature
-        jerk += abs(weights[j]) * frequencies[j] * mode_curvature
+        coherent += event.weights[j] * steady
+        band += abs(event.weights[j]) * amplitude
+        curvature += abs(event.weights[j]) * mode_curvature
+        jerk += abs(event.weights[j]) * oscillators.frequencies[j] * mode_curvature
     forced = abs(coherent)
     return (coherent, band, curvature + forcing_frequency**2 * forced,
             jerk + forcing_frequency**3 * forced, any_span)
@@ -191,28 +219,30 @@ def band_step(margin, coherent, t, forcing_frequency):
 
 
 @kernel
-def split_steady_states(q_s, v_s, t_s, frequencies, zeta, force, weights, sine_amp,
-                        forcing_frequency):
+def split_steady_states(q_s, v_s, t_s, oscillators, event):
     """Move the steady states of the modes away from resonance into the event's sinusoid.
 
     Mode j driven by Im(A e^(i Omega t)) is its steady state Im(P e^(i Omega t))
     (``propagation.steady_phasor``) plus a free transient from its state at t_s (s) less the
-    steady one. The event function keeps its value, with the steady states
-    summed into ``sine_amp`` (returned) and those modes undriven: their propagation is then
-    a free oscillation, about 2-3 times cheaper than the driven one. ``q_s``, ``v_s`` and
-    ``force`` are changed in place.
+    steady one. The event function keeps its value, with the steady states summed into its
+    ``sine_amp`` (the `records.EventFunction` returned) and those modes undriven: their
+    propagation is then a free oscillation, about 2-3 times cheaper than the driven one.
+    ``q_s``, ``v_s`` and ``oscillators.force`` are changed in place.
     """
+    sine_amp = event.sine_amp
+    forcing_frequency = event.forcing_frequency
     rotation = complex(math.cos(forcing_frequency * t_s), math.sin(forcing_frequency * t_s))
-    for j in range(frequencies.size):
-        steady = steady_phasor(frequencies[j], zeta[j], force[j], forcing_frequency)
+    for j in range(oscillators.frequencies.size):
+        steady = steady_phasor(oscillators.frequencies[j], oscillators.zeta[j],
+                               oscillators.force[j], forcing_frequency)
         if steady == 0:
             continue
         phasor = steady * rotation
         q_s[j] -= phasor.imag
         v_s[j] -= forcing_frequency * phasor.real
-        sine_amp += weights[j] * steady
-        force[j] = 0.0
-    return sine_amp
+        sine_amp += event.weights[j] * steady
+        oscillators.force[j] = 0.0
+    return EventFunction(event.weights, event.const, sine_amp, forcing_frequency)
 
 
 @kernel
@@ -253,8 +283,8 @@ def cubic_step(value, slope, acceleration, jerk, start):
 
 
 @kernel
-def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, guess, frequencies, zeta, force, weights,
-                       const, sine_amp, forcing_frequency, tolerance, q, v):
+def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, guess, oscillators, event, tolerance,
+                       q, v):
     """The single root of a monotone e on [lo, hi] (e(lo) > 0, e(hi) <= round-off).
 
     Safeguarded Newton, started from ``guess`` if it is inside the bracket, else from the
@@ -266,8 +296,8 @@ def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, guess, frequencies, ze
     if not lo < t < hi:
         t = 0.5 * (lo + hi)
     for _ in range(NEWTON_LIMIT):
-        advance(q_s, v_s, t_s, t - t_s, frequencies, zeta, force, forcing_frequency, q, v)
-        value, slope, scale = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
+        advance_to(oscillators, q_s, v_s, t_s, t, q, v)
+        value, slope, scale = evaluate(q, v, t, event)
         if value > 0.0:
             lo = t
         else:
@@ -296,38 +326,44 @@ def step_limit(t_s, t_end, frequencies):
     it passes in a logarithmic number of steps), so 64 per period plus 2^20 is never reached
     unless the bounds degenerate; the search then ends with ``GAVE_UP`` instead of spinning.
     """
-    return 2.0**20 + 64.0 * (t_end - t_s) * np.max(frequencies) / (2.0 * math.pi)
+    highest = frequencies[0]
+    for j in range(1, frequencies.size):  # not np.max, which compiles take_impl
+        highest = max(highest, frequencies[j])
+    return 2.0**20 + 64.0 * (t_end - t_s) * highest / (2.0 * math.pi)
 
 
 @kernel
-def first_root(q_s, v_s, t_s, t_end, frequencies, zeta, force, weights, const, sine_amp,
-               forcing_frequency, q, v, rotor):
+def first_root(q_s, v_s, t_s, t_end, oscillators, event, q, v, rotor):
     """First time in (t_s, t_end] where e(t) reaches 0 from above, NaN if none.
 
     ``search_root`` from t_s with no round-off tolerance (a root is a value <= 0, resolved to
     a few ulps of time), as the switching events of the dynamics use it, on the same e with
     the steady states split off (``split_steady_states``: cheaper steps).
     """
-    max_steps = step_limit(t_s, t_end, frequencies)
-    q_free, v_free, drives = q_s.copy(), v_s.copy(), force.copy()
-    split_amp = split_steady_states(q_free, v_free, t_s, frequencies, zeta, drives, weights,
-                                    sine_amp,
-                                    forcing_frequency)
-    split_start, _, _ = evaluate(q_free, v_free, t_s, weights, const, split_amp,
-                                 forcing_frequency)
-    start, _, _ = evaluate(q_s, v_s, t_s, weights, const, sine_amp, forcing_frequency)
+    max_steps = step_limit(t_s, t_end, oscillators.frequencies)
+    q_free, v_free, free = _unsplit_copy(q_s, v_s, oscillators)
+    split = split_steady_states(q_free, v_free, t_s, free, event)
+    split_start, _, _ = evaluate(q_free, v_free, t_s, split)
+    start, _, _ = evaluate(q_s, v_s, t_s, event)
     if split_start <= 0.0 < start:
         # e is at round-off level at t_s and the two forms round it differently: the caller
         # saw e > 0 there (it may have stepped off a root to that point), so search its form
-        return search_root(q_s, v_s, t_s, t_s, t_end, frequencies, zeta, force, weights, const,
-                           sine_amp, forcing_frequency, 0.0, max_steps, q, v, rotor)
-    return search_root(q_free, v_free, t_s, t_s, t_end, frequencies, zeta, drives, weights, const,
-                       split_amp, forcing_frequency, 0.0, max_steps, q, v, rotor)
+        return search_root(q_s, v_s, t_s, t_s, t_end, oscillators, event, 0.0, max_steps, q, v,
+                           rotor)
+    return search_root(q_free, v_free, t_s, t_s, t_end, free, split, 0.0, max_steps, q, v,
+                       rotor)
+
+
+@inlined_kernel
+def _unsplit_copy(q_s, v_s, oscillators):
+    """Copies of the state and of the oscillators' drives, for ``split_steady_states``."""
+    return q_s.copy(), v_s.copy(), Oscillators(oscillators.frequencies, oscillators.zeta,
+                                               oscillators.force.copy(),
+                                               oscillators.forcing_frequency)
 
 
 @kernel
-def root_after_rise(q_s, v_s, t_s, t_end, frequencies, zeta, force, weights, const, sine_amp,
-                    forcing_frequency, q, v, rotor):
+def root_after_rise(q_s, v_s, t_s, t_end, oscillators, event, q, v, rotor):
     """``first_root`` of an e that rises through 0 at t_s: ``(root, certified)``.
 
     With e(t_s) <= 0 < e'(t_s) and |e''| <= C over the search (``phase_bounds``), e rises for
@@ -337,55 +373,47 @@ def root_after_rise(q_s, v_s, t_s, t_end, frequencies, zeta, force, weights, con
     cannot show the rise (or rounding keeps e at 0 there): the caller then follows e to its
     peak, which costs a search of e'.
     """
-    q_free, v_free, drives = q_s.copy(), v_s.copy(), force.copy()
-    split_amp = split_steady_states(q_free, v_free, t_s, frequencies, zeta, drives, weights,
-                                    sine_amp,
-                                    forcing_frequency)
-    value, slope, _ = evaluate(q_free, v_free, t_s, weights, const, split_amp,
-                               forcing_frequency)
+    q_free, v_free, free = _unsplit_copy(q_s, v_s, oscillators)
+    split = split_steady_states(q_free, v_free, t_s, free, event)
+    value, slope, _ = evaluate(q_free, v_free, t_s, split)
     if slope <= 0.0:
         return np.nan, False
-    bounds = phase_bounds(q_free, v_free, t_s, t_end - t_s, frequencies, zeta, drives, weights,
-                          split_amp, forcing_frequency)
+    bounds = phase_bounds(q_free, v_free, t_s, t_end - t_s, free, split)
     curvature = bounds[2]
     reach = min(slope / curvature, t_end - t_s) if curvature > 0.0 else t_end - t_s
     if not value + reach * (slope - 0.5 * curvature * reach) > 0.0:
         return np.nan, False
     t_start = t_s + reach
-    root, _ = walk(q_free, v_free, t_s, t_start, t_end, frequencies, zeta, drives, weights, const,
-                   split_amp, forcing_frequency, 0.0, step_limit(t_s, t_end, frequencies), bounds,
-                   np.nan, q, v, rotor)
+    root, _ = walk(q_free, v_free, t_s, t_start, t_end, free, split, 0.0,
+                   step_limit(t_s, t_end, free.frequencies), bounds, np.nan, q, v, rotor)
     if root == t_start:  # e not above 0 at the window's end: only through rounding
         return np.nan, False
     return root, True
 
 
 @kernel
-def search_root(q_s, v_s, t_s, t_start, t_end, frequencies, zeta, force, weights, const, sine_amp,
-                forcing_frequency, tolerance, max_steps, q, v, rotor):
+def search_root(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps, q, v,
+                rotor):
     """First time in [t_start, t_end] where e(t) reaches 0 from above; NaN if none.
 
-    q_s, v_s: modal state at t_s (s); frequencies, zeta (per mode), force (complex drive
-    amplitudes), forcing_frequency: the phase's oscillators (see ``advance``); weights, const,
-    sine_amp: the event function. The caller guarantees that e has no root in (t_s, t_start)
-    (a warm start). ``q``, ``v`` are work arrays.
+    q_s, v_s: modal state at t_s (s) of the phase's `records.Oscillators`; ``event``: the
+    `records.EventFunction`. The caller guarantees that e has no root in (t_s, t_start) (a warm
+    start). ``q``, ``v`` are work arrays.
 
     Round-off rule: e counts as 0 where ``e <= tolerance * eps * scale`` (``evaluate``'s
     scale), i.e. where it is zero to within its own evaluation error, so that grazing at the
     level of rounding is classified one way consistently (``tolerance`` = 0: e <= 0 only).
     Returns ``GAVE_UP`` (-inf) after ``max_steps`` steps of the walk (see ``step_limit``).
     """
-    bounds = phase_bounds(q_s, v_s, t_s, t_end - t_s, frequencies, zeta, force, weights, sine_amp,
-                          forcing_frequency)
-    root, _ = walk(q_s, v_s, t_s, t_start, t_end, frequencies, zeta, force, weights, const,
-                   sine_amp, forcing_frequency, tolerance, max_steps, bounds, np.nan, q, v,
-                   rotor)
+    bounds = phase_bounds(q_s, v_s, t_s, t_end - t_s, oscillators, event)
+    root, _ = walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps,
+                   bounds, np.nan, q, v, rotor)
     return root
 
 
 @kernel
-def walk(q_s, v_s, t_s, t_start, t_end, frequencies, zeta, force, weights, const, sine_amp,
-         forcing_frequency, tolerance, max_steps, bounds, t_state, q, v, rotor):
+def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps, bounds, t_state,
+         q, v, rotor):
     """``search_root`` given ``bounds``, ``phase_bounds`` over [t_s, t_end].
 
     The bounds do not depend on ``const``: event functions that differ in it alone (a column
@@ -393,7 +421,12 @@ def walk(q_s, v_s, t_s, t_start, t_end, frequencies, zeta, force, weights, const
     entry (NaN: at no time) and on return, which is ``(root, t_state)``, so that a search
     starting where the previous one ended need not propagate to its start.
     """
-    span_cap = 2.0 * math.pi / np.min(frequencies)  # bounds hold over a step of at most this span
+    const, forcing_frequency = event.const, event.forcing_frequency
+    # bounds hold over a step of at most this span (a loop, not np.min: compile time)
+    lowest = oscillators.frequencies[0]
+    for j in range(1, oscillators.frequencies.size):
+        lowest = min(lowest, oscillators.frequencies[j])
+    span_cap = 2.0 * math.pi / lowest
     coherent, band, curvature, jerk, any_span = bounds
     floor = const - band - abs(coherent)
     if floor > tolerance * _EPS * (abs(const) + band + abs(coherent)):
@@ -404,18 +437,16 @@ def walk(q_s, v_s, t_s, t_start, t_end, frequencies, zeta, force, weights, const
     per_step = not any_span
     t = t_start
     if t == t_s:
-        q[:] = q_s
-        v[:] = v_s
+        for j in range(q.size):  # not q[:] = q_s, whose shape check compiles string formatting
+            q[j], v[j] = q_s[j], v_s[j]
     elif t != t_state:
-        advance(q_s, v_s, t_s, t - t_s, frequencies, zeta, force, forcing_frequency, q, v)
+        advance_to(oscillators, q_s, v_s, t_s, t, q, v)
     t_state = t
-    value, slope, scale = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
-    acceleration = event_acceleration(q, v, t, frequencies, zeta, force, weights, sine_amp,
-                                      forcing_frequency)
+    value, slope, scale = evaluate(q, v, t, event)
+    acceleration = event_acceleration(q, v, t, oscillators, event)
     # Between exact states the walk's own steps rotate the undriven modes (rotor), unless the
     # bounds need the exact state at every step.
-    driven = 0 if per_step else rotor_load(rotor, q, v, t, frequencies, zeta, force, weights,
-                                           forcing_frequency)
+    driven = 0 if per_step else rotor_load(rotor, q, v, t, oscillators, event)
     t_origin, offset = t, 0.0  # t = t_origin + offset, offset a sum of the rotor's steps
     steps = 0
     while steps < max_steps:
@@ -424,11 +455,11 @@ def walk(q_s, v_s, t_s, t_start, t_end, frequencies, zeta, force, weights, const
         if value <= noise:
             return t, t_state
         if per_step:
-            coherent, band, curvature, jerk, any_span = phase_bounds(
-                q, v, t, span_cap, frequencies, zeta, force, weights, sine_amp, forcing_frequency)
+            coherent, band, curvature, jerk, any_span = phase_bounds(q, v, t, span_cap,
+                                                                     oscillators, event)
         elif driven == 0 and steps % REFRESH_STEPS == 0:  # the fast transients have decayed
             coherent, band, curvature, jerk, any_span = rotor_bounds(
-                rotor, frequencies, weights, coherent, forcing_frequency)
+                rotor, oscillators, event, coherent)
         margin = value - noise  # certify e > noise over the step
         step = min(certified_step(margin, slope, curvature), span_cap)
         if not per_step:  # third order with the exact local e'': wide steps through minima
@@ -439,20 +470,18 @@ def walk(q_s, v_s, t_s, t_start, t_end, frequencies, zeta, force, weights, const
         if step <= 4.0 * _EPS * max(abs(t), span_cap):
             return t, t_state  # the event function is at round-off level: touching
         if slope < 0.0:  # approaching: try to bracket a crossing beyond the linear estimate
-            reach = min(2.0 * value / -slope, span_cap, t_end - t)
+            # min of two floats, as everywhere in the search: each signature compiles its own
+            reach = min(min(2.0 * value / -slope, span_cap), t_end - t)
             if reach > step and slope + curvature * reach < 0.0:  # e monotone on the bracket
                 t_probe = t + reach
-                advance(q_s, v_s, t_s, t_probe - t_s, frequencies, zeta, force, forcing_frequency,
-                        q, v)
+                advance_to(oscillators, q_s, v_s, t_s, t_probe, q, v)
                 t_state = t_probe
-                probe, _, probe_scale = evaluate(q, v, t_probe, weights, const, sine_amp,
-                                                 forcing_frequency)
+                probe, _, probe_scale = evaluate(q, v, t_probe, event)
                 if probe <= tolerance * _EPS * probe_scale:
                     # start Newton at the root of e's local quadratic: error ~ jerk s^3
                     guess = t + _first_positive_root(value, slope, 0.5 * acceleration)
                     return _newton_in_bracket(q_s, v_s, t_s, t, t_probe, value, probe, guess,
-                                              frequencies, zeta, force, weights, const, sine_amp,
-                                              forcing_frequency, tolerance, q, v)
+                                              oscillators, event, tolerance, q, v)
         if t + step >= t_end:
             return NO_EVENT, t_state
         taken = 0.0 if per_step else rotor_step(rotor, step)
@@ -461,18 +490,16 @@ def walk(q_s, v_s, t_s, t_start, t_end, frequencies, zeta, force, weights, const
         else:
             offset += taken
             t = t_origin + offset
-            value, slope, scale, acceleration = rotor_event(
-                rotor, q_s, v_s, t_s, t, frequencies, zeta, force, weights, const, sine_amp,
-                forcing_frequency)
+            value, slope, scale, acceleration = rotor_event(rotor, q_s, v_s, t_s, t, oscillators,
+                                                            event)
             if value > tolerance * _EPS * scale:
                 continue
             # at round-off level of a root: decide on the exact state, and go on from it
-        advance(q_s, v_s, t_s, t - t_s, frequencies, zeta, force, forcing_frequency, q, v)
+        advance_to(oscillators, q_s, v_s, t_s, t, q, v)
         t_state = t
-        value, slope, scale = evaluate(q, v, t, weights, const, sine_amp, forcing_frequency)
-        acceleration = event_acceleration(q, v, t, frequencies, zeta, force, weights, sine_amp,
-                                          forcing_frequency)
+        value, slope, scale = evaluate(q, v, t, event)
+        acceleration = event_acceleration(q, v, t, oscillators, event)
         if not per_step:
-            rotor_load(rotor, q, v, t, frequencies, zeta, force, weights, forcing_frequency)
+            rotor_load(rotor, q, v, t, oscillators, event)
             t_origin, offset = t, 0.0
     return GAVE_UP, t_state

@@ -43,6 +43,7 @@ from impactbeams.kernels.layout import (
     ROW_UNIT1,
     ROW_UNIT2,
 )
+from impactbeams.kernels.records import EventFunction, Oscillators
 from impactbeams.kernels.rotor import rotor_arrays
 
 # rows of the per-mode scratch of the moving modes (private to this kernel)
@@ -97,10 +98,12 @@ def first_impact_time(cell, table, geo, t_max, t_start, work, force, rotor):
     if sine == 0.0 and q_s[0] == 0.0 and v_s[0] == 0.0 and force[0] == 0 and active == 1:
         return np.nan  # nothing moves: the gap stays open
     frequencies = work[_FREQUENCY, :active]
-    # the harmonic as a complex amplitude, as the columns pass it: one compiled search for both
-    return search_root(q_s, v_s, 0.0, t_start, t_max, frequencies, work[_ZETA, :active],
-                       force[:active], work[_WEIGHTS, :active], cell[CELL_CLEARANCE],
-                       complex(sine, 0.0), cell[CELL_FORCING_FREQUENCY], TOUCH_TOLERANCE,
+    oscillators = Oscillators(frequencies, work[_ZETA, :active], force[:active],
+                              cell[CELL_FORCING_FREQUENCY])
+    gap = EventFunction(work[_WEIGHTS, :active], cell[CELL_CLEARANCE],
+                        complex(sine, 0.0),
+                        cell[CELL_FORCING_FREQUENCY])
+    return search_root(q_s, v_s, 0.0, t_start, t_max, oscillators, gap, TOUCH_TOLERANCE,
                        step_limit(0.0, t_max, frequencies), work[_Q, :active], work[_V, :active],
                        rotor)
 
@@ -162,12 +165,13 @@ def _shared_column(cells, first, stride, count, key, table, geo, t_max, work, fo
         source[key] = 1.0
     active = _load_moving_modes(source, table, work, force, geo[GEO_START])
     q_s, v_s, frequencies = work[_Q_S, :active], work[_V_S, :active], work[_FREQUENCY, :active]
-    zeta, weights, drives = work[_ZETA, :active], work[_WEIGHTS, :active], force[:active]
-    sine_amp = split_steady_states(q_s, v_s, 0.0, frequencies, zeta, drives, weights,
-                                   complex(gap_harmonic(source, geo),
-                                           0.0), source[CELL_FORCING_FREQUENCY])
-    bounds = phase_bounds(q_s, v_s, 0.0, t_max, frequencies, zeta, drives, weights, sine_amp,
-                          source[CELL_FORCING_FREQUENCY])
+    forcing_frequency = source[CELL_FORCING_FREQUENCY]
+    oscillators = Oscillators(frequencies, work[_ZETA, :active], force[:active],
+                              forcing_frequency)
+    weights = work[_WEIGHTS, :active]
+    split = split_steady_states(q_s, v_s, 0.0, oscillators, EventFunction(
+        weights, 0.0, complex(gap_harmonic(source, geo), 0.0), forcing_frequency))
+    bounds = phase_bounds(q_s, v_s, 0.0, t_max, oscillators, split)
     max_steps = step_limit(0.0, t_max, frequencies)
     t_start, t_state = 0.0, np.nan
     i = first
@@ -178,10 +182,9 @@ def _shared_column(cells, first, stride, count, key, table, geo, t_max, work, fo
             level = cells[i, CELL_CLEARANCE]
             if key != CELL_CLEARANCE:
                 level /= cells[i, key]
-            out[i], t_state = walk(q_s, v_s, 0.0, t_start, t_max, frequencies, zeta, drives,
-                                   weights,
-                                   level, sine_amp, source[CELL_FORCING_FREQUENCY], TOUCH_TOLERANCE,
-                                   max_steps, bounds, t_state, work[_Q, :active],
+            gap = EventFunction(weights, level, split.sine_amp, forcing_frequency)
+            out[i], t_state = walk(q_s, v_s, 0.0, t_start, t_max, oscillators, gap,
+                                   TOUCH_TOLERANCE, max_steps, bounds, t_state, work[_Q, :active],
                                    work[_V, :active], rotor)
             t_start = 0.0 if out[i] == GAVE_UP else out[i]  # NaN ends the column
         i += stride

@@ -61,6 +61,18 @@ def advance(q0, v0, t0, h, frequencies, zeta, force, forcing_frequency, q, v):
 
 
 @inlined_kernel
+def advance_to(oscillators, q_s, v_s, t_s, t, q, v):
+    """``advance`` the `records.Oscillators` from (q_s, v_s) at t_s (s) to time t (s)."""
+    forcing_frequency, h = oscillators.forcing_frequency, t - t_s
+    phase_plus = complex(math.cos(forcing_frequency * t_s), math.sin(forcing_frequency * t_s))
+    step_plus = complex(math.cos(forcing_frequency * h), math.sin(forcing_frequency * h))
+    for j in range(oscillators.frequencies.size):
+        q[j], v[j] = advance_mode(q_s[j], v_s[j], h, oscillators.frequencies[j],
+                                  oscillators.zeta[j], oscillators.force[j], forcing_frequency,
+                                  phase_plus, step_plus)
+
+
+@inlined_kernel
 def advance_mode(q0, v0, h, w, z, f, forcing_frequency, phase_plus, step_plus):
     """One mode of ``advance``: (q, q') after ``h`` (s) from (q0, v0) at t0.
 

@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 
+from impactbeams.kernels.drive import compiled_modal_acceleration
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.propagation import advance_mode
 from impactbeams.kernels.records import Rotor
@@ -67,7 +68,7 @@ def rotor_arrays(capacity):
 
 
 @kernel
-def rotor_load(rotor, q, v, t, frequencies, zeta, force, weights, forcing_frequency):
+def rotor_load(rotor, q, v, t, oscillators, event):
     """Set the rotor's amplitudes from the modal state (q, v) at t (s); return the driven count.
 
     The stored step factors are kept if the eigenvalues are those they were computed for.
@@ -76,33 +77,34 @@ def rotor_load(rotor, q, v, t, frequencies, zeta, force, weights, forcing_freque
     """
     z, lam, driven = rotor.amplitudes, rotor.eigenvalues, rotor.driven
     levels, rates = rotor.levels, rotor.rates
-    same = levels[LEVELS] == frequencies.size
+    forcing_frequency = oscillators.forcing_frequency
+    same = levels[LEVELS] == oscillators.frequencies.size
     count = 0
-    for j in range(frequencies.size):
-        w = frequencies[j]
-        eigenvalue = complex(-zeta[j] * w, w * math.sqrt(1.0 - zeta[j] * zeta[j]))
+    for j in range(oscillators.frequencies.size):
+        w, zeta = oscillators.frequencies[j], oscillators.zeta[j]
+        eigenvalue = complex(-zeta * w, w * math.sqrt(1.0 - zeta * zeta))
         same = same and lam[j] == eigenvalue
         lam[j] = eigenvalue
-        driven[j] = force[j] != 0
+        driven[j] = oscillators.force[j] != 0
         count += driven[j]
         z[j] = complex(q[j], (eigenvalue.real * q[j] - v[j]) / eigenvalue.imag)
-        free_weight = 0.0 if driven[j] else weights[j]
+        free_weight = 0.0 if driven[j] else event.weights[j]
         rates[0, j] = free_weight
         rates[1, j] = free_weight * eigenvalue
         rates[2, j] = rates[1, j] * eigenvalue
-    n = frequencies.size
+    n = oscillators.frequencies.size
     same = same and lam[n] == complex(0.0, forcing_frequency)
     lam[n] = complex(0.0, forcing_frequency)
     z[n] = complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
     if not same:
         levels[:LEVELS] = 0
-        levels[LEVELS] = frequencies.size
+        levels[LEVELS] = oscillators.frequencies.size
     levels[LEVELS + 1] = count
     return count
 
 
 @kernel
-def rotor_bounds(rotor, frequencies, weights, coherent, forcing_frequency):
+def rotor_bounds(rotor, oscillators, event, coherent):
     """``events.phase_bounds`` from now on, for a rotor without driven modes.
 
     A free mode's amplitude |z| bounds |q| and, times omega^k, its k-th derivative for all
@@ -110,13 +112,14 @@ def rotor_bounds(rotor, frequencies, weights, coherent, forcing_frequency):
     modes die out, and the walk's certified steps grow.
     """
     z = rotor.amplitudes
+    forcing_frequency = oscillators.forcing_frequency
     band = curvature = jerk = 0.0
-    for j in range(frequencies.size):
-        term = abs(weights[j]) * modulus_bound(z[j].real, z[j].imag)
-        w2 = frequencies[j] * frequencies[j]
+    for j in range(oscillators.frequencies.size):
+        term = abs(event.weights[j]) * modulus_bound(z[j].real, z[j].imag)
+        w2 = oscillators.frequencies[j] * oscillators.frequencies[j]
         band += term
         curvature += w2 * term
-        jerk += w2 * frequencies[j] * term
+        jerk += w2 * oscillators.frequencies[j] * term
     forced = abs(coherent)
     return (coherent, band, curvature + forcing_frequency**2 * forced,
             jerk + forcing_frequency**3 * forced, True)
@@ -147,7 +150,8 @@ def rotor_step(rotor, step):
     fraction, exponent = math.frexp(step)  # step = fraction 2^exponent, 1/2 <= fraction < 1
     if exponent - 2 < LOWEST:
         return 0.0
-    exponent = min(exponent, LOWEST + LEVELS)
+    if exponent > LOWEST + LEVELS:  # not min(): frexp's int32 against an int64 compiles its own
+        exponent = LOWEST + LEVELS
     first = _factor(rotor, exponent - 1)
     taken = math.ldexp(1.0, exponent - 1)
     # every mode turns (a driven mode's z is never read), which the compiler can vectorise
@@ -163,15 +167,16 @@ def rotor_step(rotor, step):
 
 
 @kernel
-def rotor_event(rotor, q_s, v_s, t_s, t, frequencies, zeta, force, weights, const, sine_amp,
-                forcing_frequency):
+def rotor_event(rotor, q_s, v_s, t_s, t, oscillators, event):
     """e, e', its evaluation scale and e'' at time t (s), from the rotor.
 
     As ``events.evaluate`` and ``events.event_acceleration``, with the undriven modes taken from
     the rotor and the driven ones propagated exactly from their state (q_s, v_s) at t_s (s).
     """
+    const, sine_amp = event.const, event.sine_amp
+    forcing_frequency = event.forcing_frequency
     z, driven, levels, rates = rotor.amplitudes, rotor.driven, rotor.levels, rotor.rates
-    n = frequencies.size
+    n = oscillators.frequencies.size
     sine, cosine = z[n].imag, z[n].real  # the forcing's phasor
     sine_term, cosine_term = sine_amp.real * sine, sine_amp.imag * cosine
     # the undriven modes (weight 0 for the driven): q = Re z, w q' = Re(w lambda z), w q'' =
@@ -209,13 +214,13 @@ def rotor_event(rotor, q_s, v_s, t_s, t, frequencies, zeta, force, weights, cons
     step_plus = complex(math.cos(forcing_frequency * h), math.sin(forcing_frequency * h))
     for j in range(n):
         if driven[j]:
-            w = frequencies[j]
-            qj, vj = advance_mode(q_s[j], v_s[j], h, w, zeta[j], force[j], forcing_frequency,
-                                  phase_plus, step_plus)
-            term = weights[j] * qj
+            w, zeta, f = oscillators.frequencies[j], oscillators.zeta[j], oscillators.force[j]
+            qj, vj = advance_mode(q_s[j], v_s[j], h, w, zeta, f, forcing_frequency, phase_plus,
+                                  step_plus)
+            term = event.weights[j] * qj
             value += term
             scale += abs(term)
-            slope += weights[j] * vj
-            acceleration += weights[j] * (force[j].real * sine + force[j].imag * cosine
-                                          - 2.0 * zeta[j] * w * vj - w * w * qj)
+            slope += event.weights[j] * vj
+            acceleration += event.weights[j] * compiled_modal_acceleration(f, w, zeta, qj, vj,
+                                                                           sine, cosine)
     return value, slope, scale, acceleration

@@ -83,6 +83,8 @@ OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV, *LONG_TIME_OBSERVA
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
 LONG_TIME_KEYS = ("sampled_periods", "period_tolerance", "max_period")  # of LongTime
 STEPPING_KEYS = ("stepping", "stepped_axis")  # of Stepping
+# a stepped sweep's cells' end states (modal, on the section at the horizon): restart points
+STEPPED_END_STATE = ("final_displacement", "final_velocity")
 _TOP_LEVEL = ("t_max", "n_modes", "observables", "params", "axes", "transient_periods",
               *LONG_TIME_KEYS, *STEPPING_KEYS)
 _AXIS_KEYS = ("min", "max", "num", "scale")
@@ -187,15 +189,26 @@ class Sweep:
     def value_shape(self, name: str) -> tuple[int, ...]:
         """Shape of one cell's value of stored array ``name``, e.g. (sampled periods,) or ().
 
-        Its registered dimensions after the grid's (variables.VARIABLES), here ``period``.
+        Its registered dimensions after the grid's (variables.VARIABLES), here ``period`` or
+        ``coordinate``.
         """
         lengths = {"period": self.long_time.sampled_periods} if self.long_time else {}
+        lengths["coordinate"] = self.free_coordinates
         return tuple(lengths[dim] for dim in VARIABLES[name].dims[1:])
 
     @property
+    def free_coordinates(self) -> int:
+        """N, the free modal coordinates of a cell: n_modes per beam (beam 1 only at a stop)."""
+        return self.n_modes * (1 if self.base.counterpart == "stop" else 2)
+
+    @property
     def stored(self) -> list[str]:
-        """Arrays a chunk yields: the observables, plus the run status of full-dynamics cells."""
-        return [*self.observables, *(["dynamics_status"] if self.needs_dynamics else [])]
+        """Arrays a chunk yields: the observables, the status of full-dynamics runs, end states.
+
+        The end states (``STEPPED_END_STATE``) are a stepped sweep's only.
+        """
+        return [*self.observables, *(["dynamics_status"] if self.needs_dynamics else []),
+                *(STEPPED_END_STATE if self.stepping is not None else ())]
 
     def definition(self) -> dict[str, Any]:
         """The sweep as a plain dict in the TOML file's layout (canonical, for hashing)."""

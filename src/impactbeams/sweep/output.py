@@ -58,6 +58,9 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
         if any("period" in dims for _, _, dims in variables.values()):
             coords["period"] = (long_time.period_numbers(sweep.transient_periods).astype(
                 _dtype("period"), copy=False), attributes("period"))
+        if any("coordinate" in dims for _, _, dims in variables.values()):
+            coords["coordinate"] = (np.arange(sweep.free_coordinates, dtype=_dtype(
+                "coordinate")), attributes("coordinate"))
     resolution = contact_resolution(sweep)
     if resolution is not None:
         run.update(contact_resolved=int(sweep.n_modes >= resolution),

@@ -27,6 +27,7 @@ from impactbeams.sweep.definition import (
     DYNAMICS_OBSERVABLES,
     FIRST_IMPACT,
     LYAPUNOV,
+    STEPPED_END_STATE,
     Axis,
     Sweep,
 )
@@ -427,8 +428,8 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     if sweep.long_time is not None:
         long_run = (_long_run(sweep.long_time, sweep.transient_periods, plan, cells, parallel)
                     if sweep.stepping is None else
-                    _stepped_run(sweep, plan, cells, stepped_rows(sweep, start, stop),
-                                 parallel)[0])
+                    _with_end_states(sweep, *_stepped_run(
+                        sweep, plan, cells, stepped_rows(sweep, start, stop), parallel)))
         long_run["dynamics_status"] = np.maximum(
             long_run["dynamics_status"], columns.get("dynamics_status", 0))
         columns.update(long_run)
@@ -511,6 +512,19 @@ def _stepped_run(sweep: Sweep, plan: Plan, cells: np.ndarray, rows: np.ndarray,
            carried["start_state"], carried["end_phase"], carried["end_state"])
     return (long_time_values(long_time, transient, omega, cells[:, layout.CELL_CLEARANCE],
                              samples, summary), carried)
+
+
+def _with_end_states(sweep: Sweep, values: dict[str, np.ndarray],
+                     carried: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """A stepped run's ``values`` with each cell's end state, (q, q') as `simulate` stores it.
+
+    NaN where the run stopped early, and (as `simulate`'s) where a tied-law run ends in
+    contact, whose coordinates are the contact modes'.
+    """
+    end = carried["end_state"][:, :, :sweep.free_coordinates].copy()
+    if sweep.base.contact_law == "tied":
+        end[carried["end_phase"] == layout.CONTACT] = np.nan
+    return {**values, **dict(zip(STEPPED_END_STATE, (end[:, 0], end[:, 1]), strict=True))}
 
 
 def _lyapunov_columns(sweep: Sweep, plan: Plan, cells: np.ndarray, parallel: bool,

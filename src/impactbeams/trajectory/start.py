@@ -20,8 +20,8 @@ import xarray as xr
 
 from impactbeams.contact.free import quadrature
 from impactbeams.kernels import contact
-from impactbeams.kernels.events import event_sine, event_value
-from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, SCALAR_CONST
+from impactbeams.kernels.events import event_value, phase_event_function
+from impactbeams.kernels.layout import CONTACT, FREE
 from impactbeams.modes import BeamShapes
 from impactbeams.packing import Packed
 from impactbeams.params import ParameterError, require_type
@@ -196,7 +196,6 @@ def section_gap(packed: Packed, z: np.ndarray, t: float = 0.0) -> tuple[float, f
     """The gap g (m) and its rate g' (m/s) of the free state z = (q, q') at time t (s)."""
     n = packed.q0.size
     scalars = packed.phase_scalars[FREE]
-    gap, rate = event_value(z[:n], z[n:], t, packed.tables[FREE, ROW_EVENT],
-                            scalars[SCALAR_CONST], event_sine(scalars),
-                            packed.settings["forcing_frequency"])
+    gap, rate = event_value(z[:n], z[n:], t, phase_event_function(
+        packed.tables[FREE], scalars, packed.settings["forcing_frequency"]))
     return float(gap), float(rate)
