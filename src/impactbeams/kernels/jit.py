@@ -1,5 +1,8 @@
-"""The package's single place for Numba compile options.
+"""The package's single place for Numba compile options, and for how kernels compile.
 
+A kernel called by kernels is compiled once per plain signature and only linked into its
+callers (`_Kernel`; docs/architecture.md, "Compiling"). It relies on Numba's compiler
+internals (dispatcher, code library), checked with Numba 0.68 by ``tests/test_compile.py``.
 ``fastmath`` stays off: event location compares signs and the "no impact" value is NaN,
 and ``nnan`` would let LLVM delete the NaN checks.
 """
