@@ -131,3 +131,43 @@ def test_a_cold_first_map_compiles_each_kernel_once_and_no_dynamics(tmp_path):
     assert ("first_impact", "_first_impact_map") not in ours
     assert set(ours) <= reachable(call_graph(), FIRST_IMPACT_ENTRIES) | {
         ("first_impact", "_first_impact_map_serial")}
+
+
+LINKED = """
+import json, sys
+from pathlib import Path
+from impactbeams.kernels.jit import kernel
+
+@kernel
+def twice(x):
+    if x < 0.0:
+        print("negative:", x)  # calls Python: reads the kernel's Environment
+    return 2.0 * x
+
+@kernel
+def caller(x):
+    return twice(x) + 1.0
+
+def cached(name):  # a kernel's cache index in NUMBA_CACHE_DIR
+    return any(Path(sys.argv[1]).rglob(f"*.{name}-*.nbi"))
+
+result = [caller(1.5), callable(next(iter(twice.overloads.values())).entry_point),
+          cached("caller"), cached("twice")]
+result += [twice(1.5), callable(next(iter(twice.overloads.values())).entry_point),
+           cached("twice"), caller(-0.5)]
+print(json.dumps(result))
+"""
+
+
+def test_a_kernel_called_by_a_kernel_is_only_linked_until_python_calls_it(tmp_path):
+    """``kernels/jit.py``: a callee gets no machine code or cache entry of its own; a call
+    from Python then compiles it in full (callable, cached) with the same result. A linked
+    kernel calling Python (``print``) finds its Environment (it hung without it)."""
+    script = tmp_path / "linked.py"
+    script.write_text(LINKED)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    result = subprocess.run([sys.executable, str(script), str(tmp_path / "cache")], env=env,
+                            check=True, capture_output=True, text=True, timeout=300)
+    printed, values = result.stdout.splitlines()
+    assert printed == "negative: -0.5"
+    assert json.loads(values) == [4.0, False, True, False, 3.0, True, True, 0.0]

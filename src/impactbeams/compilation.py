@@ -19,11 +19,11 @@ from typing import Any, TextIO
 
 REPORTED_COMPILE = 1.0  # s: an outermost compile at least this long ends with a line
 
-# The kernels called from Python by each kind of run (their callees compile with them, and
-# load with them from the cache): (module in impactbeams.kernels, kernel names). Of several
-# names, the run calls one: a first-impact map calls its serial twin for a chunk of one block
-# (`sweep.plan.compute_chunk`); either twin cached means its callees are, and the other one
-# compiles in about a second.
+# The kernels called from Python by each kind of run (their callees compile with them, linked
+# into their code, and load with them from the cache): (module in impactbeams.kernels, kernel
+# names). Of several names, the run calls one: a first-impact map calls its serial twin for a
+# chunk of one block (`sweep.plan.compute_chunk`); either twin cached counts as cached, though
+# the other one compiles its callees again (`kernels.jit`: they have no cache entry).
 ENTRY_KERNELS = {
     "first_impact": (("first_impact", ("first_impact_map_parallel",
                                        "first_impact_map_serial")),),

@@ -57,8 +57,7 @@ def observed_state(phase, y, y_rate, t, spring, drives, settings, q, v):
     if phase == CONTACT and keeps_free_coordinates(settings.contact_law):
         contact_spring.free_state(y, y_rate, t, spring, drives, settings, q, v)
     else:
-        q[:] = y
-        v[:] = y_rate
+        copy_state(y, y_rate, q, v)
 
 
 @kernel
@@ -72,8 +71,19 @@ def phase_state(phase, q, v, t, spring, drives, settings, y, y_rate):
     if phase == CONTACT and keeps_free_coordinates(settings.contact_law):
         contact_spring.switch_state(q, v, t, CONTACT, spring, drives, settings, y, y_rate)
     else:
-        y[:] = q
-        y_rate[:] = v
+        copy_state(q, v, y, y_rate)
+
+
+@kernel
+def copy_state(q, v, out_q, out_v):
+    """Copy the state (q, v) into (out_q, out_v).
+
+    Element by element: a slice assignment (``out_q[:] = q``) compiles Numba's string
+    formatting for its shape-mismatch message, about a second of a cold compile.
+    """
+    for j in range(q.size):
+        out_q[j] = q[j]
+        out_v[j] = v[j]
 
 
 @kernel

@@ -33,11 +33,21 @@ def switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new):
     """Projection of the state (q, v) at time t onto ``to_phase``'s modes."""
     r_qs, r_qs_rate = quasi_static_force(t, settings)
     if to_phase == CONTACT:
-        q_new[:] = overlap @ q - r_qs * shifts[CONTACT]
-        v_new[:] = overlap @ v - r_qs_rate * shifts[CONTACT]
+        _shifted(overlap @ q, overlap @ v, -r_qs, -r_qs_rate, shifts[CONTACT], q_new, v_new)
     else:
-        q_new[:] = overlap.T @ q + r_qs * shifts[FREE]
-        v_new[:] = overlap.T @ v + r_qs_rate * shifts[FREE]
+        _shifted(overlap.T @ q, overlap.T @ v, r_qs, r_qs_rate, shifts[FREE], q_new, v_new)
+
+
+@kernel
+def _shifted(q, v, load, rate, shift, q_new, v_new):
+    """(q_new, v_new) = (q + load shift, v + rate shift), element by element.
+
+    A slice assignment (``q_new[:] = ...``) would compile Numba's string formatting for its
+    shape-mismatch message; ``a + (-x) s`` rounds as ``a - x s``, so the signs are exact.
+    """
+    for j in range(q_new.size):
+        q_new[j] = q[j] + load * shift[j]
+        v_new[j] = v[j] + rate * shift[j]
 
 
 @kernel

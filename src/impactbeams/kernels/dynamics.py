@@ -312,8 +312,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
         if math.isnan(t_event):
             return k + 1, COMPLETE, t_stop
         if opened:  # the same free phase goes on from the opening of the gap
-            q[:] = q_end
-            v[:] = v_end
+            contact.copy_state(q_end, v_end, q, v)
             t = t_event
             continue
         instant = instantaneous(t, t_event)

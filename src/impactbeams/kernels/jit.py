@@ -1,5 +1,8 @@
-"""The package's single place for Numba compile options.
+"""The package's single place for Numba compile options, and for how kernels compile.
 
+A kernel called by kernels is compiled once per plain signature and only linked into its
+callers (`_Kernel`; docs/architecture.md, "Compiling"). It relies on Numba's compiler
+internals (dispatcher, code library), checked with Numba 0.68 by ``tests/test_compile.py``.
 ``fastmath`` stays off: event location compares signs and the "no impact" value is NaN,
 and ``nnan`` would let LLVM delete the NaN checks.
 """
@@ -7,25 +10,109 @@ and ``nnan`` would let LLVM delete the NaN checks.
 import types
 
 from numba import njit, typeof
+from numba.core import compiler, event, sigutils, typing
 from numba.core import types as numba_types
+from numba.core.codegen import JITCodeLibrary
+from numba.core.compiler_lock import global_compiler_lock
+from numba.core.environment import lookup_environment
 from numba.core.registry import CPUDispatcher
 
 _OPTIONS = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": True}
 
 
 class _Kernel(CPUDispatcher):
-    """A dispatcher that one kernel calling another compiles once per plain signature.
+    """A dispatcher that one kernel calling another compiles once per plain signature, to link.
 
     Numba types a call between kernels with its constant arguments as literals
     (``Literal[bool](True)``) and an omitted argument as its default: each combination would be
     compiled as its own specialisation, with every kernel it calls (``find_switch`` twice, for
     example). Typed by their plain types (the default's type for an omitted argument), the
     calls share one compile; the values are passed at run time, and the results are the same.
+
+    A kernel compiled for a calling kernel is only linked into the caller's code: it gets no
+    machine code, no Python or C wrappers and no cache entry of its own (a third of a cold
+    compile's time), since its callers' machine code holds it and the kernels called from
+    Python are cached with everything they call. A call from Python compiles it in full.
     """
 
     def get_call_template(self, args, kws):
         pysig, folded = self._compiler.fold_argument_types(args, kws)
-        return super().get_call_template(tuple(map(_plain_type, folded)), {})
+        args = tuple(map(_plain_type, folded))
+        if self._can_compile and args not in self.overloads:
+            self._compile_to_link(args)
+        name = self.py_func.__name__
+        template = typing.make_concrete_template(f"CallTemplate({name})", key=name,
+                                                 signatures=self.nopython_signatures)
+        return template, pysig, args, {}
+
+    def compile(self, sig):
+        """Compile for a call from Python: in full, replacing a compile only to link."""
+        args = tuple(sigutils.normalize_signature(sig)[0])
+        existing = self.overloads.get(args)
+        if existing is not None and isinstance(existing.entry_point, _LinkedEntry):
+            del self.overloads[args]
+        entry_point = super().compile(sig)
+        _set_environments(self.overloads[args].library)
+        return entry_point
+
+    def _compile_to_link(self, args):
+        with global_compiler_lock, self._compiling_counter:
+            cres = self._cache.load_overload(args, self.targetctx)  # a Python call's, cached
+            if cres is not None:
+                self.targetctx.insert_user_function(cres.entry_point, cres.fndesc,
+                                                    [cres.library])
+                self.add_overload(cres)
+                return
+            details = {"dispatcher": self, "args": args, "return_type": None}
+            with event.trigger_event("numba:compile", data=details):
+                cres = self._compile_linked(args)
+            self.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
+            self.overloads[args] = cres  # not callable from Python: `compile` replaces it
+
+    def _compile_linked(self, args):
+        flags = compiler.Flags()
+        self.targetdescr.options.parse_as_flags(flags, self.targetoptions)
+        flags.no_cpython_wrapper = flags.no_cfunc_wrapper = flags.no_compile = True
+        library = _LinkedLibrary(self.targetctx.codegen(), self.py_func.__qualname__)
+        cres = compiler.compile_extra(
+            self.targetdescr.typing_context, self.targetctx, self.py_func, args=args,
+            return_type=None, flags=flags, locals=self.locals, library=library,
+            pipeline_class=self._compiler.pipeline_class)
+        return cres._replace(entry_point=_LinkedEntry())
+
+
+class _LinkedEntry:
+    """The key under which a kernel compiled only to link is known to the target context."""
+
+
+class _LinkedLibrary(JITCodeLibrary):
+    """LLVM IR to link into callers' code, never turned into machine code itself.
+
+    Its functions are optimised one by one (Numba's function passes) but not as a module:
+    the calling kernel's module passes optimise everything it links, once, where each level
+    of a call chain re-optimised all it linked. Measured: the same maps and simulate results,
+    bit for bit, and Fig. 5a's run time within 1 %.
+    """
+
+    def _optimize_final_module(self):
+        pass
+
+    def _finalize_final_module(self):
+        self._finalize_dynamic_globals()
+        self._verify_declare_only_symbols()
+        self._finalized = True
+
+
+def _set_environments(library):
+    """Point the Environment globals of the kernels ``library`` links at their Environments.
+
+    Numba sets a kernel's global when it makes the kernel's machine code, which a linked kernel
+    never gets; its code reads it to call Python (``print``): as a cache load does, set each.
+    """
+    for variable in library._final_module.global_variables:
+        environment = lookup_environment(variable.name)
+        if environment is not None:
+            library.codegen.set_env(variable.name, environment)
 
 
 def _plain_type(argument):
@@ -36,7 +123,11 @@ def _plain_type(argument):
 
 def kernel(function):
     """Compile a serial kernel with the package's options."""
-    options = njit(**_OPTIONS)(function).targetoptions  # the options as njit completes them
+    return _dispatcher(function)
+
+
+def _dispatcher(function, **options):
+    options = njit(**_OPTIONS, **options)(function).targetoptions  # as njit completes them
     dispatcher = _Kernel(py_func=function, locals={}, targetoptions=options)
     dispatcher.enable_caching()
     return dispatcher
@@ -59,4 +150,4 @@ def parallel_kernel(function):
                                 function.__name__ + "_serial", function.__defaults__,
                                 function.__closure__)
     serial.__qualname__ = function.__qualname__ + "_serial"
-    return njit(parallel=True, **_OPTIONS)(function), njit(parallel=False, **_OPTIONS)(serial)
+    return _dispatcher(function, parallel=True), _dispatcher(serial, parallel=False)
