@@ -289,3 +289,29 @@ def test_plot_rejects_a_cube(tmp_path):
     ds = run_sweep(cube, progress=False)
     with pytest.raises(ParameterError, match="needs a 2-D sweep"):
         plot_dataset(ds, tmp_path / "c.png")
+
+
+def test_every_chunk_of_a_map_calls_the_same_twin(monkeypatch):
+    """A map larger than one block calls the parallel twin for its short last chunk too.
+
+    Each twin compiles its callees anew (`kernels.jit` links them, uncached), so a last chunk on
+    the serial twin would cost a second cold compile. Equal results either way.
+    """
+    from impactbeams.kernels import first_impact
+    from impactbeams.sweep.plan import first_impact_kernel
+
+    sweep = small(axes={"omega": {"min": 20.0, "max": 400.0, "num": 37},
+                        "force_amplitude": {"min": 1e-5, "max": 1e-3, "num": 8,
+                                            "scale": "log"}})
+    assert sweep.size > first_impact._BLOCK and small().size <= first_impact._BLOCK
+    assert first_impact_kernel(sweep) == "first_impact_map_parallel"
+    assert first_impact_kernel(small()) == first_impact_kernel(sweep, parallel=False) \
+        == "first_impact_map_serial"
+    expected = run_sweep(sweep, progress=False).first_impact_time.values
+
+    def refused(*args):
+        raise AssertionError("the serial twin was called")
+
+    monkeypatch.setattr(first_impact, "first_impact_map_serial", refused)
+    chunked = run_sweep(sweep, progress=False, chunk_cells=first_impact._BLOCK + 8)
+    np.testing.assert_array_equal(chunked.first_impact_time.values, expected)

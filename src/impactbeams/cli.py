@@ -192,6 +192,7 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     from impactbeams.costs import COMPILE
     from impactbeams.preflight import format_time
     from impactbeams.sweep.definition import expected_cost, run_kind
+    from impactbeams.sweep.plan import first_impact_kernel
 
     long_time = sweep.long_time
     horizon = (f"t_max = {sweep.t_max} s" if long_time is None else
@@ -203,7 +204,7 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
           f"{', '.join(a.name for a in sweep.axes)}{rows}; {horizon}, "
           f"{sweep.n_modes} modes per beam -> {output}\nexpected: "
           f"{expected_cost(sweep, args.threads).describe()}"
-          + ("" if kernels_cached(run_kind(sweep)) else
+          + ("" if kernels_cached(run_kind(sweep), first_impact_kernel(sweep)) else
              f", after compiling the kernels (once per install), about "
              f"{format_time(COMPILE[run_kind(sweep)])}"), file=sys.stderr)
 

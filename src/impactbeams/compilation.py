@@ -21,9 +21,8 @@ REPORTED_COMPILE = 1.0  # s: an outermost compile at least this long ends with a
 
 # The kernels called from Python by each kind of run (their callees compile with them, linked
 # into their code, and load with them from the cache): (module in impactbeams.kernels, kernel
-# names). Of several names, the run calls one: a first-impact map calls its serial twin for a
-# chunk of one block (`sweep.plan.compute_chunk`); either twin cached counts as cached, though
-# the other one compiles its callees again (`kernels.jit`: they have no cache entry).
+# names). Of several names, the run calls one: a first-impact map calls its serial twin when
+# it is one block (`sweep.plan.first_impact_kernel`), and `kernels_cached` is told which.
 ENTRY_KERNELS = {
     "first_impact": (("first_impact", ("first_impact_map_parallel",
                                        "first_impact_map_serial")),),
@@ -36,8 +35,11 @@ ENTRY_KERNELS = {
 }
 
 
-def kernels_cached(kind: str) -> bool:
+def kernels_cached(kind: str, entry: str | None = None) -> bool:
     """Whether the entry kernels of a run of ``kind`` (``ENTRY_KERNELS``) are in the disk cache.
+
+    ``entry``: the one name, of several, that the run calls (any of them otherwise). Each twin
+    counts alone, since each compiles its callees anew (`kernels.jit`).
 
     Reads each kernel's cache index, as Numba does before it compiles (the file
     ``<module>.<name>-<line>.py<version>.nbi`` in the cache folder, which Numba's locator
@@ -48,6 +50,7 @@ def kernels_cached(kind: str) -> bool:
 
     for module, names in ENTRY_KERNELS[kind]:
         kernels = importlib.import_module(f"impactbeams.kernels.{module}")
+        names = (entry,) if entry in names else names
         if not any(_has_machine_code(getattr(kernels, name)) for name in names):
             return False
     return True

@@ -380,6 +380,19 @@ def first_impact_columns(sweep: Sweep, start: int, stop: int) -> Columns:
                    _AFFINE_AXES[last.name])
 
 
+def first_impact_kernel(sweep: Sweep, parallel: bool = True) -> str:
+    """The name of the first-impact map kernel that every chunk of ``sweep`` calls.
+
+    A map of one block runs on one thread either way: the serial twin, which compiles faster.
+    A larger map calls the parallel twin for all its chunks, its last short one too, since each
+    twin compiles its callees anew (`kernels.jit`: they are linked into it, not cached alone).
+    """
+    from impactbeams.kernels.first_impact import _BLOCK
+
+    return ("first_impact_map_parallel" if parallel and sweep.size > _BLOCK
+            else "first_impact_map_serial")
+
+
 def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
                   plan: Plan | None = None) -> dict[str, np.ndarray]:
     """Observables of the flat cells ``start..stop`` of ``sweep`` (one array per observable).
@@ -400,11 +413,7 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     if plan.switching is None:
         columns = first_impact_columns(sweep, start, stop)
         cells = chunk_cells(sweep, plan, columns.start, columns.stop)
-        # a chunk of one block runs on one thread either way: the serial kernel, which compiles
-        # faster (a small first map need not compile the parallel one)
-        kernel = (first_impact.first_impact_map_parallel
-                  if parallel and cells.shape[0] > first_impact._BLOCK
-                  else first_impact.first_impact_map_serial)
+        kernel = getattr(first_impact, first_impact_kernel(sweep, parallel))
         out = np.empty(cells.shape[0])
         kernel(cells, columns.bounds, columns.key, plan.tables, plan.geometry, sweep.t_max, out)
         out = out[start - columns.start:stop - columns.start]
