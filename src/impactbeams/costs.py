@@ -39,29 +39,29 @@ from typing import Any
 import numpy as np
 
 # --- constants from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ---------------
-FIRST_IMPACT_CELL = 5.8e-07
-FIRST_IMPACT_MODE = 3.6e-08
-FIRST_IMPACT_ALONE = 4.7e-06
-FIRST_IMPACT_WALK = 5.7e-08
+FIRST_IMPACT_CELL = 3.6e-07
+FIRST_IMPACT_MODE = 3.1e-08
+FIRST_IMPACT_ALONE = 5.7e-06
+FIRST_IMPACT_WALK = 6.9e-08
 IMPACT_CYCLE = {
-    "dynamics": {"tied": (2.4e-05, 1.6), "spring": (4.7e-05, 1.5)},
-    "lyapunov": {"spring": (7.9e-06, 1.6)},
-    "long_time": {"tied": (8.7e-06, 1.1), "spring": (2.5e-05, 0.95)},
-    "simulate": {"tied": (4.4e-05, 1.6), "spring": (0.00014, 1.4)},
+    "dynamics": {"tied": (7.4e-06, 1.8), "spring": (2.8e-05, 1.4)},
+    "lyapunov": {"spring": (4.2e-05, 0.79)},
+    "long_time": {"tied": (8.2e-06, 1.1), "spring": (3.2e-05, 0.72)},
+    "simulate": {"tied": (5.9e-05, 1.4), "spring": (0.00015, 1.1)},
 }
-FREE_CYCLE = 2.1e-07
-LYAPUNOV_FREE_CYCLE = 9.5e-07
-SAMPLING = 3.5e-07
-GEOMETRY = 1.1e-05
-THREAD_SPEEDUP = {1: 1.0, 2: 1.0}
-START_UP = 1.1
+FREE_CYCLE = 2.3e-07
+LYAPUNOV_FREE_CYCLE = 1e-06
+SAMPLING = 2e-07
+GEOMETRY = 1.3e-05
+THREAD_SPEEDUP = {1: 1.0, 2: 1.8}
 COMPILE = {
-    "first_impact": 19.0,
-    "dynamics": 41.0,
-    "lyapunov": 60.0,
-    "long_time": 35.0,
-    "simulate": 29.0,
+    "first_impact": 9.5,
+    "dynamics": 25.0,
+    "lyapunov": 27.0,
+    "long_time": 19.0,
+    "simulate": 21.0,
 }
+START_UP = 0.59
 # ----------------------------------------------------------------------------------------------
 
 def speedup(threads: int) -> float:
