@@ -240,10 +240,10 @@ def markdown(report: dict) -> str:
         f"{report['transient_periods']} + {report['sampled_periods']} forcing periods each, "
         f"spring law (k = {report['contact_stiffness']:.3g} N/m) at {report['n_modes']} modes "
         f"per beam; {report['machine']}, {report['date']}, impactbeams {report['impactbeams']}"
-        f"{_load(report)}. Regenerate with `python benchmarks/bench_longtime.py` (the machine "
-        "was shared with other jobs: per-cell and profile times are the CPU time of the thread "
-        "that ran them; the whole diagram's wall time is inflated by the load, its CPU time "
-        "less so).",
+        f"{_load(report)}. Regenerate with `python benchmarks/bench_longtime.py` (per-cell and "
+        "profile times are the CPU time of the thread that ran them, so that another job's load "
+        "does not count; the whole diagram's wall time is inflated by such a load, its CPU "
+        "time less so).",
         "",
         f"Measured: every {report['stride']}-th cell ({len(report['cells'])} cells, a uniform "
         "sample of the Omega axis), each alone on one thread; the diagram's cost is "
