@@ -41,27 +41,20 @@ ENTRY_KERNELS = {
 # A cold run's compile in two processes (`compile_in_two_processes`): what a helper process
 # compiles while this one compiles the rest, and what this one compiles first (before the run,
 # so that it is busy while the helper compiles what the run needs next). Each job: (module in
-# impactbeams.kernels, kernel, argument types as `signature_text` writes them), read from a
-# cold run's compile events (tests/test_compile.py checks them against the kernels). Shares of
-# the cold compile's time (bench_compile, 2026-11-25): simulate's run_events 45 % (helper)
-# against run_inputs 37 % and the sampling kernels 13 %; the first map's `walk` about 30 %,
-# which its caller reaches after about half of the compile.
+# impactbeams.kernels, kernel, argument types as `signature_text` writes them), as a cold run
+# calls them (tests/test_compile.py checks them against a run). Shares of simulate's cold
+# compile (one process, 2026-11-25): run_events 45 % (the helper's) against run_inputs 37 %
+# and the sampling kernels 13 %. A first map calls one kernel, which links all the others:
+# the helper could only compile a callee in full, and the largest, `events.walk`, costs 5.4 s
+# of CPU so (3.4 s linked), more than its caller takes to reach it; a first map has no job.
 _SETTINGS_ARRAYS = "float64[:, :, ::1], complex128[:, ::1]"
 _SEGMENTS = ("Segments(float64[::1], int64[::1], bool[::1], float64[:, ::1], float64[:, ::1], "
              "float64[:, ::1], float64[:, ::1])")
 _DRIVES = "UniTuple(complex128[:, ::1], 3), complex128[:, ::1], settings"
-_OSCILLATORS = ("Oscillators(float64[::1], float64[::1], complex128[::1], float64), "
-                "EventFunction(float64[::1], float64, complex128, float64)")
-_ROTOR = ("Rotor(complex128[::1], complex128[::1], bool[::1], int64[::1], complex128[:, ::1], "
-          "complex128[:, ::1])")
 HELPER_JOBS = {
     "simulate": (("dynamics", "run_events",
                   f"{_SETTINGS_ARRAYS}, float64[:, ::1], float64[:, ::1], float64[:, ::1], "
                   f"{_DRIVES}, float64[::1], float64[::1], {_SEGMENTS}, float64, int64"),),
-    "first_impact": (("events", "walk",
-                      f"float64[::1], float64[::1], float64, float64, float64, {_OSCILLATORS}, "
-                      "float64, float64, Tuple((complex128, float64, float64, float64, bool,)), "
-                      f"float64, float64[::1], float64[::1], {_ROTOR}"),),
 }
 AHEAD_JOBS = {
     "simulate": (
@@ -182,6 +175,7 @@ def _start_helper(jobs: tuple, stream: TextIO) -> subprocess.Popen | None:
             if len(words) == 2 and words[0] == "done" and words[1].isdigit():
                 done.add(int(words[1]))
                 outcomes[int(words[1])].set()
+        helper.stdout.close()
         helper.wait()
         for outcome in outcomes:
             outcome.set()
