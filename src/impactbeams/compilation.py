@@ -97,12 +97,9 @@ def kernels_cached(kind: str, entry: str | None = None) -> bool:
     finds): it holds machine code for this CPU if it names this machine's code generator and
     its source stamp matches the kernel's file. Cheap (a small pickle per kernel).
     """
-    import importlib
-
     for module, names in ENTRY_KERNELS[kind]:
-        kernels = importlib.import_module(f"impactbeams.kernels.{module}")
         names = (entry,) if entry in names else names
-        if not any(_has_machine_code(getattr(kernels, name)) for name in names):
+        if not any(_has_machine_code(_kernel(module, name)) for name in names):
             return False
     return True
 
@@ -159,10 +156,13 @@ def _start_helper(jobs: tuple, stream: TextIO) -> subprocess.Popen | None:
     from impactbeams.kernels import jit
 
     arguments = [field for job in jobs for field in job]
+    # the helper imports this package from where this process did (a path added at run time)
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    path = os.pathsep.join(filter(None, (package, os.environ.get("PYTHONPATH"))))
     try:
         helper = subprocess.Popen([*_helper_command(), *arguments], stdout=subprocess.PIPE,
                                   stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
-                                  text=True, env={**os.environ, HELPER: "0"})
+                                  text=True, env={**os.environ, HELPER: "0", "PYTHONPATH": path})
     except OSError:
         return None
     outcomes = [threading.Event() for _ in jobs]
