@@ -79,8 +79,9 @@ class PlainArray:
     def isel(self, positions: Mapping[str, int]) -> PlainArray:
         """The array at the integer ``positions`` of its dimensions (others ignored), which go."""
         index = tuple(positions.get(d, slice(None)) for d in self.dims)
+        values = np.array(self.values[index], dtype=self.dtype, copy=None)  # 0-d: an array
         return dataclasses.replace(self, dims=tuple(d for d in self.dims if d not in positions),
-                                   values=self.values[index])
+                                   values=values)
 
 
 class PlainDataset:
@@ -192,7 +193,10 @@ def read_plain(path: Path) -> PlainDataset | None:
             kept = {key: variable.getncattr(key) for key in variable.ncattrs()}
             kept.pop("_FillValue", None)  # xarray's encoding, not an attribute
             named.update(str(kept.pop("coordinates", "")).split())
-            arrays[name] = PlainArray(name, variable.dimensions, np.asarray(variable[...]), kept)
+            values = np.asarray(variable[...])
+            if variable.dimensions == (name,) and values.dtype == object:
+                values = values.astype(str)  # an index of strings: NumPy's, as xarray's
+            arrays[name] = PlainArray(name, variable.dimensions, values, kept)
     return PlainDataset(arrays, frozenset(named), attrs)
 
 
