@@ -155,6 +155,8 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
     A simulated run without options gets its overview (tips, force, restitution, energy); a
     continuation's branches their frequency-response curve (over the bifurcation diagram
     ``diagram`` if given); anything else is drawn by [`draw`][], whose options these are.
+    ``dataset``: an xarray Dataset, or for a sweep's map a
+    [`PlainDataset`][impactbeams.plotting.arrays.PlainDataset] (a file read without xarray).
     Returns its notes.
     """
     _check_arguments(dataset, path, variable, values, indices, title, dpi)
