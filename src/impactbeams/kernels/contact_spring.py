@@ -52,39 +52,30 @@ from impactbeams.kernels.layout import (
 
 
 @kernel
-def spring_drives(left, modes, free_force, harmonic, weights, constant_force, forcing_frequency,
-                  forces):
+def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency, forces):
     """The modes' drive phasors and the oscillators' drives for one cell.
 
-    The contact phase's modal drive is Im(A' e^(i Omega t)) plus a constant part, with
-    ``A' = free_force + harmonic w`` and the constant ``constant_force w`` (N-ish modal units;
-    ``w`` the gap ``weights``). Returns ``drives`` with rows ``SPRING_DRIVE_ROWS`` (the last,
-    y_eq_j, real), and writes into ``forces`` the drive amplitudes A_j of the oscillators,
+    ``contact_drive`` (complex, M): amplitude A' of the contact phase's modal drive
+    Im(A' e^(i Omega t)); ``constant_drive`` (M): its constant part (N-ish modal units).
+    Returns ``drives`` with rows ``SPRING_DRIVE_ROWS`` (the last, y_eq_j, real), and writes
+    into ``forces`` the drive amplitudes A_j of the oscillators,
     y_j'' + 2 zeta_j |lambda_j| y_j' + |lambda_j|^2 y_j = Im(A_j e^(i Omega t)).
-    The sums over the velocity rows of ``left`` are loops (not BLAS, whose products cost a
-    second of a cold compile): they round as BLAS's within a few ulps of each term.
     """
     m = left.shape[1]
-    drives = np.zeros((len(SPRING_DRIVE_ROWS), m), dtype=np.complex128)
-    for n in range(m):
-        contact_drive = free_force[n] + harmonic * weights[n]
-        constant_drive = complex(constant_force * weights[n], 0.0)
-        row = left[m + n]
-        for j in range(m):
-            drives[DRIVE_RISING, j] += row[j] * contact_drive
-            drives[DRIVE_FALLING, j] += row[j] * contact_drive.conjugate()
-            drives[DRIVE_CONSTANT, j] += row[j] * constant_drive
+    drives = np.empty((len(SPRING_DRIVE_ROWS), m), dtype=np.complex128)
+    velocity_rows = np.ascontiguousarray(left[m:].T)
+    rising = velocity_rows @ contact_drive / 2j
+    falling = -(velocity_rows @ np.conj(contact_drive)) / 2j
+    constant = velocity_rows @ constant_drive.astype(np.complex128)
     for j in range(m):
-        rising = drives[DRIVE_RISING, j] / 2j
-        falling = -drives[DRIVE_FALLING, j] / 2j
-        constant = drives[DRIVE_CONSTANT, j]
         lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
-        up = rho * (1j * forcing_frequency - lam.conjugate()) * rising
-        down = rho * (-1j * forcing_frequency - lam.conjugate()) * falling
+        up = rho * (1j * forcing_frequency - lam.conjugate()) * rising[j]
+        down = rho * (-1j * forcing_frequency - lam.conjugate()) * falling[j]
         forces[j] = 2j * (up + down.conjugate())
-        offset = -2.0 * (rho * lam.conjugate() * constant).real
-        drives[DRIVE_RISING, j] = rising
-        drives[DRIVE_FALLING, j] = falling
+        offset = -2.0 * (rho * lam.conjugate() * constant[j]).real
+        drives[DRIVE_RISING, j] = rising[j]
+        drives[DRIVE_FALLING, j] = falling[j]
+        drives[DRIVE_CONSTANT, j] = constant[j]
         drives[DRIVE_EQUILIBRIUM, j] = offset / (lam.real**2 + lam.imag**2)
     return drives
 

@@ -148,8 +148,9 @@ def spring_contact_inputs(cell, tables, geometry, spring, forces, scalars):
     stiffness, damping = geometry[GEO_STIFFNESS], geometry[GEO_DAMPING]
     forcing_frequency = cell[CELL_FORCING_FREQUENCY]
     harmonic = -scalars[FREE, SCALAR_SINE] * complex(stiffness, damping * forcing_frequency)
-    drives = spring_drives(left, modes, forces[FREE], harmonic, weights,
-                           -stiffness * cell[CELL_CLEARANCE], forcing_frequency, forces[CONTACT])
+    drives = spring_drives(left, modes, forces[FREE] + harmonic * weights,
+                           -stiffness * cell[CELL_CLEARANCE] * weights, forcing_frequency,
+                           forces[CONTACT])
     force_weights = tables[CONTACT, ROW_EVENT]
     constant = -stiffness * cell[CELL_CLEARANCE]
     for j in range(force_weights.size):
