@@ -129,8 +129,10 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
             size = _push(stack, _push(stack, size, middle, b, r_m, r_b), a, middle, r_a, r_m)
         else:
             size = _push(stack, _push(stack, size, a, middle, r_a, r_m), middle, b, r_m, r_b)
-    advance_to(phase_oscillators(table, force, omega), q_s, v_s, t_s, best_t, q, v)
-    value, _, _ = evaluate(q, v, best_t, phase_event_function(table, scalars, omega))
+    # the unsplit phase's R, by the same compiled code as the search's (one propagation site)
+    value, _ = _force_at(phase_oscillators(table, force, omega),
+                         phase_event_function(table, scalars, omega), (q_s, v_s, t_s), best_t,
+                         q, v)
     return value, best_t
 
 
