@@ -43,8 +43,8 @@ ENTRY_KERNELS = {
 # so that it is busy while the helper compiles what the run needs next). Each job: (module in
 # impactbeams.kernels, kernel, argument types as `signature_text` writes them), as a cold run
 # calls them (tests/test_compile.py checks them against a run). Shares of simulate's cold
-# compile (one process, 2026-11-25): run_events 45 % (the helper's) against run_inputs 37 %
-# and the sampling kernels 13 %. A first map calls one kernel, which links all the others:
+# run in one process (16.6 s, load 2, 2026-11-25): run_events 54 % (the helper's) against
+# run_inputs 16 % and the sampling kernels with peak_force 20 %. A first map calls one kernel, which links all the others:
 # the helper could only compile a callee in full, and the largest, `events.walk`, costs 5.4 s
 # of CPU so (3.4 s linked), more than its caller takes to reach it; a first map has no job.
 _SETTINGS_ARRAYS = "float64[:, :, ::1], complex128[:, ::1]"
@@ -78,8 +78,6 @@ AHEAD_JOBS = {
         ("peaks", "peak_force",
          "float64[:, ::1], complex128[::1], float64[::1], settings, float64[::1], float64[::1], "
          "float64, float64"),
-        ("contact", "observed_state",
-         f"int64, float64[::1], float64[::1], float64, {_DRIVES}, float64[::1], float64[::1]"),
     ),
 }
 HELPER = "IMPACTBEAMS_COMPILE_HELPER"  # "0" in the environment: compile in this process alone
