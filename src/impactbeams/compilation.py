@@ -44,9 +44,10 @@ ENTRY_KERNELS = {
 # impactbeams.kernels, kernel, argument types as `signature_text` writes them), as a cold run
 # calls them (tests/test_compile.py checks them against a run). Shares of simulate's cold
 # run in one process (16.6 s, load 2, 2026-11-25): run_events 54 % (the helper's) against
-# run_inputs 16 % and the sampling kernels with peak_force 20 %. A first map calls one kernel, which links all the others:
-# the helper could only compile a callee in full, and the largest, `events.walk`, costs 5.4 s
-# of CPU so (3.4 s linked), more than its caller takes to reach it; a first map has no job.
+# run_inputs 16 % and the sampling kernels with peak_force 20 %. A first map calls one
+# kernel, which links all the others: the helper could only compile a callee in full, and the
+# largest, `events.walk`, costs 5.4 s of CPU so (3.4 s linked), more than its caller takes to
+# reach it (measured before the compile cuts of compilecut24); a first map has no job.
 _SETTINGS_ARRAYS = "float64[:, :, ::1], complex128[:, ::1]"
 _SEGMENTS = ("Segments(float64[::1], int64[::1], bool[::1], float64[:, ::1], float64[:, ::1], "
              "float64[:, ::1], float64[:, ::1])")
