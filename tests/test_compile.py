@@ -12,6 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 KERNELS = Path(__file__).parents[1] / "src" / "impactbeams" / "kernels"
@@ -171,3 +172,95 @@ def test_a_kernel_called_by_a_kernel_is_only_linked_until_python_calls_it(tmp_pa
     printed, values = result.stdout.splitlines()
     assert printed == "negative: -0.5"
     assert json.loads(values) == [4.0, False, True, False, 3.0, True, True, 0.0]
+
+
+CALLED = """
+import json, warnings
+from impactbeams import Params, simulate
+from impactbeams.compilation import AHEAD_JOBS, HELPER_JOBS, _kernel, signature_text
+from impactbeams.kernels.jit import _LinkedEntry
+
+warnings.simplefilter("ignore")
+simulate(Params(), 0.01, n_modes=3)
+print(json.dumps({f"{module}.{name}": [
+    signature_text(args) for args, compiled in _kernel(module, name).overloads.items()
+    if not isinstance(compiled.entry_point, _LinkedEntry)]
+    for module, name, _ in HELPER_JOBS["simulate"] + AHEAD_JOBS["simulate"]}))
+"""
+
+
+def test_the_compile_plan_has_the_signatures_a_run_calls():
+    """``compilation``'s jobs name kernels that a simulate calls from Python, with the
+    argument types it calls them with (a stale job would compile in vain): a run without the
+    helper (its own process, so that no job compiled ahead counts) calls each."""
+    from impactbeams.compilation import AHEAD_JOBS, HELPER_JOBS
+
+    env = {**os.environ, "IMPACTBEAMS_COMPILE_HELPER": "0"}
+    result = subprocess.run([sys.executable, "-c", CALLED], env=env, check=True,
+                            capture_output=True, text=True, timeout=600)
+    called = json.loads(result.stdout.splitlines()[-1])
+    for module, name, text in HELPER_JOBS["simulate"] + AHEAD_JOBS["simulate"]:
+        assert text in called[f"{module}.{name}"], \
+            f"{module}.{name}: the run called it with {called[f'{module}.{name}']}"
+
+
+SPLIT = """
+import sys
+from numba.core import event
+from impactbeams import compilation
+from impactbeams.kernels.records import segments
+
+compilation.kernels_cached = lambda *arguments: False  # this process's cache is empty
+compilation.HELPER_JOBS["test"] = (("records", "segments", "int64, int64"),)
+if sys.argv[1] == "fails":
+    compilation._helper_command = lambda: [sys.executable, "-c", "import sys; sys.exit(3)"]
+compilation.compile_in_two_processes("test", stream=sys.stdout)
+with event.install_recorder("numba:compile") as recorder:
+    arrays = segments(4, 3)
+helper = compilation._helpers["test"]
+helper.wait()
+print(arrays.q.shape, len(recorder.buffer) > 0, helper.returncode)
+"""
+
+
+@pytest.mark.parametrize("helper", ["compiles", "fails"])
+def test_a_helper_process_compiles_a_kernel_or_leaves_it_to_the_run(tmp_path, helper):
+    """With a helper, the run loads the kernel from the cache the helper wrote (no compile
+    of its own); when the helper fails, the run says so and compiles it itself."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    result = subprocess.run([sys.executable, "-c", SPLIT, helper], env=env, check=True,
+                            capture_output=True, text=True, timeout=300)
+    lines = result.stdout.splitlines()
+    if helper == "compiles":
+        assert lines == ["(4, 3) False 0"]
+    else:
+        assert lines == ["impactbeams: the compile helper process did not compile segments "
+                         "(exit 3): compiling it here", "(4, 3) True 3"]
+
+
+COLD_SIMULATE = """
+import sys
+import numpy as np
+from impactbeams import Params, compilation, simulate
+dataset = simulate(Params(), 0.01, n_modes=3)
+np.savez(sys.argv[1], **{name: dataset[name].values for name in dataset.data_vars})
+print("simulate" in compilation._helpers)
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.filterwarnings("ignore:n_modes = 3 does not resolve")
+def test_a_cold_simulate_in_two_processes_is_bitwise_the_warm_one(tmp_path):
+    """A simulate with an empty cache (about 15 s of compile on 2 cores, half of it in the
+    helper process) gives the arrays of a run with the kernels cached, bit for bit."""
+    from impactbeams import Params, simulate
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    result = subprocess.run([sys.executable, "-c", COLD_SIMULATE, str(tmp_path / "cold.npz")],
+                            env=env, check=True, capture_output=True, text=True, timeout=600)
+    assert result.stdout.split() == ["True"], "the cold run had no helper"
+    warm = simulate(Params(), 0.01, n_modes=3)
+    with np.load(tmp_path / "cold.npz") as cold:
+        assert set(cold.files) == set(warm.data_vars)
+        for name in cold.files:
+            assert np.array_equal(cold[name], warm[name].values, equal_nan=True), name

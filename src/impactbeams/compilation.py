@@ -10,7 +10,10 @@ thread that compiles).
 
 from __future__ import annotations
 
+import atexit
 import contextlib
+import os
+import subprocess
 import sys
 import threading
 import time
@@ -35,6 +38,53 @@ ENTRY_KERNELS = {
 }
 
 
+# A cold run's compile in two processes (`compile_in_two_processes`): what a helper process
+# compiles while this one compiles the rest, and what this one compiles first (before the run,
+# so that it is busy while the helper compiles what the run needs next). Each job: (module in
+# impactbeams.kernels, kernel, argument types as `signature_text` writes them), as a cold run
+# calls them (tests/test_compile.py checks them against a run). Shares of simulate's cold
+# run in one process (16.6 s, load 2, 2026-11-25): run_events 54 % (the helper's) against
+# run_inputs 16 % and the sampling kernels with peak_force 20 %. A first map calls one
+# kernel, which links all the others: the helper could only compile a callee in full, and the
+# largest, `events.walk`, costs 5.4 s of CPU so (3.4 s linked), more than its caller takes to
+# reach it (measured before the compile cuts of compilecut24); a first map has no job.
+_SETTINGS_ARRAYS = "float64[:, :, ::1], complex128[:, ::1]"
+_SEGMENTS = ("Segments(float64[::1], int64[::1], bool[::1], float64[:, ::1], float64[:, ::1], "
+             "float64[:, ::1], float64[:, ::1])")
+_DRIVES = "UniTuple(complex128[:, ::1], 3), complex128[:, ::1], settings"
+HELPER_JOBS = {
+    "simulate": (("dynamics", "run_events",
+                  f"{_SETTINGS_ARRAYS}, float64[:, ::1], float64[:, ::1], float64[:, ::1], "
+                  f"{_DRIVES}, float64[::1], float64[::1], {_SEGMENTS}, float64, int64"),),
+}
+AHEAD_JOBS = {
+    "simulate": (
+        ("forcing", "run_inputs",
+         "float64[::1], float64[:, :, ::1], float64[::1], UniTuple(complex128[:, ::1], 3), "
+         "float64, float64"),
+        ("records", "segments", "int64, int64"),
+        ("dynamics", "sample_states",
+         f"{_SETTINGS_ARRAYS}, {_DRIVES}, {_SEGMENTS}, float64[::1], float64[:, ::1], "
+         "float64[:, ::1], int64[::1]"),
+        ("stroboscope", "tip_loads_at", "settings, int64[::1], float64[::1], float64[:, ::1]"),
+        ("stroboscope", "tip_motions",
+         f"{_SETTINGS_ARRAYS}, float64[:, ::1], settings, int64[::1], float64[::1], "
+         "float64[:, ::1], float64[:, ::1], float64[:, ::1]"),
+        ("contact_spring", "contact_states",
+         f"{_SETTINGS_ARRAYS}, float64[:, ::1], settings, int64[::1], float64[::1], "
+         "float64[:, ::1], float64[:, ::1], float64[:, ::1]"),
+        ("dynamics", "observed_states",
+         f"int64[::1], float64[::1], float64[:, ::1], float64[:, ::1], {_DRIVES}, "
+         "float64[:, ::1], float64[:, ::1]"),
+        ("peaks", "peak_force",
+         "float64[:, ::1], complex128[::1], float64[::1], settings, float64[::1], float64[::1], "
+         "float64, float64"),
+    ),
+}
+HELPER = "IMPACTBEAMS_COMPILE_HELPER"  # "0" in the environment: compile in this process alone
+_helpers: dict[str, subprocess.Popen] = {}  # kind -> its helper process (one per run kind)
+
+
 def kernels_cached(kind: str, entry: str | None = None) -> bool:
     """Whether the entry kernels of a run of ``kind`` (``ENTRY_KERNELS``) are in the disk cache.
 
@@ -46,12 +96,9 @@ def kernels_cached(kind: str, entry: str | None = None) -> bool:
     finds): it holds machine code for this CPU if it names this machine's code generator and
     its source stamp matches the kernel's file. Cheap (a small pickle per kernel).
     """
-    import importlib
-
     for module, names in ENTRY_KERNELS[kind]:
-        kernels = importlib.import_module(f"impactbeams.kernels.{module}")
         names = (entry,) if entry in names else names
-        if not any(_has_machine_code(getattr(kernels, name)) for name in names):
+        if not any(_has_machine_code(_kernel(module, name)) for name in names):
             return False
     return True
 
@@ -67,6 +114,104 @@ def _has_machine_code(dispatcher: Any) -> bool:
     except Exception:  # an unreadable index: Numba recompiles, and so does the run
         return False
     return any(key[1] == magic for key in overloads)
+
+
+def compile_in_two_processes(kind: str, entry: str | None = None,
+                             stream: TextIO | None = None) -> None:
+    """Before a run of ``kind`` that will compile: split the compile with a helper process.
+
+    The helper (``python -m impactbeams.compilation``) compiles ``HELPER_JOBS[kind]`` into
+    Numba's disk cache; meanwhile this process compiles ``AHEAD_JOBS[kind]``, then runs, and
+    a kernel the helper owns is loaded from the cache once the helper has it (`kernels.jit`
+    waits for it there). A helper that fails or dies leaves its kernels to this process (with
+    a line on ``stream`` saying so). Nothing happens when the run's kernels are cached, with
+    one core, in a helper itself, or with ``IMPACTBEAMS_COMPILE_HELPER=0``.
+    """
+    jobs = HELPER_JOBS.get(kind, ())
+    if (not jobs or kind in _helpers or os.environ.get(HELPER) == "0"
+            or (os.cpu_count() or 1) < 2 or kernels_cached(kind, entry)):
+        return
+    helper = _start_helper(jobs, stream or sys.stderr)
+    if helper is None:
+        return
+    _helpers[kind] = helper
+    for module, name, text in AHEAD_JOBS.get(kind, ()):
+        with contextlib.suppress(Exception):  # a stale job: the run compiles what it calls
+            _kernel(module, name).compile(parse_signature(text))
+
+
+def _kernel(module: str, name: str) -> Any:
+    import importlib
+
+    return getattr(importlib.import_module(f"impactbeams.kernels.{module}"), name)
+
+
+def _helper_command() -> list[str]:
+    return [sys.executable, "-m", "impactbeams.compilation"]
+
+
+def _start_helper(jobs: tuple, stream: TextIO) -> subprocess.Popen | None:
+    """Start the helper on ``jobs``; register each job's wait with `kernels.jit`."""
+    from impactbeams.kernels import jit
+
+    arguments = [field for job in jobs for field in job]
+    # the helper imports this package from where this process did (a path added at run time)
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    path = os.pathsep.join(filter(None, (package, os.environ.get("PYTHONPATH"))))
+    try:
+        helper = subprocess.Popen([*_helper_command(), *arguments], stdout=subprocess.PIPE,
+                                  stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
+                                  text=True, env={**os.environ, HELPER: "0", "PYTHONPATH": path})
+    except OSError:
+        return None
+    outcomes = [threading.Event() for _ in jobs]
+    done: set[int] = set()
+
+    def read() -> None:  # the helper's "done i" lines, then its exit (reaped: no zombie)
+        assert helper.stdout is not None
+        for line in helper.stdout:
+            words = line.split()
+            if len(words) == 2 and words[0] == "done" and words[1].isdigit():
+                done.add(int(words[1]))
+                outcomes[int(words[1])].set()
+        helper.stdout.close()
+        helper.wait()
+        for outcome in outcomes:
+            outcome.set()
+
+    threading.Thread(target=read, daemon=True, name="compile helper").start()
+    atexit.register(_stop, helper)
+    for index, (module, name, text) in enumerate(jobs):
+        def wait(index: int = index, name: str = name) -> None:
+            outcomes[index].wait()
+            if index not in done:
+                stream.write(f"impactbeams: the compile helper process did not compile "
+                             f"{name} (exit {helper.poll()}): compiling it here\n")
+                stream.flush()
+        try:
+            key = (_kernel(module, name), parse_signature(text))
+        except Exception:  # a stale job (renamed kernel): the helper fails on it too
+            continue
+        jit.COMPILED_ELSEWHERE[key] = wait
+    return helper
+
+
+def _stop(helper: subprocess.Popen) -> None:
+    """End a helper still running when this process exits (an interrupted run)."""
+    if helper.poll() is None:
+        helper.terminate()
+        helper.wait()
+
+
+def _compile_jobs(fields: list[str]) -> None:
+    """The helper: compile each (module, kernel, signature) job; ``done i`` after each."""
+    for index in range(len(fields) // 3):
+        module, name, text = fields[3 * index: 3 * index + 3]
+        try:
+            _kernel(module, name).compile(parse_signature(text))
+        except Exception:  # left to the calling process
+            continue
+        print(f"done {index}", flush=True)
 
 
 @contextlib.contextmanager
@@ -146,3 +291,59 @@ def _group(compile_event: Any) -> str:
     """The group of the kernel a compile event is about: its module (``events``, ``numba``)."""
     module = compile_event.data["dispatcher"].py_func.__module__
     return module.removeprefix("impactbeams.kernels.").split(".")[0]
+
+
+# --- kernel signatures as text ---------------------------------------------------------------
+
+def signature_text(args: tuple) -> str:
+    """A kernel's argument types as text that `parse_signature` reads back (the compile plan).
+
+    Arrays as Numba writes them (``float64[:, ::1]`` is C-contiguous), tuples, the records of
+    `impactbeams.kernels.records` by name, the run settings' record as ``settings``.
+    """
+    return ", ".join(map(_type_text, args))
+
+
+def parse_signature(text: str) -> tuple:
+    """The argument types `signature_text` wrote."""
+    return tuple(eval(f"({text},)", {"__builtins__": {}}, _type_names()))  # noqa: S307
+
+
+def _type_text(numba_type: Any) -> str:
+    from numba.core import types
+
+    if isinstance(numba_type, types.Array):
+        axes = [":"] * numba_type.ndim
+        if numba_type.layout == "C":
+            axes[-1] = "::1"
+        elif numba_type.layout == "F":
+            axes[0] = "::1"
+        return f"{_type_text(numba_type.dtype)}[{', '.join(axes)}]"
+    if isinstance(numba_type, types.BaseNamedTuple):
+        return f"{numba_type.instance_class.__name__}({signature_text(tuple(numba_type))})"
+    if isinstance(numba_type, types.UniTuple):
+        return f"UniTuple({_type_text(numba_type.dtype)}, {numba_type.count})"
+    if isinstance(numba_type, types.Tuple):
+        return f"Tuple(({signature_text(tuple(numba_type))},))"
+    if numba_type == _type_names()["settings"]:
+        return "settings"
+    return str(numba_type)
+
+
+def _type_names() -> dict[str, Any]:
+    import numba
+    from numba.core import types
+
+    from impactbeams.kernels import layout, records
+
+    def named(cls: type) -> Any:
+        return lambda *fields: types.NamedTuple(fields, cls)
+
+    return {**vars(types), "bool": types.boolean,
+            "settings": numba.from_dtype(layout.SETTINGS_DTYPE),
+            **{name: named(getattr(records, name)) for name in (
+                "Segments", "RunInputs", "Oscillators", "EventFunction", "Rotor", "Tangent")}}
+
+
+if __name__ == "__main__":
+    _compile_jobs(sys.argv[1:])

@@ -48,6 +48,7 @@ class _Kernel(CPUDispatcher):
     def compile(self, sig):
         """Compile for a call from Python: in full, replacing a compile only to link."""
         args = tuple(sigutils.normalize_signature(sig)[0])
+        _wait_elsewhere(self, args)
         existing = self.overloads.get(args)
         if existing is not None and isinstance(existing.entry_point, _LinkedEntry):
             del self.overloads[args]
@@ -56,6 +57,7 @@ class _Kernel(CPUDispatcher):
         return entry_point
 
     def _compile_to_link(self, args):
+        _wait_elsewhere(self, args)
         with global_compiler_lock, self._compiling_counter:
             cres = self._cache.load_overload(args, self.targetctx)  # a Python call's, cached
             if cres is not None:
@@ -79,6 +81,17 @@ class _Kernel(CPUDispatcher):
             return_type=None, flags=flags, locals=self.locals, library=library,
             pipeline_class=self._compiler.pipeline_class)
         return cres._replace(entry_point=_LinkedEntry())
+
+
+# (kernel, argument types) -> a function returning once another process has compiled it into
+# the disk cache, or given up (`impactbeams.compilation`): the compile then loads it from there
+COMPILED_ELSEWHERE = {}
+
+
+def _wait_elsewhere(dispatcher, args):
+    wait = COMPILED_ELSEWHERE.pop((dispatcher, args), None)
+    if wait is not None:
+        wait()
 
 
 class _LinkedEntry:

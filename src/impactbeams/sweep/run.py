@@ -173,6 +173,7 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
         for name, array in results.items():
             array[start:stop] = values[name]
 
+    _compile_in_two_processes(sweep, runner, parallel)
     with numba_threads(threads):
         _compute(sweep, chunking, range(chunking.count), runner or local_runner(parallel),
                  chunk_progress(sweep, chunking, progress), on_chunk, keep)
@@ -253,6 +254,7 @@ def _write_sweep(sweep: Sweep, output: Path, threads: int | None, progress: bool
                 store.save(chunk, values)  # completes the file: nothing would resume from it
             write(start, stop, values)
 
+        _compile_in_two_processes(sweep, runner, parallel)
         with _one_behind(keep) as keep_behind:
             _compute(sweep, chunking, pending, runner or local_runner(parallel), bar,
                      on_chunk, keep_behind)
@@ -293,6 +295,17 @@ def _warn_unresolved(sweep: Sweep) -> None:
         warnings.warn(f"n_modes = {sweep.n_modes} does not resolve the spring contact of "
                       f"{sweep.source}: use n_modes >= {resolution} (docs/model.md, "
                       "Resolution)", RuntimeWarning, stacklevel=3)
+
+
+def _compile_in_two_processes(sweep: Sweep, runner: ChunkRunner | None,
+                              parallel: bool) -> None:
+    """A local run that will compile shares the compile with a helper process (not Dask's)."""
+    if runner is None:
+        from impactbeams.compilation import compile_in_two_processes
+        from impactbeams.sweep.definition import run_kind
+        from impactbeams.sweep.plan import first_impact_kernel
+
+        compile_in_two_processes(run_kind(sweep), first_impact_kernel(sweep, parallel))
 
 
 def _compute(sweep: Sweep, chunking: Chunking, chunks: Iterable[int], runner: ChunkRunner,

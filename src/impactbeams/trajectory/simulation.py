@@ -10,6 +10,7 @@ import numpy as np
 import xarray as xr
 
 from impactbeams import costs
+from impactbeams.compilation import compile_in_two_processes
 from impactbeams.contact.spring import required_modes
 from impactbeams.kernels.layout import CONTACT
 from impactbeams.longtime import LongTime
@@ -172,6 +173,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     if lyapunov:
         check_request(params, n_modes, t_max, lyapunov, transient_periods)
     out_times = run_inputs.times
+    compile_in_two_processes("simulate")  # a cold compile: part of it in a helper process
     packed = pack_run(params, n_modes, t_max, run_inputs.search_span)
     start = None if initial_state is None else initial_phase_state(packed, initial_state)
     if progress:
