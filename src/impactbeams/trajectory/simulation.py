@@ -173,9 +173,9 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     if lyapunov:
         check_request(params, n_modes, t_max, lyapunov, transient_periods)
     out_times = run_inputs.times
-    compile_in_two_processes("simulate")  # a cold compile: part of it in a helper process
-    packed = pack_run(params, n_modes, t_max, run_inputs.search_span)
+    packed = pack_run(params, n_modes, t_max, run_inputs.search_span)  # refuses overdamping
     start = None if initial_state is None else initial_phase_state(packed, initial_state)
+    compile_in_two_processes("simulate")  # a cold compile: part of it in a helper process
     if progress:
         _announce(params, run_inputs)
     bar = Progress(t_max, enabled=progress, unit="s simulated")
