@@ -10,7 +10,8 @@ sources in every process). Rounds interleave the commands, so that a load on the
 on all of them alike, after one warm-up round (Numba's cache warm); each command's wall time
 and CPU time (user + system, all threads) are the medians over the rounds. Also measured,
 each in a fresh process: the bare interpreter, the heavy libraries each command imports, and
-the import time of each such library on its own (``python -X importtime``, cumulative). The
+the import time of each such library on its own (``python -X importtime``, cumulative), and
+the CPU time of each phase of ``plot`` (import, read, draw, save) inside its process. The
 load average is recorded before and after. ``--baseline SRC`` (the ``src`` folder of another
 checkout, e.g. the previous release) runs each command of that code too, right before this
 code's in each round, and reports the ratios of the medians: on a loaded machine only such
@@ -89,6 +90,37 @@ def seconds(argv: list[str], env: dict[str, str], code: str = _MAIN) -> tuple[fl
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
+# the plot command's phases, timed inside its process (CPU seconds): what ``plot MAP -o PNG``
+# does, step by step (impactbeams.cli._plot)
+_PLOT_PHASES = """
+import json, sys, time
+start = time.process_time()
+from impactbeams.plotting import draw
+from impactbeams.plotting.arrays import read_figure_data
+from impactbeams.plotting.files import save_figure
+from matplotlib.figure import Figure
+imported = time.process_time()
+dataset = read_figure_data(sys.argv[1], "input")
+read = time.process_time()
+figure = Figure(figsize=(7, 5), layout="constrained")
+draw(figure.subplots(), dataset)
+drawn = time.process_time()
+save_figure(figure, sys.argv[2])
+saved = time.process_time()
+print(json.dumps({"import": imported - start, "read": read - imported, "draw": drawn - read,
+                  "save": saved - drawn}))
+"""
+
+
+def plot_phases(folder: Path, env: dict[str, str], repeats: int) -> dict[str, float]:
+    """Median CPU seconds of each phase of ``plot`` of the map in ``folder`` (import, read the
+    file, draw the figure, save it: layout, rendering, PNG), each run in a fresh process."""
+    runs = [json.loads(subprocess.run(
+        [sys.executable, "-c", _PLOT_PHASES, str(folder / "map.nc"), str(folder / "phases.png")],
+        check=True, capture_output=True, text=True, env=env).stdout) for _ in range(repeats)]
+    return {phase: statistics.median(run[phase] for run in runs) for phase in runs[0]}
+
+
 def heavy_imports(argv: list[str], env: dict[str, str]) -> list[str]:
     """The `HEAVY` libraries a fresh process has imported after the command."""
     result = subprocess.run([sys.executable, "-c", _LOADED.format(heavy=HEAVY), *argv],
@@ -155,6 +187,7 @@ def main() -> None:
         import_alone = {module: statistics.median(import_seconds(module, env)
                                                   for _ in range(args.repeats))
                         for module in HEAVY}
+        phases = plot_phases(folder, env, args.repeats)
     median = medians(walls["this"])
     cpu = medians(cpus["this"])
     report = {
@@ -166,6 +199,7 @@ def main() -> None:
         "cpu_runs_s": cpus["this"],
         "heavy_imports": imports,
         "import_alone_s": import_alone,
+        "plot_phases_cpu_s": phases,
         "load_average": {"before": load_before[0], "after": os.getloadavg()[0]},
         "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores",
         "impactbeams": __version__,
@@ -184,7 +218,8 @@ def main() -> None:
                                                         for name in baseline_cpu}}
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "startup.json").write_text(json.dumps(report, indent=2) + "\n")
-    print(json.dumps({key: report[key] for key in ("median_s", "cpu_median_s", "heavy_imports")},
+    print(json.dumps({key: report[key] for key in ("median_s", "cpu_median_s", "heavy_imports",
+                                                  "plot_phases_cpu_s")},
                      indent=2))
     if args.baseline:
         print(json.dumps({key: report["baseline"][key] for key in

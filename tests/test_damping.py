@@ -124,7 +124,8 @@ def test_undamped_drive_has_no_cosine_part():
 
     free = build_free_phase(Params(), 5)
     cell = np.array([1.1e-5, 1e-3, 50.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # layout.CELL_COLUMNS
-    amplitudes = mode_drives(free.drive, np.zeros(free.frequencies.size), free.frequencies,
-                             np.zeros(free.frequencies.size), cell)
+    amplitudes = np.empty(free.frequencies.size, dtype=np.complex128)
+    mode_drives(free.drive, np.zeros(free.frequencies.size), free.frequencies,
+                np.zeros(free.frequencies.size), cell, amplitudes)
     assert np.all(amplitudes.imag == 0.0)
     np.testing.assert_array_equal(amplitudes.real, -50.0**2 * 1e-3 * free.drive)

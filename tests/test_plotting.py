@@ -8,8 +8,10 @@ import matplotlib.colors
 import numpy as np
 import pytest
 import xarray as xr
+from matplotlib.collections import QuadMesh
 from matplotlib.contour import ContourSet
 from matplotlib.figure import Figure
+from matplotlib.image import BboxImage
 
 from impactbeams.cli import main
 from impactbeams.params import ParameterError
@@ -71,8 +73,10 @@ def _colour_bar(figure):
     return bar, labels
 
 
-def _mesh(figure):
-    (mesh,) = figure.axes[0].collections[:1]
+def _mesh(figure, axes=0):
+    """The artist drawing a map's cells: an image on a regular grid, else a QuadMesh."""
+    (mesh,) = [artist for artist in figure.axes[axes].get_children()
+               if isinstance(artist, BboxImage | QuadMesh)]
     return mesh
 
 
@@ -362,7 +366,7 @@ def test_samples_over_two_axes_need_a_slice():
         draw(Figure().subplots(), ds, "poincare_deflection1")
     axes = Figure().subplots()  # one sample of each cell: a map
     draw(axes, ds, "poincare_deflection1", indices={"period": 0})
-    assert axes.collections
+    assert _mesh(axes.figure)
 
 
 def test_period_map_is_categorical_with_none(figure):
@@ -408,7 +412,7 @@ def test_lyapunov_map_is_diverging_centred_at_zero(figure):
     # all negative (no chaos): still centred, so that blue says "stable"
     axes = Figure().subplots()
     draw(axes, _sweep(-exponent - 50.0, [omega, force], "lyapunov_exponent"))
-    assert axes.collections[0].norm(0.0) == 0.5
+    assert _mesh(axes.figure).norm(0.0) == 0.5
 
 
 # --- files and the command line -----------------------------------------------------------------

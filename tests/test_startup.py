@@ -11,6 +11,7 @@ import json
 import math
 import subprocess
 import sys
+from importlib.util import find_spec
 
 import numpy as np
 import pytest
@@ -30,6 +31,7 @@ HEAVY = {"scipy", "scipy.linalg", "scipy.optimize", "numba", "xarray", "pandas",
 # scipy.linalg in the command's own process (impactbeams.cached_kernels)
 NUMBA = {"numba", "scipy"}
 NETCDF_MAP = {"xarray", "pandas", "netCDF4"}
+DASK = {"dask"} if find_spec("dask") else set()  # xarray imports it where installed
 
 
 def _modules_after(code, cwd):
@@ -79,8 +81,16 @@ BUDGETS = {  # command: the heavy modules it imports, exactly
     # in a caller's process Numba loads its kernels as it does (scipy.linalg for BLAS)
     "run, called": (_called("run", "tiny.toml", "-o", "new.nc"),
                     NUMBA | {"scipy.linalg", "netCDF4"}),
-    # xarray reads the file; Figure and the Agg canvas draw it, not pyplot; no SciPy, no Dask
-    "plot": (_command("plot", "warm.nc", "-o", "map.png"), NETCDF_MAP | {"matplotlib"}),
+    # netCDF4 reads a map's file (not xarray, not pandas); Figure and the Agg canvas draw it,
+    # not pyplot; no SciPy, no Dask
+    "plot": (_command("plot", "warm.nc", "-o", "map.png"), {"netCDF4", "matplotlib"}),
+    "plot, a line": (_command("plot", "warm.nc", "-o", "line.png", "--slice", "omega=200"),
+                     {"netCDF4", "matplotlib"}),
+    # a caller's xarray Dataset: drawn by the same code, which imports nothing more (xarray
+    # imports Dask, if installed, in a caller's process)
+    "plot_dataset, xarray": ("import xarray as xr\nfrom impactbeams.plotting import plot_dataset"
+                             "\nplot_dataset(xr.open_dataset('warm.nc'), 'xarray.png')",
+                             NETCDF_MAP | {"matplotlib"} | DASK),
 }
 
 
@@ -93,9 +103,10 @@ def test_each_command_imports_only_what_it_uses(command, workdir):
 
 def test_the_budgets_ran_the_commands(workdir):
     """The budgets' commands did their work (a budget of a failed command would prove little)."""
-    for name in ("run", "plot"):
+    for name in ("run", "plot", "plot, a line", "plot_dataset, xarray"):
         _modules_after(BUDGETS[name][0], workdir)
-    assert (workdir / "new.nc").stat().st_size > 0 and (workdir / "map.png").stat().st_size > 0
+    assert (workdir / "new.nc").stat().st_size > 0
+    assert all((workdir / f"{name}.png").stat().st_size > 0 for name in ("map", "line", "xarray"))
 
 
 # --- Brent's method: SciPy's roots, bit for bit ---

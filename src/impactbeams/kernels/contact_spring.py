@@ -52,13 +52,13 @@ from impactbeams.kernels.layout import (
 
 
 @kernel
-def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency):
+def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency, forces):
     """The modes' drive phasors and the oscillators' drives for one cell.
 
     ``contact_drive`` (complex, M): amplitude A' of the contact phase's modal drive
     Im(A' e^(i Omega t)); ``constant_drive`` (M): its constant part (N-ish modal units).
-    Returns ``(drives, forces)``: ``drives`` with rows ``SPRING_DRIVE_ROWS`` (the last,
-    y_eq_j, real), and the drive amplitudes A_j of the oscillators,
+    Returns ``drives`` with rows ``SPRING_DRIVE_ROWS`` (the last, y_eq_j, real), and writes
+    into ``forces`` the drive amplitudes A_j of the oscillators,
     y_j'' + 2 zeta_j |lambda_j| y_j' + |lambda_j|^2 y_j = Im(A_j e^(i Omega t)).
     """
     m = left.shape[1]
@@ -67,7 +67,6 @@ def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency)
     rising = velocity_rows @ contact_drive / 2j
     falling = -(velocity_rows @ np.conj(contact_drive)) / 2j
     constant = velocity_rows @ constant_drive.astype(np.complex128)
-    forces = np.empty(m, dtype=np.complex128)
     for j in range(m):
         lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
         up = rho * (1j * forcing_frequency - lam.conjugate()) * rising[j]
@@ -78,7 +77,7 @@ def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency)
         drives[DRIVE_FALLING, j] = falling[j]
         drives[DRIVE_CONSTANT, j] = constant[j]
         drives[DRIVE_EQUILIBRIUM, j] = offset / (lam.real**2 + lam.imag**2)
-    return drives, forces
+    return drives
 
 
 @kernel
@@ -182,7 +181,10 @@ def gap_and_force(tables, forces, phase_scalars, settings, t, q, v):
     gap_acceleration = event_acceleration(
         q, v, t, phase_oscillators(table, forces[FREE], settings.forcing_frequency),
         phase_event_function(table, scalars, settings.forcing_frequency))
-    gap_acceleration += force * np.dot(weights, weights)
+    norm = 0.0  # w . w: a loop, not np.dot, whose BLAS call costs a cold compile 0.2 s
+    for j in range(weights.size):
+        norm += weights[j] * weights[j]
+    gap_acceleration += force * norm
     return gap, force, -stiffness * gap_rate - damping * gap_acceleration
 
 

@@ -30,24 +30,31 @@ def quasi_static_force(t, settings):
 
 @kernel
 def switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new):
-    """Projection of the state (q, v) at time t onto ``to_phase``'s modes."""
+    """Projection of the state (q, v) at time t onto ``to_phase``'s modes (not in place)."""
     r_qs, r_qs_rate = quasi_static_force(t, settings)
     if to_phase == CONTACT:
-        _shifted(overlap @ q, overlap @ v, -r_qs, -r_qs_rate, shifts[CONTACT], q_new, v_new)
+        _projected(overlap, False, q, v, -r_qs, -r_qs_rate, shifts[CONTACT], q_new, v_new)
     else:
-        _shifted(overlap.T @ q, overlap.T @ v, r_qs, r_qs_rate, shifts[FREE], q_new, v_new)
+        _projected(overlap, True, q, v, r_qs, r_qs_rate, shifts[FREE], q_new, v_new)
 
 
 @kernel
-def _shifted(q, v, load, rate, shift, q_new, v_new):
-    """(q_new, v_new) = (q + load shift, v + rate shift), element by element.
+def _projected(overlap, transposed, q, v, load, rate, shift, q_new, v_new):
+    """(q_new, v_new) = (P q + load shift, P v + rate shift), P ``overlap`` or its transpose.
 
-    A slice assignment (``q_new[:] = ...``) would compile Numba's string formatting for its
-    shape-mismatch message; ``a + (-x) s`` rounds as ``a - x s``, so the signs are exact.
+    Loops, not ``overlap @ q``: BLAS's products cost a cold compile about 0.7 s, and round
+    as these sums within a few ulps of their terms. Not a slice assignment either
+    (``q_new[:] = ...`` compiles Numba's string formatting for its shape-mismatch message);
+    ``a + (-x) s`` rounds as ``a - x s``, so the signs are exact.
     """
-    for j in range(q_new.size):
-        q_new[j] = q[j] + load * shift[j]
-        v_new[j] = v[j] + rate * shift[j]
+    for i in range(q_new.size):
+        projected_q = projected_v = 0.0
+        for j in range(q.size):
+            weight = overlap[j, i] if transposed else overlap[i, j]
+            projected_q += weight * q[j]
+            projected_v += weight * v[j]
+        q_new[i] = projected_q + load * shift[i]
+        v_new[i] = projected_v + rate * shift[i]
 
 
 @kernel

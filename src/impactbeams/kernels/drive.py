@@ -76,13 +76,15 @@ def mode_drive(drive, base, frequencies, zeta, force_amplitude, base_amplitude, 
 
 
 @kernel
-def mode_drives(table_drive, table_base, frequencies, zeta, cell):
-    """``mode_drive`` of every mode (rows of a phase table) for the cell's drives."""
-    out = np.empty(table_drive.size, dtype=np.complex128)
+def mode_drives(table_drive, table_base, frequencies, zeta, cell, out):
+    """``mode_drive`` of every mode (rows of a phase table) for the cell's drives, into ``out``.
+
+    Written in place: assigning a returned array to a row (``forces[phase] = ...``) compiles
+    Numba's string formatting for its shape-mismatch message, about 2 s of a cold compile.
+    """
     for j in range(table_drive.size):
         out[j] = mode_drive(table_drive[j], table_base[j], frequencies[j], zeta[j], cell[CELL_F0],
                             base_amplitude(cell), cell[CELL_FORCING_FREQUENCY])
-    return out
 
 
 @kernel

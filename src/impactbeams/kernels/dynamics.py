@@ -287,8 +287,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
     opened = False  # the previous segment ended where an early-released gap opened
     for k in range(seg_time.size):
         seg_time[k], seg_phase[k], seg_sustained[k] = t, phase, sustained
-        seg_q[k, :] = q
-        seg_v[k, :] = v
+        contact.copy_state(q, v, seg_q[k], seg_v[k])
         table, force, scalars = tables[phase], forces[phase], phase_scalars[phase]
         free = phase == FREE
         value, _ = phase_event(table, scalars, q, v, t, settings.forcing_frequency)
@@ -302,13 +301,11 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
                                   free or sustained or waits_for_force, free and conflict,
                                   settings, q_end, v_end, rotors[phase])
         if t_event == GAVE_UP:  # an event search reached its step cap: stop, undecided
-            end_q[k, :] = q
-            end_v[k, :] = v
+            contact.copy_state(q, v, end_q[k], end_v[k])
             return k + 1, SEARCH_LIMIT, t
         t_stop = settings.t_max if math.isnan(t_event) else t_event
         propagate(table, force, q, v, t, t_stop, settings, q_end, v_end)
-        end_q[k, :] = q_end
-        end_v[k, :] = v_end
+        contact.copy_state(q_end, v_end, end_q[k], end_v[k])
         if math.isnan(t_event):
             return k + 1, COMPLETE, t_stop
         if opened:  # the same free phase goes on from the opening of the gap

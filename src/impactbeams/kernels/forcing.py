@@ -148,10 +148,9 @@ def spring_contact_inputs(cell, tables, geometry, spring, forces, scalars):
     stiffness, damping = geometry[GEO_STIFFNESS], geometry[GEO_DAMPING]
     forcing_frequency = cell[CELL_FORCING_FREQUENCY]
     harmonic = -scalars[FREE, SCALAR_SINE] * complex(stiffness, damping * forcing_frequency)
-    drives, oscillator_forces = spring_drives(
-        left, modes, forces[FREE] + harmonic * weights, -stiffness * cell[CELL_CLEARANCE] * weights,
-        forcing_frequency)
-    forces[CONTACT] = oscillator_forces
+    drives = spring_drives(left, modes, forces[FREE] + harmonic * weights,
+                           -stiffness * cell[CELL_CLEARANCE] * weights, forcing_frequency,
+                           forces[CONTACT])
     force_weights = tables[CONTACT, ROW_EVENT]
     constant = -stiffness * cell[CELL_CLEARANCE]
     for j in range(force_weights.size):
@@ -180,8 +179,8 @@ def run_inputs(cell, tables, geometry, spring, t_max, search_span):
         if phase == CONTACT and spring_law:
             continue
         damped[phase, ROW_ZETA] = cell[CELL_ZETA]
-        forces[phase] = mode_drives(damped[phase, ROW_DRIVE], damped[phase, ROW_BASE],
-                                    damped[phase, ROW_FREQUENCY], damped[phase, ROW_ZETA], cell)
+        mode_drives(damped[phase, ROW_DRIVE], damped[phase, ROW_BASE],
+                    damped[phase, ROW_FREQUENCY], damped[phase, ROW_ZETA], cell, forces[phase])
     if spring_law:
         drives = spring_contact_inputs(cell, damped, geometry, spring, forces, scalars)
     else:

@@ -202,8 +202,7 @@ def sampled_run(run, overlap, shifts, spring, start_phase, q_start, v_start, tim
             return _end_state(status, recorded, count, t_end, spring, drives, settings,
                               end_state)
         t0, phase = seg_time[keep], FREE  # a resume point starts a free segment
-        q[:] = seg_q[keep]
-        v[:] = seg_v[keep]
+        contact.copy_state(seg_q[keep], seg_v[keep], q, v)
 
 
 @kernel

@@ -205,9 +205,8 @@ def carry_tangents(tables, phase_scalars, spring, settings, recorded, t_end, sch
                                     recorded.end_q[k], recorded.end_v[k], seg_end)
         contact.tangent_switch(tangent_q, tangent_v, seg_phase[k + 1], spring, no_drive,
                             scratch_q, scratch_v)
-        for row in range(tangent_q.shape[0]):  # by rows: no shape-mismatch message to compile
-            tangent_q[row, :] = scratch_q[row]
-            tangent_v[row, :] = scratch_v[row]
+        for row in range(tangent_q.shape[0]):
+            contact.copy_state(scratch_q[row], scratch_v[row], tangent_q[row], tangent_v[row])
 
 
 @kernel

@@ -2,20 +2,23 @@
 
 [`draw`][] puts one variable of a sweep on a matplotlib Axes, as the dataset's shape asks:
 a colour map over two swept axes, a line over one, a bifurcation diagram for samples per
-cell (a ``period`` dimension) over one; [`plot_dataset`][] draws into a file.
+cell (a ``period`` dimension) over one; [`plot_dataset`][] draws into a file. Both take an
+xarray Dataset or a [`PlainDataset`][impactbeams.plotting.arrays.PlainDataset] (a file read
+without xarray, `impactbeams.plotting.arrays.read_figure_data`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from impactbeams.params import ParameterError, is_path, is_real, require, require_type
+from impactbeams.plotting.arrays import PlainArray, PlainDataset, as_plain, is_dataset
 from impactbeams.plotting.files import save_figure
 from impactbeams.plotting.labels import case_title
 from impactbeams.plotting.missing import note_empty
@@ -29,10 +32,13 @@ from impactbeams.plotting.selection import (
 )
 from impactbeams.preflight import registered
 
+if TYPE_CHECKING:
+    import xarray as xr
+
 __all__ = ["draw", "parse_assignments", "parse_levels", "plot_dataset"]
 
 
-def draw(axes: Axes, dataset: xr.Dataset, variable: str | None = None, *,
+def draw(axes: Axes, dataset: xr.Dataset | PlainDataset, variable: str | None = None, *,
          values: Mapping[str, float | str] | None = None,
          indices: Mapping[str, int | str] | None = None, scale: str | None = None,
          contours: int | Sequence[float] | None = None, title: str | None = None) -> list[str]:
@@ -50,6 +56,7 @@ def draw(axes: Axes, dataset: xr.Dataset, variable: str | None = None, *,
     Returns one note per slice saying which grid value it used. Raises ParameterError for an
     unknown variable or dimension, or a shape that cannot be drawn.
     """
+    dataset = as_plain(dataset)
     name = choose_variable(dataset, variable)
     data, notes = select(dataset, name, values or {}, indices or {})
     field = data[name]
@@ -98,7 +105,8 @@ def _check_arguments(dataset: object, path: object, variable: object, values: ob
 
     The dataset's registered names must be as registered (`impactbeams.variables.validate`).
     """
-    require_type("dataset", dataset, isinstance(dataset, xr.Dataset), "an xarray.Dataset")
+    require_type("dataset", dataset, is_dataset(dataset),
+                 "an xarray.Dataset or an impactbeams.plotting.arrays.PlainDataset")
     registered(dataset, "dataset")
     require_type("path", path, is_path(path), "the path of an image file (str or pathlib.Path)")
     for name, value in (("variable", variable), ("title", title)):
@@ -125,11 +133,19 @@ def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
     return []
 
 
-def _dimensions(field: xr.DataArray) -> str:
+def _require_xarray(dataset: xr.Dataset | PlainDataset, figure: str) -> None:
+    """TypeError unless ``dataset`` is an xarray Dataset: ``figure`` is drawn from one."""
+    if isinstance(dataset, PlainDataset):
+        raise TypeError(f"{figure} is drawn from an xarray.Dataset, not a PlainDataset: read "
+                        "the file with impactbeams.plotting.arrays.read_figure_data")
+
+
+def _dimensions(field: PlainArray) -> str:
     return "dimensions " + ", ".join(f"{d} ({field.sizes[d]})" for d in field.dims)
 
 
-def plot_dataset(dataset: xr.Dataset, path: str | Path, variable: str | None = None, *,
+def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
+                 variable: str | None = None, *,
                  values: Mapping[str, float | str] | None = None,
                  indices: Mapping[str, int | str] | None = None, scale: str | None = None,
                  contours: int | Sequence[float] | None = None, title: str | None = None,
@@ -139,10 +155,13 @@ def plot_dataset(dataset: xr.Dataset, path: str | Path, variable: str | None = N
     A simulated run without options gets its overview (tips, force, restitution, energy); a
     continuation's branches their frequency-response curve (over the bifurcation diagram
     ``diagram`` if given); anything else is drawn by [`draw`][], whose options these are.
+    ``dataset``: an xarray Dataset, or for a sweep's map a
+    [`PlainDataset`][impactbeams.plotting.arrays.PlainDataset] (a file read without xarray).
     Returns its notes.
     """
     _check_arguments(dataset, path, variable, values, indices, title, dpi)
     if "branch_point" in dataset.dims:
+        _require_xarray(dataset, "a continuation's branches")
         return _plot_branches(dataset, path, variable, title, dpi, diagram)
     if diagram is not None:
         raise ParameterError("diagram (--over) is for a continuation's file only: this Dataset "
@@ -151,6 +170,7 @@ def plot_dataset(dataset: xr.Dataset, path: str | Path, variable: str | None = N
     if "time" in dataset.dims and variable is None and not options:
         from impactbeams.plotting.trajectories import plot_run
 
+        _require_xarray(dataset, "a run's overview")
         plot_run(dataset, path)
         return []
     figure = Figure(figsize=(7, 5), layout="constrained")

@@ -5,12 +5,16 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
 from impactbeams.variables import LONG_TIME_VARIABLES, PARAMETERS, VARIABLES
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from impactbeams.plotting.arrays import PlainArray, PlainDataset
 
 # fixed parameters that say which case a map shows, in this order (others only when sliced)
 _CASE = ("omega", "force_amplitude", "clearance", "uplift1", "uplift2", "damping_ratio")
@@ -36,7 +40,7 @@ def symbol(name: str) -> str:
     return entry.symbol if entry is not None else ""
 
 
-def axis_label(array: xr.DataArray) -> str:
+def axis_label(array: PlainArray | xr.DataArray) -> str:
     r"""Label of a coordinate or variable: symbol and units, e.g. ``"$\Omega$ (rad/s)"``.
 
     A swept parameter is named by its symbol alone (its long name is in the caption); an
@@ -84,7 +88,7 @@ def quantity(name: str, value: Any, units: str) -> str:
     return f"{symbol(name) or name.replace('_', ' ')} = {text}" + (f" {unit}" if unit else "")
 
 
-def case_title(dataset: xr.Dataset, variable: str, shown: tuple[str, ...]) -> str:
+def case_title(dataset: PlainDataset | xr.Dataset, variable: str, shown: tuple[str, ...]) -> str:
     """The fixed parameters, slices and run settings behind a figure of ``variable``.
 
     ``shown``: the dimensions drawn (their values are on the axes, not in the title).

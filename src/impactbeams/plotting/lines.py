@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 from matplotlib.axes import Axes
 
 from impactbeams.plotting.labels import axis_label
@@ -22,6 +21,9 @@ from impactbeams.plotting.scales import (
 )
 from impactbeams.plotting.selection import OVERLAID_DIMENSIONS, SAMPLE_DIMENSIONS
 
+if TYPE_CHECKING:
+    from impactbeams.plotting.arrays import PlainDataset
+
 # a stepped sweep's directions: up (increasing) in blue over down in red, whose dots are drawn
 # larger, so that where both reach the same response both colours show
 DIRECTION_STYLES = {"up": {"color": "tab:blue", "zorder": 3},
@@ -31,7 +33,7 @@ DIRECTION_DOTS = {"up": 2.5, "down": 5.0}  # times a single diagram's dots
 _MARKED = 100  # lines over at most this many grid values mark each value
 
 
-def draw_line(axes: Axes, dataset: xr.Dataset, variable: str, scale: str | None = None,
+def draw_line(axes: Axes, dataset: PlainDataset, variable: str, scale: str | None = None,
               **style: Any) -> None:
     """``variable`` of one dimension against its grid values; grey bands where it is NaN.
 
@@ -65,7 +67,7 @@ def draw_line(axes: Axes, dataset: xr.Dataset, variable: str, scale: str | None 
         add_missing_legend(axes, missing_note(dataset, variable))
 
 
-def draw_bifurcation(axes: Axes, dataset: xr.Dataset, variable: str, size_factor: float = 1.0,
+def draw_bifurcation(axes: Axes, dataset: PlainDataset, variable: str, size_factor: float = 1.0,
                      **style: Any) -> None:
     """Every sample of ``variable`` (one axis plus a sample dimension) as a dot at its grid value.
 
@@ -88,7 +90,7 @@ def draw_bifurcation(axes: Axes, dataset: xr.Dataset, variable: str, size_factor
     axes.yaxis.get_major_formatter().set_useMathText(True)
 
 
-def draw_directions(axes: Axes, dataset: xr.Dataset, variable: str,
+def draw_directions(axes: Axes, dataset: PlainDataset, variable: str,
                     scale: str | None = None) -> None:
     """A stepped sweep's directions overlaid over its one swept axis, one colour each.
 

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import matplotlib.colors
 import numpy as np
-import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.colorbar import Colorbar
 from matplotlib.contour import ContourSet
+from matplotlib.image import BboxImage
 from matplotlib.path import Path
 
 from impactbeams.params import ParameterError
@@ -24,8 +25,17 @@ from impactbeams.plotting.scales import (
     nice_levels,
 )
 
+if TYPE_CHECKING:
+    from matplotlib.cm import ScalarMappable
 
-def draw_map(axes: Axes, dataset: xr.Dataset, variable: str, scale: str | None = None,
+    from impactbeams.plotting.arrays import PlainDataset
+
+# cells equal on the axes within this fraction of their width (relative to their mean): a
+# boundary then lies within cells x UNIFORM widths of the mesh's, 0.01 of a cell for 10^4 cells
+UNIFORM = 1e-6
+
+
+def draw_map(axes: Axes, dataset: PlainDataset, variable: str, scale: str | None = None,
              contours: int | Sequence[float] | None = None) -> Colorbar | None:
     """Colour map of the 2-D ``variable`` on ``axes``, with its colour bar; returns the bar.
 
@@ -44,13 +54,13 @@ def draw_map(axes: Axes, dataset: xr.Dataset, variable: str, scale: str | None =
     if not np.isfinite(values).any():
         if contours is not None:
             raise ParameterError(f"contour lines need values: {variable} has none (all NaN)")
-        axes.pcolormesh(*cells, np.zeros_like(values), rasterized=True,
-                        cmap=matplotlib.colors.ListedColormap([MISSING_COLOUR]))
+        draw_cells(axes, cells, (x_log, y_log), np.zeros_like(values),
+                   cmap=matplotlib.colors.ListedColormap([MISSING_COLOUR]))
         return None
     colours = colour_scale(field, scale)
     values = colours.encode(values)
-    mesh = axes.pcolormesh(*cells, np.ma.masked_invalid(values),
-                           norm=colours.norm, cmap=colours.cmap, rasterized=True)
+    mesh = draw_cells(axes, cells, (x_log, y_log), np.ma.masked_invalid(values),
+                      norm=colours.norm, cmap=colours.cmap)
     bar = axes.get_figure().colorbar(mesh, ax=axes, shrink=0.9, anchor=(0.0, 1.0))
     bar.set_ticks(colours.ticks)
     bar.formatter = colours.formatter
@@ -62,6 +72,36 @@ def draw_map(axes: Axes, dataset: xr.Dataset, variable: str, scale: str | None =
     if np.isnan(values).any():
         add_missing_legend(bar.ax, missing_note(dataset, variable), below=True)
     return bar
+
+
+def draw_cells(axes: Axes, cells: tuple[np.ndarray, np.ndarray], logs: tuple[bool, bool],
+               values: np.ndarray, **colours: object) -> ScalarMappable:
+    """Every cell of ``values`` (y, x) between its ``cells`` edges (x, y) in its colour.
+
+    ``logs``: whether the x and y axes are log. On a regular grid (cells equal on the axes,
+    in log on a log axis: linspace and geomspace axes, named choices) an image, each screen
+    pixel the colour of the cell under its centre: the picture of a mesh of quadrilaterals,
+    which is drawn otherwise, at a small part of its cost (10^6 cells: 10 ms, not 0.3 s).
+    The axes' limits are the outer edges. ``colours``: norm and cmap.
+    """
+    if not all(_uniform(e, log) for e, log in zip(cells, logs, strict=True)):
+        return axes.pcolormesh(*cells, values, rasterized=True, **colours)
+    for axis, (which, e) in enumerate(zip("xy", cells, strict=True)):
+        if e[-1] < e[0]:  # a descending grid: the axis ascends, as a mesh's would
+            values, e = np.flip(values, axis=1 - axis), e[::-1]
+        (axes.set_xlim if which == "x" else axes.set_ylim)(e[0], e[-1])
+    # the limits are the outer edges: the image fills the axes
+    image = BboxImage(axes.bbox, origin="lower", interpolation="nearest",
+                      interpolation_stage="data", **colours)
+    image.set_data(values)
+    axes.add_artist(image)
+    return image
+
+
+def _uniform(cell_edges: np.ndarray, log: bool) -> bool:
+    """Whether cells of ``cell_edges`` are equal on their axis (in log on a log axis)."""
+    widths = np.diff(np.log(cell_edges) if log else cell_edges)
+    return bool(np.all(np.abs(widths - widths.mean()) <= UNIFORM * np.abs(widths.mean())))
 
 
 def _contour_lines(axes: Axes, bar: Colorbar, grid: tuple[np.ndarray, np.ndarray, np.ndarray],

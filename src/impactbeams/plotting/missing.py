@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.patches import Patch
 
 from impactbeams.plotting.labels import format_number
 from impactbeams.plotting.scales import MISSING_COLOUR
 
+if TYPE_CHECKING:
+    from impactbeams.plotting.arrays import PlainDataset
 
-def missing_note(dataset: xr.Dataset, variable: str, t_max: str = "$t_\\max$") -> str:
+
+def missing_note(dataset: PlainDataset, variable: str, t_max: str = "$t_\\max$") -> str:
     """What the NaN cells of ``variable`` mean: no impact by t_max where ``impacted`` says so.
 
     ``t_max``: how to write t_max (mathtext for a figure; "t_max" for a terminal).
@@ -25,7 +29,7 @@ def missing_note(dataset: xr.Dataset, variable: str, t_max: str = "$t_\\max$") -
     return "no value (NaN)"
 
 
-def note_empty(axes: Axes, dataset: xr.Dataset, variable: str) -> str:
+def note_empty(axes: Axes, dataset: PlainDataset, variable: str) -> str:
     """Say on ``axes`` that ``variable`` has no value in any cell (e.g. no cell impacts).
 
     Returns the same note in plain text, for the terminal.

@@ -8,17 +8,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import matplotlib.colors
 import matplotlib.ticker
 import numpy as np
-import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.axis import Axis
 
 from impactbeams.params import ParameterError
 from impactbeams.plotting.labels import axis_label, tick_labels
 from impactbeams.variables import VARIABLES
+
+if TYPE_CHECKING:
+    from impactbeams.plotting.arrays import PlainArray
 
 # a colour scale is logarithmic by default when positive data span more than this many decades
 LOG_DECADES = 1.5
@@ -120,7 +123,7 @@ def _inside(values: np.ndarray, vmin: float, vmax: float) -> np.ndarray:
     return values[(values >= vmin - slack) & (values <= vmax + slack)]
 
 
-def colour_scale(field: xr.DataArray, scale: str | None) -> ColourScale:
+def colour_scale(field: PlainArray, scale: str | None) -> ColourScale:
     """The colour scale of a map of ``field``: categorical, zero-centred, log or linear."""
     values = np.asarray(field.values, dtype=float)
     finite = values[np.isfinite(values)]
@@ -142,7 +145,7 @@ def colour_scale(field: xr.DataArray, scale: str | None) -> ColourScale:
     return ColourScale(norm, _with_missing(SEQUENTIAL), ticks, formatter, log=log)
 
 
-def find_categories(field: xr.DataArray, finite: np.ndarray) -> np.ndarray | None:
+def find_categories(field: PlainArray, finite: np.ndarray) -> np.ndarray | None:
     """The distinct values of integer data with few of them (a period, a flag), else None."""
     integral = field.dtype.kind in "iub" or field.name in CATEGORY_NAMES
     if not integral or not np.all(finite == np.round(finite)):
@@ -151,7 +154,7 @@ def find_categories(field: xr.DataArray, finite: np.ndarray) -> np.ndarray | Non
     return distinct if distinct.size <= MAX_CATEGORIES else None
 
 
-def category_names(field: xr.DataArray, categories: np.ndarray) -> list[str]:
+def category_names(field: PlainArray, categories: np.ndarray) -> list[str]:
     """Names of the categories: CF flag_meanings, else the registry's or CATEGORY_NAMES, or numbers.
 
     A file of an earlier version has no flag attributes: the registry's flags name its codes.
@@ -164,7 +167,7 @@ def category_names(field: xr.DataArray, categories: np.ndarray) -> list[str]:
     return [str(names.get(int(c), int(c))).replace("_", " ") for c in categories]
 
 
-def _categorical(field: xr.DataArray, categories: np.ndarray) -> ColourScale:
+def _categorical(field: PlainArray, categories: np.ndarray) -> ColourScale:
     names = category_names(field, categories)
     palette = iter(matplotlib.colormaps["tab10"].colors)
     colours = [NONE_COLOUR if name == "none" else next(palette) for name in names]
@@ -225,7 +228,7 @@ def edges(values: np.ndarray, log: bool) -> np.ndarray:
     return np.exp(inner) if log else inner
 
 
-def grid_axis(axes: Axes, which: str, coordinate: xr.DataArray) -> tuple[np.ndarray, bool]:
+def grid_axis(axes: Axes, which: str, coordinate: PlainArray) -> tuple[np.ndarray, bool]:
     """Put a grid ``coordinate`` on the ``which`` ("x" or "y") axis: label, scale and ticks.
 
     Returns the positions of the grid values on the axis and whether the axis is log

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from impactbeams.params import ParameterError
+
+if TYPE_CHECKING:
+    from impactbeams.plotting.arrays import PlainArray, PlainDataset
 
 DEFAULT_VARIABLE = "first_impact_time"
 # dimensions of samples within one cell (stroboscopic Poincare samples), not grid axes
@@ -16,7 +19,7 @@ SAMPLE_DIMENSIONS = ("period",)
 OVERLAID_DIMENSIONS = ("sweep_direction",)
 
 
-def choose_variable(dataset: xr.Dataset, variable: str | None) -> str:
+def choose_variable(dataset: PlainDataset, variable: str | None) -> str:
     """``variable`` if the dataset has it; by default first_impact_time, else the first one."""
     names = [str(name) for name in dataset.data_vars]
     if variable is None:
@@ -29,8 +32,8 @@ def choose_variable(dataset: xr.Dataset, variable: str | None) -> str:
     return variable
 
 
-def select(dataset: xr.Dataset, variable: str, values: Mapping[str, float | str],
-           indices: Mapping[str, int | str]) -> tuple[xr.Dataset, list[str]]:
+def select(dataset: PlainDataset, variable: str, values: Mapping[str, float | str],
+           indices: Mapping[str, int | str]) -> tuple[PlainDataset, list[str]]:
     """Slice ``dataset`` at the grid values nearest ``values`` and at ``indices``, by dimension.
 
     Dimensions of length 1 are dropped as well. Returns the sliced dataset and one note per
@@ -51,7 +54,7 @@ def select(dataset: xr.Dataset, variable: str, values: Mapping[str, float | str]
     return sliced.isel({d: 0 for d in sliced[variable].dims if sliced.sizes[d] == 1}), notes
 
 
-def _nearest(coordinate: xr.DataArray, wanted: float | str) -> int:
+def _nearest(coordinate: PlainArray, wanted: float | str) -> int:
     """Index of the grid value nearest ``wanted`` (in log distance on a log axis)."""
     grid, name = coordinate.values, coordinate.name
     if grid.dtype.kind in "OUS":  # named choices, e.g. a swept contact law
@@ -74,7 +77,7 @@ def _nearest(coordinate: xr.DataArray, wanted: float | str) -> int:
     return int(np.argmin(distance))
 
 
-def _index(coordinate: xr.DataArray, wanted: int | str) -> int:
+def _index(coordinate: PlainArray, wanted: int | str) -> int:
     size = coordinate.size
     try:
         index = int(wanted)
@@ -86,7 +89,7 @@ def _index(coordinate: xr.DataArray, wanted: int | str) -> int:
     return index % size
 
 
-def _slice_note(coordinate: xr.DataArray, wanted: float | str, index: int,
+def _slice_note(coordinate: PlainArray, wanted: float | str, index: int,
                 by_value: bool) -> str:
     value = coordinate.values[index]
     text = f"{value:.6g}" if coordinate.dtype.kind in "iuf" else str(value)

@@ -25,7 +25,7 @@ from impactbeams.kernels.layout import CONTACT, FREE
 from impactbeams.modes import BeamShapes
 from impactbeams.packing import Packed
 from impactbeams.params import ParameterError, require_type
-from impactbeams.trajectory.phases import Trajectory
+from impactbeams.trajectory.phases import Trajectory, free_states
 
 # a Dataset's final state restarts a run if its t_end is a whole number of forcing periods to
 # this relative tolerance (round-off of t_end = k 2 pi / Omega is ~1e-15 k)
@@ -74,11 +74,15 @@ def phase_state(packed: Packed, z: np.ndarray, t: float = 0.0,
 
 
 def free_state(packed: Packed, phase: int, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """The state (q, q') of ``phase`` at time t (s) as free coordinates z = (q, q')."""
-    q_out, v_out = np.empty_like(q), np.empty_like(v)
-    contact.observed_state(phase, q, v, t, packed.dynamics.spring_arrays, packed.drives,
-                           packed.settings, q_out, v_out)
-    return np.concatenate([q_out, v_out])
+    """The state (q, q') of ``phase`` at time t (s) as free coordinates z = (q, q').
+
+    Through ``free_states``, the kernel `simulate` has loaded already: calling
+    ``contact.observed_state`` from Python compiled it once more (0.2 s of a cold simulate).
+    """
+    q_out, v_out = free_states(packed, np.array([phase], dtype=np.int64), np.array([float(t)]),
+                               np.ascontiguousarray(q, dtype=np.float64)[None],
+                               np.ascontiguousarray(v, dtype=np.float64)[None])
+    return np.concatenate([q_out[0], v_out[0]])
 
 
 def final_state(packed: Packed, trajectory: Trajectory) -> np.ndarray:
