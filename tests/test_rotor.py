@@ -14,8 +14,8 @@ from impactbeams.kernels.events import (
     phase_event_function,
     phase_oscillators,
 )
-from impactbeams.kernels.layout import CONTACT
-from impactbeams.kernels.propagation import advance
+from impactbeams.kernels.layout import CONTACT, ROW_FREQUENCY, ROW_ZETA
+from impactbeams.kernels.propagation import advance, steady_phasor
 from impactbeams.kernels.records import EventFunction, Oscillators
 from impactbeams.kernels.rotor import (
     LEVELS,
@@ -226,3 +226,35 @@ def _round_off(q_s, v_s, t_s, t, modes, event):
         values.append(evaluate(q, v, time, event)[0])
     line = np.linspace(values[0], values[-1], times.size)
     return np.max(np.abs(np.array(values) - line))
+
+
+@pytest.mark.parametrize("detuning, split", [(1.001 / 16, True), (0.999 / 16, False),
+                                             (0.0, False)])
+def test_a_steady_state_is_split_off_down_to_a_sixteenth_of_omega_squared(detuning, split):
+    """|D| >= omega^2 / 16 (|P| at most 16 times the quasi-static |A| / omega^2): split; nearer
+    resonance, and at it (D = 0, zeta = 0), the mode stays driven (P = 0)."""
+    w, force = 1000.0, 2.0 - 1.0j
+    forcing = math.sqrt(w * w * (1.0 - detuning))  # zeta = 0: D = omega^2 - Omega^2, real
+    phasor = steady_phasor(w, 0.0, force, forcing)
+    assert (phasor != 0) == split
+    if split:
+        assert phasor == pytest.approx(force / (w * w - forcing**2), rel=4 * EPS)
+        assert abs(phasor) <= 16.0 * abs(force) / w**2
+
+
+def test_no_mode_stays_driven_beside_the_contact_resonance():
+    """The bifurcation diagram's contact phase at Omega = 200 rad/s, 8 rad/s below its first
+    resonance (208 rad/s, zeta = 0.03): every driven mode's steady state is split off, so the
+    walk steps on the rotor alone. With the former threshold omega^2 / 4 the resonant mode
+    stayed driven, and was propagated exactly at every step of every contact's search."""
+    packed = pack_run(Params(force_amplitude=1e-2, damping_ratio=0.03, omega=200.0), 32, 0.01,
+                      0.01)
+    table, force = packed.tables[CONTACT], packed.forces[CONTACT]
+    driven = [j for j in range(force.size) if force[j] != 0]
+    assert len(driven) > 1
+    resonant = int(np.argmin(np.abs(table[ROW_FREQUENCY] - 200.0)))
+    w, zeta = table[ROW_FREQUENCY, resonant], table[ROW_ZETA, resonant]
+    assert resonant in driven
+    assert abs(complex(w * w - 200.0**2, 2 * zeta * w * 200.0)) < w * w / 4  # once driven
+    for j in driven:
+        assert steady_phasor(table[ROW_FREQUENCY, j], table[ROW_ZETA, j], force[j], 200.0) != 0

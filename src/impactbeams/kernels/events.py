@@ -145,11 +145,13 @@ def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
     root = math.sqrt(1.0 - zeta * zeta)
     sigma, wd = zeta * w, w * root
     free = modulus_bound(q, (v + sigma * q) / wd)
+    if f == 0:  # undriven (its steady state split off): the growth terms below are 0
+        return 0j, free, w * w * free
     grow = free + abs(f) * span / wd
     grow_curvature = w * w * free + abs(f) * (
         1.0 + 2.0 * sigma * span / root + w * w * min(0.5 * span * span, span / wd))
     D = complex(w * w - forcing_frequency**2, 2.0 * sigma * forcing_frequency)
-    if f == 0 or D == 0:
+    if D == 0:
         return 0j, grow, grow_curvature
     steady = f / D
     P = steady * rotation

@@ -99,10 +99,12 @@ def advance_mode(q0, v0, h, w, z, f, forcing_frequency, phase_plus, step_plus):
     return q_free + combined.real / (2.0 * wd), v_free + (lam * combined).real / (2.0 * wd)
 
 
-# A mode's steady state is split off when |D| >= omega^2 / 4 (its steady amplitude is at most
-# 4 times the quasi-static one): then its terms add little rounding; nearer resonance the
-# steady state and the transient would cancel, and the mode stays driven.
-SPLIT_DETUNING = 0.25
+# A mode's steady state is split off when |D| >= omega^2 / 16 (its steady amplitude is at most
+# 16 times the quasi-static one, 4 bits of rounding): nearer resonance the steady state and
+# the transient would cancel, and the mode stays driven. |D| >= 2 zeta omega^2 sqrt(1 - zeta^2),
+# so with zeta >= 0.032 no mode stays driven; a driven mode costs the walk an exact
+# propagation at every step (docs/model.md, "The event search between events").
+SPLIT_DETUNING = 0.0625
 
 
 @kernel
