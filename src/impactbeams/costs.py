@@ -39,29 +39,29 @@ from typing import Any
 import numpy as np
 
 # --- constants from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ---------------
-FIRST_IMPACT_CELL = 3.6e-07
-FIRST_IMPACT_MODE = 3.1e-08
-FIRST_IMPACT_ALONE = 5.7e-06
-FIRST_IMPACT_WALK = 6.9e-08
+FIRST_IMPACT_CELL = 3.3e-07
+FIRST_IMPACT_MODE = 2.9e-08
+FIRST_IMPACT_ALONE = 5.6e-06
+FIRST_IMPACT_WALK = 7e-08
 IMPACT_CYCLE = {
-    "dynamics": {"tied": (7.4e-06, 1.8), "spring": (2.8e-05, 1.4)},
-    "lyapunov": {"spring": (4.2e-05, 0.79)},
-    "long_time": {"tied": (8.2e-06, 1.1), "spring": (3.2e-05, 0.72)},
-    "simulate": {"tied": (5.9e-05, 1.4), "spring": (0.00015, 1.1)},
+    "dynamics": {"tied": (8.1e-06, 1.8), "spring": (2.7e-05, 1.4)},
+    "lyapunov": {"spring": (4.4e-05, 0.76)},
+    "long_time": {"tied": (6.7e-06, 1.1), "spring": (3.3e-05, 0.7)},
+    "simulate": {"tied": (5.1e-05, 1.4), "spring": (0.00013, 1.1)},
 }
-FREE_CYCLE = 2.3e-07
-LYAPUNOV_FREE_CYCLE = 1e-06
-SAMPLING = 2e-07
+FREE_CYCLE = 2.2e-07
+LYAPUNOV_FREE_CYCLE = 9.7e-07
+SAMPLING = 2.3e-07
 GEOMETRY = 1.3e-05
 THREAD_SPEEDUP = {1: 1.0, 2: 1.8}
 COMPILE = {
-    "first_impact": 9.5,
-    "dynamics": 25.0,
-    "lyapunov": 27.0,
-    "long_time": 19.0,
-    "simulate": 21.0,
+    "first_impact": 8.7,
+    "dynamics": 20.0,
+    "lyapunov": 21.0,
+    "long_time": 15.0,
+    "simulate": 13.0,
 }
-START_UP = 0.59
+START_UP = 0.58
 # ----------------------------------------------------------------------------------------------
 
 def speedup(threads: int) -> float:
