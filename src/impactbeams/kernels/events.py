@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from impactbeams.kernels.drive import compiled_modal_acceleration
-from impactbeams.kernels.jit import inlined_kernel, kernel
+from impactbeams.kernels.jit import borrowing_kernel, inlined_kernel, kernel
 from impactbeams.kernels.layout import (
     ROW_EVENT,
     ROW_FREQUENCY,
@@ -57,7 +57,7 @@ NEWTON_LIMIT = 200
 REFRESH_STEPS = 8  # a walk's bounds are recomputed from its rotor every this many steps
 
 
-@kernel
+@borrowing_kernel
 def evaluate(q, v, t, event):
     """Return e(t), e'(t) and e's evaluation scale for modal state (q, v) at time t.
 
@@ -82,7 +82,7 @@ def evaluate(q, v, t, event):
     return value, slope, scale
 
 
-@kernel
+@borrowing_kernel
 def event_value(q, v, t, event):
     """Return e(t) and e'(t) of `records.EventFunction` ``event`` for modal state (q, v) at t."""
     value, slope, _ = evaluate(q, v, t, event)
@@ -108,13 +108,13 @@ def phase_oscillators(table, force, forcing_frequency):
     return Oscillators(table[ROW_FREQUENCY], table[ROW_ZETA], force, forcing_frequency)
 
 
-@kernel
+@borrowing_kernel
 def phase_event(table, scalars, q, v, t, forcing_frequency):
     """e(t), e'(t) of the event function of the phase with ``table`` and ``scalars``."""
     return event_value(q, v, t, phase_event_function(table, scalars, forcing_frequency))
 
 
-@kernel
+@borrowing_kernel
 def event_acceleration(q, v, t, oscillators, event):
     """e''(t) from the modal equations: q'' = Im(A e^(i Omega t)) - 2 zeta omega q' - omega^2 q."""
     sine_amp = event.sine_amp
@@ -162,7 +162,7 @@ def _mode_split(q, v, w, zeta, f, forcing_frequency, rotation, span):
     return steady, transient, w * w * transient
 
 
-@kernel
+@borrowing_kernel
 def phase_bounds(q, v, t, span, oscillators, event):
     """Split e over [t, t + span] into an exact sinusoid at Omega and a bounded rest.
 
@@ -310,7 +310,7 @@ def _quadratic_root(value, slope, acceleration, curvature, jerk, t):
     return t + d + error + 2.0 * _EPS * abs(t)
 
 
-@kernel
+@borrowing_kernel
 def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, guess, oscillators, event, tolerance,
                        q, v, curvature=np.inf, jerk=np.inf):
     """The single root of a monotone e on [lo, hi] (e(lo) > 0, e(hi) <= round-off).
@@ -354,7 +354,7 @@ def _newton_in_bracket(q_s, v_s, t_s, lo, hi, e_lo, e_hi, guess, oscillators, ev
     return hi, t  # the bracket has shrunk by at least 2^-NEWTON_LIMIT: hi is past the root
 
 
-@kernel
+@borrowing_kernel
 def step_limit(t_s, t_end, frequencies):
     """A cap on the walk's steps over (t_s, t_end]: far above any certified walk's count.
 
@@ -427,7 +427,7 @@ def root_after_rise(q_s, v_s, t_s, t_end, oscillators, event, q, v, rotor):
     return root, True
 
 
-@kernel
+@borrowing_kernel
 def search_root(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps, q, v,
                 rotor):
     """First time in [t_start, t_end] where e(t) reaches 0 from above; NaN if none.
@@ -447,7 +447,7 @@ def search_root(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, ma
     return root
 
 
-@kernel
+@borrowing_kernel
 def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps, bounds, t_state,
          q, v, rotor):
     """``search_root`` given ``bounds``, ``phase_bounds`` over [t_s, t_end].

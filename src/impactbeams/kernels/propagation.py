@@ -18,7 +18,7 @@ modal coordinates in m kg^1/2.
 
 import math
 
-from impactbeams.kernels.jit import inlined_kernel, kernel
+from impactbeams.kernels.jit import borrowing_kernel, inlined_kernel, kernel
 
 
 @kernel
@@ -44,7 +44,7 @@ def duhamel(lam, mu, growth, forcing_step, h):
     return h * growth * phi1(mu * h)
 
 
-@kernel
+@borrowing_kernel
 def advance(q0, v0, t0, h, frequencies, zeta, force, forcing_frequency, q, v):
     """Advance every mode by ``h`` (s) from time ``t0`` (s), writing into ``q`` and ``v``.
 

@@ -33,7 +33,7 @@ import math
 import numpy as np
 
 from impactbeams.kernels.drive import compiled_modal_acceleration
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import borrowing_kernel, kernel
 from impactbeams.kernels.propagation import advance_mode
 from impactbeams.kernels.records import Rotor
 
@@ -67,7 +67,7 @@ def rotor_arrays(capacity):
                  np.empty((3, capacity), dtype=np.complex128))
 
 
-@kernel
+@borrowing_kernel
 def rotor_load(rotor, q, v, t, oscillators, event):
     """Set the rotor's amplitudes from the modal state (q, v) at t (s); return the driven count.
 
@@ -103,7 +103,7 @@ def rotor_load(rotor, q, v, t, oscillators, event):
     return count
 
 
-@kernel
+@borrowing_kernel
 def rotor_bounds(rotor, oscillators, event, coherent):
     """``events.phase_bounds`` from now on, for a rotor without driven modes.
 
@@ -125,7 +125,7 @@ def rotor_bounds(rotor, oscillators, event, coherent):
             jerk + forcing_frequency**3 * forced, True)
 
 
-@kernel
+@borrowing_kernel
 def _compute_factor(eigenvalues, levels, factors, exponent):
     """Store e^(lambda 2^exponent) of every mode (``factors[exponent - LOWEST]``)."""
     level = exponent - LOWEST
@@ -137,7 +137,7 @@ def _compute_factor(eigenvalues, levels, factors, exponent):
                                                             math.sin(growth.imag))
 
 
-@kernel
+@borrowing_kernel
 def rotor_step(rotor, step):
     """Rotate the undriven modes by the largest 2^k or 3 * 2^(k-1) not above ``step`` (s > 0).
 
@@ -146,7 +146,7 @@ def rotor_step(rotor, step):
     return turn(rotor.amplitudes, rotor.eigenvalues, rotor.levels, rotor.factors, step)
 
 
-@kernel
+@borrowing_kernel
 def turn(amplitudes, eigenvalues, levels, factors, step):
     """``rotor_step`` on the rotor's arrays that it uses.
 
@@ -176,7 +176,7 @@ def turn(amplitudes, eigenvalues, levels, factors, step):
     return taken
 
 
-@kernel
+@borrowing_kernel
 def free_event(amplitudes, rates, n, event):
     """e, e', its evaluation scale and e'' of the forcing and the ``n`` undriven modes.
 
@@ -216,7 +216,7 @@ def free_event(amplitudes, rates, n, event):
     return value, slope, scale, acceleration
 
 
-@kernel
+@borrowing_kernel
 def rotor_event(rotor, q_s, v_s, t_s, t, oscillators, event):
     """e, e', its evaluation scale and e'' at time t (s), from the rotor.
 
