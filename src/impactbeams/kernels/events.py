@@ -197,14 +197,14 @@ def phase_bounds(q, v, t, span, oscillators, event):
 
 
 @kernel
-def band_step(margin, coherent, t, forcing_frequency):
+def band_step(margin, coherent, amplitude, t, forcing_frequency):
     """Largest s with margin + Im(coherent e^(i Omega (t + s'))) > 0 for all s' in [0, s).
 
     The sinusoid |K| sin(theta), theta = Omega t + arg K, drops to the level -margin at the
     next theta = pi - asin(c) (mod 2 pi), c = -margin / |K|. Shortened by a relative 1e-9 so
-    that rounding cannot carry it past that point.
+    that rounding cannot carry it past that point. ``amplitude`` is |K| (``abs(coherent)``,
+    which the walk computes once per bounds, not at each of its steps).
     """
-    amplitude = abs(coherent)
     if margin - amplitude > 0.0:
         return math.inf
     if forcing_frequency == 0.0 or margin + amplitude <= 0.0:
@@ -464,8 +464,9 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
         lowest = min(lowest, oscillators.frequencies[j])
     span_cap = 2.0 * math.pi / lowest
     coherent, band, curvature, jerk, any_span = bounds
-    floor = const - band - abs(coherent)
-    if floor > tolerance * _EPS * (abs(const) + band + abs(coherent)):
+    amplitude = abs(coherent)  # of the bounds' sinusoid, which only per-step bounds change
+    floor = const - band - amplitude
+    if floor > tolerance * _EPS * (abs(const) + band + amplitude):
         return NO_EVENT, t_state  # the event function cannot reach 0 in this phase
     # With every mode split into steady state + free transient, the bounds hold for the whole
     # phase (transient amplitudes do not grow): computed once. Otherwise (a mode at or near
@@ -493,6 +494,7 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
         if per_step:
             coherent, band, curvature, jerk, any_span = phase_bounds(q, v, t, span_cap,
                                                                      oscillators, event)
+            amplitude = abs(coherent)
         elif driven == 0 and steps % REFRESH_STEPS == 0:  # the fast transients have decayed
             coherent, band, curvature, jerk, any_span = rotor_bounds(
                 rotor, oscillators, event, coherent)
@@ -501,7 +503,7 @@ def walk(q_s, v_s, t_s, t_start, t_end, oscillators, event, tolerance, max_steps
         if not per_step:  # third order with the exact local e'': wide steps through minima
             step = min(cubic_step(margin, slope, acceleration, jerk, step), span_cap)
         # the exact sinusoid at Omega minus the bounded rest may certify a longer step
-        skip = band_step(const - band - noise, coherent, t, forcing_frequency)
+        skip = band_step(const - band - noise, coherent, amplitude, t, forcing_frequency)
         step = max(step, skip if any_span else min(skip, span_cap))
         if step <= 4.0 * _EPS * max(abs(t), span_cap):
             return t, t_state  # the event function is at round-off level: touching
