@@ -29,7 +29,7 @@ from impactbeams.kernels.events import (
     phase_oscillators,
     root_after_rise,
 )
-from impactbeams.kernels.jit import inlined_kernel, kernel
+from impactbeams.kernels.jit import borrowing_kernel, inlined_kernel, kernel
 from impactbeams.kernels.layout import (
     CONTACT,
     FREE,
@@ -61,42 +61,61 @@ def instantaneous(t_start, t_event):
     return t_event <= t_start + 4.0 * _EPS * max(t_start, 1.0)
 
 
-@kernel
+@borrowing_kernel
 def propagate(table, force, q_s, v_s, t_s, t, settings, q, v):
     """State at time t (s) of the phase with ``table``, ``force`` from (q_s, v_s) at t_s."""
     advance(q_s, v_s, t_s, t - t_s, table[ROW_FREQUENCY], table[ROW_ZETA], force,
             settings.forcing_frequency, q, v)
 
 
-@kernel
+@borrowing_kernel
 def find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor, rising=False):
     """First root in (t_s, t_max] of the phase's event function, NaN if none.
 
     The certified search restarts from the exactly propagated state every ``search span``
-    seconds (settings); the root does not depend on that span beyond round-off. A span below
-    the resolution of t searches the rest at once (it could not advance t). ``GAVE_UP`` if a
-    search reached its step cap. ``rising``: e(t_s) <= 0 < e'(t_s), and the root sought is the
-    first after e has risen through 0 (``events.root_after_rise``); ``NOT_RISEN`` if that rise
-    cannot be certified.
+    seconds (settings, ``_later_event`` past the first); the root does not depend on that span
+    beyond round-off. ``GAVE_UP`` if a search reached its step cap. ``rising``: e(t_s) <= 0 <
+    e'(t_s), and the root sought is the first after e has risen through 0
+    (``events.root_after_rise``); ``NOT_RISEN`` if that rise cannot be certified.
     """
-    t_max, span = settings.t_max, settings.search_span
+    if not t_s < settings.t_max:
+        return np.nan
+    t_b = _span_end(t_s, settings)
     oscillators = phase_oscillators(table, force, settings.forcing_frequency)
     event = phase_event_function(table, scalars, settings.forcing_frequency)
-    q_a, v_a = q_s.copy(), v_s.copy()
-    t_a = t_s
-    while t_a < t_max:
-        t_b = min(t_a + span, t_max)
-        if t_b <= t_a:
-            t_b = t_max
-        if rising and t_a == t_s:
-            root, risen = root_after_rise(q_a, v_a, t_a, t_b, oscillators, event, q, v, rotor)
-            if not risen:
-                return NOT_RISEN
-        else:
-            root = first_root(q_a, v_a, t_a, t_b, oscillators, event, q, v, rotor)
+    if rising:
+        root, risen = root_after_rise(q_s, v_s, t_s, t_b, oscillators, event, q, v, rotor)
+        if not risen:
+            return NOT_RISEN
+    else:
+        root = first_root(q_s, v_s, t_s, t_b, oscillators, event, q, v, rotor)
+    if not math.isnan(root) or not t_b < settings.t_max:
+        return root
+    return _later_event(table, force, scalars, q_s, v_s, t_s, t_b, settings, q, v, rotor)
+
+
+@borrowing_kernel
+def _span_end(t_a, settings):
+    """The end (s) of the search span from t_a, at most t_max.
+
+    A span below the resolution of t searches the rest at once (it could not advance t).
+    """
+    t_b = min(t_a + settings.search_span, settings.t_max)
+    return settings.t_max if t_b <= t_a else t_b
+
+
+@kernel
+def _later_event(table, force, scalars, q_s, v_s, t_s, t_a, settings, q, v, rotor):
+    """``find_event``'s search spans from t_a on, each from the exactly propagated state."""
+    oscillators = phase_oscillators(table, force, settings.forcing_frequency)
+    event = phase_event_function(table, scalars, settings.forcing_frequency)
+    q_a, v_a = np.empty_like(q_s), np.empty_like(v_s)
+    while t_a < settings.t_max:
+        propagate(table, force, q_s, v_s, t_s, t_a, settings, q_a, v_a)
+        t_b = _span_end(t_a, settings)
+        root = first_root(q_a, v_a, t_a, t_b, oscillators, event, q, v, rotor)
         if not math.isnan(root):
             return root
-        propagate(table, force, q_s, v_s, t_s, t_b, settings, q_a, v_a)
         t_a = t_b
     return np.nan
 
@@ -122,7 +141,7 @@ def rate_root(table, force, scalars, sign, q_s, v_s, t_s, t_end, settings, q, v,
     return root - shift
 
 
-@kernel
+@borrowing_kernel
 def _step_until(table, force, scalars, q_s, v_s, t_s, t, positive_rate, settings, q, v):
     """First time from t on, in growing steps of a few ulps, where e > 0 (or e' > 0).
 
@@ -148,7 +167,7 @@ def _opposite(table, scalars, forcing_frequency):
                          forcing_frequency)
 
 
-@kernel
+@borrowing_kernel
 def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling, settings, q,
                 v, rotor):
     """First time (s) from t_s at which e <= 0 while not rising (e' <= 0); NaN if none.
@@ -156,36 +175,58 @@ def find_switch(table, force, scalars, q_s, v_s, t_s, wait_rising, wait_falling,
     e > 0 at the start: its first root (``find_event``). e <= 0 at the start: t_s, except
 
     * rising (e' > 0) and ``wait_rising``: follow e until it has risen through 0 and falls back
-      to it, or until it peaks below 0 (e' = 0), whichever comes first (a rise certified by
-      ``events.root_after_rise`` needs no search for the peak);
-    * falling and ``wait_falling``: follow e to its minimum, then as when rising.
+      to it, or until it peaks below 0 (e' = 0), whichever comes first (``_switch_after_rise``);
+    * falling and ``wait_falling``: follow e to its minimum, then as when rising
+      (``_switch_after_minimum``).
 
     ``rotor``: the phase's (``rotor.rotor_arrays``), kept across its searches.
     """
-    t_max = settings.t_max
     value, slope = phase_event(table, scalars, q_s, v_s, t_s, settings.forcing_frequency)
     if value > 0.0:
         return find_event(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor)
-    q_a, v_a, t_a = q_s.copy(), v_s.copy(), t_s
     if slope <= 0.0:
         if not wait_falling:
             return t_s
-        t_min = rate_root(table, force, scalars, -1.0, q_s, v_s, t_s, t_max, settings, q, v,
-                          rotor)
-        if math.isnan(t_min) or t_min == GAVE_UP:
-            return t_min
-        t_a = _step_until(table, force, scalars, q_s, v_s, t_s, t_min, True, settings, q_a,
-                          v_a)
-        if t_a == GAVE_UP:
-            return GAVE_UP
-        value, _ = phase_event(table, scalars, q_a, v_a, t_a, settings.forcing_frequency)
-        if value > 0.0:
-            return find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v, rotor)
-    elif not wait_rising:
+        return _switch_after_minimum(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor)
+    if not wait_rising:
         return t_s
+    return _switch_after_rise(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor)
+
+
+@kernel
+def _switch_after_minimum(table, force, scalars, q_s, v_s, t_s, settings, q, v, rotor):
+    """``find_switch`` from a falling e <= 0: its minimum, then as from a rise there."""
+    t_min = rate_root(table, force, scalars, -1.0, q_s, v_s, t_s, settings.t_max, settings, q, v,
+                      rotor)
+    if math.isnan(t_min) or t_min == GAVE_UP:
+        return t_min
+    q_a, v_a = np.empty_like(q_s), np.empty_like(v_s)
+    t_a = _step_until(table, force, scalars, q_s, v_s, t_s, t_min, True, settings, q_a, v_a)
+    if t_a == GAVE_UP:
+        return GAVE_UP
+    value, _ = phase_event(table, scalars, q_a, v_a, t_a, settings.forcing_frequency)
+    if value > 0.0:
+        return find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v, rotor)
+    return _switch_after_rise(table, force, scalars, q_a, v_a, t_a, settings, q, v, rotor)
+
+
+@borrowing_kernel
+def _switch_after_rise(table, force, scalars, q_a, v_a, t_a, settings, q, v, rotor):
+    """``find_switch`` from e <= 0 < e' at t_a: the root after the rise, or the peak below 0.
+
+    A rise certified by ``events.root_after_rise`` needs no search for the peak
+    (``_switch_by_peak``).
+    """
     root = find_event(table, force, scalars, q_a, v_a, t_a, settings, q, v, rotor, True)
     if root != NOT_RISEN:  # certainly risen through 0: no need to find its peak
         return root
+    return _switch_by_peak(table, force, scalars, q_a, v_a, t_a, settings, q, v, rotor)
+
+
+@kernel
+def _switch_by_peak(table, force, scalars, q_a, v_a, t_a, settings, q, v, rotor):
+    """``_switch_after_rise`` where the rise is not certified: e's peak, then its root."""
+    t_max = settings.t_max
     t_peak = rate_root(table, force, scalars, 1.0, q_a, v_a, t_a, t_max, settings, q, v, rotor)
     if t_peak == GAVE_UP:
         return GAVE_UP

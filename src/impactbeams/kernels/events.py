@@ -221,7 +221,7 @@ def band_step(margin, coherent, amplitude, t, forcing_frequency):
     return (target - theta) / forcing_frequency * (1.0 - 1e-9)
 
 
-@kernel
+@inlined_kernel
 def split_steady_states(q_s, v_s, t_s, oscillators, event):
     """Move the steady states of the modes away from resonance into the event's sinusoid.
 
@@ -230,8 +230,16 @@ def split_steady_states(q_s, v_s, t_s, oscillators, event):
     steady one. The event function keeps its value, with the steady states summed into its
     ``sine_amp`` (the `records.EventFunction` returned) and those modes undriven: their
     propagation is then a free oscillation, about 2-3 times cheaper than the driven one.
-    ``q_s``, ``v_s`` and ``oscillators.force`` are changed in place.
+    ``q_s``, ``v_s`` and ``oscillators.force`` are changed in place (``split_sine``). Inlined,
+    so that the record it returns is counted by its caller's rules (`jit.borrowing_kernel`).
     """
+    return EventFunction(event.weights, event.const,
+                         split_sine(q_s, v_s, t_s, oscillators, event), event.forcing_frequency)
+
+
+@borrowing_kernel
+def split_sine(q_s, v_s, t_s, oscillators, event):
+    """``split_steady_states``' work: the split event's ``sine_amp``, the state changed in place."""
     sine_amp = event.sine_amp
     forcing_frequency = event.forcing_frequency
     rotation = complex(math.cos(forcing_frequency * t_s), math.sin(forcing_frequency * t_s))
@@ -245,7 +253,7 @@ def split_steady_states(q_s, v_s, t_s, oscillators, event):
         v_s[j] -= forcing_frequency * phasor.real
         sine_amp += event.weights[j] * steady
         oscillators.force[j] = 0.0
-    return EventFunction(event.weights, event.const, sine_amp, forcing_frequency)
+    return sine_amp
 
 
 @kernel
@@ -368,7 +376,7 @@ def step_limit(t_s, t_end, frequencies):
     return 2.0**20 + 64.0 * (t_end - t_s) * highest / (2.0 * math.pi)
 
 
-@kernel
+@borrowing_kernel
 def first_root(q_s, v_s, t_s, t_end, oscillators, event, q, v, rotor):
     """First time in (t_s, t_end] where e(t) reaches 0 from above, NaN if none.
 
@@ -377,7 +385,7 @@ def first_root(q_s, v_s, t_s, t_end, oscillators, event, q, v, rotor):
     the steady states split off (``split_steady_states``: cheaper steps).
     """
     max_steps = step_limit(t_s, t_end, oscillators.frequencies)
-    q_free, v_free, free = _unsplit_copy(q_s, v_s, oscillators)
+    q_free, v_free, free = _unsplit_copy(q_s, v_s, oscillators, rotor)
     split = split_steady_states(q_free, v_free, t_s, free, event)
     split_start, _, _ = evaluate(q_free, v_free, t_s, split)
     start, _, _ = evaluate(q_s, v_s, t_s, event)
@@ -391,14 +399,22 @@ def first_root(q_s, v_s, t_s, t_end, oscillators, event, q, v, rotor):
 
 
 @inlined_kernel
-def _unsplit_copy(q_s, v_s, oscillators):
-    """Copies of the state and of the oscillators' drives, for ``split_steady_states``."""
-    return q_s.copy(), v_s.copy(), Oscillators(oscillators.frequencies, oscillators.zeta,
-                                               oscillators.force.copy(),
-                                               oscillators.forcing_frequency)
+def _unsplit_copy(q_s, v_s, oscillators, rotor):
+    """Copies of the state and of the oscillators, for ``split_steady_states``.
+
+    In the rotor's work arrays (``rotor.split``, ``rotor.split_force``), so that a search
+    allocates nothing. Returns the copied state's rows and the copied `records.Oscillators`.
+    """
+    n = q_s.size
+    for j in range(n):  # element by element: a slice assignment compiles string formatting
+        rotor.split[0, j], rotor.split[1, j] = q_s[j], v_s[j]
+        rotor.split_force[j] = oscillators.force[j]
+    return rotor.split[0, :n], rotor.split[1, :n], Oscillators(
+        oscillators.frequencies, oscillators.zeta, rotor.split_force[:n],
+        oscillators.forcing_frequency)
 
 
-@kernel
+@borrowing_kernel
 def root_after_rise(q_s, v_s, t_s, t_end, oscillators, event, q, v, rotor):
     """``first_root`` of an e that rises through 0 at t_s: ``(root, certified)``.
 
@@ -409,7 +425,7 @@ def root_after_rise(q_s, v_s, t_s, t_end, oscillators, event, q, v, rotor):
     cannot show the rise (or rounding keeps e at 0 there): the caller then follows e to its
     peak, which costs a search of e'.
     """
-    q_free, v_free, free = _unsplit_copy(q_s, v_s, oscillators)
+    q_free, v_free, free = _unsplit_copy(q_s, v_s, oscillators, rotor)
     split = split_steady_states(q_free, v_free, t_s, free, event)
     value, slope, _ = evaluate(q_free, v_free, t_s, split)
     if slope <= 0.0:

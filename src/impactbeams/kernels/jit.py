@@ -135,8 +135,13 @@ def _plain_type(argument):
 
 
 def kernel(function):
-    """Compile a serial kernel with the package's options."""
-    return _dispatcher(function)
+    """Compile a serial kernel with the package's options.
+
+    The runtime (reference counts, allocations) is named explicitly: Numba compiles a callee
+    with the options that it does not name taken from its first caller, so a kernel first
+    reached from a ``borrowing_kernel`` would otherwise compile without it.
+    """
+    return _dispatcher(function, _nrt=True)
 
 
 def borrowing_kernel(function):
@@ -146,9 +151,11 @@ def borrowing_kernel(function):
     update each, `records`): a per-step kernel of the event search paid some 14 of them per
     step, 29 % of a long run. A kernel that allocates no array and returns none (scalars or
     tuples of them) needs none: its caller holds every array it passes for the whole call. Such
-    a kernel compiles without the runtime (``_nrt=False``), and so does what it links:
-    an allocation in it, or in anything it calls, fails to compile. Its arrays must come from
-    its arguments.
+    a kernel compiles without the runtime (``_nrt=False``): an allocation in it fails to
+    compile. The kernels it calls keep their own reference counts, so it may call one that
+    allocates, but not one that returns an array (that reference would never be released): a
+    small kernel returning a record of its arrays is an ``inlined_kernel``, which its caller's
+    rules count.
     """
     return _dispatcher(function, _nrt=False)
 

@@ -27,7 +27,8 @@ bound its four array fields, +26% with the per-step kernels binding theirs too).
 * `EventFunction`: ``e(t) = const + Im(sine_amp e^(i Omega t)) + weights . q(t)``, the
   functional whose roots the searches of `impactbeams.kernels.events` locate; ``sine_amp`` a
   float (a sine alone) or a complex (sine + i cosine), ``forcing_frequency`` Omega (rad/s).
-* `Rotor`: the arrays of an event function's rotor (`impactbeams.kernels.rotor`).
+* `Rotor`: the arrays of an event function's rotor (`impactbeams.kernels.rotor`), and the
+  work arrays of the search that uses it (the state and drives with the steady states split off).
 * `Tangent`: the tangent vectors of a run and Benettin's sums
   (`impactbeams.kernels.tangent.carry_tangents`); ``clock[CLOCK_TIME]`` is the time (s) the
   tangents are at, ``clock[CLOCK_RENORMALIZATIONS]`` the renormalisations done.
@@ -55,7 +56,8 @@ Oscillators = namedtuple("Oscillators", ("frequencies", "zeta", "force", "forcin
 
 EventFunction = namedtuple("EventFunction", ("weights", "const", "sine_amp", "forcing_frequency"))
 
-Rotor = namedtuple("Rotor", ("amplitudes", "eigenvalues", "driven", "levels", "factors", "rates"))
+Rotor = namedtuple("Rotor", ("amplitudes", "eigenvalues", "driven", "levels", "factors", "rates",
+                             "split", "split_force"))
 
 Tangent = namedtuple("Tangent", ("q", "v", "clock", "sums", "counts"))
 CLOCK = ("time", "renormalizations")

@@ -16,7 +16,7 @@ propagation. Driven modes (near resonance) are propagated exactly to each point.
 phasor e^(i Omega t) turns along as one more amplitude (lambda = i Omega), after the modes.
 
 The rotor is a `records.Rotor` of arrays ``(amplitudes, eigenvalues, driven, levels, factors,
-rates)`` (below z, lam, driven, levels, factors, rates), sized for at most
+rates, split, split_force)`` (below z, lam, driven, levels, factors, rates), sized for at most
 ``capacity`` modes (a phase uses the first ``frequencies.size``, and the next for the forcing): the
 amplitudes, the eigenvalues, which modes are driven, the factors
 ``factors[k - LOWEST] = e^(lambda 2^k)`` of the steps 2^k, k from ``LOWEST`` to
@@ -25,7 +25,9 @@ lambda and lambda^2 (rows of ``rates``). ``levels[k - LOWEST]`` is 1 once a fact
 computed, ``levels[LEVELS]`` the number of modes they were computed for, ``levels[LEVELS + 1]``
 the number of driven modes. A rotor kept across the searches of one phase
 (``dynamics.run_events`` keeps one per phase) computes each factor once per run:
-``rotor_load`` clears them only when the eigenvalues change.
+``rotor_load`` clears them only when the eigenvalues change. ``split`` (rows q, q') and
+``split_force`` hold the search's state and drives with the steady states split off
+(``events.first_root``): work arrays that a search would otherwise allocate.
 """
 
 import math
@@ -64,7 +66,8 @@ def rotor_arrays(capacity):
                  np.empty(capacity + 1, dtype=np.complex128), np.empty(capacity, dtype=np.bool_),
                  np.zeros(LEVELS + 2, dtype=np.int64),
                  np.empty((LEVELS, capacity + 1), dtype=np.complex128),
-                 np.empty((3, capacity), dtype=np.complex128))
+                 np.empty((3, capacity), dtype=np.complex128), np.empty((2, capacity)),
+                 np.empty(capacity, dtype=np.complex128))
 
 
 @borrowing_kernel
