@@ -16,7 +16,7 @@ waits for a rising force or may be released early, and the tangent dynamics' swi
 
 from impactbeams.kernels import contact_spring, contact_tied
 from impactbeams.kernels.events import phase_event
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import borrowing_kernel, kernel
 from impactbeams.kernels.layout import CONTACT, FREE, SPRING
 
 
@@ -36,7 +36,7 @@ def observed_phase(phase, settings):
     return FREE if keeps_free_coordinates(settings.contact_law) else phase
 
 
-@kernel
+@borrowing_kernel
 def switch_state(q, v, t, to_phase, overlap, shifts, spring, drives, settings, q_new, v_new):
     """The state (q, v) of the other phase at time t in ``to_phase``'s coordinates.
 
@@ -48,7 +48,7 @@ def switch_state(q, v, t, to_phase, overlap, shifts, spring, drives, settings, q
         contact_tied.switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new)
 
 
-@kernel
+@borrowing_kernel
 def observed_state(phase, y, y_rate, t, spring, drives, settings, q, v):
     """Write into (q, v) the state (y, y') of ``phase`` at time t as it is observed.
 
@@ -60,7 +60,7 @@ def observed_state(phase, y, y_rate, t, spring, drives, settings, q, v):
         copy_state(y, y_rate, q, v)
 
 
-@kernel
+@borrowing_kernel
 def phase_state(phase, q, v, t, spring, drives, settings, y, y_rate):
     """Write into (y, y') the observed state (q, v) of ``phase`` at time t in its own coordinates.
 
@@ -74,7 +74,7 @@ def phase_state(phase, q, v, t, spring, drives, settings, y, y_rate):
         copy_state(q, v, y, y_rate)
 
 
-@kernel
+@borrowing_kernel
 def copy_state(q, v, out_q, out_v):
     """Copy the state (q, v) into (out_q, out_v).
 

@@ -30,7 +30,7 @@ from impactbeams.kernels.events import (
     phase_event_function,
     phase_oscillators,
 )
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import borrowing_kernel, kernel
 from impactbeams.kernels.layout import (
     CONTACT,
     DRIVE_CONSTANT,
@@ -80,44 +80,52 @@ def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency,
     return drives
 
 
-@kernel
+@borrowing_kernel
 def _turn(t, forcing_frequency):
     """e^(i Omega t)."""
     return complex(math.cos(forcing_frequency * t), math.sin(forcing_frequency * t))
 
 
-@kernel
+@borrowing_kernel
 def _mode_drive(drives, j, turn):
     """The drive gamma_j(t) of complex mode j, given ``turn`` = e^(i Omega t)."""
     return (drives[DRIVE_RISING, j] * turn + drives[DRIVE_FALLING, j] * turn.conjugate()
             + drives[DRIVE_CONSTANT, j])
 
 
-@kernel
+@borrowing_kernel
 def to_contact(q, v, t, left, modes, drives, forcing_frequency, y, y_rate):
-    """Contact oscillators (y, y') at time t of the free coordinates (q, q')."""
+    """Contact oscillators (y, y') at time t of the free coordinates (q, q') (not in place).
+
+    z = left^T x is summed in y (real parts) and y' (imaginary parts): no work arrays.
+    """
     m = q.size
-    z_real, z_imag = np.zeros(m), np.zeros(m)
+    for j in range(m):
+        y[j] = y_rate[j] = 0.0
     for n in range(2 * m):
         x = q[n] if n < m else v[n - m]
         row = left[n]
         for j in range(m):
-            z_real[j] += row[j].real * x
-            z_imag[j] += row[j].imag * x
+            y[j] += row[j].real * x
+            y_rate[j] += row[j].imag * x
     turn = _turn(t, forcing_frequency)
     for j in range(m):
-        z = complex(z_real[j], z_imag[j])
+        z = complex(y[j], y_rate[j])
         lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
         y[j] = 2.0 * (rho * z).real - drives[DRIVE_EQUILIBRIUM, j].real
         y_rate[j] = 2.0 * (rho * (lam * z + _mode_drive(drives, j, turn))).real
 
 
-@kernel
+@borrowing_kernel
 def to_free(y, y_rate, t, right, modes, drives, forcing_frequency, q, v):
-    """Free coordinates (q, q') at time t of the contact oscillators (y, y')."""
+    """Free coordinates (q, q') at time t of the contact oscillators (y, y') (not in place).
+
+    x = 2 Re(right^T z) is summed in q and q' themselves: no work arrays.
+    """
     m = y.size
     turn = _turn(t, forcing_frequency)
-    x = np.zeros(2 * m)
+    for n in range(m):
+        q[n] = v[n] = 0.0
     for j in range(m):
         lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
         a = 0.5 * (y[j] + drives[DRIVE_EQUILIBRIUM, j].real)
@@ -125,13 +133,15 @@ def to_free(y, y_rate, t, right, modes, drives, forcing_frequency, q, v):
         b = (lam.real * a - 0.5 * y_rate[j] + forced) / lam.imag
         z = rho.conjugate() * complex(a, b)
         row = right[j]
-        for n in range(2 * m):
-            x[n] += row[n].real * z.real - row[n].imag * z.imag
+        for n in range(m):
+            q[n] += row[n].real * z.real - row[n].imag * z.imag
+        for n in range(m):
+            v[n] += row[m + n].real * z.real - row[m + n].imag * z.imag
     for n in range(m):
-        q[n], v[n] = 2.0 * x[n], 2.0 * x[m + n]
+        q[n], v[n] = 2.0 * q[n], 2.0 * v[n]
 
 
-@kernel
+@borrowing_kernel
 def switch_state(q, v, t, to_phase, spring, drives, settings, q_new, v_new):
     """The same physical state (q, v) at time t in ``to_phase``'s coordinates."""
     left, right, modes = spring
@@ -141,7 +151,7 @@ def switch_state(q, v, t, to_phase, spring, drives, settings, q_new, v_new):
         to_free(q, v, t, right, modes, drives, settings.forcing_frequency, q_new, v_new)
 
 
-@kernel
+@borrowing_kernel
 def free_state(y, y_rate, t, spring, drives, settings, q, v):
     """Free coordinates (q, q') at time t of the contact oscillators (y, y')."""
     _, right, modes = spring
@@ -241,7 +251,7 @@ def onset_work(table, scalars, settings, y, y_rate, t):
     return -tip_force * settings.residual1 * force
 
 
-@kernel
+@borrowing_kernel
 def tangent_switch(tangent_q, tangent_v, to_phase, spring, no_drive, out_q, out_v):
     """Linear part of the switch into ``to_phase``'s coordinates, row by row."""
     left, right, modes = spring

@@ -15,11 +15,11 @@ named in `impactbeams.kernels.layout`; SI units.
 
 
 from impactbeams.kernels.drive import harmonic
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import borrowing_kernel, kernel
 from impactbeams.kernels.layout import CONTACT, FREE
 
 
-@kernel
+@borrowing_kernel
 def quasi_static_force(t, settings):
     """R_qs(t) = (c1 F(t) - clearance) / (c1 + c2) (N) and its rate R_qs'(t) (N/s)."""
     c1, c2 = settings.c1, settings.c2
@@ -28,7 +28,7 @@ def quasi_static_force(t, settings):
     return (load - settings.clearance) / total, rate / total
 
 
-@kernel
+@borrowing_kernel
 def switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new):
     """Projection of the state (q, v) at time t onto ``to_phase``'s modes (not in place)."""
     r_qs, r_qs_rate = quasi_static_force(t, settings)
@@ -38,7 +38,7 @@ def switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new):
         _projected(overlap, True, q, v, r_qs, r_qs_rate, shifts[FREE], q_new, v_new)
 
 
-@kernel
+@borrowing_kernel
 def _projected(overlap, transposed, q, v, load, rate, shift, q_new, v_new):
     """(q_new, v_new) = (P q + load shift, P v + rate shift), P ``overlap`` or its transpose.
 
