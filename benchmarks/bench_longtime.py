@@ -19,6 +19,10 @@ issue 14's was 60 s).
   recorded segment start), the coordinate changes at the switches and one closed-form
   propagation per segment; and the stroboscopic sampling of 200 states. Best of 5 each.
 
+Idle BLAS threads sleep (``OPENBLAS_THREAD_TIMEOUT``, set here before NumPy and SciPy load),
+as they do in the command line (`impactbeams.cli.BLAS_THREAD_TIMEOUT`): their default spin
+after each cell's BLAS call competes with the sweep's threads on two cores.
+
 Writes docs/benchmarks/longtime.json and docs/benchmarks/longtime.md.
 
     python benchmarks/bench_longtime.py [--stride 10] [--sweep sweeps/bifurcation-omega.toml]
@@ -26,26 +30,35 @@ Writes docs/benchmarks/longtime.json and docs/benchmarks/longtime.md.
 
 from __future__ import annotations
 
-import argparse
-import dataclasses
-import json
-import math
 import os
-import platform
-import time
-from pathlib import Path
 
-import numba
-import numpy as np
+os.environ.setdefault("OPENBLAS_THREAD_TIMEOUT", "4")  # as impactbeams.cli.BLAS_THREAD_TIMEOUT
 
-from impactbeams import __version__
-from impactbeams.kernels import contact
-from impactbeams.kernels import dynamics as dyn
-from impactbeams.kernels.layout import CONTACT, FREE
-from impactbeams.kernels.rotor import rotor_arrays
-from impactbeams.packing import pack_run
-from impactbeams.sweep import build_plan, compute_chunk, load_sweep, run_sweep, sweep_from_mapping
-from impactbeams.trajectory.phases import run, sample
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import json  # noqa: E402
+import math  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numba  # noqa: E402
+import numpy as np  # noqa: E402
+
+from impactbeams import __version__  # noqa: E402
+from impactbeams.kernels import contact  # noqa: E402
+from impactbeams.kernels import dynamics as dyn  # noqa: E402
+from impactbeams.kernels.layout import CONTACT, FREE  # noqa: E402
+from impactbeams.kernels.rotor import rotor_arrays  # noqa: E402
+from impactbeams.packing import pack_run  # noqa: E402
+from impactbeams.sweep import (  # noqa: E402
+    build_plan,
+    compute_chunk,
+    load_sweep,
+    run_sweep,
+    sweep_from_mapping,
+)
+from impactbeams.trajectory.phases import run, sample  # noqa: E402
 
 ROOT = Path(__file__).parents[1]
 OUT = ROOT / "docs" / "benchmarks"

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import os
 import re
 import sys
 import warnings
@@ -552,6 +553,23 @@ def _warn(text: str) -> None:
     print(f"impactbeams: warning: {text}", file=sys.stderr)
 
 
+# OpenBLAS's idle-thread spin, 2^4 cycles: its default, 2^28 (about 0.1 s), is paid after each
+# call, and a sweep of the spring law makes one per cell (`kernels.contact_spring.spring_drives`)
+BLAS_THREAD_TIMEOUT = "4"
+
+
+def _idle_blas_threads_sleep() -> None:
+    """Let SciPy's BLAS threads sleep as soon as a call is done, instead of spinning.
+
+    After each call OpenBLAS's worker threads spin for about 0.1 s, waiting for the next one;
+    on two cores that spin competes with the sweep's own threads: the Hertz bifurcation
+    diagram on 2 threads took 53 s of CPU with it, 37 s without (issue 24). The threads and the
+    results are the same (bit for bit); OpenBLAS reads the setting when it loads, which for
+    SciPy's (the kernels' BLAS) is after this. A value set by the user is kept.
+    """
+    os.environ.setdefault("OPENBLAS_THREAD_TIMEOUT", BLAS_THREAD_TIMEOUT)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``impactbeams`` console script; returns the exit code.
 
@@ -561,9 +579,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Without ``argv`` (the console script, ``python -m impactbeams.cli``) the process is the
     command's own, and is set up for a quick start: cached kernels load without Numba's
-    compile registries (`impactbeams.cached_kernels`), and ``plot`` hides Dask from xarray.
-    With ``argv`` (a caller's process) neither is done: the results are the same.
+    compile registries (`impactbeams.cached_kernels`), ``plot`` hides Dask from xarray, and
+    idle BLAS threads sleep (`_idle_blas_threads_sleep`). With ``argv`` (a caller's process)
+    none is done: the results are the same.
     """
+    if argv is None:
+        _idle_blas_threads_sleep()
     try:
         args = build_parser().parse_args(
             _attach_negative_values(sys.argv[1:] if argv is None else argv))
