@@ -174,6 +174,42 @@ def test_a_kernel_called_by_a_kernel_is_only_linked_until_python_calls_it(tmp_pa
     assert json.loads(values) == [4.0, False, True, False, 3.0, True, True, 0.0]
 
 
+BORROWED = """
+import json
+import numpy as np
+from impactbeams.kernels.jit import borrowing_kernel, kernel
+
+@borrowing_kernel
+def norm(x):  # borrows x: no reference counts
+    return abs(x[0]) + abs(x[1])
+
+@borrowing_kernel
+def lent(x):  # would hand its caller a reference it never took
+    return x, 1.0
+
+@kernel
+def caller(x):
+    return norm(x) + lent(x)[1]
+
+try:
+    caller(np.array([3.0, -4.0]))
+    print(json.dumps(None))
+except TypeError as error:
+    print(json.dumps(str(error)))
+"""
+
+
+def test_a_borrowing_kernel_returns_no_array(tmp_path):
+    """``kernels/jit.py``: a kernel compiled without reference counts that returned an array
+    would leave its caller releasing a reference it never got: refused when it compiles."""
+    script = tmp_path / "borrowed.py"  # a file: Numba caches only kernels defined in one
+    script.write_text(BORROWED)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    result = subprocess.run([sys.executable, str(script)], env=env, check=True,
+                            capture_output=True, text=True, timeout=300)
+    assert "lent borrows its arrays and cannot return one" in json.loads(result.stdout)
+
+
 CALLED = """
 import json, warnings
 from impactbeams import Params, simulate

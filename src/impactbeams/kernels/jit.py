@@ -40,6 +40,7 @@ class _Kernel(CPUDispatcher):
         args = tuple(map(_plain_type, folded))
         if self._can_compile and args not in self.overloads:
             self._compile_to_link(args)
+            _refuse_borrowed_returns(self, self.overloads[args].signature.return_type)
         name = self.py_func.__name__
         template = typing.make_concrete_template(f"CallTemplate({name})", key=name,
                                                  signatures=self.nopython_signatures)
@@ -126,6 +127,19 @@ def _set_environments(library):
         environment = lookup_environment(variable.name)
         if environment is not None:
             library.codegen.set_env(variable.name, environment)
+
+
+def _refuse_borrowed_returns(dispatcher, returned):
+    """A ``borrowing_kernel`` returns no array: its caller would release a reference not taken."""
+    if dispatcher.targetoptions.get("_nrt", True):
+        return
+    pending = [returned]
+    while pending:
+        kind = pending.pop()
+        if isinstance(kind, numba_types.ArrayCompatible):
+            raise TypeError(f"{dispatcher.py_func.__qualname__} borrows its arrays and cannot "
+                            f"return one ({returned}): make it an inlined_kernel")
+        pending.extend(getattr(kind, "types", ()))
 
 
 def _plain_type(argument):
