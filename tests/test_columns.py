@@ -130,6 +130,13 @@ def test_columns_equal_the_cell_by_cell_search_on_the_benchmark_maps(name, axis)
     assert_columns_match_cells(thinned(BENCHMARK_MAPS / name, axis, 100), 100)
 
 
+def test_the_shipped_shaker_map_by_columns_equals_the_cell_by_cell_search():
+    """sweeps/stop-shaker-omega-amplitude.toml (beam 1 against a stop, the shaker carrying the
+    clamp and the stop, U0 up to 1e-2 m), every 100th column: columns along U0."""
+    assert_columns_match_cells(thinned(SWEEPS / "stop-shaker-omega-amplitude.toml", "omega",
+                                       100), 100)
+
+
 def test_a_column_near_resonance_follows_its_flanks(free, monkeypatch):
     """At Omega 1541 rad/s, 1.3 rad/s below beam 1's second mode (undamped, F0 = 1 mN), that
     mode stays driven (its steady state not split off): its bounds over [0, t_max] hold the
