@@ -18,14 +18,17 @@ issue 14's was 60 s).
   into the event searches of free and contact phases (``find_switch`` replayed from every
   recorded segment start), the coordinate changes at the switches and one closed-form
   propagation per segment; and the stroboscopic sampling of 200 states. Best of 5 each.
+* ``--previous FILE``: the previous code's ``longtime.json`` (this script run on that code,
+  with ``PYTHONPATH`` at it and ``--out`` elsewhere): its figures beside this code's and, where
+  both ran ``--full``, the number of cells whose response period is the same.
 
 Idle BLAS threads sleep (``OPENBLAS_THREAD_TIMEOUT``, set here before NumPy and SciPy load),
 as they do in the command line (`impactbeams.cli.BLAS_THREAD_TIMEOUT`): their default spin
 after each cell's BLAS call competes with the sweep's threads on two cores.
 
-Writes docs/benchmarks/longtime.json and docs/benchmarks/longtime.md.
+Writes longtime.json and longtime.md to ``--out`` (default docs/benchmarks).
 
-    python benchmarks/bench_longtime.py [--stride 10] [--sweep sweeps/bifurcation-omega.toml]
+    python benchmarks/bench_longtime.py [--stride 10] [--full] [--previous F] [--out DIR]
 """
 
 from __future__ import annotations
@@ -204,6 +207,7 @@ def _summary_rows(study: dict) -> list[str]:
     one_core = study["diagram_one_core_s"]
     return [
         *_full_rows(study["full_run"]),
+        *_previous_rows(study),
         f"| whole diagram, 1 core (extrapolated) | {one_core:,.0f} s |",
         f"| whole diagram, 2 cores at ideal scaling | {one_core / 2:,.0f} s "
         f"(target {TARGET_S:g} s: {one_core / 2 / TARGET_S:.1f}x) |",
@@ -233,6 +237,23 @@ def _full_rows(full: dict | None) -> list[str]:
     return [f"| **whole diagram run as one sweep on 2 threads**: wall time, CPU time | "
             f"**{full['wall_s']:,.0f} s**, {full['cpu_s']:,.0f} s ({full['cores_used']:.2f} "
             f"cores on average; target {TARGET_S:g} s) |"]
+
+
+def _previous_rows(study: dict) -> list[str]:
+    """The previous code's figures (``--previous``), with its periods compared cell by cell."""
+    previous = study.get("previous")
+    if previous is None:
+        return []
+    full, cells = previous["full_run"], study["diagram_cells"]
+    rows = [f"| previous code ({previous['date']}): whole diagram on 2 threads, wall (CPU); "
+            f"1 core (extrapolated) | {full['wall_s']:,.0f} s ({full['cpu_s']:,.0f} s); "
+            f"{previous['diagram_one_core_s']:,.0f} s |" if full else
+            f"| previous code ({previous['date']}): 1 core (extrapolated) | "
+            f"{previous['diagram_one_core_s']:,.0f} s |"]
+    if previous["same_periods"] is not None:
+        rows.append(f"| cells whose response period equals the previous code's | "
+                    f"{previous['same_periods']} of {cells} |")
+    return rows
 
 
 def _load(report: dict) -> str:
@@ -321,11 +342,25 @@ def headline(report: dict) -> str:
 
 
 def full_run(sweep) -> dict:
-    """Wall and CPU time (s) of the whole diagram as one sweep on 2 threads."""
+    """Wall and CPU time (s) of the whole diagram as one sweep on 2 threads, and each cell's
+    response period (compared cell by cell with the previous code's)."""
     wall, cpu = time.perf_counter(), time.process_time()
-    run_sweep(sweep, threads=min(2, numba.config.NUMBA_NUM_THREADS), progress=False)
+    diagram = run_sweep(sweep, threads=min(2, numba.config.NUMBA_NUM_THREADS), progress=False)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-    return {"wall_s": wall, "cpu_s": cpu, "cores_used": cpu / wall}
+    return {"wall_s": wall, "cpu_s": cpu, "cores_used": cpu / wall,
+            "response_period": diagram.response_period.values.ravel().tolist()}
+
+
+def against_previous(study: dict, previous: dict) -> dict:
+    """The previous code's figures of the same study, and its periods against this code's."""
+    mine, theirs = study["full_run"], previous["full_run"]
+    same = None
+    if mine and theirs and "response_period" in theirs:
+        same = sum(a == b for a, b in zip(mine["response_period"], theirs["response_period"],
+                                          strict=True))
+    return {"impactbeams": previous.get("impactbeams"), "date": previous.get("date"),
+            "full_run": None if theirs is None else {k: theirs[k] for k in ("wall_s", "cpu_s")},
+            "diagram_one_core_s": previous["diagram_one_core_s"], "same_periods": same}
 
 
 def diagram_study(sweep, source: str, stride: int, full: bool) -> dict:
@@ -367,6 +402,9 @@ def main() -> None:
     parser.add_argument("--no-profile", action="store_true")
     parser.add_argument("--full", action="store_true", help="also run the whole diagram")
     parser.add_argument("--map", default=str(ROOT / "sweeps" / "period-map-omega-force.toml"))
+    parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--previous", type=Path,
+                        help="the previous code's longtime.json, run with --full too")
     parser.add_argument("--map-stride", type=int, default=46,
                         help="estimate the period map from every N-th cell (0: skip)")
     args = parser.parse_args()
@@ -386,9 +424,13 @@ def main() -> None:
         "date": time.strftime("%Y-%m-%d"),
         "load_average": [load_before, os.getloadavg()[0]],  # 1-min load at start and end
     })
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "longtime.json").write_text(json.dumps(report, indent=1) + "\n")
-    (OUT / "longtime.md").write_text(markdown(report))
+    if args.previous:
+        previous = json.loads(args.previous.read_text())
+        for study, before in ((report, previous), (report["variant"], previous["variant"])):
+            study["previous"] = against_previous(study, before)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "longtime.json").write_text(json.dumps(report, indent=1) + "\n")
+    (args.out / "longtime.md").write_text(markdown(report))
     print(markdown(report))
 
 

@@ -2,26 +2,32 @@
 
     python benchmarks/run_all.py            # full size (tens of minutes on 2 cores)
     python benchmarks/run_all.py --quick    # small sizes, a couple of minutes
+    python benchmarks/run_all.py --speed-only --baseline REVISION   # the speed targets only
 
 Steps: ``bench_sweep.py`` (the Fig. 5a map: compile and run time, 1 and 2 threads, in process
 and as a command), ``bench_cube.py`` (an (Omega, clearance, F0) cube streamed into netCDF), the
 work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics;
 ``spring_precision.py``: full dynamics of the spring law against solve_ivp), the scaling
 series (``scaling.py``), ``bench_distributed.py`` (Dask overhead, if installed),
-``bench_longtime.py`` (the long-time bifurcation diagram), ``bench_continuation.py`` (the time
-per branch point of a continuation), ``bench_compile.py`` (the first
-run's compile, cold and warm) and ``bench_startup.py`` (each command's start-up). Results go to
+``bench_continuation.py`` (the time per branch point of a continuation), then the speed
+targets' benchmarks: ``bench_columns.py`` (every benchmark map by columns), ``bench_longtime.py``
+(the long-time bifurcation diagram, run whole on 2 threads), ``bench_compile.py`` (the first
+run's compile, cold and warm) and ``bench_startup.py`` (each command's start-up).
+``--baseline REVISION`` (a git revision, e.g. the previous release) checks that code out into a
+temporary worktree and runs each speed benchmark on it too, right before this code's: the maps
+(and this code's checked against them cell by cell), the long-time diagram (its periods
+compared cell by cell), the first run and the start-up. Results go to
 ``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
 ``sweep.json``/``sweep.md`` from bench_sweep, ``cube.json``/``cube.md`` from bench_cube,
-``distributed.json``/``.md``, ``longtime.json``/``.md``, ``continuation.json``/``.md``,
-``compile.json``/``.md``,
-``startup.json``); the plots are drawn from those JSON
-files only; ``README.md`` holds the headline table.
+``distributed.json``/``.md``, ``columns.json``/``.md``, ``longtime.json``/``.md``,
+``continuation.json``/``.md``, ``compile.json``/``.md``, ``startup.json``); the plots are drawn
+from those JSON files only; ``README.md`` holds the headline tables, the speed targets' first.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import platform
@@ -29,7 +35,9 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
+from typing import NamedTuple
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -96,12 +104,54 @@ def run_bench_cube(quick: bool) -> None:
                    stdout=subprocess.DEVNULL)
 
 
-def run_bench_longtime(quick: bool) -> None:
-    """The long-time bifurcation diagram's cost and profile (its own JSON and markdown)."""
-    command = [sys.executable, str(HERE / "bench_longtime.py")]
-    if quick:
-        command += ["--stride", "100", "--no-profile"]
-    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+def _script(name: str, *arguments: str, src: Path | None = None) -> None:
+    """Run benchmarks/NAME with ``arguments``, importing impactbeams from ``src`` if given."""
+    env = {**os.environ, "PYTHONPATH": str(src)} if src else None
+    subprocess.run([sys.executable, str(HERE / name), *arguments], check=True, env=env,
+                   stdout=subprocess.DEVNULL)
+
+
+@contextlib.contextmanager
+def checkout(revision: str | None) -> Iterator[Path | None]:
+    """The ``src`` folder of git ``revision`` in a temporary worktree (None without one)."""
+    if revision is None:
+        yield None
+        return
+    with tempfile.TemporaryDirectory() as scratch:
+        tree = Path(scratch, "baseline")
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--quiet", "--detach",
+                        str(tree), revision], check=True)
+        try:
+            yield tree / "src"
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)],
+                           check=True)
+
+
+def run_bench_columns(quick: bool, out: Path, baseline: Path | None) -> None:
+    """Every benchmark map by columns, with the baseline's times and maps beside them."""
+    repeats = ["--repeats", "1" if quick else "5"]
+    with tempfile.TemporaryDirectory() as scratch:
+        against: list[str] = []
+        if baseline:
+            maps = str(Path(scratch, "maps"))
+            _script("bench_columns.py", *repeats, "--out", scratch, "--reference", maps,
+                    src=baseline)
+            against = ["--reference", maps, "--previous", str(Path(scratch, "columns.json"))]
+        _script("bench_columns.py", *repeats, "--out", str(out), *against)
+
+
+def run_bench_longtime(quick: bool, out: Path, baseline: Path | None) -> None:
+    """The long-time bifurcation diagram's cost and profile (its own JSON and markdown), the
+    whole diagram run on 2 threads, and the baseline's (periods compared cell by cell)."""
+    size = ["--stride", "100", "--no-profile"] if quick else ["--full"]
+    with tempfile.TemporaryDirectory() as scratch:
+        against: list[str] = []
+        if baseline:
+            _script("bench_longtime.py", *size, "--no-profile", "--map-stride", "0", "--out",
+                    scratch, src=baseline)
+            against = ["--previous", str(Path(scratch, "longtime.json"))]
+        _script("bench_longtime.py", *size, "--out", str(out), *against)
 
 
 def run_bench_continuation(quick: bool) -> None:
@@ -112,12 +162,12 @@ def run_bench_continuation(quick: bool) -> None:
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
 
 
-def run_bench_first_run(quick: bool) -> None:
-    """The first run's compile (cold and warm) and every command's start-up (their JSON)."""
-    repeats = "1" if quick else "3"
+def run_bench_first_run(quick: bool, baseline: Path | None) -> None:
+    """The first run's compile (cold and warm) and every command's start-up (their JSON),
+    each case of the baseline run right before this code's."""
+    against = ["--baseline", str(baseline)] if baseline else []
     for script in ("bench_compile.py", "bench_startup.py"):
-        subprocess.run([sys.executable, str(HERE / script), "--repeats", repeats], check=True,
-                       stdout=subprocess.DEVNULL)
+        _script(script, "--repeats", "1" if quick else "3", *against)
 
 
 def run_bench_distributed(quick: bool) -> None:
@@ -358,6 +408,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="small sizes (minutes)")
     parser.add_argument("--out", default=str(ROOT / "docs" / "benchmarks"))
+    parser.add_argument("--baseline", metavar="REVISION",
+                        help="git revision of the previous release, measured beside this code "
+                             "by the speed benchmarks (maps, long-time, first run)")
+    parser.add_argument("--speed-only", action="store_true",
+                        help="only the speed targets' benchmarks (maps, long-time, first run)")
     parser.add_argument("--skip-bench-sweep", action="store_true")
     parser.add_argument("--skip-distributed", action="store_true")
     parser.add_argument("--skip-longtime", action="store_true")
@@ -372,6 +427,22 @@ def main() -> None:
         report(out)
         return
     out.mkdir(parents=True, exist_ok=True)
+    with checkout(args.baseline) as baseline:
+        if not args.speed_only:
+            suite(args, out)
+        log("bench_columns.py")
+        run_bench_columns(args.quick, out, baseline)
+        if not args.skip_longtime:
+            log("bench_longtime.py")
+            run_bench_longtime(args.quick, out, baseline)
+        if not args.skip_first_run:
+            log("bench_compile.py, bench_startup.py")
+            run_bench_first_run(args.quick, baseline)
+    report(out)
+
+
+def suite(args: argparse.Namespace, out: Path) -> None:
+    """Everything but the speed targets' benchmarks: accuracy against cost, scaling, peers."""
     if not args.skip_bench_sweep:
         log("bench_sweep.py")
         run_bench_sweep(args.quick)
@@ -389,20 +460,13 @@ def main() -> None:
     if not args.skip_distributed:
         log("bench_distributed.py")
         run_bench_distributed(args.quick)
-    if not args.skip_longtime:
-        log("bench_longtime.py")
-        run_bench_longtime(args.quick)
     if not args.skip_continuation:
         log("bench_continuation.py")
         run_bench_continuation(args.quick)
-    if not args.skip_first_run:
-        log("bench_compile.py, bench_startup.py")
-        run_bench_first_run(args.quick)
     about = {"quick": args.quick, **machine()}
     for name, data in (("work_precision", first), ("dynamics", dynamics), ("scaling", scale),
                        ("spring", springs)):
         (out / f"{name}.json").write_text(json.dumps({**data, "run": about}, indent=1) + "\n")
-    report(out)
 
 
 def _load(out: Path, name: str) -> dict:
@@ -436,6 +500,10 @@ def page(out: Path) -> str:
     first, dynamics, scale = (_load(out, name) for name in ("work_precision", "dynamics",
                                                              "scaling"))
     readme = headline(first, dynamics, scale, first["run"]["quick"])
+    readme += ("\n## Speed targets\n\nIssue 24's targets on 2 cores, each figure against the "
+               "previous release's measured beside it (`python benchmarks/run_all.py "
+               "--speed-only --baseline REVISION`); dates, machines and loads in the sections "
+               "below.\n\n" + speed_targets(out))
     if (out / "columns.json").exists():  # the map by columns, measured apart
         readme += "\n" + columns_section(_load(out, "columns"))
     if (out / "spring.json").exists():  # the spring law's section
@@ -511,6 +579,82 @@ def first_run_table(compile_report: dict, startup: dict) -> str:
                          f"{_with_cpu(previous['median_s'][command], previous, command)} | - | "
                          f"{when} |")
     return "\n".join(lines) + "\n"
+
+
+def _worst_map(columns: dict) -> float | None:
+    """The largest time per impacting cell over Fig. 5a's among the benchmark maps (1 or 2
+    threads), None for a results file without them."""
+    ratios = [max(entry["per_impacting_cell_over_fig5a"].values())
+              for entry in columns.get("maps", [])]
+    return max(ratios, default=None)
+
+
+def _fig5a(columns: dict, threads: str) -> float | None:
+    """Fig. 5a's best time (s) by columns on ``threads`` threads in a columns.json."""
+    return columns.get("best_s", {}).get(f"columns, {threads} thread(s)")
+
+
+class Target(NamedTuple):
+    """One speed target: a time (s) or ratio (x) now and in the previous release (None where
+    not measured), met at or under ``target``, or at or over it if ``at_least``."""
+
+    quantity: str
+    target: float
+    unit: str
+    now: float | None
+    previous: float | None
+    at_least: bool = False
+
+    def shown(self, value: float | None) -> str:
+        if value is None:
+            return "-"
+        return f"{value:.2f}x" if self.unit == "x" else f"{value:.3g} s"
+
+    def row(self) -> str:
+        met = self.now >= self.target if self.at_least else self.now <= self.target
+        return (f"| {self.quantity} | {'>=' if self.at_least else '<='} "
+                f"{self.shown(self.target)} | {self.shown(self.now)} | "
+                f"{self.shown(self.previous)} | {'yes' if met else '**no**'} |")
+
+
+def _targets(out: Path) -> list[Target]:
+    """Every speed target measured in ``out``; "previous" is the baseline run beside it."""
+    targets = []
+    if (out / "columns.json").exists():
+        now = _load(out, "columns")
+        before = now.get("previous", {})
+        targets += [
+            Target("Fig. 5a map, 10^6 cells, 2 threads (compute)", 0.12, "s", _fig5a(now, "2"),
+                   _fig5a(before, "2")),
+            Target("Fig. 5a map, 2-thread speed-up", 1.8, "x",
+                   now["speedup_2_threads"]["columns"],
+                   before.get("speedup_2_threads", {}).get("columns"), at_least=True),
+            Target("slowest benchmark map per impacting cell, over Fig. 5a", 1.5, "x",
+                   _worst_map(now), _worst_map(before))]
+    if (out / "compile.json").exists():
+        now = _load(out, "compile")
+        before = now.get("baseline", {}).get("cases", {})
+        targets += [Target(f"{case} (wall)", limit, "s", now["cases"][case]["wall_s"],
+                           before.get(case, {}).get("wall_s"))
+                    for case, limit in (("first map, cold", 8.0), ("simulate, cold", 15.0))]
+    if (out / "startup.json").exists():
+        now = _load(out, "startup")
+        before = now.get("baseline", {}).get("median_s", {})
+        targets += [Target(f"`impactbeams {command}`, warm (median wall)", limit, "s",
+                           now["median_s"][command], before.get(command))
+                    for command, limit in (("run", 0.9), ("plot", 1.2))]
+    if (out / "longtime.json").exists() and _load(out, "longtime")["full_run"]:
+        now = _load(out, "longtime")
+        before = (now.get("previous") or {}).get("full_run") or {}
+        targets.append(Target("long-time bifurcation diagram, 2 threads (wall)", 20.0, "s",
+                              now["full_run"]["wall_s"], before.get("wall_s")))
+    return targets
+
+
+def speed_targets(out: Path) -> str:
+    """Issue 24's speed targets: each figure now, the previous release's, whether met."""
+    return "\n".join(["| quantity | target | now | previous release | met |",
+                      "|---|---|---|---|---|", *(t.row() for t in _targets(out))]) + "\n"
 
 
 def _with_cpu(wall: float, startup: dict, command: str) -> str:

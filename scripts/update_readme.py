@@ -177,6 +177,11 @@ def performance() -> str:
     return "\n".join(lines) + "\n"
 
 
+def speed_targets() -> str:
+    """Issue 24's speed targets, now and in the previous release (the benchmarks page's)."""
+    return _run_all().speed_targets(BENCHMARKS)
+
+
 def first_run() -> str:
     """The first run's compile and each command's start-up (compile.json, startup.json)."""
     return _run_all().first_run_table(_results("compile"), _results("startup"))
@@ -347,6 +352,7 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "spring-convergence": spring_convergence,
     "tied-convergence": tied_convergence,
     "performance": performance,
+    "speed-targets": speed_targets,
     "first-run": first_run,
     "longtime-profile": longtime_profile,
     "spring-precision": spring_precision,

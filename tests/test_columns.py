@@ -130,6 +130,42 @@ def test_columns_equal_the_cell_by_cell_search_on_the_benchmark_maps(name, axis)
     assert_columns_match_cells(thinned(BENCHMARK_MAPS / name, axis, 100), 100)
 
 
+def test_the_shipped_shaker_map_by_columns_equals_the_cell_by_cell_search():
+    """sweeps/stop-shaker-omega-amplitude.toml (beam 1 against a stop, the shaker carrying the
+    clamp and the stop, U0 up to 1e-2 m), every 100th column: columns along U0."""
+    assert_columns_match_cells(thinned(SWEEPS / "stop-shaker-omega-amplitude.toml", "omega",
+                                       100), 100)
+
+
+def test_a_column_near_resonance_follows_its_flanks(free, monkeypatch):
+    """At Omega 1541 rad/s, 1.3 rad/s below beam 1's second mode (undamped, F0 = 1 mN), that
+    mode stays driven (its steady state not split off): its bounds over [0, t_max] hold the
+    beat of the whole run, and certified no cell's flank, so that every cell of a column along
+    the clearance fell back to the walk (80 of 80 here). The bounds over a forcing period from
+    the column's state at its start (``_response_bounds`` there) certify the flanks: a few
+    walks, and the times of the cell-by-cell search."""
+    cells = np.array([[clearance, 1e-3, 1541.1528822055138, 0.0, 0.0, 0.0, 0.0]
+                      for clearance in np.geomspace(1e-7, 1e-5, 80)])
+    tables, geometry = free_tables(free)[None], geometry_row(Params(), free)[None]
+    by_cell = np.empty(len(cells))
+    fi.first_impact_cells(cells, tables, geometry, 1.0, by_cell)
+    walks = []
+
+    def walk(*args):
+        walks.append(args[3])
+        return search_walk(*args)
+
+    search_walk = fi.walk
+    monkeypatch.setattr(fi, "walk", walk)
+    work, drives, rotor = fi._scratch(tables.shape[3])
+    by_column = np.empty(len(cells))
+    fi._shared_column.py_func(cells, 0, 1, len(cells), CELL_CLEARANCE, tables[0, FREE],
+                              geometry[0], 1.0, work, drives, rotor, by_column)
+    assert not np.isnan(by_cell).any()
+    assert len(walks) <= 8
+    np.testing.assert_allclose(by_column, by_cell, rtol=1e-12)
+
+
 def test_an_uplifted_column_is_shared_and_follows_its_flanks():
     """With uplifts the column's cells share two responses (``_load_column``): cell F0's
     state is a + F0 b, to round-off of the cell's own initial state and drives."""

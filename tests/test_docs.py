@@ -8,6 +8,7 @@ benchmark results files, checked here too.
 """
 
 import importlib.util
+import json
 import logging
 import re
 import sys
@@ -138,16 +139,40 @@ def test_readme_generated_sections_are_current():
                     "`python scripts/update_readme.py` and commit README.md")
 
 
-def test_benchmarks_page_is_generated_from_the_results_files():
+def _run_all():
     sys.path.insert(0, str(ROOT / "benchmarks"))
     try:
-        run_all = _load(ROOT / "benchmarks" / "run_all.py", "run_all")
+        return _load(ROOT / "benchmarks" / "run_all.py", "run_all")
     finally:
         sys.path.remove(str(ROOT / "benchmarks"))
+
+
+def test_benchmarks_page_is_generated_from_the_results_files():
+    run_all = _run_all()
     out = ROOT / "docs" / "benchmarks"
     if run_all.page(out) != (out / "README.md").read_text():
         pytest.fail("docs/benchmarks/README.md differs from its results files: run "
                     "`python benchmarks/run_all.py --report-only`")
+
+
+def test_speed_targets_say_met_only_within_each_target(tmp_path):
+    # A speed-up is met at or over its target, a time or a ratio at or under it; a figure the
+    # previous release's results lack shows as "-".
+    (tmp_path / "columns.json").write_text(json.dumps({
+        "best_s": {"columns, 2 thread(s)": 0.12}, "speedup_2_threads": {"columns": 1.79},
+        "maps": [{"per_impacting_cell_over_fig5a": {"1": 1.2, "2": 1.51}}],
+        "previous": {"best_s": {"columns, 2 thread(s)": 0.2}}}))
+    (tmp_path / "compile.json").write_text(json.dumps({
+        "cases": {"first map, cold": {"wall_s": 8.01}, "simulate, cold": {"wall_s": 15.0}},
+        "baseline": {"cases": {"first map, cold": {"wall_s": 9.4}}}}))
+    rows = _run_all().speed_targets(tmp_path).splitlines()[2:]
+    assert rows == [
+        "| Fig. 5a map, 10^6 cells, 2 threads (compute) | <= 0.12 s | 0.12 s | 0.2 s | yes |",
+        "| Fig. 5a map, 2-thread speed-up | >= 1.80x | 1.79x | - | **no** |",
+        "| slowest benchmark map per impacting cell, over Fig. 5a | <= 1.50x | 1.51x | - | "
+        "**no** |",
+        "| first map, cold (wall) | <= 8 s | 8.01 s | 9.4 s | **no** |",
+        "| simulate, cold (wall) | <= 15 s | 15 s | - | yes |"]
 
 
 SWEEP_OUTPUT = re.compile(r"impactbeams run \S+ -o (results/\S+\.nc)"

@@ -344,9 +344,12 @@ def _follow_flank(t, turn, x, const, curvature, t_max, harmonics, work, drives, 
 
 
 @kernel
-def _response_bounds(row, state, harmonic, active, t_max, omega, work, drives):
+def _response_bounds(row, state, harmonic, active, t, span, omega, work, drives):
     """One of a column's two responses: its gap harmonic without its steady states, bounds.
 
+    From its state at t (s) in rows ``state``, ``state + 1`` of ``work``, over [t, t + span]
+    (``events.phase_bounds``). At t = 0 the steady states are split off, in place; later
+    (rows ``_Q_AT``.., already split) the split finds none left and the bounds are a window's.
     A kernel called once per response rather than a loop collecting lists (Numba's list
     code costs a cold compile about 0.3 s).
     """
@@ -354,9 +357,9 @@ def _response_bounds(row, state, harmonic, active, t_max, omega, work, drives):
         _WEIGHTS, :active]
     q_s, v_s = work[state, :active], work[state + 1, :active]
     oscillators = Oscillators(frequencies, zeta, drives[row, :active], omega)
-    event = split_steady_states(q_s, v_s, 0.0, oscillators,
+    event = split_steady_states(q_s, v_s, t, oscillators,
                                 EventFunction(weights, 0.0, harmonic, omega))
-    return event.sine_amp, phase_bounds(q_s, v_s, 0.0, t_max, oscillators, event)
+    return event.sine_amp, phase_bounds(q_s, v_s, t, span, oscillators, event)
 
 
 @kernel
@@ -374,15 +377,23 @@ def _shared_column(cells, first, stride, count, key, table, geo, t_max, work, dr
         _WEIGHTS, :active]
     omega = cells[first, CELL_FORCING_FREQUENCY]
     harmonic_a, (coherent_a, band_a, curvature_a, jerk_a, any_a) = _response_bounds(
-        _A, _Q_A0, harmonics[0], active, t_max, omega, work, drives)
+        _A, _Q_A0, harmonics[0], active, 0.0, t_max, omega, work, drives)
     harmonic_b, (coherent_b, band_b, curvature_b, jerk_b, any_b) = _response_bounds(
-        _B, _Q_B0, harmonics[1], active, t_max, omega, work, drives)
+        _B, _Q_B0, harmonics[1], active, 0.0, t_max, omega, work, drives)
     harmonics = (harmonic_a, harmonic_b)
     max_steps = step_limit(0.0, t_max, frequencies)
     fastest = omega
     for j in range(active):  # not np.max, which compiles take_impl (0.3 s of a cold compile)
         fastest = max(fastest, frequencies[j])
     t, t_states, turn = 0.0, np.nan, 1.0 + 0.0j
+    # a mode near resonance (its steady state not split off) grows over [0, t_max]: its
+    # bounds there hold the whole growth, or its large steady state and transient apart,
+    # and certify few flanks; a window's bounds from its start's state certify more
+    # (``_response_bounds`` over [window start, window_end])
+    growing = False
+    for j in range(active):
+        growing = growing or drives[_A, j] != 0 or drives[_B, j] != 0
+    window_end, window_a, window_b = -1.0, 0.0, 0.0
     i = first
     for _ in range(count):
         if np.isnan(t):
@@ -394,11 +405,26 @@ def _shared_column(cells, first, stride, count, key, table, geo, t_max, work, dr
         cell_bounds = (coherent_a + x * coherent_b, band_a + abs(x) * band_b,
                        curvature_a + abs(x) * curvature_b, jerk_a + abs(x) * jerk_b,
                        any_a and any_b)
-        if t != t_states:
-            turn = _column_states(t, work, drives, active, omega)
-            t_states = t
-        root, t_states, turn = _follow_flank(t, turn, x, const, cell_bounds[2], t_max,
-                                             harmonics, work, drives, active, omega, fastest)
+        curvature, flank_end = cell_bounds[2], t_max
+        for attempt in range(2):  # one call site each: a call compiles (is inlined) anew
+            if t != t_states:
+                turn = _column_states(t, work, drives, active, omega)
+                t_states = t
+            if attempt == 1:  # the flank with the bounds of the forcing period from t on
+                if not t < window_end:
+                    window_end = min(t + 2.0 * math.pi / omega, t_max)
+                    for k in range(2):
+                        window = _response_bounds(_A + k, _Q_AT + 2 * k, harmonics[k], active,
+                                                  t, window_end - t, omega, work, drives)[1][2]
+                        if k == 0:
+                            window_a = window
+                        else:
+                            window_b = window
+                curvature, flank_end = window_a + abs(x) * window_b, window_end
+            root, t_states, turn = _follow_flank(t, turn, x, const, curvature, flank_end,
+                                                 harmonics, work, drives, active, omega, fastest)
+            if not (growing and np.isnan(root)):
+                break
         if np.isnan(root):
             for j in range(active):
                 work[_Q_S, j] = work[_Q_A0, j] + x * work[_Q_B0, j]
