@@ -206,6 +206,36 @@ def test_the_compile_plan_has_the_signatures_a_run_calls():
             f"{module}.{name}: the run called it with {called[f'{module}.{name}']}"
 
 
+LINKED_BY_A_MAP = """
+import json, sys
+from impactbeams.compilation import LINK_JOBS, _kernel, signature_text
+from impactbeams.sweep import run_sweep
+
+run_sweep(sys.argv[1])
+print(json.dumps({f"{module}.{name}": [signature_text(args) for args in
+                                       _kernel(module, name).overloads]
+                  for module, name, _ in LINK_JOBS["first_impact"]}))
+"""
+
+
+def test_the_link_jobs_have_the_signatures_a_map_links(tmp_path):
+    """``compilation.LINK_JOBS``: a cold first map without the helper (an empty cache: linked
+    kernels are compiled anew in each process) links each job's kernel with its signature."""
+    from impactbeams.compilation import LINK_JOBS
+
+    sweep = tmp_path / "map.toml"
+    sweep.write_text("t_max = 0.1\nn_modes = 2\n[axes.omega]\nmin = 10.0\nmax = 400.0\n"
+                     "num = 2\n[axes.force_amplitude]\nmin = 1e-6\nmax = 1e-3\nnum = 2\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"),
+           "IMPACTBEAMS_COMPILE_HELPER": "0"}
+    result = subprocess.run([sys.executable, "-c", LINKED_BY_A_MAP, str(sweep)], env=env,
+                            check=True, capture_output=True, text=True, timeout=600)
+    linked = json.loads(result.stdout.splitlines()[-1])
+    for module, name, text in LINK_JOBS["first_impact"]:
+        assert text in linked[f"{module}.{name}"], \
+            f"{module}.{name}: the map linked it with {linked[f'{module}.{name}']}"
+
+
 SPLIT = """
 import sys
 from numba.core import event
