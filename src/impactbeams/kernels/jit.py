@@ -74,9 +74,7 @@ class _Kernel(CPUDispatcher):
         with global_compiler_lock, self._compiling_counter:
             cres = None if handover is None else _taken_over(self, handover)
             if cres is not None:
-                self.targetctx.insert_user_function(cres.entry_point, cres.fndesc,
-                                                    [cres.library])
-                self.overloads[args] = cres
+                self._link(args, cres)
                 return
             cres = self._cache.load_overload(args, self.targetctx)  # a Python call's, cached
             if cres is not None:
@@ -86,9 +84,12 @@ class _Kernel(CPUDispatcher):
                 return
             details = {"dispatcher": self, "args": args, "return_type": None}
             with event.trigger_event("numba:compile", data=details):
-                cres = self._compile_linked(args)
-            self.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
-            self.overloads[args] = cres  # not callable from Python: `compile` replaces it
+                self._link(args, self._compile_linked(args))
+
+    def _link(self, args, cres):
+        """Make ``cres``, a compile only to link, what kernels calling with ``args`` link."""
+        self.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
+        self.overloads[args] = cres  # not callable from Python: `compile` replaces it
 
     def _compile_linked(self, args):
         flags = compiler.Flags()
