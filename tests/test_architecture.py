@@ -31,9 +31,11 @@ FLOORS = {
     "cli": 10,
 }
 # What kernels may import from outside the package: NumPy and Numba, ``math``, and the standard
-# library modules jit.py (``types``), __init__.py (``hashlib``, ``pathlib``) and records.py
-# (``collections``: namedtuples, which Numba compiles) need.
-KERNEL_EXTERNAL = {"numpy", "numba", "math", "types", "hashlib", "pathlib", "collections"}
+# library modules jit.py (``types``; ``pickle`` and Numba's ``llvmlite`` to hand a compile over
+# between processes), __init__.py (``hashlib``, ``pathlib``) and records.py (``collections``:
+# namedtuples, which Numba compiles) need.
+KERNEL_EXTERNAL = {"numpy", "numba", "llvmlite", "math", "types", "pickle", "hashlib", "pathlib",
+                   "collections"}
 
 
 def _modules():

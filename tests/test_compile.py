@@ -127,6 +127,8 @@ def test_a_cold_first_map_compiles_each_kernel_once_and_no_dynamics(tmp_path):
             if module.startswith("impactbeams.kernels.")]
     assert {module for module, _ in ours} & DYNAMICS_ONLY == set()
     assert len(ours) == len(set(ours)), "a kernel compiled twice (two signatures)"
+    if (os.cpu_count() or 1) >= 2:  # handed over by the helper (a stale LINK_JOBS signature
+        assert ("events", "walk") not in ours  # would compile it here as well)
     # 100 cells are one block of work: the serial twin, not the parallel one
     assert ("first_impact", "_first_impact_map_serial") in ours
     assert ("first_impact", "_first_impact_map") not in ours
@@ -240,6 +242,36 @@ def test_the_compile_plan_has_the_signatures_a_run_calls():
             f"{module}.{name}: the run called it with {called[f'{module}.{name}']}"
 
 
+LINKED_BY_A_MAP = """
+import json, sys
+from impactbeams.compilation import LINK_JOBS, _kernel, signature_text
+from impactbeams.sweep import run_sweep
+
+run_sweep(sys.argv[1])
+print(json.dumps({f"{module}.{name}": [signature_text(args) for args in
+                                       _kernel(module, name).overloads]
+                  for module, name, _ in LINK_JOBS["first_impact"]}))
+"""
+
+
+def test_the_link_jobs_have_the_signatures_a_map_links(tmp_path):
+    """``compilation.LINK_JOBS``: a cold first map without the helper (an empty cache: linked
+    kernels are compiled anew in each process) links each job's kernel with its signature."""
+    from impactbeams.compilation import LINK_JOBS
+
+    sweep = tmp_path / "map.toml"
+    sweep.write_text("t_max = 0.1\nn_modes = 2\n[axes.omega]\nmin = 10.0\nmax = 400.0\n"
+                     "num = 2\n[axes.force_amplitude]\nmin = 1e-6\nmax = 1e-3\nnum = 2\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"),
+           "IMPACTBEAMS_COMPILE_HELPER": "0"}
+    result = subprocess.run([sys.executable, "-c", LINKED_BY_A_MAP, str(sweep)], env=env,
+                            check=True, capture_output=True, text=True, timeout=600)
+    linked = json.loads(result.stdout.splitlines()[-1])
+    for module, name, text in LINK_JOBS["first_impact"]:
+        assert text in linked[f"{module}.{name}"], \
+            f"{module}.{name}: the map linked it with {linked[f'{module}.{name}']}"
+
+
 SPLIT = """
 import sys
 from numba.core import event
@@ -272,6 +304,45 @@ def test_a_helper_process_compiles_a_kernel_or_leaves_it_to_the_run(tmp_path, he
     else:
         assert lines == ["impactbeams: the compile helper process did not compile segments "
                          "(exit 3): compiling it here", "(4, 3) True 3"]
+
+
+HANDOVER = """
+import sys
+import numpy as np
+from numba.core import event
+from impactbeams import compilation
+from impactbeams.kernels.drive import modal_acceleration_at
+
+compilation.kernels_cached = lambda *arguments: False  # this process's cache is empty
+compilation.LINK_JOBS["test"] = (("drive", "compiled_modal_acceleration",
+                                  "complex128[::1], float64[::1], float64[::1], float64[::1], "
+                                  "float64[::1], float64, float64"),)
+if sys.argv[1] == "fails":
+    compilation._helper_command = lambda: [sys.executable, "-c", "import sys; sys.exit(3)"]
+compilation.compile_in_two_processes("test", stream=sys.stdout)
+modes = np.linspace(1.0, 2.0, 3)
+with event.install_recorder("numba:compile") as recorder:
+    acceleration = modal_acceleration_at(modes * (1 + 2j), modes * 30.0, modes * 0.01, modes,
+                                         -modes, 20.0, 0.3)
+compiled = {e.data["dispatcher"].py_func.__name__ for _, e in recorder.buffer}
+print(acceleration.tobytes().hex(), "modal_acceleration" in compiled,
+      compilation._helpers["test"].wait())
+"""
+
+
+def test_a_helper_hands_over_a_compile_to_link_with_the_same_results(tmp_path):
+    """A link job: the helper compiles a kernel that kernels call and hands it over; the run
+    links it into its caller without compiling it, with the results, bit for bit, of the run
+    that compiles it itself (the helper failed)."""
+    outputs = {}
+    for helper in ("links", "fails"):
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / helper)}
+        result = subprocess.run([sys.executable, "-c", HANDOVER, helper], env=env, check=True,
+                                capture_output=True, text=True, timeout=300)
+        outputs[helper] = result.stdout.splitlines()[-1].split()
+    assert outputs["links"][1:] == ["False", "0"]
+    assert outputs["fails"][1:] == ["True", "3"]
+    assert outputs["links"][0] == outputs["fails"][0]
 
 
 COLD_SIMULATE = """

@@ -13,11 +13,14 @@ from __future__ import annotations
 import atexit
 import contextlib
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any, TextIO
 
 REPORTED_COMPILE = 1.0  # s: an outermost compile at least this long ends with a line
@@ -44,10 +47,7 @@ ENTRY_KERNELS = {
 # impactbeams.kernels, kernel, argument types as `signature_text` writes them), as a cold run
 # calls them (tests/test_compile.py checks them against a run). Shares of simulate's cold
 # run in one process (16.6 s, load 2, 2026-11-25): run_events 54 % (the helper's) against
-# run_inputs 16 % and the sampling kernels with peak_force 20 %. A first map calls one
-# kernel, which links all the others: the helper could only compile a callee in full, and the
-# largest, `events.walk`, costs 5.4 s of CPU so (3.4 s linked), more than its caller takes to
-# reach it (measured before the compile cuts of compilecut24); a first map has no job.
+# run_inputs 16 % and the sampling kernels with peak_force 20 %.
 _SETTINGS_ARRAYS = "float64[:, :, ::1], complex128[:, ::1]"
 _SEGMENTS = ("Segments(float64[::1], int64[::1], bool[::1], float64[:, ::1], float64[:, ::1], "
              "float64[:, ::1], float64[:, ::1])")
@@ -56,6 +56,21 @@ HELPER_JOBS = {
     "simulate": (("dynamics", "run_events",
                   f"{_SETTINGS_ARRAYS}, float64[:, ::1], float64[:, ::1], float64[:, ::1], "
                   f"{_DRIVES}, float64[::1], float64[::1], {_SEGMENTS}, float64, int64"),),
+}
+# What a helper compiles only to link, as a calling kernel would (`kernels.jit`), and hands over
+# in a file that this process links instead of compiling it: a first map calls one kernel
+# linking all the others; the helper takes its largest callee, `events.walk` (2.6 of its 7.2 s
+# of CPU, 2026-11-28), which the map types after the columns' preparation and flank search
+# (2.8 s), so this process rarely waits for it.
+_BOUNDS = "Tuple((complex128, float64, float64, float64, bool,))"
+LINK_JOBS = {
+    "first_impact": (("events", "walk",
+                      "float64[::1], float64[::1], float64, float64, float64, "
+                      "Oscillators(float64[::1], float64[::1], complex128[::1], float64), "
+                      "EventFunction(float64[::1], float64, complex128, float64), float64, "
+                      f"float64, {_BOUNDS}, float64, float64[::1], float64[::1], "
+                      "Rotor(complex128[::1], complex128[::1], bool[::1], int64[::1], "
+                      "complex128[:, ::1], complex128[:, ::1])"),),
 }
 AHEAD_JOBS = {
     "simulate": (
@@ -121,13 +136,15 @@ def compile_in_two_processes(kind: str, entry: str | None = None,
     """Before a run of ``kind`` that will compile: split the compile with a helper process.
 
     The helper (``python -m impactbeams.compilation``) compiles ``HELPER_JOBS[kind]`` into
-    Numba's disk cache; meanwhile this process compiles ``AHEAD_JOBS[kind]``, then runs, and
-    a kernel the helper owns is loaded from the cache once the helper has it (`kernels.jit`
-    waits for it there). A helper that fails or dies leaves its kernels to this process (with
-    a line on ``stream`` saying so). Nothing happens when the run's kernels are cached, with
-    one core, in a helper itself, or with ``IMPACTBEAMS_COMPILE_HELPER=0``.
+    Numba's disk cache and ``LINK_JOBS[kind]`` into files it hands over; meanwhile this process
+    compiles ``AHEAD_JOBS[kind]``, then runs, and a kernel the helper owns is loaded from the
+    cache, or linked from its file, once the helper has it (`kernels.jit` waits for it there).
+    A helper that fails or dies leaves its kernels to this process (with a line on ``stream``
+    saying so). Nothing happens when the run's kernels are cached, with one core, in a helper
+    itself, or with ``IMPACTBEAMS_COMPILE_HELPER=0``.
     """
-    jobs = HELPER_JOBS.get(kind, ())
+    jobs = (tuple(("cache", *job) for job in HELPER_JOBS.get(kind, ()))
+            + tuple(("link", *job) for job in LINK_JOBS.get(kind, ())))
     if (not jobs or kind in _helpers or os.environ.get(HELPER) == "0"
             or (os.cpu_count() or 1) < 2 or kernels_cached(kind, entry)):
         return
@@ -151,10 +168,15 @@ def _helper_command() -> list[str]:
 
 
 def _start_helper(jobs: tuple, stream: TextIO) -> subprocess.Popen | None:
-    """Start the helper on ``jobs``; register each job's wait with `kernels.jit`."""
+    """Start the helper on ``jobs``; register each job's wait with `kernels.jit`.
+
+    A job: (how, module, kernel, signature), how ``cache`` (compiled in full into the disk
+    cache) or ``link`` (compiled to link, handed over in a file).
+    """
     from impactbeams.kernels import jit
 
-    arguments = [field for job in jobs for field in job]
+    handovers = tempfile.mkdtemp(prefix="impactbeams-compile-")  # the link jobs' files
+    arguments = [handovers, *(field for job in jobs for field in job)]
     # the helper imports this package from where this process did (a path added at run time)
     package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     path = os.pathsep.join(filter(None, (package, os.environ.get("PYTHONPATH"))))
@@ -163,6 +185,7 @@ def _start_helper(jobs: tuple, stream: TextIO) -> subprocess.Popen | None:
                                   stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
                                   text=True, env={**os.environ, HELPER: "0", "PYTHONPATH": path})
     except OSError:
+        shutil.rmtree(handovers, ignore_errors=True)
         return None
     outcomes = [threading.Event() for _ in jobs]
     done: set[int] = set()
@@ -180,14 +203,16 @@ def _start_helper(jobs: tuple, stream: TextIO) -> subprocess.Popen | None:
             outcome.set()
 
     threading.Thread(target=read, daemon=True, name="compile helper").start()
-    atexit.register(_stop, helper)
-    for index, (module, name, text) in enumerate(jobs):
-        def wait(index: int = index, name: str = name) -> None:
+    atexit.register(_stop, helper, handovers)
+    for index, (how, module, name, text) in enumerate(jobs):
+        def wait(index: int = index, name: str = name, how: str = how) -> str | None:
             outcomes[index].wait()
             if index not in done:
                 stream.write(f"impactbeams: the compile helper process did not compile "
                              f"{name} (exit {helper.poll()}): compiling it here\n")
                 stream.flush()
+                return None
+            return _handover_file(handovers, index) if how == "link" else None
         try:
             key = (_kernel(module, name), parse_signature(text))
         except Exception:  # a stale job (renamed kernel): the helper fails on it too
@@ -196,19 +221,36 @@ def _start_helper(jobs: tuple, stream: TextIO) -> subprocess.Popen | None:
     return helper
 
 
-def _stop(helper: subprocess.Popen) -> None:
-    """End a helper still running when this process exits (an interrupted run)."""
+def _handover_file(folder: str, index: int) -> str:
+    """Where the helper writes link job ``index``'s compile (`kernels.jit._Kernel.link_into`)."""
+    return os.path.join(folder, f"{index}.link")
+
+
+def _stop(helper: subprocess.Popen, handovers: str) -> None:
+    """End a helper still running when this process exits (an interrupted run).
+
+    Removes the folder of its handed-over compiles too.
+    """
     if helper.poll() is None:
         helper.terminate()
         helper.wait()
+    shutil.rmtree(handovers, ignore_errors=True)
 
 
 def _compile_jobs(fields: list[str]) -> None:
-    """The helper: compile each (module, kernel, signature) job; ``done i`` after each."""
-    for index in range(len(fields) // 3):
-        module, name, text = fields[3 * index: 3 * index + 3]
+    """The helper: compile each (how, module, kernel, signature) job; ``done i`` after each.
+
+    ``fields``: the folder for the link jobs' files, then the jobs' fields.
+    """
+    handovers, fields = fields[0], fields[1:]
+    for index in range(len(fields) // 4):
+        how, module, name, text = fields[4 * index: 4 * index + 4]
         try:
-            _kernel(module, name).compile(parse_signature(text))
+            kernel, args = _kernel(module, name), parse_signature(text)
+            if how == "link":
+                kernel.link_into(args, Path(_handover_file(handovers, index)))
+            else:
+                kernel.compile(args)
         except Exception:  # left to the calling process
             continue
         print(f"done {index}", flush=True)

@@ -7,10 +7,13 @@ internals (dispatcher, code library), checked with Numba 0.68 by ``tests/test_co
 and ``nnan`` would let LLVM delete the NaN checks.
 """
 
+import pickle
 import types
+from pathlib import Path
 
+from llvmlite import binding as llvm
 from numba import njit, typeof
-from numba.core import compiler, event, sigutils, typing
+from numba.core import compiler, event, serialize, sigutils, typing
 from numba.core import types as numba_types
 from numba.core.codegen import JITCodeLibrary
 from numba.core.compiler_lock import global_compiler_lock
@@ -57,9 +60,23 @@ class _Kernel(CPUDispatcher):
         _set_environments(self.overloads[args].library)
         return entry_point
 
-    def _compile_to_link(self, args):
-        _wait_elsewhere(self, args)
+    def link_into(self, args, path: Path) -> None:
+        """Compile to link, as a calling kernel would, and write what a caller links to ``path``.
+
+        Another process's compile then takes it over instead of compiling it (`_taken_over`):
+        a helper process's share of a cold compile (`impactbeams.compilation`).
+        """
         with global_compiler_lock, self._compiling_counter:
+            handover = _handover(self._compile_linked(args))  # links its callees: locked
+        path.write_bytes(handover)
+
+    def _compile_to_link(self, args):
+        handover = _wait_elsewhere(self, args)
+        with global_compiler_lock, self._compiling_counter:
+            cres = None if handover is None else _taken_over(self, handover)
+            if cres is not None:
+                self._link(args, cres)
+                return
             cres = self._cache.load_overload(args, self.targetctx)  # a Python call's, cached
             if cres is not None:
                 self.targetctx.insert_user_function(cres.entry_point, cres.fndesc,
@@ -68,9 +85,12 @@ class _Kernel(CPUDispatcher):
                 return
             details = {"dispatcher": self, "args": args, "return_type": None}
             with event.trigger_event("numba:compile", data=details):
-                cres = self._compile_linked(args)
-            self.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
-            self.overloads[args] = cres  # not callable from Python: `compile` replaces it
+                self._link(args, self._compile_linked(args))
+
+    def _link(self, args, cres):
+        """Make ``cres``, a compile only to link, what kernels calling with ``args`` link."""
+        self.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
+        self.overloads[args] = cres  # not callable from Python: `compile` replaces it
 
     def _compile_linked(self, args):
         flags = compiler.Flags()
@@ -84,15 +104,48 @@ class _Kernel(CPUDispatcher):
         return cres._replace(entry_point=_LinkedEntry())
 
 
-# (kernel, argument types) -> a function returning once another process has compiled it into
-# the disk cache, or given up (`impactbeams.compilation`): the compile then loads it from there
+# (kernel, argument types) -> a function returning once another process has compiled it, or
+# given up (`impactbeams.compilation`): the path of the file into which it handed over a
+# compile to link (`_Kernel.link_into`), or None: the compile then loads it from the disk cache
 COMPILED_ELSEWHERE = {}
 
 
 def _wait_elsewhere(dispatcher, args):
     wait = COMPILED_ELSEWHERE.pop((dispatcher, args), None)
-    if wait is not None:
-        wait()
+    return None if wait is None else wait()
+
+
+def _handover(cres):
+    """What a caller links of a compile to link: its LLVM bitcode, how to call it, Environments."""
+    fndesc = cres.fndesc
+    fndesc.typemap = fndesc.calltypes = None  # typing details, unpicklable, unused by a call
+    library = cres.library
+    return serialize.dumps((library.name, library._get_module_for_linking().as_bitcode(), fndesc,
+                            cres.environment, cres.signature,
+                            tuple(cres._find_referenced_environments())))
+
+
+def _taken_over(dispatcher, path):
+    """The compile to link another process wrote to ``path`` (`_handover`); None if unreadable.
+
+    The bitcode is the other process's compile as it is, so the caller links and optimises the
+    same IR as had it compiled it itself; unpickling registers the Environments in this
+    process, where the caller's compile points its globals at them (`_set_environments`).
+    """
+    try:
+        name, bitcode, fndesc, environment, signature, environments = pickle.loads(
+            Path(path).read_bytes())
+    except Exception:  # a truncated or foreign file: compiled here instead
+        return None
+    library = _LinkedLibrary(dispatcher.targetctx.codegen(), name)
+    library._final_module = llvm.parse_bitcode(bitcode)
+    library._finalize_final_module()
+    return compiler.CompileResult(
+        typing_context=dispatcher.targetdescr.typing_context,
+        target_context=dispatcher.targetctx, entry_point=_LinkedEntry(), typing_error=None,
+        type_annotation=None, signature=signature, objectmode=False, lifted=(), fndesc=fndesc,
+        library=library, call_helper=None, environment=environment, metadata=None,
+        reload_init=(), referenced_envs=environments)
 
 
 class _LinkedEntry:
