@@ -70,7 +70,8 @@ LINK_JOBS = {
                       "EventFunction(float64[::1], float64, complex128, float64), float64, "
                       f"float64, {_BOUNDS}, float64, float64[::1], float64[::1], "
                       "Rotor(complex128[::1], complex128[::1], bool[::1], int64[::1], "
-                      "complex128[:, ::1], complex128[:, ::1])"),),
+                      "complex128[:, ::1], complex128[:, ::1], float64[:, ::1], "
+                      "complex128[::1])"),),
 }
 AHEAD_JOBS = {
     "simulate": (
