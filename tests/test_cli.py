@@ -2,6 +2,7 @@
 
 import importlib.util
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -47,6 +48,23 @@ def test_help_opens_with_what_the_program_does(capsys):
     description = " ".join(capsys.readouterr().out.split("\n\n")[1].split())
     assert description == ("Two cantilever beams impacting across a clearance: frequencies, "
                            "trajectories, sweeps, plots.")
+
+
+@pytest.mark.parametrize("set_by_user", [None, "30"])
+def test_the_command_lets_idle_blas_threads_sleep_unless_told_otherwise(set_by_user):
+    # OpenBLAS reads the variable when SciPy loads it, after the command starts (issue 24); a
+    # command in its own process sets it, a caller's process is left alone
+    environment = {k: v for k, v in os.environ.items() if k != "OPENBLAS_THREAD_TIMEOUT"}
+    if set_by_user is not None:
+        environment["OPENBLAS_THREAD_TIMEOUT"] = set_by_user
+    shown = "print('timeout', os.environ.get('OPENBLAS_THREAD_TIMEOUT'))\n"
+    script = ("import os, sys\nfrom impactbeams.cli import main\n"
+              f"main(['modes', '--n', '1'])\n{shown}"
+              f"sys.argv = ['impactbeams', 'modes', '--n', '1']\nmain()\n{shown}")
+    printed = subprocess.run([sys.executable, "-c", script], env=environment, check=True,
+                             capture_output=True, text=True).stdout.splitlines()
+    assert [line for line in printed if line.startswith("timeout")] == [
+        f"timeout {set_by_user}", f"timeout {set_by_user or 4}"]
 
 
 def test_modes_table(capsys):
