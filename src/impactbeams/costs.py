@@ -39,29 +39,29 @@ from typing import Any
 import numpy as np
 
 # --- constants from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ---------------
-FIRST_IMPACT_CELL = 3.3e-07
-FIRST_IMPACT_MODE = 2.9e-08
-FIRST_IMPACT_ALONE = 5.6e-06
-FIRST_IMPACT_WALK = 7e-08
+FIRST_IMPACT_CELL = 1.9e-07
+FIRST_IMPACT_MODE = 2.5e-08
+FIRST_IMPACT_ALONE = 4.1e-06
+FIRST_IMPACT_WALK = 5.1e-08
 IMPACT_CYCLE = {
-    "dynamics": {"tied": (8.1e-06, 1.8), "spring": (2.7e-05, 1.4)},
-    "lyapunov": {"spring": (4.4e-05, 0.76)},
-    "long_time": {"tied": (6.7e-06, 1.1), "spring": (3.3e-05, 0.7)},
-    "simulate": {"tied": (5.1e-05, 1.4), "spring": (0.00013, 1.1)},
+    "dynamics": {"tied": (4.7e-06, 1.9), "spring": (1.7e-05, 1.5)},
+    "lyapunov": {"spring": (1.5e-05, 1.1)},
+    "long_time": {"tied": (1.4e-05, 0.67), "spring": (1.7e-05, 0.72)},
+    "simulate": {"tied": (3.5e-05, 1.5), "spring": (8e-05, 1.2)},
 }
-FREE_CYCLE = 2.2e-07
-LYAPUNOV_FREE_CYCLE = 9.7e-07
-SAMPLING = 2.3e-07
-GEOMETRY = 1.3e-05
+FREE_CYCLE = 1.6e-07
+LYAPUNOV_FREE_CYCLE = 6.1e-07
+SAMPLING = 1.2e-07
+GEOMETRY = 8.5e-06
 THREAD_SPEEDUP = {1: 1.0, 2: 1.8}
 COMPILE = {
-    "first_impact": 8.7,
-    "dynamics": 20.0,
-    "lyapunov": 21.0,
-    "long_time": 15.0,
-    "simulate": 13.0,
+    "first_impact": 4.8,
+    "dynamics": 15.0,
+    "lyapunov": 17.0,
+    "long_time": 10.0,
+    "simulate": 9.3,
 }
-START_UP = 0.58
+START_UP = 0.39
 # ----------------------------------------------------------------------------------------------
 
 def speedup(threads: int) -> float:
