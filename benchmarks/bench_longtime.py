@@ -245,10 +245,10 @@ def _previous_rows(study: dict) -> list[str]:
     if previous is None:
         return []
     full, cells = previous["full_run"], study["diagram_cells"]
-    rows = [f"| previous code ({previous['date']}): whole diagram on 2 threads, wall (CPU); "
-            f"1 core (extrapolated) | {full['wall_s']:,.0f} s ({full['cpu_s']:,.0f} s); "
-            f"{previous['diagram_one_core_s']:,.0f} s |" if full else
-            f"| previous code ({previous['date']}): 1 core (extrapolated) | "
+    rows = [f"| previous code, run just before in the same environment: whole diagram on 2 "
+            f"threads, wall (CPU); 1 core (extrapolated) | {full['wall_s']:,.0f} s "
+            f"({full['cpu_s']:,.0f} s); {previous['diagram_one_core_s']:,.0f} s |" if full else
+            "| previous code, run just before in the same environment: 1 core (extrapolated) | "
             f"{previous['diagram_one_core_s']:,.0f} s |"]
     if previous["same_periods"] is not None:
         rows.append(f"| cells whose response period equals the previous code's | "
@@ -358,8 +358,7 @@ def against_previous(study: dict, previous: dict) -> dict:
     if mine and theirs and "response_period" in theirs:
         same = sum(a == b for a, b in zip(mine["response_period"], theirs["response_period"],
                                           strict=True))
-    return {"impactbeams": previous.get("impactbeams"), "date": previous.get("date"),
-            "full_run": None if theirs is None else {k: theirs[k] for k in ("wall_s", "cpu_s")},
+    return {"full_run": None if theirs is None else {k: theirs[k] for k in ("wall_s", "cpu_s")},
             "diagram_one_core_s": previous["diagram_one_core_s"], "same_periods": same}
 
 

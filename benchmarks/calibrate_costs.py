@@ -218,6 +218,9 @@ def thread_speedup(log):
 # tiny runs of each kind, through the command line (compile and start-up)
 TINY = {
     "first_impact": "t_max = 0.1\nn_modes = 5\n[axes.omega]\nmin = 100.0\nmax = 300.0\nnum = 4\n",
+    # more than one block of cells: the map's parallel twin (`sweep.plan.first_impact_kernel`)
+    "first_impact_parallel": ("t_max = 0.1\nn_modes = 5\n[axes.omega]\nmin = 100.0\n"
+                              "max = 300.0\nnum = 300\n"),
     "dynamics": ('t_max = 0.01\nn_modes = 5\nobservables = ["impact_count"]\n[params]\n'
                  "force_amplitude = 1e-2\n[axes.omega]\nmin = 100.0\nmax = 300.0\nnum = 2\n"),
     "lyapunov": ('t_max = 0.05\nn_modes = 5\nobservables = ["lyapunov_exponent"]\n[params]\n'
@@ -253,7 +256,8 @@ def compile_costs(log):
     """Cold compile (s) of each kind, and the start-up of a warm command (s)."""
     compile_seconds, warm = {}, {}
     with tempfile.TemporaryDirectory() as folder:
-        for kind in ("first_impact", "dynamics", "lyapunov", "long_time", "simulate"):
+        for kind in ("first_impact", "first_impact_parallel", "dynamics", "lyapunov",
+                     "long_time", "simulate"):
             cache = Path(folder) / f"cache-{kind}"
             arguments = command(kind, folder)
             cold = cli_seconds(arguments, cache, folder)

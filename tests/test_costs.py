@@ -23,6 +23,7 @@ from impactbeams import Params, costs
 from impactbeams.compilation import kernels_cached, reporting_compiles
 from impactbeams.packing import pack_run
 from impactbeams.sweep.definition import expected_seconds, sweep_from_mapping
+from impactbeams.sweep.plan import first_impact_kernel
 from impactbeams.trajectory import phases, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -113,6 +114,19 @@ def test_the_cost_per_cycle_grows_with_the_modes(kind):
 def test_first_impact_cost_grows_with_cells_and_modes():
     assert costs.first_impact_seconds(2e6, 5) > costs.first_impact_seconds(1e6, 5)
     assert costs.first_impact_seconds(1e6, 10) > costs.first_impact_seconds(1e6, 5)
+
+
+def test_a_first_map_expects_the_compile_of_the_twin_it_calls():
+    # a map of more than one block calls the parallel twin, which compiles longer (calibrated
+    # apart); no other kind has twins
+    small, large = (sweep_from_mapping({"t_max": 0.1, "axes": {"omega": {
+        "min": 100.0, "max": 300.0, "num": num}}}) for num in (4, 300))
+    twins = [costs.compile_time("first_impact", first_impact_kernel(sweep))
+             for sweep in (small, large)]
+    assert twins == [costs.COMPILE["first_impact"], costs.COMPILE["first_impact_parallel"]]
+    assert twins[1] > twins[0]
+    assert (costs.compile_time("dynamics", "first_impact_map_parallel")
+            == costs.COMPILE["dynamics"])
 
 
 def test_an_empty_numba_cache_is_told_apart(tmp_path):

@@ -143,6 +143,7 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
     """``run`` once its output is locked: compute (or reuse) the map, check its statuses."""
     from impactbeams.sweep import write_sweep  # writes netCDF without xarray
     from impactbeams.sweep.definition import run_kind
+    from impactbeams.sweep.plan import first_impact_kernel
 
     reuse = output.exists()
     if not reuse:
@@ -150,7 +151,7 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
     try:
         # a reused output computes nothing: Numba need not load to watch for compiles
         compiling = (contextlib.nullcontext() if reuse
-                     else _running_kernels(run_kind(sweep), args))
+                     else _running_kernels(run_kind(sweep), args, first_impact_kernel(sweep)))
         with _cluster_runner(args) as runner, compiling:
             write_sweep(sweep, output, threads=None if runner else args.threads,
                         progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner,
@@ -190,7 +191,7 @@ def _sweep_output(args: argparse.Namespace, sweep: Sweep) -> Path:
 def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     """The run's size, expected cost and destination, on stderr."""
     from impactbeams.compilation import kernels_cached
-    from impactbeams.costs import COMPILE
+    from impactbeams.costs import compile_time
     from impactbeams.preflight import format_time
     from impactbeams.sweep.definition import expected_cost, run_kind
     from impactbeams.sweep.plan import first_impact_kernel
@@ -207,24 +208,26 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
           f"{expected_cost(sweep, args.threads).describe()}"
           + ("" if kernels_cached(run_kind(sweep), first_impact_kernel(sweep)) else
              f", after compiling the kernels (once per install), about "
-             f"{format_time(COMPILE[run_kind(sweep)])}"), file=sys.stderr)
+             f"{format_time(compile_time(run_kind(sweep), first_impact_kernel(sweep)))}"),
+          file=sys.stderr)
 
 
-def _running_kernels(kind: str, args: argparse.Namespace,
+def _running_kernels(kind: str, args: argparse.Namespace, entry: str | None = None,
                      ) -> contextlib.AbstractContextManager[None]:
     """Lines on stderr while the kernels of a run of ``kind`` compile (if they do).
 
-    In the command's own process, cached kernels load with only what running them needs
-    (`impactbeams.cached_kernels`).
+    ``entry``: a first map's kernel, whose twin sets the compile time expected
+    (`impactbeams.costs.compile_time`). In the command's own process, cached kernels load with
+    only what running them needs (`impactbeams.cached_kernels`).
     """
     from impactbeams.compilation import reporting_compiles
-    from impactbeams.costs import COMPILE
+    from impactbeams.costs import compile_time
 
     if args.own_process:
         from impactbeams.cached_kernels import load_cached_kernels_lean
 
         load_cached_kernels_lean()
-    return reporting_compiles(COMPILE[kind])
+    return reporting_compiles(compile_time(kind, entry))
 
 
 def _incomplete_cells(dataset: xr.Dataset) -> int:
