@@ -6,7 +6,7 @@ Each case runs as a command (``impactbeams run``/``simulate`` in a subprocess, s
 included) with a filled Numba cache ("warm"); the first case of each kind of run first with
 an empty one ("cold", compile included), whose kernels then fill the warm cache. The
 estimate is the one the command announces: start-up (``costs.START_UP``) + compute (the cost
-model) + compile when cold (``costs.COMPILE``). Writes
+model) + compile when cold (``costs.compile_time``). Writes
 docs/benchmarks/estimates.json (with the load average around each run) and the table in
 docs/limits.md between its markers (``--table-only``: the table from the JSON alone).
 """
@@ -90,18 +90,21 @@ def random_case(rng, index):
 
 
 def estimate(case, threads):
-    """(kind, compute estimate in s) of a case, from the package's cost model."""
-    from impactbeams import Params
+    """(kind, compute, cold compile) of a case in s, from the package's cost model."""
+    from impactbeams import Params, costs
     from impactbeams.sweep.definition import expected_cost, run_kind, sweep_from_mapping
+    from impactbeams.sweep.plan import first_impact_kernel
     from impactbeams.trajectory.simulation import _checked_inputs
 
     if "simulate" in case:
         run = case["simulate"]
         inputs = _checked_inputs(Params(**run["params"]), run["t_max"], run["n_modes"],
                                  run["dt_output"], None, 41, 200_000, None, None, False, False)
-        return "simulate", inputs.seconds
+        return "simulate", inputs.seconds, costs.compile_time("simulate")
     sweep = sweep_from_mapping(case["sweep"], source=case["name"])
-    return run_kind(sweep), expected_cost(sweep, threads).seconds
+    kind = run_kind(sweep)
+    return (kind, expected_cost(sweep, threads).seconds,
+            costs.compile_time(kind, first_impact_kernel(sweep)))
 
 
 def fit(case, threads):
@@ -174,14 +177,14 @@ def measure(cases, threads, log):
     with tempfile.TemporaryDirectory() as folder:
         warm_cache = Path(folder) / "warm-cache"
         for case in cases:
-            kind, compute = estimate(case, threads)
+            kind, compute, compile_seconds = estimate(case, threads)
             arguments = command(case, folder, threads)
             if kind not in cold_done:  # an empty cache of its own, then shared with the others
                 cold_done.add(kind)
                 cold_cache = Path(folder) / f"cold-{kind}"
                 seconds, load, stderr = actual(arguments, cold_cache, folder)
-                rows.append(row(case, kind, "cold", costs.START_UP + costs.COMPILE[kind]
-                                + compute, seconds, load))
+                rows.append(row(case, kind, "cold", costs.START_UP + compile_seconds + compute,
+                                seconds, load))
                 rows[-1]["stderr"] = stderr[-3000:]  # what a new user sees
                 log(rows[-1])
                 shutil.copytree(cold_cache, warm_cache, dirs_exist_ok=True)
