@@ -336,10 +336,13 @@ def spring_limits() -> str:
     report = _results("spring")
     cost = report["cost"]
     names = [f"{_sci(k, 2)} (default)" if k == default else _sci(k) for k in stiffnesses]
+    seconds = [row["per_simulated_second"]["events"] for row in cost]
+    growth = seconds[-1] / seconds[0] / (cost[-1]["n_modes"] / cost[0]["n_modes"])
+    pace = "faster than" if growth > 1.1 else "more slowly than" if growth < 0.9 else "about like"
     return (f"  {', '.join(map(str, modes))} modes at k = {', '.join(names)} N/m; above about "
             f"{_sci(beyond)} N/m it asks for more than the package's {MAX_MODES} modes per "
-            "beam. The run time per simulated second grows faster than the number of modes ("
-            + ", ".join(f"{row['per_simulated_second']['events']:.2g}" for row in cost)
+            f"beam. The run time per simulated second grows {pace} the number of modes ("
+            + ", ".join(f"{value:.2g}" for value in seconds)
             + " s at " + ", ".join(str(row["n_modes"]) for row in cost) + " modes for k = "
             f"{_sci(report['config']['cost_stiffness'])}, "
             "[benchmarks](docs/benchmarks/README.md)).\n  ")
