@@ -643,8 +643,8 @@ def _targets(out: Path) -> list[Target]:
         targets += [Target(f"`impactbeams {command}`, warm (median wall)", limit, "s",
                            now["median_s"][command], before.get(command))
                     for command, limit in (("run", 0.9), ("plot", 1.2))]
-    if (out / "longtime.json").exists() and _load(out, "longtime")["full_run"]:
-        now = _load(out, "longtime")
+    now = _load(out, "longtime") if (out / "longtime.json").exists() else {}
+    if now.get("full_run"):
         before = (now.get("previous") or {}).get("full_run") or {}
         targets.append(Target("long-time bifurcation diagram, 2 threads (wall)", 20.0, "s",
                               now["full_run"]["wall_s"], before.get("wall_s")))
