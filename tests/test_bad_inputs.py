@@ -38,6 +38,16 @@ def axis(name, low, high, num, scale="linear"):
     return f"[axes.{name}]\nmin = {low}\nmax = {high}\nnum = {num}\nscale = \"{scale}\"\n"
 
 
+CONTINUATION = ('[params]\ncounterpart = "stop"\n[continuation]\nparameter = "omega"\n'
+                'min = 100.0\nmax = 250.0\n')
+
+# each command's usage line, printed above an error in its arguments
+USAGE = {"modes": "[--n N] [--json] [PARAMETER OPTIONS]",
+         "simulate": "--t-max SECONDS -o RUN.nc [OPTIONS] [PARAMETER OPTIONS]",
+         "run": "SWEEP.toml [-o OUT.nc] [OPTIONS]",
+         "continue": "CONTINUATION.toml [-o OUT.nc] [--quiet]",
+         "plot": "IN.nc [-o OUT.png] [OPTIONS]"}
+
 # name of a case: (arguments, {file name: TOML text} to create, fragments the message must hold)
 CASES = {
     # --- modes: options, parameter values, --params files
@@ -184,7 +194,7 @@ CASES = {
                                 ["observables in s.toml = []"]),
     "sweep-observables-unknown": (["run", "s.toml"],
                                   {"s.toml": sweep_file(top='observables = ["bogus"]')},
-                                  ["observables in s.toml = 'bogus'"]),
+                                  ["unknown observable 'bogus' in the observables of s.toml"]),
     "sweep-omega-axis-1e300": (["run", "s.toml"],
                                {"s.toml": sweep_file(axes=axis("omega", 10, 1e300, 3))},
                                ["axis 'omega'", "omega = 1e+300", "<= 1e+12"]),
@@ -216,7 +226,8 @@ CASES = {
     "sweep-unknown-parameter": (["run", "s.toml"], {"s.toml": sweep_file(params="clearence = 1")},
                                 ["unknown parameter 'clearence'"]),
     "sweep-unknown-axis": (["run", "s.toml"], {"s.toml": axis("omegaa", 1, 2, 2)},
-                           ["[axes.omegaa] of s.toml = 'omegaa'"]),
+                           ["unknown parameter 'omegaa' in [axes] of s.toml (did you mean "
+                            "'omega'?)"]),
     "sweep-params-string": (["run", "s.toml"],
                             {"s.toml": sweep_file(params='clearance = "1e-5"')},
                             ["clearance = '1e-5'"]),
@@ -327,6 +338,57 @@ CASES = {
                                ["'ok.toml' is a file, not a folder"]),
     "plot-output-proc": (["plot", "map.nc", "-o", "/proc/x.png"], {},
                          ["'/proc/x.png' cannot be written"]),
+    # --- issue 32: no abbreviations, the nearest name, every drive's small-deflection limit
+    "simulate-abbreviated-option": (
+        ["simulate", "--t-max", "1", "--clear", "1e-5", "-o", "r.nc"], {},
+        ["unrecognized arguments: --clear 1e-5 (did you mean '--clearance'?)"]),
+    "modes-abbreviated-option": (["modes", "--contact-l", "tied"], {},
+                                 ["unrecognized arguments: --contact-l tied (did you mean "
+                                  "'--contact-law'?)"]),
+    "sweep-top-level-typo": (["run", "s.toml"], {"s.toml": sweep_file(top="tmax = 1.0")},
+                             ["unknown top-level key 'tmax' in s.toml (did you mean 't_max'?)"]),
+    "sweep-params-typo": (["run", "s.toml"], {"s.toml": sweep_file(params="clearence = 1e-5")},
+                          ["unknown parameter 'clearence' in [params] of s.toml (did you mean "
+                           "'clearance'?)"]),
+    "sweep-axis-key-typo": (["run", "s.toml"], {"s.toml": sweep_file(
+        axes="[axes.omega]\nmin = 10.0\nmax = 400.0\nnun = 3\n")},
+        ["unknown key 'nun' in [axes.omega] of s.toml (did you mean 'num'?)"]),
+    "continue-missing": (["continue", "missing.toml"], {},
+                         ["continuation file 'missing.toml' does not exist"]),
+    "continue-key-typo": (["continue", "c.toml"], {"c.toml": CONTINUATION.replace("max", "mx")},
+                          ["unknown key 'mx' in [continuation] of c.toml (did you mean 'max'?)"]),
+    "continue-top-level-typo": (["continue", "c.toml"], {"c.toml": "tmax = 3\n" + CONTINUATION},
+                                ["unknown top-level key 'tmax' in c.toml"]),
+    "continue-steps-crossed": (["continue", "c.toml"],
+                               {"c.toml": CONTINUATION + "min_step = 2.0\nmax_step = 1.0\n"},
+                               ["min_step = 2.0 is not allowed: must be <= max_step = 1 (rad/s)"]),
+    "continue-step-beyond-max": (["continue", "c.toml"],
+                                 {"c.toml": CONTINUATION + "step = 5.0\nmax_step = 1.0\n"},
+                                 ["step = 5.0 is not allowed: must lie from min_step = 1.5e-07 "
+                                  "to max_step = 1 (rad/s)"]),
+    "continue-omega-0": (["continue", "c.toml"],
+                         {"c.toml": CONTINUATION.replace("min = 100.0", "min = 0.0")},
+                         ["min = 0.0 is not allowed: a periodic orbit needs omega > 0"]),
+    "continue-n-modes-0": (["continue", "c.toml"], {"c.toml": "n_modes = 0\n" + CONTINUATION},
+                           ["n_modes = 0 is not allowed"]),
+    "simulate-base-amplitude-10": (["simulate", "--t-max", "1", "--base-amplitude", "10", "-o",
+                                    "r.nc"], {},
+                                   ["base_amplitude = 10.0 is not allowed: the shaker's motion "
+                                    "must be <= 0.2 min(l1, l2) = 0.02 m (small deflections"]),
+    "simulate-base-amplitude-1e300": (["simulate", "--t-max", "1", "--base-amplitude", "1e300",
+                                       "-o", "r.nc"], {}, ["base_amplitude = 1e+300"]),
+    "simulate-base-amplitude-stop": (["simulate", "--t-max", "1", "--base-amplitude", "1.0",
+                                      "--counterpart", "stop", "-o", "r.nc"], {},
+                                     ["base_amplitude = 1.0", "<= 0.2 l1 = 0.02 m"]),
+    "simulate-base-amplitude-long-beam": (
+        ["simulate", "--t-max", "1", "--base-amplitude", "0.1", "--l1", "0.2", "--counterpart",
+         "stop", "-o", "r.nc"], {}, ["base_amplitude = 0.1", "<= 0.2 l1 = 0.04 m"]),
+    "simulate-base-amplitude-beam2": (
+        ["simulate", "--t-max", "1", "--base-amplitude", "0.03", "--shaker", "beam2", "--l1",
+         "0.5", "-o", "r.nc"], {}, ["base_amplitude = 0.03", "<= 0.2 l2 = 0.024 m"]),
+    "sweep-base-amplitude-axis": (["run", "s.toml"], {"s.toml": sweep_file(
+        params='counterpart = "stop"', axes=axis("base_amplitude", 1e-6, 0.1, 3, "log"))},
+        ["base_amplitude = 0.1", "<= 0.2 l1 = 0.02 m"]),
 }
 
 
@@ -372,9 +434,15 @@ def test_bad_input_is_refused_with_one_line_and_nothing_written(scratch, capsys,
     out, err = capsys.readouterr()
     assert code == 2, err
     lines = err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("impactbeams: error: "), err
+    # one line, after the command's usage line if the arguments themselves are wrong
+    usage = lines[:-1]
+    command = argv[0] if argv and argv[0] in USAGE else None
+    assert usage in ([], [f"usage: impactbeams {command} {USAGE[command]}" if command else
+                          "usage: impactbeams [-h] [--version] {modes,simulate,run,continue,"
+                          "plot} ..."]), err
+    assert lines[-1].startswith("impactbeams: error: "), err
     for fragment in fragments:
-        assert fragment in lines[0]
+        assert fragment in lines[-1]
     assert "Traceback" not in err and "_positive" not in err and out == ""
     assert tree(scratch) == before  # no output file, no partial folder, no results/ folder
     # refused before any work: validation is vectorised and compiles nothing (measured: at
@@ -781,3 +849,22 @@ def test_a_stiff_contact_on_a_light_beam_has_its_modes():
     dense = np.sqrt(np.linalg.eigvalsh(np.diag(free.frequencies**2)
                                        + stiffness * np.outer(weights, weights)))
     assert frequencies[-1] == pytest.approx(dense[-1], rel=1e-13)
+
+
+def test_one_mode_against_a_stop_has_its_contact_mode():
+    """n_modes = 1 against a stop: one active weight, for which LAPACK's dlasd4 returns sigma
+    alone (delta = work = 1), gave `math domain error`; the one contact frequency is
+    sqrt(omega^2 + k w^2) exactly, and the run completes."""
+    from impactbeams.contact.spring import rank_one_modes
+
+    frequencies, modes = rank_one_modes(np.array([3.0]), 2.0, np.array([0.5]))
+    assert frequencies[0] == pytest.approx(np.sqrt(9.5), rel=1e-15)
+    assert abs(modes[0, 0]) == 1.0
+    # two equal frequencies deflate to one active weight: the same path
+    frequencies, modes = rank_one_modes(np.array([3.0, 3.0]), 2.0, np.array([0.5, 0.5]))
+    dense = np.linalg.eigh(np.diag([9.0, 9.0]) + 2.0 * np.outer([0.5, 0.5], [0.5, 0.5]))
+    assert frequencies == pytest.approx(np.sqrt(dense.eigenvalues), rel=1e-15)
+    assert np.abs(modes.T @ dense.eigenvectors) == pytest.approx(np.eye(2), abs=1e-15)
+    with pytest.warns(RuntimeWarning, match="n_modes = 1 does not resolve"):
+        run = simulate(Params(counterpart="stop"), 0.012, n_modes=1)
+    assert run.attrs["status"] == "complete"

@@ -83,3 +83,34 @@ def test_valid_values_round_trip(clearance, uplift1, zeta):
         return
     p = Params(clearance=clearance, uplift1=uplift1, damping_ratio=zeta)
     assert Params.from_mapping(p.as_dict()) == p
+
+
+def test_material_keys_work_as_keywords():
+    """Params(width1=...) is Params.from_mapping({"width1": ...}) (was a bare TypeError)."""
+    keywords = {"E1": 70e9, "rho1": 2700.0, "width1": 0.02, "thickness2": 6e-4}
+    assert Params(**keywords) == Params.from_mapping(keywords)
+    assert Params(width1=0.02).EI1 == pytest.approx(210e9 * 0.02 * STRIP_THICKNESS**3 / 12,
+                                                    rel=1e-15)
+    with pytest.raises(ParameterError, match="both EI1 and material keys width1"):
+        Params(EI1=1.0, width1=0.02)
+    with pytest.raises(ParameterError, match="width2 in Params\\(\\) is not allowed: "
+                                             "counterpart = 'stop' has no beam 2"):
+        Params(counterpart="stop", width2=0.01)
+
+
+@pytest.mark.parametrize(("key", "suggestion"), [
+    ("clearence", "clearance"), ("Clearance", "clearance"), ("force", "force_amplitude"),
+    ("dampingratio", "damping_ratio"), ("omgea", "omega")])
+def test_an_unknown_keyword_names_the_nearest_and_the_allowed(key, suggestion):
+    with pytest.raises(ParameterError) as error:
+        Params(**{key: 1e-5})
+    message = str(error.value)
+    assert message.startswith(f"unknown parameter {key!r} in Params() (did you mean "
+                              f"{suggestion!r}?); allowed: E1, E2, EI1, EI2, base_amplitude, "
+                              "clearance,")
+    assert not isinstance(error.value, TypeError)
+
+
+def test_an_unknown_key_far_from_every_name_gets_no_suggestion():
+    with pytest.raises(ParameterError, match=r"unknown parameter 'xyzzy' in Params\(\); allowed"):
+        Params(xyzzy=1.0)

@@ -28,12 +28,14 @@ from typing import TYPE_CHECKING, NoReturn
 from impactbeams.params import (
     CHOICES,
     MAX_CHUNK_CELLS,
+    MAX_EVENTS,
     MAX_MODES,
     ParameterError,
     Params,
+    nearest,
     refuse_beam2,
 )
-from impactbeams.variables import DAMPING_LAW, PARAMETERS
+from impactbeams.variables import PARAMETERS
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -58,8 +60,8 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
     for name, parameter in PARAMETERS.items():
         flags = ["--" + name.replace("_", "-"), *_ALIASES.get(name, [])]
         description = parameter.long_name
-        if name == "damping_ratio":
-            description += ", " + DAMPING_LAW
+        if name == "damping_ratio":  # the law itself: docs/model.md, "Modal damping"
+            description += " of each cantilever mode, 0 <= zeta < 1"
         if name in CHOICES:
             group.add_argument(*flags, dest=name, choices=CHOICES[name],
                                help=f"{description} (default: {CHOICES[name][0]})")
@@ -146,7 +148,7 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
     from impactbeams.sweep.plan import first_impact_kernel
 
     reuse = output.exists()
-    if not reuse:
+    if not reuse and not args.quiet:
         _announce(sweep, output, args)
     try:
         # a reused output computes nothing: Numba need not load to watch for compiles
@@ -160,8 +162,8 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
         print(f"\nimpactbeams: finished chunks are kept in {output}.partial/ "
               "and the same command resumes from them", file=sys.stderr)
         raise
-    print(f"reused {output}: it already holds the result of this sweep (nothing computed)"
-          if reuse else f"wrote {output}", file=sys.stderr)
+    _say(args, f"reused {output}: it already holds the result of this sweep (nothing computed)"
+         if reuse else f"wrote {output}")
     if not sweep.needs_dynamics:  # no run status to check: xarray need not load
         return 0
     import xarray as xr
@@ -227,6 +229,8 @@ def _running_kernels(kind: str, args: argparse.Namespace, entry: str | None = No
         from impactbeams.cached_kernels import load_cached_kernels_lean
 
         load_cached_kernels_lean()
+    if args.quiet:
+        return contextlib.nullcontext()
     return reporting_compiles(compile_time(kind, entry))
 
 
@@ -296,7 +300,7 @@ def _plot(args: argparse.Namespace) -> int:
 
     # a map's file is read without xarray (a third of the start-up), a run's with it
     dataset = read_figure_data(args.dataset, "input")
-    output = image_output(args.output, "-o/--output")
+    output = image_output(args.output or Path(args.dataset).with_suffix(".png"), "-o/--output")
     diagram = read_netcdf(args.over, "--over") if args.over else None
     notes = plot_dataset(dataset, output, args.var,
                          values=parse_assignments(args.slice, "--slice"),
@@ -304,8 +308,8 @@ def _plot(args: argparse.Namespace) -> int:
                          scale=args.scale, contours=parse_levels(args.contours),
                          title=args.title, dpi=args.dpi, diagram=diagram)
     for note in notes:
-        print(f"impactbeams: {note}", file=sys.stderr)
-    print(f"wrote {output}", file=sys.stderr)
+        _say(args, f"impactbeams: {note}")
+    _say(args, f"wrote {output}")
     return 0
 
 
@@ -328,13 +332,13 @@ def _continue(args: argparse.Namespace) -> int:
     from impactbeams.preflight import require_input_file, require_output_file
     from impactbeams.sweep.lock import output_lock
 
-    continuation = load_continuation(require_input_file(args.file, "continuation file"))
+    continuation = load_continuation(require_input_file(args.file, "continuation"))
     output = require_output_file(args.output or Path("results") / (Path(args.file).stem + ".nc"),
                                  "-o/--output", {".nc"}, "netCDF")
     with output_lock(output):
-        print(f"{args.file}: periodic orbits of period {continuation.period} along "
-              f"{continuation.parameter} from {continuation.low:g} to {continuation.high:g} "
-              f"({continuation.direction}) -> {output}", file=sys.stderr)
+        _say(args, f"{args.file}: periodic orbits of period {continuation.period} along "
+             f"{continuation.parameter} from {continuation.low:g} to {continuation.high:g} "
+             f"({continuation.direction}) -> {output}")
         try:
             with _running_kernels("simulate", args):
                 dataset = continue_orbits(continuation,
@@ -345,7 +349,7 @@ def _continue(args: argparse.Namespace) -> int:
                   f"computed are in {output}", file=sys.stderr)
             raise
         write_netcdf(dataset, output)
-    print(f"wrote {output}: {_branch_summary(dataset)}", file=sys.stderr)
+    _say(args, f"wrote {output}: {_branch_summary(dataset)}")
     return 0
 
 
@@ -381,14 +385,20 @@ def _simulate(args: argparse.Namespace) -> int:
             dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
                                dt_output=args.dt_output, fields=args.fields,
                                energy_balance=args.energy_balance, lyapunov=args.lyapunov,
-                               transient_periods=args.transient_periods, progress=True)
+                               transient_periods=args.transient_periods,
+                               max_events=args.max_events, progress=not args.quiet)
         write_netcdf(dataset, output)
     status = dataset.attrs["status"]
     exponent = (f", largest Lyapunov exponent {float(dataset.lyapunov_exponent):.6g} +- "
                 f"{float(dataset.lyapunov_exponent_error):.2g} 1/s" if args.lyapunov else "")
-    print(f"wrote {output}: {dataset.impact.size} impacts, status {status}{exponent}",
-          file=sys.stderr)
+    _say(args, f"wrote {output}: {dataset.impact.size} impacts, status {status}{exponent}")
     return 0 if status == "complete" else EXIT_INCOMPLETE  # simulate() warned already
+
+
+def _say(args: argparse.Namespace, line: str) -> None:
+    """An informative line on stderr, unless --quiet (warnings and errors are always shown)."""
+    if not args.quiet:
+        print(line, file=sys.stderr)
 
 
 def _number(text: str) -> float:
@@ -428,11 +438,51 @@ _POSITIVE_INTEGER = _integer_from(1)
 _MODE_COUNT = _integer_from(1, MAX_MODES)
 
 
+class UsageError(ParameterError):
+    """An error in the command's arguments: one line after the command's usage line."""
+
+    def __init__(self, message: str, usage: str) -> None:
+        super().__init__(message)
+        self.usage = usage
+
+
 class _Parser(argparse.ArgumentParser):
-    """An ArgumentParser whose errors are ParameterErrors: one line, exit code 2, in main."""
+    """An ArgumentParser whose errors are UsageErrors (usage, one line, exit code 2, in main).
+
+    No option may be abbreviated (``--clear`` is not ``--clearance``), and an unknown one is
+    reported by the subcommand it was given to, with the nearest option.
+    """
+
+    def __init__(self, **kwargs: object) -> None:
+        super().__init__(allow_abbrev=False, **kwargs)  # type: ignore[arg-type]
+        self.commands: dict[str, _Parser] = {}
 
     def error(self, message: str) -> NoReturn:
-        raise ParameterError(message)
+        raise UsageError(message, self.format_usage().strip())
+
+    def parse_args(self, args: Sequence[str] | None = None,  # type: ignore[override]
+                   namespace: None = None) -> argparse.Namespace:
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            parser = self.commands.get(getattr(parsed, "command", None), self)
+            options = [option for action in parser._actions for option in action.option_strings]
+            parser.error(f"unrecognized arguments: {' '.join(extras)}"
+                         f"{nearest(extras[0].split('=')[0], options)}")
+        return parsed
+
+
+class _Version(argparse.Action):
+    """``--version``: the installed version (read only when asked: it costs the metadata)."""
+
+    def __init__(self, option_strings: list[str], dest: str, **kwargs: object) -> None:
+        super().__init__(option_strings, dest, nargs=0,
+                         help="print the version of impactbeams and exit")
+
+    def __call__(self, parser: argparse.ArgumentParser, *_: object) -> None:
+        import impactbeams
+
+        print(f"impactbeams {impactbeams.__version__}")
+        parser.exit()
 
 
 # a negative number as an option's value (argparse reads "-1e-5" as an option)
@@ -455,22 +505,33 @@ def _attach_negative_values(argv: Sequence[str]) -> list[str]:
 def build_parser() -> argparse.ArgumentParser:
     """The ``impactbeams`` argument parser with all subcommands."""
     parser = _Parser(prog="impactbeams", description=__doc__.split("\n")[0])
+    parser.add_argument("--version", action=_Version)
     commands = parser.add_subparsers(dest="command", required=True)
-    modes = commands.add_parser("modes", help="print natural frequencies of both phases (rad/s)")
+
+    def command(name: str, usage: str, **kwargs: str) -> _Parser:
+        sub = commands.add_parser(name, usage=f"%(prog)s {usage}", **kwargs)
+        sub.add_argument("--quiet", action="store_true",
+                         help="print nothing but warnings and errors on stderr")
+        parser.commands[name] = sub
+        return sub
+
+    modes = command("modes", "[--n N] [--json] [PARAMETER OPTIONS]",
+                    help="print natural frequencies of both phases (rad/s)")
     modes.add_argument("--n", type=_MODE_COUNT, default=5,
                        help=f"number of modes (default 5, at most {MAX_MODES})")
     modes.add_argument("--json", action="store_true", help="print JSON instead of a table")
     add_parameter_options(modes)
     modes.set_defaults(handler=_modes)
 
-    simulate = commands.add_parser("simulate", help="simulate one trajectory, write netCDF")
+    simulate = command("simulate", "--t-max SECONDS -o RUN.nc [OPTIONS] [PARAMETER OPTIONS]",
+                       help="simulate one trajectory, write netCDF")
     simulate.add_argument("--t-max", type=_number, required=True, metavar="SECONDS",
                           help="end time (s)")
-    simulate.add_argument("--n-modes", type=_MODE_COUNT, default=None,
+    simulate.add_argument("--n-modes", type=_MODE_COUNT, default=None, metavar="N",
                           help="free modes per beam (default: 5 for the tied law; for the "
                                "spring law the number that resolves the contact, 4 n*)")
     simulate.add_argument("--dt-output", type=_number, default=1e-4, metavar="SECONDS",
-                          help="output time step (s, default 1e-4)")
+                          help="output time step (s, default 1e-4, at most t_max)")
     simulate.add_argument("--energy-balance", action="store_true",
                           help="also store the work of F and the dissipation (costly with many "
                                "modes)")
@@ -482,12 +543,19 @@ def build_parser() -> argparse.ArgumentParser:
     simulate.add_argument("--transient-periods", type=_integer_from(0), default=0,
                           metavar="PERIODS",
                           help="forcing periods left out of the exponents' average (default 0)")
-    simulate.add_argument("-o", "--output", required=True, metavar="RUN.nc")
+    simulate.add_argument("--max-events", type=_POSITIVE_INTEGER, default=MAX_EVENTS,
+                          metavar="N",
+                          help=f"stop the run after N phases, free flights and contacts "
+                               f"(default {MAX_EVENTS}), with status event_limit")
+    simulate.add_argument("-o", "--output", required=True, metavar="RUN.nc",
+                          help="netCDF file to write (replaced if it exists)")
     add_parameter_options(simulate)
     simulate.set_defaults(handler=_simulate)
 
-    run = commands.add_parser("run", help="run a sweep defined in a TOML file (see sweeps/)")
-    run.add_argument("sweep", metavar="SWEEP.toml")
+    run = command("run", "SWEEP.toml [-o OUT.nc] [OPTIONS]",
+                  help="run a sweep defined in a TOML file (see sweeps/)")
+    run.add_argument("sweep", metavar="SWEEP.toml",
+                     help="sweep definition, e.g. sweeps/fig5a-omega-force.toml")
     run.add_argument("-o", "--output", metavar="OUT.nc",
                      help="netCDF result (default results/<sweep name>.nc)")
     run.add_argument("--threads", type=_POSITIVE_INTEGER,
@@ -496,7 +564,6 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--chunk-cells", type=_integer_from(1, MAX_CHUNK_CELLS),
                      help="most cells per chunk, rounded down to whole lines of the last "
                      "axes (default: 2^20 for a first-impact map, 2^16 for full dynamics)")
-    run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.add_argument("--discard-corrupt", action="store_true",
                      help="on a resume, delete damaged saved chunks and compute them again "
                      "(default: stop with an error naming the file)")
@@ -508,18 +575,21 @@ def build_parser() -> argparse.ArgumentParser:
                          help="run the chunks on a Dask LocalCluster of N worker processes")
     run.set_defaults(handler=_run)
 
-    cont = commands.add_parser("continue",
-                               help="continue periodic orbits along a parameter (see sweeps/)")
+    cont = command("continue", "CONTINUATION.toml [-o OUT.nc] [--quiet]",
+                   help="continue periodic orbits along a parameter (see sweeps/)")
     cont.add_argument("file", metavar="CONTINUATION.toml",
                       help="continuation file, e.g. sweeps/continuation-stop-fold.toml")
     cont.add_argument("-o", "--output", metavar="OUT.nc",
                       help="netCDF result (default results/<file name>.nc)")
-    cont.add_argument("--quiet", action="store_true", help="no progress lines")
     cont.set_defaults(handler=_continue)
 
-    plot = commands.add_parser("plot", help="draw a saved sweep map or simulated run")
-    plot.add_argument("dataset", metavar="IN.nc")
-    plot.add_argument("-o", "--output", required=True, metavar="OUT.png")
+    plot = command("plot", "IN.nc [-o OUT.png] [OPTIONS]",
+                   help="draw a saved sweep map, simulated run or continuation")
+    plot.add_argument("dataset", metavar="IN.nc",
+                      help="a file written by impactbeams run, simulate or continue")
+    plot.add_argument("-o", "--output", metavar="OUT.png",
+                      help="the figure; its suffix sets the format (default: IN.png, next to "
+                           "IN.nc)")
     plot.add_argument("--var", metavar="NAME",
                       help="variable to draw (default: first_impact_time; a run without "
                            "options gets its overview)")
@@ -595,6 +665,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
             return args.handler(args)
+    except UsageError as error:
+        print(error.usage, file=sys.stderr)
+        return _fail(error, EXIT_USER_ERROR)
     except ParameterError as error:
         return _fail(error, EXIT_USER_ERROR)
     except (OSError, MemoryError) as error:

@@ -28,7 +28,8 @@ name               unit    meaning
                            fixed rigid stop ``clearance`` below it: no beam 2, so beam 2's
                            keys are refused when given and their defaults are ignored)
 ``base_amplitude`` m       U0 of the shaker's motion u_b(t) = U0 sin(omega t) (default 0; the
-                           tied law takes it with shaker = "both" only)
+                           tied law takes it with shaker = "both" only); at most 0.2 times the
+                           shortest shaken beam (small deflections, ``check_joint``)
 ``shaker``         -       which clamps the shaker carries: "both" (default), "beam1" or
                            "beam2" (beam 2's clamp, or a fixed stop's mount)
 ``start``          -       initial state: "rest" (at rest in the absolute frame, default)
@@ -39,11 +40,12 @@ name               unit    meaning
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import os
 import reprlib
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -102,6 +104,25 @@ def require_type(name: str, value: Any, condition: bool, allowed: str) -> None:
                                 f"not allowed: must be {allowed}")
 
 
+def unknown_key(what: str, key: Any, where: str, allowed: Collection[str]) -> ParameterError:
+    """The error of an unknown ``what`` (key, parameter, ...) ``key`` in ``where``.
+
+    It names the key, the nearest allowed one (a spelling slip, or an abbreviation of a
+    longer name) and every allowed one.
+    """
+    return ParameterError(f"unknown {what} {key!r} in {where}{nearest(key, allowed)}; allowed: "
+                          f"{', '.join(allowed)}")
+
+
+def nearest(key: Any, allowed: Collection[str]) -> str:
+    """`` (did you mean 'NAME'?)`` for the allowed name nearest ``key``, or "" if none is near."""
+    if not isinstance(key, str):
+        return ""
+    close = difflib.get_close_matches(key, list(allowed), n=1) or sorted(
+        name for name in allowed if len(key) > 1 and name.startswith(key))[:1]
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
 def is_real(value: Any) -> bool:
     """Whether ``value`` is a real number (int or float, not bool, not a string)."""
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
@@ -144,6 +165,9 @@ def require_finite(name: str, value: Any, unit: str = "") -> float:
 # stays below 12 % of w.
 MAX_DEFLECTION = 0.2
 MAX_MODES = 200  # free modes per beam: the package's limit (docs/limits.md)
+# a simulated run's default cap on its phases (free flights and contacts: about half as many
+# contacts), beyond which it stops with status "event_limit"
+MAX_EVENTS = 200_000
 # the largest chunk of a sweep: about 1.3 GB of cell rows and results (kernels.layout.CELL_COLUMNS
 # and an output per cell), and well below HDF5's 4 GiB limit on a compressed block (here, not in
 # sweep/, so that `impactbeams --help` need not import the sweep package)
@@ -260,13 +284,18 @@ def check_range(name: str, value: Any, point: PointName = no_point) -> None:
 
 
 def check_joint(values: Mapping[str, Any], point: PointName = no_point,
-                counterpart: str = "beam") -> None:
+                counterpart: str = "beam", shaker: str = "both") -> None:
     """Raise ParameterError unless the resolved parameters are jointly allowed.
 
     ``values``: every numeric field of [`Params`][] (EI/rhoA form), as floats or arrays that
     broadcast against each other (a sweep's corner grid). Each condition is monotone in every
     parameter, so a sweep that passes at the corners of its box passes everywhere. Against a
     ``counterpart = "stop"`` beam 1 alone closes the clearance, and uplift2 must be 0.
+
+    Small deflections bound every drive by a tip deflection of MAX_DEFLECTION times the
+    beam's length: the tip force by its static deflection F0 l1^3 / (3 EI1), the shaker by
+    its own motion U0, which each beam it carries (``shaker``; a stop's mount drives beam 1)
+    passes to its tip against a counterpart that does not follow, and more near a resonance.
     """
     v = {name: np.asarray(value, dtype=float) for name, value in values.items()}
     stop = counterpart == "stop"
@@ -292,6 +321,11 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
                     f"its static tip deflection F0 l1^3 / (3 EI1) = {value_at(static, j):.3g} m",
                     "l1", v["l1"], j) + ", i.e. force_amplitude <= "
                 f"{MAX_DEFLECTION * value_at(v['l1'] / compliance, j):.3g} N for this beam 1")
+    shaken = _shaken_length(v, counterpart, shaker)
+    require_all("base_amplitude", v["base_amplitude"],
+                v["base_amplitude"] <= MAX_DEFLECTION * shaken, point,
+                lambda j: _deflection_rule(
+                    "the shaker's motion", _SHAKEN[counterpart == "stop" or shaker][1], shaken, j))
     for i in ("1", "2"):
         fundamental = (np.sqrt(v[f"EI{i}"] / v[f"rhoA{i}"])
                        * (FIRST_CANTILEVER_ROOT / v[f"l{i}"]) ** 2)
@@ -301,6 +335,18 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
                         f" = {value_at(f, j):.3g} rad/s must be <= {MAX_FREQUENCY:g} rad/s: a "
                         "continuum beam model does not hold at higher frequencies (check "
                         f"l{i}, EI{i}, rhoA{i} or the material keys)"))
+
+
+# the beams a shaker's motion deflects: by shaker, or True against a stop (its mount or beam 1's
+# clamp, or both, move beam 1 only), and how a message names their shortest length
+_SHAKEN = {"both": (("1", "2"), "min(l1, l2)"), "beam1": (("1",), "l1"),
+           "beam2": (("2",), "l2"), True: (("1",), "l1")}
+
+
+def _shaken_length(values: Mapping[str, np.ndarray], counterpart: str, shaker: str) -> Any:
+    """The shortest beam the shaker's motion deflects (m, elementwise)."""
+    lengths = [values["l" + i] for i in _SHAKEN[counterpart == "stop" or shaker][0]]
+    return np.minimum(*lengths) if len(lengths) == 2 else lengths[0]
 
 
 def value_at(array: Any, index: tuple[int, ...]) -> float:
@@ -358,13 +404,14 @@ DEFAULT_CONTACT_FORCE = 1e-3  # N, force scale of the default contact stiffness
 DEFAULT_CONTACT_STIFFNESS = hertz_stiffness(DEFAULT_TIP_RADIUS, DEFAULT_CONTACT_FORCE)
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, init=False)
 class Params:
     """Parameters of the two-beam impact model (SI units, see the module docstring).
 
-    Build it with keywords (``Params(clearance=2e-5)``), from a mapping that may use the
-    material keys ([`from_mapping`][]) or from a TOML file ([`from_toml`][]). Every value is
-    validated on construction; a bad value raises [`ParameterError`][].
+    Build it with keywords, the material keys among them (``Params(clearance=2e-5)``,
+    ``Params(width1=0.02)``), from a mapping ([`from_mapping`][]) or from a TOML file
+    ([`from_toml`][]). Every value is validated on construction; a bad value, or an unknown
+    key, raises [`ParameterError`][].
     """
 
     l1: float = 0.1
@@ -387,6 +434,13 @@ class Params:
     shaker: str = "both"
     start: str = "rest"
 
+    def __init__(self, **values: Any) -> None:
+        """Every parameter by keyword (SI units); the material keys replace a beam's EI, rhoA."""
+        given = _field_values(values, "Params()")
+        for field in dataclasses.fields(self):
+            object.__setattr__(self, field.name, given.get(field.name, field.default))
+        self.__post_init__()
+
     def __post_init__(self) -> None:
         for name, allowed in CHOICES.items():
             value = getattr(self, name)
@@ -401,7 +455,7 @@ class Params:
                 if field.name in BEAM2_KEYS:
                     require(field.name, getattr(self, field.name),
                             getattr(self, field.name) == field.default, _NO_BEAM2)
-        check_joint(self.numeric(), counterpart=self.counterpart)
+        check_joint(self.numeric(), counterpart=self.counterpart, shaker=self.shaker)
         # with one clamp moving, the tied tips' quasi-static part would carry a moving
         # clearance: not built
         require("base_amplitude", self.base_amplitude,
@@ -460,13 +514,7 @@ class Params:
         """
         require_type("mapping", mapping, isinstance(mapping, Mapping),
                      "a mapping of parameter names to values")
-        for key in mapping:
-            if key not in PARAMETERS:
-                raise ParameterError(f"unknown parameter {key!r} in {source}; allowed: "
-                                     f"{', '.join(sorted(PARAMETERS))}")
-        if mapping.get("counterpart") == "stop":
-            refuse_beam2(mapping, source)
-        return cls(**resolve_materials(mapping, source))
+        return cls(**_field_values(mapping, source))
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Params:
@@ -481,6 +529,19 @@ class Params:
 
 
 _NO_BEAM2 = "counterpart = 'stop' has no beam 2: leave beam 2's keys out"
+
+
+def _field_values(values: Mapping[str, Any], source: str) -> dict[str, Any]:
+    """[`Params`][]' fields given in ``values`` (from ``source``), the material keys resolved.
+
+    An unknown key, or a key of beam 2 against a stop, raises ParameterError.
+    """
+    for key in values:
+        if key not in PARAMETERS:
+            raise unknown_key("parameter", key, source, sorted(PARAMETERS))
+    if values.get("counterpart") == "stop":
+        refuse_beam2(values, source)
+    return resolve_materials(values, source)
 
 
 def refuse_beam2(given: Any, source: str) -> None:

@@ -178,6 +178,8 @@ def _secular_root(i: int, d: np.ndarray, z: np.ndarray) -> tuple[float, np.ndarr
     iteration's stopping test has an absolute part: seen for the last root of a stiff contact
     on a beam whose modes reach 4e11 rad/s); roots that converge are left exactly as they are.
     """
+    if d.size == 1:  # dlasd4 returns sigma alone here (delta = work = 1), not the difference
+        return math.hypot(d[0], z[0]), np.array([-z[0] ** 2])
     import scipy.linalg.lapack  # here, not at the top: a first-impact map needs no SciPy
 
     delta, sigma, work, info = scipy.linalg.lapack.dlasd4(i, d, z, 1.0)

@@ -38,6 +38,7 @@ from impactbeams.params import (
     read_toml,
     require,
     require_table,
+    unknown_key,
 )
 
 _TOP_LEVEL = ("n_modes", "period", "transient_periods", "params", "continuation")
@@ -54,14 +55,16 @@ def load_continuation(path: str | os.PathLike[str]) -> Continuation:
     data = read_toml(path)
     source = str(path)
     for key in data:
-        require(f"{key!r} in {source}", key, key in _TOP_LEVEL,
-                f"unknown key; allowed: {', '.join(_TOP_LEVEL)}")
+        if key not in _TOP_LEVEL:
+            raise unknown_key("top-level key", key, source, _TOP_LEVEL)
     table = require_table(data, "continuation", source)
-    require(f"[continuation] of {source}", None, "parameter" in table and "min" in table
-            and "max" in table, "needs parameter, min and max")
-    for key in table:
-        require(f"{key!r} in [continuation] of {source}", key, key in _RANGE_KEYS,
-                f"unknown key; allowed: {', '.join(_RANGE_KEYS)}")
+    for key in table:  # before the required keys: a misspelt one is why one is missing
+        if key not in _RANGE_KEYS:
+            raise unknown_key("key", key, f"[continuation] of {source}", _RANGE_KEYS)
+    missing = [key for key in ("parameter", "min", "max") if key not in table]
+    if missing:
+        raise ParameterError(f"[continuation] of {source} needs parameter, min and max: "
+                             f"{', '.join(missing)} missing")
     values: dict[str, Any] = {_RANGE_KEYS[key]: value for key, value in table.items()}
     values.update({key: data[key] for key in ("n_modes", "period", "transient_periods")
                    if key in data})

@@ -30,6 +30,7 @@ from impactbeams.continuation.output import branches_dataset
 from impactbeams.orbits.period_map import check_law
 from impactbeams.orbits.shooting import DEFAULT_SUBSPACE, GUARD, METHODS
 from impactbeams.params import (
+    MAX_MODES,
     RANGES,
     ParameterError,
     Params,
@@ -39,7 +40,7 @@ from impactbeams.params import (
     require_integer,
     require_type,
 )
-from impactbeams.variables import global_attributes
+from impactbeams.variables import PARAMETERS, global_attributes
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -107,6 +108,32 @@ class Continuation:
             value = getattr(self, name)
             if value is not None:
                 require(name, value, require_finite(name, value) > 0, "must be > 0")
+        if self.n_modes is not None:
+            require_integer("n_modes", self.n_modes, 1, MAX_MODES)
+        if self.parameter == "omega":
+            require("min", self.low, self.low > 0, "a periodic orbit needs omega > 0", "rad/s")
+        self._check_steps()
+
+    def _check_steps(self) -> None:
+        """min_step <= step <= max_step, said in the parameter's units (given or default)."""
+        step, low, high = self._steps()
+        unit = PARAMETERS[self.parameter].units
+        require("min_step", low, low <= high, f"must be <= max_step = {high:g}", unit)
+        require("step", step, low <= step <= high,
+                f"must lie from min_step = {low:g} to max_step = {high:g}", unit)
+
+    def _steps(self) -> tuple[float, float, float]:
+        """The first, smallest and largest steps in the parameter's units (given or default).
+
+        The default first step is a hundredth of the range, within the given smallest and
+        largest.
+        """
+        width = self.high - self.low
+        low = self.min_step if self.min_step is not None else 1e-9 * width
+        high = self.max_step if self.max_step is not None else max(
+            self.step or width / 100.0, width / 20.0)
+        step = self.step if self.step is not None else min(max(width / 100.0, low), high)
+        return step, low, high
 
     @property
     def first(self) -> float:
@@ -118,12 +145,8 @@ class Continuation:
     def settings(self) -> Settings:
         """The engine's settings, steps in units of the range."""
         width = self.high - self.low
-        step = self.step if self.step is not None else width / 100.0
-        return Settings(step=step / width,
-                        min_step=(self.min_step if self.min_step is not None else 1e-9 * width)
-                        / width,
-                        max_step=(self.max_step if self.max_step is not None
-                                  else max(step, width / 20.0)) / width,
+        step, low, high = self._steps()
+        return Settings(step=step / width, min_step=low / width, max_step=high / width,
                         max_points=self.max_points, max_branches=self.max_branches)
 
 
@@ -140,8 +163,6 @@ def continue_orbits(continuation: Continuation,
     require_type("continuation", continuation, isinstance(continuation, Continuation),
                  "an impactbeams.Continuation")
     c = continuation
-    if c.parameter == "omega":
-        require("low", c.low, c.low > 0, "a periodic orbit needs omega > 0", "rad/s")
     params = c.params.replace(**{c.parameter: c.first})
     problem = BeamOrbits(params, c.parameter, _modes(c), c.period, c.method,
                          c.subspace)
@@ -162,7 +183,7 @@ def _modes(c: Continuation) -> int:
     from impactbeams.contact import recommended_modes
 
     if c.n_modes is not None:
-        return require_integer("n_modes", c.n_modes, 1)
+        return int(c.n_modes)
     return recommended_modes(c.params)
 
 

@@ -55,6 +55,7 @@ from impactbeams.params import (
     require_table,
     require_type,
     resolve_materials,
+    unknown_key,
     value_at,
 )
 from impactbeams.preflight import (
@@ -269,8 +270,8 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
                  "a mapping in the sweep file's layout, e.g. tomllib.load of a sweep file")
     require_type("source", source, isinstance(source, str), "a str naming the sweep in messages")
     for key in data:
-        require(f"{key!r} in {source}", key, key in _TOP_LEVEL,
-                f"unknown key; allowed top-level keys: {', '.join(_TOP_LEVEL)}")
+        if key not in _TOP_LEVEL:
+            raise unknown_key("top-level key", key, source, _TOP_LEVEL)
     t_max = _number(data.get("t_max", 1.0), f"t_max in {source}")
     require(f"t_max in {source}", t_max, t_max > 0, "must be > 0", "s")
     n_modes = data.get("n_modes", 5)
@@ -363,8 +364,8 @@ def _observables(value: Any, source: str) -> tuple[str, ...]:
     require(where, value, isinstance(value, list) and bool(value),
             f'must be a non-empty list of names, e.g. ["{FIRST_IMPACT}"]')
     for name in value:
-        require(where, name, name in OBSERVABLES,
-                f"unknown observable; allowed: {', '.join(OBSERVABLES)}")
+        if name not in OBSERVABLES:
+            raise unknown_key("observable", name, f"the observables of {source}", OBSERVABLES)
     require(where, value, len(set(value)) == len(value), "must name each observable once")
     return tuple(value)
 
@@ -382,16 +383,16 @@ def _law_axis(spec: Any, where: str) -> Axis:
 
 def _axis(name: str, spec: Any, source: str) -> Axis:
     where = f"[axes.{name}] of {source}"
-    require(where, name, name in PARAMETERS,
-            f"unknown parameter; allowed: {', '.join(PARAMETERS)}")
+    if name not in PARAMETERS:
+        raise unknown_key("parameter", name, f"[axes] of {source}", PARAMETERS)
     if name == "contact_law":
         return _law_axis(spec, where)
     require(where, name, name not in CHOICES,  # a name, not a number: only the law is swept
             f"{name} is not sweepable: give it in [params] (one sweep per {name})")
     require(where, spec, isinstance(spec, dict), "must be a table with min, max, num, scale")
     for key in spec:
-        require(f"{key!r} in {where}", key, key in _AXIS_KEYS,
-                f"unknown key; allowed: {', '.join(_AXIS_KEYS)}")
+        if key not in _AXIS_KEYS:
+            raise unknown_key("key", key, where, _AXIS_KEYS)
     for key in ("min", "max", "num"):
         require(f"{key} in {where}", None, key in spec, "is required")
     lo, hi = _number(spec["min"], f"min in {where}"), _number(spec["max"], f"max in {where}")
@@ -471,7 +472,7 @@ def _check_grid(sweep: Sweep) -> None:
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
-    check_joint(values, point, sweep.base.counterpart)
+    check_joint(values, point, sweep.base.counterpart, sweep.base.shaker)
     check_run(values, sweep.t_max, sweep.n_modes, point)
     _check_long_time(sweep, values, point)
 

@@ -16,6 +16,7 @@ from impactbeams.kernels.layout import CONTACT
 from impactbeams.longtime import LongTime
 from impactbeams.packing import Packed, pack_run
 from impactbeams.params import (
+    MAX_EVENTS,
     MAX_MODES,
     Params,
     is_integer,
@@ -93,7 +94,7 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
 
 def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output: float = 1e-4,
              fields: bool = False, *, times: np.ndarray | None = None, n_points: int = 41,
-             max_events: int = 200_000, search_span: float | None = None,
+             max_events: int = MAX_EVENTS, search_span: float | None = None,
              episode_separation: float | None = None,
              energy_balance: bool = False, lyapunov: bool | int = False,
              transient_periods: int = 0, long_time: LongTime | None = None,
