@@ -8,6 +8,7 @@ file or folder appears.
 
 import itertools
 import time
+import warnings
 import tracemalloc
 
 import numpy as np
@@ -17,6 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from impactbeams.cli import _attach_negative_values, main
+from impactbeams.contact import build_free_phase
 from impactbeams.io import write_netcdf
 from impactbeams.params import MAX_DEFLECTION, ParameterError, Params, check_joint
 from impactbeams.preflight import check_run
@@ -495,7 +497,7 @@ def test_rerun_of_a_finished_sweep_says_it_reused_the_result(scratch, capsys):
         "t_max = 0.3\nn_modes = 4\n[axes.omega]\nmin = 50.0\nmax = 200.0\nnum = 3\n"
         "[axes.force_amplitude]\nmin = 1e-4\nmax = 1e-3\nnum = 2\n")
     before = (scratch / "same.nc").read_bytes()
-    assert main(["run", "same.toml", "-o", "same.nc", "--quiet"]) == 0
+    assert main(["run", "same.toml", "-o", "same.nc"]) == 0
     err = capsys.readouterr().err
     assert err == "reused same.nc: it already holds the result of this sweep (nothing computed)\n"
     assert (scratch / "same.nc").read_bytes() == before
@@ -554,6 +556,8 @@ def test_a_1e8_cell_sweep_validates_fast_without_per_cell_memory():
     ({"times": [0.2, 0.1]}, "times"),
     ({"times": [0.0, 2.0]}, "times"),
     ({"episode_separation": -1.0}, "episode_separation = -1.0"),
+    ({"dt_output": 1.5}, "dt_output = 1.5 is not allowed: must be > 0 and <= t_max = 1.0 (a "
+                         "longer step stores only t = 0)"),
 ])
 def test_simulate_refuses_bad_arguments_at_once(kwargs, fragment):
     start = time.perf_counter()
@@ -868,3 +872,40 @@ def test_one_mode_against_a_stop_has_its_contact_mode():
     with pytest.warns(RuntimeWarning, match="n_modes = 1 does not resolve"):
         run = simulate(Params(counterpart="stop"), 0.012, n_modes=1)
     assert run.attrs["status"] == "complete"
+
+
+STOP = Params(counterpart="stop", contact_law="tied")
+
+
+@pytest.mark.parametrize(("state", "message"), [
+    # a tip 233 km away ran with status complete
+    (np.full(10, 1e3), "initial_state is not allowed: its free vibration deflects beam 1's tip "
+                       "by up to 2.33e+05 m, more than 0.2 l1 = 0.02 m (small deflections"),
+    # a velocity alone: its free vibration's amplitude q'/omega_n counts
+    (np.r_[np.zeros(5), np.full(5, 1e3)], "deflects beam 1's tip by up to 239 m"),
+    # passed with NumPy's ComplexWarning, the imaginary part dropped
+    (np.full(10, 1e-6 + 1e-6j), "j]) is not allowed: complex; must be 10 finite numbers"),
+])
+def test_initial_states_beyond_the_model_are_refused_in_one_line(state, message):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no NumPy warning on the way
+        with pytest.raises(ParameterError) as error:
+            simulate(STOP, 0.01, n_modes=5, initial_state=state)
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_an_initial_state_within_the_limit_is_taken():
+    """A tip deflection of 4.7 mm (below 0.2 l1 = 20 mm) starts as given."""
+    run = simulate(STOP, 0.01, n_modes=5, initial_state=np.r_[1e-4, np.zeros(9)],
+                   times=np.array([0.0]))
+    tip = float(build_free_phase(STOP, 5).tip1[0]) * 1e-4
+    assert float(run.tip_deflection_1[0]) == pytest.approx(tip, rel=1e-12)
+
+
+def test_beam_2_fields_against_a_stop_are_refused():
+    from impactbeams.trajectory import InitialFields
+
+    fields = InitialFields(deflection2=lambda x: 1e-6 * x)
+    with pytest.raises(ParameterError, match="initial_state.deflection2 is not allowed: "
+                                             "counterpart = 'stop' has no beam 2"):
+        simulate(STOP, 0.01, n_modes=5, initial_state=fields)

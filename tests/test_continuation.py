@@ -212,3 +212,39 @@ def test_locate_without_a_corrected_point_beyond(reach, root, located):
     found = locate(point_at, point_at(0.0), 2.0, None, grazing_test, 1e-11)
     assert found.beyond is None and found.root == located
     assert found.s == pytest.approx(min(root, reach), abs=1e-11)
+
+
+@pytest.mark.parametrize(("options", "refused"), [
+    (["--slice", "omega=200"], "values (--slice) = {'omega': '200'} is not allowed"),
+    (["--slice", "bogus=1"], "values (--slice) = {'bogus': '1'} is not allowed"),
+    (["--slice-index", "branch_point=0"], "indices (--slice-index) = {'branch_point': '0'}"),
+    (["--log"], "scale (--log / --linear) = 'log' is not allowed"),
+    (["--contours", "3"], "contours (--contours) = 3 is not allowed"),
+])
+def test_options_a_continuation_plot_would_ignore_are_refused(tmp_path, capsys, options,
+                                                              refused):
+    """--slice, --slice-index, a colour scale and contours mean nothing to the branches drawn
+    whole along their parameter: refused in one line, not silently ignored."""
+    from impactbeams.cli import main
+
+    branches = follow(toys.period_doubling(), [0.0, 0.0], -0.5, -0.5, 0.5)
+    branches_dataset(branches, "omega", {"title": "toy"}).to_netcdf(tmp_path / "cont.nc")
+    assert main(["plot", str(tmp_path / "cont.nc"), "--var", "amplitude", *options]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"impactbeams: error: {refused}")
+    assert line.endswith("a continuation's branches, drawn whole along their parameter, "
+                         "take none")
+    assert not (tmp_path / "cont.png").exists()
+
+
+def test_plot_draws_next_to_its_input_by_default(tmp_path, capsys):
+    """Without -o the figure is IN.png beside IN.nc (plot had no default output)."""
+    from impactbeams.cli import main
+
+    branches = follow(toys.period_doubling(), [0.0, 0.0], -0.5, -0.5, 0.5)
+    branches_dataset(branches, "omega", {"title": "toy"}).to_netcdf(tmp_path / "cont.nc")
+    assert main(["plot", str(tmp_path / "cont.nc"), "--var", "amplitude"]) == 0
+    assert capsys.readouterr().err == f"wrote {tmp_path / 'cont.png'}\n"
+    assert (tmp_path / "cont.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["plot", str(tmp_path / "cont.nc"), "--var", "amplitude", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""

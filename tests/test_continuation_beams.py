@@ -39,7 +39,7 @@ def reduced(tmp_path, low, high, **extra):
 def test_grazing_located_and_crossed(tmp_path, capsys):
     """Up to the first grazing (the linear resonance touching the stop) and past it."""
     path = reduced(tmp_path, 195.0, 210.0)
-    assert main(["continue", str(path), "-o", str(tmp_path / "b.nc"), "--quiet"]) == 0
+    assert main(["continue", str(path), "-o", str(tmp_path / "b.nc")]) == 0
     assert "1 grazing" in capsys.readouterr().err
     with xr.open_dataset(tmp_path / "b.nc") as branch:
         (index,) = np.flatnonzero(branch.bifurcation.values == GRAZING)

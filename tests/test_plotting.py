@@ -479,3 +479,23 @@ def test_integers_with_many_values_are_continuous(figure):
     draw(figure.subplots(), _sweep(twelve, [omega, force], "response_period"))
     assert type(_mesh(figure).norm) is matplotlib.colors.Normalize
     assert np.array_equal(_mesh(figure).get_array().reshape(3, 4), twelve.T)
+
+
+def test_a_variable_without_samples_is_not_told_to_slice_a_period():
+    """A stepped sweep's final_displacement (sweep_direction, omega, coordinate) was told to
+    draw one sample with --slice-index period=I, a dimension it does not have."""
+    import xarray as xr
+    from matplotlib.figure import Figure
+
+    from impactbeams.plotting import draw
+
+    dataset = xr.Dataset({"final_displacement": (("sweep_direction", "omega", "coordinate"),
+                                                 np.zeros((2, 3, 4)))},
+                         coords={"sweep_direction": ["up", "down"], "omega": [1.0, 2.0, 3.0],
+                                 "coordinate": np.arange(4)})
+    with pytest.raises(ParameterError) as error:
+        draw(Figure().subplots(), dataset, "final_displacement")
+    assert "period" not in str(error.value)
+    assert str(error.value).startswith("a map needs a 2-D sweep (a line a 1-D one): "
+                                       "final_displacement has dimensions sweep_direction (2), "
+                                       "omega (3), coordinate (4)")

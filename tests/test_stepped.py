@@ -255,6 +255,27 @@ def test_a_restart_from_a_cells_stored_end_state_is_the_next_cell(along):
             assert np.abs(run[name].values - end).max() < 1e-12 * np.abs(end).max()
 
 
+def test_a_cell_of_a_stepped_sweep_is_a_start_and_the_whole_sweep_is_refused(along):
+    """simulate(initial_state=) of a stepped sweep's Dataset raised KeyError 't_end': one cell
+    (on the section, after whole forcing periods) starts the run its state array starts, bit
+    for bit; the whole sweep, with an end state per cell, is refused in one line."""
+    axis, stepped, _ = along
+    up = stepped.sel(sweep_direction="up")
+    cell = up.isel({axis: 2})
+    state = np.concatenate([cell.final_displacement, cell.final_velocity])
+    params = sweep_from_mapping(ALONG[axis]).base.replace(**{axis: float(up[axis][3])})
+    t_max = 2 * 2 * math.pi / params.omega
+    from_cell = simulate(params, t_max, n_modes=5, initial_state=cell)
+    from_state = simulate(params, t_max, n_modes=5, initial_state=state)
+    for name in ("tip_deflection_1", "final_displacement", "final_velocity"):
+        np.testing.assert_array_equal(from_cell[name], from_state[name])
+    with pytest.raises(ParameterError, match=(
+            "initial_state: the Dataset holds an end state per cell \\(dimensions "
+            f"sweep_direction, {axis}\\): give one cell, e.g. dataset.isel\\(sweep_direction=0, "
+            f"{axis}=0\\)")):
+        simulate(params, t_max, n_modes=5, initial_state=stepped)
+
+
 # a stepped sweep of two parallel rows per direction: four chunks of one row each
 ROWS = {**FOLD, "transient_periods": 40, "sampled_periods": 4, "stepped_axis": "omega",
         "params": {key: value for key, value in FOLD["params"].items()
@@ -365,7 +386,7 @@ def test_the_shipped_stepped_sweep_runs_and_plots_both_directions(tmp_path, monk
     Path("stepped.toml").write_text(text)
     with warnings.catch_warnings():  # 6 modes do not resolve the Hertz contact: a reduced grid
         warnings.simplefilter("ignore", RuntimeWarning)
-        assert main(["run", "stepped.toml", "-o", "out.nc", "--quiet"]) == 0
+        assert main(["run", "stepped.toml", "-o", "out.nc"]) == 0
     assert ("2 x 12 = 24 cells over omega (stepped up and down along omega)"
             in capsys.readouterr().err)
     assert main(["plot", "out.nc", "-o", "out.png"]) == 0

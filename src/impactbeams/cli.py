@@ -32,6 +32,7 @@ from impactbeams.params import (
     MAX_MODES,
     ParameterError,
     Params,
+    modes_per_beam,
     nearest,
     refuse_beam2,
 )
@@ -204,9 +205,10 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     stepping = sweep.stepping
     rows = ("" if stepping is None else
             f" (stepped {' and '.join(stepping.directions)} along {stepping.axis})")
-    print(f"{sweep.source}: {' x '.join(map(str, sweep.shape))} = {sweep.size} cells over "
+    grid = f"{' x '.join(map(str, sweep.shape))} = " if len(sweep.shape) > 1 else ""
+    print(f"{sweep.source}: {grid}{sweep.size} cells over "
           f"{', '.join(a.name for a in sweep.axes)}{rows}; {horizon}, "
-          f"{sweep.n_modes} modes per beam -> {output}\nexpected: "
+          f"{modes_per_beam(sweep.n_modes, sweep.base.counterpart)} -> {output}\nexpected: "
           f"{expected_cost(sweep, args.threads).describe()}"
           + ("" if kernels_cached(run_kind(sweep), first_impact_kernel(sweep)) else
              f", after compiling the kernels (once per install), about "

@@ -531,6 +531,11 @@ class Params:
 _NO_BEAM2 = "counterpart = 'stop' has no beam 2: leave beam 2's keys out"
 
 
+def modes_per_beam(n_modes: int, counterpart: str) -> str:
+    """``"16 modes per beam"``, or against a stop (one beam) ``"16 modes of beam 1"``."""
+    return f"{n_modes} modes {'of beam 1' if counterpart == 'stop' else 'per beam'}"
+
+
 def _field_values(values: Mapping[str, Any], source: str) -> dict[str, Any]:
     """[`Params`][]' fields given in ``values`` (from ``source``), the material keys resolved.
 

@@ -62,6 +62,7 @@ def draw(axes: Axes, dataset: xr.Dataset | PlainDataset, variable: str | None = 
     field = data[name]
     grid = [d for d in field.dims if d not in (*SAMPLE_DIMENSIONS, *OVERLAID_DIMENSIONS)]
     overlaid = len(grid) == 1 and any(d in field.dims for d in OVERLAID_DIMENSIONS)
+    samples = any(d in field.dims for d in SAMPLE_DIMENSIONS)
     if contours is not None and len(field.dims) != 2:
         raise ParameterError(f"contour lines need a map of two dimensions; {name} has "
                              f"{_dimensions(field)}")
@@ -69,7 +70,7 @@ def draw(axes: Axes, dataset: xr.Dataset | PlainDataset, variable: str | None = 
         from impactbeams.plotting.lines import draw_directions
 
         draw_directions(axes, data, name, scale)
-    elif grid and len(grid) < field.ndim:
+    elif samples and grid:
         if len(grid) > 1:
             raise ParameterError(f"a bifurcation diagram needs one swept axis: {name} has "
                                  f"{_dimensions(field)}; slice all but one (--slice "
@@ -133,6 +134,19 @@ def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
     return []
 
 
+# the command line's name of each option of plot_dataset that a figure may not take
+_OPTIONS = {"values": "--slice", "indices": "--slice-index", "scale": "--log / --linear",
+            "contours": "--contours"}
+
+
+def _refuse_options(figure: str, **given: object) -> None:
+    """ParameterError naming the first option ``given`` (not None or empty) ``figure`` ignores."""
+    for name, value in given.items():
+        if value is not None and value != {}:
+            raise ParameterError(f"{name} ({_OPTIONS[name]}) = {value!r} is not allowed: "
+                                 f"{figure} take none")
+
+
 def _require_xarray(dataset: xr.Dataset | PlainDataset, figure: str) -> None:
     """TypeError unless ``dataset`` is an xarray Dataset: ``figure`` is drawn from one."""
     if isinstance(dataset, PlainDataset):
@@ -162,6 +176,8 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
     _check_arguments(dataset, path, variable, values, indices, title, dpi)
     if "branch_point" in dataset.dims:
         _require_xarray(dataset, "a continuation's branches")
+        _refuse_options("a continuation's branches, drawn whole along their parameter,",
+                        values=values, indices=indices, scale=scale, contours=contours)
         return _plot_branches(dataset, path, variable, title, dpi, diagram)
     if diagram is not None:
         raise ParameterError("diagram (--over) is for a continuation's file only: this Dataset "

@@ -20,6 +20,7 @@ from impactbeams.params import (
     MAX_MODES,
     Params,
     is_integer,
+    modes_per_beam,
     require,
     require_finite,
     require_integer,
@@ -238,7 +239,8 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
     times = _checked_times(times, t_max)
     if times is None:
         dt_output = require_finite("dt_output", dt_output, "s")
-        require("dt_output", dt_output, dt_output > 0, "must be > 0", "s")
+        require("dt_output", dt_output, 0 < dt_output <= t_max,
+                f"must be > 0 and <= t_max = {t_max!r} (a longer step stores only t = 0)", "s")
     max_events = require_integer("max_events", max_events, 1)
     n_points = require_integer("n_points", n_points, 2)
     span = t_max if search_span is None else require_finite("search_span", search_span, "s")
@@ -274,7 +276,8 @@ def _announce(params: Params, run_inputs: _RunInputs) -> None:
     compile_note = ("" if kernels_cached("simulate") else
                     f", after compiling the kernels (once per install), about "
                     f"{format_time(costs.COMPILE['simulate'])}")
-    print(f"simulate: {params.contact_law} contact, {run_inputs.n_modes} modes per beam, "
+    print(f"simulate: {params.contact_law} contact, "
+          f"{modes_per_beam(run_inputs.n_modes, params.counterpart)}, "
           f"t_max = {run_inputs.t_max:g} s; expected: roughly "
           f"{format_time(run_inputs.seconds)}{compile_note}", file=sys.stderr)
 

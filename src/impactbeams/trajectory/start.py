@@ -24,7 +24,7 @@ from impactbeams.kernels.events import event_value, phase_event_function
 from impactbeams.kernels.layout import CONTACT, FREE
 from impactbeams.modes import BeamShapes
 from impactbeams.packing import Packed
-from impactbeams.params import ParameterError, require_type
+from impactbeams.params import MAX_DEFLECTION, ParameterError, require_type
 from impactbeams.trajectory.phases import Trajectory, free_states
 
 # a Dataset's final state restarts a run if its t_end is a whole number of forcing periods to
@@ -39,17 +39,42 @@ def checked_state(packed: Packed, state: object, name: str = "initial_state") ->
     finite values.
     """
     size = 2 * packed.q0.size
-    try:
-        z = np.asarray(state, dtype=float)
-    except (TypeError, ValueError):
-        z = None
     allowed = (f"{size} finite numbers, the modal state (q, q') of this model's "
                f"2 x {packed.q0.size} free coordinates (n_modes, counterpart)")
+    try:
+        given = np.asarray(state)
+        z = None if given.dtype.kind not in "biuf" else given.astype(float)
+    except (TypeError, ValueError):
+        z = None
+    if z is None and np.iscomplexobj(given):  # its imaginary part would be dropped
+        raise ParameterError(f"{name} = {reprlib.repr(state)} is not allowed: complex; must "
+                             f"be {allowed}")
     require_type(name, state, z is not None, allowed)
     if z.shape != (size,) or not np.all(np.isfinite(z)):
         raise ParameterError(f"{name} = {reprlib.repr(state)} (shape {z.shape}) is not "
                              f"allowed: must be {allowed}")
+    _check_reach(packed, z, name)
     return z
+
+
+def _check_reach(packed: Packed, z: np.ndarray, name: str) -> None:
+    """Refuse a state whose free vibration may move a tip beyond the small-deflection limit.
+
+    Each mode's amplitude sqrt(q_n^2 + (q_n' / omega_n)^2) times its tip deflection, summed:
+    the most the state's free vibration can deflect each tip (m), against MAX_DEFLECTION of
+    the beam's length, as every drive is (`impactbeams.params.check_joint`).
+    """
+    free, p = packed.dynamics.free, packed.params
+    n = packed.q0.size
+    amplitudes = np.hypot(z[:n], z[n:] / free.frequencies)
+    for beam, tips in (("1", free.tip1), ("2", free.tip2)):
+        reach, limit = float(np.abs(tips) @ amplitudes), MAX_DEFLECTION * getattr(p, "l" + beam)
+        if reach > limit:
+            raise ParameterError(
+                f"{name} is not allowed: its free vibration deflects beam {beam}'s tip by up to "
+                f"{reach:.3g} m, more than {MAX_DEFLECTION:g} l{beam} = {limit:.3g} m (small "
+                "deflections: the beam model is linear); is it in the run's modal units (q in "
+                "kg^1/2 m^1/2, as final_displacement)?")
 
 
 def phase_state(packed: Packed, z: np.ndarray, t: float = 0.0,
@@ -142,6 +167,11 @@ def _projection(field: Callable[[np.ndarray], np.ndarray] | None, name: str, sha
 def projected_fields(packed: Packed, fields: InitialFields) -> np.ndarray:
     """The section state z = (q, q') of ``fields`` (see `InitialFields`)."""
     p, free = packed.params, packed.dynamics.free
+    if p.counterpart == "stop":
+        for name in ("deflection2", "velocity2"):
+            if getattr(fields, name) is not None:
+                raise ParameterError(f"initial_state.{name} is not allowed: counterpart = "
+                                     "'stop' has no beam 2; leave it None")
     q = np.concatenate([_projection(fields.deflection1, "deflection1", free.beam1.shapes,
                                     p.rhoA1),
                         _projection(fields.deflection2, "deflection2", free.beam2.shapes,
@@ -152,10 +182,26 @@ def projected_fields(packed: Packed, fields: InitialFields) -> np.ndarray:
 
 
 def dataset_final_state(packed: Packed, dataset: xr.Dataset) -> np.ndarray:
-    """The final state of an earlier run's Dataset, at a whole number of forcing periods."""
+    """The final state of an earlier run's Dataset, at a whole number of forcing periods.
+
+    A simulate() result, or one cell of a stepped sweep (each cell ends after whole forcing
+    periods of its own omega: its end state is on the section, `impactbeams.sweep`).
+    """
     if "final_displacement" not in dataset:
         raise ParameterError("initial_state: the Dataset has no final_displacement (not a "
-                             "simulate() result of this version)")
+                             "simulate() result or a stepped sweep's of this version)")
+    cells = [dim for dim in dataset["final_displacement"].dims if dim != "coordinate"]
+    if cells:
+        raise ParameterError(
+            "initial_state: the Dataset holds an end state per cell (dimensions "
+            f"{', '.join(map(str, cells))}): give one cell, e.g. dataset.isel("
+            f"{', '.join(f'{dim}=0' for dim in cells)})")
+    if "t_end" not in dataset.attrs:
+        if "stepping" not in dataset.attrs:
+            raise ParameterError("initial_state: the Dataset has no t_end (not a simulate() "
+                                 "result or a stepped sweep's of this version)")
+        return np.concatenate([dataset["final_displacement"].values,
+                               dataset["final_velocity"].values])
     t_end, omega = float(dataset.attrs["t_end"]), packed.params.omega
     turns = omega * t_end / (2.0 * math.pi)
     if abs(turns - round(turns)) > SECTION_TOLERANCE * max(turns, 1.0):
