@@ -8,8 +8,8 @@ file or folder appears.
 
 import itertools
 import time
-import warnings
 import tracemalloc
+import warnings
 
 import numpy as np
 import pytest

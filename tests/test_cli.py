@@ -233,3 +233,51 @@ def test_run_announces_a_stop_sweep_in_modes_of_beam_1(capsys, tmp_path):
     first = capsys.readouterr().err.splitlines()[0]
     assert first == (f"s.toml: 400 cells over omega; t_max = 0.3 s, 16 modes of beam 1 -> "
                      f"{tmp_path / 's.nc'}")
+
+
+def test_a_run_stopped_by_the_event_cap_says_where_and_when_it_will(tmp_path, capsys):
+    """The bar ended at '600/600 s simulated' for a run stopped at 318 s; the cap was neither
+    announced nor settable. Now --max-events sets it, the pace of the first window warns that
+    it will be reached, and the bar's last line says where the run stopped."""
+    output = tmp_path / "r.nc"
+    assert main(["simulate", "--t-max", "5", "--max-events", "3000", "-o", str(output)]) == 3
+    err = capsys.readouterr().err.splitlines()
+    with xr.open_dataset(output) as run:
+        t_end = run.attrs["t_end"]
+        assert run.attrs["status"] == "event_limit" and run.attrs["n_phases"] == 3000
+    warning = next(line for line in err if "at its pace so far" in line)
+    assert warning.endswith("and stops there: raise max_events (--max-events) to go on")
+    assert "reaches max_events = 3000 phases at about t = " in warning
+    last_bar = next(line for line in err if "stopped: event_limit" in line)
+    assert err.index(warning) < err.index(last_bar)
+    assert last_bar.endswith(f"stopped: event_limit at t = {t_end:.6g} s")
+    assert f" {t_end:.4g}/5 s simulated" in last_bar
+    assert not any("5/5 s simulated" in line for line in err)
+
+
+@pytest.mark.parametrize(("clearance", "hinted"), [("0.011", True), ("1.1e-5", False)])
+def test_a_clearance_beyond_any_motion_of_the_drive_gets_a_hint(tmp_path, capsys, clearance,
+                                                                 hinted):
+    """simulate --clearance 0.011 (mm typed as m) ran to 0 impacts without a word. The tip's
+    linear response by t_max = 0.6 s: its static deflection F0 l1^3 / (3 EI1) = 3.70e-5 m
+    amplified by 1 / (1 - (Omega / omega_1)^2) = 1.043 (the steady part, 3.86e-5 m), plus the
+    free vibration of the start from rest, at most Omega / omega_n of each mode's."""
+    assert main(["simulate", "--t-max", "0.6", "--clearance", clearance, "-o",
+                 str(tmp_path / "r.nc"), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    p = Params()
+    static = p.force_amplitude * p.tip_compliance[0]
+    steady = static / (1 - (p.omega / (1.8751040687**2 * 0.7 / p.l1**2)) ** 2)
+    if not hinted:
+        assert err == ""
+        return
+    (line,) = err.splitlines()
+    reach = float(line.split("by t_max (")[1].split(" m")[0])
+    assert steady < reach < steady * (1 + p.omega / 246.121)  # plus the free vibration
+    assert steady == pytest.approx(3.856e-5, rel=1e-3)
+    ratio = float(line.split(" m is ")[1].split(" times")[0])
+    assert ratio == pytest.approx(0.011 / reach, rel=5e-3)  # both printed to 3 digits
+    assert line == (f"impactbeams: warning: clearance = 0.011 m is {ratio:.3g} times the "
+                    "largest tip motion the drive is expected to give beam 1 by t_max "
+                    f"({reach:.3g} m, its linear response): the tips will most likely never "
+                    "meet. A clearance in mm typed in m? (0.011 mm is 1.1e-05 m)")

@@ -377,14 +377,18 @@ def _branch_summary(dataset: xr.Dataset) -> str:
 
 def _simulate(args: argparse.Namespace) -> int:
     from impactbeams.io import write_netcdf
-    from impactbeams.preflight import require_output_file
+    from impactbeams.preflight import clearance_hint, require_output_file
     from impactbeams.sweep.lock import output_lock
     from impactbeams.trajectory import simulate
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
+    params = params_from_args(args)
+    hint = clearance_hint(params, args.t_max) if 0 < args.t_max < float("inf") else None
     with output_lock(output):  # a second simulate on this output would silently replace it
+        if hint:
+            _warn(hint)
         with _running_kernels("simulate", args):
-            dataset = simulate(params_from_args(args), args.t_max, n_modes=args.n_modes,
+            dataset = simulate(params, args.t_max, n_modes=args.n_modes,
                                dt_output=args.dt_output, fields=args.fields,
                                energy_balance=args.energy_balance, lyapunov=args.lyapunov,
                                transient_periods=args.transient_periods,
@@ -664,7 +668,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(
             _attach_negative_values(sys.argv[1:] if argv is None else argv))
         args.own_process = argv is None
-        with warnings.catch_warnings():
+        with warnings.catch_warnings():  # each warning a line, whatever the caller's filters
+            warnings.simplefilter("default")
             warnings.showwarning = _show_warning
             return args.handler(args)
     except UsageError as error:

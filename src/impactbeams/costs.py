@@ -116,6 +116,23 @@ def impacting_fraction(values: Mapping[str, Any], n_modes: int, horizon: Any) ->
     its participation (``Gamma_n Y_n(l) ~ 4 / (k_n l)``, driven by ``U0 Omega^2``), plus the
     clamp's own U0 (which a shaker carrying both clamps does not add: an overestimate).
     """
+    lasting, passing, slowest = tip_reach(values, n_modes, horizon)
+    gap = np.asarray(values["clearance"]) - lasting
+    damping = np.asarray(values["damping_ratio"], dtype=float)
+    decay = damping * slowest * np.asarray(horizon)  # free vibration's decay over it
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(decay > 0.0, np.log(passing / gap) / decay, 1.0)
+    return np.where(gap <= 0.0, 1.0, np.where(passing >= gap, np.clip(share, 0.0, 1.0), 0.0))
+
+
+def tip_reach(values: Mapping[str, Any], n_modes: int, horizon: Any,
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Beam 1's tip motion (m) by the linear response over ``horizon`` (s), per point.
+
+    Returns the steady part plus the uplifts, which last (m), the free vibration of the start
+    from rest, which passes with the damping (m), and beam 1's slowest frequency (rad/s), as
+    `impacting_fraction` describes them.
+    """
     from impactbeams.modes import cantilever_roots
 
     roots = cantilever_roots(n_modes)
@@ -135,11 +152,7 @@ def impacting_fraction(values: Mapping[str, Any], n_modes: int, horizon: Any) ->
         shaken = steady * (rho_a * length) / roots * big_omega**2  # per unit U0
         lasting = lasting + base * (1.0 + np.sum(shaken, axis=-1))
         passing = passing + base * np.sum(shaken * big_omega / omega_n, axis=-1)
-    gap = np.asarray(values["clearance"]) - lasting
-    decay = damping * omega_n[..., 0] * np.asarray(horizon)  # free vibration's decay over it
-    with np.errstate(divide="ignore", invalid="ignore"):
-        share = np.where(decay > 0.0, np.log(passing / gap) / decay, 1.0)
-    return np.where(gap <= 0.0, 1.0, np.where(passing >= gap, np.clip(share, 0.0, 1.0), 0.0))
+    return lasting, passing, omega_n[..., 0]
 
 
 def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon: Any,

@@ -51,15 +51,23 @@ class Progress:
         """Record the work finished so far as ``done`` units in all (e.g. simulated time)."""
         self.update(done - self.done)
 
-    def _draw(self, now: float, eta: float) -> None:
+    def stop(self, done: float, reason: str) -> None:
+        """End the bar at ``done`` units, short of its total, saying why (a last line)."""
+        self.done = done
+        if self.enabled:
+            self._draw(time.perf_counter(), float("nan"), f"stopped: {reason}")
+
+    def _draw(self, now: float, eta: float, stopped: str = "") -> None:
         fraction = min(self.done / self.total, 1.0) if self.total else 1.0
         bar = "#" * int(30 * fraction)
         eta_text = "   ?  " if eta != eta else f"{eta:6.1f}"
         amounts = (f"{self.done}/{self.total}" if isinstance(self.total, int)
                    else f"{self.done:.4g}/{self.total:.4g}")
         line = (f"[{bar:<30}] {100 * fraction:5.1f}% {amounts} {self.unit} "
-                f"{now - self.start:6.1f} s elapsed, ETA {eta_text} s")
-        if self.interactive:
+                f"{now - self.start:6.1f} s elapsed, " + (stopped or f"ETA {eta_text} s"))
+        if stopped:
+            self.stream.write(("\r" if self.interactive else "") + line + "\n")
+        elif self.interactive:
             self.stream.write("\r" + line + ("\n" if fraction >= 1 else ""))
         elif int(10 * fraction) > self.reported_decile:
             self.reported_decile = int(10 * fraction)

@@ -53,7 +53,7 @@ class Trajectory:
 
 
 def run(packed: Packed, max_events: int,
-        report: Callable[[float], None] | None = None,
+        report: Callable[[float, int], None] | None = None,
         start: tuple[np.ndarray, np.ndarray, int] | None = None) -> Trajectory:
     """Run the event kernel, in windows of segments, up to ``max_events`` segments.
 
@@ -62,8 +62,9 @@ def run(packed: Packed, max_events: int,
 
     Each window ends where the run can resume exactly (``stroboscope.resume_point``: a free
     segment after a contact of positive length, where no history carries over), so that the
-    segments are bit for bit those of one uninterrupted run; ``report(t)`` is called after
-    each window with the simulated time reached (s). The arrays grow by doubling.
+    segments are bit for bit those of one uninterrupted run; ``report(t, phases)`` is called
+    after each window with the simulated time reached (s) and the phases recorded before it.
+    The arrays grow by doubling.
     """
     from impactbeams.kernels.stroboscope import resume_point
 
@@ -91,7 +92,7 @@ def run(packed: Packed, max_events: int,
         phase0 = FREE  # a resume point is a free segment
         window = _next_window(window, resume, time.perf_counter() - began)
         if report is not None:
-            report(t0)
+            report(t0, first)
     count += first
     time_, phase, sustained, q, v, end_q, end_v = (array[:count] for array in arrays)
     return Trajectory(time_, phase, sustained, q, v, end_q, end_v, dyn.STATUS_NAMES[status],

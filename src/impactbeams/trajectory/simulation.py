@@ -181,8 +181,12 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     if progress:
         _announce(params, run_inputs)
     bar = Progress(t_max, enabled=progress, unit="s simulated")
-    trajectory = run(packed, run_inputs.max_events, bar.reach, start)
-    bar.reach(t_max)
+    trajectory = run(packed, run_inputs.max_events,
+                     _EventPace(bar, t_max, run_inputs.max_events).report, start)
+    if trajectory.status == "complete":
+        bar.reach(t_max)
+    else:
+        bar.stop(trajectory.t_end, f"{trajectory.status} at t = {trajectory.t_end:.6g} s")
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
                       f"{t_max!r} s: status {trajectory.status!r}", RuntimeWarning, stacklevel=2)
@@ -207,6 +211,29 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
     validate(dataset)  # as registered, or a bug of the package
     return dataset
+
+
+class _EventPace:
+    """Progress of a run, and a warning once its pace says it will reach ``max_events``.
+
+    The pace is the phases per simulated second so far (reported after each window of
+    `phases.run`), the run's own measure: no estimate before the run knows how often a rattle
+    makes contact.
+    """
+
+    def __init__(self, bar: Progress, t_max: float, max_events: int) -> None:
+        self.bar, self.t_max, self.max_events, self.warned = bar, t_max, max_events, False
+
+    def report(self, t: float, phases: int) -> None:
+        self.bar.reach(t)
+        if self.warned or t <= 0.0 or phases * self.t_max / t <= self.max_events:
+            return
+        self.warned = True
+        warnings.warn(f"at its pace so far ({phases} phases in {t:.4g} s) the run reaches "
+                      f"max_events = {self.max_events} phases at about t = "
+                      f"{self.max_events * t / phases:.3g} s of t_max = {self.t_max:g} s, and "
+                      "stops there: raise max_events (--max-events) to go on",
+                      RuntimeWarning, stacklevel=4)
 
 
 @dataclasses.dataclass(frozen=True)
