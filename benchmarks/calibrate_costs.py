@@ -194,6 +194,23 @@ def sampling_cost(log):
     return per
 
 
+def energy_cost(log):
+    """Seconds per node of the energy quadrature and mode (with the balance minus without)."""
+    from impactbeams import Params, costs
+    from impactbeams.preflight import highest_frequency
+    from impactbeams.trajectory import simulate
+
+    params, n, t_max, dt = Params(contact_law="spring", damping_ratio=0.01), 32, 0.1, 1e-3
+    without = timed(lambda: simulate(params, t_max, n_modes=n, dt_output=dt))
+    balance = timed(lambda: simulate(params, t_max, n_modes=n, dt_output=dt,
+                                     energy_balance=True))
+    per_node = costs.energy_seconds(float(highest_frequency(params.numeric(), n)), n, t_max,
+                              round(t_max / dt) + 1) / costs.ENERGY_NODE
+    per = max(balance - without, 0.0) / per_node
+    log(f"energy balance: {per * 1e9:.1f} ns per quadrature node and mode")
+    return per
+
+
 def geometry_cost(log):
     from impactbeams.sweep.plan import build_plan
 
@@ -324,6 +341,7 @@ def main() -> None:
     constants["FREE_CYCLE"] = free_cost(log)
     constants["LYAPUNOV_FREE_CYCLE"] = free_cost(log, "lyapunov_exponent")
     constants["SAMPLING"] = sampling_cost(log)
+    constants["ENERGY_NODE"] = energy_cost(log)
     constants["GEOMETRY"] = geometry_cost(log)
     constants["THREAD_SPEEDUP"] = {1: 1.0, 2: thread_speedup(log)}
     if args.skip_compile:

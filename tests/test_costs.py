@@ -289,3 +289,56 @@ def test_a_stop_costs_beam_one_coordinates_only():
     power = IMPACT_CYCLE["long_time"]["spring"][1]  # the calibrated n^p per impacting cycle
     assert stop < 1.05 * 2.0 ** -power * beams  # n modes in all, not 2 n: 2^-p of the work
     assert abs(stop - halved) < 0.2 * halved  # the same work, bar the impacting share's rule
+
+
+def _quadrature_panels(packed, trajectory, times):
+    """The panels `kernels.reductions.work_of_force` takes over a run (its own rule: at most
+    half the shortest period of each segment's phase, cut at every output time)."""
+    from impactbeams.kernels.layout import ROW_FREQUENCY
+
+    ends = np.append(trajectory.time[1:], trajectory.t_end)
+    cuts = np.unique(np.concatenate([trajectory.time, times, [trajectory.t_end]]))
+    segment = np.searchsorted(trajectory.time, cuts[:-1], side="right") - 1
+    fastest = np.array([max(packed.tables[phase][ROW_FREQUENCY].max(), packed.params.omega)
+                        for phase in trajectory.phase])[segment]
+    widths = np.minimum(np.diff(cuts), ends[segment] - cuts[:-1])
+    return int(np.sum(np.maximum(1, np.ceil(widths * fastest / math.pi))))
+
+
+@pytest.mark.parametrize(("law", "n_modes"), [("spring", 16), ("tied", 5)])
+def test_the_energy_balance_is_in_the_estimate(law, n_modes):
+    """simulate --energy-balance announced 26 min for a run whose quadratures alone would take
+    days: their cost was not in the estimate. It is now, and its count of quadrature panels
+    follows the kernel's (here within a factor 3: the contacts' phases have higher
+    frequencies, and their switches cut panels, neither known before a run)."""
+    from impactbeams.preflight import highest_frequency
+    from impactbeams.trajectory.simulation import simulation_cost
+
+    params = Params(contact_law=law)
+    fastest = float(highest_frequency(params.numeric(), n_modes))
+    t_max, n_times = 0.3, 301
+    plain, balanced = (simulation_cost(params, t_max, n_modes, n_times, False, 41, energy, 1000)
+                       for energy in (False, True))
+    assert balanced.seconds - plain.seconds == pytest.approx(
+        costs.energy_seconds(fastest, n_modes, t_max, n_times), rel=1e-12)
+    packed = pack_run(params, n_modes, t_max, t_max)
+    trajectory = phases.run(packed, 200_000)
+    modelled = t_max * fastest / math.pi + n_times
+    counted = _quadrature_panels(packed, trajectory, np.linspace(0.0, t_max, n_times))
+    assert modelled / 3 < counted < 3 * modelled
+
+
+def test_the_energy_quadratures_report_progress(capsys):
+    """The quadratures ran silent for 30+ CPU-minutes; each now reports the simulated time it
+    has integrated, to its end, and the results are the same bits."""
+    params = Params(contact_law="tied", omega=400.0, force_amplitude=5e-3, damping_ratio=0.01)
+    quiet = simulate(params, 0.2, n_modes=8, dt_output=1e-3, energy_balance=True)
+    capsys.readouterr()
+    shown = simulate(params, 0.2, n_modes=8, dt_output=1e-3, energy_balance=True,
+                     progress=True)
+    err = capsys.readouterr().err.splitlines()
+    for what in ("work and dissipation", "episodes' energies"):
+        lines = [line for line in err if f"s integrated ({what})" in line]
+        assert len(lines) >= 2 and "100.0% 0.2/0.2 s integrated" in lines[-1], what
+    for name in quiet.variables:
+        assert quiet[name].values.tobytes() == shown[name].values.tobytes(), name

@@ -20,12 +20,12 @@ from impactbeams.kernels import dynamics as dyn
 from impactbeams.kernels.first_impact import first_impact_cells
 from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.kernels.propagation import advance
-from impactbeams.kernels.reductions import work_of_force
 from impactbeams.model import build_free_phase
 from impactbeams.modes import contact_frequencies, contact_modes
 from impactbeams.packing import free_tables, geometry_row
 from impactbeams.params import Params
 from impactbeams.trajectory import observables, pack_run, run, sample
+from impactbeams.trajectory.fields import energy_integrals
 from references import (
     free_tip_gap,
     gauss_rule,
@@ -92,10 +92,7 @@ def phase_energy_drift(params, t_max, n_modes, count=20_001):
     times = np.unique(np.concatenate([np.linspace(0.0, t_max, count), traj.time]))
     phase, q, v = sample(packed, traj, times)
     obs = observables(packed, phase, times, q, v)
-    work, loss = energies = np.empty((2, times.size))
-    work_of_force(packed.tables, packed.forces, packed.phase_scalars,
-                  packed.dynamics.spring_arrays, packed.drives, packed.settings, traj.segments,
-                  traj.t_end, times, energies)
+    work, loss = energy_integrals(packed, traj, times)
     balance = obs["energy"] - obs["unresolved_kinetic_energy"] - work + loss
     segment = np.searchsorted(traj.time, times, side="right") - 1
     start = balance[np.searchsorted(times, traj.time)][segment]

@@ -21,7 +21,8 @@ Numba's disk cache, `impactbeams.compilation`) and the compute, per cell of a sw
   (a map's run over t_max with its observables), ``lyapunov`` (its windowed run with the
   tangent vectors), ``long_time`` (transient + sampled forcing periods, stroboscopic samples)
   and ``simulate`` (one run, then every contact's peak force and the impact table; plus
-  ``SAMPLING`` per output time and mode).
+  ``SAMPLING`` per output time and mode, and with the energy balance its two quadratures,
+  `energy_seconds`).
 
 Time on T threads: the compute divided by ``THREAD_SPEEDUP[T]`` (measured on 2 cores).
 
@@ -52,6 +53,7 @@ IMPACT_CYCLE = {
 FREE_CYCLE = 1.7e-07
 LYAPUNOV_FREE_CYCLE = 6.2e-07
 SAMPLING = 1.2e-07
+ENERGY_NODE = 1.7e-07
 GEOMETRY = 8.9e-06
 THREAD_SPEEDUP = {1: 1.0, 2: 1.8}
 COMPILE = {
@@ -169,6 +171,23 @@ def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon:
     per_beam = n_modes / 2 if counterpart == "stop" else n_modes
     per_cycle = share * scale * per_beam**power + (1.0 - share) * free * per_beam
     return cycles(values, horizon) * per_cycle
+
+
+ENERGY_NODES = 12  # Gauss nodes per panel of the energy quadrature (kernels.reductions)
+ENERGY_QUADRATURES = 2  # over the output times, and over the episodes' ends
+
+
+def energy_seconds(fastest: float, n_modes: int, horizon: float, n_times: float) -> float:
+    """Seconds of a simulated run's energy balance (`kernels.reductions.work_of_force`).
+
+    Each of its ENERGY_QUADRATURES quadratures evaluates the power at ENERGY_NODES nodes per
+    panel of at most half the ``fastest`` period (rad/s: the highest mode's), over the
+    ``horizon`` (s) and at least once between output times: ``ENERGY_NODE n_modes`` each
+    (the propagation of both beams' coordinates). The panels the contacts' switches cut
+    are left out: a run's events are not known before it runs.
+    """
+    panels = horizon * fastest / np.pi + n_times
+    return ENERGY_QUADRATURES * ENERGY_NODES * panels * ENERGY_NODE * n_modes
 
 
 def first_impact_seconds(cells: float, n_modes: int) -> float:

@@ -119,15 +119,17 @@ def _integrate_power(tables, forces, phase_scalars, spring, drives, settings, re
 
 @kernel
 def work_of_force(tables, forces, phase_scalars, spring, drives, settings, recorded, t_end,
-                  times, out):
+                  times, out, carried):
     """Work done by F and energy dissipated by damping from t = 0 to each of ``times`` (J).
 
-    ``recorded``: the run's `records.Segments`, all of them recorded ones; ``times`` ascending
-    in [0, t_end], ``t_end`` where the last segment stops; ``out``: rows ``(work,
-    dissipation)``, a column per time.
+    ``recorded``: consecutive `records.Segments` of the run, all of them recorded ones;
+    ``times`` ascending in [time[0], t_end], ``t_end`` where the last segment stops; ``out``:
+    rows ``(work, dissipation)``, a column per time. ``carried``: (work, dissipation, time
+    integrated to) at the first segment's start, updated to the last one's end: a run taken
+    in consecutive pieces (each with the times before its end) sums in the order of one call.
     """
     work_arrays = np.empty((4, recorded.q.shape[1]))
-    work, dissipated, t_done, i = 0.0, 0.0, 0.0, 0
+    work, dissipated, t_done, i = carried[0], carried[1], carried[2], 0
     count = recorded.time.size
     for k in range(count):
         seg_end = recorded.time[k + 1] if k + 1 < count else t_end
@@ -142,6 +144,7 @@ def work_of_force(tables, forces, phase_scalars, spring, drives, settings, recor
         dw, dd = _integrate_power(tables, forces, phase_scalars, spring, drives, settings,
                                   recorded, k, t_done, seg_end, work_arrays)
         work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, seg_end)
+    carried[0], carried[1], carried[2] = work, dissipated, t_done
 
 
 @kernel

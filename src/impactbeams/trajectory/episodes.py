@@ -11,13 +11,14 @@ beams' own motion takes to turn around.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from numpy.polynomial.legendre import leggauss
 
 from impactbeams.kernels.layout import CONTACT, ROW_FREQUENCY
-from impactbeams.kernels.reductions import work_of_force
 from impactbeams.packing import Packed
+from impactbeams.trajectory.fields import energy_integrals
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory, sample
 
@@ -60,11 +61,13 @@ def _contact_work(packed: Packed, trajectory: Trajectory, k: int) -> tuple[float
 
 
 def episode_table(packed: Packed, trajectory: Trajectory, impacts: dict[str, np.ndarray],
-                  separation: float, energy: bool = True) -> dict[str, np.ndarray]:
+                  separation: float, energy: bool = True,
+                  report: Callable[[float], None] | None = None) -> dict[str, np.ndarray]:
     """Per-episode quantities from the per-contact table ``impacts`` (see the module doc).
 
     ``energy``: also the dissipated energy and the energetic restitution (quadratures over
-    the contacts, costly with many modes).
+    the contacts and the run, costly with many modes; ``report`` as in
+    `impactbeams.trajectory.fields.energy_integrals`).
     """
     k = np.flatnonzero(trajectory.phase == CONTACT)
     onset = impacts["impact_onset_time"]
@@ -88,13 +91,14 @@ def episode_table(packed: Packed, trajectory: Trajectory, impacts: dict[str, np.
     }
     if energy:
         table.update(_episode_energetics(packed, trajectory, k, labels, onset[first],
-                                         release[last], closed))
+                                         release[last], closed, report))
     return table
 
 
 def _episode_energetics(packed: Packed, trajectory: Trajectory, k: np.ndarray,
                         labels: np.ndarray, start: np.ndarray, end: np.ndarray,
-                        closed: np.ndarray) -> dict[str, np.ndarray]:
+                        closed: np.ndarray, report: Callable[[float], None] | None,
+                        ) -> dict[str, np.ndarray]:
     """Dissipated energy (J) and energetic restitution of each episode."""
     count = start.size
     approach, separation_work = np.zeros(count), np.zeros(count)
@@ -104,10 +108,7 @@ def _episode_energetics(packed: Packed, trajectory: Trajectory, k: np.ndarray,
             approach[labels[j]] -= compression
             separation_work[labels[j]] += restitution
     bounds = np.sort(np.concatenate([start, np.where(closed, end, trajectory.t_end)]))
-    work, dissipation = energies = np.empty((2, bounds.size))
-    work_of_force(packed.tables, packed.forces, packed.phase_scalars,
-                  packed.dynamics.spring_arrays, packed.drives, packed.settings,
-                  trajectory.segments, trajectory.t_end, bounds, energies)
+    _, dissipation = energy_integrals(packed, trajectory, bounds, report)
     at = dict(zip(bounds, dissipation, strict=True))
     return {
         "episode_dissipated_energy": np.array(

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from impactbeams.contact.free import unit_tip_shape
 from impactbeams.drive import moving_clamps
 from impactbeams.kernels.drive import harmonic
 from impactbeams.kernels.layout import CONTACT, FREE
+from impactbeams.kernels.records import Segments
 from impactbeams.kernels.reductions import work_of_force
 from impactbeams.packing import Packed
 from impactbeams.trajectory.observables import loads, observables
@@ -17,10 +20,11 @@ SAMPLE_CHUNK = 1 << 15  # output times per sampling call: bounds memory at ~N * 
 
 
 def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray, energy: bool = True,
-                ) -> dict[str, np.ndarray]:
+                report: Callable[[float], None] | None = None) -> dict[str, np.ndarray]:
     """Observables and contact flag at ``times``; NaN past t_end.
 
-    With ``energy``, also the work of F and the damping dissipation.
+    With ``energy``, also the work of F and the damping dissipation (``report`` as in
+    `energy_integrals`).
     """
     inside = times <= trajectory.t_end
     names = ["tip_deflection_1", "tip_deflection_2", "tip_velocity_1", "tip_velocity_2", "gap",
@@ -36,11 +40,41 @@ def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray, energ
         out["in_contact"][index] = phase
     if not energy:
         return out
-    work, dissipation = energies = np.empty((2, reached.size))
-    work_of_force(packed.tables, packed.forces, packed.phase_scalars,
-                  packed.dynamics.spring_arrays, packed.drives, packed.settings,
-                  trajectory.segments, trajectory.t_end, times[reached], energies)
+    work, dissipation = energy_integrals(packed, trajectory, times[reached], report)
     out["work_of_force"][reached], out["damping_dissipation"][reached] = work, dissipation
+    return out
+
+
+ENERGY_PIECES = 100  # pieces of a run's energy quadrature: a progress report after each
+
+
+def energy_integrals(packed: Packed, trajectory: Trajectory, times: np.ndarray,
+                     report: Callable[[float], None] | None = None) -> np.ndarray:
+    """Work of the drives and damping dissipation (J) from t = 0 to each of ``times``.
+
+    ``times`` ascending in [0, t_end]; returns rows (work, dissipation). The quadrature
+    (`kernels.reductions.work_of_force`, at the fastest mode's time scale: with many modes
+    it costs far more than the run) goes in about ENERGY_PIECES pieces of equal simulated
+    time, cut at segment starts, and ``report(t)`` is called after each with the time
+    integrated to (s). The pieces carry the sums over, in the order of one call: bit for bit.
+    """
+    recorded, t_end = trajectory.segments, trajectory.t_end
+    count = recorded.time.size
+    cuts = np.searchsorted(recorded.time, np.linspace(0.0, t_end, ENERGY_PIECES + 1)[1:-1])
+    starts = np.unique(np.concatenate([[0], cuts[cuts < count]]))
+    out, carried, done = np.empty((2, times.size)), np.zeros(3), 0
+    for first, stop in zip(starts, [*starts[1:], count], strict=True):
+        end = recorded.time[stop] if stop < count else t_end
+        # a time at a segment's start belongs to that segment, as in one call
+        upto = int(np.searchsorted(times, end)) if stop < count else times.size
+        piece = np.empty((2, upto - done))
+        work_of_force(packed.tables, packed.forces, packed.phase_scalars,
+                      packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                      Segments(*(array[first:stop] for array in recorded)), end,
+                      times[done:upto], piece, carried)
+        out[:, done:upto], done = piece, upto
+        if report is not None:
+            report(float(end))
     return out
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 import warnings
+from collections.abc import Callable
 
 import numpy as np
 import xarray as xr
@@ -26,7 +27,13 @@ from impactbeams.params import (
     require_integer,
     require_type,
 )
-from impactbeams.preflight import Cost, check_run, format_time, require_memory
+from impactbeams.preflight import (
+    Cost,
+    check_run,
+    format_time,
+    highest_frequency,
+    require_memory,
+)
 from impactbeams.progress import Progress
 from impactbeams.trajectory.episodes import default_separation, episode_table
 from impactbeams.trajectory.fields import SAMPLE_CHUNK, deflections, time_series
@@ -81,7 +88,8 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
     Memory: the output series (and fields) twice (arrays and Dataset), the workspace of the
     sampling (SAMPLING_ARRAYS float64 arrays of a chunk's times by the coordinates) and the
     recorded segments at the ``max_events`` cap (time, phase and four states of 2 n_modes).
-    Time: `impactbeams.costs` (the run and its impact table per cycle, and the sampling).
+    Time: `impactbeams.costs` (the run and its impact table per cycle, the sampling, and the
+    energy balance's quadratures).
     """
     coordinates = 2 * n_modes
     series = 1 + SERIES + ENERGY_SERIES * energy_balance + 2 * n_points * fields
@@ -90,6 +98,9 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
     seconds = float(costs.dynamics_seconds(params.numeric(), params.contact_law, n_modes, t_max,
                                            "simulate", params.counterpart)
                     ) + costs.SAMPLING * n_times * n_modes
+    if energy_balance:
+        fastest = float(highest_frequency(params.numeric(), n_modes))
+        seconds += costs.energy_seconds(fastest, n_modes, t_max, n_times)
     return Cost(2 * 8 * series * n_times + sampling + segments, seconds)
 
 
@@ -341,14 +352,17 @@ def _check_long_time(params: Params, t_max: float, transient_periods: int,
 
 def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray, separation: float,
              energy: bool, progress: bool = False) -> xr.Dataset:
-    series = time_series(packed, trajectory, times, energy)
+    series = time_series(packed, trajectory, times, energy,
+                         _integration_bar(trajectory, energy and progress, "work and dissipation"))
     series["tip_deflection_2"] = series["tip_deflection_2"] - packed.params.clearance
     contacts = int(np.count_nonzero(trajectory.phase == CONTACT))
     bar = Progress(contacts, enabled=progress and contacts > 0, unit="contacts' peak forces")
     impacts = impact_table(packed, trajectory, bar.update)
     data = {name: ("time", values, attributes(name)) for name, values in series.items()}
     data.update({name: ("impact", values, attributes(name)) for name, values in impacts.items()})
-    episodes = episode_table(packed, trajectory, impacts, separation, energy)
+    episodes = episode_table(packed, trajectory, impacts, separation, energy,
+                             _integration_bar(trajectory, energy and progress,
+                                              "episodes' energies"))
     data.update({name: ("episode", values, attributes(name))
                  for name, values in episodes.items()})
     coords = {"time": ("time", times, attributes("time")),
@@ -361,6 +375,12 @@ def _dataset(packed: Packed, trajectory: Trajectory, times: np.ndarray, separati
     # energies of the motion relative to the clamps (docs/model.md, "Base excitation")
     dataset.attrs["energy_frame"] = "relative"
     return dataset
+
+
+def _integration_bar(trajectory: Trajectory, enabled: bool, what: str,
+                     ) -> Callable[[float], None]:
+    """A progress bar over the simulated time an energy quadrature has integrated."""
+    return Progress(trajectory.t_end, enabled=enabled, unit=f"s integrated ({what})").reach
 
 
 def _with_exponents(dataset: xr.Dataset, exponents: Exponents, transient: int) -> xr.Dataset:
