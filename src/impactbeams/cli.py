@@ -376,8 +376,9 @@ def _branch_summary(dataset: xr.Dataset) -> str:
 
 
 def _simulate(args: argparse.Namespace) -> int:
+    from impactbeams.costs import clearance_hint
     from impactbeams.io import write_netcdf
-    from impactbeams.preflight import clearance_hint, require_output_file
+    from impactbeams.preflight import require_output_file
     from impactbeams.sweep.lock import output_lock
     from impactbeams.trajectory import simulate
 

@@ -35,9 +35,12 @@ of the shipped sweeps and of random runs: docs/limits.md, "Time".
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from impactbeams.params import Params
 
 # --- constants from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ---------------
 FIRST_IMPACT_CELL = 2.1e-07
@@ -155,6 +158,29 @@ def tip_reach(values: Mapping[str, Any], n_modes: int, horizon: Any,
         lasting = lasting + base * (1.0 + np.sum(shaken, axis=-1))
         passing = passing + base * np.sum(shaken * big_omega / omega_n, axis=-1)
     return lasting, passing, omega_n[..., 0]
+
+
+# a clearance this many times the tip motion the drive is expected to give is worth a hint
+IMPLAUSIBLE_CLEARANCE = 10.0
+
+
+def clearance_hint(params: Params, t_max: float) -> str | None:
+    """A hint if the clearance is far beyond any motion the drive gives beam 1's tip by t_max.
+
+    The motion is the linear response's (`tip_reach`: the steady part, the start's free
+    vibration and the uplifts, growing through a resonance until t_max). A
+    clearance of IMPLAUSIBLE_CLEARANCE times that or more is most likely a unit slip (mm
+    typed as m); None if it is not, or if nothing drives the beams at all.
+    """
+    lasting, passing, _ = tip_reach(params.numeric(), 10, t_max)
+    reach = float(lasting + passing)
+    ratio = params.clearance / reach if reach > 0 else 0.0
+    if ratio < IMPLAUSIBLE_CLEARANCE:
+        return None
+    return (f"clearance = {params.clearance:g} m is {ratio:.3g} times the largest tip motion "
+            f"the drive is expected to give beam 1 by t_max ({reach:.3g} m, its linear "
+            "response): the tips will most likely never meet. A clearance in mm typed in m? "
+            f"({params.clearance:g} mm is {params.clearance * 1e-3:g} m)")
 
 
 def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon: Any,

@@ -21,7 +21,6 @@ import numpy as np
 from impactbeams.params import (
     MAX_FREQUENCY,
     ParameterError,
-    Params,
     PointName,
     no_point,
     require_all,
@@ -70,31 +69,6 @@ def check_run(values: Mapping[str, Any], t_max: float, n_modes: int,
         f"t_max, more than {MAX_PHASE:g} rad (double precision keeps a phase to ~0.1 eps "
         "omega t; beyond, results lose their digits and a run takes hours): t_max <= "
         f"{MAX_PHASE / value_at(fastest, j):.3g} s here, or fewer modes"))
-
-
-# a clearance this many times the tip motion the drive is expected to give is worth a hint
-IMPLAUSIBLE_CLEARANCE = 10.0
-
-
-def clearance_hint(params: Params, t_max: float) -> str | None:
-    """A hint if the clearance is far beyond any motion the drive gives beam 1's tip by t_max.
-
-    The motion is the linear response's (`impactbeams.costs.tip_reach`: the steady part, the
-    start's free vibration and the uplifts, growing through a resonance until t_max). A
-    clearance of IMPLAUSIBLE_CLEARANCE times that or more is most likely a unit slip (mm
-    typed as m); None if it is not, or if nothing drives the beams at all.
-    """
-    from impactbeams.costs import tip_reach
-
-    lasting, passing, _ = tip_reach(params.numeric(), 10, t_max)
-    reach = float(lasting + passing)
-    ratio = params.clearance / reach if reach > 0 else 0.0
-    if ratio < IMPLAUSIBLE_CLEARANCE:
-        return None
-    return (f"clearance = {params.clearance:g} m is {ratio:.3g} times the largest tip motion "
-            f"the drive is expected to give beam 1 by t_max ({reach:.3g} m, its linear "
-            "response): the tips will most likely never meet. A clearance in mm typed in m? "
-            f"({params.clearance:g} mm is {params.clearance * 1e-3:g} m)")
 
 
 @dataclasses.dataclass(frozen=True)
