@@ -436,7 +436,7 @@ class Params:
 
     def __init__(self, **values: Any) -> None:
         """Every parameter by keyword (SI units); the material keys replace a beam's EI, rhoA."""
-        given = _field_values(values, "Params()")
+        given = _field_values(values, "Params()", given_fields=False)
         for field in dataclasses.fields(self):
             object.__setattr__(self, field.name, given.get(field.name, field.default))
         self.__post_init__()
@@ -514,7 +514,7 @@ class Params:
         """
         require_type("mapping", mapping, isinstance(mapping, Mapping),
                      "a mapping of parameter names to values")
-        return cls(**_field_values(mapping, source))
+        return cls(**_field_values(mapping, source, given_fields=True))
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Params:
@@ -536,16 +536,21 @@ def modes_per_beam(n_modes: int, counterpart: str) -> str:
     return f"{n_modes} modes {'of beam 1' if counterpart == 'stop' else 'per beam'}"
 
 
-def _field_values(values: Mapping[str, Any], source: str) -> dict[str, Any]:
+def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
+                  ) -> dict[str, Any]:
     """[`Params`][]' fields given in ``values`` (from ``source``), the material keys resolved.
 
-    An unknown key, or a key of beam 2 against a stop, raises ParameterError.
+    An unknown key, or a key of beam 2 against a stop, raises ParameterError: any such key of
+    a mapping that is ``given_fields`` (a file's, a user's); of keywords, which copies of a
+    Params pass whole (``dataclasses.replace``), beam 2's material keys only (its fields at
+    their defaults are checked on construction).
     """
     for key in values:
         if key not in PARAMETERS:
             raise unknown_key("parameter", key, source, sorted(PARAMETERS))
     if values.get("counterpart") == "stop":
-        refuse_beam2(values, source)
+        refuse_beam2([key for key in values if given_fields or key[:-1] in MATERIAL_KEYS],
+                     source)
     return resolve_materials(values, source)
 
 
