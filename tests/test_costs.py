@@ -207,7 +207,8 @@ def test_a_run_in_windows_is_bitwise_the_uninterrupted_run(monkeypatch, law, n_m
     monkeypatch.setattr(phases, "_MIN_WINDOW", 16)
     monkeypatch.setattr(phases, "WINDOW_SECONDS", 0.0)
     reached = []
-    windowed = phases.run(packed, max_events, reached.append)
+    windowed = phases.run(packed, max_events, lambda t, phases_so_far: reached.append(
+        (t, phases_so_far)))
     assert len(reached) >= 5 and reached == sorted(reached)
     for field in FIELDS:
         assert np.array_equal(getattr(windowed, field), getattr(whole, field)), field

@@ -209,7 +209,7 @@ def test_files_of_earlier_versions_are_plotted_and_reused(tmp_path, capsys):
                  "dynamics_status"]) == 0
     assert capsys.readouterr().err == f"wrote {tmp_path / 'old.png'}\n"
     (tmp_path / "status.toml").write_text(STATUS_TOML)
-    assert main(["run", str(tmp_path / "status.toml"), "-o", str(path), "--quiet"]) == 3
+    assert main(["run", str(tmp_path / "status.toml"), "-o", str(path)]) == 3
     assert capsys.readouterr().err.startswith(f"reused {path}: it already holds the result")
     assert path.read_bytes() == before
 

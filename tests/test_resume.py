@@ -389,5 +389,6 @@ def test_a_finished_file_is_reused_only_if_it_holds_the_sweeps_map(
         write_sweep(load_sweep(sweep_files / f"{kind}.toml"), out)
     intact = uninterrupted(kind).read_bytes()
     out.write_bytes(intact)
-    assert main(_command(sweep_files, kind, out)) == 0
+    reuse = [argument for argument in _command(sweep_files, kind, out) if argument != "--quiet"]
+    assert main(reuse) == 0
     assert "reused" in capsys.readouterr().err and out.read_bytes() == intact
