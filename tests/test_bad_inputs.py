@@ -371,6 +371,11 @@ CASES = {
     "continue-omega-0": (["continue", "c.toml"],
                          {"c.toml": CONTINUATION.replace("min = 100.0", "min = 0.0")},
                          ["min = 0.0 is not allowed: a periodic orbit needs omega > 0"]),
+    "continue-base-amplitude-beyond": (  # refused before its header, not at the range's end
+        ["continue", "c.toml"],
+        {"c.toml": CONTINUATION.replace('"omega"', '"base_amplitude"').replace(
+            "min = 100.0\nmax = 250.0", "min = 1e-6\nmax = 0.1")},
+        ["base_amplitude = 0.1 is not allowed: the shaker's motion must be <= 0.2 l1 = 0.02 m"]),
     "continue-n-modes-0": (["continue", "c.toml"], {"c.toml": "n_modes = 0\n" + CONTINUATION},
                            ["n_modes = 0 is not allowed"]),
     "simulate-base-amplitude-10": (["simulate", "--t-max", "1", "--base-amplitude", "10", "-o",

@@ -112,6 +112,8 @@ class Continuation:
             require_integer("n_modes", self.n_modes, 1, MAX_MODES)
         if self.parameter == "omega":
             require("min", self.low, self.low > 0, "a periodic orbit needs omega > 0", "rad/s")
+        for end in (self.low, self.high):  # with the fixed ones, at both ends (monotone rules)
+            self.params.replace(**{self.parameter: end})
         self._check_steps()
 
     def _check_steps(self) -> None:
