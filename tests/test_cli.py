@@ -202,6 +202,7 @@ def test_every_argument_has_a_one_line_help_and_every_command_is_quiet():
     (--damping-ratio's was five lines), and --quiet on every command."""
     parser, commands = every_command()
     assert sorted(commands) == ["continue", "modes", "plot", "run", "simulate"]
+    assert all(action.help for action in parser._actions)
     for name, command in commands.items():
         for action in command._actions:
             assert action.help, (name, action.dest)

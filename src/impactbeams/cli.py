@@ -513,7 +513,8 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``impactbeams`` argument parser with all subcommands."""
     parser = _Parser(prog="impactbeams", description=__doc__.split("\n")[0])
     parser.add_argument("--version", action=_Version)
-    commands = parser.add_subparsers(dest="command", required=True)
+    commands = parser.add_subparsers(dest="command", required=True,
+                                     help="what to do (impactbeams COMMAND --help: its options)")
 
     def command(name: str, usage: str, **kwargs: str) -> _Parser:
         sub = commands.add_parser(name, usage=f"%(prog)s {usage}", **kwargs)
