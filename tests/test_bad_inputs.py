@@ -63,6 +63,9 @@ CASES = {
                        ["params in p.toml = 5", "must be a table"]),
     "modes-params-other-table": (["modes", "--params", "p.toml"], {"p.toml": "[other]\na = 1\n"},
                                  ["unknown key 'other' in p.toml"]),
+    "modes-params-table-typo": (["modes", "--params", "p.toml"], {"p.toml": "[param]\nl1 = 0.1\n"},
+                                ["unknown key 'param' in p.toml (did you mean 'params'?): a "
+                                 "parameters file has only a [params] table"]),
     "modes-params-unknown": (["modes", "--params", "p.toml"], {"p.toml": "[params]\nforce = 1\n"},
                              ["unknown parameter 'force'"]),
     "modes-params-string": (["modes", "--params", "p.toml"],

@@ -522,8 +522,8 @@ class Params:
         data = read_toml(path)
         for key in data:
             if key != "params":
-                raise ParameterError(f"unknown key {key!r} in {path}: a parameters file has "
-                                     "only a [params] table")
+                raise ParameterError(f"unknown key {key!r} in {path}{nearest(key, ['params'])}: "
+                                     "a parameters file has only a [params] table")
         return cls.from_mapping(require_table(data, "params", str(path)),
                                 source=f"[params] of {path}")
 
