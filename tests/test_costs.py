@@ -343,3 +343,20 @@ def test_the_energy_quadratures_report_progress(capsys):
         assert len(lines) >= 2 and "100.0% 0.2/0.2 s integrated" in lines[-1], what
     for name in quiet.variables:
         assert quiet[name].values.tobytes() == shown[name].values.tobytes(), name
+
+
+def test_a_run_stopped_early_announces_its_energy_balance_again(capsys):
+    """Announced for the whole t_max (3.3 days for the issue's 1e4 s), the quadratures of a
+    run the event cap stopped at 318 s cover those 318 s only: said again, for that time."""
+    from impactbeams.preflight import format_time, highest_frequency
+
+    params = Params(contact_law="tied", omega=400.0, force_amplitude=5e-3, damping_ratio=0.01)
+    with pytest.warns(RuntimeWarning, match="status 'event_limit'"):
+        run = simulate(params, 2.0, n_modes=8, dt_output=1e-3, energy_balance=True,
+                       max_events=300, progress=True)
+    t_end = run.attrs["t_end"]
+    reached = int(np.count_nonzero(run.time.values <= t_end))
+    expected = costs.energy_seconds(float(highest_frequency(params.numeric(), 8)), 8, t_end,
+                                    reached)
+    assert (f"simulate: the energy balance over the {t_end:.4g} s simulated: roughly "
+            f"{format_time(expected)}\n") in capsys.readouterr().err

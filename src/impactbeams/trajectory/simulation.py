@@ -201,6 +201,9 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     if trajectory.status != "complete":
         warnings.warn(f"simulation stopped at t = {trajectory.t_end!r} s before t_max = "
                       f"{t_max!r} s: status {trajectory.status!r}", RuntimeWarning, stacklevel=2)
+        if progress and energy_balance:  # the estimate announced was for the whole t_max
+            _announce_energy(params, n_modes, trajectory.t_end,
+                             int(np.count_nonzero(out_times <= trajectory.t_end)))
     separation = run_inputs.episode_separation
     dataset = _dataset(packed, trajectory, out_times,
                        default_separation(packed) if separation is None else separation,
@@ -318,6 +321,14 @@ def _announce(params: Params, run_inputs: _RunInputs) -> None:
           f"{modes_per_beam(run_inputs.n_modes, params.counterpart)}, "
           f"t_max = {run_inputs.t_max:g} s; expected: roughly "
           f"{format_time(run_inputs.seconds)}{compile_note}", file=sys.stderr)
+
+
+def _announce_energy(params: Params, n_modes: int, t_end: float, n_times: int) -> None:
+    """The expected time of the energy balance over a run that stopped at ``t_end`` (s)."""
+    seconds = costs.energy_seconds(float(highest_frequency(params.numeric(), n_modes)), n_modes,
+                                   t_end, n_times)
+    print(f"simulate: the energy balance over the {t_end:.4g} s simulated: roughly "
+          f"{format_time(seconds)}", file=sys.stderr)
 
 
 def _check_options(fields: bool, energy_balance: bool, lyapunov: bool | int,
