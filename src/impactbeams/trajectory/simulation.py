@@ -10,6 +10,7 @@ import numpy as np
 import xarray as xr
 
 from impactbeams import costs
+from impactbeams.blas import one_blas_thread
 from impactbeams.compilation import compile_in_two_processes
 from impactbeams.contact.spring import required_modes
 from impactbeams.kernels.layout import CONTACT
@@ -91,6 +92,7 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
     return Cost(2 * 8 * series * n_times + sampling + segments, seconds)
 
 
+@one_blas_thread
 def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output: float = 1e-4,
              fields: bool = False, *, times: np.ndarray | None = None, n_points: int = 41,
              max_events: int = 200_000, search_span: float | None = None,
