@@ -191,8 +191,7 @@ def _sweep_output(args: argparse.Namespace, sweep: Sweep) -> Path:
 def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     """The run's size, expected cost and destination, on stderr."""
     from impactbeams.compilation import kernels_cached
-    from impactbeams.costs import compile_time
-    from impactbeams.preflight import format_time
+    from impactbeams.costs import compile_estimate
     from impactbeams.sweep.definition import expected_cost, run_kind
     from impactbeams.sweep.plan import first_impact_kernel
 
@@ -207,8 +206,8 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
           f"{sweep.n_modes} modes per beam -> {output}\nexpected: "
           f"{expected_cost(sweep, args.threads).describe()}"
           + ("" if kernels_cached(run_kind(sweep), first_impact_kernel(sweep)) else
-             f", after compiling the kernels (once per install), about "
-             f"{format_time(compile_time(run_kind(sweep), first_impact_kernel(sweep)))}"),
+             f", after compiling its kernels (once per install), expected "
+             f"{compile_estimate(run_kind(sweep), first_impact_kernel(sweep)).describe()}"),
           file=sys.stderr)
 
 
@@ -217,17 +216,17 @@ def _running_kernels(kind: str, args: argparse.Namespace, entry: str | None = No
     """Lines on stderr while the kernels of a run of ``kind`` compile (if they do).
 
     ``entry``: a first map's kernel, whose twin sets the compile time expected
-    (`impactbeams.costs.compile_time`). In the command's own process, cached kernels load with
-    only what running them needs (`impactbeams.cached_kernels`).
+    (`impactbeams.costs.compile_estimate`). In the command's own process, cached kernels load
+    with only what running them needs (`impactbeams.cached_kernels`).
     """
-    from impactbeams.compilation import reporting_compiles
-    from impactbeams.costs import compile_time
+    from impactbeams.compilation import kernels_cached, reporting_compiles
+    from impactbeams.costs import compile_estimate
 
     if args.own_process:
         from impactbeams.cached_kernels import load_cached_kernels_lean
 
         load_cached_kernels_lean()
-    return reporting_compiles(compile_time(kind, entry))
+    return reporting_compiles(compile_estimate(kind, entry), kernels_cached(kind, entry))
 
 
 def _incomplete_cells(dataset: xr.Dataset) -> int:
@@ -336,7 +335,7 @@ def _continue(args: argparse.Namespace) -> int:
               f"{continuation.parameter} from {continuation.low:g} to {continuation.high:g} "
               f"({continuation.direction}) -> {output}", file=sys.stderr)
         try:
-            with _running_kernels("simulate", args):
+            with _running_kernels("orbits", args):
                 dataset = continue_orbits(continuation,
                                           None if args.quiet else _branch_progress)
         except ContinuationInterrupted as interrupted:

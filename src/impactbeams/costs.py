@@ -33,6 +33,8 @@ of the shipped sweeps and of random runs: docs/limits.md, "Time".
 
 from __future__ import annotations
 
+import dataclasses
+import os
 from collections.abc import Mapping
 from typing import Any
 
@@ -63,7 +65,14 @@ COMPILE = {
     "simulate": 9.8,
 }
 START_UP = 0.39
+COMPILE_LOAD = 0.98
+COMPILE_CORES = 2
 # ----------------------------------------------------------------------------------------------
+
+# A compile's measured spread about the load-scaled time (`compile_estimate`): 0.9-1.2 of it for
+# the cold runs of docs/benchmarks/estimates.json (load 1-2) and of issue 32 (25.9 s at load 5
+# against 21.6 s scaled from 7.2 s), widened for the load average's lag behind the load now.
+COMPILE_RANGE = (0.7, 1.5)
 
 def compile_time(kind: str, entry: str | None = None) -> float:
     """Expected cold compile (s) of a run of ``kind`` (``COMPILE``).
@@ -74,6 +83,54 @@ def compile_time(kind: str, entry: str | None = None) -> float:
     """
     parallel = entry is not None and entry.endswith("_parallel")
     return COMPILE.get(f"{kind}_parallel", COMPILE[kind]) if parallel else COMPILE[kind]
+
+
+@dataclasses.dataclass(frozen=True)
+class CompileEstimate:
+    """A cold compile's expected wall time on this machine now, as a range (s).
+
+    ``calibrated``: the measured time (s) at load ``COMPILE_LOAD`` on ``COMPILE_CORES`` cores;
+    ``load``: this machine's load average over the last minute (None where the system does
+    not tell it); ``cores``: its cores.
+    """
+
+    low: float
+    high: float
+    calibrated: float
+    load: float | None
+    cores: int
+
+    def describe(self) -> str:
+        """``"10-22 s here (2 cores at load 3.1; measured 7.2 s at load 1.0 on 2 cores)"``."""
+        here = (f"{self.cores} cores, load unknown" if self.load is None else
+                f"{self.cores} cores at load {self.load:.1f}")
+        return (f"{self.low:.0f}-{self.high:.0f} s here ({here}; measured "
+                f"{self.calibrated:.2g} s at load {COMPILE_LOAD:.1f} on {COMPILE_CORES} cores)")
+
+
+def compile_estimate(kind: str, entry: str | None = None, load: float | None = None,
+                     cores: int | None = None) -> CompileEstimate | None:
+    """The cold compile of a run of ``kind`` expected here and now (None: not calibrated).
+
+    The calibrated time (`compile_time`) scaled by the cores' contention, max(1, (L + 1) / C)
+    with load average L (a process wanting a core among L others) on C cores, against the
+    same at calibration; ``COMPILE_RANGE`` about that. ``load`` and ``cores``: this machine's
+    (``os.getloadavg``, ``os.cpu_count``) unless given.
+    """
+    if kind not in COMPILE:
+        return None
+    cores = cores or os.cpu_count() or 1
+    if load is None and hasattr(os, "getloadavg"):
+        load = os.getloadavg()[0]
+    calibrated = compile_time(kind, entry)
+    contention = 1.0 if load is None else _contention(load, cores)
+    centre = calibrated * contention / _contention(COMPILE_LOAD, COMPILE_CORES)
+    return CompileEstimate(centre * COMPILE_RANGE[0], centre * COMPILE_RANGE[1], calibrated,
+                           load, cores)
+
+
+def _contention(load: float, cores: int) -> float:
+    return max(1.0, (load + 1.0) / cores)
 
 
 def speedup(threads: int) -> float:

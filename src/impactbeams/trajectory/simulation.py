@@ -273,8 +273,8 @@ def _announce(params: Params, run_inputs: _RunInputs) -> None:
     from impactbeams.compilation import kernels_cached
 
     compile_note = ("" if kernels_cached("simulate") else
-                    f", after compiling the kernels (once per install), about "
-                    f"{format_time(costs.COMPILE['simulate'])}")
+                    ", after compiling its kernels (once per install), expected "
+                    f"{costs.compile_estimate('simulate').describe()}")
     print(f"simulate: {params.contact_law} contact, {run_inputs.n_modes} modes per beam, "
           f"t_max = {run_inputs.t_max:g} s; expected: roughly "
           f"{format_time(run_inputs.seconds)}{compile_note}", file=sys.stderr)
