@@ -136,9 +136,14 @@ def tied_convergence() -> str:
 
 
 def performance() -> str:
-    """Headline costs, each read from its results file with its date and machine."""
+    """Headline costs, each read from its results file with its date and machine.
+
+    One figure per quantity, the current code's: the cold compile is the first-run table's
+    (compile.json); older runs (the full suite's scaling series) are the benchmarks page's
+    history, labelled there.
+    """
     columns, sweep, cube = _results("columns"), _results("sweep"), _results("cube")
-    scale, continuation = _results("scaling"), _results("continuation")
+    continuation = _results("continuation")
     branch = next(row for row in continuation["cases"] if row["n_modes"] == 32)
     best = columns["best_s"]
     full = next(run for run in cube["runs"] if run["cells"] == 10**9)
@@ -154,9 +159,6 @@ def performance() -> str:
          "OUT.nc`, warm Numba cache ([phases](docs/benchmarks/sweep.md))",
          f"{sweep['command_s']:.1f} s, of which {sweep['command_overhead_s']:.1f} s "
          "interpreter, imports, loading the kernels and writing", recorded(sweep)),
-        ("compile time of the map's kernels (apart)",
-         f"{sweep['compile_cold_s']:.0f} s cold, {sweep['compile_warm_cache_s']:.1f} s from "
-         "the disk cache", recorded(sweep)),
         ("(Omega, Delta, F0) cube of 1000^3 = 10^9 cells streamed into netCDF, 2 threads "
          "([details](docs/benchmarks/cube.md))",
          f"{full['wall_s']:.0f} s, {full['cpu_s']:.0f} s of CPU, peak memory "
@@ -168,9 +170,6 @@ def performance() -> str:
          f"(of which {1e3 * branch['measures']:.0f} ms the point's measures), "
          f"{1e3 * branch['newton']['seconds_per_point']:.0f} ms by Newton",
          recorded(continuation)),
-        ("Fig. 5a map, 10^6 cells, in the full suite's last scaling series (`scaling.json`)",
-         ", ".join(f"{row['seconds']:.2f} s on {row['threads']} thread(s)"
-                    for row in scale["threads"]), recorded(scale)),
     ]
     lines = ["| quantity | value | measured |", "|---|---|---|"]
     lines += [f"| {what} | {value} | {when} |" for what, value, when in rows]
