@@ -36,7 +36,7 @@ MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov e
 # windowed run) in a full-dynamics sweep; more: dynamics_status = 1
 # The code that decides a sweep's numbers: every kernel and the modules that build their inputs
 # (paths in the package). Saved chunks and finished files of other code are never reused.
-NUMERIC_CODE = ("kernels/*.py", "packing.py", "contact/*.py", "drive.py", "modes.py",
+NUMERIC_CODE = ("kernels/*.py", "packing.py", "contact/*.py", "drive.py", "modes.py", "blas.py",
                 "brent.py", "params.py", "sweep/definition.py", "sweep/plan.py")
 # a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
 LONG_RUN_CAPACITY = 2048
