@@ -347,6 +347,39 @@ def spring_limits() -> str:
             "[benchmarks](docs/benchmarks/README.md)).\n  ")
 
 
+def docs_build() -> str:
+    """How long a strict docs build takes (docs_build.json, benchmarks/bench_docs_build.py)."""
+    report = _results("docs_build")
+
+    def build(name: str) -> str:
+        run = report[name]
+        return (f"{run['wall_s']:.0f} s ({run['cpu_s']:.0f} s of CPU, load "
+                f"{run['load_average_before'][0]:.1f} to {run['load_average_after'][0]:.1f})")
+
+    return (f"Building the site runs every example of the pages: `mkdocs build --strict` took "
+            f"{build('cold')} with an empty Numba cache, as after a fresh install, and "
+            f"{build('warm')} with the kernels cached ({report['date']}, {report['machine']}, "
+            f"{report['cores']} cores; `python benchmarks/bench_docs_build.py`, "
+            "`docs/benchmarks/docs_build.json`). The examples run in a temporary folder: the "
+            "build writes only into its site folder, never into `results/`.\n")
+
+
+def newcomer() -> str:
+    """The compile announced against the compile taken, per command (newcomer.json)."""
+    report = _results("newcomer")
+    rows = ["| step | command | compile announced | compile taken | command's wall time |",
+            "|---|---|---|---|---|"]
+    for step in report["steps"]:
+        announced = ("-" if step["announced_s"] is None else
+                     f"{step['announced_s'][0]}-{step['announced_s'][1]} s ({step['machine']})")
+        compiled = "-" if step["compiled_s"] is None else f"{step['compiled_s']:.1f} s"
+        rows.append(f"| {step['task']} | `{step['command']}` | {announced} | {compiled} | "
+                    f"{step['wall_s']:.1f} s |")
+    return ("\n".join(rows) + f"\n\n{report['date']}, {report['machine']}, {report['cores']} "
+            f"cores, load {report['load_average_end']:.1f} at the end "
+            "(`python scripts/newcomer.py --output docs/benchmarks/newcomer.json`).\n")
+
+
 SECTIONS: dict[str, Callable[[], str]] = {
     "longtime": longtime,
     "bad-input": lambda: transcript("modes", "--clearance=-1e-5"),
@@ -361,6 +394,8 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "map-threads": map_threads,
     "fig4": fig4,
     "spring-limits": spring_limits,
+    "docs-build": docs_build,
+    "newcomer": newcomer,
 }
 
 
