@@ -144,42 +144,41 @@ def test_a_run_leaves_its_kernels_cached():
     assert kernels_cached("simulate")
 
 
-ESTIMATE = costs.CompileEstimate(8.0, 17.0, 7.2, 3.0, 2)
+ESTIMATE = costs.CompileEstimate(8.0, 17.0, 7.2, 3.0, 2, 0.5)
 
 
-def test_a_compile_is_announced_with_its_range_here_and_timed_beside_it(monkeypatch):
+@pytest.fixture
+def fresh(monkeypatch):
+    """A kernel not compiled yet, whose every compile is reported (however short)."""
     from impactbeams import compilation
 
     monkeypatch.setattr(compilation, "REPORTED_COMPILE", 0.0)
-    stream = io.StringIO()
 
     @numba.njit(cache=False)
     def fresh(x):
         return x + 1
 
+    return fresh
+
+
+def test_a_compile_is_announced_with_its_range_here_and_timed_beside_it(fresh):
+    stream = io.StringIO()
     with reporting_compiles(ESTIMATE, stream=stream):
         fresh(1)
         fresh(2)  # compiled already: no new line
     lines = stream.getvalue().splitlines()
     assert lines[0] == (
         "impactbeams: compiling the kernels of this kind of run (once per install: later runs "
-        "load them from the disk cache), expected 8-17 s here (2 cores at load 3.0; measured "
+        "load them from the disk cache), expected 8-17 s here (2 cores at load 3.0, 50 % of a "
+        "core to this process just now; measured "
         f"7.2 s at load {costs.COMPILE_LOAD:.1f} on {costs.COMPILE_CORES} cores)")
     assert re.fullmatch(r"impactbeams: compiled 1 kernels in \d+\.\d s \(cached for later "
                         r"runs; announced 8-17 s\)", lines[1]) and len(lines) == 2
 
 
-def test_a_run_whose_kernels_are_cached_announces_no_install_compile(monkeypatch):
+def test_a_run_whose_kernels_are_cached_announces_no_install_compile(fresh):
     """A kernel missing from the cache of a warm run's kind is no compile "once per install"."""
-    from impactbeams import compilation
-
-    monkeypatch.setattr(compilation, "REPORTED_COMPILE", 0.0)
     stream = io.StringIO()
-
-    @numba.njit(cache=False)
-    def fresh(x):
-        return x + 1
-
     with reporting_compiles(ESTIMATE, cached=True, stream=stream):
         fresh(1)
     lines = stream.getvalue().splitlines()
@@ -192,12 +191,20 @@ def test_the_compile_estimate_scales_with_the_load_here():
     # calibrated at COMPILE_LOAD on COMPILE_CORES: the same there; at load 5 on 2 cores a
     # compile gets a third of a core's share (issue 32: 25.9 s where 7.2 s was quoted)
     there = costs.compile_estimate("first_impact", load=costs.COMPILE_LOAD,
-                                   cores=costs.COMPILE_CORES)
+                                   cores=costs.COMPILE_CORES, share=1.0)
     assert there.low < costs.COMPILE["first_impact"] < there.high
-    busy = costs.compile_estimate("first_impact", "first_impact_map_parallel", load=5.0, cores=2)
+    busy = costs.compile_estimate("first_impact", "first_impact_map_parallel", load=5.0, cores=2,
+                                  share=1.0)
     assert busy.low < 25.9 < busy.high
     assert busy.low > costs.COMPILE["first_impact_parallel"]
-    assert "2 cores at load 5.0" in busy.describe()
+    assert "2 cores at load 5.0, 100 % of a core" in busy.describe()
+    # a process that gets a quarter of a core now waits four times as long, whatever the load
+    starved = costs.compile_estimate("first_impact", load=0.0, cores=2, share=0.25)
+    assert starved.low == pytest.approx(4 * there.low)
+
+
+def test_the_share_of_a_core_is_measured():
+    assert 0.0 < costs.cpu_share() <= 1.0
     assert costs.compile_estimate("orbits") is None  # not calibrated: no time is stated
 
 

@@ -226,7 +226,8 @@ def _running_kernels(kind: str, args: argparse.Namespace, entry: str | None = No
         from impactbeams.cached_kernels import load_cached_kernels_lean
 
         load_cached_kernels_lean()
-    return reporting_compiles(compile_estimate(kind, entry), kernels_cached(kind, entry))
+    cached = kernels_cached(kind, entry)
+    return reporting_compiles(None if cached else compile_estimate(kind, entry), cached)
 
 
 def _incomplete_cells(dataset: xr.Dataset) -> int:
