@@ -99,3 +99,18 @@ def test_the_fig5a_sweep_says_where_its_funnel_ends():
     forces = column.axes[1].values
     assert not impacted[0]  # the smallest force of the range
     assert f"{forces[impacted].min():.2g}" == f"{stated:.2g}"
+
+
+def test_the_newcomer_script_finds_the_readme_job_and_the_three_tasks():
+    """CI's newcomer run (scripts/newcomer.py) reads its commands from the README and the page."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("newcomer", ROOT / "scripts" / "newcomer.py")
+    newcomer = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(newcomer)
+    assert [command.split()[:2] for command in newcomer.readme_commands()] == [
+        ["impactbeams", "run"], ["impactbeams", "plot"]]
+    tasks = newcomer.task_commands()
+    assert {task for task, _, _ in tasks} == set(newcomer.TASKS)
+    assert any(code == 2 for _, _, code in tasks)  # the refused input, as the page shows it
+    assert any(command.startswith("impactbeams simulate") for _, command, _ in tasks)
