@@ -143,7 +143,7 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
     """``run`` once its output is locked: compute (or reuse) the map, check its statuses."""
     from impactbeams.sweep import write_sweep  # writes netCDF without xarray
     from impactbeams.sweep.definition import run_kind
-    from impactbeams.sweep.plan import first_impact_kernel
+    from impactbeams.sweep.plan import entry_kernel
 
     reuse = output.exists()
     if not reuse:
@@ -151,7 +151,7 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
     try:
         # a reused output computes nothing: Numba need not load to watch for compiles
         compiling = (contextlib.nullcontext() if reuse
-                     else _running_kernels(run_kind(sweep), args, first_impact_kernel(sweep)))
+                     else _running_kernels(run_kind(sweep), args, entry_kernel(sweep)))
         with _cluster_runner(args) as runner, compiling:
             write_sweep(sweep, output, threads=None if runner else args.threads,
                         progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner,
@@ -193,7 +193,7 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     from impactbeams.compilation import kernels_cached
     from impactbeams.costs import compile_estimate
     from impactbeams.sweep.definition import expected_cost, run_kind
-    from impactbeams.sweep.plan import first_impact_kernel
+    from impactbeams.sweep.plan import entry_kernel
 
     long_time = sweep.long_time
     horizon = (f"t_max = {sweep.t_max} s" if long_time is None else
@@ -205,9 +205,9 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
           f"{', '.join(a.name for a in sweep.axes)}{rows}; {horizon}, "
           f"{sweep.n_modes} modes per beam -> {output}\nexpected: "
           f"{expected_cost(sweep, args.threads).describe()}"
-          + ("" if kernels_cached(run_kind(sweep), first_impact_kernel(sweep)) else
+          + ("" if kernels_cached(run_kind(sweep), entry_kernel(sweep)) else
              f", after compiling its kernels (once per install), expected "
-             f"{compile_estimate(run_kind(sweep), first_impact_kernel(sweep)).describe()}"),
+             f"{compile_estimate(run_kind(sweep), entry_kernel(sweep)).describe()}"),
           file=sys.stderr)
 
 
@@ -215,7 +215,8 @@ def _running_kernels(kind: str, args: argparse.Namespace, entry: str | None = No
                      ) -> contextlib.AbstractContextManager[None]:
     """Lines on stderr while the kernels of a run of ``kind`` compile (if they do).
 
-    ``entry``: a first map's kernel, whose twin sets the compile time expected
+    ``entry``: the kernel the run calls, of its kind's (`impactbeams.sweep.plan.entry_kernel`):
+    whether it is cached, and for a first map the compile time expected of its twin
     (`impactbeams.costs.compile_estimate`). In the command's own process, cached kernels load
     with only what running them needs (`impactbeams.cached_kernels`).
     """

@@ -393,6 +393,18 @@ def first_impact_kernel(sweep: Sweep, parallel: bool = True) -> str:
             else "first_impact_map_serial")
 
 
+def entry_kernel(sweep: Sweep) -> str:
+    """The kernel, of its kind's in `compilation.ENTRY_KERNELS`, that ``sweep``'s chunks call.
+
+    A long-time sweep calls the stepped map's kernel when stepped, the stroboscope's when not:
+    each compiles apart (a stepped sweep after a plain one compiled 169 kernels); the serial
+    twins, which a local run calls. Other kinds: `first_impact_kernel` (used by a first map).
+    """
+    if sweep.long_time is not None:
+        return "stepped_map_serial" if sweep.stepping is not None else "stroboscope_map_serial"
+    return first_impact_kernel(sweep)
+
+
 def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
                   plan: Plan | None = None) -> dict[str, np.ndarray]:
     """Observables of the flat cells ``start..stop`` of ``sweep`` (one array per observable).
