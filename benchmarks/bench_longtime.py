@@ -23,8 +23,9 @@ issue 14's was 60 s).
   both ran ``--full``, the number of cells whose response period is the same.
 
 Idle BLAS threads sleep (``OPENBLAS_THREAD_TIMEOUT``, set here before NumPy and SciPy load),
-as they do in the command line (`impactbeams.cli.BLAS_THREAD_TIMEOUT`): their default spin
-after each cell's BLAS call competes with the sweep's threads on two cores.
+as they do in the command line (`impactbeams.cli.BLAS_THREAD_TIMEOUT`), so that the figures
+are the command's (since issue 32 the cells call no BLAS; a geometry's set-up holds it to one
+thread).
 
 Writes longtime.json and longtime.md to ``--out`` (default docs/benchmarks).
 

@@ -352,11 +352,18 @@ def main() -> None:
     else:
         constants["COMPILE"], measured["warm_command"] = compile_costs(log)
         constants["START_UP"] = min(measured["warm_command"].values())
+    # the load (last minute) and cores the compile times were measured at, last: the compile
+    # scales from them to a machine's load (`costs.compile_estimate`)
+    load_after = os.getloadavg()
+    constants["COMPILE_LOAD"] = (previous["constants"]["COMPILE_LOAD"] if args.skip_compile
+                                 else load_after[0])
+    constants["COMPILE_CORES"] = os.cpu_count()
     constants = round_constants(constants)
     constants["THREAD_SPEEDUP"] = {int(k): v for k, v in constants["THREAD_SPEEDUP"].items()}
+    constants["COMPILE_CORES"] = int(constants["COMPILE_CORES"])
     result = {"constants": constants, "measured": measured,
               "load_average_before": list(load_before), "load_average_after":
-              list(os.getloadavg()), "cpu_count": os.cpu_count(),
+              list(load_after), "cpu_count": os.cpu_count(),
               "started_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime(started)),
               "seconds": round(time.time() - started, 1)}
     args.output.write_text(json.dumps(result, indent=1) + "\n")

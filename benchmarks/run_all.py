@@ -314,7 +314,7 @@ def _baseline_misses(cells: dict) -> dict[str, int]:
 
 
 def headline(first: dict, dynamics: dict, scale: dict, quick: bool) -> str:
-    """The README: headline table, targets, how to regenerate."""
+    """The page's history section: the full suite's headline table and targets, as run then."""
     n = first["config"]["n_default"]
     speed = _speedups(first)
     grid_err, graze_err = (_default_errors(first[k], n) for k in ("grid", "grazing"))
@@ -354,14 +354,22 @@ def headline(first: dict, dynamics: dict, scale: dict, quick: bool) -> str:
                          verdicts="\n".join(f"- {v}" for v in verdicts), **run)
 
 
-README = """# Benchmarks: run time against error
+TITLE = """# Benchmarks: run time against error
 
 Regenerate everything here (JSON, PNG and this file) with one command from the repository root:
 
     python benchmarks/run_all.py            # full size; add --quick for a small, fast run
 
-This run: {size}; {machine}, Python {python}, NumPy {numpy}, SciPy {scipy}, Numba {numba},
-impactbeams {impactbeams}, {date}. The machine may have been shared: timings are noisy.
+Each section names its run's date, machine and load. The last, "History", is the full
+suite's older run, kept as a record of the code of its date, not as a current figure.
+"""
+
+README = """## History: the full suite's run of {date}
+
+Run time against error and the map's scaling, as measured then ({size}; {machine}, Python
+{python}, NumPy {numpy}, SciPy {scipy}, Numba {numba}, impactbeams {impactbeams}) on the
+code of that date: its times are not the current code's (the sections above are). The
+machine may have been shared: timings are noisy.
 
 {table}
 
@@ -369,7 +377,7 @@ Targets at matched error (first-impact map grid):
 
 {verdicts}
 
-## What is measured
+### What is measured
 
 * **impactbeams' accuracy knob is the number of modes only.** Its first-impact kernel has no
   tolerance: propagation is exact (closed form), steps are certified root-free, the root is
@@ -499,11 +507,10 @@ def page(out: Path) -> str:
     """The benchmarks page (README.md of ``out``), from its JSON files only."""
     first, dynamics, scale = (_load(out, name) for name in ("work_precision", "dynamics",
                                                              "scaling"))
-    readme = headline(first, dynamics, scale, first["run"]["quick"])
-    readme += ("\n## Speed targets\n\nIssue 24's targets on 2 cores, each figure against the "
-               "previous release's measured beside it (`python benchmarks/run_all.py "
-               "--speed-only --baseline REVISION`); dates, machines and loads in the sections "
-               "below.\n\n" + speed_targets(out))
+    readme = TITLE + ("\n## Speed targets\n\nIssue 24's targets on 2 cores, each figure "
+                      "against the previous release's measured beside it (`python "
+                      "benchmarks/run_all.py --speed-only --baseline REVISION`); dates, "
+                      "machines and loads in the sections below.\n\n" + speed_targets(out))
     if (out / "columns.json").exists():  # the map by columns, measured apart
         readme += "\n" + columns_section(_load(out, "columns"))
     if (out / "spring.json").exists():  # the spring law's section
@@ -519,6 +526,7 @@ def page(out: Path) -> str:
                    + first_run_table(_load(out, "compile"), _load(out, "startup")))
     if (out / "harmonic_balance.json").exists():  # the harmonic-balance peer (pyHarm)
         readme += "\n" + harmonic_balance.section(_load(out, "harmonic_balance"))
+    readme += "\n" + headline(first, dynamics, scale, first["run"]["quick"])
     return readme + "\n" + results_files(out)
 
 
@@ -530,8 +538,9 @@ def columns_section(report: dict) -> str:
             f"`bench_columns.py` ({date}; {machine}): {report['cells']:,} cells, compute only, "
             f"kernels loaded, best of {report['repeats']}; same classification in every cell: "
             f"{report['same_classification']}, largest difference in t* "
-            f"{report['max_time_difference_s']:.1e} s. The table above (`scaling.json`) is the "
-            "full suite's older series. Details: [columns.md](columns.md).\n\n"
+            f"{report['max_time_difference_s']:.1e} s. The history section's table "
+            "(`scaling.json`) is the full suite's older series. Details: "
+            "[columns.md](columns.md).\n\n"
             "| kernel, threads | best time |\n|---|---|\n" + "\n".join(rows) + "\n"
             + ("\n" + maps_table(report) if "maps" in report else ""))
 

@@ -136,9 +136,14 @@ def tied_convergence() -> str:
 
 
 def performance() -> str:
-    """Headline costs, each read from its results file with its date and machine."""
+    """Headline costs, each read from its results file with its date and machine.
+
+    One figure per quantity, the current code's: the cold compile is the first-run table's
+    (compile.json); older runs (the full suite's scaling series) are the benchmarks page's
+    history, labelled there.
+    """
     columns, sweep, cube = _results("columns"), _results("sweep"), _results("cube")
-    scale, continuation = _results("scaling"), _results("continuation")
+    continuation = _results("continuation")
     branch = next(row for row in continuation["cases"] if row["n_modes"] == 32)
     best = columns["best_s"]
     full = next(run for run in cube["runs"] if run["cells"] == 10**9)
@@ -154,9 +159,6 @@ def performance() -> str:
          "OUT.nc`, warm Numba cache ([phases](docs/benchmarks/sweep.md))",
          f"{sweep['command_s']:.1f} s, of which {sweep['command_overhead_s']:.1f} s "
          "interpreter, imports, loading the kernels and writing", recorded(sweep)),
-        ("compile time of the map's kernels (apart)",
-         f"{sweep['compile_cold_s']:.0f} s cold, {sweep['compile_warm_cache_s']:.1f} s from "
-         "the disk cache", recorded(sweep)),
         ("(Omega, Delta, F0) cube of 1000^3 = 10^9 cells streamed into netCDF, 2 threads "
          "([details](docs/benchmarks/cube.md))",
          f"{full['wall_s']:.0f} s, {full['cpu_s']:.0f} s of CPU, peak memory "
@@ -168,9 +170,6 @@ def performance() -> str:
          f"(of which {1e3 * branch['measures']:.0f} ms the point's measures), "
          f"{1e3 * branch['newton']['seconds_per_point']:.0f} ms by Newton",
          recorded(continuation)),
-        ("Fig. 5a map, 10^6 cells, in the full suite's last scaling series (`scaling.json`)",
-         ", ".join(f"{row['seconds']:.2f} s on {row['threads']} thread(s)"
-                    for row in scale["threads"]), recorded(scale)),
     ]
     lines = ["| quantity | value | measured |", "|---|---|---|"]
     lines += [f"| {what} | {value} | {when} |" for what, value, when in rows]
@@ -348,6 +347,39 @@ def spring_limits() -> str:
             "[benchmarks](docs/benchmarks/README.md)).\n  ")
 
 
+def docs_build() -> str:
+    """How long a strict docs build takes (docs_build.json, benchmarks/bench_docs_build.py)."""
+    report = _results("docs_build")
+
+    def build(name: str) -> str:
+        run = report[name]
+        return (f"{run['wall_s']:.0f} s ({run['cpu_s']:.0f} s of CPU, load "
+                f"{run['load_average_before'][0]:.1f} to {run['load_average_after'][0]:.1f})")
+
+    return (f"Building the site runs every example of the pages: `mkdocs build --strict` took "
+            f"{build('cold')} with an empty Numba cache, as after a fresh install, and "
+            f"{build('warm')} with the kernels cached ({report['date']}, {report['machine']}, "
+            f"{report['cores']} cores; `python benchmarks/bench_docs_build.py`, "
+            "`docs/benchmarks/docs_build.json`). The examples run in a temporary folder: the "
+            "build writes only into its site folder, never into `results/`.\n")
+
+
+def newcomer() -> str:
+    """The compile announced against the compile taken, per command (newcomer.json)."""
+    report = _results("newcomer")
+    rows = ["| step | command | compile announced | compile taken | command's wall time |",
+            "|---|---|---|---|---|"]
+    for step in report["steps"]:
+        announced = ("-" if step["announced_s"] is None else
+                     f"{step['announced_s'][0]}-{step['announced_s'][1]} s ({step['machine']})")
+        compiled = "-" if step["compiled_s"] is None else f"{step['compiled_s']:.1f} s"
+        rows.append(f"| {step['task']} | `{step['command']}` | {announced} | {compiled} | "
+                    f"{step['wall_s']:.1f} s |")
+    return ("\n".join(rows) + f"\n\n{report['date']}, {report['machine']}, {report['cores']} "
+            f"cores, load {report['load_average_end']:.1f} at the end "
+            "(`python scripts/newcomer.py --output docs/benchmarks/newcomer.json`).\n")
+
+
 SECTIONS: dict[str, Callable[[], str]] = {
     "longtime": longtime,
     "bad-input": lambda: transcript("modes", "--clearance=-1e-5"),
@@ -362,6 +394,8 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "map-threads": map_threads,
     "fig4": fig4,
     "spring-limits": spring_limits,
+    "docs-build": docs_build,
+    "newcomer": newcomer,
 }
 
 

@@ -17,7 +17,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "impactbeams"
 # The floor of each top-level part: a module may import parts on lower floors and its own part.
 FLOORS = {
     "kernels": 0,
-    "variables": 1, "io": 1, "brent": 1,
+    "variables": 1, "io": 1, "brent": 1, "blas": 1,
     "params": 2,
     "modes": 3, "longtime": 3,
     "contact": 4,

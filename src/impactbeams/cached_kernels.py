@@ -1,36 +1,25 @@
 """Loading the kernels from Numba's disk cache with only what running them needs.
 
-Two costs of a warm ``impactbeams run`` that running cached kernels does not need (measured by
-benchmarks/bench_startup.py, docs/benchmarks/startup.json):
+A cost of a warm ``impactbeams run`` that running cached kernels does not need (measured by
+benchmarks/bench_startup.py, docs/benchmarks/startup.json): Numba refreshes its target
+context before it loads a kernel from the disk cache. It imports and installs every typing
+and lowering registry (NumPy's functions, the random generators, cffi, typed containers...),
+about 0.5 s of CPU that only a compile uses. A compile refreshes the context itself
+(``numba.core.compiler``, and ``BaseContext.get_function`` on a missing lowering), so after
+`load_cached_kernels_lean` a cache hit starts Numba's runtime (NRT, which the kernels'
+allocations call) and loads the machine code, and a cache miss compiles as before. (No kernel
+calls BLAS, whose routines Numba would import ``scipy.linalg`` for: they sum in loops.)
 
-* Numba refreshes its target context before it loads a kernel from the disk cache: it imports
-  and installs every typing and lowering registry (NumPy's functions, the random generators,
-  cffi, typed containers...), about 0.5 s of CPU that only a compile uses. A compile refreshes
-  the context itself (``numba.core.compiler``, and ``BaseContext.get_function`` on a missing
-  lowering), so after `load_cached_kernels_lean` a cache hit starts Numba's runtime (NRT, which
-  the kernels' allocations call) and loads the machine code, and a cache miss compiles as
-  before.
-* A kernel whose machine code calls BLAS imports ``scipy.linalg.cython_blas`` on its first call
-  (Numba looks the routines up there), and Python imports the package ``scipy.linalg`` first:
-  0.3 s for one extension module of BLAS entry points. The extension is loaded alone here.
-
-Both change the process they run in, so the command line, which owns its process, calls
-`load_cached_kernels_lean`; the library does not. The kernels' machine code and BLAS are the
-same either way: results are bit for bit those of Numba's own loading (tests/test_startup.py).
+This changes the process it runs in, so the command line, which owns its process, calls
+`load_cached_kernels_lean`; the library does not. The kernels' machine code is the same
+either way: results are bit for bit those of Numba's own loading (tests/test_startup.py).
 """
 
 from __future__ import annotations
 
-import importlib.machinery
-import importlib.util
-import sys
-from pathlib import Path
-
-_BLAS = "scipy.linalg.cython_blas"
-
 
 def load_cached_kernels_lean() -> None:
-    """Make this process load cached kernels without Numba's registries or ``scipy.linalg``.
+    """Make this process load cached kernels without Numba's registries.
 
     Safe to call more than once; does nothing with a Numba whose cache lacks what this relies
     on (``Cache._load_overload`` and its I/O guard, as in Numba 0.68): it then loads as usual.
@@ -52,26 +41,4 @@ def load_cached_kernels_lean() -> None:
 
     load_overload.lean = True  # type: ignore[attr-defined]
     cache.load_overload = load_overload
-    _load_blas_alone()
 
-
-def _load_blas_alone() -> None:
-    """Import ``scipy.linalg.cython_blas`` without running ``scipy/linalg/__init__.py``.
-
-    A later ``import scipy.linalg`` imports the package as usual and finds this module in
-    ``sys.modules``.
-    """
-    if _BLAS in sys.modules or "scipy.linalg" in sys.modules:
-        return
-    import scipy  # the top package only (Numba imports it to check its version)
-
-    spec = importlib.machinery.PathFinder.find_spec(
-        _BLAS, [str(Path(scipy.__path__[0], "linalg"))])
-    if spec is None or spec.loader is None:  # another layout of SciPy: imported when needed
-        return
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[_BLAS] = module
-    try:
-        spec.loader.exec_module(module)
-    except Exception:  # left to the usual import, which then says what is wrong
-        del sys.modules[_BLAS]

@@ -146,7 +146,7 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
     """``run`` once its output is locked: compute (or reuse) the map, check its statuses."""
     from impactbeams.sweep import write_sweep  # writes netCDF without xarray
     from impactbeams.sweep.definition import run_kind
-    from impactbeams.sweep.plan import first_impact_kernel
+    from impactbeams.sweep.plan import entry_kernel
 
     reuse = output.exists()
     if not reuse and not args.quiet:
@@ -154,7 +154,7 @@ def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
     try:
         # a reused output computes nothing: Numba need not load to watch for compiles
         compiling = (contextlib.nullcontext() if reuse
-                     else _running_kernels(run_kind(sweep), args, first_impact_kernel(sweep)))
+                     else _running_kernels(run_kind(sweep), args, entry_kernel(sweep)))
         with _cluster_runner(args) as runner, compiling:
             write_sweep(sweep, output, threads=None if runner else args.threads,
                         progress=not args.quiet, chunk_cells=args.chunk_cells, runner=runner,
@@ -194,10 +194,9 @@ def _sweep_output(args: argparse.Namespace, sweep: Sweep) -> Path:
 def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     """The run's size, expected cost and destination, on stderr."""
     from impactbeams.compilation import kernels_cached
-    from impactbeams.costs import compile_time
-    from impactbeams.preflight import format_time
+    from impactbeams.costs import compile_estimate
     from impactbeams.sweep.definition import expected_cost, run_kind
-    from impactbeams.sweep.plan import first_impact_kernel
+    from impactbeams.sweep.plan import entry_kernel
 
     long_time = sweep.long_time
     horizon = (f"t_max = {sweep.t_max} s" if long_time is None else
@@ -210,9 +209,9 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
           f"{', '.join(a.name for a in sweep.axes)}{rows}; {horizon}, "
           f"{modes_per_beam(sweep.n_modes, sweep.base.counterpart)} -> {output}\nexpected: "
           f"{expected_cost(sweep, args.threads).describe()}"
-          + ("" if kernels_cached(run_kind(sweep), first_impact_kernel(sweep)) else
-             f", after compiling the kernels (once per install), about "
-             f"{format_time(compile_time(run_kind(sweep), first_impact_kernel(sweep)))}"),
+          + ("" if kernels_cached(run_kind(sweep), entry_kernel(sweep)) else
+             f", after compiling its kernels (once per install), expected "
+             f"{compile_estimate(run_kind(sweep), entry_kernel(sweep)).describe()}"),
           file=sys.stderr)
 
 
@@ -220,12 +219,13 @@ def _running_kernels(kind: str, args: argparse.Namespace, entry: str | None = No
                      ) -> contextlib.AbstractContextManager[None]:
     """Lines on stderr while the kernels of a run of ``kind`` compile (if they do).
 
-    ``entry``: a first map's kernel, whose twin sets the compile time expected
-    (`impactbeams.costs.compile_time`). In the command's own process, cached kernels load with
-    only what running them needs (`impactbeams.cached_kernels`).
+    ``entry``: the kernel the run calls, of its kind's (`impactbeams.sweep.plan.entry_kernel`):
+    whether it is cached, and for a first map the compile time expected of its twin
+    (`impactbeams.costs.compile_estimate`). In the command's own process, cached kernels load
+    with only what running them needs (`impactbeams.cached_kernels`).
     """
-    from impactbeams.compilation import reporting_compiles
-    from impactbeams.costs import compile_time
+    from impactbeams.compilation import kernels_cached, reporting_compiles
+    from impactbeams.costs import compile_estimate
 
     if args.own_process:
         from impactbeams.cached_kernels import load_cached_kernels_lean
@@ -233,7 +233,8 @@ def _running_kernels(kind: str, args: argparse.Namespace, entry: str | None = No
         load_cached_kernels_lean()
     if args.quiet:
         return contextlib.nullcontext()
-    return reporting_compiles(compile_time(kind, entry))
+    cached = kernels_cached(kind, entry)
+    return reporting_compiles(None if cached else compile_estimate(kind, entry), cached)
 
 
 def _incomplete_cells(dataset: xr.Dataset) -> int:
@@ -342,7 +343,7 @@ def _continue(args: argparse.Namespace) -> int:
              f"{continuation.parameter} from {continuation.low:g} to {continuation.high:g} "
              f"({continuation.direction}) -> {output}")
         try:
-            with _running_kernels("simulate", args):
+            with _running_kernels("orbits", args):
                 dataset = continue_orbits(continuation,
                                           None if args.quiet else _branch_progress)
         except ContinuationInterrupted as interrupted:

@@ -38,6 +38,10 @@ ENTRY_KERNELS = {
     "simulate": (("dynamics", ("run_events",)), ("dynamics", ("sample_states",)),
                  ("dynamics", ("observed_states",)), ("stroboscope", ("tip_motions",)),
                  ("records", ("segments",))),
+    # periodic orbits and their continuation: a run's kernels and the tangent dynamics'
+    "orbits": (("dynamics", ("run_events",)), ("dynamics", ("sample_states",)),
+               ("tangent", ("carry_tangents",)), ("contact", ("tangent_switch",)),
+               ("stroboscope", ("tip_motions",))),
 }
 
 
@@ -258,19 +262,24 @@ def _compile_jobs(fields: list[str]) -> None:
 
 
 @contextlib.contextmanager
-def reporting_compiles(expected: float, stream: TextIO | None = None) -> Iterator[None]:
+def reporting_compiles(expected: Any = None, cached: bool = False,
+                       stream: TextIO | None = None) -> Iterator[None]:
     """Print ``compiling kernels ...`` when a compile starts, and its time when it ends.
 
-    ``expected``: the measured cold compile time (s) announced. Each outermost compile (a
+    ``expected``: the cold compile expected here (`impactbeams.costs.CompileEstimate`, or None
+    where none is calibrated), announced with the first compile; ``cached``: whether the run's
+    entry kernels are in the disk cache (`kernels_cached`), when a compile is only of kernels
+    missing from it and nothing is announced as once per install. Each outermost compile (a
     kernel called from Python, with every kernel it calls) of at least ``REPORTED_COMPILE``
-    seconds ends with a line ``compiled N kernels in S s``; on a terminal one line shows the
-    group being compiled (the kernels' module: ``events``, ``dynamics``...), the kernels done
-    and the time since the first compile started. Nothing is printed when every kernel loads
-    from the cache (Numba signals a compile only on a cache miss).
+    seconds ends with a line ``compiled N kernels in S s (... announced A-B s)``: the kernels and
+    the time since the first compile started, beside the announced range. On a terminal one
+    line shows the group being compiled (the kernels' module: ``events``, ``dynamics``...), the
+    kernels done and the time since the first compile started. Nothing is printed when every
+    kernel loads from the cache (Numba signals a compile only on a cache miss).
     """
     from numba.core import event
 
-    listener = _compile_report(expected, stream or sys.stderr)
+    listener = _compile_report(expected, cached, stream or sys.stderr)
     event.register("numba:compile", listener)
     try:
         yield
@@ -278,9 +287,22 @@ def reporting_compiles(expected: float, stream: TextIO | None = None) -> Iterato
         event.unregister("numba:compile", listener)
 
 
-def _compile_report(expected: float, stream: TextIO) -> Any:
+def _announcement(expected: Any, cached: bool) -> str:
+    """The line that starts a compile: what compiles, and how long it is expected to take."""
+    if cached:
+        return "compiling kernels missing from the disk cache (the run's others load from it)"
+    what = ("compiling the kernels of this kind of run (once per install: later runs load "
+            "them from the disk cache)")
+    return what if expected is None else f"{what}, expected {expected.describe()}"
+
+
+def _compile_report(expected: Any, cached: bool, stream: TextIO) -> Any:
     """A Numba ``numba:compile`` listener printing the compile's progress on ``stream``."""
     from numba.core import event
+
+    announced = ("" if expected is None or cached else
+                 f"; announced {expected.low:.0f}-{expected.high:.0f} s")
+    expecting = announced.replace("; announced", ", expected")
 
     class CompileReport(event.Listener):
         def __init__(self) -> None:
@@ -288,7 +310,7 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
             self.local = threading.local()  # each thread's compile depth (Dask, long runs)
             self.lock = threading.Lock()
             self.announced = False
-            self.first = self.start = 0.0
+            self.first = self.start = 0.0  # the first compile's start, the outermost one's
             self.kernels = 0
 
         def on_start(self, compile_event: Any) -> None:
@@ -296,11 +318,10 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
             self.local.depth = depth + 1
             with self.lock:
                 if depth == 0:
-                    self.start, self.kernels = time.perf_counter(), 0
+                    self.start = time.perf_counter()
                 if not self.announced:
                     self.announced, self.first = True, self.start
-                    self._write(f"compiling kernels (once per install), about {expected:.0f} s",
-                                final=not self.interactive)
+                    self._write(_announcement(expected, cached), final=not self.interactive)
                 elif self.interactive:
                     self._progress(compile_event)
 
@@ -308,17 +329,17 @@ def _compile_report(expected: float, stream: TextIO) -> Any:
             self.local.depth -= 1
             with self.lock:
                 self.kernels += 1
-                elapsed = time.perf_counter() - self.start
-                if self.local.depth == 0 and elapsed >= REPORTED_COMPILE:
-                    self._write(f"compiled {self.kernels} kernels in {elapsed:.1f} s (cached "
-                                "for later runs)", final=True)
+                now = time.perf_counter()
+                if self.local.depth == 0 and now - self.start >= REPORTED_COMPILE:
+                    self._write(f"compiled {self.kernels} kernels in {now - self.first:.1f} s "
+                                f"(cached for later runs{announced})", final=True)
                 elif self.interactive:
                     self._progress(compile_event)
 
         def _progress(self, compile_event: Any) -> None:
-            self._write(f"compiling kernels (once per install), about {expected:.0f} s: "
-                        f"{_group(compile_event)}, {self.kernels} compiled, "
-                        f"{time.perf_counter() - self.first:.0f} s", final=False)
+            self._write(f"compiling kernels{expecting}: {_group(compile_event)}, "
+                        f"{self.kernels} compiled, {time.perf_counter() - self.first:.0f} s",
+                        final=False)
 
         def _write(self, line: str, final: bool) -> None:
             if self.interactive:  # rewrite the line in place; end it when final

@@ -34,6 +34,10 @@ of the shipped sweeps and of random runs: docs/limits.md, "Time".
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+import os
+import time
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
@@ -68,7 +72,14 @@ COMPILE = {
     "simulate": 9.8,
 }
 START_UP = 0.39
+COMPILE_LOAD = 0.98
+COMPILE_CORES = 2
 # ----------------------------------------------------------------------------------------------
+
+# The announced range about the load-scaled compile (`compile_estimate`): the load can rise
+# during a compile, which the range's top allows for in part; the compile announced against
+# the compile taken, on a fresh cache: docs/benchmarks/newcomer.json (scripts/newcomer.py).
+COMPILE_RANGE = (0.7, 1.5)
 
 def compile_time(kind: str, entry: str | None = None) -> float:
     """Expected cold compile (s) of a run of ``kind`` (``COMPILE``).
@@ -79,6 +90,73 @@ def compile_time(kind: str, entry: str | None = None) -> float:
     """
     parallel = entry is not None and entry.endswith("_parallel")
     return COMPILE.get(f"{kind}_parallel", COMPILE[kind]) if parallel else COMPILE[kind]
+
+
+@dataclasses.dataclass(frozen=True)
+class CompileEstimate:
+    """A cold compile's expected wall time on this machine now, as a range (s).
+
+    ``calibrated``: the measured time (s) at load ``COMPILE_LOAD`` on ``COMPILE_CORES`` cores;
+    ``load``: this machine's load average over the last minute (None where the system does
+    not tell it); ``cores``: its cores; ``share``: the share of a core this process got in a
+    short busy probe just before (`cpu_share`).
+    """
+
+    low: float
+    high: float
+    calibrated: float
+    load: float | None
+    cores: int
+    share: float
+
+    def describe(self) -> str:
+        """The range, this machine and its load, and the calibration's, in one phrase."""
+        here = (f"{self.cores} cores, load unknown" if self.load is None else
+                f"{self.cores} cores at load {self.load:.1f}")
+        return (f"{self.low:.0f}-{self.high:.0f} s here ({here}, {100 * self.share:.0f} % of a "
+                f"core to this process just now; measured {self.calibrated:.2g} s at load "
+                f"{COMPILE_LOAD:.1f} on {COMPILE_CORES} cores)")
+
+
+def compile_estimate(kind: str, entry: str | None = None, load: float | None = None,
+                     cores: int | None = None,
+                     share: float | None = None) -> CompileEstimate | None:
+    """The cold compile of a run of ``kind`` expected here and now (None: not calibrated).
+
+    The calibrated time (`compile_time`) scaled by the contention for the cores: the larger of
+    max(1, (L + 1) / C), with load average L (a process wanting a core among L others) on C
+    cores, and 1 / the share of a core this process gets now, against the same at
+    calibration; ``COMPILE_RANGE`` about that. ``load``, ``cores``, ``share``: this machine's
+    (``os.getloadavg``, ``os.cpu_count``, `cpu_share`) unless given.
+    """
+    if kind not in COMPILE:
+        return None
+    cores = cores or os.cpu_count() or 1
+    if load is None and hasattr(os, "getloadavg"):
+        load = os.getloadavg()[0]
+    share = cpu_share() if share is None else share
+    calibrated = compile_time(kind, entry)
+    contention = max(1.0 if load is None else _contention(load, cores), 1.0 / max(share, 0.01))
+    centre = calibrated * contention / _contention(COMPILE_LOAD, COMPILE_CORES)
+    return CompileEstimate(centre * COMPILE_RANGE[0], centre * COMPILE_RANGE[1], calibrated,
+                           load, cores, share)
+
+
+def _contention(load: float, cores: int) -> float:
+    return max(1.0, (load + 1.0) / cores)
+
+
+@functools.cache
+def cpu_share(seconds: float = 0.1) -> float:
+    """The share of a core this thread gets now: its CPU time over ``seconds`` of busy wall time.
+
+    Measured once per process (a cold run's announcement only: the 0.1 s is not spent when
+    the kernels are cached). 1 on an idle core; about C / (L + 1) among L busy threads.
+    """
+    wall, cpu = time.perf_counter(), time.thread_time()
+    while time.perf_counter() - wall < seconds:
+        pass
+    return min(1.0, (time.thread_time() - cpu) / (time.perf_counter() - wall))
 
 
 def speedup(threads: int) -> float:

@@ -386,7 +386,7 @@ def hertz_stiffness(tip_radius: float, force: float, youngs_modulus1: float = ST
     return (6.0 * contact_modulus**2 * tip_radius * force) ** (1.0 / 3.0)
 
 
-DEFAULT_CONTACT_LAW = "spring"  # compliant: converges in the number of modes
+DEFAULT_CONTACT_LAW = "spring"  # compliant: its first contacts converge in the number of modes
 # the kernels' laws (one list: layout.CONTACT_LAWS, whose order is the kernels' integer codes),
 # offered to users the default first
 CONTACT_LAWS = (DEFAULT_CONTACT_LAW,

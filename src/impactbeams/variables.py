@@ -28,8 +28,9 @@ DAMPING_LAW = ("modal: each cantilever mode's whole coordinate eta_n = <y, Y_n> 
 
 CONTACT_LAW_NOTES = {
     "spring": "compliant tip contact R = -k g - c g' while positive, free coordinates kept in "
-              "both phases, static correction of the missed modes; converges in n_modes "
-              "(docs/model.md, Compliant contact)",
+              "both phases, static correction of the missed modes; the first contacts and "
+              "episodes' totals converge in n_modes, the chaotic trace after the first rattle "
+              "does not (docs/model.md, Compliant contact)",
     "tied": "the paper's tied tips with projections at the switches; results after the first "
             "impact do not converge in n_modes (docs/model.md)",
 }
@@ -65,8 +66,9 @@ PARAMETERS: dict[str, Parameter] = {
     "uplift1": Parameter("m", "initial tip uplift of beam 1 (delta_1)", r"$\delta_1$"),
     "uplift2": Parameter("m", "initial tip uplift of beam 2 (delta_2)", r"$\delta_2$"),
     "damping_ratio": Parameter("1", "modal damping ratio (zeta)", r"$\zeta$"),
-    "contact_law": Parameter("1", "tip contact law: spring (compliant, converges in n_modes) or "
-                                  "tied (the paper's, does not converge after the first impact)"),
+    "contact_law": Parameter("1", "tip contact law: spring (compliant, first contacts and "
+                                  "episodes converge in n_modes) or tied (the paper's, does not "
+                                  "converge after the first impact)"),
     "contact_stiffness": Parameter("N/m", "stiffness k of the tip contact spring", "$k$"),
     "contact_damping": Parameter("N s/m", "damping c of the tip contact dashpot", "$c$"),
     "counterpart": Parameter("1", "what beam 1's tip meets: beam (beam 2's tip) or stop (a fixed "

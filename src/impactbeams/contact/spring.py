@@ -39,6 +39,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from impactbeams.blas import one_blas_thread
 from impactbeams.contact.free import FreePhase, build_free_phase
 from impactbeams.params import MAX_MODES, ParameterError, Params
 
@@ -232,6 +233,7 @@ def _damped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
     return values[keep], right, left
 
 
+@one_blas_thread
 def spring_contact(free: FreePhase, tip_compliance: tuple[float, float], damping_ratio: float,
                    stiffness: float, damping: float = 0.0) -> SpringContact:
     """The contact phase of the spring law (k = ``stiffness`` N/m, c = ``damping`` N s/m)."""

@@ -29,6 +29,7 @@ import warnings
 
 import numpy as np
 
+from impactbeams.blas import one_blas_thread
 from impactbeams.contact.free import FreePhase, build_free_phase, quadrature
 from impactbeams.modes import BeamShapes, ContactModes, contact_modes
 from impactbeams.params import Params
@@ -75,6 +76,7 @@ def _free_on_beam(shapes: BeamShapes, n_before: int, n_after: int, x: np.ndarray
     return np.vstack([np.zeros((n_before, x.size)), values, np.zeros((n_after, x.size))])
 
 
+@one_blas_thread
 def build_tied_model(params: Params, n_modes: int) -> ModalModel:
     """The tied law's modal model: ``n_modes`` free modes per beam and as many contact modes."""
     free = build_free_phase(params, n_modes)

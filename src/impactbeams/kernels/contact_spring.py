@@ -63,10 +63,17 @@ def spring_drives(left, modes, contact_drive, constant_drive, forcing_frequency,
     """
     m = left.shape[1]
     drives = np.empty((len(SPRING_DRIVE_ROWS), m), dtype=np.complex128)
-    velocity_rows = np.ascontiguousarray(left[m:].T)
-    rising = velocity_rows @ contact_drive / 2j
-    falling = -(velocity_rows @ np.conj(contact_drive)) / 2j
-    constant = velocity_rows @ constant_drive.astype(np.complex128)
+    # the products of the contact phase's velocity rows, sum_n left[m + n, j] x_n, in loops
+    # over n in order: BLAS's sums split with its thread count (issue 32)
+    rising = np.zeros(m, dtype=np.complex128)  # of A' / 2i
+    falling = np.zeros(m, dtype=np.complex128)  # of -conj(A') / 2i
+    constant = np.zeros(m, dtype=np.complex128)  # of the constant part
+    for n in range(m):
+        up, down = contact_drive[n] / 2j, -contact_drive[n].conjugate() / 2j
+        for j in range(m):
+            rising[j] += left[m + n, j] * up
+            falling[j] += left[m + n, j] * down
+            constant[j] += left[m + n, j] * constant_drive[n]
     for j in range(m):
         lam, rho = modes[MODE_EIGENVALUE, j], modes[MODE_PHASE, j]
         up = rho * (1j * forcing_frequency - lam.conjugate()) * rising[j]

@@ -22,6 +22,7 @@ import math
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from impactbeams.blas import one_blas_thread
 from impactbeams.contact.spring import required_modes
 from impactbeams.kernels import contact
 from impactbeams.kernels.layout import (
@@ -126,6 +127,7 @@ class PeriodMap:
         """The run's initial state of ``params.start`` (and uplifts) as a section state."""
         return np.concatenate([self.packed.q0, self.packed.v0])
 
+    @one_blas_thread
     def __call__(self, state: np.ndarray, directions: np.ndarray | str | None = None,
                  measures: bool = True) -> PeriodMapResult:
         """P^p(z) from the section state ``state``, with dP^p/dz applied to ``directions``.
@@ -169,6 +171,7 @@ class PeriodMap:
             impulse=float(np.sum(impacts["impact_impulse"])), max_tip1=max_tip1,
             max_tip2=max_tip2, peak_forces=peaks)
 
+    @one_blas_thread
     def jacobian(self, result: PeriodMapResult, directions: np.ndarray | str) -> np.ndarray:
         """dP^p/dz of an earlier evaluation ``result`` applied to more ``directions``.
 

@@ -31,6 +31,7 @@ import math
 
 import numpy as np
 
+from impactbeams.blas import one_blas_thread
 from impactbeams.kernels.layout import FREE, ROW_FREQUENCY
 from impactbeams.orbits.period_map import PeriodMap, PeriodMapResult
 from impactbeams.params import ParameterError, Params, require, require_integer, require_type
@@ -115,6 +116,7 @@ class PeriodicOrbit:
         return orbit_dataset(self, samples_per_period)
 
 
+@one_blas_thread
 def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
                    guess: np.ndarray | PeriodicOrbit | None = None, *,
                    transient_periods: int = 50, tolerance: float = 1e-11,

@@ -36,7 +36,7 @@ MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov e
 # windowed run) in a full-dynamics sweep; more: dynamics_status = 1
 # The code that decides a sweep's numbers: every kernel and the modules that build their inputs
 # (paths in the package). Saved chunks and finished files of other code are never reused.
-NUMERIC_CODE = ("kernels/*.py", "packing.py", "contact/*.py", "drive.py", "modes.py",
+NUMERIC_CODE = ("kernels/*.py", "packing.py", "contact/*.py", "drive.py", "modes.py", "blas.py",
                 "brent.py", "params.py", "sweep/definition.py", "sweep/plan.py")
 # a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
 LONG_RUN_CAPACITY = 2048
@@ -391,6 +391,18 @@ def first_impact_kernel(sweep: Sweep, parallel: bool = True) -> str:
 
     return ("first_impact_map_parallel" if parallel and sweep.size > _BLOCK
             else "first_impact_map_serial")
+
+
+def entry_kernel(sweep: Sweep) -> str:
+    """The kernel, of its kind's in `compilation.ENTRY_KERNELS`, that ``sweep``'s chunks call.
+
+    A long-time sweep calls the stepped map's kernel when stepped, the stroboscope's when not:
+    each compiles apart (a stepped sweep after a plain one compiled 169 kernels); the serial
+    twins, which a local run calls. Other kinds: `first_impact_kernel` (used by a first map).
+    """
+    if sweep.long_time is not None:
+        return "stepped_map_serial" if sweep.stepping is not None else "stroboscope_map_serial"
+    return first_impact_kernel(sweep)
 
 
 def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,

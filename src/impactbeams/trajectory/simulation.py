@@ -11,6 +11,7 @@ import numpy as np
 import xarray as xr
 
 from impactbeams import costs
+from impactbeams.blas import one_blas_thread
 from impactbeams.compilation import compile_in_two_processes
 from impactbeams.contact.spring import required_modes
 from impactbeams.kernels.layout import CONTACT
@@ -104,6 +105,7 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
     return Cost(2 * 8 * series * n_times + sampling + segments, seconds)
 
 
+@one_blas_thread
 def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output: float = 1e-4,
              fields: bool = False, *, times: np.ndarray | None = None, n_points: int = 41,
              max_events: int = MAX_EVENTS, search_span: float | None = None,
@@ -315,8 +317,8 @@ def _announce(params: Params, run_inputs: _RunInputs) -> None:
     from impactbeams.compilation import kernels_cached
 
     compile_note = ("" if kernels_cached("simulate") else
-                    f", after compiling the kernels (once per install), about "
-                    f"{format_time(costs.COMPILE['simulate'])}")
+                    ", after compiling its kernels (once per install), expected "
+                    f"{costs.compile_estimate('simulate').describe()}")
     print(f"simulate: {params.contact_law} contact, "
           f"{modes_per_beam(run_inputs.n_modes, params.counterpart)}, "
           f"t_max = {run_inputs.t_max:g} s; expected: roughly "
