@@ -19,6 +19,7 @@ from impactbeams.variables import PARAMETERS
 
 _MICRO = 1e6  # m -> µm
 _MILLI = 1e3  # N -> mN, s -> ms
+_LEGEND_ROOM = 1.3  # a force panel's top over its largest peak: a row of legend above them
 # the tips in mathtext, as in docs/model.md: y2 is drawn minus the clearance
 _TIP1, _TIP2 = "$y_1(l_1)$", r"$y_2(l_2) - \Delta$"
 
@@ -105,7 +106,9 @@ def plot_contact_force(axis: Axes, dataset: xr.Dataset) -> None:
     axis.vlines(onsets, 0.0, peaks, colors="k", lw=0.4)
     axis.plot(onsets, peaks, ".", ms=2.5, color="k", label="peak of each contact")
     axis.axhline(0.0, color="0.6", lw=0.5)
-    axis.legend(loc="upper right", fontsize="small")
+    if peaks.size and peaks.max() > 0:  # room above the peaks for the legend's one row
+        axis.set_ylim(top=_LEGEND_ROOM * peaks.max())
+    axis.legend(loc="upper right", fontsize="small", ncols=2)
 
 
 def _draw_surface(axis: Axes, dataset: xr.Dataset, beam: str, rows: int) -> None:
