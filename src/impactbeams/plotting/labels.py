@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from impactbeams.drive import SHAKER_WORDS
 from impactbeams.variables import LONG_TIME_VARIABLES, PARAMETERS, VARIABLES
 
 if TYPE_CHECKING:
@@ -25,11 +26,6 @@ _ZERO_BY_DEFAULT = ("force_amplitude", "base_amplitude", "uplift1", "uplift2", "
 # largest whose number is >= 1 (20 µm, not 2e-05 m; 0.5 mN, not 5e-04 N)
 _PREFIXED = {"m": ((1.0, "m"), (1e-3, "mm"), (1e-6, "µm"), (1e-9, "nm")),
              "N": ((1.0, "N"), (1e-3, "mN"), (1e-6, "µN"), (1e-9, "nN"))}
-# which clamps a shaker carries, in words (a stop's mount for beam 2's with a stop)
-_SHAKER_WORDS = {("both", "beam"): "on both clamps", ("beam1", "beam"): "on beam 1's clamp",
-                 ("beam2", "beam"): "on beam 2's clamp",
-                 ("both", "stop"): "on beam 1's clamp and the stop",
-                 ("beam1", "stop"): "on beam 1's clamp", ("beam2", "stop"): "on the stop"}
 # quantities of the free phase before any contact: independent of the contact law
 _LAW_FREE = ("first_impact_time", "impacted")
 
@@ -142,7 +138,7 @@ def base_motion(amplitude: float, attrs: Mapping[str, Any]) -> str:
 
     E.g. ``"$U_0$ = 5 µm on both clamps"``.
     """
-    where = _SHAKER_WORDS.get((attrs.get("shaker"), attrs.get("counterpart", "beam")), "")
+    where = SHAKER_WORDS.get((attrs.get("shaker"), attrs.get("counterpart", "beam")), "")
     return f"{quantity('base_amplitude', amplitude, 'm')} {where}".rstrip()
 
 
