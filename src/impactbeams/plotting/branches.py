@@ -42,7 +42,9 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
                   diagram: xr.Dataset | None = None, hz: bool = False) -> None:
     """Draw ``variable`` (default max |y1|, or y1 on the section over a ``diagram``).
 
-    ``hz``: a frequency axis in Hz (Omega / 2 pi) instead of rad/s.
+    ``hz``: a frequency axis in Hz (Omega / 2 pi) instead of rad/s. Lengths and forces are
+    drawn in the units `branch_units` gives; draw anything else first, in those units, and set
+    the axes' limits before: the event labels are placed last, on the laid-out axes.
     """
     parameter = dataset.attrs["continued_parameter"]
     name = variable or (OVERLAY_MEASURE if diagram is not None else DEFAULT_MEASURE)
@@ -50,8 +52,7 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
         raise ParameterError(f"--var {name!r} is not a variable along the branch; choose one "
                              "of " + ", ".join(v for v in dataset.data_vars
                                                 if dataset[v].dims in ALONG))
-    x_factor, x_units = _parameter_units(dataset[parameter], hz)
-    y_factor, y_units = display_units(dataset[name].values, dataset[name].attrs.get("units", ""))
+    (x_factor, x_units), (y_factor, y_units) = branch_units(dataset, name, hz)
     if diagram is not None:
         _draw_diagram(axes, diagram, parameter, x_factor, y_factor)
     x = x_factor * dataset[parameter].values
@@ -71,14 +72,21 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
     place_labels(axes, events)
 
 
-def _parameter_units(coordinate: xr.DataArray, hz: bool) -> tuple[float, str]:
-    """The factor and units of the continued parameter's axis (Hz if asked for Omega)."""
-    units = coordinate.attrs.get("units", "")
+def branch_units(dataset: xr.Dataset, name: str, hz: bool = False,
+                 ) -> tuple[tuple[float, str], tuple[float, str]]:
+    """The factors and units `draw_branches` draws the continued parameter and ``name`` in.
+
+    Lengths and forces in the prefix of their size (`display_units`), Omega in Hz if ``hz``:
+    what else is drawn on the same axes must be scaled alike.
+    """
+    coordinate = dataset[dataset.attrs["continued_parameter"]]
     if hz:
         if coordinate.name != "omega":
             raise ParameterError(f"--hz is for a branch along omega, not {coordinate.name!r}")
-        return 1.0 / (2.0 * math.pi), "Hz"
-    return display_units(coordinate.values, units)
+        x = (1.0 / (2.0 * math.pi), "Hz")
+    else:
+        x = display_units(coordinate.values, coordinate.attrs.get("units", ""))
+    return x, display_units(dataset[name].values, dataset[name].attrs.get("units", ""))
 
 
 def _draw_branch(axes: Axes, x: np.ndarray, y: np.ndarray, stable: np.ndarray,
@@ -121,7 +129,8 @@ def place_labels(axes: Axes, events: list[tuple[float, float, str]]) -> None:
 
     Greedy, left to right: each label takes the first of ``_OFFSETS`` whose box is free and
     inside the axes (a far one is joined to its point by a line); if none is, the free one
-    nearest, else the first. Positions are measured on the laid-out figure.
+    nearest, else the first. Positions are measured on the laid-out figure; events out of the
+    axes' view are not labelled.
     """
     figure = axes.get_figure(root=True)
     if not isinstance(figure.canvas, FigureCanvasAgg):
@@ -137,6 +146,8 @@ def place_labels(axes: Axes, events: list[tuple[float, float, str]]) -> None:
         legend.set_loc(tuple(axes.transAxes.inverted().transform((box.x0, box.y0))))
         taken.append(box)
     for x, y, text in events:
+        if not inside.contains(*axes.transData.transform((x, y))):
+            continue  # out of view (limits set by the caller): no label
         label = axes.annotate(text, (x, y), textcoords="offset points", xytext=_OFFSETS[0],
                               fontsize="x-small", annotation_clip=False,
                               arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.5,
