@@ -354,9 +354,11 @@ def test_bifurcation_diagram_draws_every_finite_sample(figure):
     assert dots.get_linestyle() == "None"
     # the doubled branch shows as two y values per Omega above 50 rad/s
     above = dots.get_xdata() > 50.0
-    assert len(np.unique(np.round(dots.get_ydata()[above] / 1e-9))) == 2 * len(
-        np.unique(dots.get_xdata()[above]))
-    assert axes.get_ylabel() == "stroboscopic tip deflection of beam 1 (m)"
+    assert len(np.unique(np.round(dots.get_ydata()[above] / 1e-3))) == 2 * len(
+        np.unique(dots.get_xdata()[above]))  # drawn in µm: 1e-3 µm is the nm of before
+    assert axes.get_ylabel() == "stroboscopic tip deflection of beam 1 (µm)"
+    finite = samples[np.isfinite(samples)]
+    np.testing.assert_array_equal(np.sort(dots.get_ydata()), np.sort(1e6 * finite))
 
 
 def test_samples_over_two_axes_need_a_slice():

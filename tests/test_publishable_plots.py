@@ -255,3 +255,27 @@ def test_draw_on_a_given_axes_keeps_its_figure(tmp_path):
     draw(axes, _map_of_many_parameters())
     figure.canvas.draw()
     assert _inside_figure(figure, _left_title(axes))
+
+
+def test_a_shaker_studys_bifurcation_diagram_names_its_drive_in_micrometres(captured,
+                                                                           tmp_path):
+    """The shipped stop-shaker diagram's case: the title named "F0 = 0 N" and not the shaker,
+    and the samples were drawn in metres under a "x10^-5" offset."""
+    omega = np.linspace(100.0, 1000.0, 30)
+    samples = 1e-5 * np.sin(omega[:, None] / 50.0 + np.arange(8)[None, :])
+    dataset = xr.Dataset(
+        {"poincare_deflection1": (("omega", "period"), samples,
+                                  attributes("poincare_deflection1"))},
+        coords={"omega": ("omega", omega, parameter_attributes("omega"))},
+        attrs={**SHAKER, "damping_ratio": 0.03, "transient_periods": 500,
+               "sampled_periods": 200, "n_modes": 28, "contact_law": "spring"})
+    plot_dataset(dataset, tmp_path / "diagram.png")
+    (figure,) = captured
+    axes = figure.axes[0]
+    title = _left_title(axes)
+    assert "$U_0$ = 5 µm on beam 1's clamp and the stop" in title.get_text()
+    assert "$F_0$" not in title.get_text() and _inside_figure(figure, title)
+    assert axes.get_ylabel().endswith("(µm)")
+    assert axes.yaxis.get_offset_text().get_text() == ""
+    (dots,) = axes.lines
+    np.testing.assert_array_equal(np.sort(dots.get_ydata()), np.sort(1e6 * samples.ravel()))
