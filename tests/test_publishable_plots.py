@@ -279,3 +279,18 @@ def test_a_shaker_studys_bifurcation_diagram_names_its_drive_in_micrometres(capt
     assert axes.yaxis.get_offset_text().get_text() == ""
     (dots,) = axes.lines
     np.testing.assert_array_equal(np.sort(dots.get_ydata()), np.sort(1e6 * samples.ravel()))
+
+
+def test_a_map_over_the_base_amplitude_says_where_the_shaker_sits(captured, tmp_path):
+    omega, amplitude = np.linspace(10.0, 400.0, 4), np.geomspace(1e-7, 1e-2, 3)
+    dataset = xr.Dataset(
+        {"first_impact_time": (("omega", "base_amplitude"), np.full((4, 3), 0.1),
+                               attributes("first_impact_time"))},
+        coords={"omega": ("omega", omega, parameter_attributes("omega")),
+                "base_amplitude": ("base_amplitude", amplitude,
+                                   parameter_attributes("base_amplitude"))},
+        attrs={**SHAKER, "t_max": 1.0, "n_modes": 5})
+    plot_dataset(dataset, tmp_path / "map.png")
+    text = _left_title(captured[0].axes[0]).get_text()
+    assert "shaker on beam 1's clamp and the stop" in text
+    assert "$F_0$" not in text and "$U_0$ =" not in text  # U0 is an axis

@@ -138,8 +138,12 @@ def base_motion(amplitude: float, attrs: Mapping[str, Any]) -> str:
 
     E.g. ``"$U_0$ = 5 µm on both clamps"``.
     """
-    where = SHAKER_WORDS.get((attrs.get("shaker"), attrs.get("counterpart", "beam")), "")
-    return f"{quantity('base_amplitude', amplitude, 'm')} {where}".rstrip()
+    return f"{quantity('base_amplitude', amplitude, 'm')} {shaker_place(attrs)}".rstrip()
+
+
+def shaker_place(attrs: Mapping[str, Any]) -> str:
+    """Where the shaker of ``attrs`` sits, e.g. ``"on both clamps"`` (``""`` if not said)."""
+    return SHAKER_WORDS.get((attrs.get("shaker"), attrs.get("counterpart", "beam")), "")
 
 
 def case_title(dataset: PlainDataset | xr.Dataset, variable: str, shown: tuple[str, ...]) -> str:
@@ -156,6 +160,8 @@ def case_title(dataset: PlainDataset | xr.Dataset, variable: str, shown: tuple[s
             values[str(name)] = (coordinate.item(), coordinate.attrs.get("units", ""))
     parts = [base_motion(v, dataset.attrs) if n == "base_amplitude" else quantity(n, v, u)
              for n, (v, u) in values.items() if not (n in _ZERO_BY_DEFAULT and v == 0)]
+    if "base_amplitude" in (*dataset.dims, dataset.attrs.get("continued_parameter")):
+        parts.append(f"shaker {shaker_place(dataset.attrs)}")  # U0 on an axis: where it acts
     parts += _run_settings(dataset.attrs, law=variable not in _LAW_FREE,
                            long_time=variable in LONG_TIME_VARIABLES)
     return ", ".join(parts)
