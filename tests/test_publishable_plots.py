@@ -67,6 +67,14 @@ def test_run_overview_draws_the_peak_of_every_contact(coarse_run, captured, tmp_
     assert np.array_equal(markers.get_xdata(), run.impact_onset_time.values)
 
 
+def test_a_runs_force_drawn_alone_shows_the_peaks_too(coarse_run, captured, tmp_path):
+    """`impactbeams plot RUN.nc --var contact_force`: the same peaks as the overview."""
+    plot_dataset(coarse_run, tmp_path / "force.png", "contact_force")
+    axes = captured[0].axes[0]
+    assert _largest_drawn(axes) == 1e3 * float(coarse_run.impact_peak_force.max())
+    assert axes.get_ylabel() == "contact force $R$ (mN)"
+
+
 def test_fig3_panels_draw_every_peak_and_are_lettered_once(coarse_run, captured, tmp_path):
     trajectories.plot_paper_fig3_laws([coarse_run, coarse_run], tmp_path / "fig3.png")
     (figure,) = captured

@@ -77,6 +77,13 @@ def draw(axes: Axes, dataset: xr.Dataset | PlainDataset, variable: str | None = 
         from impactbeams.plotting.lines import draw_bifurcation
 
         draw_bifurcation(axes, data, name)
+    elif name == "contact_force" and "impact_peak_force" in data.variables:
+        # a run's force: its samples miss most contacts, each contact's peak is drawn too
+        from impactbeams.plotting.labels import axis_label
+        from impactbeams.plotting.trajectories import plot_contact_force
+
+        plot_contact_force(axes, data)
+        axes.set_xlabel(axis_label(data["time"]))
     elif field.ndim == 1:
         from impactbeams.plotting.lines import draw_line
 

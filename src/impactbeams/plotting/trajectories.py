@@ -13,6 +13,7 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from impactbeams.plotting.arrays import PlainDataset
 from impactbeams.plotting.files import save_figure
 from impactbeams.plotting.labels import base_motion, quantity
 from impactbeams.variables import PARAMETERS
@@ -74,7 +75,6 @@ def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
     t = dataset.time.values
     plot_tips(axes[0], dataset)
     plot_contact_force(axes[1], dataset)
-    axes[1].set_ylabel("contact force $R$ (mN)")
     onset = dataset.impact_onset_time.values
     axes[2].plot(onset, dataset.restitution_coefficient, ".", ms=3, color="C2")
     axes[2].axhline(0.0, color="0.6", lw=0.5)
@@ -91,7 +91,7 @@ def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
     save_figure(figure, path)
 
 
-def plot_contact_force(axis: Axes, dataset: xr.Dataset) -> None:
+def plot_contact_force(axis: Axes, dataset: xr.Dataset | PlainDataset) -> None:
     """Contact force R (mN): every contact's peak as a stem at its onset, over R(t) sampled.
 
     The samples alone miss most contacts (each lasts a fraction of a millisecond: the Fig. 3
@@ -99,16 +99,17 @@ def plot_contact_force(axis: Axes, dataset: xr.Dataset) -> None:
     their largest force is half the largest peak); the stems are the peaks themselves
     (``impact_peak_force``, certified maxima).
     """
-    axis.plot(dataset.time, dataset.contact_force * _MILLI, lw=0.6, color="C3",
-              label="$R$ at the output times")
-    peaks = dataset.impact_peak_force.values * _MILLI
-    onsets = dataset.impact_onset_time.values
+    axis.plot(dataset["time"].values, dataset["contact_force"].values * _MILLI, lw=0.6,
+              color="C3", label="$R$ at the output times")
+    peaks = dataset["impact_peak_force"].values * _MILLI
+    onsets = dataset["impact_onset_time"].values
     axis.vlines(onsets, 0.0, peaks, colors="k", lw=0.4)
     axis.plot(onsets, peaks, ".", ms=2.5, color="k", label="peak of each contact")
     axis.axhline(0.0, color="0.6", lw=0.5)
     if peaks.size and peaks.max() > 0:  # room above the peaks for the legend's one row
         axis.set_ylim(top=_LEGEND_ROOM * peaks.max())
     axis.legend(loc="upper right", fontsize="small", ncols=2)
+    axis.set_ylabel("contact force $R$ (mN)")
 
 
 def _draw_surface(axis: Axes, dataset: xr.Dataset, beam: str, rows: int) -> None:
@@ -147,7 +148,6 @@ def _fig3_panels(axes: Sequence[Axes], dataset: xr.Dataset) -> None:
     axes[1].set_ylabel("restitution $e$")
     axes[1].set_xlabel("impact onset time (s)")
     plot_contact_force(axes[2], dataset)
-    axes[2].set_ylabel("contact force $R$ (mN)")
     axes[2].set_xlabel("$t$ (s)")
     if "episode_restitution" in dataset:
         axes[1].plot(dataset.episode_onset_time, dataset.episode_restitution, "D", ms=5,
