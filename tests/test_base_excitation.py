@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from impactbeams import Params, simulate
+from impactbeams.cli import build_parser, params_from_args
 from impactbeams.contact import build_tied_model
 from impactbeams.drive import contact_participation, drive_summary, participation
 from impactbeams.kernels import first_impact as fi
@@ -315,14 +316,20 @@ def test_the_shaker_and_the_start_are_not_axes(name):
 
 def test_a_study_that_names_its_shaker_has_no_tip_force_unless_it_names_one(tmp_path):
     """The paper's 1 mN tip force is the default drive only of a study without a shaker: one
-    that gives base_amplitude (keywords, a file's [params], a sweep's axis, even at 0) is
-    driven by its shaker alone unless it gives force_amplitude too; a copy keeps both."""
+    that gives base_amplitude (keywords, a file's [params], a sweep's axis, a copy's change,
+    the command line, even at 0) is driven by its shaker alone unless it gives
+    force_amplitude too."""
     assert Params().force_amplitude == 1e-3 and Params().base_amplitude == 0.0
     assert Params(base_amplitude=1e-5).force_amplitude == 0.0
     assert Params(base_amplitude=0.0).force_amplitude == 0.0
     assert Params(base_amplitude=1e-5, force_amplitude=2e-4).force_amplitude == 2e-4
     assert Params.from_mapping({"base_amplitude": 1e-5}).force_amplitude == 0.0
-    assert Params().replace(base_amplitude=1e-5).force_amplitude == 1e-3
+    # a copy resolves a default again, as if built with its changes; a given value stays
+    assert Params().replace(base_amplitude=1e-5) == Params(base_amplitude=1e-5)
+    assert Params().replace(omega=80.0).force_amplitude == 1e-3
+    assert Params(force_amplitude=1e-3).replace(base_amplitude=1e-5).force_amplitude == 1e-3
+    assert Params(base_amplitude=1e-5).replace(omega=80.0).force_amplitude == 0.0
+    assert Params(base_amplitude=1e-5).replace(base_amplitude=0.0).force_amplitude == 0.0
     (tmp_path / "p.toml").write_text("[params]\nbase_amplitude = 1e-5\n")
     assert Params.from_toml(tmp_path / "p.toml").force_amplitude == 0.0
     sweep = sweep_from_mapping({"t_max": 0.01, "n_modes": 3, "params": {"counterpart": "stop"},
@@ -330,6 +337,12 @@ def test_a_study_that_names_its_shaker_has_no_tip_force_unless_it_names_one(tmp_
                                                             "num": 3}}})
     assert {sweep.params_at({"base_amplitude": u}).force_amplitude
             for u in (0.0, 5e-6, 1e-5)} == {0.0}
+    parser = build_parser()
+    for argv, force in ((["--base-amplitude", "1e-5"], 0.0), ([], 1e-3),
+                        (["--base-amplitude", "1e-5", "--force-amplitude", "1e-3"], 1e-3),
+                        (["--params", str(tmp_path / "p.toml"), "--omega", "80"], 0.0)):
+        args = parser.parse_args(["simulate", "--t-max", "0.01", "-o", "run.nc", *argv])
+        assert params_from_args(args).force_amplitude == force, argv
 
 
 def test_the_drives_are_named_in_one_line():

@@ -359,6 +359,7 @@ CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS, "shaker": S
            "start": layout.STARTS}
 # N, the paper's tip force: the default drive of a study that names no base motion
 DEFAULT_FORCE_AMPLITUDE = 1e-3
+DRIVES = ("force_amplitude", "base_amplitude")  # their defaults depend on which are given
 DEFAULT_TIP_RADIUS = 1e-3  # m, of the default contact stiffness
 DEFAULT_CONTACT_FORCE = 1e-3  # N, force scale of the default contact stiffness
 DEFAULT_CONTACT_STIFFNESS = hertz_stiffness(DEFAULT_TIP_RADIUS, DEFAULT_CONTACT_FORCE)
@@ -422,8 +423,11 @@ class Params:
 
         A study of a shaker (``base_amplitude`` given, whatever its value) gets no tip force
         unless it gives ``force_amplitude`` too; without a shaker the tip force is the paper's
-        1 mN. Copies (`replace`) keep both, as every other parameter.
+        1 mN. Which were given is kept (``_given_drives``, not a field): a copy (`replace`)
+        resolves the others again, as if built with its changes.
         """
+        given = frozenset(name for name in DRIVES if getattr(self, name) is not None)
+        object.__setattr__(self, "_given_drives", given)
         named_base = self.base_amplitude is not None
         if not named_base:
             object.__setattr__(self, "base_amplitude", 0.0)
@@ -464,8 +468,13 @@ class Params:
         return dataclasses.asdict(self)
 
     def replace(self, **changes: Any) -> Params:
-        """Return a copy with some parameters changed (material keys allowed)."""
-        base = self.as_dict()
+        """Return a copy with some parameters changed (material keys allowed).
+
+        A drive left to its default stays a default: ``Params().replace(base_amplitude=U0)``
+        is ``Params(base_amplitude=U0)``, a shaker study without tip force.
+        """
+        base = {name: value for name, value in self.as_dict().items()
+                if name not in DRIVES or name in getattr(self, "_given_drives", DRIVES)}
         for i in ("1", "2"):
             if any(k + i in changes for k in MATERIAL_KEYS):
                 del base["EI" + i], base["rhoA" + i]
