@@ -302,3 +302,21 @@ def test_a_map_over_the_base_amplitude_says_where_the_shaker_sits(captured, tmp_
     text = _left_title(captured[0].axes[0]).get_text()
     assert "shaker on beam 1's clamp and the stop" in text
     assert "$F_0$" not in text and "$U_0$ =" not in text  # U0 is an axis
+
+
+def test_labels_are_placed_on_a_figure_without_an_agg_canvas():
+    """`draw_branches` on a bare Figure measures with an Agg renderer and leaves the canvas."""
+    from impactbeams.plotting.branches import draw_branches
+
+    figure = Figure(figsize=(7, 5), layout="constrained")
+    canvas = figure.canvas
+    axes = figure.subplots()
+    draw_branches(axes, _branch())
+    assert figure.canvas is canvas
+    FigureCanvasAgg(figure)
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    boxes = [Text.get_window_extent(label, renderer) for label in _labels(axes)]
+    assert len(boxes) == 5
+    for a, b in itertools.combinations(boxes, 2):
+        assert not a.overlaps(b)

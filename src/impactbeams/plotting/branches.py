@@ -17,6 +17,7 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.backend_bases import RendererBase
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 from matplotlib.text import Annotation, Text
 from matplotlib.transforms import Bbox
 
@@ -133,10 +134,8 @@ def place_labels(axes: Axes, events: list[tuple[float, float, str]]) -> None:
     axes' view are not labelled.
     """
     figure = axes.get_figure(root=True)
-    if not isinstance(figure.canvas, FigureCanvasAgg):
-        FigureCanvasAgg(figure)  # a renderer to measure the texts with
-    figure.draw_without_rendering()
-    renderer = figure.canvas.get_renderer()
+    figure.draw_without_rendering()  # the layout: positions as they will be drawn
+    renderer = _renderer(figure)
     points_to_pixels = figure.dpi / 72.0
     inside = axes.get_window_extent(renderer)
     taken = [_marker_box(axes, x, y, points_to_pixels) for x, y, _ in events]
@@ -156,6 +155,16 @@ def place_labels(axes: Axes, events: list[tuple[float, float, str]]) -> None:
         label.xyann = _free_offset(label, renderer, taken, inside)
         label.arrow_patch.set_visible(abs(label.xyann[1]) > 15)  # a line to a far label
         taken.append(_text_box(label, renderer))
+
+
+def _renderer(figure: Figure) -> RendererBase:
+    """A renderer to measure texts with: the canvas's own, else an Agg one (canvas kept)."""
+    if hasattr(figure.canvas, "get_renderer"):
+        return figure.canvas.get_renderer()
+    canvas = figure.canvas
+    renderer = FigureCanvasAgg(figure).get_renderer()
+    figure.set_canvas(canvas)
+    return renderer
 
 
 def _text_box(label: Annotation, renderer: RendererBase) -> Bbox:
