@@ -181,10 +181,10 @@ def orbit_measures(period_map: PeriodMap, result: PeriodMapResult,
 
     ``section_deflection_1``: the orbit's p stroboscopic samples of y1, at t = k T, k < p.
     What a shaker's user reads: beam 1's tip amplitude absolute (``tip_amplitude_1``) and
-    relative to its clamp (``tip_relative_amplitude_1``), their ratio to the base amplitude
-    (``transmissibility``, NaN without base motion), the largest closing speed of the gap at
-    a contact's onset (``max_impact_velocity``, 0 without contact) and the largest contact
-    force (``peak_contact_force``); the contacts per orbit are the evaluation's own.
+    relative to its clamp (``tip_relative_amplitude_1``), the absolute one over the base
+    amplitude (``transmissibility``, NaN without base motion), the largest closing speed of
+    the gap at a contact's onset (``max_impact_velocity``, 0 without contact) and the largest
+    contact force (``peak_contact_force``); the contacts per orbit are the evaluation's own.
     """
     # the tips on the sections by the period map's own sampling of its run
     sections = period_map.forcing_period * np.arange(period_map.periods)
