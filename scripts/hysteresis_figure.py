@@ -27,8 +27,9 @@ from matplotlib.figure import Figure
 from impactbeams.continuation import continue_orbits, load_continuation
 from impactbeams.io import write_text
 from impactbeams.longtime import hysteresis
-from impactbeams.plotting.branches import draw_branches
+from impactbeams.plotting.branches import branch_units, draw_branches
 from impactbeams.plotting.files import save_figure
+from impactbeams.plotting.labels import case_title
 from impactbeams.sweep import run_sweep, sweep_from_mapping
 from impactbeams.variables import BIFURCATIONS
 
@@ -40,6 +41,7 @@ STEP = 2.5  # rad/s: cells 2 rad/s or more past each fold (tests/test_hysteresis
 DWELL = 300
 SWEEPS = {"up": ("^", "C3", 6), "down": ("v", "C2", 4)}  # marker, colour, size
 VIEW = (260.0, 340.0)  # rad/s: the folds; below, the response is linear up to the grazing
+MEASURE = "section_deflection_1"  # y1 on the section: what the sweeps sample
 
 
 def stepped_sweep(continuation):
@@ -59,13 +61,16 @@ def draw(branch, stepped) -> None:
     """The branch's section deflection, the sweeps' samples over it (one marker per cell)."""
     figure = Figure(figsize=(7, 5), layout="constrained")
     axes = figure.add_subplot()
+    (x_factor, _), (y_factor, _) = branch_units(branch, MEASURE)
     for direction, (marker, colour, size) in SWEEPS.items():
         row = stepped.sel(sweep_direction=direction)
-        axes.plot(row.omega, row.poincare_deflection1.isel(period=-1), marker, color=colour,
-                  markersize=size, markerfacecolor="none", linestyle="none",
-                  label=f"stepped sweep {direction}")
-    draw_branches(axes, branch, "section_deflection_1")
-    axes.set_xlim(*VIEW)
+        axes.plot(x_factor * row.omega, y_factor * row.poincare_deflection1.isel(period=-1),
+                  marker, color=colour, markersize=size, markerfacecolor="none",
+                  linestyle="none", label=f"stepped sweep {direction}")
+    axes.set_xlim(x_factor * VIEW[0], x_factor * VIEW[1])
+    axes.set_title(case_title(branch, MEASURE, ("branch_point",)), loc="left",
+                   fontsize="medium", wrap=True)
+    draw_branches(axes, branch, MEASURE)  # last: it places the event labels
     save_figure(figure, FIGURE)
 
 

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from impactbeams import Params, simulate
+from impactbeams.cli import build_parser, params_from_args
 from impactbeams.contact import build_tied_model
-from impactbeams.drive import contact_participation, participation
+from impactbeams.drive import contact_participation, drive_summary, participation
 from impactbeams.kernels import first_impact as fi
 from impactbeams.kernels.layout import CELL_U0, CONTACT
 from impactbeams.modes import free_modes
@@ -125,7 +126,8 @@ def test_rest_start_settles_on_the_steady_state():
 @pytest.mark.parametrize("changes", [
     {"shaker": "beam1", "base_amplitude": 2e-5, "force_amplitude": 0.0, "omega": 200.0},
     {"shaker": "beam2", "base_amplitude": 2e-5, "force_amplitude": 0.0, "omega": 80.0},
-    {"shaker": "both", "base_amplitude": 3e-6, "omega": 400.0, "damping_ratio": 0.01},
+    {"shaker": "both", "base_amplitude": 3e-6, "force_amplitude": 1e-3, "omega": 400.0,
+     "damping_ratio": 0.01},
 ], ids=["beam1", "beam2", "both-with-force"])
 def test_spring_contacts_equal_dop853(changes):
     """The first five contacts against DOP853 on the same modal equations (12 modes, k = 1e4):
@@ -151,7 +153,7 @@ def test_energy_balance_closes_with_the_base_drive(shaker, dashpot):
     contacts, with and without a dashpot (energies relative to the clamps; measured 2e-14 to
     7e-12 of the energy, 1e-10 required as for the tip force alone in tests/test_dynamics.py)."""
     params = Params(contact_stiffness=1e4, shaker=shaker, base_amplitude=2e-5, omega=80.0,
-                    damping_ratio=0.01, contact_damping=dashpot)
+                    damping_ratio=0.01, contact_damping=dashpot, force_amplitude=1e-3)
     times = np.linspace(0.0, 0.05, 5001)
     ds = simulate(params, 0.05, n_modes=12, times=times, energy_balance=True)
     assert ds.impact_onset_time.size >= 2
@@ -241,7 +243,7 @@ def test_tied_law_energy_balance_within_every_phase_with_both_clamps_shaken(damp
     """Tied law, both clamps on the shaker, tip force too: d(E - U) = dW - dD within each phase
     (the tied law loses energy only at onsets), 1e-10 of the energy as in
     tests/test_dynamics.py; the contact modes' own participation factors carry the drive."""
-    params = Params(contact_law="tied", base_amplitude=5e-6, omega=230.0,
+    params = Params(contact_law="tied", base_amplitude=5e-6, force_amplitude=1e-3, omega=230.0,
                     damping_ratio=damping_ratio)
     t_max = 0.3
     packed, traj = trajectory(params, t_max)
@@ -271,7 +273,7 @@ def test_tied_contact_modes_carry_the_static_inertial_response():
     (c2 d1 + c1 d2) / (c1 + c2). The contact modes' static sum ``sum Z_m(l) Gamma_m / omega_m^2``
     must give it (measured 1e-8 at 20 modes per beam, 5e-12 at 50). And the contact phase's
     drive amplitudes of a run are ``Gamma_m U0 Omega^2`` plus the tip force's."""
-    params = Params(contact_law="tied", base_amplitude=U0, omega=300.0)
+    params = Params(contact_law="tied", base_amplitude=U0, force_amplitude=1e-3, omega=300.0)
     c1, c2 = params.tip_compliance
     d1 = params.rhoA1 * params.l1**4 / (8 * params.EI1)
     d2 = params.rhoA2 * params.l2**4 / (8 * params.EI2)
@@ -293,7 +295,7 @@ def test_a_sweep_starting_steady_at_an_undamped_resonance_is_refused_before_work
     """
     first = float(free_modes(Params().EI1, Params().rhoA1, Params().l1, 1).frequencies[0])
     mapping = {"t_max": 0.01, "n_modes": 3, "observables": ["first_impact_time"],
-               "params": {"start": "steady", "base_amplitude": U0},
+               "params": {"start": "steady", "base_amplitude": U0, "force_amplitude": 1e-3},
                "axes": {"omega": {"min": first, "max": 2 * first, "num": 3}}}
     with pytest.raises(ParameterError, match="is a natural frequency and damping_ratio = 0"):
         check_contact_phases(sweep_from_mapping(mapping))
@@ -310,3 +312,46 @@ def test_the_shaker_and_the_start_are_not_axes(name):
                "axes": {name: {"min": 1e-3, "max": 1e-2, "num": 3, "scale": "log"}}}
     with pytest.raises(ParameterError, match=f"{name} is not sweepable: give it in"):
         sweep_from_mapping(mapping)
+
+
+def test_a_study_that_names_its_shaker_has_no_tip_force_unless_it_names_one(tmp_path):
+    """The paper's 1 mN tip force is the default drive only of a study without a shaker: one
+    that gives base_amplitude (keywords, a file's [params], a sweep's axis, a copy's change,
+    the command line, even at 0) is driven by its shaker alone unless it gives
+    force_amplitude too."""
+    assert Params().force_amplitude == 1e-3 and Params().base_amplitude == 0.0
+    assert Params(base_amplitude=1e-5).force_amplitude == 0.0
+    assert Params(base_amplitude=0.0).force_amplitude == 0.0
+    assert Params(base_amplitude=1e-5, force_amplitude=2e-4).force_amplitude == 2e-4
+    assert Params.from_mapping({"base_amplitude": 1e-5}).force_amplitude == 0.0
+    # a copy resolves a default again, as if built with its changes; a given value stays
+    assert Params().replace(base_amplitude=1e-5) == Params(base_amplitude=1e-5)
+    assert Params().replace(omega=80.0).force_amplitude == 1e-3
+    assert Params(force_amplitude=1e-3).replace(base_amplitude=1e-5).force_amplitude == 1e-3
+    assert Params(base_amplitude=1e-5).replace(omega=80.0).force_amplitude == 0.0
+    assert Params(base_amplitude=1e-5).replace(base_amplitude=0.0).force_amplitude == 0.0
+    (tmp_path / "p.toml").write_text("[params]\nbase_amplitude = 1e-5\n")
+    assert Params.from_toml(tmp_path / "p.toml").force_amplitude == 0.0
+    sweep = sweep_from_mapping({"t_max": 0.01, "n_modes": 3, "params": {"counterpart": "stop"},
+                                "axes": {"base_amplitude": {"min": 0.0, "max": 1e-5,
+                                                            "num": 3}}})
+    assert {sweep.params_at({"base_amplitude": u}).force_amplitude
+            for u in (0.0, 5e-6, 1e-5)} == {0.0}
+    parser = build_parser()
+    for argv, force in ((["--base-amplitude", "1e-5"], 0.0), ([], 1e-3),
+                        (["--base-amplitude", "1e-5", "--force-amplitude", "1e-3"], 1e-3),
+                        (["--params", str(tmp_path / "p.toml"), "--omega", "80"], 0.0)):
+        args = parser.parse_args(["simulate", "--t-max", "0.01", "-o", "run.nc", *argv])
+        assert params_from_args(args).force_amplitude == force, argv
+
+
+def test_the_drives_are_named_in_one_line():
+    assert drive_summary(Params()) == "drives: tip force F0 = 0.001 N; Omega = 50 rad/s"
+    stop = Params(counterpart="stop", base_amplitude=1e-5, omega=200.0)
+    assert drive_summary(stop) == (
+        "drives: base motion U0 = 1e-05 m on beam 1's clamp and the stop (the stop moves with "
+        "the shaker: shaker = 'beam1' keeps it fixed); Omega = 200 rad/s")
+    assert drive_summary(stop.replace(shaker="beam1", force_amplitude=2e-4)) == (
+        "drives: tip force F0 = 0.0002 N; base motion U0 = 1e-05 m on beam 1's clamp; "
+        "Omega = 200 rad/s")
+    assert drive_summary(Params(base_amplitude=0.0)) == "drives: none; Omega = 50 rad/s"

@@ -142,7 +142,8 @@ def test_restart_from_the_final_state_continues_the_run():
     assert np.array_equal(again.tip_deflection_1, second.tip_deflection_1)
 
 
-@pytest.mark.parametrize("extra", [{}, {"base_amplitude": 1e-6}, {"counterpart": "stop"}])
+@pytest.mark.parametrize("extra", [{}, {"base_amplitude": 1e-6, "force_amplitude": 1e-3},
+                                   {"counterpart": "stop"}])
 def test_fields_of_the_rest_state_start_as_rest(extra):
     """Zero deflection and velocity fields (at rest in the absolute frame) project on q = 0
     and the rest velocity of the tip force and the shaker: bit for bit start = "rest"."""
@@ -311,7 +312,8 @@ def test_monodromy_against_a_stop_on_a_shaker(shaker):
     """Beam 1 against a stop, the shaker moving beam 1's clamp (a harmonic term in the gap) or
     both (the stop's mount too), with the tip force: the orbit found by Newton, its monodromy
     against central differences at relative step 1e-5 (measured 3e-8 and 8e-9)."""
-    params = Params(**PERIODIC, counterpart="stop", base_amplitude=1e-6, shaker=shaker)
+    params = Params(**PERIODIC, counterpart="stop", base_amplitude=1e-6, shaker=shaker,
+                    force_amplitude=1e-3)
     orbit = periodic_orbit(params, n_modes=6, method="newton", transient_periods=20)
     assert orbit.residual <= 1e-11 and orbit.contacts >= 1
     period_map = PeriodMap(params, n_modes=6)

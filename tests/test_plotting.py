@@ -220,8 +220,7 @@ def test_labels_are_symbols_with_units(figure):
     assert axes.get_xlabel() == "$\\Omega$ (rad/s)"
     assert axes.get_ylabel() == "$F_0$ (N)"
     assert figure.axes[1].get_ylabel() == "time before the first impact $t^*$ (s)"
-    assert axes.get_title(loc="left") == ("$\\Delta$ = $1.1\\times10^{-5}$ m, "
-                                          "$t_\\max$ = 1 s, 5 modes")
+    assert axes.get_title(loc="left") == "$\\Delta$ = 11 µm, $t_\\max$ = 1 s, 5 modes"
     for name, label in (("clearance", "$\\Delta$ (m)"), ("damping_ratio", "$\\zeta$"),
                         ("uplift1", "$\\delta_1$ (m)"), ("EI2", "$EI_2$ (N m$^{2}$)")):
         assert axis_label(_axis(name, [1.0, 2.0])) == label
@@ -235,8 +234,8 @@ def test_long_time_titles_name_the_sampled_periods_not_t_max(figure):
     for variable in ("response_period", "poincare_deflection1"):
         axes = Figure().subplots()
         draw(axes, ds, variable)
-        assert axes.get_title(loc="left") == ("$\\Delta$ = $1.1\\times10^{-5}$ m, 500 transient "
-                                              "+ 200 sampled periods, 5 modes, spring law")
+        assert axes.get_title(loc="left") == ("$\\Delta$ = 11 µm, 500 transient + 200 sampled "
+                                              "periods, 5 modes, spring law")
     axes = figure.subplots()  # the same file's other observables cover [0, t_max]
     draw(axes, fig5a_like().assign_attrs(transient_periods=500, sampled_periods=200))
     assert "$t_\\max$ = 1 s" in axes.get_title(loc="left")
@@ -250,7 +249,8 @@ def test_run_overview_writes_symbols_and_units_as_the_maps(monkeypatch, tmp_path
     run = xr.Dataset(
         {"tip_deflection_1": ("time", 1e-6 * np.sin(time)), "tip_deflection_2": ("time", 0 * time),
          "contact_force": ("time", 0 * time), "energy": ("time", 1e-9 + 0 * time),
-         "restitution_coefficient": ("impact", [0.5]), "impact_onset_time": ("impact", [0.005])},
+         "restitution_coefficient": ("impact", [0.5]), "impact_onset_time": ("impact", [0.005]),
+         "impact_peak_force": ("impact", [2e-3])},
         coords={"time": time},
         attrs={"force_amplitude": 1e-3, "omega": 40.0, "clearance": 2e-5, "n_modes": 40,
                "contact_law": "spring", "contact_stiffness": 1.2345e7, "status": "complete"})
@@ -258,7 +258,7 @@ def test_run_overview_writes_symbols_and_units_as_the_maps(monkeypatch, tmp_path
     (figure,) = figures
     axes = figure.axes
     assert axes[0].get_title() == (
-        "$F_0$ = 0.001 N, $\\Omega$ = 40 rad/s, $\\Delta$ = $2\\times10^{-5}$ m\n"
+        "$F_0$ = 1 mN, $\\Omega$ = 40 rad/s (6.37 Hz), $\\Delta$ = 20 µm\n"
         "spring law, $k$ = $1.23\\times10^{7}$ N/m, 40 modes; status complete")
     assert axes[0].get_ylabel() == "tip deflection (µm)"
     assert [t.get_text() for t in axes[0].get_legend().get_texts()] == [
@@ -288,7 +288,7 @@ def test_slice_picks_the_nearest_grid_value_in_log_distance(figure):
                      "(index 2 of 0..4)"]
     expected = cube().first_impact_time.isel(clearance=2).values.T
     assert np.array_equal(_mesh(figure).get_array().reshape(expected.shape), expected)
-    assert "$\\Delta$ = $10^{-4}$ m" in axes.get_title(loc="left")
+    assert "$\\Delta$ = 100 µm" in axes.get_title(loc="left")
 
 
 def test_slice_by_index_and_two_slices_give_a_line(figure):
@@ -354,9 +354,11 @@ def test_bifurcation_diagram_draws_every_finite_sample(figure):
     assert dots.get_linestyle() == "None"
     # the doubled branch shows as two y values per Omega above 50 rad/s
     above = dots.get_xdata() > 50.0
-    assert len(np.unique(np.round(dots.get_ydata()[above] / 1e-9))) == 2 * len(
-        np.unique(dots.get_xdata()[above]))
-    assert axes.get_ylabel() == "stroboscopic tip deflection of beam 1 (m)"
+    assert len(np.unique(np.round(dots.get_ydata()[above] / 1e-3))) == 2 * len(
+        np.unique(dots.get_xdata()[above]))  # drawn in µm: 1e-3 µm is the nm of before
+    assert axes.get_ylabel() == "stroboscopic tip deflection of beam 1 (µm)"
+    finite = samples[np.isfinite(samples)]
+    np.testing.assert_array_equal(np.sort(dots.get_ydata()), np.sort(1e6 * finite))
 
 
 def test_samples_over_two_axes_need_a_slice():

@@ -309,7 +309,7 @@ def _plot(args: argparse.Namespace) -> int:
                          values=parse_assignments(args.slice, "--slice"),
                          indices=parse_assignments(args.slice_index, "--slice-index"),
                          scale=args.scale, contours=parse_levels(args.contours),
-                         title=args.title, dpi=args.dpi, diagram=diagram)
+                         title=args.title, dpi=args.dpi, diagram=diagram, hz=args.hz)
     for note in notes:
         _say(args, f"impactbeams: {note}")
     _say(args, f"wrote {output}")
@@ -621,6 +621,8 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--over", metavar="DIAGRAM.nc",
                       help="a continuation's branches over this bifurcation diagram (a "
                            "long-time sweep along the continued parameter)")
+    plot.add_argument("--hz", action="store_true",
+                      help="a continuation's frequency axis in Hz (Omega / 2 pi), not rad/s")
     plot.set_defaults(handler=_plot)
     return parser
 

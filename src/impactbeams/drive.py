@@ -24,6 +24,29 @@ if TYPE_CHECKING:
 CLAMPS_MOVED = dict(zip(SHAKERS, ((1.0, 1.0), (1.0, 0.0), (0.0, 1.0)), strict=True))
 
 
+# where the shaker sits, in words, by (shaker, counterpart): a stop's mount is beam 2's clamp
+SHAKER_WORDS = {("both", "beam"): "on both clamps", ("beam1", "beam"): "on beam 1's clamp",
+                ("beam2", "beam"): "on beam 2's clamp",
+                ("both", "stop"): "on beam 1's clamp and the stop",
+                ("beam1", "stop"): "on beam 1's clamp", ("beam2", "stop"): "on the stop"}
+
+
+def drive_summary(params: Params) -> str:
+    """One line naming every drive of ``params``, e.g. for a command's header.
+
+    ``"drives: tip force F0 = 0.001 N; base motion U0 = 1e-05 m on beam 1's clamp and the stop
+    (the stop moves with the shaker: shaker = 'beam1' keeps it fixed); Omega = 50 rad/s"``.
+    """
+    drives = [f"tip force F0 = {params.force_amplitude:g} N"] if params.force_amplitude else []
+    if params.base_amplitude:
+        words = SHAKER_WORDS[params.shaker, params.counterpart]
+        moving_stop = params.counterpart == "stop" and params.shaker != "beam1"
+        drives.append(f"base motion U0 = {params.base_amplitude:g} m {words}" + (
+            " (the stop moves with the shaker: shaker = 'beam1' keeps it fixed)" if moving_stop
+            else ""))
+    return (f"drives: {'; '.join(drives) or 'none'}; Omega = {params.omega:g} rad/s")
+
+
 def moving_clamps(shaker: str) -> tuple[float, float]:
     """(1.0 if beam 1's clamp moves else 0.0, likewise beam 2's) for a ``shaker`` value."""
     return CLAMPS_MOVED[shaker]

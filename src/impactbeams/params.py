@@ -14,7 +14,9 @@ name               unit    meaning
 ``width1`` ...     m       strip width
 ``thickness1``...  m       strip thickness
 ``clearance``      m       Delta, gap between the tips at rest (> 0)
-``force_amplitude`` N      F0 of the tip force F(t) = F0 sin(omega t) on beam 1 (downward)
+``force_amplitude`` N      F0 of the tip force F(t) = F0 sin(omega t) on beam 1 (downward);
+                           default 1e-3, but 0 when ``base_amplitude`` is given: a study that
+                           names its shaker is driven by it alone unless it names F0 too
 ``omega``          rad/s   forcing frequency Omega
 ``uplift1``,       m       initial tip uplifts delta_1, delta_2 (static tip-load shape)
 ``uplift2``
@@ -30,8 +32,10 @@ name               unit    meaning
 ``base_amplitude`` m       U0 of the shaker's motion u_b(t) = U0 sin(omega t) (default 0; the
                            tied law takes it with shaker = "both" only); at most 0.2 times the
                            shortest shaken beam (small deflections, ``check_joint``)
-``shaker``         -       which clamps the shaker carries: "both" (default), "beam1" or
-                           "beam2" (beam 2's clamp, or a fixed stop's mount)
+``shaker``         -       which clamps the shaker carries: "both" (default: both beams'
+                           clamps, or beam 1's and the stop's mount, which then moves with it),
+                           "beam1" (a stop stays fixed) or "beam2" (beam 2's clamp, or a stop's
+                           mount)
 ``start``          -       initial state: "rest" (at rest in the absolute frame, default)
                            or "steady" (on the no-contact steady response to every drive)
 =================  ======  ==========================================================
@@ -399,6 +403,9 @@ SHAKERS = ("both", "beam1", "beam2")  # which clamps the shaker carries (impactb
 # the parameters whose value is a name, and the names allowed (the default first)
 CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS, "shaker": SHAKERS,
            "start": layout.STARTS}
+# N, the paper's tip force: the default drive of a study that names no base motion
+DEFAULT_FORCE_AMPLITUDE = 1e-3
+DRIVES = ("force_amplitude", "base_amplitude")  # their defaults depend on which are given
 DEFAULT_TIP_RADIUS = 1e-3  # m, of the default contact stiffness
 DEFAULT_CONTACT_FORCE = 1e-3  # N, force scale of the default contact stiffness
 DEFAULT_CONTACT_STIFFNESS = hertz_stiffness(DEFAULT_TIP_RADIUS, DEFAULT_CONTACT_FORCE)
@@ -421,7 +428,7 @@ class Params:
     rhoA1: float = DEFAULT_RHOA
     rhoA2: float = DEFAULT_RHOA
     clearance: float = 1.1e-5
-    force_amplitude: float = 1e-3
+    force_amplitude: float | None = None  # DEFAULT_FORCE_AMPLITUDE, or 0 (`_resolve_drives`)
     omega: float = 50.0
     uplift1: float = 0.0
     uplift2: float = 0.0
@@ -430,7 +437,7 @@ class Params:
     contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS
     contact_damping: float = 0.0
     counterpart: str = "beam"
-    base_amplitude: float = 0.0
+    base_amplitude: float | None = None  # 0.0; None: not given (`_resolve_drives`)
     shaker: str = "both"
     start: str = "rest"
 
@@ -442,6 +449,7 @@ class Params:
         self.__post_init__()
 
     def __post_init__(self) -> None:
+        self._resolve_drives()
         for name, allowed in CHOICES.items():
             value = getattr(self, name)
             require(name, value, isinstance(value, str) and value in allowed,
@@ -463,6 +471,23 @@ class Params:
                 or self.shaker == "both",
                 "with contact_law = 'tied' the shaker must carry both clamps (shaker = 'both', "
                 f"not {self.shaker!r}), or use contact_law = 'spring'")
+
+    def _resolve_drives(self) -> None:
+        """The drives not given: no base motion; the tip force only if no base motion is named.
+
+        A study of a shaker (``base_amplitude`` given, whatever its value) gets no tip force
+        unless it gives ``force_amplitude`` too; without a shaker the tip force is the paper's
+        1 mN. Which were given is kept (``_given_drives``, not a field): a copy (`replace`)
+        resolves the others again, as if built with its changes.
+        """
+        given = frozenset(name for name in DRIVES if getattr(self, name) is not None)
+        object.__setattr__(self, "_given_drives", given)
+        named_base = self.base_amplitude is not None
+        if not named_base:
+            object.__setattr__(self, "base_amplitude", 0.0)
+        if self.force_amplitude is None:
+            object.__setattr__(self, "force_amplitude",
+                               0.0 if named_base else DEFAULT_FORCE_AMPLITUDE)
 
     @staticmethod
     def numeric_names() -> tuple[str, ...]:
@@ -497,8 +522,13 @@ class Params:
         return dataclasses.asdict(self)
 
     def replace(self, **changes: Any) -> Params:
-        """Return a copy with some parameters changed (material keys allowed)."""
-        base = self.as_dict()
+        """Return a copy with some parameters changed (material keys allowed).
+
+        A drive left to its default stays a default: ``Params().replace(base_amplitude=U0)``
+        is ``Params(base_amplitude=U0)``, a shaker study without tip force.
+        """
+        base = {name: value for name, value in self.as_dict().items()
+                if name not in DRIVES or name in getattr(self, "_given_drives", DRIVES)}
         for i in ("1", "2"):
             if any(k + i in changes for k in MATERIAL_KEYS):
                 del base["EI" + i], base["rhoA" + i]

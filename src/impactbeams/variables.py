@@ -429,6 +429,22 @@ VARIABLES.update({
     "tip_amplitude_2": Variable(("branch_point",), "m", "largest tip deflection of beam 2",
                                 "max |y2(l2, t)| over the orbit (0 against a stop)",
                                 symbol=r"$\max|y_2(l_2)|$"),
+    "tip_relative_amplitude_1": Variable(
+        ("branch_point",), "m", "largest tip deflection of beam 1 relative to its clamp",
+        "max |y1(l1, t) - u_b1(t)| over the orbit, u_b1 = U0 sin(Omega t) where the shaker "
+        "carries beam 1's clamp (else 0: equal to tip_amplitude_1)",
+        symbol=r"$\max|y_1(l_1) - u_b|$"),
+    "transmissibility": Variable(
+        ("branch_point",), "1", "transmissibility of the base motion to beam 1's tip",
+        "tip_amplitude_1 / base_amplitude: the largest absolute tip deflection over the shaker's "
+        "amplitude U0 (below contact, the modulus of the linear transmissibility |Y(l1)| / U0); "
+        "NaN without base motion", symbol=r"$\max|y_1(l_1)| / U_0$"),
+    "max_impact_velocity": Variable(
+        ("branch_point",), "m s-1", "largest impact velocity",
+        "max of -dg/dt at a contact's onset over the orbit (the gap's closing speed, "
+        "impact_velocity of a simulated run), of the onsets inside the period (a contact "
+        "under way at the section has its onset outside it); 0 without one",
+        symbol=r"$v_\max$"),
     "peak_contact_force": Variable(("branch_point",), "N", "largest contact force",
                                    "max R(t) over the orbit; 0 without contact",
                                    symbol=r"$R_\max$"),

@@ -180,11 +180,20 @@ def orbit_measures(period_map: PeriodMap, result: PeriodMapResult,
     """The amplitude measures of the registry (impactbeams.variables) of one orbit.
 
     ``section_deflection_1``: the orbit's p stroboscopic samples of y1, at t = k T, k < p.
+    What a shaker's user reads: beam 1's tip amplitude absolute (``tip_amplitude_1``) and
+    relative to its clamp (``tip_relative_amplitude_1``), the absolute one over the base
+    amplitude (``transmissibility``, NaN without base motion), the largest closing speed of
+    the gap at a contact's onset (``max_impact_velocity``, 0 without contact) and the largest
+    contact force (``peak_contact_force``); the contacts per orbit are the evaluation's own.
     """
     # the tips on the sections by the period map's own sampling of its run
     sections = period_map.forcing_period * np.arange(period_map.periods)
     section = period_map.tip_motions(result, sections)[:, TIP_Y1]
+    base = period_map.params.base_amplitude
     return {"tip_amplitude_1": result.max_tip1, "tip_amplitude_2": result.max_tip2,
+            "tip_relative_amplitude_1": result.max_relative_tip1,
+            "transmissibility": result.max_tip1 / base if base > 0 else math.nan,
+            "max_impact_velocity": float(np.max(-result.impact_velocities, initial=0.0)),
             "peak_contact_force": result.peak_force,
             "contact_impulse": result.impulse / period_map.periods,
             "section_deflection_1": section}

@@ -18,12 +18,14 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from collections.abc import Callable
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact.spring import required_modes
+from impactbeams.drive import moving_clamps
 from impactbeams.kernels import contact
 from impactbeams.kernels.layout import (
     CONTACT,
@@ -75,7 +77,12 @@ class PeriodMapResult:
     ``max_tip2``: max |y1(l1)|, max |y2(l2)| (m) over [0, pT]. ``status``: the run's
     (``dynamics.STATUS_NAMES``). ``trajectory``: the recorded segments. ``peak_forces`` (N):
     each contact phase's peak force, in order (empty without measures): the grazing value of
-    a continuation reads the shallowest one without a second search.
+    a continuation reads the shallowest one without a second search. ``impact_velocities``
+    (m/s): the gap's rate dg/dt at each contact's onset in (0, pT), in order (< 0: closing;
+    empty without measures; a contact under way at t = 0 had its onset before).
+    ``max_relative_tip1`` (m): max |y1(l1) - u_b1| over [0, pT], beam 1's
+    tip relative to its clamp (u_b1 = U0 sin(Omega t) if the shaker carries that clamp, else
+    0: then it is ``max_tip1``; NaN without measures).
     """
 
     state: np.ndarray
@@ -91,6 +98,8 @@ class PeriodMapResult:
     status: str
     trajectory: Trajectory
     peak_forces: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
+    impact_velocities: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
+    max_relative_tip1: float = math.nan
 
 
 class PeriodMap:
@@ -164,12 +173,22 @@ class PeriodMap:
             return result
         impacts = impact_table(self.packed, result.trajectory)
         peaks = impacts["impact_peak_force"]
-        min_gap, min_gap_time, max_tip1, max_tip2 = self._extrema(result.trajectory)
+        min_gap, min_gap_time, max_tip1, max_tip2, relative = self._extrema(result.trajectory)
         return dataclasses.replace(
             result, min_gap=min_gap, min_gap_time=min_gap_time,
             peak_force=float(np.max(peaks, initial=0.0)),
             impulse=float(np.sum(impacts["impact_impulse"])), max_tip1=max_tip1,
-            max_tip2=max_tip2, peak_forces=peaks)
+            max_tip2=max_tip2, peak_forces=peaks,
+            impact_velocities=impacts["impact_velocity"][self._onsets(result.trajectory)],
+            max_relative_tip1=relative)
+
+    @staticmethod
+    def _onsets(trajectory: Trajectory) -> np.ndarray:
+        """Which contact phases of ``trajectory`` have their onset in it.
+
+        All but a contact under way at its start, whose onset came before.
+        """
+        return np.flatnonzero(trajectory.phase == CONTACT) > 0
 
     @one_blas_thread
     def jacobian(self, result: PeriodMapResult, directions: np.ndarray | str) -> np.ndarray:
@@ -229,8 +248,8 @@ class PeriodMap:
         labels = episode_labels(trajectory.time[k], release, default_separation(self.packed))
         return int(labels[-1]) + 1 if labels.size else 0
 
-    def _extrema(self, trajectory: Trajectory) -> tuple[float, float, float, float]:
-        """The gap's smallest interior minimum and its time, max |y1| and max |y2|.
+    def _extrema(self, trajectory: Trajectory) -> tuple[float, float, float, float, float]:
+        """The gap's smallest interior minimum and its time, max |y1|, max |y2|, max |y1 - u_b1|.
 
         The gap and the tips come from one sampling of the run on the grid (``_grid``).
         """
@@ -239,9 +258,22 @@ class PeriodMap:
         gap = self._gap_of(times, q)
         tips = self._tips_of(phase, times, q, v)
         min_gap, min_gap_time = self._min_gap(trajectory, times, gap, phase == FREE)
-        max_tip1, max_tip2 = (self._max_tip(trajectory, times, np.abs(tips[:, column]), column)
-                              for column in (TIP_Y1, TIP_Y2))
-        return min_gap, min_gap_time, max_tip1, max_tip2
+
+        def size(column: int, clamp: bool) -> Callable[[np.ndarray], np.ndarray]:
+            """|tip ``column``| at times (relative to beam 1's clamp if ``clamp``)."""
+            return lambda t: np.abs(self._tips(trajectory, t)[:, column]
+                                    - (self._clamp1(t) if clamp else 0.0))
+
+        max_tip1, max_tip2, relative = (
+            self._largest(times, np.abs(tips[:, column] - (self._clamp1(times) if clamp
+                                                           else 0.0)), size(column, clamp))
+            for column, clamp in ((TIP_Y1, False), (TIP_Y2, False), (TIP_Y1, True)))
+        return min_gap, min_gap_time, max_tip1, max_tip2, relative
+
+    def _clamp1(self, times: np.ndarray) -> np.ndarray:
+        """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0."""
+        moves1, _ = moving_clamps(self.params.shaker)
+        return moves1 * self.params.base_amplitude * np.sin(self.params.omega * times)
 
     def _grid(self) -> np.ndarray:
         return np.linspace(0.0, self.horizon, SAMPLES_PER_PERIOD * self.periods + 1)
@@ -285,14 +317,17 @@ class PeriodMap:
         tip_motions(p.tables, p.forces, p.phase_scalars, p.settings, phase, times, q, v, out)
         return out
 
-    def _max_tip(self, trajectory: Trajectory, times: np.ndarray, size: np.ndarray,
-                 column: int) -> float:
-        """The largest |tip| of ``column`` from its samples ``size`` at ``times``, refined."""
-        i = int(np.argmax(size))
+    def _largest(self, times: np.ndarray, sampled: np.ndarray,
+                 size: Callable[[np.ndarray], np.ndarray]) -> float:
+        """The largest of ``size`` (a function of times) from its samples at ``times``.
+
+        ``sampled``: its values there; refined by Brent's method between the neighbours of the
+        largest sample.
+        """
+        i = int(np.argmax(sampled))
         lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
-        value, _ = self._refined(
-            lambda t: -abs(self._tips(trajectory, np.array([t]))[0, column]), lo, hi,
-            -size[i], times[i])
+        value, _ = self._refined(lambda t: -float(size(np.array([t]))[0]), lo, hi,
+                                 -sampled[i], times[i])
         return -value
 
     @staticmethod

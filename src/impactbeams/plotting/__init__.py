@@ -78,6 +78,13 @@ def draw(axes: Axes, dataset: xr.Dataset | PlainDataset, variable: str | None = 
         from impactbeams.plotting.lines import draw_bifurcation
 
         draw_bifurcation(axes, data, name)
+    elif name == "contact_force" and "impact_peak_force" in data.variables:
+        # a run's force: its samples miss most contacts, each contact's peak is drawn too
+        from impactbeams.plotting.labels import axis_label
+        from impactbeams.plotting.trajectories import plot_contact_force
+
+        plot_contact_force(axes, data)
+        axes.set_xlabel(axis_label(data["time"]))
     elif field.ndim == 1:
         from impactbeams.plotting.lines import draw_line
 
@@ -94,7 +101,7 @@ def draw(axes: Axes, dataset: xr.Dataset | PlainDataset, variable: str | None = 
         raise ParameterError(f"a map needs a 2-D sweep (a line a 1-D one): {name} has "
                              f"{_dimensions(field)}; slice the others (--slice NAME=VALUE)")
     axes.set_title(case_title(data, name, field.dims) if title is None else title,
-                   loc="left", fontsize="medium")
+                   loc="left", fontsize="medium", wrap=True)
     if not np.isfinite(np.asarray(field.values, dtype=float)).any():
         notes.append(note_empty(axes, data, name))
     return notes
@@ -119,7 +126,8 @@ def _check_arguments(dataset: object, path: object, variable: object, values: ob
 
 
 def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
-                   title: str | None, dpi: float, diagram: xr.Dataset | None) -> list[str]:
+                   title: str | None, dpi: float, diagram: xr.Dataset | None,
+                   hz: bool) -> list[str]:
     """A continuation's frequency-response curve into ``path``."""
     from impactbeams.plotting.branches import draw_branches
 
@@ -127,9 +135,9 @@ def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
         registered(diagram, "diagram")
     figure = Figure(figsize=(7, 5), layout="constrained")
     axes = figure.subplots()
-    draw_branches(axes, dataset, variable, diagram)
     axes.set_title(case_title(dataset, variable or "tip_amplitude_1", ("branch_point",))
-                   if title is None else title, loc="left", fontsize="medium")
+                   if title is None else title, loc="left", fontsize="medium", wrap=True)
+    draw_branches(axes, dataset, variable, diagram, hz)  # last: it places labels laid out
     save_figure(figure, path, dpi)
     return []
 
@@ -163,12 +171,14 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
                  values: Mapping[str, float | str] | None = None,
                  indices: Mapping[str, int | str] | None = None, scale: str | None = None,
                  contours: int | Sequence[float] | None = None, title: str | None = None,
-                 dpi: float = 150, diagram: xr.Dataset | None = None) -> list[str]:
+                 dpi: float = 150, diagram: xr.Dataset | None = None,
+                 hz: bool = False) -> list[str]:
     """Draw ``dataset`` into the image file ``path`` (format from its extension).
 
     A simulated run without options gets its overview (tips, force, restitution, energy); a
     continuation's branches their frequency-response curve (over the bifurcation diagram
-    ``diagram`` if given); anything else is drawn by [`draw`][], whose options these are.
+    ``diagram`` if given; its frequency axis in Hz if ``hz``); anything else is drawn by
+    [`draw`][], whose options these are.
     ``dataset``: an xarray Dataset, or for a sweep's map a
     [`PlainDataset`][impactbeams.plotting.arrays.PlainDataset] (a file read without xarray).
     Returns its notes.
@@ -178,10 +188,11 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
         _require_xarray(dataset, "a continuation's branches")
         _refuse_options("a continuation's branches, drawn whole along their parameter,",
                         values=values, indices=indices, scale=scale, contours=contours)
-        return _plot_branches(dataset, path, variable, title, dpi, diagram)
-    if diagram is not None:
-        raise ParameterError("diagram (--over) is for a continuation's file only: this Dataset "
-                             "has no branch_point dimension")
+        return _plot_branches(dataset, path, variable, title, dpi, diagram, hz)
+    if diagram is not None or hz:
+        raise ParameterError(f"{'diagram (--over)' if diagram is not None else '--hz'} is for "
+                             "a continuation's file only: this Dataset has no branch_point "
+                             "dimension")
     options = values or indices or scale or contours is not None or title is not None
     if "time" in dataset.dims and variable is None and not options:
         from impactbeams.plotting.trajectories import plot_run

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from impactbeams.drive import SHAKER_WORDS
 from impactbeams.variables import LONG_TIME_VARIABLES, PARAMETERS, VARIABLES
 
 if TYPE_CHECKING:
@@ -17,8 +18,14 @@ if TYPE_CHECKING:
     from impactbeams.plotting.arrays import PlainArray, PlainDataset
 
 # fixed parameters that say which case a map shows, in this order (others only when sliced)
-_CASE = ("omega", "force_amplitude", "clearance", "uplift1", "uplift2", "damping_ratio")
-_ZERO_BY_DEFAULT = ("uplift1", "uplift2", "damping_ratio")  # named only when nonzero
+_CASE = ("omega", "force_amplitude", "base_amplitude", "clearance", "uplift1", "uplift2",
+         "damping_ratio")
+# named only when nonzero: a drive that is off is no part of the case
+_ZERO_BY_DEFAULT = ("force_amplitude", "base_amplitude", "uplift1", "uplift2", "damping_ratio")
+# the prefixes a reader uses for lengths and forces, largest first: a value is written with the
+# largest whose number is >= 1 (20 µm, not 2e-05 m; 0.5 mN, not 5e-04 N)
+_PREFIXED = {"m": ((1.0, "m"), (1e-3, "mm"), (1e-6, "µm"), (1e-9, "nm")),
+             "N": ((1.0, "N"), (1e-3, "mN"), (1e-6, "µN"), (1e-9, "nN"))}
 # quantities of the free phase before any contact: independent of the contact law
 _LAW_FREE = ("first_impact_time", "impacted")
 
@@ -40,11 +47,12 @@ def symbol(name: str) -> str:
     return entry.symbol if entry is not None else ""
 
 
-def axis_label(array: PlainArray | xr.DataArray) -> str:
+def axis_label(array: PlainArray | xr.DataArray, units: str | None = None) -> str:
     r"""Label of a coordinate or variable: symbol and units, e.g. ``"$\Omega$ (rad/s)"``.
 
     A swept parameter is named by its symbol alone (its long name is in the caption); an
     output variable by its long name and symbol. Without units the parentheses are left out.
+    ``units``: the units drawn, if not the array's own (`display_units`).
     """
     name = str(array.name)
     words = array.attrs.get("long_name", name.replace("_", " "))
@@ -52,8 +60,24 @@ def axis_label(array: PlainArray | xr.DataArray) -> str:
         words = symbol(name) or words.split(":")[0]
     elif symbol(name):
         words = f"{words} {symbol(name)}"
-    units = units_text(array.attrs.get("units", ""))
+    units = units_text(array.attrs.get("units", "") if units is None else units)
     return f"{words} ({units})" if units else words
+
+
+def display_units(values: np.ndarray, units: str) -> tuple[float, str]:
+    """The factor and units to draw ``values`` (in ``units``) in.
+
+    Lengths and forces take the prefix of their largest magnitude (``1e6, "µm"`` for tens of
+    µm), so that an axis needs no offset or power of ten; others stay (1.0, ``units``).
+    """
+    finite = np.abs(np.asarray(values, dtype=float))
+    finite = finite[np.isfinite(finite)]
+    prefixes = _PREFIXED.get(units, ())
+    if not prefixes or finite.size == 0 or finite.max() == 0:
+        return 1.0, units
+    scale, prefixed = next(((scale, name) for scale, name in prefixes if finite.max() >= scale),
+                           prefixes[-1])
+    return 1.0 / scale, prefixed
 
 
 def format_number(value: float, digits: int = 3) -> str:
@@ -81,11 +105,45 @@ def tick_labels(ticks: np.ndarray) -> list[str]:
     return [f"{t:g}" if decimal else power_of_ten(t) for t in ticks]
 
 
-def quantity(name: str, value: Any, units: str) -> str:
-    r"""``"$\Omega$ = 50 rad/s"``: a parameter's symbol (or name), value and units."""
-    text = format_number(float(value)) if isinstance(value, int | float | np.number) else value
+def with_units(value: float, units: str, digits: int = 3) -> str:
+    """``value`` and its units as read: lengths and forces with a prefix (``"20 µm"``).
+
+    Other units as `format_number` writes the value, with `units_text`.
+    """
+    for scale, prefixed in _PREFIXED.get(units, ()):
+        if abs(value) >= scale and abs(value) < 1e4 * scale:
+            return f"{value / scale:.{digits}g} {prefixed}"
     unit = units_text(units)
-    return f"{symbol(name) or name.replace('_', ' ')} = {text}" + (f" {unit}" if unit else "")
+    return format_number(value, digits) + (f" {unit}" if unit else "")
+
+
+def quantity(name: str, value: Any, units: str) -> str:
+    r"""``"$\Omega$ = 50 rad/s"``: a parameter's symbol (or name), value and units.
+
+    Lengths and forces take the prefix a reader uses (`with_units`); a forcing frequency is
+    also given in Hz.
+    """
+    if not isinstance(value, int | float | np.number):
+        unit = units_text(units)
+        return f"{symbol(name) or name.replace('_', ' ')} = {value}" + (f" {unit}" if unit
+                                                                         else "")
+    text = f"{symbol(name) or name.replace('_', ' ')} = {with_units(float(value), units)}"
+    if name == "omega" and units == "rad/s" and value > 0:
+        text += f" ({float(value) / (2 * math.pi):.3g} Hz)"
+    return text
+
+
+def base_motion(amplitude: float, attrs: Mapping[str, Any]) -> str:
+    """The base motion's ``amplitude`` (m) and which clamps the shaker of ``attrs`` carries.
+
+    E.g. ``"$U_0$ = 5 µm on both clamps"``.
+    """
+    return f"{quantity('base_amplitude', amplitude, 'm')} {shaker_place(attrs)}".rstrip()
+
+
+def shaker_place(attrs: Mapping[str, Any]) -> str:
+    """Where the shaker of ``attrs`` sits, e.g. ``"on both clamps"`` (``""`` if not said)."""
+    return SHAKER_WORDS.get((attrs.get("shaker"), attrs.get("counterpart", "beam")), "")
 
 
 def case_title(dataset: PlainDataset | xr.Dataset, variable: str, shown: tuple[str, ...]) -> str:
@@ -100,8 +158,10 @@ def case_title(dataset: PlainDataset | xr.Dataset, variable: str, shown: tuple[s
     for name, coordinate in dataset.coords.items():  # sliced dimensions: scalar coordinates
         if coordinate.ndim == 0 and name not in shown:
             values[str(name)] = (coordinate.item(), coordinate.attrs.get("units", ""))
-    parts = [quantity(n, v, u) for n, (v, u) in values.items()
-             if not (n in _ZERO_BY_DEFAULT and v == 0)]
+    parts = [base_motion(v, dataset.attrs) if n == "base_amplitude" else quantity(n, v, u)
+             for n, (v, u) in values.items() if not (n in _ZERO_BY_DEFAULT and v == 0)]
+    if "base_amplitude" in (*dataset.dims, dataset.attrs.get("continued_parameter")):
+        parts.append(f"shaker {shaker_place(dataset.attrs)}")  # U0 on an axis: where it acts
     parts += _run_settings(dataset.attrs, law=variable not in _LAW_FREE,
                            long_time=variable in LONG_TIME_VARIABLES)
     return ", ".join(parts)

@@ -13,12 +13,14 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from impactbeams.plotting.arrays import PlainDataset
 from impactbeams.plotting.files import save_figure
-from impactbeams.plotting.labels import quantity
+from impactbeams.plotting.labels import base_motion, quantity
 from impactbeams.variables import PARAMETERS
 
 _MICRO = 1e6  # m -> µm
 _MILLI = 1e3  # N -> mN, s -> ms
+_LEGEND_ROOM = 1.3  # a force panel's top over its largest peak: a row of legend above them
 # the tips in mathtext, as in docs/model.md: y2 is drawn minus the clearance
 _TIP1, _TIP2 = "$y_1(l_1)$", r"$y_2(l_2) - \Delta$"
 
@@ -29,8 +31,12 @@ def _parameter(dataset: xr.Dataset, name: str) -> str:
 
 
 def _case(dataset: xr.Dataset) -> str:
-    return ", ".join(_parameter(dataset, name)
-                     for name in ("force_amplitude", "omega", "clearance"))
+    """Every nonzero drive (tip force, base motion and its clamps), Omega and the clearance."""
+    a = dataset.attrs
+    drives = [_parameter(dataset, "force_amplitude")] if a.get("force_amplitude", 0.0) else []
+    if a.get("base_amplitude", 0.0):
+        drives.append(base_motion(a["base_amplitude"], a))
+    return ", ".join([*drives, *(_parameter(dataset, name) for name in ("omega", "clearance"))])
 
 
 def _law(dataset: xr.Dataset) -> str:
@@ -68,8 +74,7 @@ def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
     axes = figure.subplots(4, 1, sharex=True)
     t = dataset.time.values
     plot_tips(axes[0], dataset)
-    axes[1].plot(t, dataset.contact_force * _MILLI, lw=0.7, color="C3")
-    axes[1].set_ylabel("contact force $R$ (mN)")
+    plot_contact_force(axes[1], dataset)
     onset = dataset.impact_onset_time.values
     axes[2].plot(onset, dataset.restitution_coefficient, ".", ms=3, color="C2")
     axes[2].axhline(0.0, color="0.6", lw=0.5)
@@ -81,8 +86,30 @@ def plot_run(dataset: xr.Dataset, path: str | Path) -> None:
     axes[3].set_ylabel("energy (nJ)")
     axes[3].set_xlabel("time $t$ (s)")
     axes[3].legend(loc="upper left", fontsize="small")
-    axes[0].set_title(f"{_title(dataset)}; status {dataset.attrs.get('status', '?')}")
+    axes[0].set_title(f"{_title(dataset)}; status {dataset.attrs.get('status', '?')}",
+                      wrap=True)
     save_figure(figure, path)
+
+
+def plot_contact_force(axis: Axes, dataset: xr.Dataset | PlainDataset) -> None:
+    """Contact force R (mN): every contact's peak as a stem at its onset, over R(t) sampled.
+
+    The samples alone miss most contacts (each lasts a fraction of a millisecond: the Fig. 3
+    run at dt_output = 1e-4 s has 126 of its 6001 samples in one of its 682 contacts, and
+    their largest force is half the largest peak); the stems are the peaks themselves
+    (``impact_peak_force``, certified maxima).
+    """
+    axis.plot(dataset["time"].values, dataset["contact_force"].values * _MILLI, lw=0.6,
+              color="C3", label="$R$ at the output times")
+    peaks = dataset["impact_peak_force"].values * _MILLI
+    onsets = dataset["impact_onset_time"].values
+    axis.vlines(onsets, 0.0, peaks, colors="k", lw=0.4)
+    axis.plot(onsets, peaks, ".", ms=2.5, color="k", label="peak of each contact")
+    axis.axhline(0.0, color="0.6", lw=0.5)
+    if peaks.size and peaks.max() > 0:  # room above the peaks for the legend's one row
+        axis.set_ylim(top=_LEGEND_ROOM * peaks.max())
+    axis.legend(loc="upper right", fontsize="small", ncols=2)
+    axis.set_ylabel("contact force $R$ (mN)")
 
 
 def _draw_surface(axis: Axes, dataset: xr.Dataset, beam: str, rows: int) -> None:
@@ -106,12 +133,12 @@ def plot_surfaces_laws(datasets: Sequence[xr.Dataset], path: str | Path,
             _draw_surface(axis, dataset, beam, 100)
             axis.set_title(f"({'abcdefgh'[2 * row + i]}) beam {beam}; {_law(dataset)}",
                            fontsize="medium")
-    figure.suptitle(_case(datasets[0]))
+    figure.suptitle(_case(datasets[0]), wrap=True)
     save_figure(figure, path, dpi=dpi)
 
 
 def _fig3_panels(axes: Sequence[Axes], dataset: xr.Dataset) -> None:
-    """The three panels of Fig. 3, with the episodes' restitution and every contact's peak."""
+    """Fig. 3's three panels (untitled), with the episodes' restitution and the contacts' peaks."""
     plot_tips(axes[0], dataset)
     axes[0].set_xlabel("$t$ (s)")
     released = np.isfinite(dataset.restitution_coefficient.values)
@@ -120,8 +147,7 @@ def _fig3_panels(axes: Sequence[Axes], dataset: xr.Dataset) -> None:
                  label="per contact")
     axes[1].set_ylabel("restitution $e$")
     axes[1].set_xlabel("impact onset time (s)")
-    axes[2].plot(dataset.time, dataset.contact_force * _MILLI, lw=0.7, color="C3")
-    axes[2].set_ylabel("impact force $R$ (mN)")
+    plot_contact_force(axes[2], dataset)
     axes[2].set_xlabel("$t$ (s)")
     if "episode_restitution" in dataset:
         axes[1].plot(dataset.episode_onset_time, dataset.episode_restitution, "D", ms=5,
@@ -134,29 +160,26 @@ def _fig3_panels(axes: Sequence[Axes], dataset: xr.Dataset) -> None:
         else:
             axes[1].axhline(0.0, color="0.6", lw=0.5)
         axes[1].legend(loc="best", fontsize="small")
-        axes[2].plot(dataset.impact_onset_time, dataset.impact_peak_force * _MILLI, ".",
-                     ms=2, color="k", label="peak of each contact")
-        axes[2].legend(loc="upper right", fontsize="small")
-    for axis, label in zip(axes, "abc", strict=True):
-        axis.set_title(f"({label})", loc="left")
 
 
 def plot_paper_fig3_laws(datasets: Sequence[xr.Dataset], path: str | Path) -> None:
     """Fig. 3 of several runs (e.g. tied and spring law) side by side, one column each.
 
-    Panel (b) shows the restitution of every contact and of every episode, panel (c) the
-    contact force on the output grid and the peak of every contact (short contacts fall
-    between output samples).
+    Rows: the tips, the restitution of every contact and of every episode, the contact force
+    (`plot_contact_force`: the peak of every contact). Panels are lettered down each column,
+    (a)-(c) the first run's, (d)-(f) the second's; each column is titled with its law.
     """
     figure = Figure(figsize=(6 * len(datasets), 8.5), layout="constrained")
     axes = figure.subplots(3, len(datasets), squeeze=False)
     for row in (0, 2):  # tips and forces on common scales; restitution may differ by decades
         for axis in axes[row, 1:]:
             axis.sharey(axes[row, 0])
-    for column, dataset in zip(axes.T, datasets, strict=True):
+    for j, (column, dataset) in enumerate(zip(axes.T, datasets, strict=True)):
         _fig3_panels(column, dataset)
-        column[0].set_title(f"(a) {_law(dataset)}", loc="left")
-    figure.suptitle(_case(datasets[0]))
+        for i, axis in enumerate(column):
+            axis.set_title(f"({chr(ord('a') + 3 * j + i)})", loc="left")
+        column[0].set_title(_law(dataset), loc="right", fontsize="medium")
+    figure.suptitle(_case(datasets[0]), wrap=True)
     save_figure(figure, path)
 
 
@@ -171,7 +194,7 @@ def plot_divergence_laws(groups: Sequence[Sequence[xr.Dataset]], labels: Sequenc
     for column, datasets in zip(axes.T, groups, strict=True):
         _divergence_panels(column, datasets, labels)
         column[0].set_title(_law(datasets[0]))
-    figure.suptitle(_case(groups[0][0]))
+    figure.suptitle(_case(groups[0][0]), wrap=True)
     save_figure(figure, path, dpi=110)
 
 
@@ -209,7 +232,7 @@ def plot_phase_portrait_laws(denses: Sequence[xr.Dataset], sections: Sequence[xr
         for axis in row:
             axis.set_title(f"{_law(section)}\n{axis.get_title()}", fontsize="medium")
             axis.tick_params(labelbottom=True)
-    figure.suptitle(_case(sections[0]))
+    figure.suptitle(_case(sections[0]), wrap=True)
     save_figure(figure, path)
 
 
