@@ -30,7 +30,8 @@ class Evaluation:
     ``multipliers``: the Floquet multipliers (eigenvalues of dr/dz + I when the problem does
     not give them, e.g. from a Newton-Picard subspace), leading first. ``grazing``: a number
     whose sign change along the branch is a grazing (the orbit's smallest free-flight gap), NaN
-    if the problem has none. ``contacts``: contacts per orbit. ``measures``: named amplitudes
+    if the problem has none. ``contacts``, ``episodes``: contacts and impact episodes per orbit
+    (their change between two points is a nonsmooth event). ``measures``: named amplitudes
     (a number, or one per section of the orbit's period: an array).
     """
 
@@ -39,6 +40,7 @@ class Evaluation:
     multipliers: np.ndarray
     grazing: float = math.nan
     contacts: int = 0
+    episodes: int = 0
     measures: Mapping[str, float | np.ndarray] = dataclasses.field(default_factory=dict)
 
 
