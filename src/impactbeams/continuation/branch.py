@@ -43,7 +43,12 @@ from impactbeams.params import ParameterError
 
 # how a branch ended
 BOUND, MAX_POINTS, MIN_STEP, INTERRUPTED = "bound", "max_points", "min_step", "interrupted"
-ENDINGS = (BOUND, MAX_POINTS, MIN_STEP, INTERRUPTED)
+# ... and: back at one of its own earlier points (an isola, a loop of a period-2 branch); a
+# period-p branch back on its period-p/2 origin (at a period doubling of it); too little
+# advance over the last Settings.stall_points steps
+CLOSED_LOOP, JOINED_ORIGIN, STALLED = "closed_loop", "joined_origin", "stalled"
+ENDINGS = (BOUND, MAX_POINTS, MIN_STEP, INTERRUPTED, CLOSED_LOOP, JOINED_ORIGIN, STALLED)
+INCOMPLETE = (MAX_POINTS, MIN_STEP, STALLED)  # endings short of the range, not by the branch
 
 
 @dataclasses.dataclass
@@ -120,8 +125,12 @@ def _follow(follower: Follower, branch: Branch, span: Span,
             progress: Progress | None) -> list[int]:
     """Step ``branch`` to its end; the indices of its period-doubling points."""
     settings, ds = follower.settings, follower.settings.step
-    current = branch.points[-1]
+    current, steps = branch.points[-1], [branch.points[-1]]
     while len(branch.points) < settings.max_points:
+        ending = _ended(branch, steps, ds, settings)
+        if ending:
+            branch.ending = ending
+            break
         point, taken, grazing = follower.step(current, ds)
         low, high = span.low * follower.scaling.parameter, span.high * follower.scaling.parameter
         if point is not None and not low <= point.x[-1] <= high:
@@ -132,11 +141,13 @@ def _follow(follower: Follower, branch: Branch, span: Span,
         if point is not None and not same_piece(current, point):
             _append(branch, _advance(follower, current, point), progress)
             current, ds = point, follower.next_step(taken, point.iterations)
+            steps.append(current)
             continue
         crossing = point is None and crosses(current.evaluation.grazing, grazing)
         resumed = crossing and _cross_grazing(follower, branch, current, taken, progress)
         if resumed:
             current, ds = resumed
+            steps.append(current)
             continue
         if crossing and taken / 2.0 >= settings.min_step:
             ds = taken / 2.0  # an iterate crossed, not the branch, or no way across: smaller
@@ -146,9 +157,48 @@ def _follow(follower: Follower, branch: Branch, span: Span,
             break
         _append(branch, _between(follower, current, point), progress)
         current, ds = point, follower.next_step(taken, point.iterations)
+        steps.append(current)
     else:
         branch.ending = MAX_POINTS
     return [i for i, point in enumerate(branch.points) if point.label == PERIOD_DOUBLING]
+
+
+# a section sample spread this small against the tip amplitude: the orbit repeats after half
+# its period (a period-2 branch back on its period-1 origin); a period-2 orbit's spread grows
+# like the square root of the distance from its doubling, ~3e-2 at the switch distance
+JOINED_SPREAD = 1e-7
+# the steps kept out of the closed-loop test: the branch's own last ones
+RECENT_STEPS = 5
+
+
+def _ended(branch: Branch, steps: list[Point], ds: float, settings: Settings) -> str:
+    """How the branch ends at its last point, "" if it goes on.
+
+    ``steps``: the points reached by the steps so far (not the located ones between).
+    """
+    x, tangent = steps[-1].x, steps[-1].tangent
+    if len(steps) > RECENT_STEPS + 1:
+        earlier = steps[:-RECENT_STEPS]
+        distances = np.linalg.norm(np.array([point.x for point in earlier]) - x, axis=1)
+        nearest = int(np.argmin(distances))
+        # the same place the same way (after a fold the branch returns near its way out,
+        # the other way)
+        if distances[nearest] < 0.5 * ds and earlier[nearest].tangent @ tangent > 0.9:
+            return CLOSED_LOOP
+    if branch.origin is not None and len(steps) > 1 and _repeats_early(branch.points[-1]):
+        return JOINED_ORIGIN
+    if len(steps) > settings.stall_points and np.linalg.norm(
+            x - steps[-1 - settings.stall_points].x) < settings.stall_advance:
+        return STALLED
+    return ""
+
+
+def _repeats_early(point: Point) -> bool:
+    """Whether the orbit's section samples all coincide: it is of a shorter period."""
+    samples = np.atleast_1d(point.evaluation.measures.get("section_deflection_1", np.nan))
+    size = point.evaluation.measures.get("tip_amplitude_1", np.nan)
+    spread = float(np.ptp(samples)) if samples.size > 1 else math.nan
+    return spread <= JOINED_SPREAD * size
 
 
 def _append(branch: Branch, points: list[Point], progress: Progress | None) -> None:
@@ -164,6 +214,7 @@ def _append(branch: Branch, points: list[Point], progress: Progress | None) -> N
 
 # a step across which a smooth bifurcation is detected is searched in this many pieces
 SAMPLES = 16
+SAMPLINGS = 2  # ... and a piece where one is detected again in as many
 # bisections of a step whose signature changed without its test function changing sign (two
 # crossings, or a multiplier that left the kind in between, e.g. a complex pair turned real)
 MAX_SUBDIVISIONS = 6
@@ -184,14 +235,14 @@ def _between(follower: Follower, a: Point, b: Point,
         return follower.correct(origin + s * normal, normal, normal).point
 
     found = detected(a, b)
-    if found and depth == 0:
+    if found and depth < SAMPLINGS:
         # crossings close together (a pair that leaves and returns within the step) show at
         # the ends as one, or none: the step is sampled, and each piece searched on its own
         width = float(normal @ (b.x - origin))
         samples = [point_at(width * k / SAMPLES) for k in range(1, SAMPLES)]
         ends = [a, *(point for point in samples if point is not None), b]
         return [point for start, end in zip(ends[:-1], ends[1:], strict=True)
-                for point in _advance(follower, start, end, 1)]
+                for point in _advance(follower, start, end, depth + 1)]
     if depth < MAX_SUBDIVISIONS and not all(_brackets(test, a, b) for _, test in found):
         # a signature changed without its test function changing sign: two crossings, or a
         # multiplier that left its kind in the step (a complex pair turned real): look closer

@@ -101,8 +101,8 @@ def detected(a: Point, b: Point) -> list[tuple[str, Callable[[Point], float]]]:
     plus, minus = _real_crossing(_real_positive, a, b), _real_crossing(_real_negative, a, b)
     if turned:
         found.append((FOLD, lambda point: float(point.tangent[-1])))
-    if turned != plus:
-        # a real multiplier through +1 without the branch turning (or turning without one)
+    if plus and not turned:
+        # a real multiplier through +1 without the branch turning
         found.append((BRANCH_POINT, _crossing_modulus(_real_positive, a, b)))
     if minus:
         # a real multiplier < 0 may be born in the step from a complex pair meeting on the

@@ -18,7 +18,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from impactbeams.continuation.arclength import Point, Scaling, Settings
+from impactbeams.continuation.arclength import (
+    LOCATE,
+    MICRO_CONTACTS,
+    Point,
+    Scaling,
+    Settings,
+)
 from impactbeams.continuation.beams import BeamOrbits
 from impactbeams.continuation.branch import (
     Branch,
@@ -60,7 +66,11 @@ class Continuation:
     state; without it, ``transient_periods`` period maps from the run's start. Steps in the
     parameter's units; ``state_scale`` in m (module docstring). ``method``: the corrector's
     dr/dz, "newton" (full monodromy), "newton-picard" (on ``subspace`` carried directions)
-    or "auto" (`BeamOrbits`).
+    or "auto" (`BeamOrbits`). ``micro_contacts``: "locate" every change of the orbit's
+    contact sequence, or "summarise" those within an impact episode (labelled chatter at the
+    first point after, not located; an episode's appearance and disappearance still are):
+    for stiff contacts, where micro-contacts appear and merge many times per unit of the
+    parameter.
     """
 
     params: Params
@@ -81,6 +91,7 @@ class Continuation:
     state_scale: float | None = None
     method: str = "auto"
     subspace: int = DEFAULT_SUBSPACE
+    micro_contacts: str = LOCATE
 
     def __post_init__(self) -> None:
         require_type("params", self.params, isinstance(self.params, Params),
@@ -103,6 +114,8 @@ class Continuation:
                 f"must be one of {', '.join(map(repr, METHODS))}")
         require_integer("subspace", self.subspace, GUARD + 1)
         require_integer("transient_periods", self.transient_periods, 0)
+        require("micro_contacts", self.micro_contacts, self.micro_contacts in MICRO_CONTACTS,
+                f"must be one of {', '.join(map(repr, MICRO_CONTACTS))}")
         for name in ("step", "min_step", "max_step", "state_scale"):
             value = getattr(self, name)
             if value is not None:
@@ -124,7 +137,8 @@ class Continuation:
                         / width,
                         max_step=(self.max_step if self.max_step is not None
                                   else max(step, width / 20.0)) / width,
-                        max_points=self.max_points, max_branches=self.max_branches)
+                        max_points=self.max_points, max_branches=self.max_branches,
+                        micro_contacts=self.micro_contacts)
 
 
 Progress = Callable[[Branch, Point], None]
