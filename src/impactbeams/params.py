@@ -38,7 +38,9 @@ name               unit    meaning
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import functools
 import math
 import os
 import reprlib
@@ -224,6 +226,11 @@ RANGES: dict[str, Range] = {
 PointName = Callable[[tuple[int, ...]], str]
 
 
+@functools.cache
+def _FIELDS() -> tuple[dataclasses.Field, ...]:  # noqa: N802
+    return dataclasses.fields(Params)
+
+
 def no_point(index: tuple[int, ...]) -> str:
     """No grid point to name: the values are one set of parameters."""
     return ""
@@ -393,14 +400,22 @@ class Params:
             require(name, value, isinstance(value, str) and value in allowed,
                     f"must be one of {', '.join(map(repr, allowed))}")
         for name in self.numeric_names():
-            value = require_finite(name, getattr(self, name), PARAMETERS[name].units)
-            check_range(name, value)
-            object.__setattr__(self, name, value)
+            self._set_checked(name, getattr(self, name))
         if self.counterpart == "stop":
             for field in dataclasses.fields(Params):
                 if field.name in BEAM2_KEYS:
                     require(field.name, getattr(self, field.name),
                             getattr(self, field.name) == field.default, _NO_BEAM2)
+        self._check_together()
+
+    def _set_checked(self, name: str, value: Any) -> None:
+        """Set the numeric parameter ``name`` to ``value`` as a float, if allowed."""
+        value = require_finite(name, value, PARAMETERS[name].units)
+        check_range(name, value)
+        object.__setattr__(self, name, value)
+
+    def _check_together(self) -> None:
+        """The joint rules of the numeric parameters and the choices."""
         check_joint(self.numeric(), counterpart=self.counterpart)
         # with one clamp moving, the tied tips' quasi-static part would carry a moving
         # clearance: not built
@@ -411,6 +426,7 @@ class Params:
                 f"not {self.shaker!r}), or use contact_law = 'spring'")
 
     @staticmethod
+    @functools.cache
     def numeric_names() -> tuple[str, ...]:
         """Names of the numeric parameters (all but the named choices), in field order."""
         return tuple(f.name for f in dataclasses.fields(Params) if f.name not in CHOICES)
@@ -440,10 +456,20 @@ class Params:
 
     def as_dict(self) -> dict[str, float | str]:
         """All parameters by name, in the resolved EI/rhoA form."""
-        return dataclasses.asdict(self)
+        # floats and names only: no deep copy needed (dataclasses.asdict's cost per run)
+        return {field.name: getattr(self, field.name) for field in _FIELDS()}
 
     def replace(self, **changes: Any) -> Params:
         """Return a copy with some parameters changed (material keys allowed)."""
+        if changes.keys() <= set(self.numeric_names()) and not (
+                self.counterpart == "stop" and changes.keys() & set(BEAM2_KEYS)):
+            # numbers only, on parameters already checked: only the changes and the joint
+            # rules need checking (a continuation changes one parameter per period map)
+            changed = copy.copy(self)
+            for name, value in changes.items():
+                changed._set_checked(name, value)
+            changed._check_together()
+            return changed
         base = self.as_dict()
         for i in ("1", "2"):
             if any(k + i in changes for k in MATERIAL_KEYS):

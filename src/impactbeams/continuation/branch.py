@@ -241,8 +241,10 @@ def _between(follower: Follower, a: Point, b: Point,
         width = float(normal @ (b.x - origin))
         samples = [point_at(width * k / SAMPLES) for k in range(1, SAMPLES)]
         ends = [a, *(point for point in samples if point is not None), b]
-        return [point for start, end in zip(ends[:-1], ends[1:], strict=True)
-                for point in _advance(follower, start, end, depth + 1)]
+        found_points = [point for start, end in zip(ends[:-1], ends[1:], strict=True)
+                        for point in _advance(follower, start, end, depth + 1)]
+        # the samples only served the search: the branch keeps what was located, and b
+        return [point for point in found_points if point.label] + [b]
     if depth < MAX_SUBDIVISIONS and not all(_brackets(test, a, b) for _, test in found):
         # a signature changed without its test function changing sign: two crossings, or a
         # multiplier that left its kind in the step (a complex pair turned real): look closer
@@ -256,8 +258,8 @@ def _between(follower: Follower, a: Point, b: Point,
             continue
         s, before, _, _ = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
                                  follower.settings.locate_tolerance)
-        if before is not a:
-            located.append((s, dataclasses.replace(before, label=label)))
+        # (``a`` itself when the root is there: it replaces ``a`` on the branch, `_append`)
+        located.append((s, dataclasses.replace(before, label=label)))
     if depth < MAX_SUBDIVISIONS and not all(same_piece(a, point) for _, point in located):
         # the contacts changed and changed back within the step: two nonsmooth events hide
         middle = point_at(0.5 * float(normal @ (b.x - origin)))
