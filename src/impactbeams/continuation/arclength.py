@@ -10,8 +10,8 @@ A step of length ds predicts x~ + ds t and corrects by Newton on
 The step halves when Newton fails to converge within ``max_iterations`` (or stops
 contracting) and when the angle between consecutive tangents exceeds ``max_angle`` on one
 smooth piece of the branch (across a change of the orbit's contact sequence the tangent jumps
-however small the step: the step is kept and the event between located); it grows by 1.5
-after a step that took at most 3 iterations, up to ``max_step``.
+however small the step: such a step is kept once below ``KINK_STEP`` and the event between
+located); it grows by 1.5 after a step that took at most 3 iterations, up to ``max_step``.
 """
 
 from __future__ import annotations
@@ -25,6 +25,10 @@ from impactbeams.continuation.problem import Evaluation, Problem, parameter_deri
 from impactbeams.params import ParameterError
 
 GRADIENT_STEP = 1e-7  # x~ units
+# a step that turns by more than max_angle onto another contact sequence is kept once it is
+# this short (x~ units: 1e-4 of the range): the kink is then the branch's, not a jump of the
+# corrector onto another part of the branch (which a longer step can reach)
+KINK_STEP = 1e-4
 # what to do with a change of the contacts within an episode (Settings.micro_contacts)
 LOCATE, SUMMARISE = "locate", "summarise"
 MICRO_CONTACTS = (LOCATE, SUMMARISE)
@@ -251,10 +255,12 @@ class Follower:
             if point is not None and (angle(point.tangent, start.tangent)
                                       <= self.settings.max_angle
                                       or ds <= self.settings.min_step
-                                      or not same_piece(start, point)):
+                                      or (ds <= KINK_STEP and not same_piece(start, point))):
                 # across a change of the contact sequence the tangent jumps however small the
-                # step (the branch has a kink): the caller locates the event in between
-                return point, ds, ()
+                # step (the branch has a kink): the caller locates the event in between. Past
+                # a kink of more than 90 degrees the tangent oriented like the previous one
+                # would point back: forward is away from the start
+                return oriented(point, point.x - start.x), ds, ()
             grazing = self.grazing_values(correction)
             if crosses(start.evaluation.grazing, grazing):
                 return None, ds, grazing
@@ -280,6 +286,13 @@ def tangent_of(jacobian: np.ndarray, orientation: np.ndarray) -> np.ndarray:
 def angle(a: np.ndarray, b: np.ndarray) -> float:
     """The angle (rad) between two unit vectors."""
     return math.acos(min(1.0, max(-1.0, float(a @ b))))
+
+
+def oriented(point: Point, forward: np.ndarray) -> Point:
+    """``point`` with its tangent turned, if need be, to have a positive part along ``forward``."""
+    if point.tangent @ forward >= 0:
+        return point
+    return dataclasses.replace(point, tangent=-point.tangent)
 
 
 def same_piece(a: Point, b: Point) -> bool:

@@ -26,6 +26,7 @@ from impactbeams.continuation.arclength import (
     Scaling,
     Settings,
     crosses,
+    oriented,
     same_piece,
 )
 from impactbeams.continuation.events import (
@@ -47,8 +48,11 @@ BOUND, MAX_POINTS, MIN_STEP, INTERRUPTED = "bound", "max_points", "min_step", "i
 # period-p branch back on its period-p/2 origin (at a period doubling of it); too little
 # advance over the last Settings.stall_points steps
 CLOSED_LOOP, JOINED_ORIGIN, STALLED = "closed_loop", "joined_origin", "stalled"
-ENDINGS = (BOUND, MAX_POINTS, MIN_STEP, INTERRUPTED, CLOSED_LOOP, JOINED_ORIGIN, STALLED)
-INCOMPLETE = (MAX_POINTS, MIN_STEP, STALLED)  # endings short of the range, not by the branch
+RETRACED = "retraced"  # back on its own earlier points the other way: a jump, not the branch
+ENDINGS = (BOUND, MAX_POINTS, MIN_STEP, INTERRUPTED, CLOSED_LOOP, JOINED_ORIGIN, STALLED,
+           RETRACED)
+# endings short of the range, not by the branch
+INCOMPLETE = (MAX_POINTS, MIN_STEP, STALLED, RETRACED)
 
 
 @dataclasses.dataclass
@@ -181,10 +185,13 @@ def _ended(branch: Branch, steps: list[Point], ds: float, settings: Settings) ->
         earlier = steps[:-RECENT_STEPS]
         distances = np.linalg.norm(np.array([point.x for point in earlier]) - x, axis=1)
         nearest = int(np.argmin(distances))
-        # the same place the same way (after a fold the branch returns near its way out,
-        # the other way)
+        # the same place the same way: a loop; the other way: the branch retraces itself (a
+        # step jumped onto its own earlier part). After a fold the branch returns near its
+        # way out only within a few steps of it (excluded).
         if distances[nearest] < 0.5 * ds and earlier[nearest].tangent @ tangent > 0.9:
             return CLOSED_LOOP
+        if distances[nearest] < 0.5 * ds and earlier[nearest].tangent @ tangent < -0.9:
+            return RETRACED
     if branch.origin is not None and len(steps) > 1 and _repeats_early(branch.points[-1]):
         return JOINED_ORIGIN
     if len(steps) > settings.stall_points and np.linalg.norm(
@@ -278,7 +285,8 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
     """The points from ``a`` (excluded) to ``b``, events located, whatever lies between.
 
     On one smooth piece: `_between`. Across a change of the contact sequence: the nonsmooth
-    event is located on ``a``'s secant planes (the grazing value, or the contacts per orbit
+    event is located on planes across the chord from ``a`` to ``b`` (the grazing value, or the
+    contacts per orbit
     by bisection for a merge or split), labelled at the last point before it, and smooth
     bifurcations are sought only within each side's piece; then on from the first point past
     it. Unlocated (no corrected point past it on the planes, or more than ``MAX_SUBDIVISIONS``
@@ -289,12 +297,17 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
     label, test = _nonsmooth(a, b, follower.settings.micro_contacts)
     if label == CHATTER:
         return [dataclasses.replace(b, label=CHATTER)]
-    _, before, past, _ = locate(lambda s: follower.at_arclength(a, s).point, a,
-                                float(a.tangent @ (b.x - a.x)), b, test,
+    # on planes across the chord from a to b: they reach b whatever the kink at the event
+    # (planes across a's tangent may not, past a kink of the branch)
+    chord = (b.x - a.x) / np.linalg.norm(b.x - a.x)
+    _, before, past, _ = locate(lambda s: follower.correct(a.x + s * chord, chord, chord).point,
+                                a, float(np.linalg.norm(b.x - a.x)), b, test,
                                 follower.settings.locate_tolerance)
     if past is None or depth >= MAX_SUBDIVISIONS or (before is a and past is b):
         return [b]
     label = GRAZING if _at_zero_depth(a, b, before, past) else _merge_or_split(a, b)
+    if past is not b:  # forward on the far side is toward b (the kink may exceed 90 degrees)
+        past = oriented(past, b.x - past.x)
     near = _between(follower, a, before)[:-1] if before is not a else []
     rest = [] if past is b else _advance(follower, past, b, depth + 1)
     return [*near, dataclasses.replace(before, label=label), past, *rest]
@@ -377,7 +390,7 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     if grazing is current:  # within the tolerance of the grazing already
         branch.points[-1] = dataclasses.replace(current, label=GRAZING)
     else:
-        _append(branch, [*_between(follower, current, grazing)[:-1],
+        _append(branch, [*_advance(follower, current, grazing)[:-1],
                          dataclasses.replace(grazing, label=GRAZING)], progress)
     # no smooth bifurcation is sought across the grazing: the multipliers jump there
     _append(branch, [beyond], progress)
@@ -403,7 +416,7 @@ def _short_of_grazing(follower: Follower, branch: Branch, current: Point, last: 
     """
     if last is current:
         return None
-    _append(branch, _between(follower, current, last), progress)
+    _append(branch, _advance(follower, current, last), progress)
     return last, max(taken / 2.0, follower.settings.min_step)
 
 
