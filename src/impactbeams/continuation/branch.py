@@ -20,6 +20,7 @@ from collections.abc import Callable
 import numpy as np
 
 from impactbeams.continuation.arclength import (
+    KINK_STEP,
     SUMMARISE,
     Follower,
     Point,
@@ -139,11 +140,18 @@ def _follow(follower: Follower, branch: Branch, span: Span,
         low, high = span.low * follower.scaling.parameter, span.high * follower.scaling.parameter
         if point is not None and not low <= point.x[-1] <= high:
             end = _at_bound(follower, current, point, low if point.x[-1] < low else high)
-            _append(branch, _advance(follower, current, end), progress)
+            _append(branch, _advance_or_end(follower, current, end), progress)
             branch.ending = BOUND
             break
         if point is not None and not same_piece(current, point):
-            _append(branch, _advance(follower, current, point), progress)
+            try:
+                _append(branch, _advance(follower, current, point), progress)
+            except _Jumped:  # the step reached another branch (near a fold at an event)
+                if taken / 2.0 < settings.min_step:
+                    branch.ending = MIN_STEP
+                    break
+                ds = taken / 2.0
+                continue
             current, ds = point, follower.next_step(taken, point.iterations)
             steps.append(current)
             continue
@@ -290,7 +298,8 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
     by bisection for a merge or split), labelled at the last point before it, and smooth
     bifurcations are sought only within each side's piece; then on from the first point past
     it. Unlocated (no corrected point past it on the planes, or more than ``MAX_SUBDIVISIONS``
-    events in a row): ``b`` unlabelled.
+    events in a row): ``b`` unlabelled, or `_Jumped` for a step longer than ``KINK_STEP`` (a
+    shorter one will reach it); `_Jumped` also when ``b`` is on another branch.
     """
     if same_piece(a, b):
         return _between(follower, a, b, depth=depth)
@@ -298,19 +307,46 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
     if label == CHATTER:
         return [dataclasses.replace(b, label=CHATTER)]
     # on planes across the chord from a to b: they reach b whatever the kink at the event
-    # (planes across a's tangent may not, past a kink of the branch)
+    # (planes across a's tangent may not, past a kink of the branch); else on those, which
+    # reach an event just before a fold that the chord's planes cut twice
     chord = (b.x - a.x) / np.linalg.norm(b.x - a.x)
-    _, before, past, _ = locate(lambda s: follower.correct(a.x + s * chord, chord, chord).point,
-                                a, float(np.linalg.norm(b.x - a.x)), b, test,
-                                follower.settings.locate_tolerance)
+    for normal in (chord, a.tangent):
+        _, before, past, _ = locate(
+            lambda s, n=normal: follower.correct(a.x + s * n, n, n).point, a,
+            float(normal @ (b.x - a.x)), b, test, follower.settings.locate_tolerance)
+        if past is not None and not (before is a and past is b):
+            break
     if past is None or depth >= MAX_SUBDIVISIONS or (before is a and past is b):
+        if depth == 0 and np.linalg.norm(b.x - a.x) > KINK_STEP:
+            raise _Jumped  # not located from here: a shorter step will reach it
         return [b]
+    if np.linalg.norm(past.x - before.x) > JUMP * np.linalg.norm(b.x - a.x):
+        raise _Jumped  # the map is continuous: the two sides of an event of one branch meet
     label = GRAZING if _at_zero_depth(a, b, before, past) else _merge_or_split(a, b)
     if past is not b:  # forward on the far side is toward b (the kink may exceed 90 degrees)
         past = oriented(past, b.x - past.x)
     near = _between(follower, a, before)[:-1] if before is not a else []
     rest = [] if past is b else _advance(follower, past, b, depth + 1)
     return [*near, dataclasses.replace(before, label=label), past, *rest]
+
+
+def _advance_or_end(follower: Follower, a: Point, b: Point) -> list[Point]:
+    """`_advance`, or ``b`` unlabelled where no shorter step can be tried (a bound, ...)."""
+    try:
+        return _advance(follower, a, b)
+    except _Jumped:
+        return [b]
+
+
+# the last points on both sides of a located change of the contacts are this close (against
+# the step) on one branch: the period map is continuous, only its Jacobian jumps. Farther
+# apart, the step's end is on another branch (two meet at a fold at a contact change, where
+# a short step can land on either)
+JUMP = 1e-3
+
+
+class _Jumped(Exception):
+    """A step whose ends lie on two branches, or across an event not located from its start."""
 
 
 def _nonsmooth(a: Point, b: Point, micro_contacts: str,
@@ -371,8 +407,13 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
                                     current, taken, None, grazing_test,
                                     follower.settings.locate_tolerance)
     if past is not None:  # the branch is reachable across it on these planes after all
-        _append(branch, _advance(follower, current, past), progress)
-        return past, max(taken / 2.0, follower.settings.min_step)
+        try:
+            _append(branch, _advance(follower, current, past), progress)
+        except _Jumped:
+            return None
+        # forward is away from where the branch came from (near a fold past the grazing, the
+        # tangent oriented like current's may point back to the grazing)
+        return oriented(past, past.x - current.x), max(taken / 2.0, follower.settings.min_step)
     if not root:
         return _short_of_grazing(follower, branch, current, grazing, taken, progress)
     gradient = follower.grazing_gradient(grazing.x)
@@ -390,7 +431,7 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     if grazing is current:  # within the tolerance of the grazing already
         branch.points[-1] = dataclasses.replace(current, label=GRAZING)
     else:
-        _append(branch, [*_advance(follower, current, grazing)[:-1],
+        _append(branch, [*_advance_or_end(follower, current, grazing)[:-1],
                          dataclasses.replace(grazing, label=GRAZING)], progress)
     # no smooth bifurcation is sought across the grazing: the multipliers jump there
     _append(branch, [beyond], progress)
@@ -416,7 +457,7 @@ def _short_of_grazing(follower: Follower, branch: Branch, current: Point, last: 
     """
     if last is current:
         return None
-    _append(branch, _advance(follower, current, last), progress)
+    _append(branch, _advance_or_end(follower, current, last), progress)
     return last, max(taken / 2.0, follower.settings.min_step)
 
 
