@@ -114,6 +114,7 @@ class Point:
     evaluation: Evaluation
     iterations: int
     label: str = ""
+    crossed: bool = False  # whether Newton's iterates met other contacts than the point's
 
     def state(self, scaling: Scaling) -> np.ndarray:
         """The section state z."""
@@ -166,13 +167,14 @@ class Follower:
         part still vanishes exactly where dr/dz is singular (a fold), whatever dr/dp.
         """
         x, iterates, previous, rate = predicted.copy(), [], math.inf, None
-        frozen = getattr(self.problem, "approximate", False)
+        frozen, contacts = getattr(self.problem, "approximate", False), set()
         for iteration in range(1, self.settings.max_iterations + 1):
             try:
                 evaluation, jacobian, rate = self.linearised(x, rate if frozen else None)
             except (ParameterError, RuntimeError):  # out of the allowed values, or a run stopped
                 break
             iterates.append(x.copy())
+            contacts.add(evaluation.contacts)
             system = np.vstack([jacobian, direction])
             rhs = np.append(evaluation.residual * self.scaling.state,
                             direction @ (x - predicted))
@@ -185,8 +187,9 @@ class Follower:
             size = float(np.max(np.abs(delta)))
             if size <= self.settings.tolerance:
                 tangent = tangent_of(jacobian, orientation)
-                point = Point(x + delta, tangent, self._measured(x + delta, evaluation),
-                              iteration)
+                measured = self._measured(x + delta, evaluation)
+                point = Point(x + delta, tangent, measured, iteration,
+                              crossed=bool(contacts - {measured.contacts}))
                 return Correction(point, tuple(iterates))
             if iteration > 2 and size > previous:  # not contracting: a smaller step will do
                 break
@@ -268,9 +271,17 @@ class Follower:
             if ds < self.settings.min_step:
                 return None, ds, grazing
 
-    def next_step(self, taken: float, iterations: int) -> float:
-        """The step after one of length ``taken`` that converged in ``iterations``."""
-        factor = 1.5 if iterations <= 3 else (1.0 if iterations <= 5 else 0.7)
+    def next_step(self, taken: float, point: Point) -> float:
+        """The step after one of length ``taken`` that reached ``point``.
+
+        It grows after a quick convergence and shrinks after a slow one, unless Newton's
+        iterates met another contact sequence: then a nonsmooth event is just ahead, where
+        Newton converges slowly however small the step (the map's Jacobian jumps there), and
+        the step grows to cross it (the event is then located between).
+        """
+        iterations = point.iterations
+        factor = 1.5 if iterations <= 3 or point.crossed else (
+            1.0 if iterations <= 5 else 0.7)
         return min(max(taken * factor, self.settings.min_step), self.settings.max_step)
 
 

@@ -152,7 +152,7 @@ def _follow(follower: Follower, branch: Branch, span: Span,
                     break
                 ds = taken / 2.0
                 continue
-            current, ds = point, follower.next_step(taken, point.iterations)
+            current, ds = point, follower.next_step(taken, point)
             steps.append(current)
             continue
         crossing = point is None and crosses(current.evaluation.grazing, grazing)
@@ -168,7 +168,7 @@ def _follow(follower: Follower, branch: Branch, span: Span,
             branch.ending = MIN_STEP
             break
         _append(branch, _between(follower, current, point), progress)
-        current, ds = point, follower.next_step(taken, point.iterations)
+        current, ds = point, follower.next_step(taken, point)
         steps.append(current)
     else:
         branch.ending = MAX_POINTS
@@ -179,8 +179,9 @@ def _follow(follower: Follower, branch: Branch, span: Span,
 # its period (a period-2 branch back on its period-1 origin); a period-2 orbit's spread grows
 # like the square root of the distance from its doubling, ~3e-2 at the switch distance
 JOINED_SPREAD = 1e-7
-# the steps kept out of the closed-loop test: the branch's own last ones
-RECENT_STEPS = 5
+# the steps kept out of the closed-loop test: the branch's own last ones; and a loop is at
+# least this many steps long
+RECENT_STEPS, LOOP_STEPS = 5, 20
 
 
 def _ended(branch: Branch, steps: list[Point], ds: float, settings: Settings) -> str:
@@ -193,13 +194,19 @@ def _ended(branch: Branch, steps: list[Point], ds: float, settings: Settings) ->
         earlier = steps[:-RECENT_STEPS]
         distances = np.linalg.norm(np.array([point.x for point in earlier]) - x, axis=1)
         nearest = int(np.argmin(distances))
+        travelled = sum(np.linalg.norm(b.x - a.x) for a, b in zip(
+            steps[nearest:-1], steps[nearest + 1:], strict=True))
+        if travelled < LOOP_STEPS * ds:  # creeping, not round a loop
+            nearest = -1
         # the same place the same way: a loop; the other way: the branch retraces itself (a
         # step jumped onto its own earlier part). After a fold the branch returns near its
         # way out only within a few steps of it (excluded).
-        if distances[nearest] < 0.5 * ds and earlier[nearest].tangent @ tangent > 0.9:
-            return CLOSED_LOOP
-        if distances[nearest] < 0.5 * ds and earlier[nearest].tangent @ tangent < -0.9:
-            return RETRACED
+        if nearest >= 0 and distances[nearest] < 0.5 * ds and same_piece(earlier[nearest],
+                                                                           steps[-1]):
+            if earlier[nearest].tangent @ tangent > 0.9:
+                return CLOSED_LOOP
+            if earlier[nearest].tangent @ tangent < -0.9:
+                return RETRACED
     if branch.origin is not None and len(steps) > 1 and _repeats_early(branch.points[-1]):
         return JOINED_ORIGIN
     if len(steps) > settings.stall_points and np.linalg.norm(
