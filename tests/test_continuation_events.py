@@ -13,9 +13,12 @@ label is checked by its own criterion: the multipliers on both sides within one 
 contacts on both sides of a nonsmooth event.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 
+import continuation_reference as reference
 import impactbeams as ib
 from impactbeams.cli import main
 from impactbeams.continuation import Continuation, continue_orbits
@@ -138,3 +141,41 @@ def test_summary_counts_each_event_once(tmp_path, capsys):
                                               np.arange(dataset.branch_point.size)])
     assert _branch_summary(doubled).endswith(
         "2 period_doubling, 1 neimark_sacker, 1 grazing")
+
+
+# issue 31's stiff case: a 200 x 20 x 1 mm cantilever against a rigid stop 0.5 mm below its
+# tip, its clamp on a shaker (0.1 mm), zeta = 0.01; here k = 1e4 N/m and 4 modes over the
+# onset of impacts below the resonance (omega_1 = 131 rad/s), where the orbit starts to impact
+# and then gains and loses contacts and doubles (the whole range and both directions at the
+# default modes: the slow test below and benchmarks/bench_stiff_continuation.py)
+SHAKER = ib.Params.from_mapping({
+    "l1": 0.2, "width1": 0.02, "thickness1": 0.001, "counterpart": "stop", "clearance": 5e-4,
+    "shaker": "beam1", "base_amplitude": 1e-4, "force_amplitude": 0.0, "damping_ratio": 0.01,
+    "contact_stiffness": 1e4})
+
+
+@pytest.fixture(scope="module")
+def shaker_up():
+    return continue_orbits(Continuation(SHAKER, "omega", 100.0, 117.5, n_modes=4,
+                                        max_branches=1))
+
+
+def test_stiff_stop_on_a_shaker_reaches_the_end_of_its_range(shaker_up):
+    assert shaker_up.attrs["branch_endings"] == "bound"
+    assert float(shaker_up.omega.min()) == 100.0 and float(shaker_up.omega[-1]) == 117.5
+    labels = {BIFURCATIONS[code] for code in shaker_up.bifurcation.values}
+    assert {"grazing", "period_doubling", "neimark_sacker"} <= labels
+
+
+def test_stiff_stop_grazings_exact_and_the_onset_of_impacts_where_the_linear_response_grazes(
+        shaker_up):
+    """Each grazing has zero gap to 1e-9 of the clearance; the first (the onset of impacts) is
+    where the non-impacting steady response's tip amplitude reaches the clearance
+    (tests/continuation_reference.py: the linear response, no continuation), to 1e-8 rad/s."""
+    grazings = np.flatnonzero(shaker_up.bifurcation.values == BIFURCATIONS.index("grazing"))
+    assert np.abs(shaker_up.grazing_gap.values[grazings]).max() < 1e-9 * SHAKER.clearance
+    assert int(shaker_up.contacts_per_orbit[grazings[0]]) == 0
+    with warnings.catch_warnings():  # 4 modes do not resolve the contact: the same model as
+        warnings.simplefilter("ignore", RuntimeWarning)  # the branch's, on purpose
+        onset = reference.stop_grazing(SHAKER, 4, 100.0, 120.0)
+    assert float(shaker_up.omega[grazings[0]]) == pytest.approx(onset, abs=1e-8)

@@ -140,7 +140,10 @@ def _follow(follower: Follower, branch: Branch, span: Span,
         low, high = span.low * follower.scaling.parameter, span.high * follower.scaling.parameter
         if point is not None and not low <= point.x[-1] <= high:
             end = _at_bound(follower, current, point, low if point.x[-1] < low else high)
-            _append(branch, _advance_or_end(follower, current, end), progress)
+            if end is None and taken / 2.0 >= settings.min_step:
+                ds = taken / 2.0  # no orbit at the bound from there (an event between)
+                continue
+            _append(branch, _advance_or_end(follower, current, end or current), progress)
             branch.ending = BOUND
             break
         if point is not None and not same_piece(current, point):
@@ -468,13 +471,12 @@ def _short_of_grazing(follower: Follower, branch: Branch, current: Point, last: 
     return last, max(taken / 2.0, follower.settings.min_step)
 
 
-def _at_bound(follower: Follower, a: Point, b: Point, bound: float) -> Point:
-    """The branch's end at the parameter's bound, between ``a`` and ``b`` (b if it fails)."""
+def _at_bound(follower: Follower, a: Point, b: Point, bound: float) -> Point | None:
+    """The branch's end at the parameter's bound, between ``a`` and ``b`` (None if it fails)."""
     weight = (bound - a.x[-1]) / (b.x[-1] - a.x[-1])
     guess = a.x + weight * (b.x - a.x)
     guess[-1] = bound
-    end = follower.at_parameter(guess, a.tangent).point
-    return end if end is not None else b
+    return follower.at_parameter(guess, a.tangent).point
 
 
 def _switched(follower: Follower, branches: list[Branch], index: int, at: int,
