@@ -177,11 +177,12 @@ def test_interrupt_writes_the_points_computed(tmp_path, capsys, monkeypatch):
     start and the 5 points, its branch ending 'interrupted'."""
     import impactbeams.cli as cli
 
-    def interrupting(branch, point):
-        if len(branch.points) == 6:
-            raise KeyboardInterrupt
+    class Interrupting(cli._BranchProgress):
+        def __call__(self, branch, point):
+            if len(branch.points) == 6:
+                raise KeyboardInterrupt
 
-    monkeypatch.setattr(cli, "_branch_progress", interrupting)
+    monkeypatch.setattr(cli, "_BranchProgress", Interrupting)
     output = tmp_path / "cut.nc"
     assert main(["continue", str(reduced(tmp_path, 195.0, 210.0)), "-o", str(output)]) == 130
     assert "branch points computed are in" in capsys.readouterr().err

@@ -20,6 +20,7 @@ import json
 import os
 import re
 import sys
+import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -41,6 +42,7 @@ from impactbeams.variables import PARAMETERS
 if TYPE_CHECKING:
     import xarray as xr
 
+    from impactbeams.continuation import Continuation
     from impactbeams.continuation.arclength import Point
     from impactbeams.continuation.branch import Branch
     from impactbeams.sweep import ChunkRunner, Sweep
@@ -344,8 +346,8 @@ def _continue(args: argparse.Namespace) -> int:
              f"({continuation.direction}) -> {output}")
         try:
             with _running_kernels("orbits", args):
-                dataset = continue_orbits(continuation,
-                                          None if args.quiet else _branch_progress)
+                dataset = continue_orbits(continuation, None if args.quiet else _BranchProgress(
+                    continuation.low, continuation.high))
         except ContinuationInterrupted as interrupted:
             write_netcdf(interrupted.dataset, output)
             print(f"\nimpactbeams: the {interrupted.dataset.branch_point.size} branch points "
@@ -353,27 +355,73 @@ def _continue(args: argparse.Namespace) -> int:
             raise
         write_netcdf(dataset, output)
     _say(args, f"wrote {output}: {_branch_summary(dataset)}")
-    return 0
+    short = _short_branches(dataset, continuation)
+    for line in short:
+        print(f"impactbeams: warning: {line}", file=sys.stderr)
+    return EXIT_INCOMPLETE if short and not args.allow_incomplete else 0
 
 
-def _branch_progress(branch: Branch, point: Point) -> None:
-    """One line on stderr per labelled point, and every 20th point."""
-    count = len(branch.points)
-    if point.label or count % 20 == 0:
-        print(f"  point {count}: {point.parameter(branch.scaling):.10g}, largest |mu| "
+class _BranchProgress:
+    """Progress of a continuation on stderr: each labelled point and every 20th.
+
+    With the parameter, the share of the range the branch has covered and the time left at
+    the branch's rate so far.
+    """
+
+    def __init__(self, low: float, high: float) -> None:
+        self.low, self.high = low, high
+        self.started: dict[int, tuple[float, float]] = {}  # id(branch): (time, parameter)
+
+    def __call__(self, branch: Branch, point: Point) -> None:
+        count, p = len(branch.points), point.parameter(branch.scaling)
+        start = self.started.setdefault(id(branch), (time.perf_counter(), p))
+        if not (point.label or count % 20 == 0):
+            return
+        seconds, end = time.perf_counter() - start[0], (
+            self.high if p >= start[1] else self.low)
+        done = abs(p - start[1]) / max(abs(end - start[1]), 1e-300)
+        left = f", about {seconds * (1 - done) / done:.0f} s left" if 0 < done < 1 else ""
+        print(f"  branch of period {branch.period}, point {count}: {p:.10g} "
+              f"({100 * min(done, 1):.0f} % of the way to {end:g}{left}), largest |mu| "
               f"{abs(point.evaluation.multipliers[0]):.4g}, {point.evaluation.contacts} "
               f"contacts per orbit {point.label}", file=sys.stderr)
 
 
 def _branch_summary(dataset: xr.Dataset) -> str:
-    """Points, branches, how they ended, bifurcations found."""
+    """Points, branches, what each covered and how it ended, events found (each once)."""
     from impactbeams.variables import BIFURCATIONS
 
-    codes = dataset["bifurcation"].values
-    found = ", ".join(f"{int((codes == code).sum())} {name}"
-                      for code, name in enumerate(BIFURCATIONS) if code and (codes == code).any())
+    events = {(int(code), f"{value:.9g}") for code, value in zip(
+        dataset["bifurcation"].values, dataset[dataset.attrs["continued_parameter"]].values,
+        strict=True) if code}
+    counts = [(sum(code == c for c, _ in events), name) for code, name in enumerate(BIFURCATIONS)]
+    found = ", ".join(f"{count} {name}" for count, name in counts if count)
+    covered = "; ".join(
+        f"branch {number}: {low} to {high} ({ending})" for number, ((low, high), ending)
+        in enumerate(zip((c.split(":") for c in dataset.attrs["branch_covered"].split()),
+                         dataset.attrs["branch_endings"].split(), strict=True)))
     return (f"{dataset.branch_point.size} points on {int(dataset.branch.max()) + 1} branch(es) "
-            f"(ended: {dataset.attrs['branch_endings']}); {found or 'no bifurcation'}")
+            f"({covered}); {found or 'no bifurcation'}")
+
+
+def _short_branches(dataset: xr.Dataset, continuation: Continuation) -> list[str]:
+    """A line for each branch that stopped short of its range on its own (stalled, ...)."""
+    from impactbeams.continuation.branch import INCOMPLETE
+
+    parameter = continuation.parameter
+    lines = []
+    for number, ending in enumerate(dataset.attrs["branch_endings"].split()):
+        if ending not in INCOMPLETE:
+            continue
+        last = dataset.isel(branch_point=int((dataset.branch == number).values.nonzero()[0][-1]))
+        lines.append(
+            f"branch {number} ended ({ending}) at {parameter} = {float(last[parameter]):.10g}, "
+            f"short of [{continuation.low:g}, {continuation.high:g}], with "
+            f"{int(last.contacts_per_orbit)} contacts per orbit and largest |mu| "
+            f"{float(last.multiplier_modulus.max()):.4g}: try micro_contacts = \"summarise\" "
+            "(stiff contacts), a larger max_points, fewer n_modes or a smaller "
+            "contact_stiffness, or start a second run past it (start =)")
+    return lines
 
 
 def _simulate(args: argparse.Namespace) -> int:
@@ -590,6 +638,9 @@ def build_parser() -> argparse.ArgumentParser:
                       help="continuation file, e.g. sweeps/continuation-stop-fold.toml")
     cont.add_argument("-o", "--output", metavar="OUT.nc",
                       help="netCDF result (default results/<file name>.nc)")
+    cont.add_argument("--allow-incomplete", action="store_true",
+                      help="exit 0 even when a branch stops short of the range (stalled, "
+                           f"max_points, min_step; otherwise exit {EXIT_INCOMPLETE})")
     cont.set_defaults(handler=_continue)
 
     plot = command("plot", "IN.nc [-o OUT.png] [OPTIONS]",

@@ -43,8 +43,10 @@ name               unit    meaning
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import difflib
+import functools
 import math
 import os
 import reprlib
@@ -252,6 +254,11 @@ RANGES: dict[str, Range] = {
 PointName = Callable[[tuple[int, ...]], str]
 
 
+@functools.cache
+def _FIELDS() -> tuple[dataclasses.Field, ...]:  # noqa: N802
+    return dataclasses.fields(Params)
+
+
 def no_point(index: tuple[int, ...]) -> str:
     """No grid point to name: the values are one set of parameters."""
     return ""
@@ -455,14 +462,22 @@ class Params:
             require(name, value, isinstance(value, str) and value in allowed,
                     f"must be one of {', '.join(map(repr, allowed))}")
         for name in self.numeric_names():
-            value = require_finite(name, getattr(self, name), PARAMETERS[name].units)
-            check_range(name, value)
-            object.__setattr__(self, name, value)
+            self._set_checked(name, getattr(self, name))
         if self.counterpart == "stop":
             for field in dataclasses.fields(Params):
                 if field.name in BEAM2_KEYS:
                     require(field.name, getattr(self, field.name),
                             getattr(self, field.name) == field.default, _NO_BEAM2)
+        self._check_together()
+
+    def _set_checked(self, name: str, value: Any) -> None:
+        """Set the numeric parameter ``name`` to ``value`` as a float, if allowed."""
+        value = require_finite(name, value, PARAMETERS[name].units)
+        check_range(name, value)
+        object.__setattr__(self, name, value)
+
+    def _check_together(self) -> None:
+        """The joint rules of the numeric parameters and the choices."""
         check_joint(self.numeric(), counterpart=self.counterpart, shaker=self.shaker)
         # with one clamp moving, the tied tips' quasi-static part would carry a moving
         # clearance: not built
@@ -490,6 +505,7 @@ class Params:
                                0.0 if named_base else DEFAULT_FORCE_AMPLITUDE)
 
     @staticmethod
+    @functools.cache
     def numeric_names() -> tuple[str, ...]:
         """Names of the numeric parameters (all but the named choices), in field order."""
         return tuple(f.name for f in dataclasses.fields(Params) if f.name not in CHOICES)
@@ -519,7 +535,8 @@ class Params:
 
     def as_dict(self) -> dict[str, float | str]:
         """All parameters by name, in the resolved EI/rhoA form."""
-        return dataclasses.asdict(self)
+        # floats and names only: no deep copy needed (dataclasses.asdict's cost per run)
+        return {field.name: getattr(self, field.name) for field in _FIELDS()}
 
     def replace(self, **changes: Any) -> Params:
         """Return a copy with some parameters changed (material keys allowed).
@@ -527,6 +544,15 @@ class Params:
         A drive left to its default stays a default: ``Params().replace(base_amplitude=U0)``
         is ``Params(base_amplitude=U0)``, a shaker study without tip force.
         """
+        if changes.keys() <= set(self.numeric_names()) - set(DRIVES) and not (
+                self.counterpart == "stop" and changes.keys() & set(BEAM2_KEYS)):
+            # numbers other than the drives, on parameters already checked: only the changes
+            # and the joint rules need checking (a continuation changes one per period map)
+            changed = copy.copy(self)
+            for name, value in changes.items():
+                changed._set_checked(name, value)
+            changed._check_together()
+            return changed
         base = {name: value for name, value in self.as_dict().items()
                 if name not in DRIVES or name in getattr(self, "_given_drives", DRIVES)}
         for i in ("1", "2"):

@@ -383,7 +383,7 @@ VARIABLES.update({
 # the order they were found, branches one after the other
 STABILITY = ("unstable", "stable")
 BIFURCATIONS = ("none", "fold", "period_doubling", "neimark_sacker", "grazing",
-                "branch_point")  # events.LABELS
+                "branch_point", "contact_merge", "contact_split", "chatter")  # events.LABELS
 VARIABLES.update({
     "branch_point": Variable(("branch_point",), "1", "branch point number",
                              "index of the periodic orbit along the continuation, from 0",
@@ -411,8 +411,14 @@ VARIABLES.update({
         "period_doubling (a real multiplier through -1); 3 neimark_sacker (a complex pair "
         "through |mu| = 1); 4 grazing (the orbit's smallest free-flight gap through 0, the "
         "contact sequence changes); 5 branch_point (a real multiplier through +1 where the "
-        "branch does not turn: another branch crosses it): each located to the attribute "
-        "locate_tolerance in the parameter", dtype="int8", flags=BIFURCATIONS),
+        "branch does not turn: another branch crosses it); 6 contact_merge and 7 contact_split "
+        "(a free interval between two contacts closes or opens, in the direction the branch "
+        "is followed): each located to the attribute locate_tolerance in the parameter; 8 "
+        "chatter (the contacts within an episode changed between the previous point and this "
+        "one, not located: micro_contacts = summarise). Fold, period doubling, "
+        "Neimark-Sacker and branch point are smooth bifurcations, found only within one "
+        "smooth piece (the same contact sequence); a change of stability across a nonsmooth "
+        "event (4, 6, 7, 8) belongs to that event", dtype="int8", flags=BIFURCATIONS),
     "newton_iterations": Variable(("branch_point",), "1", "Newton iterations",
                                   "corrector iterations that found the branch point",
                                   dtype="int32"),

@@ -8,8 +8,10 @@ A step of length ds predicts x~ + ds t and corrects by Newton on
     r(z, p) = 0,    t . (x~ - x~_predicted) = 0     (Keller's pseudo-arclength condition).
 
 The step halves when Newton fails to converge within ``max_iterations`` (or stops
-contracting) and when the angle between consecutive tangents exceeds ``max_angle``; it grows
-by 1.5 after a step that took at most 3 iterations, up to ``max_step``.
+contracting) and when the angle between consecutive tangents exceeds ``max_angle`` on one
+smooth piece of the branch (across a change of the orbit's contact sequence the tangent jumps
+however small the step: such a step is kept once below ``KINK_STEP`` and the event between
+located); it grows by 1.5 after a step that took at most 3 iterations, up to ``max_step``.
 """
 
 from __future__ import annotations
@@ -23,6 +25,13 @@ from impactbeams.continuation.problem import Evaluation, Problem, parameter_deri
 from impactbeams.params import ParameterError
 
 GRADIENT_STEP = 1e-7  # x~ units
+# a step that turns by more than max_angle onto another contact sequence is kept once it is
+# this short (x~ units: 1e-4 of the range): the kink is then the branch's, not a jump of the
+# corrector onto another part of the branch (which a longer step can reach)
+KINK_STEP = 1e-4
+# what to do with a change of the contacts within an episode (Settings.micro_contacts)
+LOCATE, SUMMARISE = "locate", "summarise"
+MICRO_CONTACTS = (LOCATE, SUMMARISE)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -36,7 +45,10 @@ class Settings:
     until the parameter is known to this much (in x~ units, i.e. times 1 / w_p in the
     parameter). ``switch_distance``: how far from a period-doubling point the period-2 branch
     starts. ``max_branches``: branches in all, the started one included (each period doubling
-    found starts one, while there is room).
+    found starts one, while there is room). ``micro_contacts``: "locate" every change of the
+    contact sequence, or "summarise" those within an episode (label chatter, not located).
+    ``stall_points``, ``stall_advance``: the branch has stalled, and ends, when its last
+    ``stall_points`` steps moved it less than ``stall_advance`` in all (x~ units).
     """
 
     step: float = 1e-2
@@ -49,10 +61,13 @@ class Settings:
     locate_tolerance: float = 1e-11
     switch_distance: float = 1e-3
     max_branches: int = 2
+    micro_contacts: str = LOCATE
+    stall_points: int = 100
+    stall_advance: float = 1e-4
 
     def __post_init__(self) -> None:
         for name in ("step", "min_step", "max_step", "tolerance", "max_angle",
-                     "locate_tolerance", "switch_distance"):
+                     "locate_tolerance", "switch_distance", "stall_advance"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ParameterError(f"{name} = {value!r} is not allowed: must be a finite "
@@ -60,7 +75,10 @@ class Settings:
         if not self.min_step <= self.step <= self.max_step:
             raise ParameterError(f"step = {self.step!r} is not allowed: must lie from min_step "
                                  f"= {self.min_step!r} to max_step = {self.max_step!r}")
-        for name in ("max_points", "max_iterations", "max_branches"):
+        if self.micro_contacts not in MICRO_CONTACTS:
+            raise ParameterError(f"micro_contacts = {self.micro_contacts!r} is not allowed: "
+                                 f"must be one of {', '.join(map(repr, MICRO_CONTACTS))}")
+        for name in ("max_points", "max_iterations", "max_branches", "stall_points"):
             value = getattr(self, name)
             if not (isinstance(value, int) and value >= 1):
                 raise ParameterError(f"{name} = {value!r} is not allowed: must be an integer "
@@ -96,6 +114,7 @@ class Point:
     evaluation: Evaluation
     iterations: int
     label: str = ""
+    crossed: bool = False  # whether Newton's iterates met other contacts than the point's
 
     def state(self, scaling: Scaling) -> np.ndarray:
         """The section state z."""
@@ -148,13 +167,14 @@ class Follower:
         part still vanishes exactly where dr/dz is singular (a fold), whatever dr/dp.
         """
         x, iterates, previous, rate = predicted.copy(), [], math.inf, None
-        frozen = getattr(self.problem, "approximate", False)
+        frozen, contacts = getattr(self.problem, "approximate", False), set()
         for iteration in range(1, self.settings.max_iterations + 1):
             try:
                 evaluation, jacobian, rate = self.linearised(x, rate if frozen else None)
             except (ParameterError, RuntimeError):  # out of the allowed values, or a run stopped
                 break
             iterates.append(x.copy())
+            contacts.add(evaluation.contacts)
             system = np.vstack([jacobian, direction])
             rhs = np.append(evaluation.residual * self.scaling.state,
                             direction @ (x - predicted))
@@ -167,8 +187,9 @@ class Follower:
             size = float(np.max(np.abs(delta)))
             if size <= self.settings.tolerance:
                 tangent = tangent_of(jacobian, orientation)
-                point = Point(x + delta, tangent, self._measured(x + delta, evaluation),
-                              iteration)
+                measured = self._measured(x + delta, evaluation)
+                point = Point(x + delta, tangent, measured, iteration,
+                              crossed=bool(contacts - {measured.contacts}))
                 return Correction(point, tuple(iterates))
             if iteration > 2 and size > previous:  # not contracting: a smaller step will do
                 break
@@ -186,7 +207,8 @@ class Follower:
         z, p = self.scaling.unscaled(x)
         measured = self.problem.evaluate(z, p, jacobian=False)
         return dataclasses.replace(evaluation, grazing=measured.grazing,
-                                   contacts=measured.contacts, measures=measured.measures)
+                                   contacts=measured.contacts, episodes=measured.episodes,
+                                   measures=measured.measures)
 
     def grazing_values(self, correction: Correction) -> tuple[float, ...]:
         """The grazing values of a correction's iterates (read only when a step failed)."""
@@ -235,8 +257,13 @@ class Follower:
             point = correction.point
             if point is not None and (angle(point.tangent, start.tangent)
                                       <= self.settings.max_angle
-                                      or ds <= self.settings.min_step):
-                return point, ds, ()
+                                      or ds <= self.settings.min_step
+                                      or (ds <= KINK_STEP and not same_piece(start, point))):
+                # across a change of the contact sequence the tangent jumps however small the
+                # step (the branch has a kink): the caller locates the event in between. Past
+                # a kink of more than 90 degrees the tangent oriented like the previous one
+                # would point back: forward is away from the start
+                return oriented(point, point.x - start.x), ds, ()
             grazing = self.grazing_values(correction)
             if crosses(start.evaluation.grazing, grazing):
                 return None, ds, grazing
@@ -244,9 +271,17 @@ class Follower:
             if ds < self.settings.min_step:
                 return None, ds, grazing
 
-    def next_step(self, taken: float, iterations: int) -> float:
-        """The step after one of length ``taken`` that converged in ``iterations``."""
-        factor = 1.5 if iterations <= 3 else (1.0 if iterations <= 5 else 0.7)
+    def next_step(self, taken: float, point: Point) -> float:
+        """The step after one of length ``taken`` that reached ``point``.
+
+        It grows after a quick convergence and shrinks after a slow one, unless Newton's
+        iterates met another contact sequence: then a nonsmooth event is just ahead, where
+        Newton converges slowly however small the step (the map's Jacobian jumps there), and
+        the step grows to cross it (the event is then located between).
+        """
+        iterations = point.iterations
+        factor = 1.5 if iterations <= 3 or point.crossed else (
+            1.0 if iterations <= 5 else 0.7)
         return min(max(taken * factor, self.settings.min_step), self.settings.max_step)
 
 
@@ -262,6 +297,23 @@ def tangent_of(jacobian: np.ndarray, orientation: np.ndarray) -> np.ndarray:
 def angle(a: np.ndarray, b: np.ndarray) -> float:
     """The angle (rad) between two unit vectors."""
     return math.acos(min(1.0, max(-1.0, float(a @ b))))
+
+
+def oriented(point: Point, forward: np.ndarray) -> Point:
+    """``point`` with its tangent turned, if need be, to have a positive part along ``forward``."""
+    if point.tangent @ forward >= 0:
+        return point
+    return dataclasses.replace(point, tangent=-point.tangent)
+
+
+def same_piece(a: Point, b: Point) -> bool:
+    """Whether two points lie on one smooth piece: the same contacts and episodes per orbit.
+
+    (The grazing value alone may change sign between two orbits of one contact sequence: it
+    is whichever of a free-flight minimum and the shallowest contact is nearer 0.)
+    """
+    return (a.evaluation.contacts, a.evaluation.episodes) == (b.evaluation.contacts,
+                                                              b.evaluation.episodes)
 
 
 def crosses(before: float, values: tuple[float, ...]) -> bool:

@@ -84,13 +84,14 @@ class BeamOrbits:
         named = orbit_measures(period_map, result) if measures else {}
         if not jacobian:
             return Evaluation(residual, np.empty((0, 0)), np.empty(0), grazing,
-                              result.contacts, named)
+                              result.contacts, result.episodes, named)
         if self.method == "newton":
             drz = period_map.jacobian(result, "all") - np.eye(len(z))
             multipliers = multipliers_of(drz)
         else:
             drz, multipliers = self._subspace_jacobian(period_map, result, residual)
-        return Evaluation(residual, drz, multipliers, grazing, result.contacts, named)
+        return Evaluation(residual, drz, multipliers, grazing, result.contacts,
+                          result.episodes, named)
 
     def _run(self, period_map: PeriodMap, z: np.ndarray, p: float,
              measures: bool) -> PeriodMapResult:

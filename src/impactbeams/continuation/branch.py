@@ -19,8 +19,21 @@ from collections.abc import Callable
 
 import numpy as np
 
-from impactbeams.continuation.arclength import Follower, Point, Scaling, Settings, crosses
+from impactbeams.continuation.arclength import (
+    KINK_STEP,
+    SUMMARISE,
+    Follower,
+    Point,
+    Scaling,
+    Settings,
+    crosses,
+    oriented,
+    same_piece,
+)
 from impactbeams.continuation.events import (
+    CHATTER,
+    CONTACT_MERGE,
+    CONTACT_SPLIT,
     GRAZING,
     PERIOD_DOUBLING,
     detected,
@@ -32,7 +45,15 @@ from impactbeams.params import ParameterError
 
 # how a branch ended
 BOUND, MAX_POINTS, MIN_STEP, INTERRUPTED = "bound", "max_points", "min_step", "interrupted"
-ENDINGS = (BOUND, MAX_POINTS, MIN_STEP, INTERRUPTED)
+# ... and: back at one of its own earlier points (an isola, a loop of a period-2 branch); a
+# period-p branch back on its period-p/2 origin (at a period doubling of it); too little
+# advance over the last Settings.stall_points steps
+CLOSED_LOOP, JOINED_ORIGIN, STALLED = "closed_loop", "joined_origin", "stalled"
+RETRACED = "retraced"  # back on its own earlier points the other way: a jump, not the branch
+ENDINGS = (BOUND, MAX_POINTS, MIN_STEP, INTERRUPTED, CLOSED_LOOP, JOINED_ORIGIN, STALLED,
+           RETRACED)
+# endings short of the range, not by the branch
+INCOMPLETE = (MAX_POINTS, MIN_STEP, STALLED, RETRACED)
 
 
 @dataclasses.dataclass
@@ -109,20 +130,39 @@ def _follow(follower: Follower, branch: Branch, span: Span,
             progress: Progress | None) -> list[int]:
     """Step ``branch`` to its end; the indices of its period-doubling points."""
     settings, ds = follower.settings, follower.settings.step
-    current = branch.points[-1]
+    current, steps = branch.points[-1], [branch.points[-1]]
     while len(branch.points) < settings.max_points:
+        ending = _ended(branch, steps, ds, settings)
+        if ending:
+            branch.ending = ending
+            break
         point, taken, grazing = follower.step(current, ds)
         low, high = span.low * follower.scaling.parameter, span.high * follower.scaling.parameter
         if point is not None and not low <= point.x[-1] <= high:
             end = _at_bound(follower, current, point, low if point.x[-1] < low else high)
-            _append(branch, _between(follower, current, end), progress)
+            if end is None and taken / 2.0 >= settings.min_step:
+                ds = taken / 2.0  # no orbit at the bound from there (an event between)
+                continue
+            _append(branch, _advance_or_end(follower, current, end or current), progress)
             branch.ending = BOUND
             break
-        crossing = (point is not None and _grazes(current, point)) or (
-            point is None and crosses(current.evaluation.grazing, grazing))
-        resumed = crossing and _cross_grazing(follower, branch, current, taken, point, progress)
+        if point is not None and not same_piece(current, point):
+            try:
+                _append(branch, _advance(follower, current, point), progress)
+            except _Jumped:  # the step reached another branch (near a fold at an event)
+                if taken / 2.0 < settings.min_step:
+                    branch.ending = MIN_STEP
+                    break
+                ds = taken / 2.0
+                continue
+            current, ds = point, follower.next_step(taken, point)
+            steps.append(current)
+            continue
+        crossing = point is None and crosses(current.evaluation.grazing, grazing)
+        resumed = crossing and _cross_grazing(follower, branch, current, taken, progress)
         if resumed:
             current, ds = resumed
+            steps.append(current)
             continue
         if crossing and taken / 2.0 >= settings.min_step:
             ds = taken / 2.0  # an iterate crossed, not the branch, or no way across: smaller
@@ -131,45 +171,228 @@ def _follow(follower: Follower, branch: Branch, span: Span,
             branch.ending = MIN_STEP
             break
         _append(branch, _between(follower, current, point), progress)
-        current, ds = point, follower.next_step(taken, point.iterations)
+        current, ds = point, follower.next_step(taken, point)
+        steps.append(current)
     else:
         branch.ending = MAX_POINTS
     return [i for i, point in enumerate(branch.points) if point.label == PERIOD_DOUBLING]
 
 
+# a section sample spread this small against the tip amplitude: the orbit repeats after half
+# its period (a period-2 branch back on its period-1 origin); a period-2 orbit's spread grows
+# like the square root of the distance from its doubling, ~3e-2 at the switch distance
+JOINED_SPREAD = 1e-7
+# the steps kept out of the closed-loop test: the branch's own last ones; and a loop is at
+# least this many steps long
+RECENT_STEPS, LOOP_STEPS = 5, 20
+
+
+def _ended(branch: Branch, steps: list[Point], ds: float, settings: Settings) -> str:
+    """How the branch ends at its last point, "" if it goes on.
+
+    ``steps``: the points reached by the steps so far (not the located ones between).
+    """
+    x, tangent = steps[-1].x, steps[-1].tangent
+    if len(steps) > RECENT_STEPS + 1:
+        earlier = steps[:-RECENT_STEPS]
+        distances = np.linalg.norm(np.array([point.x for point in earlier]) - x, axis=1)
+        nearest = int(np.argmin(distances))
+        travelled = sum(np.linalg.norm(b.x - a.x) for a, b in zip(
+            steps[nearest:-1], steps[nearest + 1:], strict=True))
+        if travelled < LOOP_STEPS * ds:  # creeping, not round a loop
+            nearest = -1
+        # the same place the same way: a loop; the other way: the branch retraces itself (a
+        # step jumped onto its own earlier part). After a fold the branch returns near its
+        # way out only within a few steps of it (excluded).
+        if nearest >= 0 and distances[nearest] < 0.5 * ds and same_piece(earlier[nearest],
+                                                                           steps[-1]):
+            if earlier[nearest].tangent @ tangent > 0.9:
+                return CLOSED_LOOP
+            if earlier[nearest].tangent @ tangent < -0.9:
+                return RETRACED
+    if branch.origin is not None and len(steps) > 1 and _repeats_early(branch.points[-1]):
+        return JOINED_ORIGIN
+    if len(steps) > settings.stall_points and np.linalg.norm(
+            x - steps[-1 - settings.stall_points].x) < settings.stall_advance:
+        return STALLED
+    return ""
+
+
+def _repeats_early(point: Point) -> bool:
+    """Whether the orbit's section samples all coincide: it is of a shorter period."""
+    samples = np.atleast_1d(point.evaluation.measures.get("section_deflection_1", np.nan))
+    size = point.evaluation.measures.get("tip_amplitude_1", np.nan)
+    spread = float(np.ptp(samples)) if samples.size > 1 else math.nan
+    return spread <= JOINED_SPREAD * size
+
+
 def _append(branch: Branch, points: list[Point], progress: Progress | None) -> None:
+    """Append ``points``; one that is the branch's last point relabelled replaces it."""
     for point in points:
-        branch.points.append(point)
+        if point.x is branch.points[-1].x:
+            branch.points[-1] = point
+        else:
+            branch.points.append(point)
         if progress is not None:
             progress(branch, point)
 
 
-def _between(follower: Follower, a: Point, b: Point,
-             plane: tuple[np.ndarray, np.ndarray] | None = None) -> list[Point]:
-    """The bifurcations located between ``a`` and ``b`` (in order), then ``b``.
+# a step across which a smooth bifurcation is detected is searched in this many pieces
+SAMPLES = 16
+SAMPLINGS = 2  # ... and a piece where one is detected again in as many
+# bisections of a step whose signature changed without its test function changing sign (two
+# crossings, or a multiplier that left the kind in between, e.g. a complex pair turned real)
+MAX_SUBDIVISIONS = 6
 
-    Points between are corrected on planes s along ``a``'s tangent from ``a``, or along
-    ``plane`` = (origin, unit normal) when given.
+
+def _between(follower: Follower, a: Point, b: Point,
+             plane: tuple[np.ndarray, np.ndarray] | None = None, depth: int = 0) -> list[Point]:
+    """The smooth bifurcations located between ``a`` and ``b`` (in order), then ``b``.
+
+    ``a`` and ``b`` lie on one smooth piece of the branch. Points between are corrected on
+    planes s along ``a``'s tangent from ``a``, or along ``plane`` = (origin, unit normal) when
+    given. A kind whose signature changed but whose test function has the same sign at both
+    ends is sought in both halves of the step (at most ``MAX_SUBDIVISIONS`` times).
     """
     origin, normal = plane if plane is not None else (a.x, a.tangent)
 
     def point_at(s: float) -> Point | None:
         return follower.correct(origin + s * normal, normal, normal).point
 
+    found = detected(a, b)
+    if found and depth < SAMPLINGS:
+        # crossings close together (a pair that leaves and returns within the step) show at
+        # the ends as one, or none: the step is sampled, and each piece searched on its own
+        width = float(normal @ (b.x - origin))
+        samples = [point_at(width * k / SAMPLES) for k in range(1, SAMPLES)]
+        ends = [a, *(point for point in samples if point is not None), b]
+        found_points = [point for start, end in zip(ends[:-1], ends[1:], strict=True)
+                        for point in _advance(follower, start, end, depth + 1)]
+        # the samples only served the search: the branch keeps what was located, and b
+        return [point for point in found_points if point.label] + [b]
+    if depth < MAX_SUBDIVISIONS and not all(_brackets(test, a, b) for _, test in found):
+        # a signature changed without its test function changing sign: two crossings, or a
+        # multiplier that left its kind in the step (a complex pair turned real): look closer
+        middle = point_at(0.5 * float(normal @ (b.x - origin)))
+        if middle is not None and same_piece(a, middle) and same_piece(middle, b):
+            return (_between(follower, a, middle, plane, depth + 1)
+                    + _between(follower, middle, b, plane, depth + 1))
     located = []
-    for label, test in detected(a, b):
-        if not (math.isfinite(test(a)) and math.isfinite(test(b))
-                and (test(a) > 0) != (test(b) > 0)):
-            continue  # a signature changed without its multiplier crossing (a collision)
+    for label, test in found:
+        if not _brackets(test, a, b):
+            continue
         s, before, _, _ = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
                                  follower.settings.locate_tolerance)
-        if before is not a:
-            located.append((s, dataclasses.replace(before, label=label)))
+        # (``a`` itself when the root is there: it replaces ``a`` on the branch, `_append`)
+        located.append((s, dataclasses.replace(before, label=label)))
+    if depth < MAX_SUBDIVISIONS and not all(same_piece(a, point) for _, point in located):
+        # the contacts changed and changed back within the step: two nonsmooth events hide
+        middle = point_at(0.5 * float(normal @ (b.x - origin)))
+        if middle is not None:
+            return (_advance(follower, a, middle, depth + 1)
+                    + _advance(follower, middle, b, depth + 1))
     return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
 
 
-def _grazes(a: Point, b: Point) -> bool:
-    return crosses(a.evaluation.grazing, (b.evaluation.grazing,))
+def _brackets(test: Callable[[Point], float], a: Point, b: Point) -> bool:
+    """Whether ``test`` is finite at ``a`` and ``b`` and changes sign between them."""
+    return math.isfinite(test(a)) and math.isfinite(test(b)) and (test(a) > 0) != (test(b) > 0)
+
+
+def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Point]:
+    """The points from ``a`` (excluded) to ``b``, events located, whatever lies between.
+
+    On one smooth piece: `_between`. Across a change of the contact sequence: the nonsmooth
+    event is located on planes across the chord from ``a`` to ``b`` (the grazing value, or the
+    contacts per orbit
+    by bisection for a merge or split), labelled at the last point before it, and smooth
+    bifurcations are sought only within each side's piece; then on from the first point past
+    it. Unlocated (no corrected point past it on the planes, or more than ``MAX_SUBDIVISIONS``
+    events in a row): ``b`` unlabelled, or `_Jumped` for a step longer than ``KINK_STEP`` (a
+    shorter one will reach it); `_Jumped` also when ``b`` is on another branch.
+    """
+    if same_piece(a, b):
+        return _between(follower, a, b, depth=depth)
+    label, test = _nonsmooth(a, b, follower.settings.micro_contacts)
+    if label == CHATTER:
+        return [dataclasses.replace(b, label=CHATTER)]
+    # on planes across the chord from a to b: they reach b whatever the kink at the event
+    # (planes across a's tangent may not, past a kink of the branch); else on those, which
+    # reach an event just before a fold that the chord's planes cut twice
+    chord = (b.x - a.x) / np.linalg.norm(b.x - a.x)
+    for normal in (chord, a.tangent):
+        _, before, past, _ = locate(
+            lambda s, n=normal: follower.correct(a.x + s * n, n, n).point, a,
+            float(normal @ (b.x - a.x)), b, test, follower.settings.locate_tolerance)
+        if past is not None and not (before is a and past is b):
+            break
+    if past is None or depth >= MAX_SUBDIVISIONS or (before is a and past is b):
+        if depth == 0 and np.linalg.norm(b.x - a.x) > KINK_STEP:
+            raise _Jumped  # not located from here: a shorter step will reach it
+        return [b]
+    if np.linalg.norm(past.x - before.x) > JUMP * np.linalg.norm(b.x - a.x):
+        raise _Jumped  # the map is continuous: the two sides of an event of one branch meet
+    label = GRAZING if _at_zero_depth(a, b, before, past) else _merge_or_split(a, b)
+    if past is not b:  # forward on the far side is toward b (the kink may exceed 90 degrees)
+        past = oriented(past, b.x - past.x)
+    near = _between(follower, a, before)[:-1] if before is not a else []
+    rest = [] if past is b else _advance(follower, past, b, depth + 1)
+    return [*near, dataclasses.replace(before, label=label), past, *rest]
+
+
+def _advance_or_end(follower: Follower, a: Point, b: Point) -> list[Point]:
+    """`_advance`, or ``b`` unlabelled where no shorter step can be tried (a bound, ...)."""
+    try:
+        return _advance(follower, a, b)
+    except _Jumped:
+        return [b]
+
+
+# the last points on both sides of a located change of the contacts are this close (against
+# the step) on one branch: the period map is continuous, only its Jacobian jumps. Farther
+# apart, the step's end is on another branch (two meet at a fold at a contact change, where
+# a short step can land on either)
+JUMP = 1e-3
+
+
+class _Jumped(Exception):
+    """A step whose ends lie on two branches, or across an event not located from its start."""
+
+
+def _nonsmooth(a: Point, b: Point, micro_contacts: str,
+               ) -> tuple[str, Callable[[Point], float]]:
+    """The kind of the contact-sequence change between ``a`` and ``b`` and its test function.
+
+    A grazing when the grazing value changes sign (a contact at zero depth), located at its
+    root; else a merge or split, located by bisection on the contacts per orbit. With
+    ``micro_contacts = "summarise"`` a change that keeps the episodes per orbit is `CHATTER`,
+    not located: only an episode's appearance or disappearance is.
+    """
+    if micro_contacts == SUMMARISE and a.evaluation.episodes == b.evaluation.episodes:
+        return CHATTER, grazing_test
+    if crosses(a.evaluation.grazing, (b.evaluation.grazing,)):
+        return GRAZING, grazing_test
+    contacts = a.evaluation.contacts
+
+    def same_contacts(point: Point) -> float:
+        return 1.0 if point.evaluation.contacts == contacts else -1.0
+
+    return _merge_or_split(a, b), same_contacts
+
+
+# a located change of the contacts is a grazing when the grazing value at the event is this
+# small against its values at the step's ends: a contact at zero depth (else the free interval
+# between two contacts closed or opened, and the shallowest contact is not at the event)
+ZERO_DEPTH = 1e-3
+
+
+def _at_zero_depth(a: Point, b: Point, before: Point, past: Point) -> bool:
+    scale = max(abs(a.evaluation.grazing), abs(b.evaluation.grazing))
+    return min(abs(before.evaluation.grazing), abs(past.evaluation.grazing)) <= ZERO_DEPTH * scale
+
+
+def _merge_or_split(a: Point, b: Point) -> str:
+    return CONTACT_MERGE if b.evaluation.contacts < a.evaluation.contacts else CONTACT_SPLIT
 
 
 # distances beyond a grazing tried for the first point of the new contact sequence, as
@@ -178,22 +401,31 @@ BEYOND = (1e-2, 4e-2, 0.16, 0.64, 2.5e-3, 6.25e-4, 1.6e-4)
 
 
 def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: float,
-                   end: Point | None, progress: Progress | None) -> tuple[Point, float] | None:
-    """Locate the grazing ahead of ``current``, label it, resume beyond it.
+                   progress: Progress | None) -> tuple[Point, float] | None:
+    """Locate the grazing ahead of ``current`` where the step failed, label it, resume beyond.
 
-    The grazing is bracketed on secant planes of ``current``. Beyond it the branch may turn
-    within a sliver of the parameter (a multiplier jumps): the first point of the new contact
-    sequence is corrected on a plane across the grazing value's gradient, at a distance where
-    the gap has changed sign, so that it exists whichever way the branch turns. Returns that
-    point and the step to take from it; None, labelling nothing, if none is found (a Newton
-    iterate crossed, not the branch). Not bracketed, or no change of the contacts: labels
-    nothing and resumes short of it (`_short_of_grazing`).
+    Newton failed at the step's end but its iterates crossed the grazing. The grazing is
+    bracketed on secant planes of ``current``. Beyond it the branch may turn within a sliver of
+    the parameter (a multiplier jumps): the first point of the new contact sequence is
+    corrected on a plane across the grazing value's gradient, at a distance where the gap has
+    changed sign, so that it exists whichever way the branch turns. Returns that point and the
+    step to take from it; None, labelling nothing, if none is found (a Newton iterate crossed,
+    not the branch). Not bracketed, or no change of the contacts: labels nothing and resumes
+    short of it (`_short_of_grazing`).
     """
     _, grazing, past, root = locate(lambda s: follower.at_arclength(current, s).point,
-                                    current, taken, end, grazing_test,
+                                    current, taken, None, grazing_test,
                                     follower.settings.locate_tolerance)
-    if not root or (past is not None and _same_contacts(grazing, past)):
-        return _short_of_grazing(follower, branch, current, grazing, past, taken, progress)
+    if past is not None:  # the branch is reachable across it on these planes after all
+        try:
+            _append(branch, _advance(follower, current, past), progress)
+        except _Jumped:
+            return None
+        # forward is away from where the branch came from (near a fold past the grazing, the
+        # tangent oriented like current's may point back to the grazing)
+        return oriented(past, past.x - current.x), max(taken / 2.0, follower.settings.min_step)
+    if not root:
+        return _short_of_grazing(follower, branch, current, grazing, taken, progress)
     gradient = follower.grazing_gradient(grazing.x)
     # across the grazing surface, toward the other sign of the gap
     normal = -np.sign(current.evaluation.grazing) * gradient
@@ -209,12 +441,15 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     if grazing is current:  # within the tolerance of the grazing already
         branch.points[-1] = dataclasses.replace(current, label=GRAZING)
     else:
-        _append(branch, [*_between(follower, current, grazing)[:-1],
+        _append(branch, [*_advance_or_end(follower, current, grazing)[:-1],
                          dataclasses.replace(grazing, label=GRAZING)], progress)
-    if grazing.tangent @ normal < 0:  # oriented into the new contact sequence, as beyond's
-        grazing = dataclasses.replace(grazing, tangent=-grazing.tangent)
-    _append(branch, _between(follower, grazing, beyond, (grazing.x, normal)), progress)
+    # no smooth bifurcation is sought across the grazing: the multipliers jump there
+    _append(branch, [beyond], progress)
     return beyond, distance
+
+
+def _grazes(a: Point, b: Point) -> bool:
+    return crosses(a.evaluation.grazing, (b.evaluation.grazing,))
 
 
 def _same_contacts(a: Point, b: Point) -> bool:
@@ -222,32 +457,26 @@ def _same_contacts(a: Point, b: Point) -> bool:
 
 
 def _short_of_grazing(follower: Follower, branch: Branch, current: Point, last: Point,
-                      past: Point | None, taken: float,
-                      progress: Progress | None) -> tuple[Point, float] | None:
+                      taken: float, progress: Progress | None) -> tuple[Point, float] | None:
     """Resume where the grazing value changed sign without a grazing located.
 
-    Either no corrected point beyond was found and the root is not within the bracket
-    (``past`` None: the branch turned back across ``current``'s planes, at a fold, before
-    reaching the grazing) and the branch resumes from ``last``, the farthest point reached, to
-    cross the grazing on planes of its own; or the value jumped across 0 between two orbits of
-    the same contacts (it is the gap of whichever of a free-flight minimum and the shallowest
-    contact is nearer 0) and the branch resumes from ``past``. Returns None if neither moved
-    from ``current``.
+    No corrected point beyond was found and the root is not within the bracket: the branch
+    turned back across ``current``'s planes, at a fold, before reaching the grazing, and it
+    resumes from ``last``, the farthest point reached, to cross the grazing on planes of its
+    own. Returns None if that is ``current``.
     """
-    resume = last if past is None else past
-    if resume is current:
+    if last is current:
         return None
-    _append(branch, _between(follower, current, resume), progress)
-    return resume, max(taken / 2.0, follower.settings.min_step)
+    _append(branch, _advance_or_end(follower, current, last), progress)
+    return last, max(taken / 2.0, follower.settings.min_step)
 
 
-def _at_bound(follower: Follower, a: Point, b: Point, bound: float) -> Point:
-    """The branch's end at the parameter's bound, between ``a`` and ``b`` (b if it fails)."""
+def _at_bound(follower: Follower, a: Point, b: Point, bound: float) -> Point | None:
+    """The branch's end at the parameter's bound, between ``a`` and ``b`` (None if it fails)."""
     weight = (bound - a.x[-1]) / (b.x[-1] - a.x[-1])
     guess = a.x + weight * (b.x - a.x)
     guess[-1] = bound
-    end = follower.at_parameter(guess, a.tangent).point
-    return end if end is not None else b
+    return follower.at_parameter(guess, a.tangent).point
 
 
 def _switched(follower: Follower, branches: list[Branch], index: int, at: int,

@@ -22,6 +22,8 @@
     method = "auto"            # the corrector: "newton", "newton-picard" or "auto" (Newton up
                                # to 48 coordinates 2 N, Newton-Picard above)
     subspace = 8               # Newton-Picard's carried directions
+    micro_contacts = "locate"  # or "summarise": changes of the contacts within an episode
+                               # labelled chatter, not located (stiff contacts)
 """
 
 from __future__ import annotations
@@ -45,7 +47,8 @@ _TOP_LEVEL = ("n_modes", "period", "transient_periods", "params", "continuation"
 _RANGE_KEYS = {"parameter": "parameter", "min": "low", "max": "high", "direction": "direction",
                "start": "start", "step": "step", "min_step": "min_step", "max_step": "max_step",
                "max_points": "max_points", "max_branches": "max_branches",
-               "state_scale": "state_scale", "method": "method", "subspace": "subspace"}
+               "state_scale": "state_scale", "method": "method", "subspace": "subspace",
+               "micro_contacts": "micro_contacts"}
 _INTEGERS = ("n_modes", "period", "transient_periods", "max_points", "max_branches",
              "subspace")
 
@@ -80,7 +83,7 @@ def _check_type(key: str, value: Any, source: str) -> None:
     where = f"{key} in {source}"
     if key in _INTEGERS:
         require(where, value, is_integer(value), "must be an integer")
-    elif key in ("parameter", "direction", "method"):
+    elif key in ("parameter", "direction", "method", "micro_contacts"):
         require(where, value, isinstance(value, str), "must be a name (a string)")
     elif not is_real(value):
         raise ParameterError(f"{where} = {value!r} is not allowed: must be a number")

@@ -36,6 +36,12 @@ from impactbeams.variables import BIFURCATIONS
 
 FOLD, PERIOD_DOUBLING, NEIMARK_SACKER, GRAZING, BRANCH_POINT = (
     "fold", "period_doubling", "neimark_sacker", "grazing", "branch_point")
+# nonsmooth events that are not grazings: a free interval between two contacts closes (merge)
+# or opens (split), in the direction the branch is followed; ``chatter``: the contact sequence
+# changed within an episode between the previous point and this one, not located
+# (``micro_contacts = "summarise"``)
+CONTACT_MERGE, CONTACT_SPLIT, CHATTER = "contact_merge", "contact_split", "chatter"
+NONSMOOTH = (GRAZING, CONTACT_MERGE, CONTACT_SPLIT, CHATTER)
 LABELS = BIFURCATIONS  # the registry's flags: "none", then the labels above, codes 0, 1, ...
 MAX_LOCATING = 60  # corrector solves per located event (bisection from 1 to 1e-18 of a step)
 
@@ -59,6 +65,20 @@ def _outside(moduli: np.ndarray) -> int:
     return int(np.count_nonzero(moduli > 1.0))
 
 
+def _real_crossing(moduli: Callable[[Point], np.ndarray], a: Point, b: Point) -> int:
+    """+1 (-1) if a real multiplier of ``moduli``'s kind left (entered) the circle, else 0.
+
+    A crossing changes the parity of the real ones outside; a complex pair that meets on the
+    real axis, or leaves it, changes their number by 2.
+    """
+    change = _outside(moduli(b)) - _outside(moduli(a))
+    return int(np.sign(change)) if change % 2 else 0
+
+
+def _all_outside(point: Point) -> int:
+    return _outside(np.abs(point.evaluation.multipliers))
+
+
 def _crossing_modulus(moduli: Callable[[Point], np.ndarray], a: Point, b: Point,
                       missing: float = math.nan) -> Callable[[Point], float]:
     """|mu| - 1 of the multiplier that crosses: the (k+1)-th largest, k outside on both ends.
@@ -78,18 +98,59 @@ def detected(a: Point, b: Point) -> list[tuple[str, Callable[[Point], float]]]:
     """The smooth bifurcations between two points of a branch, with their test functions."""
     found: list[tuple[str, Callable[[Point], float]]] = []
     turned = (a.tangent[-1] > 0) != (b.tangent[-1] > 0)
+    plus, minus = _real_crossing(_real_positive, a, b), _real_crossing(_real_negative, a, b)
     if turned:
         found.append((FOLD, lambda point: float(point.tangent[-1])))
-    if turned != (_outside(_real_positive(a)) % 2 != _outside(_real_positive(b)) % 2):
-        # a real multiplier through +1 without the branch turning (or turning without one)
+    if plus and not turned:
+        # a real multiplier through +1 without the branch turning
         found.append((BRANCH_POINT, _crossing_modulus(_real_positive, a, b)))
-    if _outside(_real_negative(a)) % 2 != _outside(_real_negative(b)) % 2:
+    if minus:
         # a real multiplier < 0 may be born in the step from a complex pair meeting on the
         # negative axis inside the circle: before that, none is outside (-1 = |mu| of 0)
         found.append((PERIOD_DOUBLING, _crossing_modulus(_real_negative, a, b, missing=-1.0)))
-    if _outside(_complex_pairs(a)) != _outside(_complex_pairs(b)):
+    pairs = _pair_crossings(a, b)
+    found += [(NEIMARK_SACKER, test) for test in pairs]
+    if not pairs and _all_outside(b) - _all_outside(a) != plus + minus:
+        # more multipliers left (or entered) the circle than the real crossings account for: a
+        # complex pair crossed it, one born or gone on the real axis within the step. Counting
+        # complex pairs outside would also count two real multipliers outside that meet on the
+        # real axis and leave it as a pair: no crossing.
         found.append((NEIMARK_SACKER, _crossing_modulus(_complex_pairs, a, b)))
     return found
+
+
+def _pair_crossings(a: Point, b: Point) -> list[Callable[[Point], float]]:
+    """|mu| - 1 of each complex pair that crosses the circle from ``a`` to ``b``.
+
+    The pairs (mu with Im mu > 0) of both ends are matched by nearness, so that one pair
+    leaving and another entering in the same step are two crossings, not none. The test
+    function of a crossing follows its pair by the argument of the matched ends.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    mu_a, mu_b = (point.evaluation.multipliers for point in (a, b))
+    mu_a, mu_b = mu_a[mu_a.imag > 0], mu_b[mu_b.imag > 0]
+    if mu_a.size == 0 or mu_b.size == 0:
+        return []
+    rows, columns = linear_sum_assignment(np.abs(mu_a[:, None] - mu_b[None, :]))
+    tests = []
+    for i, j in zip(rows, columns, strict=True):
+        if (abs(mu_a[i]) > 1.0) != (abs(mu_b[j]) > 1.0):
+            tests.append(_pair_modulus(0.5 * (np.angle(mu_a[i]) + np.angle(mu_b[j]))))
+    return tests
+
+
+def _pair_modulus(argument: float) -> Callable[[Point], float]:
+    """|mu| - 1 of a point's complex multiplier whose argument is nearest ``argument``."""
+
+    def test(point: Point) -> float:
+        mu = point.evaluation.multipliers
+        mu = mu[mu.imag > 0]
+        if mu.size == 0:
+            return math.nan
+        return float(abs(mu[np.argmin(np.abs(np.angle(mu) - argument))])) - 1.0
+
+    return test
 
 
 def grazing_test(point: Point) -> float:

@@ -65,6 +65,7 @@ def branches_dataset(branches: list[Branch], parameter: str,
     dataset = xr.Dataset(variables, coords=coords, attrs={
         **attrs, "continued_parameter": parameter,
         "branch_endings": " ".join(branch.ending for branch in branches),
+        "branch_covered": " ".join(_covered(branch) for branch in branches),
         "branch_origins": " ".join("-" if branch.origin is None else
                                    f"{branch.origin[0]}:{branch.origin[1]}"
                                    for branch in branches)})
@@ -75,6 +76,12 @@ def branches_dataset(branches: list[Branch], parameter: str,
         dataset[parameter].attrs.update(parameter_attributes(parameter))
     validate(dataset)
     return dataset
+
+
+def _covered(branch: Branch) -> str:
+    """The interval of the parameter the branch's points span, "low:high" (its units)."""
+    values = [point.parameter(branch.scaling) for point in branch.points]
+    return f"{min(values)!r}:{max(values)!r}"
 
 
 def _multipliers(points: list[Point]) -> np.ndarray:

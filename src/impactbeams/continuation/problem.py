@@ -20,6 +20,10 @@ import numpy as np
 # ~ 4e-11 relative. dr/dp only steers the corrector and the tangent: a converged point solves
 # r = 0 to the tolerance whatever the error of dr/dp.
 PARAMETER_STEP = np.finfo(float).eps ** (1.0 / 3.0)
+# ... but a difference across a change of the orbit's contacts (a grazing within ~1e-5 of the
+# parameter) measures the jump of the map's slope, not its slope, and Newton then converges
+# slowly however small the step: the step narrows by NARROWING, at most NARROWINGS times
+NARROWING, NARROWINGS = 1e-3, 2
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -30,7 +34,8 @@ class Evaluation:
     ``multipliers``: the Floquet multipliers (eigenvalues of dr/dz + I when the problem does
     not give them, e.g. from a Newton-Picard subspace), leading first. ``grazing``: a number
     whose sign change along the branch is a grazing (the orbit's smallest free-flight gap), NaN
-    if the problem has none. ``contacts``: contacts per orbit. ``measures``: named amplitudes
+    if the problem has none. ``contacts``, ``episodes``: contacts and impact episodes per orbit
+    (their change between two points is a nonsmooth event). ``measures``: named amplitudes
     (a number, or one per section of the orbit's period: an array).
     """
 
@@ -39,6 +44,7 @@ class Evaluation:
     multipliers: np.ndarray
     grazing: float = math.nan
     contacts: int = 0
+    episodes: int = 0
     measures: Mapping[str, float | np.ndarray] = dataclasses.field(default_factory=dict)
 
 
@@ -70,10 +76,16 @@ def parameter_derivative(problem: Problem, z: np.ndarray, p: float, scale: float
     """dr/dp by central differences with the step ``PARAMETER_STEP * max(|p|, scale)``.
 
     Within a step of ``lowest`` (the parameter's smallest allowed value, e.g. 0 for a force
-    amplitude) the difference is taken forward, to error ~ sqrt(eps).
+    amplitude) the difference is taken forward, to error ~ sqrt(eps). Where the two ends have
+    other contacts per orbit the step is narrowed (``NARROWING``).
     """
     h = PARAMETER_STEP * max(abs(p), scale)
-    ahead = problem.evaluate(z, p + h, jacobian=False, measures=False).residual
-    if p - h < lowest:
-        return (ahead - problem.evaluate(z, p, False, False).residual) / h
-    return (ahead - problem.evaluate(z, p - h, False, False).residual) / (2.0 * h)
+    for _ in range(NARROWINGS + 1):
+        ahead = problem.evaluate(z, p + h, jacobian=False, measures=False)
+        behind = problem.evaluate(z, max(p - h, p if p - h < lowest else -math.inf),
+                                  jacobian=False, measures=False)
+        if ahead.contacts == behind.contacts:
+            break
+        h *= NARROWING  # the difference straddles a change of the contacts: nearer
+    width = h if p - h < lowest else 2.0 * h
+    return (ahead.residual - behind.residual) / width

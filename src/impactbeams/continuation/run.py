@@ -18,7 +18,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from impactbeams.continuation.arclength import Point, Scaling, Settings
+from impactbeams.blas import one_blas_thread
+from impactbeams.continuation.arclength import (
+    LOCATE,
+    MICRO_CONTACTS,
+    Point,
+    Scaling,
+    Settings,
+)
 from impactbeams.continuation.beams import BeamOrbits
 from impactbeams.continuation.branch import (
     Branch,
@@ -61,7 +68,11 @@ class Continuation:
     state; without it, ``transient_periods`` period maps from the run's start. Steps in the
     parameter's units; ``state_scale`` in m (module docstring). ``method``: the corrector's
     dr/dz, "newton" (full monodromy), "newton-picard" (on ``subspace`` carried directions)
-    or "auto" (`BeamOrbits`).
+    or "auto" (`BeamOrbits`). ``micro_contacts``: "locate" every change of the orbit's
+    contact sequence, or "summarise" those within an impact episode (labelled chatter at the
+    first point after, not located; an episode's appearance and disappearance still are):
+    for stiff contacts, where micro-contacts appear and merge many times per unit of the
+    parameter.
     """
 
     params: Params
@@ -82,6 +93,7 @@ class Continuation:
     state_scale: float | None = None
     method: str = "auto"
     subspace: int = DEFAULT_SUBSPACE
+    micro_contacts: str = LOCATE
 
     def __post_init__(self) -> None:
         require_type("params", self.params, isinstance(self.params, Params),
@@ -104,6 +116,8 @@ class Continuation:
                 f"must be one of {', '.join(map(repr, METHODS))}")
         require_integer("subspace", self.subspace, GUARD + 1)
         require_integer("transient_periods", self.transient_periods, 0)
+        require("micro_contacts", self.micro_contacts, self.micro_contacts in MICRO_CONTACTS,
+                f"must be one of {', '.join(map(repr, MICRO_CONTACTS))}")
         for name in ("step", "min_step", "max_step", "state_scale"):
             value = getattr(self, name)
             if value is not None:
@@ -149,12 +163,14 @@ class Continuation:
         width = self.high - self.low
         step, low, high = self._steps()
         return Settings(step=step / width, min_step=low / width, max_step=high / width,
-                        max_points=self.max_points, max_branches=self.max_branches)
+                        max_points=self.max_points, max_branches=self.max_branches,
+                        micro_contacts=self.micro_contacts)
 
 
 Progress = Callable[[Branch, Point], None]
 
 
+@one_blas_thread
 def continue_orbits(continuation: Continuation,
                     progress: Progress | None = None) -> xr.Dataset:
     """Follow the periodic orbits of ``continuation`` and return the branches' Dataset.

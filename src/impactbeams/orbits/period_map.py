@@ -352,7 +352,7 @@ def geometry_arrays(params: Params, n_modes: int) -> Dynamics:
     Along a branch in Omega, F0, U0 or the clearance the modes and the spring law's contact
     phase (an eigenproblem, the larger part of building a map at 32 modes) stay the same.
     """
-    dynamics = _geometry(dataclasses.replace(params, **_cell_defaults()), n_modes)
+    dynamics = _geometry(params.replace(**_cell_defaults()), n_modes)
     return dataclasses.replace(dynamics, params=params)
 
 

@@ -30,7 +30,8 @@ OVERLAY_MEASURE = "section_deflection_1"  # what a diagram's poincare_deflection
 DIAGRAM_SAMPLES = "poincare_deflection1"
 ALONG = (("branch_point",), ("branch_point", "section"))  # what can be drawn
 MARKERS = {"fold": ("o", "F"), "period_doubling": ("s", "PD"), "neimark_sacker": ("D", "NS"),
-           "grazing": ("^", "G"), "branch_point": ("v", "BP")}
+           "grazing": ("^", "G"), "branch_point": ("v", "BP"), "contact_merge": ("<", "M"),
+           "contact_split": (">", "S"), "chatter": ("x", "C")}
 OTHER_MARKER = "*"  # an event kind without a marker of its own
 # where an event's label may go, in points from its marker, tried in this order: beside it,
 # then further up or down (joined to it by a line)
