@@ -131,6 +131,7 @@ def _follow(follower: Follower, branch: Branch, span: Span,
     """Step ``branch`` to its end; the indices of its period-doubling points."""
     settings, ds = follower.settings, follower.settings.step
     current, steps = branch.points[-1], [branch.points[-1]]
+    near: Point | None = None  # the point before the grazing current was resumed past
     while len(branch.points) < settings.max_points:
         ending = _ended(branch, steps, ds, settings)
         if ending:
@@ -155,23 +156,36 @@ def _follow(follower: Follower, branch: Branch, span: Span,
                     break
                 ds = taken / 2.0
                 continue
-            current, ds = point, follower.next_step(taken, point)
+            current, ds, near = point, follower.next_step(taken, point), None
             steps.append(current)
             continue
         crossing = point is None and crosses(current.evaluation.grazing, grazing)
         resumed = crossing and _cross_grazing(follower, branch, current, taken, progress)
         if resumed:
-            current, ds = resumed
+            near, (current, ds) = current, resumed
             steps.append(current)
             continue
         if crossing and taken / 2.0 >= settings.min_step:
             ds = taken / 2.0  # an iterate crossed, not the branch, or no way across: smaller
             continue
+        if point is None and near is None and len(steps) > 1 and not same_piece(steps[-2],
+                                                                                current):
+            near = steps[-2]  # current was reached across a change of the contacts
+        if point is None and near is not None:
+            # no step from a point at the grazing (the far side's Jacobian is singular
+            # there): on from a point a little beyond it, across the grazing surface
+            found = _beyond(follower, near, current, settings.step)
+            near = None
+            if found is not None:
+                _append(branch, _advance_or_end(follower, current, found[0]), progress)
+                current, ds = found
+                steps.append(current)
+                continue
         if point is None:
             branch.ending = MIN_STEP
             break
         _append(branch, _between(follower, current, point), progress)
-        current, ds = point, follower.next_step(taken, point)
+        current, ds, near = point, follower.next_step(taken, point), None
         steps.append(current)
     else:
         branch.ending = MAX_POINTS
@@ -226,20 +240,38 @@ def _repeats_early(point: Point) -> bool:
     return spread <= JOINED_SPREAD * size
 
 
+# an event of the same kind this close (x~) to the branch's last one of that kind is that one
+REPEATED = 1e-9
+
+
+def _repeats(branch: Branch, point: Point) -> bool:
+    last = next((p for p in reversed(branch.points) if p.label == point.label), None)
+    return last is not None and float(np.linalg.norm(last.x - point.x)) <= REPEATED
+
+
 def _append(branch: Branch, points: list[Point], progress: Progress | None) -> None:
-    """Append ``points``; one that is the branch's last point relabelled replaces it."""
+    """Append ``points``; one that is the branch's last point relabelled replaces it.
+
+    An event located again (the same label within ``REPEATED`` of the branch's last one of
+    that kind: found from both sides of a step searched twice) is not repeated.
+    """
     for point in points:
         if point.x is branch.points[-1].x:
             branch.points[-1] = point
+        elif point.label and _repeats(branch, point):
+            continue
         else:
             branch.points.append(point)
         if progress is not None:
             progress(branch, point)
 
 
+# a point beyond an event is a direction to orient the far side by from this many Newton
+# tolerances on (closer, the direction is Newton's error)
+FAR = 100
 # a step across which a smooth bifurcation is detected is searched in this many pieces
 SAMPLES = 16
-SAMPLINGS = 2  # ... and a piece where one is detected again in as many
+SAMPLINGS = 3  # ... and a piece where one is detected again, as many times in all
 # bisections of a step whose signature changed without its test function changing sign (two
 # crossings, or a multiplier that left the kind in between, e.g. a complex pair turned real)
 MAX_SUBDIVISIONS = 6
@@ -316,14 +348,14 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
     label, test = _nonsmooth(a, b, follower.settings.micro_contacts)
     if label == CHATTER:
         return [dataclasses.replace(b, label=CHATTER)]
-    # on planes across the chord from a to b: they reach b whatever the kink at the event
-    # (planes across a's tangent may not, past a kink of the branch); else on those, which
-    # reach an event just before a fold that the chord's planes cut twice
+    # on planes across a's tangent (its parameter rate pins the parameter, `events.locate`);
+    # else across the chord from a to b, which reach b whatever the kink at the event
     chord = (b.x - a.x) / np.linalg.norm(b.x - a.x)
-    for normal in (chord, a.tangent):
+    for normal in (a.tangent, chord):
         _, before, past, _ = locate(
             lambda s, n=normal: follower.correct(a.x + s * n, n, n).point, a,
-            float(normal @ (b.x - a.x)), b, test, follower.settings.locate_tolerance)
+            float(normal @ (b.x - a.x)), b, test, follower.settings.locate_tolerance,
+            _gap_tolerance(follower, a) if test is grazing_test else math.inf)
         if past is not None and not (before is a and past is b):
             break
     if past is None or depth >= MAX_SUBDIVISIONS or (before is a and past is b):
@@ -333,11 +365,19 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
     if np.linalg.norm(past.x - before.x) > JUMP * np.linalg.norm(b.x - a.x):
         raise _Jumped  # the map is continuous: the two sides of an event of one branch meet
     label = GRAZING if _at_zero_depth(a, b, before, past) else _merge_or_split(a, b)
-    if past is not b:  # forward on the far side is toward b (the kink may exceed 90 degrees)
-        past = oriented(past, b.x - past.x)
+    # forward on the far side is toward b (the kink may exceed 90 degrees); where b is past
+    # itself but for Newton's error, away from a
+    far = b.x - past.x
+    past = oriented(past, far if np.linalg.norm(far) > FAR * follower.settings.tolerance
+                    else past.x - a.x)
     near = _between(follower, a, before)[:-1] if before is not a else []
     rest = [] if past is b else _advance(follower, past, b, depth + 1)
     return [*near, dataclasses.replace(before, label=label), past, *rest]
+
+
+def _gap_tolerance(follower: Follower, start: Point) -> float:
+    """How small a located grazing's gap must be (m): the location tolerance of its start's."""
+    return follower.settings.locate_tolerance * abs(start.evaluation.grazing)
 
 
 def _advance_or_end(follower: Follower, a: Point, b: Point) -> list[Point]:
@@ -415,7 +455,8 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     """
     _, grazing, past, root = locate(lambda s: follower.at_arclength(current, s).point,
                                     current, taken, None, grazing_test,
-                                    follower.settings.locate_tolerance)
+                                    follower.settings.locate_tolerance,
+                                    _gap_tolerance(follower, current))
     if past is not None:  # the branch is reachable across it on these planes after all
         try:
             _append(branch, _advance(follower, current, past), progress)
@@ -426,17 +467,8 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
         return oriented(past, past.x - current.x), max(taken / 2.0, follower.settings.min_step)
     if not root:
         return _short_of_grazing(follower, branch, current, grazing, taken, progress)
-    gradient = follower.grazing_gradient(grazing.x)
-    # across the grazing surface, toward the other sign of the gap
-    normal = -np.sign(current.evaluation.grazing) * gradient
-    normal /= np.linalg.norm(normal)
-    for fraction in BEYOND:
-        distance = max(fraction * taken, follower.settings.min_step)
-        beyond = follower.correct(grazing.x + distance * normal, normal, normal).point
-        if beyond is not None and _grazes(current, beyond) and not _same_contacts(grazing,
-                                                                                   beyond):
-            break
-    else:
+    found = _beyond(follower, current, grazing, taken)
+    if found is None:
         return None
     if grazing is current:  # within the tolerance of the grazing already
         branch.points[-1] = dataclasses.replace(current, label=GRAZING)
@@ -444,8 +476,30 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
         _append(branch, [*_advance_or_end(follower, current, grazing)[:-1],
                          dataclasses.replace(grazing, label=GRAZING)], progress)
     # no smooth bifurcation is sought across the grazing: the multipliers jump there
-    _append(branch, [beyond], progress)
-    return beyond, distance
+    _append(branch, [found[0]], progress)
+    return found
+
+
+def _beyond(follower: Follower, current: Point, at: Point, taken: float,
+            ) -> tuple[Point, float] | None:
+    """The first point of the new contact sequence past the grazing ``at``, and its distance.
+
+    Corrected on a plane across the grazing value's gradient at ``at``, toward the other sign
+    of the gap than ``current``'s, at the first of ``BEYOND``'s distances where the gap has
+    changed sign and the contacts are not ``current``'s: it exists whichever way the branch
+    turns. ``at``: the grazing, as located (still ``current``'s side) or just past it.
+    Oriented away from ``at``. None if none is found.
+    """
+    gradient = follower.grazing_gradient(at.x)
+    normal = -np.sign(current.evaluation.grazing) * gradient
+    normal /= np.linalg.norm(normal)
+    for fraction in BEYOND:
+        distance = max(fraction * taken, follower.settings.min_step)
+        beyond = follower.correct(at.x + distance * normal, normal, normal).point
+        if beyond is not None and _grazes(current, beyond) and not _same_contacts(current,
+                                                                                   beyond):
+            return oriented(beyond, beyond.x - at.x), distance
+    return None
 
 
 def _grazes(a: Point, b: Point) -> bool:

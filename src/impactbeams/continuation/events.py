@@ -6,7 +6,8 @@ function, continuous near the crossing, whose root locates it:
 =================  ============================================  ===============================
 label              detected by a change of                       located at the root of
 =================  ============================================  ===============================
-fold               the sign of the tangent's parameter part      that part (a multiplier at +1)
+fold               the sign of the tangent's parameter part, and  that part (a multiplier at +1)
+                   the parity of the real multipliers > 1
 period_doubling    the parity of the real multipliers < -1       |mu| - 1 of that real mu < 0
 neimark_sacker     the complex pairs outside the unit circle     |mu| - 1 of that pair
 grazing            the sign of the orbit's smallest free gap     that gap
@@ -99,7 +100,10 @@ def detected(a: Point, b: Point) -> list[tuple[str, Callable[[Point], float]]]:
     found: list[tuple[str, Callable[[Point], float]]] = []
     turned = (a.tangent[-1] > 0) != (b.tangent[-1] > 0)
     plus, minus = _real_crossing(_real_positive, a, b), _real_crossing(_real_negative, a, b)
-    if turned:
+    if turned and plus:
+        # (a tangent that turns without a real multiplier through +1 is not a fold: its
+        # orientation flipped, as it can at a point just past a grazing, where the far side's
+        # Jacobian is singular)
         found.append((FOLD, lambda point: float(point.tangent[-1])))
     if plus and not turned:
         # a real multiplier through +1 without the branch turning
@@ -178,7 +182,8 @@ class Located(NamedTuple):
 
 
 def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
-           test: Callable[[Point], float], tolerance: float) -> Located:
+           test: Callable[[Point], float], tolerance: float,
+           value_tolerance: float = math.inf) -> Located:
     """The points on both sides of the root of ``test`` between ``start`` and ``end``.
 
     ``start`` is at s = 0, ``end`` at s = ``s_end`` (None if the corrector failed there: it
@@ -190,12 +195,15 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
     tangent is orthogonal to it). Without a corrected point beyond, the bracket holds a root
     only if the test's value at its near end is as small as the secant from ``start``
     predicts over the bracket's width (``ROOT_MARGIN``): at a fold's reach it is not.
+    ``value_tolerance``: the bracket also needs the test's value at its near end this small
+    (a grazing's gap: where the branch crosses the grazing surface slantwise, the parameter
+    pinned leaves the gap less well known).
     """
     low: Bracket = (0.0, test(start), start)
     high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
     side = 0  # which end kept its place last (Illinois halves its value the second time)
     for _ in range(MAX_LOCATING):
-        if _known(low, high, tolerance):
+        if _known(low, high, tolerance) and abs(test(low[2])) <= value_tolerance:
             break
         s = _next_arclength(low, high)
         point = point_at(s)
