@@ -66,9 +66,10 @@ def run(stiffness: float | None, direction: str, cap: float, summarise: bool = T
     codes = dataset.bifurcation.values
     covered = dataset.attrs.get("branch_covered")
     if covered is None:  # an earlier version: from the points
-        covered = " ".join(f"{dataset.omega.values[dataset.branch.values == b].min()!r}:"
-                           f"{dataset.omega.values[dataset.branch.values == b].max()!r}"
-                           for b in range(int(dataset.branch.max()) + 1))
+        omega, branch = dataset.omega.values, dataset.branch.values
+        covered = " ".join(f"{float(omega[branch == b].min())!r}:"
+                           f"{float(omega[branch == b].max())!r}"
+                           for b in range(int(branch.max()) + 1))
     return {"stiffness": stiffness, "direction": direction, "n_modes": int(dataset.n_modes),
             "seconds": wall, "cpu_seconds": cpu, "capped": capped,
             "points": int(dataset.branch_point.size),
