@@ -3,13 +3,12 @@
 The case of issue 31, as a new user writes it: a steel cantilever 200 x 20 x 1 mm against a
 rigid stop 0.5 mm below its tip, its clamp on a shaker (base amplitude 0.1 mm, no tip force),
 zeta = 0.01, Omega over 0.5 to 2 omega_1 (65.6 to 262.5 rad/s), up and down, at the default
-(Hertz) contact and at contact_stiffness = 1e4 N/m, each at its default modes, with
-``micro_contacts = "summarise"`` (the changes of the contacts within an impact episode labelled,
-not located). Per run: the wall and CPU time, the points and branches, each branch's covered
-interval and ending, the events located. A run is stopped after ``--cap`` seconds (it then
+(Hertz) contact and at contact_stiffness = 1e4 N/m, each at its default modes and settings
+(every change of the contacts located; max_points 5000). Per run: the wall and CPU time, the
+points and branches, each branch's covered interval and ending, the events located. A run is stopped after ``--cap`` seconds (it then
 reports how far it got). ``--baseline TREE`` runs the same cases by an earlier version (its
-source tree; ``micro_contacts`` left out where it lacks it) in a child process, right after
-each of this version's. Writes docs/benchmarks/stiff_continuation.json and .md.
+source tree) in a child process, right after each of this version's. Writes
+docs/benchmarks/stiff_continuation.json and .md.
 
     python benchmarks/bench_stiff_continuation.py [--cap 900] [--baseline TREE]
 """
@@ -48,11 +47,10 @@ class Cap(Exception):
     pass
 
 
-def run(stiffness: float | None, direction: str, cap: float, summarise: bool = True) -> dict:
+def run(stiffness: float | None, direction: str, cap: float) -> dict:
     """One continuation of the case; stopped (and reported as far as it got) after ``cap`` s."""
-    extra = {"micro_contacts": "summarise"} if summarise else {}
     continuation = Continuation(params(stiffness), "omega", LOW, HIGH, direction=direction,
-                                max_points=5000, **extra)
+                                max_points=5000)
     signal.signal(signal.SIGALRM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
     signal.alarm(int(cap))
     wall, cpu = time.perf_counter(), time.process_time()
@@ -84,7 +82,7 @@ def baseline(tree: Path, stiffness: float | None, direction: str, cap: float) ->
     env = {**os.environ, "PYTHONPATH": f"{tree / 'src'}{os.pathsep}{Path(__file__).parent}",
            "NUMBA_CACHE_DIR": str(tree / ".numba-cache"), "PYTHONDONTWRITEBYTECODE": "1"}
     code = (f"import json, bench_stiff_continuation as b; print(json.dumps(b.run("
-            f"{stiffness!r}, {direction!r}, {cap!r}, summarise=False)))")
+            f"{stiffness!r}, {direction!r}, {cap!r})))")
     done = subprocess.run([sys.executable, "-c", code], env=env, check=True,
                           capture_output=True, text=True, cwd=tree)
     return json.loads(done.stdout.splitlines()[-1])
@@ -108,8 +106,8 @@ def markdown(report: dict) -> str:
              f"{report['cores']} cores (CPU time in brackets: what one free core would take). "
              "The case of issue 31: a 200 x 20 x 1 mm steel cantilever, a rigid stop 0.5 mm "
              "below its tip, its clamp on a shaker (0.1 mm), zeta = 0.01, Omega from "
-             f"{LOW} to {HIGH} rad/s (0.5 to 2 omega_1), micro_contacts = \"summarise\"; each "
-             "run is stopped at the cap if it has not ended.", "",
+             f"{LOW} to {HIGH} rad/s (0.5 to 2 omega_1), default settings (max_points 5000); "
+             "each run is stopped at the cap if it has not ended.", "",
              "| contact | direction | modes | time, s | points (branches) | branch 0 covers, rad/s "
              "(endings) | grazings | events |" + (" before: time, s / covers |"
                                                     if report.get("baseline") else ""),
@@ -125,8 +123,8 @@ def markdown(report: dict) -> str:
             line += f" {old['seconds']:.0f} ({old['cpu_seconds']:.0f}) / {coverage(old)} |"
         lines.append(line)
     if report.get("baseline"):
-        lines += ["", f"\"before\": the same cases by {report['baseline']} (without "
-                  "micro_contacts, which it lacks), each right after this version's."]
+        lines += ["", f"\"before\": the same cases by {report['baseline']}, each right "
+                  "after this version's."]
     return "\n".join(lines) + "\n"
 
 
