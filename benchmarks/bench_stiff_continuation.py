@@ -5,10 +5,10 @@ rigid stop 0.5 mm below its tip, its clamp on a shaker (base amplitude 0.1 mm, n
 zeta = 0.01, Omega over 0.5 to 2 omega_1 (65.6 to 262.5 rad/s), up and down, at the default
 (Hertz) contact and at contact_stiffness = 1e4 N/m, each at its default modes and settings
 (every change of the contacts located; max_points 5000). Per run: the wall and CPU time, the
-points and branches, each branch's covered interval and ending, the events located. A run is stopped after ``--cap`` seconds (it then
-reports how far it got). ``--baseline TREE`` runs the same cases by an earlier version (its
-source tree) in a child process, right after each of this version's. Writes
-docs/benchmarks/stiff_continuation.json and .md.
+points and branches, each branch's covered interval and ending, the events located. A run is
+stopped after ``--cap`` seconds (it then reports how far it got). ``--baseline TREE`` runs
+the same cases by an earlier version (its source tree) in a child process, right after each
+of this version's. Writes docs/benchmarks/stiff_continuation.json and .md.
 
     python benchmarks/bench_stiff_continuation.py [--cap 900] [--baseline TREE]
 """
