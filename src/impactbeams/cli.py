@@ -639,8 +639,8 @@ def build_parser() -> argparse.ArgumentParser:
     cont.add_argument("-o", "--output", metavar="OUT.nc",
                       help="netCDF result (default results/<file name>.nc)")
     cont.add_argument("--allow-incomplete", action="store_true",
-                      help="exit 0 even when a branch stops short of the range (stalled, "
-                           f"max_points, min_step; otherwise exit {EXIT_INCOMPLETE})")
+                      help="exit 0, not 3, when a branch stops short of its range "
+                           "(stalled, max_points, min_step, retraced)")
     cont.set_defaults(handler=_continue)
 
     plot = command("plot", "IN.nc [-o OUT.png] [OPTIONS]",

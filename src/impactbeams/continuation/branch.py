@@ -132,13 +132,16 @@ def _follow(follower: Follower, branch: Branch, span: Span,
     settings, ds = follower.settings, follower.settings.step
     current, steps = branch.points[-1], [branch.points[-1]]
     near: Point | None = None  # the point before the grazing current was resumed past
+    low, high = span.low * follower.scaling.parameter, span.high * follower.scaling.parameter
     while len(branch.points) < settings.max_points:
+        if not low <= current.x[-1] <= high:  # resumed past an event beyond the bound
+            _end_at_bound(follower, branch, steps, low, high, progress)
+            break
         ending = _ended(branch, steps, ds, settings)
         if ending:
             branch.ending = ending
             break
         point, taken, grazing = follower.step(current, ds)
-        low, high = span.low * follower.scaling.parameter, span.high * follower.scaling.parameter
         if point is not None and not low <= point.x[-1] <= high:
             end = _at_bound(follower, current, point, low if point.x[-1] < low else high)
             if end is None and taken / 2.0 >= settings.min_step:
@@ -523,6 +526,23 @@ def _short_of_grazing(follower: Follower, branch: Branch, current: Point, last: 
         return None
     _append(branch, _advance_or_end(follower, current, last), progress)
     return last, max(taken / 2.0, follower.settings.min_step)
+
+
+def _end_at_bound(follower: Follower, branch: Branch, steps: list[Point], low: float,
+                  high: float, progress: Progress | None) -> None:
+    """End ``branch`` at the bound its last step point went past (resumed past an event).
+
+    The points beyond the range go; the end is corrected at the bound between the last step
+    points on both sides of it (the last one inside if that fails).
+    """
+    inside = [point for point in steps if low <= point.x[-1] <= high]
+    branch.points[:] = [point for point in branch.points if low <= point.x[-1] <= high]
+    last = steps[-1]
+    if inside:
+        end = _at_bound(follower, inside[-1], last, low if last.x[-1] < low else high)
+        if end is not None:
+            _append(branch, [end], progress)
+    branch.ending = BOUND
 
 
 def _at_bound(follower: Follower, a: Point, b: Point, bound: float) -> Point | None:
