@@ -66,9 +66,8 @@ PARAMETERS: dict[str, Parameter] = {
     "uplift1": Parameter("m", "initial tip uplift of beam 1 (delta_1)", r"$\delta_1$"),
     "uplift2": Parameter("m", "initial tip uplift of beam 2 (delta_2)", r"$\delta_2$"),
     "damping_ratio": Parameter("1", "modal damping ratio (zeta)", r"$\zeta$"),
-    "contact_law": Parameter("1", "tip contact law: spring (compliant, first contacts and "
-                                  "episodes converge in n_modes) or tied (the paper's, does not "
-                                  "converge after the first impact)"),
+    "contact_law": Parameter("1", "tip contact law: spring (compliant; first contacts and "
+                                  "episodes converge in n_modes) or tied (the paper's)"),
     "contact_stiffness": Parameter("N/m", "stiffness k of the tip contact spring", "$k$"),
     "contact_damping": Parameter("N s/m", "damping c of the tip contact dashpot", "$c$"),
     "counterpart": Parameter("1", "what beam 1's tip meets: beam (beam 2's tip) or stop (a fixed "
