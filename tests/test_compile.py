@@ -216,7 +216,7 @@ CALLED = """
 import json, warnings
 from impactbeams import Params, simulate
 from impactbeams.compilation import AHEAD_JOBS, HELPER_JOBS, _kernel, signature_text
-from impactbeams.kernels.jit import _LinkedEntry
+from impactbeams.kernels.linking import _LinkedEntry
 
 warnings.simplefilter("ignore")
 simulate(Params(), 0.01, n_modes=3)
