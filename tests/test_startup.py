@@ -194,6 +194,7 @@ print(json.dumps({"loaded": loaded, "total": total}))
 """
 
 
+@pytest.mark.fast_path
 @pytest.mark.parametrize("kind", ["first-impact", "dynamics"])
 def test_lean_loading_gives_numbas_results(kind, tmp_path):
     """A sweep whose kernels load lean (after this process has cached them) writes the map
