@@ -4,8 +4,9 @@ Compile: the first runs of ``bench_compile.py`` (a 10 x 10 first map and a 0.01 
 each in a fresh process with an empty Numba cache, then warm), on each path. Run: in a
 fresh process per path and round, kernels loaded (a first call compiles or loads them), the
 best of ``--repeats`` of a Fig. 5a map of 200 x 200 cells on one thread and of a simulate of
-each contact law, whose results (every variable's bytes) are compared. The paths alternate, back to back, so that a shared machine's load hits
-both alike; the load average is recorded. Writes docs/benchmarks/numba_paths.json.
+each contact law, whose results (every variable's bytes) are compared between the paths. The
+paths alternate, back to back, so that a shared machine's load hits both alike; the load
+average is recorded. Writes docs/benchmarks/numba_paths.json.
 
     python benchmarks/bench_numba_paths.py [--rounds 2] [--repeats 3]
 """
