@@ -120,6 +120,13 @@ def test_the_list_names_every_internal_the_fast_path_uses(path):
             and not any(entry.startswith(name) for entry in jit.FAST_PATH_INTERNALS)} == set()
 
 
+def test_the_dependency_starts_at_the_tested_numba():
+    """pyproject.toml's lower bound is the series the fast path is tested with; no upper bound
+    (a later Numba takes the plain path)."""
+    text = (ROOT / "pyproject.toml").read_text()
+    assert re.findall(r'"numba[^"]*"', text) == [f'"numba>={jit.TESTED_NUMBA}"']
+
+
 def _numba_version() -> str:
     import numba
 
@@ -140,6 +147,19 @@ def test_an_untested_numba_takes_the_plain_path_unless_told(setting):
             f"{jit.FALLBACK} (slower to compile and to run, the same results): its fast path is "
             f"tested with Numba {jit.TESTED_NUMBA} only, this is 0.69.0 "
             f"({jit.PLAIN_NUMBA}=0 tries it)"]
+
+
+def test_the_warning_fails_no_test():
+    """The suite on an untested Numba: the warning (``filterwarnings = error`` but for it) is shown,
+    the tests run, on the plain path."""
+    code = (_NEWER + "import sys, pytest\nsys.exit(pytest.main(['-q', '-p', 'no:cacheprovider', "
+            "'tests/test_numba_paths.py::test_the_dependency_starts_at_the_"
+            "tested_numba']))")
+    environment = {key: value for key, value in os.environ.items() if key != jit.PLAIN_NUMBA}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=ROOT, env=environment, timeout=300)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "1 passed, 1 warning" in done.stdout and jit.FALLBACK in done.stdout
 
 
 # what the plain path leaves out around the kernels: the helper process, the lean loading
