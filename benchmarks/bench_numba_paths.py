@@ -3,8 +3,10 @@
 Compile: the first runs of ``bench_compile.py`` (a 10 x 10 first map and a 0.01 s simulate,
 each in a fresh process with an empty Numba cache, then warm), on each path. Run: in a
 fresh process per path and round, kernels loaded (a first call compiles or loads them), the
-best of ``--repeats`` of a Fig. 5a map of 200 x 200 cells on one thread and of a simulate of
-each contact law, whose results (every variable's bytes) are compared between the paths. The
+best of ``--repeats`` of the Fig. 5a map (1000 x 1000 cells), 8 cells of the long-time
+diagram (sweeps/bifurcation-omega.toml: the Hertz law's long runs, where the fast path's
+borrowing kernels count no references) on one thread, and a simulate of each contact law,
+whose results (every variable's bytes) are compared between the paths. The
 paths alternate, back to back, so that a shared machine's load hits both alike; the load
 average is recorded. Writes docs/benchmarks/numba_paths.json.
 
@@ -31,23 +33,25 @@ from impactbeams.kernels.jit import PLAIN_NUMBA
 ROOT = Path(__file__).parents[1]
 OUT = ROOT / "docs" / "benchmarks"
 PATHS = {"fast": "", "plain": "1"}  # IMPACTBEAMS_PLAIN_NUMBA of each path
-MAP_CELLS = 200  # along each axis of Fig. 5a's plane
-# runs each case once to load its kernels, then times it; prints {case: best seconds}
+LONG_TIME_CELLS = 8  # of the long-time diagram's 400 frequencies
+# runs each case once to load its kernels, then times it; prints the best times and a digest
+# of each case's results
 _CHILD = """
 import hashlib, json, sys, time
 from impactbeams import Params, simulate
-from impactbeams.sweep import run_sweep, sweep_from_mapping
+from impactbeams.sweep import load_sweep, run_sweep, sweep_from_mapping
 from impactbeams.sweep.definition import read_toml
 
 repeats, cells = int(sys.argv[1]), int(sys.argv[2])
-plane = read_toml("sweeps/fig5a-omega-force.toml")
-for axis in plane["axes"].values():
-    axis["num"] = cells
-sweep = sweep_from_mapping(plane)
+diagram = read_toml("sweeps/bifurcation-omega.toml")
+diagram["axes"]["omega"]["num"] = cells
+fig5a, long_time = load_sweep("sweeps/fig5a-omega-force.toml"), sweep_from_mapping(diagram)
 cases = {
-    f"Fig. 5a map, {cells} x {cells} cells, 1 thread": lambda: run_sweep(sweep, threads=1),
-    "simulate, tied law, 0.5 s": lambda: simulate(Params(contact_law="tied"), 0.5),
-    "simulate, spring law, 0.1 s": lambda: simulate(Params(contact_law="spring"), 0.1),
+    "Fig. 5a map, 1000 x 1000 cells, 1 thread": lambda: run_sweep(fig5a, threads=1),
+    f"long-time diagram (Hertz, 32 modes), {cells} cells, 1 thread":
+        lambda: run_sweep(long_time, threads=1),
+    "simulate, tied law, 2 s": lambda: simulate(Params(contact_law="tied"), 2.0),
+    "simulate, spring law, 1 s": lambda: simulate(Params(contact_law="spring"), 1.0),
 }
 best, digests = {}, {}
 for case, run in cases.items():
@@ -92,7 +96,7 @@ def run_times(rounds: int, repeats: int, scratch: Path) -> dict[str, list[dict]]
     for _ in range(rounds):
         for path in PATHS:
             done = subprocess.run(
-                [sys.executable, "-c", _CHILD, str(repeats), str(MAP_CELLS)], cwd=ROOT,
+                [sys.executable, "-c", _CHILD, str(repeats), str(LONG_TIME_CELLS)], cwd=ROOT,
                 env=_environment(path, scratch / f"cache-run-{path}"), check=True,
                 capture_output=True, text=True)
             best[path].append(json.loads(done.stdout))
