@@ -10,7 +10,7 @@ whose results (every variable's bytes) are compared between the paths. The
 paths alternate, back to back, so that a shared machine's load hits both alike; the load
 average is recorded. Writes docs/benchmarks/numba_paths.json.
 
-    python benchmarks/bench_numba_paths.py [--rounds 2] [--repeats 3]
+    python benchmarks/bench_numba_paths.py [--rounds 2] [--repeats 5]
 """
 
 import argparse
@@ -50,8 +50,10 @@ cases = {
     "Fig. 5a map, 1000 x 1000 cells, 1 thread": lambda: run_sweep(fig5a, threads=1),
     f"long-time diagram (Hertz, 32 modes), {cells} cells, 1 thread":
         lambda: run_sweep(long_time, threads=1),
-    "simulate, tied law, 2 s": lambda: simulate(Params(contact_law="tied"), 2.0),
-    "simulate, spring law, 1 s": lambda: simulate(Params(contact_law="spring"), 1.0),
+    "simulate, tied law, 20 s (output every ms)":
+        lambda: simulate(Params(contact_law="tied"), 20.0, dt_output=1e-3),
+    "simulate, spring law, 3 s (output every ms)":
+        lambda: simulate(Params(contact_law="spring"), 3.0, dt_output=1e-3),
 }
 best, digests = {}, {}
 for case, run in cases.items():
@@ -127,7 +129,7 @@ def report(compiles: dict, runs: dict, rounds: int, repeats: int, load: tuple) -
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--rounds", type=int, default=2)
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
     load = os.getloadavg()
     with tempfile.TemporaryDirectory() as scratch:

@@ -7,8 +7,8 @@ Every kernel compiles on one of two paths, to the same results:
   without reference counts, and a cold run may share its compile with a helper process. It
   uses Numba's compiler internals, tested with Numba 0.68 only;
 * the plain path: every kernel a ``numba.njit`` kernel with public options only (no linking,
-  no borrowed arrays; `impactbeams.compilation` starts no helper and `impactbeams.
-  cached_kernels` loads as Numba does). Slower to compile and run, the same results
+  no borrowed arrays; no helper process, `impactbeams.compilation`; no lean cache loading,
+  `impactbeams.cached_kernels`). Slower to compile and run, the same results
   (docs/architecture.md, "Two paths").
 
 ``IMPACTBEAMS_PLAIN_NUMBA=1`` (or `use_plain_numba`) takes the plain path. Otherwise the first
