@@ -86,11 +86,16 @@ def commands(folder: Path) -> dict[str, list[str]]:
             "simulate": ["simulate", "--t-max", "0.01", "-o", str(folder / "run.nc")]}
 
 
-def first_run(argv: list[str], cache: Path, source: Path | None, folder: Path) -> dict:
-    """One command in a fresh process with NUMBA_CACHE_DIR=cache: its times and compiles."""
+def first_run(argv: list[str], cache: Path, source: Path | None, folder: Path,
+              env: dict[str, str] | None = None) -> dict:
+    """One command in a fresh process with NUMBA_CACHE_DIR=cache: its times and compiles.
+
+    ``env``: more environment variables (``IMPACTBEAMS_PLAIN_NUMBA``: bench_numba_paths.py).
+    """
     for output in folder.glob("*.nc"):
         output.unlink()
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONWARNINGS": "ignore"}
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONWARNINGS": "ignore",
+           **(env or {})}
     if source is not None:
         env["PYTHONPATH"] = str(source)
     record = folder / "record.json"

@@ -12,7 +12,8 @@ series (``scaling.py``), ``bench_distributed.py`` (Dask overhead, if installed),
 ``bench_continuation.py`` (the time per branch point of a continuation), then the speed
 targets' benchmarks: ``bench_columns.py`` (every benchmark map by columns), ``bench_longtime.py``
 (the long-time bifurcation diagram, run whole on 2 threads), ``bench_compile.py`` (the first
-run's compile, cold and warm) and ``bench_startup.py`` (each command's start-up).
+run's compile, cold and warm), ``bench_startup.py`` (each command's start-up) and
+``bench_numba_paths.py`` (compile and run times of the fast path and of plain Numba kernels).
 ``--baseline REVISION`` (a git revision, e.g. the previous release) checks that code out into a
 temporary worktree and runs each speed benchmark on it too, right before this code's: the maps
 (and this code's checked against them cell by cell), the long-time diagram (its periods
@@ -20,7 +21,8 @@ compared cell by cell), the first run and the start-up. Results go to
 ``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
 ``sweep.json``/``sweep.md`` from bench_sweep, ``cube.json``/``cube.md`` from bench_cube,
 ``distributed.json``/``.md``, ``columns.json``/``.md``, ``longtime.json``/``.md``,
-``continuation.json``/``.md``, ``compile.json``/``.md``, ``startup.json``); the plots are drawn
+``continuation.json``/``.md``, ``compile.json``/``.md``, ``startup.json``,
+``numba_paths.json``); the plots are drawn
 from those JSON files only; ``README.md`` holds the headline tables, the speed targets' first.
 """
 
@@ -164,10 +166,12 @@ def run_bench_continuation(quick: bool) -> None:
 
 def run_bench_first_run(quick: bool, baseline: Path | None) -> None:
     """The first run's compile (cold and warm) and every command's start-up (their JSON),
-    each case of the baseline run right before this code's."""
+    each case of the baseline run right before this code's; the fast path against plain
+    Numba kernels."""
     against = ["--baseline", str(baseline)] if baseline else []
     for script in ("bench_compile.py", "bench_startup.py"):
         _script(script, "--repeats", "1" if quick else "3", *against)
+    _script("bench_numba_paths.py", "--rounds", "1" if quick else "2")
 
 
 def run_bench_distributed(quick: bool) -> None:
@@ -524,6 +528,8 @@ def page(out: Path) -> str:
                    "`bench_startup.py` (each command's start-up, warm cache, bytecode "
                    "cached; medians of wall time and, in brackets, CPU time):\n\n"
                    + first_run_table(_load(out, "compile"), _load(out, "startup")))
+    if (out / "numba_paths.json").exists():  # the fast path against plain Numba kernels
+        readme += "\n" + numba_paths_section(_load(out, "numba_paths"))
     if (out / "harmonic_balance.json").exists():  # the harmonic-balance peer (pyHarm)
         readme += "\n" + harmonic_balance.section(_load(out, "harmonic_balance"))
     readme += "\n" + headline(first, dynamics, scale, first["run"]["quick"])
@@ -587,6 +593,34 @@ def first_run_table(compile_report: dict, startup: dict) -> str:
                          f"{_with_cpu(seconds, startup, command)} | "
                          f"{_with_cpu(previous['median_s'][command], previous, command)} | - | "
                          f"{when} |")
+    return "\n".join(lines) + "\n"
+
+
+def numba_paths_section(report: dict) -> str:
+    """Compile and run times of the fast path and of plain Numba kernels (numba_paths.json)."""
+    load = report["load_average"]
+    fast, plain = report["compile"]["fast"], report["compile"]["plain"]
+    lines = ["## The fast path against plain Numba kernels", "",
+             f"`bench_numba_paths.py` ({report['date']}; {report['machine']}; Numba "
+             f"{report['numba']}; load average {load['before']:.1f} before, {load['after']:.1f} "
+             f"after; medians of {report['rounds']} rounds, the paths back to back): every kernel "
+             "a plain `numba.njit` kernel (`IMPACTBEAMS_PLAIN_NUMBA=1`, and what a Numba the fast "
+             "path was not tested with gets) against the fast path "
+             "([architecture](../architecture.md#two-paths-fast-and-plain)). First runs as in "
+             "[compile.md](compile.md), fresh processes, wall (CPU):", "",
+             "| first run | fast path | plain | plain / fast (wall) |", "|---|---|---|---|"]
+    for case, row in fast.items():
+        other = plain[case]
+        lines.append(f"| {case} | {row['wall_s']:.1f} s ({row['cpu_s']:.1f} s) | "
+                     f"{other['wall_s']:.1f} s ({other['cpu_s']:.1f} s) | "
+                     f"{other['wall_s'] / row['wall_s']:.2f} |")
+    same = "the same" if report["same_results"] else "DIFFERENT"
+    lines += ["", f"Run time, kernels loaded, best of {report['repeats']} in each round's "
+              f"process; results {same} on both paths (every variable's bytes):", "",
+              "| run | fast path | plain | plain / fast |", "|---|---|---|---|"]
+    for case, seconds in report["run_best_s"]["fast"].items():
+        other = report["run_best_s"]["plain"][case]
+        lines.append(f"| {case} | {seconds:.3f} s | {other:.3f} s | {other / seconds:.2f} |")
     return "\n".join(lines) + "\n"
 
 

@@ -20,6 +20,18 @@ from impactbeams.model import build_tied_model  # noqa: E402
 from impactbeams.params import Params  # noqa: E402
 
 
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """On the plain path (kernels/jit.py), skip the checks of how the fast path compiles."""
+    from impactbeams.kernels.jit import plain_numba
+
+    if not plain_numba():
+        return
+    skip = pytest.mark.skip(reason="kernels compile as plain Numba kernels (kernels/jit.py)")
+    for item in items:
+        if "fast_path" in item.keywords:
+            item.add_marker(skip)
+
+
 @pytest.fixture(scope="session")
 def default_params() -> Params:
     return Params()

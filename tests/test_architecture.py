@@ -31,11 +31,12 @@ FLOORS = {
     "cli": 10,
 }
 # What kernels may import from outside the package: NumPy and Numba, ``math``, and the standard
-# library modules jit.py (``types``; ``pickle`` and Numba's ``llvmlite`` to hand a compile over
+# library modules jit.py (``types``; ``os``, ``importlib`` and ``warnings`` to choose the fast
+# or the plain path), linking.py (``pickle`` and Numba's ``llvmlite`` to hand a compile over
 # between processes), __init__.py (``hashlib``, ``pathlib``) and records.py (``collections``:
 # namedtuples, which Numba compiles) need.
 KERNEL_EXTERNAL = {"numpy", "numba", "llvmlite", "math", "types", "pickle", "hashlib", "pathlib",
-                   "collections"}
+                   "collections", "os", "importlib", "warnings"}
 
 
 def _modules():

@@ -110,6 +110,7 @@ print(json.dumps([(e.data["dispatcher"].py_func.__module__, e.data["dispatcher"]
 """
 
 
+@pytest.mark.fast_path
 @pytest.mark.slow
 def test_a_cold_first_map_compiles_each_kernel_once_and_no_dynamics(tmp_path):
     """A 100-cell map with an empty cache (about 20 s of compile on 2 cores), then cached."""
@@ -162,8 +163,9 @@ print(json.dumps(result))
 """
 
 
+@pytest.mark.fast_path
 def test_a_kernel_called_by_a_kernel_is_only_linked_until_python_calls_it(tmp_path):
-    """``kernels/jit.py``: a callee gets no machine code or cache entry of its own; a call
+    """``kernels/linking.py``: a callee gets no machine code or cache entry of its own; a call
     from Python then compiles it in full (callable, cached) with the same result. A linked
     kernel calling Python (``print``) finds its Environment (it hung without it)."""
     script = tmp_path / "linked.py"
@@ -201,8 +203,9 @@ except TypeError as error:
 """
 
 
+@pytest.mark.fast_path
 def test_a_borrowing_kernel_returns_no_array(tmp_path):
-    """``kernels/jit.py``: a kernel compiled without reference counts that returned an array
+    """``kernels/linking.py``: a kernel compiled without reference counts that returned an array
     would leave its caller releasing a reference it never got: refused when it compiles."""
     script = tmp_path / "borrowed.py"  # a file: Numba caches only kernels defined in one
     script.write_text(BORROWED)
@@ -216,7 +219,7 @@ CALLED = """
 import json, warnings
 from impactbeams import Params, simulate
 from impactbeams.compilation import AHEAD_JOBS, HELPER_JOBS, _kernel, signature_text
-from impactbeams.kernels.jit import _LinkedEntry
+from impactbeams.kernels.linking import _LinkedEntry
 
 warnings.simplefilter("ignore")
 simulate(Params(), 0.01, n_modes=3)
@@ -227,6 +230,7 @@ print(json.dumps({f"{module}.{name}": [
 """
 
 
+@pytest.mark.fast_path
 def test_the_compile_plan_has_the_signatures_a_run_calls():
     """``compilation``'s jobs name kernels that a simulate calls from Python, with the
     argument types it calls them with (a stale job would compile in vain): a run without the
@@ -254,6 +258,7 @@ print(json.dumps({f"{module}.{name}": [signature_text(args) for args in
 """
 
 
+@pytest.mark.fast_path
 def test_the_link_jobs_have_the_signatures_a_map_links(tmp_path):
     """``compilation.LINK_JOBS``: a cold first map without the helper (an empty cache: linked
     kernels are compiled anew in each process) links each job's kernel with its signature."""
@@ -291,6 +296,7 @@ print(arrays.q.shape, len(recorder.buffer) > 0, helper.returncode)
 """
 
 
+@pytest.mark.fast_path
 @pytest.mark.parametrize("helper", ["compiles", "fails"])
 def test_a_helper_process_compiles_a_kernel_or_leaves_it_to_the_run(tmp_path, helper):
     """With a helper, the run loads the kernel from the cache the helper wrote (no compile
@@ -330,6 +336,7 @@ print(acceleration.tobytes().hex(), "modal_acceleration" in compiled,
 """
 
 
+@pytest.mark.fast_path
 def test_a_helper_hands_over_a_compile_to_link_with_the_same_results(tmp_path):
     """A link job: the helper compiles a kernel that kernels call and hands it over; the run
     links it into its caller without compiling it, with the results, bit for bit, of the run
@@ -355,6 +362,7 @@ print("simulate" in compilation._helpers)
 """
 
 
+@pytest.mark.fast_path
 @pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:n_modes = 3 does not resolve")
 def test_a_cold_simulate_in_two_processes_is_bitwise_the_warm_one(tmp_path):

@@ -126,6 +126,7 @@ print(json.dumps([code] + [[e.data["dispatcher"].py_func.__module__,
 """
 
 
+@pytest.mark.fast_path
 @pytest.mark.slow
 def test_a_cold_simulate_compiles_no_string_formatting_or_array_extremum(tmp_path):
     """simulate with an empty cache (about 17 s of compile on 2 cores)."""

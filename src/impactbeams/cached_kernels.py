@@ -21,16 +21,19 @@ from __future__ import annotations
 def load_cached_kernels_lean() -> None:
     """Make this process load cached kernels without Numba's registries.
 
-    Safe to call more than once; does nothing with a Numba whose cache lacks what this relies
-    on (``Cache._load_overload`` and its I/O guard, as in Numba 0.68): it then loads as usual.
+    Safe to call more than once; does nothing on the plain path (`kernels.jit`: taken with a
+    Numba whose cache lacks what this relies on, ``Cache._load_overload`` and its I/O guard as
+    in Numba 0.68, or asked for): kernels then load as Numba loads them.
     """
+    from impactbeams.kernels.jit import plain_numba
+
+    if plain_numba():
+        return
     from numba.core import caching
     from numba.core.runtime import nrt
 
     cache = caching.Cache
-    if getattr(cache.load_overload, "lean", False) or not all(
-            hasattr(cache, name) for name in ("_load_overload",
-                                              "_guard_against_spurious_io_errors")):
+    if getattr(cache.load_overload, "lean", False):
         return
 
     def load_overload(self: caching.Cache, sig: object, target_context: object) -> object:

@@ -61,7 +61,7 @@ HELPER_JOBS = {
                   f"{_SETTINGS_ARRAYS}, float64[:, ::1], float64[:, ::1], float64[:, ::1], "
                   f"{_DRIVES}, float64[::1], float64[::1], {_SEGMENTS}, float64, int64"),),
 }
-# What a helper compiles only to link, as a calling kernel would (`kernels.jit`), and hands over
+# What a helper compiles only to link, as a calling kernel would (`kernels.linking`), and hands over
 # in a file that this process links instead of compiling it: a first map calls one kernel
 # linking all the others; the helper takes its largest callee, `events.walk` (2.6 of its 7.2 s
 # of CPU, 2026-11-28), which the map types after the columns' preparation and flank search
@@ -109,7 +109,7 @@ def kernels_cached(kind: str, entry: str | None = None) -> bool:
     """Whether the entry kernels of a run of ``kind`` (``ENTRY_KERNELS``) are in the disk cache.
 
     ``entry``: the one name, of several, that the run calls (any of them otherwise). Each twin
-    counts alone, since each compiles its callees anew (`kernels.jit`).
+    counts alone, since each compiles its callees anew (`kernels.linking`).
 
     Reads each kernel's cache index, as Numba does before it compiles (the file
     ``<module>.<name>-<line>.py<version>.nbi`` in the cache folder, which Numba's locator
@@ -128,10 +128,10 @@ def _has_machine_code(dispatcher: Any) -> bool:
     index = getattr(cache, "_cache_file", None)
     if index is None:  # caching disabled: every process compiles
         return False
-    magic = dispatcher.targetctx.codegen().magic_tuple()
     try:
+        magic = dispatcher.targetctx.codegen().magic_tuple()
         overloads = index._load_index()
-    except Exception:  # an unreadable index: Numba recompiles, and so does the run
+    except Exception:  # an unreadable index (or a Numba without these): taken as a compile
         return False
     return any(key[1] == magic for key in overloads)
 
@@ -143,15 +143,18 @@ def compile_in_two_processes(kind: str, entry: str | None = None,
     The helper (``python -m impactbeams.compilation``) compiles ``HELPER_JOBS[kind]`` into
     Numba's disk cache and ``LINK_JOBS[kind]`` into files it hands over; meanwhile this process
     compiles ``AHEAD_JOBS[kind]``, then runs, and a kernel the helper owns is loaded from the
-    cache, or linked from its file, once the helper has it (`kernels.jit` waits for it there).
+    cache, or linked from its file, once the helper has it (`kernels.linking` waits for it).
     A helper that fails or dies leaves its kernels to this process (with a line on ``stream``
     saying so). Nothing happens when the run's kernels are cached, with one core, in a helper
-    itself, or with ``IMPACTBEAMS_COMPILE_HELPER=0``.
+    itself, with ``IMPACTBEAMS_COMPILE_HELPER=0``, or on the plain path (`kernels.jit`: its
+    kernels compile in full, as Numba does).
     """
+    from impactbeams.kernels.jit import plain_numba
+
     jobs = (tuple(("cache", *job) for job in HELPER_JOBS.get(kind, ()))
             + tuple(("link", *job) for job in LINK_JOBS.get(kind, ())))
     if (not jobs or kind in _helpers or os.environ.get(HELPER) == "0"
-            or (os.cpu_count() or 1) < 2 or kernels_cached(kind, entry)):
+            or (os.cpu_count() or 1) < 2 or plain_numba() or kernels_cached(kind, entry)):
         return
     helper = _start_helper(jobs, stream or sys.stderr)
     if helper is None:
@@ -173,12 +176,12 @@ def _helper_command() -> list[str]:
 
 
 def _start_helper(jobs: tuple, stream: TextIO) -> subprocess.Popen | None:
-    """Start the helper on ``jobs``; register each job's wait with `kernels.jit`.
+    """Start the helper on ``jobs``; register each job's wait with `kernels.linking`.
 
     A job: (how, module, kernel, signature), how ``cache`` (compiled in full into the disk
     cache) or ``link`` (compiled to link, handed over in a file).
     """
-    from impactbeams.kernels import jit
+    from impactbeams.kernels import linking
 
     handovers = tempfile.mkdtemp(prefix="impactbeams-compile-")  # the link jobs' files
     arguments = [handovers, *(field for job in jobs for field in job)]
@@ -222,12 +225,12 @@ def _start_helper(jobs: tuple, stream: TextIO) -> subprocess.Popen | None:
             key = (_kernel(module, name), parse_signature(text))
         except Exception:  # a stale job (renamed kernel): the helper fails on it too
             continue
-        jit.COMPILED_ELSEWHERE[key] = wait
+        linking.COMPILED_ELSEWHERE[key] = wait
     return helper
 
 
 def _handover_file(folder: str, index: int) -> str:
-    """Where the helper writes link job ``index``'s compile (`kernels.jit._Kernel.link_into`)."""
+    """Where the helper writes link job ``index``'s compile (`linking._Kernel.link_into`)."""
     return os.path.join(folder, f"{index}.link")
 
 

@@ -1,204 +1,152 @@
 """The package's single place for Numba compile options, and for how kernels compile.
 
-A kernel called by kernels is compiled once per plain signature and only linked into its
-callers (`_Kernel`; docs/architecture.md, "Compiling"). It relies on Numba's compiler
-internals (dispatcher, code library), checked with Numba 0.68 by ``tests/test_compile.py``.
+Every kernel compiles on one of two paths, to the same results:
+
+* the fast path (`impactbeams.kernels.linking`): a kernel called by kernels is compiled once
+  per plain signature and only linked into its callers, a ``borrowing_kernel`` compiles
+  without reference counts, and a cold run may share its compile with a helper process. It
+  uses Numba's compiler internals, tested with Numba 0.68 only;
+* the plain path: every kernel a ``numba.njit`` kernel with public options only (no linking,
+  no borrowed arrays; no helper process, `impactbeams.compilation`; no lean cache loading,
+  `impactbeams.cached_kernels`). Slower to compile and run, the same results
+  (docs/architecture.md, "Two paths").
+
+``IMPACTBEAMS_PLAIN_NUMBA=1`` (or `use_plain_numba`) takes the plain path. Otherwise the first
+kernel made checks this Numba (its version, then each of `FAST_PATH_INTERNALS`) and takes the
+fast path, or the plain one with one warning naming what it missed; ``IMPACTBEAMS_PLAIN_NUMBA=0``
+skips the version check (to try the fast path on a Numba newer than the tested one).
 ``fastmath`` stays off: event location compares signs and the "no impact" value is NaN,
 and ``nnan`` would let LLVM delete the NaN checks.
 """
 
-import pickle
+import importlib
+import os
 import types
-from pathlib import Path
+import warnings
 
-from llvmlite import binding as llvm
-from numba import njit, typeof
-from numba.core import compiler, event, serialize, sigutils, typing
-from numba.core import types as numba_types
-from numba.core.codegen import JITCodeLibrary
-from numba.core.compiler_lock import global_compiler_lock
-from numba.core.environment import lookup_environment
-from numba.core.registry import CPUDispatcher
+import numba
+from numba import njit
 
 _OPTIONS = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": True}
 
+PLAIN_NUMBA = "IMPACTBEAMS_PLAIN_NUMBA"  # "1": the plain path; "0": no version check
+TESTED_NUMBA = "0.68"  # the Numba release the fast path is tested with (pyproject.toml)
+FALLBACK = "impactbeams compiles its kernels as plain Numba kernels"  # the warning's start
 
-class _Kernel(CPUDispatcher):
-    """A dispatcher that one kernel calling another compiles once per plain signature, to link.
+# Numba's internals the fast path uses, each looked up before the first kernel is made:
+# kernels/linking.py's, then the lean cache loading's (impactbeams.cached_kernels).
+# ``dispatcher.`` names an attribute of a Numba dispatcher (a kernel not compiled).
+FAST_PATH_INTERNALS = (
+    "llvmlite.binding.parse_bitcode",
+    "numba.core.compiler.compile_extra",
+    "numba.core.compiler.Flags.no_cpython_wrapper",
+    "numba.core.compiler.Flags.no_cfunc_wrapper",
+    "numba.core.compiler.Flags.no_compile",
+    "numba.core.compiler.CompileResult.referenced_envs",
+    "numba.core.compiler.CompileResult._find_referenced_environments",
+    "numba.core.compiler_lock.global_compiler_lock",
+    "numba.core.event.trigger_event",
+    "numba.core.serialize.dumps",
+    "numba.core.sigutils.normalize_signature",
+    "numba.core.typing.make_concrete_template",
+    "numba.core.environment.lookup_environment",
+    "numba.core.options.TargetOptions.parse_as_flags",
+    "numba.core.cpu.CPUTargetOptions._nrt",
+    "numba.core.base.BaseContext.insert_user_function",
+    "numba.core.codegen.JITCPUCodegen.set_env",
+    "numba.core.codegen.JITCodeLibrary._get_module_for_linking",
+    "numba.core.codegen.JITCodeLibrary._optimize_final_module",
+    "numba.core.codegen.JITCodeLibrary._finalize_final_module",
+    "numba.core.codegen.JITCodeLibrary._finalize_dynamic_globals",
+    "numba.core.codegen.JITCodeLibrary._verify_declare_only_symbols",
+    "numba.core.registry.CPUDispatcher.get_call_template",
+    "numba.core.registry.CPUDispatcher.add_overload",
+    "numba.core.registry.CPUDispatcher.nopython_signatures",
+    "numba.core.registry.CPUDispatcher.targetdescr",
+    "dispatcher._compiler.fold_argument_types",
+    "dispatcher._compiler.pipeline_class",
+    "dispatcher._can_compile",
+    "dispatcher._compiling_counter",
+    "dispatcher._cache.load_overload",
+    "numba.core.caching.Cache._load_overload",
+    "numba.core.caching.Cache._guard_against_spurious_io_errors",
+    "numba.core.runtime.nrt.rtsys.initialize",
+)
 
-    Numba types a call between kernels with its constant arguments as literals
-    (``Literal[bool](True)``) and an omitted argument as its default: each combination would be
-    compiled as its own specialisation, with every kernel it calls (``find_switch`` twice, for
-    example). Typed by their plain types (the default's type for an omitted argument), the
-    calls share one compile; the values are passed at run time, and the results are the same.
+_path = None  # "fast" or "plain", chosen when first asked (`plain_numba`)
+_fast_kernels = False  # whether a kernel was made on the fast path
 
-    A kernel compiled for a calling kernel is only linked into the caller's code: it gets no
-    machine code, no Python or C wrappers and no cache entry of its own (a third of a cold
-    compile's time), since its callers' machine code holds it and the kernels called from
-    Python are cached with everything they call. A call from Python compiles it in full.
+
+def use_plain_numba() -> None:
+    """Compile every kernel as a plain ``numba.njit`` kernel, with public options only.
+
+    As ``IMPACTBEAMS_PLAIN_NUMBA=1``, which it sets for the processes this one starts (a
+    command, Dask's local workers). Call it before importing a kernel module (any run, sweep or
+    simulate imports them): kernels made on the fast path stay as they are, so it refuses then.
     """
-
-    def get_call_template(self, args, kws):
-        pysig, folded = self._compiler.fold_argument_types(args, kws)
-        args = tuple(map(_plain_type, folded))
-        if self._can_compile and args not in self.overloads:
-            self._compile_to_link(args)
-            _refuse_borrowed_returns(self, self.overloads[args].signature.return_type)
-        name = self.py_func.__name__
-        template = typing.make_concrete_template(f"CallTemplate({name})", key=name,
-                                                 signatures=self.nopython_signatures)
-        return template, pysig, args, {}
-
-    def compile(self, sig):
-        """Compile for a call from Python: in full, replacing a compile only to link."""
-        args = tuple(sigutils.normalize_signature(sig)[0])
-        _wait_elsewhere(self, args)
-        existing = self.overloads.get(args)
-        if existing is not None and isinstance(existing.entry_point, _LinkedEntry):
-            del self.overloads[args]
-        entry_point = super().compile(sig)
-        _set_environments(self.overloads[args].library)
-        return entry_point
-
-    def link_into(self, args, path: Path) -> None:
-        """Compile to link, as a calling kernel would, and write what a caller links to ``path``.
-
-        Another process's compile then takes it over instead of compiling it (`_taken_over`):
-        a helper process's share of a cold compile (`impactbeams.compilation`).
-        """
-        with global_compiler_lock, self._compiling_counter:
-            handover = _handover(self._compile_linked(args))  # links its callees: locked
-        path.write_bytes(handover)
-
-    def _compile_to_link(self, args):
-        handover = _wait_elsewhere(self, args)
-        with global_compiler_lock, self._compiling_counter:
-            cres = None if handover is None else _taken_over(self, handover)
-            if cres is not None:
-                self._link(args, cres)
-                return
-            cres = self._cache.load_overload(args, self.targetctx)  # a Python call's, cached
-            if cres is not None:
-                self.targetctx.insert_user_function(cres.entry_point, cres.fndesc,
-                                                    [cres.library])
-                self.add_overload(cres)
-                return
-            details = {"dispatcher": self, "args": args, "return_type": None}
-            with event.trigger_event("numba:compile", data=details):
-                self._link(args, self._compile_linked(args))
-
-    def _link(self, args, cres):
-        """Make ``cres``, a compile only to link, what kernels calling with ``args`` link."""
-        self.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
-        self.overloads[args] = cres  # not callable from Python: `compile` replaces it
-
-    def _compile_linked(self, args):
-        flags = compiler.Flags()
-        self.targetdescr.options.parse_as_flags(flags, self.targetoptions)
-        flags.no_cpython_wrapper = flags.no_cfunc_wrapper = flags.no_compile = True
-        library = _LinkedLibrary(self.targetctx.codegen(), self.py_func.__qualname__)
-        cres = compiler.compile_extra(
-            self.targetdescr.typing_context, self.targetctx, self.py_func, args=args,
-            return_type=None, flags=flags, locals=self.locals, library=library,
-            pipeline_class=self._compiler.pipeline_class)
-        return cres._replace(entry_point=_LinkedEntry())
+    global _path
+    if _fast_kernels:
+        raise RuntimeError("use_plain_numba: kernels are already made on the fast path: call "
+                           "it before a run imports them, or set IMPACTBEAMS_PLAIN_NUMBA=1")
+    _path = "plain"
+    os.environ[PLAIN_NUMBA] = "1"
 
 
-# (kernel, argument types) -> a function returning once another process has compiled it, or
-# given up (`impactbeams.compilation`): the path of the file into which it handed over a
-# compile to link (`_Kernel.link_into`), or None: the compile then loads it from the disk cache
-COMPILED_ELSEWHERE = {}
+def plain_numba() -> bool:
+    """Whether kernels compile on the plain path (chosen on the first call, then fixed)."""
+    global _path
+    if _path is None:
+        _path = _choose_path()
+    return _path == "plain"
 
 
-def _wait_elsewhere(dispatcher, args):
-    wait = COMPILED_ELSEWHERE.pop((dispatcher, args), None)
-    return None if wait is None else wait()
+def _choose_path() -> str:
+    setting = os.environ.get(PLAIN_NUMBA, "")
+    if setting not in ("", "0", "1"):
+        raise ValueError(f"{PLAIN_NUMBA} = {setting!r}: allowed are 1 (plain Numba kernels), "
+                         "0 (the fast path, on any Numba that has its internals) or unset")
+    if setting == "1":
+        return "plain"
+    missing = _fast_path_missing(check_version=setting != "0")
+    if missing is None:
+        return "fast"
+    warnings.warn(f"{FALLBACK} (slower to compile and to run, the same results): {missing}",
+                  RuntimeWarning, stacklevel=2)
+    return "plain"
 
 
-def _handover(cres):
-    """What a caller links of a compile to link: its LLVM bitcode, how to call it, Environments."""
-    fndesc = cres.fndesc
-    fndesc.typemap = fndesc.calltypes = None  # typing details, unpicklable, unused by a call
-    library = cres.library
-    return serialize.dumps((library.name, library._get_module_for_linking().as_bitcode(), fndesc,
-                            cres.environment, cres.signature,
-                            tuple(cres._find_referenced_environments())))
+def _fast_path_missing(check_version: bool) -> str | None:
+    """Why this Numba cannot take the fast path, or None."""
+    version = numba.__version__
+    if check_version and not version.startswith(f"{TESTED_NUMBA}."):
+        return (f"its fast path is tested with Numba {TESTED_NUMBA} only, this is {version} "
+                f"({PLAIN_NUMBA}=0 tries it)")
+    for name in FAST_PATH_INTERNALS:
+        if not _present(name):
+            return f"Numba {version} has no {name}, which its fast path uses"
+    return None
 
 
-def _taken_over(dispatcher, path):
-    """The compile to link another process wrote to ``path`` (`_handover`); None if unreadable.
-
-    The bitcode is the other process's compile as it is, so the caller links and optimises the
-    same IR as had it compiled it itself; unpickling registers the Environments in this
-    process, where the caller's compile points its globals at them (`_set_environments`).
-    """
-    try:
-        name, bitcode, fndesc, environment, signature, environments = pickle.loads(
-            Path(path).read_bytes())
-    except Exception:  # a truncated or foreign file: compiled here instead
-        return None
-    library = _LinkedLibrary(dispatcher.targetctx.codegen(), name)
-    library._final_module = llvm.parse_bitcode(bitcode)
-    library._finalize_final_module()
-    return compiler.CompileResult(
-        typing_context=dispatcher.targetdescr.typing_context,
-        target_context=dispatcher.targetctx, entry_point=_LinkedEntry(), typing_error=None,
-        type_annotation=None, signature=signature, objectmode=False, lifted=(), fndesc=fndesc,
-        library=library, call_helper=None, environment=environment, metadata=None,
-        reload_init=(), referenced_envs=environments)
-
-
-class _LinkedEntry:
-    """The key under which a kernel compiled only to link is known to the target context."""
-
-
-class _LinkedLibrary(JITCodeLibrary):
-    """LLVM IR to link into callers' code, never turned into machine code itself.
-
-    Its functions are optimised one by one (Numba's function passes) but not as a module:
-    the calling kernel's module passes optimise everything it links, once, where each level
-    of a call chain re-optimised all it linked. Measured: the same maps and simulate results,
-    bit for bit, and Fig. 5a's run time within 1 %.
-    """
-
-    def _optimize_final_module(self):
-        pass
-
-    def _finalize_final_module(self):
-        self._finalize_dynamic_globals()
-        self._verify_declare_only_symbols()
-        self._finalized = True
-
-
-def _set_environments(library):
-    """Point the Environment globals of the kernels ``library`` links at their Environments.
-
-    Numba sets a kernel's global when it makes the kernel's machine code, which a linked kernel
-    never gets; its code reads it to call Python (``print``): as a cache load does, set each.
-    """
-    for variable in library._final_module.global_variables:
-        environment = lookup_environment(variable.name)
-        if environment is not None:
-            library.codegen.set_env(variable.name, environment)
-
-
-def _refuse_borrowed_returns(dispatcher, returned):
-    """A ``borrowing_kernel`` returns no array: its caller would release a reference not taken."""
-    if dispatcher.targetoptions.get("_nrt", True):
-        return
-    pending = [returned]
-    while pending:
-        kind = pending.pop()
-        if isinstance(kind, numba_types.ArrayCompatible):
-            raise TypeError(f"{dispatcher.py_func.__qualname__} borrows its arrays and cannot "
-                            f"return one ({returned}): make it an inlined_kernel")
-        pending.extend(getattr(kind, "types", ()))
-
-
-def _plain_type(argument):
-    if isinstance(argument, numba_types.Omitted):
-        return typeof(argument.value)
-    return numba_types.unliteral(argument)
+def _present(name: str) -> bool:
+    """Whether the dotted ``name`` (a module's attribute, at any depth) exists."""
+    parts = name.split(".")
+    if parts[0] == "dispatcher":
+        found, start = njit(_present), 1  # a dispatcher, never compiled
+    else:
+        for start in range(len(parts) - 1, 0, -1):  # the longest prefix that is a module
+            try:
+                found = importlib.import_module(".".join(parts[:start]))
+                break
+            except ImportError:
+                continue
+        else:
+            return False
+    for attribute in parts[start:]:
+        try:
+            found = getattr(found, attribute)
+        except AttributeError:
+            return False
+    return True
 
 
 def kernel(function):
@@ -222,21 +170,50 @@ def borrowing_kernel(function):
     compile. The kernels it calls keep their own reference counts, so it may call one that
     allocates, but not one that returns an array (that reference would never be released): a
     small kernel returning a record of its arrays is an ``inlined_kernel``, which its caller's
-    rules count.
+    rules count. On the plain path it is a ``kernel``.
     """
     return _dispatcher(function, _nrt=False)
 
 
 def _dispatcher(function, **options):
-    options = njit(**_OPTIONS, **options)(function).targetoptions  # as njit completes them
-    dispatcher = _Kernel(py_func=function, locals={}, targetoptions=options)
-    dispatcher.enable_caching()
-    return dispatcher
+    """``function`` compiled with the package's ``options`` on the chosen path.
+
+    The plain path drops Numba's private options (``_nrt``) and compiles a copy named apart
+    (`_plain_copy`).
+    """
+    global _fast_kernels
+    if plain_numba():
+        public = {name: value for name, value in options.items() if not name.startswith("_")}
+        return njit(**_OPTIONS, **public)(_plain_copy(function))
+    from impactbeams.kernels import linking
+
+    _fast_kernels = True
+    return linking.linking_kernel(function, njit(**_OPTIONS, **options)(function).targetoptions)
 
 
 def inlined_kernel(function):
     """A small kernel inlined into its callers' Numba IR (a per-mode body of a hot loop)."""
+    if plain_numba():
+        function = _plain_copy(function)
     return njit(inline="always", **_OPTIONS)(function)
+
+
+def _plain_copy(function):
+    """``function`` under a name of its own in Numba's disk cache, for the plain path.
+
+    The cache keys a kernel by its name and code, not by how it was compiled: the two paths'
+    kernels share neither machine code nor cache files (a plain kernel never loads a fast
+    one's, which links its callees, and the other way round).
+    """
+    return _renamed(function, function.__name__, function.__qualname__ + "_plain")
+
+
+def _renamed(function, name, qualname):
+    """A copy of ``function`` (same code, globals, defaults) under ``name`` and ``qualname``."""
+    copy = types.FunctionType(function.__code__, function.__globals__, name,
+                              function.__defaults__, function.__closure__)
+    copy.__qualname__ = qualname
+    return copy
 
 
 def parallel_kernel(function):
@@ -247,8 +224,6 @@ def parallel_kernel(function):
     Numba's disk cache is keyed by the function's name, not by the ``parallel`` flag, so the
     two would otherwise load each other's machine code.
     """
-    serial = types.FunctionType(function.__code__, function.__globals__,
-                                function.__name__ + "_serial", function.__defaults__,
-                                function.__closure__)
-    serial.__qualname__ = function.__qualname__ + "_serial"
+    serial = _renamed(function, function.__name__ + "_serial",
+                      function.__qualname__ + "_serial")
     return _dispatcher(function, parallel=True), _dispatcher(serial, parallel=False)
