@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -181,6 +182,12 @@ def continue_orbits(continuation: Continuation,
     require_type("continuation", continuation, isinstance(continuation, Continuation),
                  "an impactbeams.Continuation")
     c = continuation
+    if c.params.damping_ratio == 0.0 and c.parameter != "damping_ratio":
+        # the free modes' multipliers are then on the unit circle to round-off
+        warnings.warn("damping_ratio = 0: the undamped modes' Floquet multipliers lie on the "
+                      "unit circle, so stability and the Neimark-Sacker labels are decided by "
+                      "round-off; continue a damped model (damping_ratio > 0)", RuntimeWarning,
+                      stacklevel=2)
     params = c.params.replace(**{c.parameter: c.first})
     problem = BeamOrbits(params, c.parameter, _modes(c), c.period, c.method,
                          c.subspace)
