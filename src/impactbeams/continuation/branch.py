@@ -212,10 +212,11 @@ def _ended(branch: Branch, steps: list[Point], ds: float, settings: Settings) ->
     x, tangent = steps[-1].x, steps[-1].tangent
     if len(steps) > RECENT_STEPS + 1:
         earlier = steps[:-RECENT_STEPS]
-        distances = np.linalg.norm(np.array([point.x for point in earlier]) - x, axis=1)
+        xs = np.array([point.x for point in steps])
+        distances = np.linalg.norm(xs[:-RECENT_STEPS] - x, axis=1)
         nearest = int(np.argmin(distances))
-        travelled = sum(np.linalg.norm(b.x - a.x) for a, b in zip(
-            steps[nearest:-1], steps[nearest + 1:], strict=True))
+        # one pass over the steps' lengths (a loop in Python here was quadratic in the points)
+        travelled = float(np.sum(np.linalg.norm(np.diff(xs[nearest:], axis=0), axis=1)))
         if travelled < LOOP_STEPS * ds:  # creeping, not round a loop
             nearest = -1
         # the same place the same way: a loop; the other way: the branch retraces itself (a
