@@ -130,8 +130,9 @@ def place_labels(axes: Axes, events: list[tuple[float, float, str]]) -> None:
     """Label each event (x, y, text) near its point, clear of the labels, legend and markers.
 
     Greedy, left to right: each label takes the first of ``_OFFSETS`` whose box is free and
-    inside the axes (a far one is joined to its point by a line); if none is, the free one
-    nearest, else the first. Positions are measured on the laid-out figure; events out of the
+    inside the axes (a far one is joined to its point by a line); if none is, it is left out
+    (on a branch with hundreds of events: the markers and the legend still name them).
+    Positions are measured on the laid-out figure; events out of the
     axes' view are not labelled.
     """
     figure = axes.get_figure(root=True)
@@ -153,7 +154,11 @@ def place_labels(axes: Axes, events: list[tuple[float, float, str]]) -> None:
                               arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.5,
                                           "shrinkA": 0, "shrinkB": 4})
         label.set_in_layout(False)
-        label.xyann = _free_offset(label, renderer, taken, inside)
+        offset = _free_offset(label, renderer, taken, inside)
+        if offset is None:  # no room: its marker and the legend name it
+            label.remove()
+            continue
+        label.xyann = offset
         label.arrow_patch.set_visible(abs(label.xyann[1]) > 15)  # a line to a far label
         taken.append(_text_box(label, renderer))
 
@@ -175,20 +180,17 @@ def _text_box(label: Annotation, renderer: RendererBase) -> Bbox:
 
 
 def _free_offset(label: Annotation, renderer: RendererBase, taken: list[Bbox],
-                 inside: Bbox) -> tuple[float, float]:
+                 inside: Bbox) -> tuple[float, float] | None:
     """The first offset of ``_OFFSETS`` putting ``label`` clear of ``taken``, inside ``inside``.
 
-    Else the first offset clear of ``taken``; else the first.
+    None if there is none (a crowded branch: the label is left out).
     """
-    free = []
     for offset in _OFFSETS:
         label.xyann = offset
         box = _text_box(label, renderer)
-        if not any(box.overlaps(other) for other in taken):
-            if _contains(inside, box):
-                return offset
-            free.append(offset)
-    return free[0] if free else _OFFSETS[0]
+        if _contains(inside, box) and not any(box.overlaps(other) for other in taken):
+            return offset
+    return None
 
 
 def _marker_box(axes: Axes, x: float, y: float, points_to_pixels: float) -> Bbox:
