@@ -187,7 +187,14 @@ def _follow(follower: Follower, branch: Branch, span: Span,
         if point is None:
             branch.ending = MIN_STEP
             break
-        _append(branch, _between(follower, current, point), progress)
+        try:
+            _append(branch, _between(follower, current, point), progress)
+        except _Jumped:  # a piece of its search met a change it could not locate: shorter
+            if taken / 2.0 < settings.min_step:
+                branch.ending = MIN_STEP
+                break
+            ds = taken / 2.0
+            continue
         current, ds, near = point, follower.next_step(taken, point), None
         steps.append(current)
     else:
