@@ -34,9 +34,12 @@ class Evaluation:
     ``multipliers``: the Floquet multipliers (eigenvalues of dr/dz + I when the problem does
     not give them, e.g. from a Newton-Picard subspace), leading first. ``grazing``: a number
     whose sign change along the branch is a grazing (the orbit's smallest free-flight gap), NaN
-    if the problem has none. ``contacts``, ``episodes``: contacts and impact episodes per orbit
+    if the problem has none. ``interval``: a number whose sign change is a merge or split of
+    two contacts (the gap's local maximum between contacts nearest 0), NaN if none or not
+    known. ``contacts``, ``episodes``: contacts and impact episodes per orbit
     (their change between two points is a nonsmooth event). ``measures``: named amplitudes
-    (a number, or one per section of the orbit's period: an array).
+    (a number, or one per section of the orbit's period: an array), empty until the point is
+    kept on a branch (`Problem.measures`).
     """
 
     residual: np.ndarray
@@ -46,6 +49,7 @@ class Evaluation:
     contacts: int = 0
     episodes: int = 0
     measures: Mapping[str, float | np.ndarray] = dataclasses.field(default_factory=dict)
+    interval: float = math.nan
 
 
 class Problem(Protocol):
@@ -54,12 +58,15 @@ class Problem(Protocol):
     period: int  # forcing periods per orbit (1 for a plain fixed point)
 
     def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,
-                 measures: bool = True) -> Evaluation:
-        """r(z, p) and the contacts.
+                 grazing: bool = True) -> Evaluation:
+        """r(z, p) and the contacts (``measures`` left empty).
 
         With dr/dz and the multipliers if ``jacobian`` (else both are empty); with the grazing
-        value if ``measures`` (else NaN) and the named measures if both.
+        value (and the interval value, if the problem has one) if ``grazing`` (else NaN).
         """
+
+    def measures(self, z: np.ndarray, p: float) -> Mapping[str, float | np.ndarray]:
+        """The named measures at (z, p): read only for the points a branch keeps."""
 
     def iterated(self, times: int) -> Problem:
         """The same family for ``times`` times the period (P applied ``times`` times)."""
@@ -81,9 +88,9 @@ def parameter_derivative(problem: Problem, z: np.ndarray, p: float, scale: float
     """
     h = PARAMETER_STEP * max(abs(p), scale)
     for _ in range(NARROWINGS + 1):
-        ahead = problem.evaluate(z, p + h, jacobian=False, measures=False)
+        ahead = problem.evaluate(z, p + h, jacobian=False, grazing=False)
         behind = problem.evaluate(z, max(p - h, p if p - h < lowest else -math.inf),
-                                  jacobian=False, measures=False)
+                                  jacobian=False, grazing=False)
         if ahead.contacts == behind.contacts:
             break
         h *= NARROWING  # the difference straddles a change of the contacts: nearer
