@@ -179,11 +179,11 @@ def _follow(follower: Follower, branch: Branch, span: Span,
         if point is None and near is not None:
             # no step from a point at the grazing (the far side's Jacobian is singular
             # there): on from a point a little beyond it, across the grazing surface
-            found = _beyond(follower, near, current, settings.step)
+            found = _reached_beyond(follower, near, current)
             near = None
             if found is not None:
-                _append(follower, branch, _advance_or_end(follower, current, found[0]), progress)
-                current, ds = found
+                (current, ds), points = found
+                _append(follower, branch, points, progress)
                 steps.append(current)
                 continue
         if point is None:
@@ -542,6 +542,29 @@ def _beyond(follower: Follower, current: Point, at: Point, taken: float,
         if beyond is not None and _grazes(current, beyond) and not _same_contacts(current,
                                                                                    beyond):
             return oriented(beyond, beyond.x - at.x), distance
+    return None
+
+
+# scales of the distance beyond a grazing tried by `_reached_beyond`, in the first step's
+NEARER = (1.0, 1.0 / 16.0, 1.0 / 256.0)
+
+
+def _reached_beyond(follower: Follower, near: Point, at: Point,
+                    ) -> tuple[tuple[Point, float], list[Point]] | None:
+    """`_beyond` the grazing ``at`` (reached from ``near``), and the points from ``at`` to it.
+
+    A point beyond that the way from ``at`` does not reach on the branch (`_Jumped`: it lies
+    past a further change of the contacts, on the next piece but one) is given up for one
+    nearer. None if none is found.
+    """
+    for scale in NEARER:
+        found = _beyond(follower, near, at, scale * follower.settings.step)
+        if found is None:
+            continue
+        try:
+            return found, _advance(follower, at, found[0])
+        except _Jumped:
+            continue
     return None
 
 
