@@ -105,8 +105,10 @@ def _pieces(segments: tuple[Segment, ...], attachments: tuple[Attachment, ...]) 
 
 @dataclasses.dataclass(frozen=True)
 class Cantilever:
-    """A cantilever clamped at x = 0, free at x = L, as uniform ``segments`` from the clamp
-    out, carrying ``attachments`` (PointMass, Spring) at any positions 0 <= x <= L (m).
+    """A cantilever clamped at x = 0, free at x = L, with attachments anywhere on it.
+
+    ``segments``: uniform Segments from the clamp out; ``attachments``: PointMass and Spring
+    parts at any positions 0 <= x <= L (m).
 
     A rotational Spring at x = 0 makes the clamp compliant. Attachments at one position add.
     """
@@ -149,13 +151,14 @@ class Cantilever:
         return _modes(self, n)
 
     def flexibility(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Static deflection at each ``x`` (m) under a unit force at each ``y`` (m): the
-        Green's function with the springs, m/N, shape (len(x), len(y)).
+        """Static deflection at each ``x`` (m) under a unit force at each ``y`` (m).
+
+        The Green's function with the springs (m/N), shape (len(x), len(y)).
         """
         x, y = self.positions("x", x), self.positions("y", y)
         p = self.pieces
-        ports = [(e, 0) for e, k in zip(p.ends, p.stiffness) if k]
-        ports += [(e, 1) for e, k in zip(p.ends, p.rotational) if k]
+        ports = [(e, 0) for e, k in zip(p.ends, p.stiffness, strict=True) if k]
+        ports += [(e, 1) for e, k in zip(p.ends, p.rotational, strict=True) if k]
         stiffness = np.array([k for k in (*p.stiffness, *p.rotational) if k])
         return flexibility.spring_flexibility(x, y, p.starts, p.ends, p.EI, p.clamp, ports,
                                               stiffness)
@@ -167,8 +170,8 @@ class Cantilever:
         require(name, x, ok, "must be real positions (m)")
         bad = ~(np.isfinite(x) & (x >= 0.0) & (x <= self.length))
         if bad.any():
-            require(name, x[bad][0], False, f"must lie on the beam, 0 <= x <= {self.length!r}",
-                    "m")
+            require(name, float(x[bad][0]), False,
+                    f"must lie on the beam, 0 <= x <= {self.length!r}", "m")
         return x.astype(float)
 
 
@@ -208,10 +211,21 @@ def _dofs(p: Pieces) -> tuple[list[list[int | None]], int]:
 
 def _count(p: Pieces, omega: float) -> int:
     """J0 + s(K) at ``omega``: natural frequencies below it."""
+    K, held = _dynamic_stiffness(p, omega)
+    return held + (int(np.count_nonzero(np.linalg.eigvalsh(K) < 0.0)) if len(K) else 0)
+
+
+def _dynamic_stiffness(p: Pieces, omega: float) -> tuple[np.ndarray, int]:
+    """K(omega) on the nodal DOFs (theta in units of w k), and J0.
+
+    J0: the pieces' own natural frequencies below omega with their nodal DOFs held.
+    """
     element_dofs, size = _dofs(p)
     k = waves.wave_number(omega, p.EI, p.rhoA)
     b = k * p.lengths
-    ell = 1.0 / k.max()  # theta DOFs scaled by a length: a congruence, so the same inertia
+    # theta DOFs in units of w k (a congruence: the same inertia): every entry ~ EI k^3, so
+    # that eigvalsh's error, eps times the largest entry, stays eps of each entry's own size
+    turn = k.max()
     K = np.zeros((size, size))
     held = 0
     for j, dofs in enumerate(element_dofs):
@@ -221,7 +235,7 @@ def _count(p: Pieces, omega: float) -> int:
         else:
             element = waves.dynamic_stiffness(p.EI[j], k[j], b[j])
             held += waves.clamped_count(b[j])
-        scale = np.array([1.0, ell, 1.0, ell])[: len(dofs)]
+        scale = np.array([1.0, turn, 1.0, turn])[: len(dofs)]
         element = element * np.outer(scale, scale)
         index = [i for i, d in enumerate(dofs) if d is not None]
         taken = [dofs[i] for i in index]
@@ -230,11 +244,10 @@ def _count(p: Pieces, omega: float) -> int:
         w, theta = dofs[2], dofs[3]
         if w is not None:
             K[w, w] += p.stiffness[j] - p.mass[j] * omega**2
-            K[theta, theta] += (p.rotational[j] - p.inertia[j] * omega**2) * ell**2
+            K[theta, theta] += (p.rotational[j] - p.inertia[j] * omega**2) * turn**2
     if p.compliant:
-        K[0, 0] += p.clamp * ell**2
-    negative = int(np.count_nonzero(np.linalg.eigvalsh(K) < 0.0)) if size else 0
-    return held + negative
+        K[0, 0] += p.clamp * turn**2
+    return K, held
 
 
 # --- wave coefficients ----------------------------------------------------------------------
@@ -292,8 +305,10 @@ def _short(p: Pieces, omega: float) -> np.ndarray:
 
 
 def _secular(omega: float, p: Pieces, short: np.ndarray) -> float:
-    """det A(omega): zero at natural frequencies, continuous, bounded (every row of A has
-    entries of at most 1, so |det A| <= 8^(rows / 2) by Hadamard's inequality)."""
+    """The determinant of A(omega): zero at natural frequencies, continuous, bounded.
+
+    Every row of A has entries of at most 1, so |det A| <= 8^(rows / 2) (Hadamard).
+    """
     return float(np.linalg.det(_wave_matrix(p, omega, short)))
 
 
@@ -343,7 +358,7 @@ def _root(p: Pieces, lo: float, hi: float, index: int) -> tuple[float, np.ndarra
 
 def _integral_of_square(p: Pieces, k: np.ndarray, short: np.ndarray,
                         c: np.ndarray) -> float:
-    """sum over pieces of rhoA int w^2 dx for wave coefficients ``c`` (pieces x 4).
+    """The sum over pieces of rhoA int w^2 dx for wave coefficients ``c`` (pieces x 4).
 
     For y'''' = y: int_0^b y^2 dxi = [3 y y''' - y' y'' + xi (y^2 - 2 y' y''' + y''^2)]_0^b / 4.
     """
@@ -406,7 +421,8 @@ def _mass_product(p: Pieces, k: np.ndarray, short: np.ndarray, a: np.ndarray,
 
 @dataclasses.dataclass(frozen=True)
 class StructureModes:
-    """The first natural frequencies (rad/s) of ``beam`` and their mass-normalised shapes:
+    """The first natural frequencies (rad/s) of ``beam`` and their mass-normalised shapes.
+
     ``int rhoA Y_n Y_m dx + sum mass Y_n Y_m + sum rotary_inertia Y_n' Y_m' = delta_nm``
     (Y in kg^-1/2), each with its tip deflection >= 0 (its tip slope > 0 where that is 0).
 
@@ -455,8 +471,9 @@ class StructureModes:
         return dataclasses.replace(self, coefficients=self.coefficients * signs[:, None, None])
 
     def residual_flexibility(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """G(x, y) - sum_n Y_n(x) Y_n(y) / omega_n^2 (m/N): the static flexibility these modes
-        leave out, (len(x), len(y)); what the contact's static correction needs.
+        """The static flexibility these modes leave out (m/N), (len(x), len(y)).
+
+        G(x, y) - sum_n Y_n(x) Y_n(y) / omega_n^2: what the contact's static correction needs.
         """
         modal = (self(x) / self.frequencies[:, None] ** 2).T @ self(y)
         return self.beam.flexibility(x, y) - modal

@@ -19,7 +19,7 @@ import numpy as np
 
 def _piece_integral(x: np.ndarray, d: int, y: np.ndarray, e: int, start: float, end: float,
                     EI: float) -> np.ndarray:
-    """int over [start, end] clipped to [0, min(x, y)] of m_d(x, s) m_e(y, s) / EI ds.
+    """The integral over [start, end] clipped to [0, min(x, y)] of m_d(x, s) m_e(y, s) / EI ds.
 
     Written in distances to the nearer point (t = near - s >= 0) so that every term is a
     difference of powers of positive numbers: no cancellation beyond a factor of order 1.
@@ -39,11 +39,13 @@ def _piece_integral(x: np.ndarray, d: int, y: np.ndarray, e: int, start: float, 
 
 def clamped_flexibility(x: np.ndarray, d: int, y: np.ndarray, e: int, starts: np.ndarray,
                         ends: np.ndarray, EI: np.ndarray, clamp_stiffness: float) -> np.ndarray:
-    """G0 between points ``x`` (derivative d) and ``y`` (load e), broadcast: no springs but
-    the clamp's (``clamp_stiffness`` N m/rad, inf for a rigid clamp). Units m/N, 1/N, 1/(N m).
+    """G0 between points ``x`` (derivative d) and ``y`` (load e), broadcast: m/N, 1/N, 1/(N m).
+
+    No springs but the clamp's (``clamp_stiffness`` N m/rad, inf for a rigid clamp).
     """
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    total = sum(_piece_integral(x, d, y, e, s0, s1, ei) for s0, s1, ei in zip(starts, ends, EI))
+    total = sum(_piece_integral(x, d, y, e, s0, s1, ei)
+                for s0, s1, ei in zip(starts, ends, EI, strict=True))
     arm_x = x if d == 0 else np.ones_like(x)
     arm_y = y if e == 0 else np.ones_like(y)
     return total + arm_x * arm_y / clamp_stiffness

@@ -55,8 +55,9 @@ class PointMass:
 
 @dataclasses.dataclass(frozen=True)
 class Spring:
-    """Linear springs to ground at ``position`` (m): ``stiffness`` on the deflection (N/m),
-    ``rotational_stiffness`` on the slope (N m/rad).
+    """Linear springs to ground at ``position`` (m), on the deflection and on the slope.
+
+    ``stiffness`` (N/m) acts on the deflection, ``rotational_stiffness`` (N m/rad) on the slope.
 
     They add ``stiffness y(x)^2 / 2 + rotational_stiffness y'(x)^2 / 2`` to the strain
     energy. A rotational spring at ``position = 0`` makes the clamp compliant.

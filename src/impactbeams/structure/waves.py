@@ -27,7 +27,7 @@ _INVERSE_FACTORIALS = np.array([1.0 / math.factorial(n) for n in range(4 * _TERM
 
 
 def wave_number(omega: float, EI: np.ndarray, rhoA: np.ndarray) -> np.ndarray:
-    """k = (omega^2 rhoA / EI)^(1/4) (1/m) at ``omega`` (rad/s)."""
+    """The wave number k = (omega^2 rhoA / EI)^(1/4) (1/m) at ``omega`` (rad/s)."""
     return np.sqrt(omega * np.sqrt(rhoA / EI))
 
 
