@@ -38,6 +38,7 @@ from impactbeams.structure.parts import (
 
 _RTOL = 4 * np.finfo(float).eps
 _COINCIDENT = 8 * np.finfo(float).eps  # bracket width (relative) at which roots are one
+_CLUSTER = np.sqrt(np.finfo(float).eps)  # roots closer than this (relative) share their shapes
 
 
 @dataclasses.dataclass(frozen=True)
@@ -350,6 +351,8 @@ def _root(p: Pieces, lo: float, hi: float, index: int) -> tuple[float, np.ndarra
         return lo, short
     if f_hi == 0.0:
         return hi, short
+    if (f_lo < 0) == (f_hi < 0) and hi - lo <= _COINCIDENT * hi:
+        return 0.5 * (lo + hi), short  # the count put the root in a bracket of round-off width
     if (f_lo < 0) == (f_hi < 0):
         raise RuntimeError(f"natural frequency {index + 1} not bracketed in [{lo!r}, {hi!r}] "
                            f"rad/s (secular values {f_lo!r}, {f_hi!r}): please report this beam")
@@ -375,23 +378,40 @@ def _integral_of_square(p: Pieces, k: np.ndarray, short: np.ndarray,
 
 
 def _modes(beam: Cantilever, n: int) -> StructureModes:
+    """The first n modes: roots from the count's brackets, shapes per cluster of roots."""
     p = beam.pieces
-    frequencies, wave_numbers, bases, coefficients = [], [], [], []
+    roots = []
     for lo, hi, index, multiplicity in _brackets(p, n):
         if multiplicity == 1:
-            omega, short = _root(p, lo, hi, index)
+            roots.append(_root(p, lo, hi, index)[0])
         else:
-            omega, short = 0.5 * (lo + hi), _short(p, hi)
-        null = np.linalg.svd(_wave_matrix(p, omega, short))[2][-multiplicity:]
+            roots += [0.5 * (lo + hi)] * multiplicity
+    roots = roots[:n]
+    wave_numbers, bases, coefficients = [], [], []
+    for cluster in _clusters(np.array(roots)):
+        omega = float(np.mean(cluster))
+        short = _short(p, max(cluster))
+        null = np.linalg.svd(_wave_matrix(p, omega, short))[2][-len(cluster):]
         k = waves.wave_number(omega, p.EI, p.rhoA)
-        for c in _orthonormal(p, k, short, null.reshape(multiplicity, -1, 4)):
-            frequencies.append(omega)
+        for c in _orthonormal(p, k, short, null.reshape(len(cluster), -1, 4)):
             wave_numbers.append(k)
             bases.append(short)
             coefficients.append(c)
-    shapes = StructureModes(beam, np.array(frequencies[:n]), np.array(wave_numbers[:n]),
-                            np.array(bases[:n]), np.array(coefficients[:n]))
+    shapes = StructureModes(beam, np.array(roots), np.array(wave_numbers), np.array(bases),
+                            np.array(coefficients))
     return shapes.with_signs()
+
+
+def _clusters(roots: np.ndarray) -> list[np.ndarray]:
+    """Runs of roots closer than ``_CLUSTER`` (relative) to the next, whose shapes go together.
+
+    A run's shapes span the null space of A at its mean frequency.
+    Alone, a root at a relative distance d from its neighbour gets a null vector accurate to
+    eps / d only (A's second smallest singular value is of order d): sqrt(eps) is the
+    crossing, where either way the shapes are orthogonal to about 1e-8.
+    """
+    cut = np.nonzero(np.diff(roots) > _CLUSTER * roots[1:])[0] + 1
+    return np.split(roots, cut)
 
 
 def _orthonormal(p: Pieces, k: np.ndarray, short: np.ndarray,
