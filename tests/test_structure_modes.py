@@ -395,6 +395,7 @@ BAD = [
     (lambda: Cantilever(()), "segments = () is not allowed"),
     (lambda: Cantilever.uniform(EI, RHOA, L).modes(0), "n = 0 is not allowed"),
     (lambda: Cantilever.uniform(EI, RHOA, L).frequency_count(-1.0), "omega = -1.0 is not allowed"),
+    (lambda: Cantilever.uniform(EI, RHOA, L).frequency_count("5"), "omega = '5' is not allowed"),
     (lambda: Cantilever.uniform(EI, RHOA, L).flexibility([0.05, 0.11], 0.1),
      "x = 0.11 is not allowed: must lie on the beam, 0 <= x <= 0.1 (m)"),
     (lambda: Cantilever.uniform(EI, RHOA, L).modes(2)(math.nan), "x = nan is not allowed"),

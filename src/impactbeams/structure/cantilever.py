@@ -25,7 +25,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from impactbeams.brent import brentq
-from impactbeams.params import require, require_integer
+from impactbeams.params import is_real, require, require_integer
 from impactbeams.structure import flexibility, waves
 from impactbeams.structure.parts import (
     Attachment,
@@ -177,13 +177,10 @@ class Cantilever:
 
 
 def _positive_frequency(omega: float) -> float:
-    try:
-        value = float(omega)
-    except (TypeError, ValueError):
-        value = math.nan
-    require("omega", omega, math.isfinite(value) and value > 0.0,
+    """``omega`` as a float, or a ParameterError unless it is a finite real number > 0."""
+    require("omega", omega, is_real(omega) and math.isfinite(omega) and omega > 0.0,
             "must be a finite frequency > 0", "rad/s")
-    return value
+    return float(omega)
 
 
 # --- Wittrick-Williams count ----------------------------------------------------------------

@@ -14,12 +14,18 @@ from typing import Any
 from impactbeams.params import ParameterError, is_real, require
 
 
-def _finite(name: str, value: Any, unit: str, positive: bool) -> float:
-    """``value`` as a float if it is a finite real number, > 0 (``positive``) or >= 0."""
+def _check_fields(part: Any, units: dict[str, str], positive: bool) -> None:
+    """Store each field of ``part`` named in ``units`` (name: unit) as a float.
+
+    Raise ParameterError unless it is a finite real number > 0 (``positive``) or >= 0.
+    """
     bound = "> 0" if positive else ">= 0"
-    ok = is_real(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)
-    require(name, value, ok, f"must be a finite real number {bound}", unit)
-    return float(value)
+    for name, unit in units.items():
+        value = getattr(part, name)
+        ok = is_real(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)
+        require(f"{type(part).__name__}.{name}", value, ok, f"must be a finite real number {bound}",
+                unit)
+        object.__setattr__(part, name, float(value))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -31,9 +37,7 @@ class Segment:
     rhoA: float
 
     def __post_init__(self) -> None:
-        for name, unit in (("length", "m"), ("EI", "N m^2"), ("rhoA", "kg/m")):
-            value = _finite(f"Segment.{name}", getattr(self, name), unit, positive=True)
-            object.__setattr__(self, name, value)
+        _check_fields(self, {"length": "m", "EI": "N m^2", "rhoA": "kg/m"}, positive=True)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,9 +52,8 @@ class PointMass:
     rotary_inertia: float = 0.0
 
     def __post_init__(self) -> None:
-        for name, unit in (("position", "m"), ("mass", "kg"), ("rotary_inertia", "kg m^2")):
-            value = _finite(f"PointMass.{name}", getattr(self, name), unit, positive=False)
-            object.__setattr__(self, name, value)
+        _check_fields(self, {"position": "m", "mass": "kg", "rotary_inertia": "kg m^2"},
+                      positive=False)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,10 +71,8 @@ class Spring:
     rotational_stiffness: float = 0.0
 
     def __post_init__(self) -> None:
-        for name, unit in (("position", "m"), ("stiffness", "N/m"),
-                           ("rotational_stiffness", "N m/rad")):
-            value = _finite(f"Spring.{name}", getattr(self, name), unit, positive=False)
-            object.__setattr__(self, name, value)
+        _check_fields(self, {"position": "m", "stiffness": "N/m",
+                             "rotational_stiffness": "N m/rad"}, positive=False)
 
 
 Attachment = PointMass | Spring
