@@ -181,9 +181,9 @@ def test_modes_are_orthonormal_with_the_attachments(name):
     beam = _to_structure(*CASES[name])
     modes = beam.modes(30)
     mass, stiffness = _mass_and_stiffness_products(beam, modes)
-    assert np.abs(mass - np.eye(30)).max() < 1e-11
+    assert np.abs(mass - np.eye(30)).max() < 1e-12  # measured: 3e-15 to 1.3e-14
     scale = np.outer(modes.frequencies, modes.frequencies)
-    assert np.abs(stiffness / scale - np.eye(30)).max() < 1e-9
+    assert np.abs(stiffness / scale - np.eye(30)).max() < 1e-12  # measured: 4e-15 to 1.2e-14
 
 
 def test_shapes_meet_the_joint_conditions():
