@@ -424,3 +424,15 @@ def test_clustered_and_merged_roots_get_orthonormal_shapes(stiffness, orthonorma
         assert np.abs(modes.frequencies / _half_beam_frequencies(60) - 1.0).max() < 1e-14
     mass, _ = _mass_and_stiffness_products(beam, modes)
     assert np.abs(mass - np.eye(60)).max() < orthonormal
+
+
+def test_the_count_does_not_flicker_next_to_a_root_of_commensurate_pieces():
+    """Pieces of 4, 4 and 2 cm: mode 158 lies next to a pole of the free last piece. With the
+    slope DOFs scaled so that K's entries spanned 16 orders of magnitude, eigvalsh's error
+    flipped the count back and forth over 4e-4 of the frequency there, and the root went
+    unbracketed; every entry of the order of EI k^3, the count rises once, monotonically."""
+    beam = _to_structure(*CASES["springs"])
+    root = beam.modes(160).frequencies[157]
+    trials = root * np.linspace(0.992, 1.008, 401)  # the flicker was over 0.9995-1.0
+    counts = np.array([beam.frequency_count(w) for w in trials])
+    assert (np.diff(counts) >= 0).all() and counts[0] == 157 and counts[-1] == 158

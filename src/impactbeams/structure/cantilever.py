@@ -223,7 +223,7 @@ def _dynamic_stiffness(p: Pieces, omega: float) -> tuple[np.ndarray, int]:
     b = k * p.lengths
     # theta DOFs in units of w k (a congruence: the same inertia): every entry ~ EI k^3, so
     # that eigvalsh's error, eps times the largest entry, stays eps of each entry's own size
-    turn = k.max()
+    slope_unit = k.max()
     K = np.zeros((size, size))
     held = 0
     for j, dofs in enumerate(element_dofs):
@@ -233,7 +233,7 @@ def _dynamic_stiffness(p: Pieces, omega: float) -> tuple[np.ndarray, int]:
         else:
             element = waves.dynamic_stiffness(p.EI[j], k[j], b[j])
             held += waves.clamped_count(b[j])
-        scale = np.array([1.0, turn, 1.0, turn])[: len(dofs)]
+        scale = np.array([1.0, slope_unit, 1.0, slope_unit])[: len(dofs)]
         element = element * np.outer(scale, scale)
         index = [i for i, d in enumerate(dofs) if d is not None]
         taken = [dofs[i] for i in index]
@@ -242,9 +242,9 @@ def _dynamic_stiffness(p: Pieces, omega: float) -> tuple[np.ndarray, int]:
         w, theta = dofs[2], dofs[3]
         if w is not None:
             K[w, w] += p.stiffness[j] - p.mass[j] * omega**2
-            K[theta, theta] += (p.rotational[j] - p.inertia[j] * omega**2) * turn**2
+            K[theta, theta] += (p.rotational[j] - p.inertia[j] * omega**2) * slope_unit**2
     if p.compliant:
-        K[0, 0] += p.clamp * turn**2
+        K[0, 0] += p.clamp * slope_unit**2
     return K, held
 
 
