@@ -87,11 +87,10 @@ class Settings:
 
 @dataclasses.dataclass(frozen=True)
 class Scaling:
-    """x~ = (z * state, p * parameter); ``lowest``: the parameter's smallest allowed value."""
+    """x~ = (z * state, p * parameter)."""
 
     state: np.ndarray
     parameter: float
-    lowest: float = -math.inf
 
     def scaled(self, z: np.ndarray, p: float) -> np.ndarray:
         """x~ of (z, p)."""
@@ -150,7 +149,7 @@ class Follower:
         evaluation = self.problem.evaluate(z, p, grazing=False)
         if rate is None:
             rate = parameter_derivative(self.problem, z, p, 1.0 / self.scaling.parameter,
-                                        self.scaling.lowest)
+                                        evaluation)
         w = self.scaling.state
         jacobian = np.hstack([w[:, None] * evaluation.jacobian / w[None, :],
                               (w * rate / self.scaling.parameter)[:, None]])

@@ -289,7 +289,7 @@ FAR = 100
 # piece where one is detected again in SAMPLES[1], and so on: to 1 / 4096 of the step. The
 # first sampling finds crossings that hide each other at the step's ends; within a piece, the
 # detected crossing is then narrowed by fewer samples a level
-SAMPLES = (16, 4, 4, 4, 4)
+SAMPLES = (16, 16, 4, 4)
 # bisections of a step whose signature changed without its test function changing sign (two
 # crossings, or a multiplier that left the kind in between, e.g. a complex pair turned real)
 MAX_SUBDIVISIONS = 6
