@@ -533,9 +533,13 @@ def _beyond(follower: Follower, current: Point, at: Point, taken: float,
     turns. ``at``: the grazing, as located (still ``current``'s side) or just past it.
     Oriented away from ``at``. None if none is found.
     """
+    # toward the other sign of the gap than current's (at's own, where current is at the
+    # grazing to round-off)
+    side = -np.sign(current.evaluation.grazing) or np.sign(at.evaluation.grazing)
     gradient = follower.grazing_gradient(at.x)
-    normal = -np.sign(current.evaluation.grazing) * gradient
-    normal /= np.linalg.norm(normal)
+    if not side or not np.any(gradient):
+        return None
+    normal = side * gradient / np.linalg.norm(gradient)
     for fraction in BEYOND:
         distance = max(fraction * taken, follower.settings.min_step)
         beyond = follower.correct(at.x + distance * normal, normal, normal).point
