@@ -333,32 +333,50 @@ def _continue(args: argparse.Namespace) -> int:
         continue_orbits,
         load_continuation,
     )
-    from impactbeams.io import write_netcdf
-    from impactbeams.preflight import require_input_file, require_output_file
+    from impactbeams.continuation.checkpoint import (
+        CourseLog,
+        reporting_kept_points,
+        saved_points,
+    )
+    from impactbeams.preflight import require_input_file
     from impactbeams.sweep.lock import output_lock
+    from impactbeams.sweep.store import partial_folder
 
     continuation = load_continuation(require_input_file(args.file, "continuation"))
-    output = require_output_file(args.output or Path("results") / (Path(args.file).stem + ".nc"),
-                                 "-o/--output", {".nc"}, "netCDF")
-    with output_lock(output):
+    output = _continuation_output(args, continuation)
+    with reporting_kept_points(output), output_lock(output):  # before anything is printed
+        kept = saved_points(output) if CourseLog(output, continuation).check() else 0
+        resumed = (f" (resuming from the {kept} branch points saved in "
+                   f"{partial_folder(output)}/)" if kept else "")
         _say(args, f"{args.file}: periodic orbits of period {continuation.period} along "
              f"{continuation.parameter} from {continuation.low:g} to {continuation.high:g} "
-             f"({continuation.direction}) -> {output}")
+             f"({continuation.direction}) -> {output}{resumed}")
         try:
             with _running_kernels("orbits", args):
                 dataset = continue_orbits(continuation, None if args.quiet else _BranchProgress(
-                    continuation.low, continuation.high))
+                    continuation.low, continuation.high), output)
         except ContinuationInterrupted as interrupted:
-            write_netcdf(interrupted.dataset, output)
+            folder = partial_folder(output)
             print(f"\nimpactbeams: the {interrupted.dataset.branch_point.size} branch points "
-                  f"computed are in {output}", file=sys.stderr)
+                  f"computed are in {folder / output.name}; the continuation's steps are kept "
+                  f"in {folder}/ and the same command resumes from them", file=sys.stderr)
             raise
-        write_netcdf(dataset, output)
     _say(args, f"wrote {output}: {_branch_summary(dataset)}")
     short = _short_branches(dataset, continuation)
     for line in short:
         print(f"impactbeams: warning: {line}", file=sys.stderr)
     return EXIT_INCOMPLETE if short and not args.allow_incomplete else 0
+
+
+def _continuation_output(args: argparse.Namespace, continuation: Continuation) -> Path:
+    """The checked output of ``continue``: a writable .nc path with room on its disk."""
+    from impactbeams.continuation.checkpoint import expected_log_size
+    from impactbeams.preflight import require_disk, require_output_file
+
+    output = require_output_file(args.output or Path("results") / (Path(args.file).stem + ".nc"),
+                                 "-o/--output", {".nc"}, "netCDF")
+    require_disk(output, expected_log_size(continuation), "-o/--output")
+    return output
 
 
 class _BranchProgress:
