@@ -183,3 +183,24 @@ def test_another_continuation_or_other_code_is_refused_in_one_line_before_the_he
         "impactbeams code (code digest 0123456789abcdef, this code ")
     (partial / "run.json").write_text(json.dumps(record))
     assert {path.name: path.read_bytes() for path in partial.iterdir()} == before
+
+
+def test_a_full_disk_is_refused_before_the_header(files, tmp_path, capsys, monkeypatch):
+    """16 kB free: refused in one line before any work (it computed the whole branch, then
+    lost it at the write); the room asked for is the first branch's fewest points' log."""
+    import shutil
+
+    from impactbeams.continuation import load_continuation
+    from impactbeams.continuation.checkpoint import expected_log_size
+
+    usage = shutil.disk_usage(tmp_path)
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: usage._replace(free=16 * 1024))
+    out = tmp_path / "out.nc"
+    assert main(_command(files, "newton", out)) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"impactbeams: error: -o/--output '{out}' is not allowed: the run needs "
+                          "about ") and "16 KiB free" in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+    # 21 points at max_step (1.7 / 20 rad/s), 2 N = 12: each a 1.2 kB monodromy and the rest
+    assert expected_log_size(load_continuation(files / "newton.toml")) == 2 * 21 * (
+        8 * 144 + 64 * 12 + 2048)

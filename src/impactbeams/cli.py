@@ -338,11 +338,13 @@ def _continue(args: argparse.Namespace) -> int:
         reporting_kept_points,
         saved_points,
     )
+    from impactbeams.continuation.run import orbits_problem
     from impactbeams.preflight import require_input_file
     from impactbeams.sweep.lock import output_lock
     from impactbeams.sweep.store import partial_folder
 
     continuation = load_continuation(require_input_file(args.file, "continuation"))
+    orbits_problem(continuation)  # what the file alone cannot tell (the subspace's room)
     output = _continuation_output(args, continuation)
     with reporting_kept_points(output), output_lock(output):  # before anything is printed
         kept = saved_points(output) if CourseLog(output, continuation).check() else 0

@@ -221,9 +221,7 @@ def continue_orbits(continuation: Continuation, progress: Progress | None = None
 def _continued(c: Continuation, progress: Progress | None,
                log: CourseLog | None = None) -> xr.Dataset:
     """The branches' Dataset of ``c``, checkpointed into (and resumed from) ``log``."""
-    params = c.params.replace(**{c.parameter: c.first})
-    problem = BeamOrbits(params, c.parameter, mode_count(c), c.period, c.method,
-                         c.subspace)
+    problem = orbits_problem(c)
     settings = c.settings()
     resume = None if log is None else log.restore(problem, settings)
     if resume is None:
@@ -240,6 +238,15 @@ def _continued(c: Continuation, progress: Progress | None,
         interrupted.dataset = branches_dataset(interrupted.branches, c.parameter, attrs)
         raise
     return branches_dataset(branches, c.parameter, attrs)
+
+
+def orbits_problem(c: Continuation) -> BeamOrbits:
+    """The first branch's problem: the orbits at the first value.
+
+    A ParameterError for a method or subspace that does not fit its coordinates.
+    """
+    params = c.params.replace(**{c.parameter: c.first})
+    return BeamOrbits(params, c.parameter, mode_count(c), c.period, c.method, c.subspace)
 
 
 def mode_count(c: Continuation) -> int:
