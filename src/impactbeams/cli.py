@@ -352,7 +352,8 @@ def _continue(args: argparse.Namespace) -> int:
                    f"{partial_folder(output)}/)" if kept else "")
         _say(args, f"{args.file}: periodic orbits of period {continuation.period} along "
              f"{continuation.parameter} from {continuation.low:g} to {continuation.high:g} "
-             f"({continuation.direction}) -> {output}{resumed}")
+             f"({continuation.direction}) -> {output}{resumed}\nexpected: "
+             f"{_continuation_cost(continuation)}")
         try:
             with _running_kernels("orbits", args):
                 dataset = continue_orbits(continuation, None if args.quiet else _BranchProgress(
@@ -368,6 +369,20 @@ def _continue(args: argparse.Namespace) -> int:
     for line in short:
         print(f"impactbeams: warning: {line}", file=sys.stderr)
     return EXIT_INCOMPLETE if short and not args.allow_incomplete else 0
+
+
+def _continuation_cost(continuation: Continuation) -> str:
+    """The expected time of a continuation: per point (calibrated), and at least how many."""
+    from impactbeams.continuation.run import fewest_points, mode_count, state_size
+    from impactbeams.costs import continuation_point_seconds
+
+    per_point, points = continuation_point_seconds(state_size(continuation)), fewest_points(
+        continuation)
+    return (f"about {per_point * 1e3:.2g} ms of CPU per branch point with "
+            f"{modes_per_beam(mode_count(continuation), continuation.params.counterpart)} "
+            f"(measured on the shipped soft stop: stiffer contacts cost more), and at least "
+            f"{points} points at max_step: {per_point * points:.2g} s or more, after the start "
+            f"({continuation.transient_periods} transient periods)")
 
 
 def _continuation_output(args: argparse.Namespace, continuation: Continuation) -> Path:

@@ -26,7 +26,6 @@ import dataclasses
 import hashlib
 import io
 import json
-import math
 import pickle
 import shutil
 import struct
@@ -272,20 +271,6 @@ def reporting_kept_points(output: Path) -> Iterator[None]:
         raise
 
 
-def state_size(continuation: Continuation) -> int:
-    """The section state's length 2 N: positions and velocities of the free coordinates."""
-    from impactbeams.continuation.run import mode_count
-
-    beams = 1 if continuation.params.counterpart == "stop" else 2
-    return 2 * beams * mode_count(continuation)
-
-
-def fewest_points(continuation: Continuation) -> int:
-    """The fewest points the first branch can have: its range in steps of ``max_step``."""
-    _, _, largest = continuation._steps()
-    return math.ceil((continuation.high - continuation.low) / largest) + 1
-
-
 # bytes a branch point takes beyond its monodromy (state, tangent, residual, multipliers,
 # measures, the pickle's own), measured on the shipped example (5 modes): about 2.4 kB
 POINT_OVERHEAD = 2048
@@ -297,5 +282,7 @@ def expected_log_size(continuation: Continuation) -> int:
     Each point keeps its monodromy (8 (2 N)^2 bytes) and its vectors; the first branch has
     at least `fewest_points`; the output holds far less than the log.
     """
+    from impactbeams.continuation.run import fewest_points, state_size
+
     n = state_size(continuation)
     return 2 * fewest_points(continuation) * (8 * n * n + 64 * n + POINT_OVERHEAD)

@@ -249,6 +249,17 @@ def orbits_problem(c: Continuation) -> BeamOrbits:
     return BeamOrbits(params, c.parameter, mode_count(c), c.period, c.method, c.subspace)
 
 
+def state_size(c: Continuation) -> int:
+    """The section state's length 2 N: positions and velocities of the free coordinates."""
+    return 2 * (1 if c.params.counterpart == "stop" else 2) * mode_count(c)
+
+
+def fewest_points(c: Continuation) -> int:
+    """The fewest points the first branch can have: its range in steps of ``max_step``."""
+    _, _, largest = c._steps()
+    return math.ceil((c.high - c.low) / largest) + 1
+
+
 def mode_count(c: Continuation) -> int:
     """The free modes per beam of ``c``: its ``n_modes``, or those that resolve the contact."""
     from impactbeams.contact import recommended_modes
