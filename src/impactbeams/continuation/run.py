@@ -202,6 +202,8 @@ def continue_orbits(continuation: Continuation, progress: Progress | None = None
                       "unit circle, so stability and the Neimark-Sacker labels are decided by "
                       "round-off; continue a damped model (damping_ratio > 0)", RuntimeWarning,
                       stacklevel=2)
+    if c.params.moving_stop():
+        warnings.warn(c.params.moving_stop(), UserWarning, stacklevel=2)
     if output is None:
         return _continued(c, progress)
     output = Path(output)
