@@ -271,8 +271,9 @@ def reporting_kept_points(output: Path) -> Iterator[None]:
         raise
 
 
-# bytes a branch point takes beyond its monodromy (state, tangent, residual, multipliers,
-# measures, the pickle's own), measured on the shipped example (5 modes): about 2.4 kB
+# bytes a branch point takes in the log beyond its monodromy (state, tangent, residual,
+# multipliers, measures, each record's list of the points): 2.5 kB of 3.3 kB on the shipped
+# example (5 modes; docs/benchmarks/continuation_checkpoint.json)
 POINT_OVERHEAD = 2048
 
 
