@@ -12,19 +12,16 @@ basis from step to step, which the checkpoints must carry too.
 import functools
 import json
 import signal
-import subprocess
-import sys
 import warnings
 
 import pytest
 
 import impactbeams as ib
-from impactbeams.cli import EXIT_INTERRUPTED, main
+from impactbeams.cli import main
 from impactbeams.continuation import Continuation, ContinuationInterrupted, continue_orbits
 from impactbeams.continuation.checkpoint import saved_points
 from impactbeams.params import ParameterError
-from test_resume import assert_same_map
-from test_sweep import PROCESS_DEADLINE, _wait_for
+from test_resume import _interrupt, assert_same_map, uninterrupted_runs
 
 FILE = ("n_modes = 3\n[params]\ncontact_stiffness = 1e4\ndamping_ratio = 0.02\n"
         "force_amplitude = 3e-5\nclearance = 1.1e-5\n[continuation]\nparameter = 'omega'\n"
@@ -59,35 +56,8 @@ def _command(files, method, out):
 @pytest.fixture(scope="module")
 def uninterrupted(files, tmp_path_factory):
     """The file of an uninterrupted run of each method (computed once, when first asked)."""
-    folder = tmp_path_factory.mktemp("uninterrupted")
-
-    @functools.cache
-    def run(method):
-        out = folder / f"{method}.nc"
-        assert main(_command(files, method, out)) == 0
-        return out
-
-    return run
-
-
-def _interrupt(command, out, how):
-    """Run ``command`` in a CLI process; send it ``how`` once some points are saved."""
-    log = out.with_name("stderr.txt")
-    with open(log, "w") as stderr:
-        process = subprocess.Popen([sys.executable, "-c", SLOW_CLI, *command], stderr=stderr)
-        try:
-            _wait_for(lambda: saved_points(out) >= SAVED_BEFORE_THE_SIGNAL,
-                      f"{SAVED_BEFORE_THE_SIGNAL} saved points", process, log)
-            process.send_signal(how)
-            process.wait(timeout=PROCESS_DEADLINE)
-        finally:
-            process.kill()  # no-op when it has ended; never leave it running
-            process.wait()
-    expected = EXIT_INTERRUPTED if how == signal.SIGINT else -how
-    assert process.returncode == expected, (
-        f"code {process.returncode}, not {expected}: it ended by itself before the signal?\n"
-        f"{log.read_text()}")
-    return log.read_text()
+    return uninterrupted_runs(tmp_path_factory.mktemp("uninterrupted"),
+                              functools.partial(_command, files))
 
 
 @pytest.mark.parametrize(("how", "method"), [(signal.SIGKILL, "newton"),
@@ -99,9 +69,10 @@ def test_a_stopped_continuation_resumes_to_the_uninterrupted_file(files, uninter
     reference = uninterrupted(method)  # first: compiled here, the CLI process loads the kernels
     out = tmp_path / "out.nc"
     command = _command(files, method, out)
-    stderr = _interrupt(command, out, how)
     partial = tmp_path / "out.nc.partial"
-    kept = saved_points(out)
+    kept = _interrupt(command, partial, how, lambda _: saved_points(out), SLOW_CLI,
+                      SAVED_BEFORE_THE_SIGNAL)
+    stderr = (tmp_path / "stderr.txt").read_text()
     assert not out.exists() and SAVED_BEFORE_THE_SIGNAL <= kept < 77
     if how == signal.SIGINT:  # what was computed, to look at, and the way on
         assert stderr.splitlines()[-2].endswith(
