@@ -146,9 +146,9 @@ class CourseLog:
         with writing(Path(self._stream.name)):
             self._stream.write(_FRAME.pack(len(payload), zlib.crc32(payload)) + payload)
             self._stream.flush()
+        if self.segment and not self._saved:  # the new stream holds a whole record: the
+            self._remove_older()  # older ones can go
         self._saved = counts
-        if self.segment:  # the new stream holds a whole record: the older ones can go
-            self._remove_older()
 
     def _open(self) -> None:
         with writing(self.directory):
