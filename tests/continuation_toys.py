@@ -30,16 +30,18 @@ class Map:
     def residual(self, z, p):
         return self._iterate(z, p)[0] - z
 
-    def evaluate(self, z, p, jacobian=True, measures=True):
-        end, monodromy, sections = self._iterate(z, p)
+    def evaluate(self, z, p, jacobian=True, grazing=True):
+        end, monodromy, _ = self._iterate(z, p)
         jacobian = monodromy - np.eye(len(z)) if jacobian else np.empty((0, 0))
         gap = math.nan if self.gap is None else self.gap(z, p)
         return Evaluation(end - z, jacobian,
                           multipliers_of(jacobian) if jacobian.size else np.empty(0),
-                          grazing=gap,
-                          contacts=int(gap <= 0) if self.gap else 0,
-                          measures={"amplitude": float(np.max(np.abs(z))),
-                                    "section_deflection_1": sections})
+                          grazing=gap if grazing else math.nan,
+                          contacts=int(gap <= 0) if self.gap else 0)
+
+    def measures(self, z, p):
+        return {"amplitude": float(np.max(np.abs(z))),
+                "section_deflection_1": self._iterate(z, p)[2]}
 
     def iterated(self, times):
         return Map(self.step, self.jac, self.gap, self.period * times)

@@ -19,7 +19,7 @@ FLOORS = {
     "kernels": 0,
     "variables": 1, "io": 1, "brent": 1, "blas": 1,
     "params": 2,
-    "modes": 3, "longtime": 3,
+    "modes": 3, "longtime": 3, "structure": 3,
     "contact": 4,
     "model": 5, "compliant": 5,  # old import paths, re-exporting contact
     "drive": 5,

@@ -747,6 +747,14 @@ def _public_calls():
                                 "n_modes = 3.0 is not allowed: must be an integer >= 1"),
         "build_free_phase-n_modes": (lambda: ib.build_free_phase(Params(), True),
                                      "n_modes = True"),
+        "Cantilever-segments": (lambda: ib.Cantilever(()), "segments = () is not allowed: "
+                                "must be one or more Segment"),
+        "Segment-length": (lambda: ib.Segment(0.0, 1.0, 1.0), "Segment.length = 0.0 is not "
+                           "allowed: must be a finite real number > 0 (m)"),
+        "PointMass-mass": (lambda: ib.PointMass(0.1, -1.0), "PointMass.mass = -1.0 is not "
+                           "allowed: must be a finite real number >= 0 (kg)"),
+        "Spring-stiffness": (lambda: ib.Spring(0.1, float("nan")), "Spring.stiffness = nan is "
+                             "not allowed: must be a finite real number >= 0 (N/m)"),
         "LongTime-sampled_periods": (lambda: ib.LongTime(sampled_periods="3"),
                                      "sampled_periods = '3'"),
         "simulate-params": (lambda: simulate({"l1": 0.1}, 1.0), "params = {'l1': 0.1} (dict)"),

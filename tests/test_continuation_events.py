@@ -76,6 +76,47 @@ def test_contact_merge_and_split_labelled(to_262):
     assert splits == pytest.approx([259.1538], abs=1e-4)
 
 
+@pytest.mark.parametrize("offset", [-1, 2])
+def test_interval_value_is_the_gaps_maximum_between_contacts(to_262, offset):
+    """The merge at 257.4636 rad/s is located at the root of the interval value: before it
+    (the point before the event, 3 contacts) the height of the lowest free interval between
+    two contacts, after it (2 contacts) the highest rise of the gap within a contact (< 0),
+    each against the gap sampled every 1e-6 of the segment (brute force: 1e-12 of the
+    clearance), and 0 on both sides of the located merge (1e-9 of the clearance)."""
+    from impactbeams.kernels.layout import CONTACT
+    from impactbeams.orbits import PeriodMap
+
+    merge = int(np.flatnonzero(to_262.bifurcation.values
+                               == BIFURCATIONS.index("contact_merge"))[0])
+
+    def approach(index):
+        point = to_262.isel(branch_point=index)
+        period_map = PeriodMap(PARAMS.replace(omega=float(point.omega)), n_modes=3)
+        return period_map, period_map.approach(period_map(point.section_state.values,
+                                                          measures=False))
+
+    for at in (merge, merge + 1):
+        assert abs(approach(at)[1].interval_gap) <= 1e-9 * PARAMS.clearance
+    period_map, result = approach(merge + offset)
+    trajectory = result.trajectory
+    contact = trajectory.phase == CONTACT
+    starts, ends = trajectory.time, trajectory.segment_end
+    if offset < 0:  # free segments with a contact on both sides
+        segments = [k for k in range(1, contact.size - 1)
+                    if not contact[k] and contact[k - 1] and contact[k + 1]]
+    else:
+        segments = list(np.flatnonzero(contact))
+    heights = []
+    for k in (k for k in segments if ends[k] > starts[k]):
+        times = np.linspace(starts[k], ends[k], 1_000_001)[1:-1]
+        gap = period_map._gap(trajectory, times)[0]
+        inner = 1 + np.flatnonzero((gap[1:-1] > gap[:-2]) & (gap[1:-1] >= gap[2:]))
+        heights += list(gap[inner])
+    expected = min(heights, key=abs)
+    assert (expected > 0) == (offset < 0) and abs(expected) > 1e-4 * PARAMS.clearance
+    assert abs(result.interval_gap - expected) <= 1e-12 * PARAMS.clearance
+
+
 def test_every_label_by_its_own_criterion(to_262):
     """Smooth: a multiplier on the circle at the point (located on its near side), and the
     multipliers outside differ at the next point, of the same contacts; nonsmooth: the

@@ -323,6 +323,42 @@ def test_monodromy_against_a_stop_on_a_shaker(shaker):
     assert np.linalg.norm(carried - reference, 2) < 3e-7 * np.linalg.norm(reference, 2)
 
 
+def test_the_gaps_minimum_is_refined_at_the_root_of_its_rate():
+    """The gap's rate dg/dt, from the sampled q', is its derivative (central differences,
+    to their error ~1e-9 relative), and the free-flight minimum found at its root is the one
+    found by minimising the gap itself (Brent, 60 samples of the run instead of ~10), to 2 eps
+    of the gap's scale."""
+    params = Params.from_mapping({
+        "l1": 0.2, "width1": 0.02, "thickness1": 0.001, "counterpart": "stop",
+        "clearance": 5e-4, "shaker": "beam1", "base_amplitude": 1e-4, "damping_ratio": 0.01,
+        "contact_stiffness": 1e4, "omega": 100.0})  # a shaken beam below its stop's reach
+    period_map = PeriodMap(params, n_modes=8)
+    z = period_map.rest_state()
+    for _ in range(60):
+        z = period_map(z, measures=False).state
+    result = period_map.approach(period_map(z, measures=False))
+    trajectory = result.trajectory
+    assert math.isfinite(result.min_gap)
+    h = 1e-7
+    for t in np.linspace(0.1, 0.9, 9) * period_map.horizon:
+        free = period_map._gap(trajectory, np.array([t - h, t, t + h]))
+        if not free[1].all():
+            continue
+        difference = (free[0][2] - free[0][0]) / (2 * h)
+        rate = period_map._gap_rate(trajectory, t)
+        assert rate == pytest.approx(difference, rel=1e-7, abs=1e-9 * abs(rate) + 1e-12)
+    spacing = period_map.horizon / 512
+    brent = period_map._refined(lambda t: period_map._gap(trajectory, np.array([t]))[0][0],
+                                result.min_gap_time - spacing, result.min_gap_time + spacing,
+                                math.inf, math.nan)
+    assert abs(brent[0] - result.min_gap) <= 2 * np.finfo(float).eps * params.clearance
+    # the flat minimum pins Brent's time to ~sqrt(eps) of the period only; the rate's root
+    # to Brent's root-finding tolerance, 1e-14 s: the rate there is within its slope times that
+    assert brent[1] == pytest.approx(result.min_gap_time, abs=1e-9)
+    slope = abs(period_map._gap_rate(trajectory, result.min_gap_time + spacing)) / spacing
+    assert abs(period_map._gap_rate(trajectory, result.min_gap_time)) <= 2e-14 * slope
+
+
 def test_a_branch_reuses_the_geometry_bit_for_bit():
     """Maps at another Omega, F0 or clearance reuse the geometry's modes and contact phase:
     the same bits as a map built afresh."""
@@ -334,7 +370,7 @@ def test_a_branch_reuses_the_geometry_bit_for_bit():
         params = first.replace(**change)
         reused = PeriodMap(params, n_modes=N_MODES)
         assert reused.packed.dynamics.spring is PeriodMap(first, N_MODES).packed.dynamics.spring
-        module._geometry.cache_clear()
+        module._GEOMETRY_CACHE.clear()
         fresh = PeriodMap(params, n_modes=N_MODES)
         assert fresh.packed.dynamics.spring is not reused.packed.dynamics.spring
         a, b = reused(z, directions="all"), fresh(z, directions="all")

@@ -23,6 +23,10 @@ _LAZY = {
     "Continuation": "impactbeams.continuation",
     "continue_orbits": "impactbeams.continuation",
     "plot_dataset": "impactbeams.plotting",
+    "Cantilever": "impactbeams.structure",
+    "Segment": "impactbeams.structure",
+    "PointMass": "impactbeams.structure",
+    "Spring": "impactbeams.structure",
 }
 
 __all__ = ["ParameterError", "Params", "__version__", *_LAZY]

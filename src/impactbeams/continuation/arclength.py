@@ -87,11 +87,10 @@ class Settings:
 
 @dataclasses.dataclass(frozen=True)
 class Scaling:
-    """x~ = (z * state, p * parameter); ``lowest``: the parameter's smallest allowed value."""
+    """x~ = (z * state, p * parameter)."""
 
     state: np.ndarray
     parameter: float
-    lowest: float = -math.inf
 
     def scaled(self, z: np.ndarray, p: float) -> np.ndarray:
         """x~ of (z, p)."""
@@ -147,10 +146,10 @@ class Follower:
         taken by differences at x~.
         """
         z, p = self.scaling.unscaled(x)
-        evaluation = self.problem.evaluate(z, p, measures=False)
+        evaluation = self.problem.evaluate(z, p, grazing=False)
         if rate is None:
             rate = parameter_derivative(self.problem, z, p, 1.0 / self.scaling.parameter,
-                                        self.scaling.lowest)
+                                        evaluation)
         w = self.scaling.state
         jacobian = np.hstack([w[:, None] * evaluation.jacobian / w[None, :],
                               (w * rate / self.scaling.parameter)[:, None]])
@@ -197,18 +196,26 @@ class Follower:
         return Correction(None, tuple(iterates))
 
     def _measured(self, x: np.ndarray, evaluation: Evaluation) -> Evaluation:
-        """``evaluation`` with the contacts, the grazing value and the measures read at x~.
+        """``evaluation`` with the contacts, the grazing and interval values read at x~.
 
         x~ is the point found, after Newton's last correction: its run costs what a run
-        at the last iterate with measures would, and the grazing value there is the orbit's
-        to round-off, not to the correction (up to 1e-10 of ``state_scale``: 1e-14 m of gap,
-        3e-8 rad/s of a grazing's frequency on the shipped example).
+        at the last iterate would, and the grazing value there is the orbit's to round-off,
+        not to the correction (up to 1e-10 of ``state_scale``: 1e-14 m of gap, 3e-8 rad/s of a
+        grazing's frequency on the shipped example).
         """
         z, p = self.scaling.unscaled(x)
         measured = self.problem.evaluate(z, p, jacobian=False)
         return dataclasses.replace(evaluation, grazing=measured.grazing,
-                                   contacts=measured.contacts, episodes=measured.episodes,
-                                   measures=measured.measures)
+                                   interval=measured.interval, contacts=measured.contacts,
+                                   episodes=measured.episodes)
+
+    def kept(self, point: Point) -> Point:
+        """``point`` with its named measures: it is kept on the branch (the others are not)."""
+        if point.evaluation.measures:
+            return point
+        z, p = self.scaling.unscaled(point.x)
+        return dataclasses.replace(point, evaluation=dataclasses.replace(
+            point.evaluation, measures=self.problem.measures(z, p)))
 
     def grazing_values(self, correction: Correction) -> tuple[float, ...]:
         """The grazing values of a correction's iterates (read only when a step failed)."""

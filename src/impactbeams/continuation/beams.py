@@ -71,39 +71,49 @@ class BeamOrbits:
         return self._maps[p]
 
     def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,
-                 measures: bool = True) -> Evaluation:
+                 grazing: bool = True) -> Evaluation:
         """r(z, p), the contacts, and what is asked.
 
-        With dr/dz and the multipliers if ``jacobian``; with the orbit's grazing value and
-        measures if ``measures``.
+        With dr/dz and the multipliers if ``jacobian``; with the orbit's grazing value if
+        ``grazing``.
         """
         period_map = self.period_map(p)
-        result = self._run(period_map, z, p, measures)
+        result = self._run(period_map, z, p, grazing)
         residual = result.state - z
-        grazing = grazing_value(period_map, result) if measures else math.nan
-        named = orbit_measures(period_map, result) if measures else {}
+        value = grazing_value(period_map, result) if grazing else math.nan
+        interval = result.interval_gap if grazing else math.nan
         if not jacobian:
-            return Evaluation(residual, np.empty((0, 0)), np.empty(0), grazing,
-                              result.contacts, result.episodes, named)
+            return Evaluation(residual, np.empty((0, 0)), np.empty(0), value, result.contacts,
+                              result.episodes, interval=interval)
         if self.method == "newton":
             drz = period_map.jacobian(result, "all") - np.eye(len(z))
             multipliers = multipliers_of(drz)
         else:
             drz, multipliers = self._subspace_jacobian(period_map, result, residual)
-        return Evaluation(residual, drz, multipliers, grazing, result.contacts,
-                          result.episodes, named)
+        return Evaluation(residual, drz, multipliers, value, result.contacts, result.episodes,
+                          interval=interval)
+
+    def measures(self, z: np.ndarray, p: float) -> dict[str, float | np.ndarray]:
+        """The orbit's named measures (`orbit_measures`) at (z, p)."""
+        period_map = self.period_map(p)
+        result = period_map.measured(self._run(period_map, z, p, True))
+        self._last = (p, z.tobytes(), result)
+        return orbit_measures(period_map, result)
 
     def _run(self, period_map: PeriodMap, z: np.ndarray, p: float,
-             measures: bool) -> PeriodMapResult:
+             grazing: bool) -> PeriodMapResult:
         """The map's run from z, the last one again if it is the same (a point's measures).
 
-        Measures asked of the last run are read from it (`PeriodMap.measured`), not run again.
+        What a grazing value needs (`PeriodMap.approach`) is read from the run if asked; of
+        the last run, without running it again.
         """
         key = z.tobytes()
         if self._last is not None and self._last[:2] == (p, key):
-            result = period_map.measured(self._last[2]) if measures else self._last[2]
+            result = self._last[2]
         else:
-            result = period_map(z, measures=measures)
+            result = period_map(z, measures=False)
+        if grazing:
+            result = period_map.approach(result)
         self._last = (p, key, result)
         return result
 

@@ -37,8 +37,10 @@ from impactbeams.continuation.events import (
     CONTACT_SPLIT,
     GRAZING,
     PERIOD_DOUBLING,
+    Located,
     detected,
     grazing_test,
+    interval_test,
     locate,
 )
 from impactbeams.continuation.problem import Problem
@@ -151,7 +153,7 @@ def continue_branches(problem: Problem, z0: np.ndarray, p0: float, span: Span,
                                  f"periodic orbit took more than {settings.max_iterations} "
                                  "iterations from the guess (give a better guess, e.g. more "
                                  "transient periods)")
-        branches = [Branch([first], problem.period, scaling)]
+        branches = [Branch([follower.kept(first)], problem.period, scaling)]
         queue, at = [(follower, 0)], None
     else:
         branches, at = resume.branches, resume.position
@@ -204,12 +206,12 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
             if end is None and taken / 2.0 >= settings.min_step:
                 ds = taken / 2.0  # no orbit at the bound from there (an event between)
                 continue
-            _append(branch, _advance_or_end(follower, current, end or current), progress)
+            _append(follower, branch, _advance_or_end(follower, current, end or current), progress)
             branch.ending = BOUND
             break
         if point is not None and not same_piece(current, point):
             try:
-                _append(branch, _advance(follower, current, point), progress)
+                _append(follower, branch, _advance(follower, current, point), progress)
             except _Jumped:  # the step reached another branch (near a fold at an event)
                 if taken / 2.0 < settings.min_step:
                     branch.ending = MIN_STEP
@@ -234,18 +236,18 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
         if point is None and near is not None:
             # no step from a point at the grazing (the far side's Jacobian is singular
             # there): on from a point a little beyond it, across the grazing surface
-            found = _beyond(follower, near, current, settings.step)
+            found = _reached_beyond(follower, near, current)
             near = None
             if found is not None:
-                _append(branch, _advance_or_end(follower, current, found[0]), progress)
-                current, ds = found
+                (current, ds), points = found
+                _append(follower, branch, points, progress)
                 steps.append(current)
                 continue
         if point is None:
             branch.ending = MIN_STEP
             break
         try:
-            _append(branch, _between(follower, current, point), progress)
+            _append(follower, branch, _between(follower, current, point), progress)
         except _Jumped:  # a piece of its search met a change it could not locate: shorter
             if taken / 2.0 < settings.min_step:
                 branch.ending = MIN_STEP
@@ -317,18 +319,21 @@ def _repeats(branch: Branch, point: Point) -> bool:
     return last is not None and float(np.linalg.norm(last.x - point.x)) <= REPEATED
 
 
-def _append(branch: Branch, points: list[Point], progress: Progress | None) -> None:
-    """Append ``points``; one that is the branch's last point relabelled replaces it.
+def _append(follower: Follower, branch: Branch, points: list[Point],
+            progress: Progress | None) -> None:
+    """Append ``points`` with their measures; one that is the last point relabelled replaces it.
 
     An event located again (the same label within ``REPEATED`` of the branch's last one of
     that kind: found from both sides of a step searched twice) is not repeated.
     """
     for point in points:
         if point.x is branch.points[-1].x:
-            branch.points[-1] = point
+            point = branch.points[-1] = dataclasses.replace(
+                point, evaluation=branch.points[-1].evaluation)
         elif point.label and _repeats(branch, point):
             continue
         else:
+            point = follower.kept(point)
             branch.points.append(point)
         if progress is not None:
             progress(branch, point)
@@ -337,9 +342,11 @@ def _append(branch: Branch, points: list[Point], progress: Progress | None) -> N
 # a point beyond an event is a direction to orient the far side by from this many Newton
 # tolerances on (closer, the direction is Newton's error)
 FAR = 100
-# a step across which a smooth bifurcation is detected is searched in this many pieces
-SAMPLES = 16
-SAMPLINGS = 3  # ... and a piece where one is detected again, as many times in all
+# a step across which a smooth bifurcation is detected is searched in SAMPLES[0] pieces, a
+# piece where one is detected again in SAMPLES[1], and so on: to 1 / 4096 of the step. The
+# first sampling finds crossings that hide each other at the step's ends; within a piece, the
+# detected crossing is then narrowed by fewer samples a level
+SAMPLES = (16, 16, 4, 4)
 # bisections of a step whose signature changed without its test function changing sign (two
 # crossings, or a multiplier that left the kind in between, e.g. a complex pair turned real)
 MAX_SUBDIVISIONS = 6
@@ -360,11 +367,11 @@ def _between(follower: Follower, a: Point, b: Point,
         return follower.correct(origin + s * normal, normal, normal).point
 
     found = detected(a, b)
-    if found and depth < SAMPLINGS:
+    if found and depth < len(SAMPLES):
         # crossings close together (a pair that leaves and returns within the step) show at
         # the ends as one, or none: the step is sampled, and each piece searched on its own
-        width = float(normal @ (b.x - origin))
-        samples = [point_at(width * k / SAMPLES) for k in range(1, SAMPLES)]
+        width, pieces = float(normal @ (b.x - origin)), SAMPLES[depth]
+        samples = [point_at(width * k / pieces) for k in range(1, pieces)]
         ends = [a, *(point for point in samples if point is not None), b]
         found_points = [point for start, end in zip(ends[:-1], ends[1:], strict=True)
                         for point in _advance(follower, start, end, depth + 1)]
@@ -420,10 +427,7 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
     # else across the chord from a to b, which reach b whatever the kink at the event
     chord = (b.x - a.x) / np.linalg.norm(b.x - a.x)
     for normal in (a.tangent, chord):
-        _, before, past, _ = locate(
-            lambda s, n=normal: follower.correct(a.x + s * n, n, n).point, a,
-            float(normal @ (b.x - a.x)), b, test, follower.settings.locate_tolerance,
-            _gap_tolerance(follower, a) if test is grazing_test else math.inf)
+        _, before, past, _ = _located_change(follower, a, b, normal, test)
         if past is not None and not (before is a and past is b):
             break
     if past is None or depth >= MAX_SUBDIVISIONS or (before is a and past is b):
@@ -443,9 +447,29 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
     return [*near, dataclasses.replace(before, label=label), past, *rest]
 
 
+def _located_change(follower: Follower, a: Point, b: Point, normal: np.ndarray,
+                    test: Callable[[Point], float]) -> Located:
+    """The change of the contacts from ``a`` to ``b`` located on planes along ``normal``.
+
+    By ``test``'s root; where the grazing value jumps instead (its sign changed without a
+    contact at zero depth), by bisection on the contacts.
+    """
+    def point_at(s: float) -> Point | None:
+        return follower.correct(a.x + s * normal, normal, normal).point
+
+    width, tolerance = float(normal @ (b.x - a.x)), follower.settings.locate_tolerance
+    if test in (grazing_test, interval_test):
+        located = locate(point_at, a, width, b, test, tolerance,
+                         tolerance * abs(test(a)), may_jump=True)
+        if located.root:
+            return located
+        test = _contacts_of(a)
+    return locate(point_at, a, width, b, test, tolerance)
+
+
 def _gap_tolerance(follower: Follower, start: Point) -> float:
     """How small a located grazing's gap must be (m): the location tolerance of its start's."""
-    return follower.settings.locate_tolerance * abs(start.evaluation.grazing)
+    return follower.settings.locate_tolerance * abs(grazing_test(start))
 
 
 def _advance_or_end(follower: Follower, a: Point, b: Point) -> list[Point]:
@@ -472,7 +496,8 @@ def _nonsmooth(a: Point, b: Point, micro_contacts: str,
     """The kind of the contact-sequence change between ``a`` and ``b`` and its test function.
 
     A grazing when the grazing value changes sign (a contact at zero depth), located at its
-    root; else a merge or split, located by bisection on the contacts per orbit. With
+    root; else a merge or split, located at the root of the interval value where it changes
+    sign (the gap's maximum between contacts), else by bisection on the contacts. With
     ``micro_contacts = "summarise"`` a change that keeps the episodes per orbit is `CHATTER`,
     not located: only an episode's appearance or disappearance is.
     """
@@ -480,12 +505,19 @@ def _nonsmooth(a: Point, b: Point, micro_contacts: str,
         return CHATTER, grazing_test
     if crosses(a.evaluation.grazing, (b.evaluation.grazing,)):
         return GRAZING, grazing_test
+    if crosses(a.evaluation.interval, (b.evaluation.interval,)):
+        return _merge_or_split(a, b), interval_test
+    return _merge_or_split(a, b), _contacts_of(a)
+
+
+def _contacts_of(a: Point) -> Callable[[Point], float]:
+    """A test whose sign is whether a point has ``a``'s contacts per orbit (+1) or not (-1)."""
     contacts = a.evaluation.contacts
 
     def same_contacts(point: Point) -> float:
         return 1.0 if point.evaluation.contacts == contacts else -1.0
 
-    return _merge_or_split(a, b), same_contacts
+    return same_contacts
 
 
 # a located change of the contacts is a grazing when the grazing value at the event is this
@@ -524,10 +556,10 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     _, grazing, past, root = locate(lambda s: follower.at_arclength(current, s).point,
                                     current, taken, None, grazing_test,
                                     follower.settings.locate_tolerance,
-                                    _gap_tolerance(follower, current))
+                                    _gap_tolerance(follower, current), may_jump=True)
     if past is not None:  # the branch is reachable across it on these planes after all
         try:
-            _append(branch, _advance(follower, current, past), progress)
+            _append(follower, branch, _advance(follower, current, past), progress)
         except _Jumped:
             return None
         # forward is away from where the branch came from (near a fold past the grazing, the
@@ -541,10 +573,10 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     if grazing is current:  # within the tolerance of the grazing already
         branch.points[-1] = dataclasses.replace(current, label=GRAZING)
     else:
-        _append(branch, [*_advance_or_end(follower, current, grazing)[:-1],
+        _append(follower, branch, [*_advance_or_end(follower, current, grazing)[:-1],
                          dataclasses.replace(grazing, label=GRAZING)], progress)
     # no smooth bifurcation is sought across the grazing: the multipliers jump there
-    _append(branch, [found[0]], progress)
+    _append(follower, branch, [found[0]], progress)
     return found
 
 
@@ -570,6 +602,29 @@ def _beyond(follower: Follower, current: Point, at: Point, taken: float,
     return None
 
 
+# scales of the distance beyond a grazing tried by `_reached_beyond`, in the first step's
+NEARER = (1.0, 1.0 / 16.0, 1.0 / 256.0)
+
+
+def _reached_beyond(follower: Follower, near: Point, at: Point,
+                    ) -> tuple[tuple[Point, float], list[Point]] | None:
+    """`_beyond` the grazing ``at`` (reached from ``near``), and the points from ``at`` to it.
+
+    A point beyond that the way from ``at`` does not reach on the branch (`_Jumped`: it lies
+    past a further change of the contacts, on the next piece but one) is given up for one
+    nearer. None if none is found.
+    """
+    for scale in NEARER:
+        found = _beyond(follower, near, at, scale * follower.settings.step)
+        if found is None:
+            continue
+        try:
+            return found, _advance(follower, at, found[0])
+        except _Jumped:
+            continue
+    return None
+
+
 def _grazes(a: Point, b: Point) -> bool:
     return crosses(a.evaluation.grazing, (b.evaluation.grazing,))
 
@@ -589,7 +644,7 @@ def _short_of_grazing(follower: Follower, branch: Branch, current: Point, last: 
     """
     if last is current:
         return None
-    _append(branch, _advance_or_end(follower, current, last), progress)
+    _append(follower, branch, _advance_or_end(follower, current, last), progress)
     return last, max(taken / 2.0, follower.settings.min_step)
 
 
@@ -606,7 +661,7 @@ def _end_at_bound(follower: Follower, branch: Branch, steps: list[Point], low: f
     if inside:
         end = _at_bound(follower, inside[-1], last, low if last.x[-1] < low else high)
         if end is not None:
-            _append(branch, [end], progress)
+            _append(follower, branch, [end], progress)
     branch.ending = BOUND
 
 
@@ -632,7 +687,8 @@ def _switched(follower: Follower, branches: list[Branch], index: int, at: int,
                             direction).point
     if start is None:
         return
-    branches.append(Branch([dataclasses.replace(start, label="")], 2 * branches[index].period,
+    branches.append(Branch([doubled.kept(dataclasses.replace(start, label=""))],
+                           2 * branches[index].period,
                            scaling, origin=(index, at)))
     queue.append((doubled, len(branches) - 1))
 

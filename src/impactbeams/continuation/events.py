@@ -162,6 +162,11 @@ def grazing_test(point: Point) -> float:
     return point.evaluation.grazing
 
 
+def interval_test(point: Point) -> float:
+    """The gap's maximum between contacts nearest 0 (its sign changes at a merge or split)."""
+    return point.evaluation.interval
+
+
 PointAt = Callable[[float], "Point | None"]
 # an unbracketed end (no corrected point beyond) is a root if the test's value there is within
 # this many times the secant's slope from the start times the bracket's width (a root in it)
@@ -183,7 +188,7 @@ class Located(NamedTuple):
 
 def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
            test: Callable[[Point], float], tolerance: float,
-           value_tolerance: float = math.inf) -> Located:
+           value_tolerance: float = math.inf, may_jump: bool = False) -> Located:
     """The points on both sides of the root of ``test`` between ``start`` and ``end``.
 
     ``start`` is at s = 0, ``end`` at s = ``s_end`` (None if the corrector failed there: it
@@ -197,13 +202,21 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
     predicts over the bracket's width (``ROOT_MARGIN``): at a fold's reach it is not.
     ``value_tolerance``: the bracket also needs the test's value at its near end this small
     (a grazing's gap: where the branch crosses the grazing surface slantwise, the parameter
-    pinned leaves the gap less well known).
+    pinned leaves the gap less well known). ``may_jump``: the test may jump (a grazing value,
+    where a free-flight minimum of the gap vanishes): a bracket whose ends' values stay far
+    from 0 as it narrows is then no root either, and the search ends there.
     """
     low: Bracket = (0.0, test(start), start)
     high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
     side = 0  # which end kept its place last (Illinois halves its value the second time)
     for _ in range(MAX_LOCATING):
         if _known(low, high, tolerance) and abs(test(low[2])) <= value_tolerance:
+            break
+        if low[0] > 0.0 and (may_jump or high[2] is None) and not _pinned(low, high, start,
+                                                                          test):
+            # the test is too far from 0 at both ends for a root within the bracket: it jumps
+            # there (e.g. a free-flight minimum of the gap vanishes), or the corrector fails
+            # beyond it (a fold's reach); narrowing the bracket cannot change that
             break
         s = _next_arclength(low, high)
         point = point_at(s)
@@ -218,17 +231,26 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
             if side == 1:
                 low = (low[0], low[1] / 2.0, low[2])
             side = 1
-    return Located(low[0], low[2], high[2], high[2] is not None or _pinned(low, high, start,
-                                                                          test))
+    return Located(low[0], low[2], high[2],
+                   _pinned(low, high, start, test) if may_jump or high[2] is None else True)
 
 
 def _pinned(low: Bracket, high: Bracket, start: Point, test: Callable[[Point], float]) -> bool:
-    """Whether the secant from ``start`` to ``low`` puts the root within the bracket."""
-    (s0, f0, _), s1 = low, high[0]
-    if s0 <= 0.0 or not math.isfinite(f0):
+    """Whether the test's value at an end of the bracket is small enough for a root in it.
+
+    At least one end's value must be within ``ROOT_MARGIN`` times the bracket's width times
+    the secant's slope from ``start`` to ``low`` (an end without a value, where the corrector
+    failed, does not count): a continuous test with a simple root satisfies this as the
+    bracket narrows, a test that jumps does not.
+    """
+    (s0, f0, _), (s1, f1, _) = low, high
+    if s0 <= 0.0:  # no step from the start: a root anywhere up to a valued end
+        return math.isfinite(f1)
+    if not math.isfinite(f0):
         return False
     slope = abs(test(start) - f0) / s0
-    return abs(f0) <= ROOT_MARGIN * slope * (s1 - s0)
+    ends = [abs(f0)] + ([abs(f1)] if math.isfinite(f1) else [])
+    return min(ends) <= ROOT_MARGIN * slope * (s1 - s0)
 
 
 Bracket = tuple[float, float, Point | None]
@@ -246,11 +268,14 @@ def _known(low: Bracket, high: Bracket, tolerance: float) -> bool:
 
 
 def _next_arclength(low: Bracket, high: Bracket) -> float:
-    """Regula falsi between the ends, bisection when a value is missing or it leaves them."""
+    """Regula falsi between the ends (off them by a margin), bisection when a value is missing."""
     (s0, f0, _), (s1, f1, _) = low, high
     middle = 0.5 * (s0 + s1)
     if not (math.isfinite(f0) and math.isfinite(f1)) or f0 == f1:
         return middle
     s = s0 - f0 * (s1 - s0) / (f1 - f0)
+    # kept off the ends by a margin, not sent to the middle: a root close to an end (where
+    # the other end's value is large, e.g. at a grazing reached by a step much longer than
+    # the gap's curvature allows) is then bracketed a thousand times closer in one solve
     margin = 1e-3 * (s1 - s0)
-    return s if s0 + margin < s < s1 - margin else middle
+    return min(max(s, s0 + margin), s1 - margin)

@@ -15,11 +15,14 @@ from typing import Protocol
 
 import numpy as np
 
-# Central differences in the parameter: the truncation error ~ h^2 |r'''| and the round-off
-# ~ eps |r| / h balance at h ~ eps^(1/3) times the parameter's scale, where both are ~ eps^(2/3)
-# ~ 4e-11 relative. dr/dp only steers the corrector and the tangent: a converged point solves
-# r = 0 to the tolerance whatever the error of dr/dp.
-PARAMETER_STEP = np.finfo(float).eps ** (1.0 / 3.0)
+# Forward differences in the parameter from the evaluation at p, which the corrector has
+# anyway: the truncation error ~ h |r''| and the round-off ~ eps |r| / h balance at h ~
+# eps^(1/2) times the parameter's scale, where both are ~ eps^(1/2) ~ 1.5e-8 relative. dr/dp
+# only steers the corrector and the tangent: a converged point solves r = 0 to the tolerance
+# whatever the error of dr/dp, and a fold, where the tangent's parameter part vanishes, moves
+# by the square of its error in the parameter (central differences, eps^(2/3), cost a second
+# run per iterate: 40 % of a stiff continuation).
+PARAMETER_STEP = np.finfo(float).eps ** 0.5
 # ... but a difference across a change of the orbit's contacts (a grazing within ~1e-5 of the
 # parameter) measures the jump of the map's slope, not its slope, and Newton then converges
 # slowly however small the step: the step narrows by NARROWING, at most NARROWINGS times
@@ -34,9 +37,12 @@ class Evaluation:
     ``multipliers``: the Floquet multipliers (eigenvalues of dr/dz + I when the problem does
     not give them, e.g. from a Newton-Picard subspace), leading first. ``grazing``: a number
     whose sign change along the branch is a grazing (the orbit's smallest free-flight gap), NaN
-    if the problem has none. ``contacts``, ``episodes``: contacts and impact episodes per orbit
+    if the problem has none. ``interval``: a number whose sign change is a merge or split of
+    two contacts (the gap's local maximum between contacts nearest 0), NaN if none or not
+    known. ``contacts``, ``episodes``: contacts and impact episodes per orbit
     (their change between two points is a nonsmooth event). ``measures``: named amplitudes
-    (a number, or one per section of the orbit's period: an array).
+    (a number, or one per section of the orbit's period: an array), empty until the point is
+    kept on a branch (`Problem.measures`).
     """
 
     residual: np.ndarray
@@ -46,6 +52,7 @@ class Evaluation:
     contacts: int = 0
     episodes: int = 0
     measures: Mapping[str, float | np.ndarray] = dataclasses.field(default_factory=dict)
+    interval: float = math.nan
 
 
 class Problem(Protocol):
@@ -54,12 +61,15 @@ class Problem(Protocol):
     period: int  # forcing periods per orbit (1 for a plain fixed point)
 
     def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,
-                 measures: bool = True) -> Evaluation:
-        """r(z, p) and the contacts.
+                 grazing: bool = True) -> Evaluation:
+        """r(z, p) and the contacts (``measures`` left empty).
 
         With dr/dz and the multipliers if ``jacobian`` (else both are empty); with the grazing
-        value if ``measures`` (else NaN) and the named measures if both.
+        value (and the interval value, if the problem has one) if ``grazing`` (else NaN).
         """
+
+    def measures(self, z: np.ndarray, p: float) -> Mapping[str, float | np.ndarray]:
+        """The named measures at (z, p): read only for the points a branch keeps."""
 
     def iterated(self, times: int) -> Problem:
         """The same family for ``times`` times the period (P applied ``times`` times)."""
@@ -72,20 +82,17 @@ def multipliers_of(jacobian: np.ndarray) -> np.ndarray:
 
 
 def parameter_derivative(problem: Problem, z: np.ndarray, p: float, scale: float,
-                         lowest: float = -math.inf) -> np.ndarray:
-    """dr/dp by central differences with the step ``PARAMETER_STEP * max(|p|, scale)``.
+                         at: Evaluation) -> np.ndarray:
+    """dr/dp by a forward difference from ``at``, the evaluation at (z, p).
 
-    Within a step of ``lowest`` (the parameter's smallest allowed value, e.g. 0 for a force
-    amplitude) the difference is taken forward, to error ~ sqrt(eps). Where the two ends have
-    other contacts per orbit the step is narrowed (``NARROWING``).
+    The step is ``PARAMETER_STEP * max(|p|, scale)`` upward (never below a parameter's
+    smallest allowed value, e.g. 0 for a force amplitude). Where the two ends have other
+    contacts per orbit the step is narrowed (``NARROWING``).
     """
     h = PARAMETER_STEP * max(abs(p), scale)
     for _ in range(NARROWINGS + 1):
-        ahead = problem.evaluate(z, p + h, jacobian=False, measures=False)
-        behind = problem.evaluate(z, max(p - h, p if p - h < lowest else -math.inf),
-                                  jacobian=False, measures=False)
-        if ahead.contacts == behind.contacts:
+        other = problem.evaluate(z, p + h, jacobian=False, grazing=False)
+        if other.contacts == at.contacts:
             break
         h *= NARROWING  # the difference straddles a change of the contacts: nearer
-    width = h if p - h < lowest else 2.0 * h
-    return (ahead.residual - behind.residual) / width
+    return (other.residual - at.residual) / h

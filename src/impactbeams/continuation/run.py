@@ -42,7 +42,6 @@ from impactbeams.orbits.period_map import check_law
 from impactbeams.orbits.shooting import DEFAULT_SUBSPACE, GUARD, METHODS
 from impactbeams.params import (
     MAX_MODES,
-    RANGES,
     ParameterError,
     Params,
     check_range,
@@ -295,8 +294,7 @@ def _scaling(problem: BeamOrbits, c: Continuation, state: np.ndarray) -> Scaling
     scale = c.state_scale if c.state_scale is not None else (
         STATE_SCALE_CLEARANCES * c.params.clearance)
     per_metre = size / tip if tip > 0 and size > 0 else 1.0
-    lowest = 0.0 if RANGES[c.parameter].sign else -math.inf
-    return Scaling(weights / (per_metre * scale), 1.0 / (c.high - c.low), lowest)
+    return Scaling(weights / (per_metre * scale), 1.0 / (c.high - c.low))
 
 
 def _attributes(c: Continuation, problem: BeamOrbits) -> dict[str, object]:

@@ -21,7 +21,7 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from scipy.optimize import minimize_scalar
+from scipy.optimize import brentq, minimize_scalar
 
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact.spring import required_modes
@@ -51,7 +51,7 @@ from impactbeams.params import (
     require_type,
 )
 from impactbeams.trajectory.episodes import default_separation, episode_labels
-from impactbeams.trajectory.impacts import impact_table
+from impactbeams.trajectory.impacts import impact_table, peak_forces
 from impactbeams.trajectory.phases import Trajectory, run, sample
 from impactbeams.trajectory.start import checked_state, final_state, phase_state
 
@@ -61,6 +61,9 @@ from impactbeams.trajectory.start import checked_state, final_state, phase_state
 # be missed.
 SAMPLES_PER_PERIOD = 512
 MAX_EVENTS = 200_000  # phases per map evaluation
+# samples of the gap per segment for its maxima between contacts (a contact's rise, a free
+# interval's height): each refined at the root of the gap's rate
+INTERVAL_SAMPLES = 16
 
 
 @dataclasses.dataclass(frozen=True)
@@ -100,6 +103,7 @@ class PeriodMapResult:
     peak_forces: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
     impact_velocities: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
     max_relative_tip1: float = math.nan
+    interval_gap: float = math.nan
 
 
 class PeriodMap:
@@ -171,16 +175,69 @@ class PeriodMap:
         """
         if math.isfinite(result.max_tip1):
             return result
+        result = self.approach(result)
         impacts = impact_table(self.packed, result.trajectory)
-        peaks = impacts["impact_peak_force"]
-        min_gap, min_gap_time, max_tip1, max_tip2, relative = self._extrema(result.trajectory)
+        max_tip1, max_tip2, relative = self._tip_maxima(result.trajectory)
         return dataclasses.replace(
-            result, min_gap=min_gap, min_gap_time=min_gap_time,
-            peak_force=float(np.max(peaks, initial=0.0)),
-            impulse=float(np.sum(impacts["impact_impulse"])), max_tip1=max_tip1,
-            max_tip2=max_tip2, peak_forces=peaks,
+            result, impulse=float(np.sum(impacts["impact_impulse"])), max_tip1=max_tip1,
+            max_tip2=max_tip2,
             impact_velocities=impacts["impact_velocity"][self._onsets(result.trajectory)],
             max_relative_tip1=relative)
+
+    def approach(self, result: PeriodMapResult) -> PeriodMapResult:
+        """``result`` with what a grazing is read from: the gap's minimum and the peak forces.
+
+        ``min_gap``, ``min_gap_time``, ``peak_force`` and ``peak_forces`` only (the other
+        measures stay NaN): a continuation reads them at every corrected point, and its
+        measures only at the points it keeps.
+        """
+        if math.isfinite(result.peak_force):
+            return result
+        peaks = peak_forces(self.packed, result.trajectory)
+        times = self._grid()
+        phase, q, _ = sample(self.packed, result.trajectory, times)
+        min_gap, min_gap_time = self._min_gap(result.trajectory, times, self._gap_of(times, q),
+                                              phase == FREE)
+        return dataclasses.replace(result, min_gap=min_gap, min_gap_time=min_gap_time,
+                                   peak_force=float(np.max(peaks, initial=0.0)),
+                                   peak_forces=peaks,
+                                   interval_gap=self._interval_gap(result.trajectory))
+
+    def _interval_gap(self, trajectory: Trajectory) -> float:
+        """The gap's local maximum nearest 0 between contacts (m); NaN if there is none.
+
+        The height of a free interval between two contacts (> 0; where it reaches 0 the two
+        contacts merge) or the highest interior rise of the gap within a contact (< 0; where
+        it reaches 0 the contact splits in two). Within a contact the gap is read from the
+        free coordinates, which leave out the contact force's static part: it is the
+        overlap times -(1 + that part's compliance times the stiffness), of the same sign and
+        zero where the overlap is. Each segment is sampled ``INTERVAL_SAMPLES`` times and the
+        value nearest 0 refined at the root of the gap's rate.
+        """
+        phase, starts, ends = trajectory.phase, trajectory.time, trajectory.segment_end
+        contact = phase == CONTACT
+        if not contact.any():
+            return math.nan
+        lasting = ends > starts  # (a contact of zero duration has no interior)
+        times = np.linspace(starts, ends, INTERVAL_SAMPLES, axis=1)
+        gap = self._gap_of(times.ravel(), sample(self.packed, trajectory, times.ravel())[1])
+        gap = gap.reshape(times.shape)
+        candidates = [(gap[k, i], k, i) for k in np.flatnonzero(contact & lasting)
+                      for i in _interior_maxima(gap[k])]
+        for interval in _between_contacts(contact):
+            k = max(interval, key=lambda segment: np.max(gap[segment]))
+            i = int(np.argmax(gap[k]))
+            if 0 < i < INTERVAL_SAMPLES - 1:
+                candidates.append((gap[k, i], k, i))
+        if not candidates:
+            return math.nan
+        value, k, i = min(candidates, key=lambda candidate: abs(candidate[0]))
+        lo, hi = times[k, i - 1], times[k, i + 1]
+        rate = functools.partial(self._gap_rate, trajectory)
+        if rate(lo) > 0.0 > rate(hi):
+            t = brentq(rate, lo, hi, xtol=1e-14 * max(hi, 1.0))
+            value = max(value, float(self._gap(trajectory, np.array([t]))[0][0]))
+        return float(value)
 
     @staticmethod
     def _onsets(trajectory: Trajectory) -> np.ndarray:
@@ -248,27 +305,20 @@ class PeriodMap:
         labels = episode_labels(trajectory.time[k], release, default_separation(self.packed))
         return int(labels[-1]) + 1 if labels.size else 0
 
-    def _extrema(self, trajectory: Trajectory) -> tuple[float, float, float, float, float]:
-        """The gap's smallest interior minimum and its time, max |y1|, max |y2|, max |y1 - u_b1|.
-
-        The gap and the tips come from one sampling of the run on the grid (``_grid``).
-        """
+    def _tip_maxima(self, trajectory: Trajectory) -> tuple[float, float, float]:
+        """The largest |y1|, |y2| and |y1 - u_b1| (m): the run sampled on the grid, then refined."""
         times = self._grid()
-        phase, q, v = sample(self.packed, trajectory, times)
-        gap = self._gap_of(times, q)
-        tips = self._tips_of(phase, times, q, v)
-        min_gap, min_gap_time = self._min_gap(trajectory, times, gap, phase == FREE)
+        tips = self._tips(trajectory, times)
 
         def size(column: int, clamp: bool) -> Callable[[np.ndarray], np.ndarray]:
             """|tip ``column``| at times (relative to beam 1's clamp if ``clamp``)."""
             return lambda t: np.abs(self._tips(trajectory, t)[:, column]
                                     - (self._clamp1(t) if clamp else 0.0))
 
-        max_tip1, max_tip2, relative = (
+        return tuple(
             self._largest(times, np.abs(tips[:, column] - (self._clamp1(times) if clamp
                                                            else 0.0)), size(column, clamp))
             for column, clamp in ((TIP_Y1, False), (TIP_Y2, False), (TIP_Y1, True)))
-        return min_gap, min_gap_time, max_tip1, max_tip2, relative
 
     def _clamp1(self, times: np.ndarray) -> np.ndarray:
         """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0."""
@@ -293,13 +343,34 @@ class PeriodMap:
 
     def _min_gap(self, trajectory: Trajectory, times: np.ndarray, gap: np.ndarray,
                  free: np.ndarray) -> tuple[float, float]:
+        """The smallest interior minimum of the sampled ``gap`` in free flight, and its time.
+
+        Refined at the root of the gap's rate between the sample's neighbours (Brent: a
+        simple root, found to round-off in some 10 samples of the run), or by minimising
+        the gap where the rate does not change sign there.
+        """
         interior = free[1:-1] & free[:-2] & free[2:] & (gap[1:-1] <= gap[:-2]) & (
             gap[1:-1] <= gap[2:])
         if not np.any(interior):
             return math.nan, math.nan
         i = 1 + int(np.argmin(np.where(interior, gap[1:-1], np.inf)))
+        lo, hi = times[i - 1], times[i + 1]
+        rate = functools.partial(self._gap_rate, trajectory)
+        if rate(lo) < 0.0 < rate(hi):
+            t = brentq(rate, lo, hi, xtol=1e-14 * max(hi, 1.0))
+            value = float(self._gap(trajectory, np.array([t]))[0][0])
+            return (value, t) if value < gap[i] else (float(gap[i]), float(times[i]))
         return self._refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
-                             times[i - 1], times[i + 1], gap[i], times[i])
+                             lo, hi, gap[i], times[i])
+
+    def _gap_rate(self, trajectory: Trajectory, t: float) -> float:
+        """dg/dt (m/s) at ``t`` in a free phase, whose coordinates' rates are the sampled q'."""
+        _, _, v = sample(self.packed, trajectory, np.array([t]))
+        scalars = self.packed.phase_scalars[FREE]
+        omega = self.params.omega
+        return float(omega * (scalars[SCALAR_SINE] * math.cos(omega * t)
+                              - scalars[SCALAR_COSINE] * math.sin(omega * t))
+                     + v[0] @ self.packed.tables[FREE, ROW_EVENT])
 
     def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
         """The tips' motion (``kernels.layout`` TIP_* columns) of ``result``'s run at ``times``."""
@@ -344,16 +415,30 @@ class PeriodMap:
 # the cell's parameters (`packing.cell_rows`) that the geometry's arrays do not depend on; the
 # damping ratio is one too, but the spring law's contact modes are solved for it
 _CELL_ONLY = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "base_amplitude")
+GEOMETRIES = 4  # geometries whose arrays are kept
 
 
 def geometry_arrays(params: Params, n_modes: int) -> Dynamics:
     """`packing.dynamics_arrays` of ``params``, reused while only the cell's parameters change.
 
     Along a branch in Omega, F0, U0 or the clearance the modes and the spring law's contact
-    phase (an eigenproblem, the larger part of building a map at 32 modes) stay the same.
+    phase (an eigenproblem, the larger part of building a map at 32 modes) stay the same. The
+    arrays are built with the cell's parameters at their defaults and found again by the
+    other parameters' values (a continuation asks for a map at every corrector iterate: a
+    `Params` copy per look-up cost more than the run at 16 modes).
     """
-    dynamics = _geometry(params.replace(**_cell_defaults()), n_modes)
+    key = (n_modes, *(value for name, value in params.as_dict().items()
+                      if name not in _CELL_ONLY))
+    dynamics = _GEOMETRY_CACHE.pop(key, None)
+    if dynamics is None:
+        dynamics = dynamics_arrays(params.replace(**_cell_defaults()), n_modes)
+        if len(_GEOMETRY_CACHE) >= GEOMETRIES:
+            _GEOMETRY_CACHE.pop(next(iter(_GEOMETRY_CACHE)))
+    _GEOMETRY_CACHE[key] = dynamics  # last used last
     return dataclasses.replace(dynamics, params=params)
+
+
+_GEOMETRY_CACHE: dict[tuple, Dynamics] = {}
 
 
 @functools.cache
@@ -363,9 +448,27 @@ def _cell_defaults() -> dict[str, float]:
     return {name: getattr(defaults, name) for name in _CELL_ONLY}
 
 
-@functools.lru_cache(maxsize=4)
-def _geometry(params: Params, n_modes: int) -> Dynamics:
-    return dynamics_arrays(params, n_modes)
+def _interior_maxima(values: np.ndarray) -> np.ndarray:
+    """Indices of the samples above the one before and not below the one after (not the ends)."""
+    middle = values[1:-1]
+    return 1 + np.flatnonzero((middle > values[:-2]) & (middle >= values[2:]))
+
+
+def _between_contacts(contact: np.ndarray) -> list[list[int]]:
+    """The free intervals with a contact on both sides, as lists of their segments.
+
+    The period's ends joined: a free interval across them is its last and first segments.
+    """
+    n = contact.size
+    found = []
+    for k in np.flatnonzero(~contact):
+        if n > 1 and k == n - 1 and not contact[0]:
+            continue  # the period's first segment goes on from here: listed with it
+        interval = [int(k)] + ([n - 1] if k == 0 and n > 1 and not contact[n - 1] else [])
+        before, after = (interval[-1] - 1) % n, (k + 1) % n
+        if contact[before] and contact[after]:
+            found.append(interval)
+    return found
 
 
 def check_law(params: Params) -> None:

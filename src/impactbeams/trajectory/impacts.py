@@ -79,6 +79,24 @@ def _impulses(packed: Packed, trajectory: Trajectory, k: np.ndarray) -> np.ndarr
     return quasi_static + modal @ shear
 
 
+def peak_forces(packed: Packed, trajectory: Trajectory,
+                report: Callable[[int], None] | None = None) -> np.ndarray:
+    """The peak contact force (N) of each contact phase of ``trajectory``, in order.
+
+    ``report`` as in `impact_table`.
+    """
+    k = np.flatnonzero(trajectory.phase == CONTACT)
+    peaks = np.empty(k.size)
+    segment_end = trajectory.segment_end
+    for i, j in enumerate(k):
+        peaks[i] = peak_force(packed.tables[CONTACT], packed.forces[CONTACT],
+                              packed.phase_scalars[CONTACT], packed.settings, trajectory.q[j],
+                              trajectory.v[j], trajectory.time[j], segment_end[j])[0]
+        if report is not None and ((i + 1) % _REPORT_EVERY == 0 or i + 1 == k.size):
+            report(i % _REPORT_EVERY + 1)
+    return peaks
+
+
 def impact_table(packed: Packed, trajectory: Trajectory,
                  report: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
     """Per-impact quantities: one entry per contact phase (zero-duration ones included).
@@ -95,14 +113,7 @@ def impact_table(packed: Packed, trajectory: Trajectory,
                                      np.minimum(k + 1, trajectory.time.size - 1), end=False)
     nan = np.full(k.size, np.nan)
     onset_rate, separation_rate = _gap_rate(before), _gap_rate(separated)
-    peaks = np.empty(k.size)
-    segment_end = trajectory.segment_end
-    for i, j in enumerate(k):
-        peaks[i] = peak_force(packed.tables[CONTACT], packed.forces[CONTACT],
-                              packed.phase_scalars[CONTACT], packed.settings, trajectory.q[j],
-                              trajectory.v[j], trajectory.time[j], segment_end[j])[0]
-        if report is not None and ((i + 1) % _REPORT_EVERY == 0 or i + 1 == k.size):
-            report(i % _REPORT_EVERY + 1)
+    peaks = peak_forces(packed, trajectory, report)
     return {
         "impact_onset_time": trajectory.time[k],
         "impact_duration": np.where(released, trajectory.segment_end[k] - trajectory.time[k],

@@ -1,0 +1,111 @@
+"""The parts of a cantilever: uniform segments and point attachments, checked on creation.
+
+A beam is clamped at x = 0 and free at x = L; it is a series of uniform segments (a stepped
+beam; one segment is a uniform beam) carrying point masses and springs to ground anywhere on
+it. Every part refuses a value that is not allowed with one ParameterError naming it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+from impactbeams.params import ParameterError, is_real, require
+
+
+def _check_fields(part: Any, units: dict[str, str], positive: bool) -> None:
+    """Store each field of ``part`` named in ``units`` (name: unit) as a float.
+
+    Raise ParameterError unless it is a finite real number > 0 (``positive``) or >= 0.
+    """
+    bound = "> 0" if positive else ">= 0"
+    for name, unit in units.items():
+        value = getattr(part, name)
+        ok = is_real(value) and math.isfinite(value) and (value > 0 if positive else value >= 0)
+        require(f"{type(part).__name__}.{name}", value, ok, f"must be a finite real number {bound}",
+                unit)
+        object.__setattr__(part, name, float(value))
+
+
+@dataclasses.dataclass(frozen=True)
+class Segment:
+    """A uniform piece of the beam: ``length`` (m), ``EI`` (N m^2), ``rhoA`` (kg/m)."""
+
+    length: float
+    EI: float
+    rhoA: float
+
+    def __post_init__(self) -> None:
+        _check_fields(self, {"length": "m", "EI": "N m^2", "rhoA": "kg/m"}, positive=True)
+
+
+@dataclasses.dataclass(frozen=True)
+class PointMass:
+    """A rigid body fixed at ``position`` (m): ``mass`` (kg), ``rotary_inertia`` (kg m^2).
+
+    It adds ``mass y(x)^2 / 2 + rotary_inertia y'(x)^2 / 2`` to the kinetic energy.
+    """
+
+    position: float
+    mass: float
+    rotary_inertia: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check_fields(self, {"position": "m", "mass": "kg", "rotary_inertia": "kg m^2"},
+                      positive=False)
+
+
+@dataclasses.dataclass(frozen=True)
+class Spring:
+    """Linear springs to ground at ``position`` (m), on the deflection and on the slope.
+
+    ``stiffness`` (N/m) acts on the deflection, ``rotational_stiffness`` (N m/rad) on the slope.
+
+    They add ``stiffness y(x)^2 / 2 + rotational_stiffness y'(x)^2 / 2`` to the strain
+    energy. A rotational spring at ``position = 0`` makes the clamp compliant.
+    """
+
+    position: float
+    stiffness: float = 0.0
+    rotational_stiffness: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check_fields(self, {"position": "m", "stiffness": "N/m",
+                             "rotational_stiffness": "N m/rad"}, positive=False)
+
+
+Attachment = PointMass | Spring
+
+
+def check_attachments(attachments: tuple[Any, ...], length: float) -> None:
+    """Raise ParameterError for an attachment that is not a part, or not on the beam.
+
+    Masses and translational springs act at 0 < x <= L (at the clamp the deflection is held,
+    so they would do nothing); a rotational spring at x = 0 is the compliant clamp.
+    """
+    for index, part in enumerate(attachments):
+        name = f"attachments[{index}]"
+        if not isinstance(part, (PointMass, Spring)):
+            raise ParameterError(f"{name} = {part!r} is not allowed: must be a PointMass or a "
+                                 "Spring")
+        at_clamp_allowed = isinstance(part, Spring) and part.stiffness == 0.0
+        low = "0 <=" if at_clamp_allowed else "0 <"
+        require(f"{name}.position", part.position,
+                (part.position >= 0.0 if at_clamp_allowed else part.position > 0.0)
+                and part.position <= length,
+                f"must lie on the beam, {low} x <= {length!r} (at the clamp, x = 0, only a "
+                "rotational spring acts)", "m")
+
+
+def check_clamp(attachments: tuple[Any, ...]) -> None:
+    """Raise ParameterError if the clamp's rotational springs (if any) sum to zero.
+
+    A compliant clamp without stiffness would let the whole beam turn as a rigid body.
+    """
+    at_clamp = [p for p in attachments if isinstance(p, Spring) and p.position == 0.0]
+    total = sum(p.rotational_stiffness for p in at_clamp)
+    if at_clamp and total == 0.0:
+        require("Spring.rotational_stiffness at position 0", total, False,
+                "must be > 0 (a spring at the clamp makes it compliant; without stiffness the "
+                "beam would turn freely about it)", "N m/rad")
