@@ -4,7 +4,7 @@
 --only-continuation`` on the shipped continuation; here the CPU time per point of that
 continuation at two mode counts (Newton at 5 modes, Newton-Picard at 100), measured as the
 calibration measures it, is within ``FACTOR`` of the estimate. The calibration's own points
-are within 2.1 of its fit (the corrector changes at 48 coordinates, which a power law does not
+are within 1.8 of its fit (the corrector changes at 48 coordinates, which a power law does not
 follow); ``FACTOR`` leaves room for a machine loaded otherwise than at calibration. Timed:
 slow.
 """

@@ -74,7 +74,7 @@ COMPILE = {
 START_UP = 0.39
 COMPILE_LOAD = 0.98
 COMPILE_CORES = 2
-CONTINUATION_POINT = (0.0065, 0.3)
+CONTINUATION_POINT = (0.0017, 0.53)
 # ----------------------------------------------------------------------------------------------
 
 # The announced range about the load-scaled compile (`compile_estimate`): the load can rise
