@@ -13,6 +13,7 @@ average before and after) and rewrites the constants block of src/impactbeams/co
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import re
@@ -232,6 +233,34 @@ def thread_speedup(log):
     return one / two
 
 
+# the shipped continuation's model at these modes (2 N = 2 n coordinates: a stop), this many
+# points from where its orbit impacts (past the grazing at 202 rad/s)
+CONTINUATION_MODES, CONTINUATION_POINTS, CONTINUATION_START = (5, 20, 50, 200), 20, 210.0
+
+
+def continuation_costs(log):
+    """CPU seconds per branch point of the shipped continuation, fitted as a (2 N)^p.
+
+    Between the first and the last point `continue_orbits` reports (the located events
+    among them): the corrector, its dr/dp, the test functions and the measures.
+    """
+    from impactbeams.continuation import continue_orbits, load_continuation
+
+    shipped = load_continuation(ROOT / "sweeps" / "continuation-stop-fold.toml")
+    per_point = []
+    for n in CONTINUATION_MODES:
+        continuation = dataclasses.replace(shipped, n_modes=n, max_points=CONTINUATION_POINTS,
+                                           max_branches=1, start=CONTINUATION_START)
+        continue_orbits(dataclasses.replace(continuation, max_points=3))  # warm
+        stamps = []
+        continue_orbits(continuation, lambda *_, stamps=stamps: stamps.append(time.process_time()))
+        per_point.append((stamps[-1] - stamps[0]) / (len(stamps) - 1))
+        log(f"continuation, {n} modes: {per_point[-1] * 1e3:.1f} ms CPU per point")
+    coordinates = 2 * np.array(CONTINUATION_MODES)
+    return dict(zip(map(str, CONTINUATION_MODES), per_point, strict=True)), fit_power(
+        coordinates, per_point)
+
+
 # tiny runs of each kind, through the command line (compile and start-up)
 TINY = {
     "first_impact": "t_max = 0.1\nn_modes = 5\n[axes.omega]\nmin = 100.0\nmax = 300.0\nnum = 4\n",
@@ -322,7 +351,12 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=ROOT / "docs" / "benchmarks" / "costs.json")
     parser.add_argument("--skip-compile", action="store_true",
                         help="keep the compile and start-up figures of the existing output")
+    parser.add_argument("--only-continuation", action="store_true",
+                        help="measure CONTINUATION_POINT only, keep the other constants")
     args = parser.parse_args()
+    if args.only_continuation:
+        continuation_only(args.output)
+        return
     warnings.simplefilter("ignore")
     log = lambda text: print(text, flush=True)  # noqa: E731
     load_before = os.getloadavg()
@@ -344,6 +378,7 @@ def main() -> None:
     constants["ENERGY_NODE"] = energy_cost(log)
     constants["GEOMETRY"] = geometry_cost(log)
     constants["THREAD_SPEEDUP"] = {1: 1.0, 2: thread_speedup(log)}
+    measured["continuation"], constants["CONTINUATION_POINT"] = continuation_costs(log)
     if args.skip_compile:
         previous = json.loads(args.output.read_text())
         constants["START_UP"] = previous["constants"]["START_UP"]
@@ -369,6 +404,20 @@ def main() -> None:
     args.output.write_text(json.dumps(result, indent=1) + "\n")
     write_module(constants)
     log(f"wrote {args.output} and the constants of src/impactbeams/costs.py")
+
+
+def continuation_only(output):
+    """Measure CONTINUATION_POINT alone into ``output`` and the module (the rest kept)."""
+    result = json.loads(output.read_text())
+    measured, fitted = continuation_costs(lambda text: print(text, flush=True))
+    constants = result["constants"]
+    constants["CONTINUATION_POINT"] = round_constants(fitted)
+    constants["THREAD_SPEEDUP"] = {int(k): v for k, v in constants["THREAD_SPEEDUP"].items()}
+    result["measured"]["continuation"] = measured
+    result["continuation_measured_utc"] = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
+    result["continuation_load_average"] = list(os.getloadavg())
+    output.write_text(json.dumps(result, indent=1) + "\n")
+    write_module(constants)
 
 
 if __name__ == "__main__":

@@ -379,6 +379,9 @@ CASES = {
         {"c.toml": CONTINUATION.replace('"omega"', '"base_amplitude"').replace(
             "min = 100.0\nmax = 250.0", "min = 1e-6\nmax = 0.1")},
         ["base_amplitude = 0.1 is not allowed: the shaker's motion must be <= 0.2 l1 = 0.02 m"]),
+    "continue-subspace-beyond": (["continue", "c.toml"],  # before its header
+                                 {"c.toml": "n_modes = 3\n" + CONTINUATION + "subspace = 50\n"},
+                                 ["subspace = 50 is not allowed: must be an integer from 3 to 6"]),
     "continue-n-modes-0": (["continue", "c.toml"], {"c.toml": "n_modes = 0\n" + CONTINUATION},
                            ["n_modes = 0 is not allowed"]),
     "simulate-base-amplitude-10": (["simulate", "--t-max", "1", "--base-amplitude", "10", "-o",

@@ -173,8 +173,9 @@ def test_period_doubling_where_the_diagram_from_rest_changes_period():
 
 
 def test_interrupt_writes_the_points_computed(tmp_path, capsys, monkeypatch):
-    """Ctrl-C (here in the progress report of the 5th point): exit 130, the file holds the
-    start and the 5 points, its branch ending 'interrupted'."""
+    """Ctrl-C (here in the progress report of the 5th point): exit 130, the points computed
+    are in OUT.nc.partial/OUT.nc (the start and 5 points, its branch ending 'interrupted'),
+    OUT.nc is not written: the same command resumes (tests/test_continuation_resume.py)."""
     import impactbeams.cli as cli
 
     class Interrupting(cli._BranchProgress):
@@ -186,7 +187,8 @@ def test_interrupt_writes_the_points_computed(tmp_path, capsys, monkeypatch):
     output = tmp_path / "cut.nc"
     assert main(["continue", str(reduced(tmp_path, 195.0, 210.0)), "-o", str(output)]) == 130
     assert "branch points computed are in" in capsys.readouterr().err
-    with xr.open_dataset(output) as branch:
+    assert not output.exists()
+    with xr.open_dataset(tmp_path / "cut.nc.partial" / "cut.nc") as branch:
         assert branch.branch_point.size == 6
         assert branch.attrs["branch_endings"] == "interrupted"
 

@@ -436,3 +436,27 @@ def test_a_stepped_sweep_checks_the_cache_for_its_own_kernel(monkeypatch):
     monkeypatch.setattr(compilation, "_has_machine_code", lambda kernel: kernel is cached)
     assert kernels_cached("long_time", entry_kernel(plain))
     assert not kernels_cached("long_time", entry_kernel(stepped))
+
+
+def test_a_wait_for_the_compile_helper_is_reported_and_kept_alive(fresh, monkeypatch):
+    """The run waiting for the helper process's share of a cold compile (issue 32: under load
+    two silent minutes after the announcement) is a compile of its own in the report: announced,
+    a "still compiling" line after every COMPILE_HEARTBEAT s without one, timed at its end."""
+    import time
+
+    from impactbeams import compilation
+    from impactbeams.kernels import linking
+
+    monkeypatch.setattr(compilation, "COMPILE_HEARTBEAT", 0.2)
+    key = (fresh, ("int64",))
+    monkeypatch.setitem(linking.COMPILED_ELSEWHERE, key, lambda: time.sleep(0.9) or "file")
+    stream = io.StringIO()
+    with reporting_compiles(ESTIMATE, stream=stream):
+        assert linking._wait_elsewhere(*key) == "file"
+        assert linking._wait_elsewhere(*key) is None  # waited for once
+    lines = stream.getvalue().splitlines()
+    assert lines[0].startswith("impactbeams: compiling the kernels of this kind of run")
+    beats = [line for line in lines if line.startswith("impactbeams: still compiling: ")]
+    assert 1 <= len(beats) <= 5 and beats[0].endswith(", expected 8-17 s")
+    assert re.fullmatch(r"impactbeams: compiled 1 kernels in \d+\.\d s \(cached for later runs; "
+                        r"announced 8-17 s\)", lines[-1])

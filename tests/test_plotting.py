@@ -22,6 +22,7 @@ from impactbeams.variables import attributes, parameter_attributes
 
 # the range of first_impact_time in the shipped Fig. 5a map (s), whose colour bar had one label
 FIG5A_RANGE = (0.0044150341684267526, 0.9893873136883936)
+MS = 1e3  # times are drawn in ms (plotting.labels.display_units)
 
 
 @pytest.fixture
@@ -86,11 +87,11 @@ def _mesh(figure, axes=0):
 def test_fig5a_colour_bar_has_round_labels_over_the_data_range(figure):
     draw(figure.subplots(), fig5a_like())
     bar, labels = _colour_bar(figure)
-    # 0.0044..0.989 s spans 2.35 decades: log colours; only 2 decades inside, so 1-2-5 steps
+    # 4.4..989 ms spans 2.35 decades: log colours; only 2 decades inside, so 1-2-5 steps
     assert isinstance(_mesh(figure).norm, matplotlib.colors.LogNorm)
-    assert labels == ["0.005", "0.01", "0.02", "0.05", "0.1", "0.2", "0.5"]
+    assert labels == ["5", "10", "20", "50", "100", "200", "500"]
     low, high = FIG5A_RANGE
-    assert np.all((bar.get_yticks() >= low) & (bar.get_yticks() <= high))
+    assert np.all((bar.get_yticks() >= low * MS) & (bar.get_yticks() <= high * MS))
 
 
 def test_log_ticks_are_decades_over_a_wide_range(figure):
@@ -99,8 +100,9 @@ def test_log_ticks_are_decades_over_a_wide_range(figure):
                     _axis("clearance", np.geomspace(1e-6, 1e-4, 10), "log")])
     draw(figure.subplots(), ds)
     bar, labels = _colour_bar(figure)
-    assert np.allclose(bar.get_yticks(), 10.0 ** np.arange(-6, 0), rtol=1e-12)
-    assert labels == [f"$10^{{{k}}}$" for k in range(-6, 0)]
+    # 1 us to 100 ms, in ms: decades from 10^-3 to 10^2, decimal
+    assert np.allclose(bar.get_yticks(), 10.0 ** np.arange(-3, 3), rtol=1e-12)
+    assert labels == ["0.001", "0.01", "0.1", "1", "10", "100"]
 
 
 def test_narrow_positive_range_is_linear_with_several_round_ticks(figure):
@@ -111,7 +113,7 @@ def test_narrow_positive_range_is_linear_with_several_round_ticks(figure):
     bar, labels = _colour_bar(figure)
     ticks = bar.get_yticks()
     assert type(_mesh(figure).norm) is matplotlib.colors.Normalize
-    assert len(labels) >= 4 and np.all((ticks >= 0.21) & (ticks <= 0.93))
+    assert len(labels) >= 4 and np.all((ticks >= 0.21 * MS) & (ticks <= 0.93 * MS))
     steps = np.diff(ticks)  # equal round steps (1, 2, 2.5 or 5 x 10^k)
     assert np.allclose(steps, steps[0]) and round(steps[0] / 10 ** math.floor(
         math.log10(steps[0])), 9) in (1, 2, 2.5, 5)
@@ -178,7 +180,7 @@ def test_contour_lines_are_labelled(figure):
     axes = Figure().subplots()
     draw(axes, fig5a_like(), contours=[0.01, 0.1, 5.0])  # 5 s is outside the data: left out
     (lines,) = [c for c in axes.get_children() if isinstance(c, ContourSet)]
-    assert list(lines.levels) == [0.01, 0.1]
+    assert list(lines.levels) == [10.0, 100.0]  # levels in s, drawn in ms
 
 
 def test_crowded_contour_labels_are_one_per_level_and_apart(figure):
@@ -219,7 +221,7 @@ def test_labels_are_symbols_with_units(figure):
     _, _ = _colour_bar(figure)
     assert axes.get_xlabel() == "$\\Omega$ (rad/s)"
     assert axes.get_ylabel() == "$F_0$ (N)"
-    assert figure.axes[1].get_ylabel() == "time before the first impact $t^*$ (s)"
+    assert figure.axes[1].get_ylabel() == "time before the first impact $t^*$ (ms)"
     assert axes.get_title(loc="left") == "$\\Delta$ = 11 µm, $t_\\max$ = 1 s, 5 modes"
     for name, label in (("clearance", "$\\Delta$ (m)"), ("damping_ratio", "$\\zeta$"),
                         ("uplift1", "$\\delta_1$ (m)"), ("EI2", "$EI_2$ (N m$^{2}$)")):
@@ -286,7 +288,7 @@ def test_slice_picks_the_nearest_grid_value_in_log_distance(figure):
     notes = draw(axes, cube(), values={"clearance": "6e-5"})
     assert notes == ["slice clearance = 6e-5: nearest grid value clearance = 0.0001 m "
                      "(index 2 of 0..4)"]
-    expected = cube().first_impact_time.isel(clearance=2).values.T
+    expected = cube().first_impact_time.isel(clearance=2).values.T * MS
     assert np.array_equal(_mesh(figure).get_array().reshape(expected.shape), expected)
     assert "$\\Delta$ = 100 µm" in axes.get_title(loc="left")
 
@@ -297,7 +299,7 @@ def test_slice_by_index_and_two_slices_give_a_line(figure):
     assert notes[0].startswith("slice at index 4 of 0..4: clearance = 0.001 m")
     (line,) = axes.get_lines()
     assert np.array_equal(line.get_xdata(), cube().omega.values)
-    assert np.array_equal(line.get_ydata(), cube().first_impact_time[:, 1, 4].values)
+    assert np.array_equal(line.get_ydata(), cube().first_impact_time[:, 1, 4].values * MS)
     assert axes.get_xlabel() == "$\\Omega$ (rad/s)"
 
 
@@ -320,7 +322,7 @@ def test_a_1d_sweep_is_a_line_with_grey_bands_where_nan(figure):
     axes = figure.subplots()
     draw(axes, _sweep(t, [omega]))
     (line,) = axes.get_lines()
-    assert np.array_equal(line.get_ydata(), t, equal_nan=True)
+    assert np.array_equal(line.get_ydata(), t * MS, equal_nan=True)
     bands = [p for p in axes.patches if p.get_facecolor()[:3] == matplotlib.colors.to_rgb(
         MISSING_COLOUR)]
     assert len(bands) == 2  # two runs of NaN cells

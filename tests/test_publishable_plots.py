@@ -320,3 +320,26 @@ def test_labels_are_placed_on_a_figure_without_an_agg_canvas():
     assert len(boxes) == 5
     for a, b in itertools.combinations(boxes, 2):
         assert not a.overlaps(b)
+
+
+def test_a_first_impact_map_is_coloured_in_milliseconds(captured, tmp_path):
+    """The colour bar in the prefix of the times' size (3 to 300 ms: ms, no powers of ten);
+    contour levels given in s are drawn where those times are, labelled in ms."""
+    omega, force = np.linspace(100.0, 400.0, 20), np.geomspace(1e-5, 1e-3, 20)
+    times = np.geomspace(3e-3, 0.3, 400).reshape(20, 20)
+    dataset = xr.Dataset(
+        {"first_impact_time": (("omega", "force_amplitude"), times,
+                               attributes("first_impact_time"))},
+        coords={"omega": ("omega", omega, parameter_attributes("omega")),
+                "force_amplitude": ("force_amplitude", force,
+                                    parameter_attributes("force_amplitude"))},
+        attrs={"clearance": 1.1e-5, "t_max": 1.0, "n_modes": 5})
+    plot_dataset(dataset, tmp_path / "map.png", contours=[0.01, 0.1])
+    (figure,) = captured
+    bar = figure.axes[1]
+    assert bar.get_ylabel().endswith("(ms)")
+    ticks = [label.get_text() for label in bar.get_yticklabels() if label.get_text()]
+    assert ticks == ["5", "10", "20", "50", "100", "200"]
+    levels = sorted(text.get_text() for text in figure.axes[0].texts)
+    assert levels == ["10", "100"]
+    assert display_units(np.array([2e-3, 0.3]), "s") == (1e3, "ms")

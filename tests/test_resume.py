@@ -159,18 +159,22 @@ def _command(sweep_files, kind, out, *options):
             "--quiet", *(options or ("--threads", "1"))]
 
 
-@pytest.fixture(scope="module")
-def uninterrupted(sweep_files, tmp_path_factory):
-    """The file of an uninterrupted run of each kind (computed once, when first asked for)."""
-    folder = tmp_path_factory.mktemp("uninterrupted")
-
+def uninterrupted_runs(folder, command):
+    """``run(name)``: the file ``folder/name.nc`` of ``main(command(name, out))``, run once."""
     @functools.cache
-    def run(kind):
-        out = folder / f"{kind}.nc"
-        assert main(_command(sweep_files, kind, out)) == 0
+    def run(name):
+        out = folder / f"{name}.nc"
+        assert main(command(name, out)) == 0
         return out
 
     return run
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(sweep_files, tmp_path_factory):
+    """The file of an uninterrupted run of each kind (computed once, when first asked for)."""
+    return uninterrupted_runs(tmp_path_factory.mktemp("uninterrupted"),
+                              functools.partial(_command, sweep_files))
 
 
 def _contents(path):
@@ -210,24 +214,30 @@ SLOW_CLI = ("import sys, time\n"
             "sys.exit(main(sys.argv[1:]))\n")
 
 
-def _interrupt(command, partial, how):
-    """Run ``command`` in a CLI process; send it ``how`` once a few chunks are saved."""
+def _saved_chunks(partial):
+    return len(list(partial.glob("chunk_*.npz")))
+
+
+def _interrupt(command, partial, how, saved=_saved_chunks, script=SLOW_CLI,
+               before=SAVED_BEFORE_THE_SIGNAL):
+    """Run ``command`` in a CLI process (``script``); send it ``how`` once ``saved(partial)``
+    (the chunks saved, by default) reaches ``before``. Returns what it reached in the end;
+    the process's stderr is in ``partial``'s folder, ``stderr.txt``."""
     log = partial.with_name("stderr.txt")
     with open(log, "w") as stderr:
-        process = subprocess.Popen([sys.executable, "-c", SLOW_CLI, *command], stderr=stderr)
+        process = subprocess.Popen([sys.executable, "-c", script, *command], stderr=stderr)
         try:
-            _wait_for(lambda: len(list(partial.glob("chunk_*.npz"))) >= SAVED_BEFORE_THE_SIGNAL,
-                      f"{SAVED_BEFORE_THE_SIGNAL} saved chunks", process, log)
+            _wait_for(lambda: saved(partial) >= before, f"{before} saved", process, log)
             process.send_signal(how)
             process.wait(timeout=PROCESS_DEADLINE)
         finally:
             process.kill()  # no-op when it has ended; never leave it running
             process.wait()
-    expected = -signal.SIGKILL if how == signal.SIGKILL else EXIT_INTERRUPTED
+    expected = EXIT_INTERRUPTED if how == signal.SIGINT else -how
     assert process.returncode == expected, (
         f"code {process.returncode}, not {expected}: it ended by itself before the signal?\n"
         f"{log.read_text()}")
-    return len(list(partial.glob("chunk_*.npz")))
+    return saved(partial)
 
 
 def _kill_and_resume(sweep_files, uninterrupted, tmp_path, capsys, kind, how, *options):

@@ -96,7 +96,7 @@ def test_in_the_band_up_and_down_reach_different_attractors(fold):
 SHAKER = {"n_modes": 5, "transient_periods": 40, "sampled_periods": 4, "stepping": "up",
           "observables": ["poincare_deflection1"],
           "params": {"counterpart": "stop", "force_amplitude": 0.0, "base_amplitude": 5e-6,
-                     "damping_ratio": 0.03},
+                     "damping_ratio": 0.03, "shaker": "both"},
           "axes": {"omega": {"min": 150.0, "max": 450.0, "num": 16}}}
 
 
@@ -194,7 +194,8 @@ AXES_CASE = {"n_modes": 5, "transient_periods": 100, "sampled_periods": 4,
 ALONG = {
     "clearance": {**AXES_CASE, "params": {**AXES_CASE["params"], "force_amplitude": 3e-5},
                   "axes": {"clearance": {"min": 3e-6, "max": 1.2e-5, "num": 10}}},
-    "base_amplitude": {**AXES_CASE, "params": {**AXES_CASE["params"], "force_amplitude": 0.0},
+    "base_amplitude": {**AXES_CASE, "params": {**AXES_CASE["params"], "force_amplitude": 0.0,
+                                               "shaker": "both"},
                        "axes": {"base_amplitude": {"min": 2e-7, "max": 1.6e-6, "num": 8}}},
 }
 # a linear response (no contact) from rest, along an axis it does not depend on or scales

@@ -442,3 +442,54 @@ def test_the_readme_stop_and_shaker_commands_run(name, tmp_path, monkeypatch):
             assert np.all(np.diff(np.where(impacting, t_star, 0.0), axis=1)[both] <= 1e-12)
         else:
             assert (result.steady_impact_rate > 0).any()
+
+
+# --- shaker = "both" moves the stop: said once per run, only where it was not asked for ------
+
+
+def _moving_stop_warnings(record):
+    return [w for w in record if "moves the stop with beam 1's clamp" in str(w.message)]
+
+
+def test_a_stop_on_a_shaker_left_at_both_is_told_once_per_simulate(recwarn):
+    """One line per call (not per window or phase); none where the shaker is named, where it
+    carries beam 1 only, where nothing shakes, or for two beams; kept through ``replace``."""
+    import warnings
+
+    unasked = Params(counterpart="stop", base_amplitude=1e-6)
+    assert unasked.moving_stop() == unasked.replace(omega=100.0, force_amplitude=1e-4
+                                                    ).moving_stop() is not None
+    for quiet in (Params(counterpart="stop", base_amplitude=1e-6, shaker="both"),
+                  Params.from_mapping({"counterpart": "stop", "base_amplitude": 1e-6,
+                                       "shaker": "both"}).replace(omega=80.0),
+                  Params(counterpart="stop", base_amplitude=1e-6, shaker="beam1"),
+                  Params(counterpart="stop"), Params(base_amplitude=1e-6)):
+        assert quiet.moving_stop() is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        simulate(unasked, 0.05, n_modes=3, dt_output=0.01)
+        assert len(_moving_stop_warnings(recwarn)) == 1
+        simulate(unasked.replace(shaker="both"), 0.05, n_modes=3, dt_output=0.01)
+    assert len(_moving_stop_warnings(recwarn)) == 1
+
+
+def test_a_sweep_tells_it_once_and_the_shipped_sweeps_not_at_all(tmp_path, capsys):
+    """A map of 2 x 3 cells along U0 from 0: one warning line from ``run`` (per sweep, not per
+    cell); the shipped stop-and-shaker sweeps name their shaker and say nothing."""
+    from impactbeams.cli import main
+    from impactbeams.sweep import load_sweep
+    from impactbeams.sweep.run import _warn_moving_stop
+
+    path = tmp_path / "shaken.toml"
+    path.write_text('t_max = 0.05\nn_modes = 3\n[params]\ncounterpart = "stop"\n'
+                    "[axes.omega]\nmin = 100.0\nmax = 200.0\nnum = 2\n"
+                    "[axes.base_amplitude]\nmin = 0.0\nmax = 1e-6\nnum = 3\n")
+    assert main(["run", str(path), "-o", str(tmp_path / "shaken.nc"), "--quiet"]) == 0
+    assert capsys.readouterr().err == (
+        f"impactbeams: warning: {path}: shaker = 'both' (the default) moves the stop with beam "
+        "1's clamp, as on one shaker table: set shaker = 'beam1' for a fixed stop, or shaker = "
+        "'both' to say so\n")
+    shipped = sorted((Path(__file__).parents[1] / "sweeps").glob("*shaker*.toml"))
+    assert len(shipped) == 3
+    for sweep in shipped:
+        _warn_moving_stop(load_sweep(sweep))  # pytest turns a warning into an error

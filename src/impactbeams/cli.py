@@ -333,32 +333,67 @@ def _continue(args: argparse.Namespace) -> int:
         continue_orbits,
         load_continuation,
     )
-    from impactbeams.io import write_netcdf
-    from impactbeams.preflight import require_input_file, require_output_file
+    from impactbeams.continuation.checkpoint import (
+        CourseLog,
+        reporting_kept_points,
+        saved_points,
+    )
+    from impactbeams.continuation.run import orbits_problem
+    from impactbeams.preflight import require_input_file
     from impactbeams.sweep.lock import output_lock
+    from impactbeams.sweep.store import partial_folder
 
     continuation = load_continuation(require_input_file(args.file, "continuation"))
-    output = require_output_file(args.output or Path("results") / (Path(args.file).stem + ".nc"),
-                                 "-o/--output", {".nc"}, "netCDF")
-    with output_lock(output):
+    orbits_problem(continuation)  # what the file alone cannot tell (the subspace's room)
+    output = _continuation_output(args, continuation)
+    with reporting_kept_points(output), output_lock(output):  # before anything is printed
+        kept = saved_points(output) if CourseLog(output, continuation).check() else 0
+        resumed = (f" (resuming from the {kept} branch points saved in "
+                   f"{partial_folder(output)}/)" if kept else "")
         _say(args, f"{args.file}: periodic orbits of period {continuation.period} along "
              f"{continuation.parameter} from {continuation.low:g} to {continuation.high:g} "
-             f"({continuation.direction}) -> {output}")
+             f"({continuation.direction}) -> {output}{resumed}\nexpected: "
+             f"{_continuation_cost(continuation)}")
         try:
             with _running_kernels("orbits", args):
                 dataset = continue_orbits(continuation, None if args.quiet else _BranchProgress(
-                    continuation.low, continuation.high))
+                    continuation.low, continuation.high), output)
         except ContinuationInterrupted as interrupted:
-            write_netcdf(interrupted.dataset, output)
+            folder = partial_folder(output)
             print(f"\nimpactbeams: the {interrupted.dataset.branch_point.size} branch points "
-                  f"computed are in {output}", file=sys.stderr)
+                  f"computed are in {folder / output.name}; the continuation's steps are kept "
+                  f"in {folder}/ and the same command resumes from them", file=sys.stderr)
             raise
-        write_netcdf(dataset, output)
     _say(args, f"wrote {output}: {_branch_summary(dataset)}")
     short = _short_branches(dataset, continuation)
     for line in short:
         print(f"impactbeams: warning: {line}", file=sys.stderr)
     return EXIT_INCOMPLETE if short and not args.allow_incomplete else 0
+
+
+def _continuation_cost(continuation: Continuation) -> str:
+    """The expected time of a continuation: per point (calibrated), and at least how many."""
+    from impactbeams.continuation.run import fewest_points, mode_count, state_size
+    from impactbeams.costs import continuation_point_seconds
+
+    per_point, points = continuation_point_seconds(state_size(continuation)), fewest_points(
+        continuation)
+    return (f"about {per_point * 1e3:.2g} ms of CPU per branch point with "
+            f"{modes_per_beam(mode_count(continuation), continuation.params.counterpart)} "
+            f"(measured on the shipped soft stop: stiffer contacts cost more), and at least "
+            f"{points} points at max_step: {per_point * points:.2g} s or more, after the start "
+            f"({continuation.transient_periods} transient periods)")
+
+
+def _continuation_output(args: argparse.Namespace, continuation: Continuation) -> Path:
+    """The checked output of ``continue``: a writable .nc path with room on its disk."""
+    from impactbeams.continuation.checkpoint import expected_log_size
+    from impactbeams.preflight import require_disk, require_output_file
+
+    output = require_output_file(args.output or Path("results") / (Path(args.file).stem + ".nc"),
+                                 "-o/--output", {".nc"}, "netCDF")
+    require_disk(output, expected_log_size(continuation), "-o/--output")
+    return output
 
 
 class _BranchProgress:

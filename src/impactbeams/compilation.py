@@ -24,6 +24,9 @@ from pathlib import Path
 from typing import Any, TextIO
 
 REPORTED_COMPILE = 1.0  # s: an outermost compile at least this long ends with a line
+# s: a compile (or a wait for the helper's) this long without a line gets one, and again after
+# as long: no silent minutes under load
+COMPILE_HEARTBEAT = 20.0
 
 # The kernels called from Python by each kind of run (their callees compile with them, linked
 # into their code, and load with them from the cache): (module in impactbeams.kernels, kernel
@@ -282,12 +285,16 @@ def reporting_compiles(expected: Any = None, cached: bool = False,
     """
     from numba.core import event
 
+    from impactbeams.kernels.jit import COMPILE_WAIT
+
     listener = _compile_report(expected, cached, stream or sys.stderr)
-    event.register("numba:compile", listener)
+    for kind in ("numba:compile", COMPILE_WAIT):  # a wait for the helper's share is one too
+        event.register(kind, listener)
     try:
         yield
     finally:
-        event.unregister("numba:compile", listener)
+        for kind in ("numba:compile", COMPILE_WAIT):
+            event.unregister(kind, listener)
 
 
 def _announcement(expected: Any, cached: bool) -> str:
@@ -315,6 +322,31 @@ def _compile_report(expected: Any, cached: bool, stream: TextIO) -> Any:
             self.announced = False
             self.first = self.start = 0.0  # the first compile's start, the outermost one's
             self.kernels = 0
+            self.active = 0  # outermost compiles going on, in any thread
+            self.written = 0.0  # when the last line was written
+            self.beating: threading.Thread | None = None
+
+        def _beat(self, compile_event: Any) -> None:
+            """Start the heartbeat: a line after every ``COMPILE_HEARTBEAT`` s without one."""
+            if self.beating is not None and self.beating.is_alive():
+                return
+            self.written = time.perf_counter()
+
+            def beat() -> None:
+                while True:
+                    time.sleep(min(1.0, COMPILE_HEARTBEAT))
+                    with self.lock:
+                        if not self.active:
+                            return
+                        now = time.perf_counter()
+                        if now - self.written >= COMPILE_HEARTBEAT:
+                            self._write(f"still compiling: {_group(compile_event)}, "
+                                        f"{self.kernels} kernels compiled, "
+                                        f"{now - self.first:.0f} s{expecting}",
+                                        final=not self.interactive)
+
+            self.beating = threading.Thread(target=beat, daemon=True, name="compile report")
+            self.beating.start()
 
         def on_start(self, compile_event: Any) -> None:
             depth = getattr(self.local, "depth", 0)
@@ -322,6 +354,8 @@ def _compile_report(expected: Any, cached: bool, stream: TextIO) -> Any:
             with self.lock:
                 if depth == 0:
                     self.start = time.perf_counter()
+                    self.active += 1
+                    self._beat(compile_event)
                 if not self.announced:
                     self.announced, self.first = True, self.start
                     self._write(_announcement(expected, cached), final=not self.interactive)
@@ -332,6 +366,8 @@ def _compile_report(expected: Any, cached: bool, stream: TextIO) -> Any:
             self.local.depth -= 1
             with self.lock:
                 self.kernels += 1
+                if self.local.depth == 0:
+                    self.active -= 1
                 now = time.perf_counter()
                 if self.local.depth == 0 and now - self.start >= REPORTED_COMPILE:
                     self._write(f"compiled {self.kernels} kernels in {now - self.first:.1f} s "
@@ -345,6 +381,7 @@ def _compile_report(expected: Any, cached: bool, stream: TextIO) -> Any:
                         final=False)
 
         def _write(self, line: str, final: bool) -> None:
+            self.written = time.perf_counter()
             if self.interactive:  # rewrite the line in place; end it when final
                 stream.write(f"\rimpactbeams: {line}\033[K" + ("\n" if final else ""))
             else:

@@ -74,6 +74,7 @@ COMPILE = {
 START_UP = 0.39
 COMPILE_LOAD = 0.98
 COMPILE_CORES = 2
+CONTINUATION_POINT = (0.0017, 0.53)
 # ----------------------------------------------------------------------------------------------
 
 # The announced range about the load-scaled compile (`compile_estimate`): the load can rise
@@ -157,6 +158,17 @@ def cpu_share(seconds: float = 0.1) -> float:
     while time.perf_counter() - wall < seconds:
         pass
     return min(1.0, (time.thread_time() - cpu) / (time.perf_counter() - wall))
+
+
+def continuation_point_seconds(coordinates: int) -> float:
+    """Expected CPU time (s) per branch point of a continuation of ``coordinates`` = 2 N.
+
+    ``CONTINUATION_POINT`` = (a, p): a (2 N)^p, measured on the shipped continuation (a soft
+    stop, one contact per orbit) at 5 to 200 modes; a stiffer contact, with more contacts per
+    orbit, costs more per point.
+    """
+    scale, power = CONTINUATION_POINT
+    return scale * coordinates ** power
 
 
 def speedup(threads: int) -> float:

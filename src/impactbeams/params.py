@@ -412,7 +412,18 @@ CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS, "shaker": S
            "start": layout.STARTS}
 # N, the paper's tip force: the default drive of a study that names no base motion
 DEFAULT_FORCE_AMPLITUDE = 1e-3
+# said once per run of a stop on a shaker whose shaker is left to its default (`moving_stop`)
+MOVING_STOP = ("shaker = 'both' (the default) moves the stop with beam 1's clamp, as on one "
+               "shaker table: set shaker = 'beam1' for a fixed stop, or shaker = 'both' to say "
+               "so")
 DRIVES = ("force_amplitude", "base_amplitude")  # their defaults depend on which are given
+
+
+def moving_stop(stop: bool, shaken: bool, shaker: str, named: bool) -> str | None:
+    """`MOVING_STOP` where a ``stop`` on a shaker (``shaken``) moves with it unasked."""
+    return MOVING_STOP if stop and shaken and shaker == "both" and not named else None
+
+
 DEFAULT_TIP_RADIUS = 1e-3  # m, of the default contact stiffness
 DEFAULT_CONTACT_FORCE = 1e-3  # N, force scale of the default contact stiffness
 DEFAULT_CONTACT_STIFFNESS = hertz_stiffness(DEFAULT_TIP_RADIUS, DEFAULT_CONTACT_FORCE)
@@ -453,6 +464,8 @@ class Params:
         given = _field_values(values, "Params()", given_fields=False)
         for field in dataclasses.fields(self):
             object.__setattr__(self, field.name, given.get(field.name, field.default))
+        # kept as the drives are (`replace`): whether ``shaker = "both"`` moves a stop unasked
+        object.__setattr__(self, "_shaker_named", "shaker" in given)
         self.__post_init__()
 
     def __post_init__(self) -> None:
@@ -515,6 +528,21 @@ class Params:
         return {name: getattr(self, name) for name in self.numeric_names()}
 
     @property
+    def shaker_named(self) -> bool:
+        """Whether ``shaker`` was given (not left to its default, "both")."""
+        return getattr(self, "_shaker_named", True)
+
+    def moving_stop(self) -> str | None:
+        """The line that says a shaker left at "both" moves the stop too (None if it does not).
+
+        Against a stop, with base motion, the default ``shaker = "both"`` carries the stop's
+        mount with beam 1's clamp (a shaker table with both on it): the gap sees only beam 1's
+        motion relative to its clamp. Said once per run where the shaker was not named.
+        """
+        return moving_stop(self.counterpart == "stop", self.base_amplitude > 0.0, self.shaker,
+                           self.shaker_named)
+
+    @property
     def initial_gap(self) -> float:
         """Gap between the tips at t = 0: clearance + uplift1 - uplift2 (m)."""
         return self.clearance + self.uplift1 - self.uplift2
@@ -555,6 +583,8 @@ class Params:
             return changed
         base = {name: value for name, value in self.as_dict().items()
                 if name not in DRIVES or name in getattr(self, "_given_drives", DRIVES)}
+        if not self.shaker_named:
+            del base["shaker"]
         for i in ("1", "2"):
             if any(k + i in changes for k in MATERIAL_KEYS):
                 del base["EI" + i], base["rhoA" + i]

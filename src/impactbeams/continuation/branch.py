@@ -14,6 +14,7 @@ multiplier's -1 eigenvector and followed after the branch it left.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 
@@ -89,6 +90,39 @@ class ContinuationInterrupted(KeyboardInterrupt):
 Progress = Callable[[Branch, Point], None]
 
 
+@dataclasses.dataclass
+class Position:
+    """What `_follow` carries from one step to the next (saved by a checkpoint).
+
+    ``current``: the point the next step starts from; ``ds``: that step; ``steps``: the
+    points the steps reached (not the located ones between); ``near``: the point before the
+    grazing ``current`` was resumed past.
+    """
+
+    current: Point
+    ds: float
+    steps: list[Point]
+    near: Point | None = None
+
+
+@dataclasses.dataclass
+class Course:
+    """A continuation at the top of a step: everything its results depend on from there.
+
+    ``branches`` so far; ``follower`` steps branch ``index`` from ``position``; ``queue``:
+    the branches switched to and still to follow, each with its follower.
+    """
+
+    branches: list[Branch]
+    follower: Follower
+    index: int
+    position: Position
+    queue: list[tuple[Follower, int]]
+
+
+Checkpoint = Callable[[Course], None]
+
+
 @dataclasses.dataclass(frozen=True)
 class Span:
     """The parameter's range of the continuation and the direction it starts in (+1 or -1)."""
@@ -100,42 +134,65 @@ class Span:
 
 def continue_branches(problem: Problem, z0: np.ndarray, p0: float, span: Span,
                       scaling: Scaling, settings: Settings,
-                      progress: Progress | None = None) -> list[Branch]:
+                      progress: Progress | None = None, checkpoint: Checkpoint | None = None,
+                      resume: Course | None = None) -> list[Branch]:
     """Follow the branch through (z0, p0) (a guess, corrected at p0) and those it switches to.
 
-    Raises ParameterError if the start does not converge; `ContinuationInterrupted` (with the
-    branches so far) on Ctrl-C.
+    ``checkpoint`` is called with the `Course` at the top of every step; from a ``resume``
+    (such a `Course`), the continuation goes on as it would have from there, bit for bit
+    (``z0``, ``p0`` unused). Raises ParameterError if the start does not converge;
+    `ContinuationInterrupted` (with the branches so far) on Ctrl-C.
     """
-    follower = Follower(problem, scaling, settings)
-    orientation = np.zeros(len(z0) + 1)
-    orientation[-1] = span.direction
-    first = follower.at_parameter(scaling.scaled(z0, p0), orientation).point
-    if first is None:
-        raise ParameterError(f"the start at {p0!r} did not converge: Newton on the periodic "
-                             f"orbit took more than {settings.max_iterations} iterations from "
-                             "the guess (give a better guess, e.g. more transient periods)")
-    branches = [Branch([follower.kept(first)], problem.period, scaling)]
-    queue = [(follower, 0)]
+    if resume is None:
+        follower = Follower(problem, scaling, settings)
+        orientation = np.zeros(len(z0) + 1)
+        orientation[-1] = span.direction
+        first = follower.at_parameter(scaling.scaled(z0, p0), orientation).point
+        if first is None:
+            raise ParameterError(f"the start at {p0!r} did not converge: Newton on the "
+                                 f"periodic orbit took more than {settings.max_iterations} "
+                                 "iterations from the guess (give a better guess, e.g. more "
+                                 "transient periods)")
+        branches = [Branch([follower.kept(first)], problem.period, scaling)]
+        queue, at = [(follower, 0)], None
+    else:
+        branches, at = resume.branches, resume.position
+        queue = [(resume.follower, resume.index), *resume.queue]
     try:
         while queue:
             follower, index = queue.pop(0)
-            for switch in _follow(follower, branches[index], span, progress):
+            save = None if checkpoint is None else functools.partial(
+                _save, checkpoint, branches, follower, index, queue)
+            for switch in _follow(follower, branches[index], span, progress, at, save):
                 if len(branches) < settings.max_branches:
                     _switched(follower, branches, index, switch, queue)
+            at = None
     except KeyboardInterrupt:
         branches[-1].ending = branches[-1].ending or INTERRUPTED
         raise ContinuationInterrupted(branches) from None
     return branches
 
 
-def _follow(follower: Follower, branch: Branch, span: Span,
-            progress: Progress | None) -> list[int]:
-    """Step ``branch`` to its end; the indices of its period-doubling points."""
-    settings, ds = follower.settings, follower.settings.step
-    current, steps = branch.points[-1], [branch.points[-1]]
-    near: Point | None = None  # the point before the grazing current was resumed past
+def _save(checkpoint: Checkpoint, branches: list[Branch], follower: Follower, index: int,
+          queue: list[tuple[Follower, int]], position: Position) -> None:
+    checkpoint(Course(branches, follower, index, position, queue))
+
+
+def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress | None,
+            at: Position | None = None,
+            save: Callable[[Position], None] | None = None) -> list[int]:
+    """Step ``branch`` to its end; the indices of its period-doubling points.
+
+    From its last point, or from ``at``; ``save`` is called with the `Position` at the top of
+    every step.
+    """
+    settings = follower.settings
+    at = at or Position(branch.points[-1], settings.step, [branch.points[-1]])
+    current, ds, steps, near = at.current, at.ds, at.steps, at.near
     low, high = span.low * follower.scaling.parameter, span.high * follower.scaling.parameter
     while len(branch.points) < settings.max_points:
+        if save is not None:
+            save(Position(current, ds, steps, near))
         if not low <= current.x[-1] <= high:  # resumed past an event beyond the bound
             _end_at_bound(follower, branch, steps, low, high, progress)
             break

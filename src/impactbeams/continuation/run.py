@@ -12,8 +12,10 @@ fraction of ``state_scale``.
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -33,7 +35,9 @@ from impactbeams.continuation.branch import (
     Span,
     continue_branches,
 )
+from impactbeams.continuation.checkpoint import CourseLog, reporting_kept_points
 from impactbeams.continuation.output import branches_dataset
+from impactbeams.io import write_netcdf
 from impactbeams.orbits.period_map import check_law
 from impactbeams.orbits.shooting import DEFAULT_SUBSPACE, GUARD, METHODS
 from impactbeams.params import (
@@ -41,11 +45,13 @@ from impactbeams.params import (
     ParameterError,
     Params,
     check_range,
+    is_path,
     require,
     require_finite,
     require_integer,
     require_type,
 )
+from impactbeams.sweep.lock import output_lock
 from impactbeams.variables import PARAMETERS, global_attributes
 
 if TYPE_CHECKING:
@@ -170,15 +176,24 @@ Progress = Callable[[Branch, Point], None]
 
 
 @one_blas_thread
-def continue_orbits(continuation: Continuation,
-                    progress: Progress | None = None) -> xr.Dataset:
+def continue_orbits(continuation: Continuation, progress: Progress | None = None,
+                    output: str | Path | None = None) -> xr.Dataset:
     """Follow the periodic orbits of ``continuation`` and return the branches' Dataset.
 
-    On Ctrl-C raises `ContinuationInterrupted` whose ``dataset`` holds what was computed.
-    ParameterError if the start does not converge or an input is not allowed.
+    With ``output`` (a netCDF path) the Dataset is also written there, and the continuation
+    checkpoints every step under ``OUTPUT.partial/`` (`impactbeams.continuation.checkpoint`):
+    killed or interrupted, the same call resumes from its last step and writes the same file,
+    bit for bit. One writer per output (the lock of `impactbeams.sweep.lock`); the partial run
+    of another continuation or other code is refused. An existing ``output`` is replaced.
+
+    On Ctrl-C raises `ContinuationInterrupted` whose ``dataset`` holds what was computed
+    (with ``output``, also written to ``OUTPUT.partial/OUTPUT``). ParameterError if the
+    start does not converge or an input is not allowed.
     """
     require_type("continuation", continuation, isinstance(continuation, Continuation),
                  "an impactbeams.Continuation")
+    require_type("output", output, output is None or is_path(output),
+                 "None or the path of a netCDF file (str or pathlib.Path)")
     c = continuation
     if c.params.damping_ratio == 0.0 and c.parameter != "damping_ratio":
         # the free modes' multipliers are then on the unit circle to round-off
@@ -186,23 +201,68 @@ def continue_orbits(continuation: Continuation,
                       "unit circle, so stability and the Neimark-Sacker labels are decided by "
                       "round-off; continue a damped model (damping_ratio > 0)", RuntimeWarning,
                       stacklevel=2)
-    params = c.params.replace(**{c.parameter: c.first})
-    problem = BeamOrbits(params, c.parameter, _modes(c), c.period, c.method,
-                         c.subspace)
-    state = _start_state(problem, c)
-    scaling = _scaling(problem, c, state)
+    if c.params.moving_stop():
+        warnings.warn(c.params.moving_stop(), UserWarning, stacklevel=2)
+    if output is None:
+        return _continued(c, progress)
+    output = Path(output)
+    with reporting_kept_points(output), output_lock(output):
+        log = CourseLog(output, c)
+        try:
+            dataset = _continued(c, progress, log)
+        except ContinuationInterrupted as interrupted:
+            log.close()  # what was computed, to look at: the log resumes from its last step
+            write_netcdf(interrupted.dataset, log.directory / output.name)
+            raise
+        write_netcdf(dataset, output)
+        log.remove()
+    return dataset
+
+
+def _continued(c: Continuation, progress: Progress | None,
+               log: CourseLog | None = None) -> xr.Dataset:
+    """The branches' Dataset of ``c``, checkpointed into (and resumed from) ``log``."""
+    problem = orbits_problem(c)
     settings = c.settings()
+    resume = None if log is None else log.restore(problem, settings)
+    if resume is None:
+        state = _start_state(problem, c)
+        scaling = _scaling(problem, c, state)
+    else:  # the start and its scaling are the saved points'
+        state, scaling = np.empty(0), resume.branches[0].scaling
     span = Span(c.low, c.high, 1 if c.direction == "up" else -1)
     attrs = _attributes(c, problem)
     try:
-        branches = continue_branches(problem, state, c.first, span, scaling, settings, progress)
+        branches = continue_branches(problem, state, c.first, span, scaling, settings, progress,
+                                     log, resume)
     except ContinuationInterrupted as interrupted:
         interrupted.dataset = branches_dataset(interrupted.branches, c.parameter, attrs)
         raise
     return branches_dataset(branches, c.parameter, attrs)
 
 
-def _modes(c: Continuation) -> int:
+def orbits_problem(c: Continuation) -> BeamOrbits:
+    """The first branch's problem: the orbits at the first value.
+
+    A ParameterError for a method or subspace that does not fit its coordinates.
+    """
+    params = c.params.replace(**{c.parameter: c.first})
+    return BeamOrbits(params, c.parameter, mode_count(c), c.period, c.method, c.subspace)
+
+
+def state_size(c: Continuation) -> int:
+    """The section state's length 2 N: positions and velocities of the free coordinates."""
+    return 2 * (1 if c.params.counterpart == "stop" else 2) * mode_count(c)
+
+
+def fewest_points(c: Continuation) -> int:
+    """The fewest points the first branch can have: its range in steps of ``max_step``."""
+    _, _, largest = c._steps()
+    return math.ceil((c.high - c.low) / largest) + 1
+
+
+def mode_count(c: Continuation) -> int:
+    """The free modes per beam of ``c``: its ``n_modes``, or those that resolve the contact."""
     from impactbeams.contact import recommended_modes
 
     if c.n_modes is not None:

@@ -32,6 +32,9 @@ _OPTIONS = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": T
 PLAIN_NUMBA = "IMPACTBEAMS_PLAIN_NUMBA"  # "1": the plain path; "0": no version check
 TESTED_NUMBA = "0.68"  # the Numba release the fast path is tested with (pyproject.toml)
 FALLBACK = "impactbeams compiles its kernels as plain Numba kernels"  # the warning's start
+# the event of a wait for another process's compile of a kernel (`linking._wait_elsewhere`),
+# which the compile report counts as a compile; Numba's own "numba:compile" is a compile here
+COMPILE_WAIT = "impactbeams:compile-wait"
 
 # Numba's internals the fast path uses, each looked up before the first kernel is made:
 # kernels/linking.py's, then the lean cache loading's (impactbeams.cached_kernels).

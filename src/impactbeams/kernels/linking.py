@@ -21,6 +21,8 @@ from numba.core.compiler_lock import global_compiler_lock
 from numba.core.environment import lookup_environment
 from numba.core.registry import CPUDispatcher
 
+from impactbeams.kernels.jit import COMPILE_WAIT
+
 
 class _Kernel(CPUDispatcher):
     """A dispatcher that one kernel calling another compiles once per plain signature, to link.
@@ -110,8 +112,18 @@ COMPILED_ELSEWHERE = {}
 
 
 def _wait_elsewhere(dispatcher, args):
+    """Wait for another process's compile of ``dispatcher`` at ``args``, if it has one.
+
+    The wait is this process's compile done elsewhere: a `jit.COMPILE_WAIT` event, which the
+    compile report (`impactbeams.compilation.reporting_compiles`) announces, times and keeps
+    alive as a compile (under load a helper's share took minutes, silent before: issue 32).
+    """
     wait = COMPILED_ELSEWHERE.pop((dispatcher, args), None)
-    return None if wait is None else wait()
+    if wait is None:
+        return None
+    details = {"dispatcher": dispatcher, "args": args, "return_type": None}
+    with event.trigger_event(COMPILE_WAIT, data=details):
+        return wait()
 
 
 def _handover(cres):

@@ -22,10 +22,11 @@ _CASE = ("omega", "force_amplitude", "base_amplitude", "clearance", "uplift1", "
          "damping_ratio")
 # named only when nonzero: a drive that is off is no part of the case
 _ZERO_BY_DEFAULT = ("force_amplitude", "base_amplitude", "uplift1", "uplift2", "damping_ratio")
-# the prefixes a reader uses for lengths and forces, largest first: a value is written with the
-# largest whose number is >= 1 (20 µm, not 2e-05 m; 0.5 mN, not 5e-04 N)
+# the prefixes a reader uses for lengths, forces and times, largest first: a value is written
+# with the largest whose number is >= 1 (20 µm, not 2e-05 m; 0.5 mN, not 5e-04 N; 30 ms)
 _PREFIXED = {"m": ((1.0, "m"), (1e-3, "mm"), (1e-6, "µm"), (1e-9, "nm")),
-             "N": ((1.0, "N"), (1e-3, "mN"), (1e-6, "µN"), (1e-9, "nN"))}
+             "N": ((1.0, "N"), (1e-3, "mN"), (1e-6, "µN"), (1e-9, "nN")),
+             "s": ((1.0, "s"), (1e-3, "ms"), (1e-6, "µs"), (1e-9, "ns"))}
 # quantities of the free phase before any contact: independent of the contact law
 _LAW_FREE = ("first_impact_time", "impacted")
 
@@ -67,8 +68,9 @@ def axis_label(array: PlainArray | xr.DataArray, units: str | None = None) -> st
 def display_units(values: np.ndarray, units: str) -> tuple[float, str]:
     """The factor and units to draw ``values`` (in ``units``) in.
 
-    Lengths and forces take the prefix of their largest magnitude (``1e6, "µm"`` for tens of
-    µm), so that an axis needs no offset or power of ten; others stay (1.0, ``units``).
+    Lengths, forces and times take the prefix of their largest magnitude (``1e6, "µm"`` for
+    tens of µm, ``1e3, "ms"`` for times below a second), so that an axis or colour bar needs
+    no offset or power of ten; others stay (1.0, ``units``).
     """
     finite = np.abs(np.asarray(values, dtype=float))
     finite = finite[np.isfinite(finite)]

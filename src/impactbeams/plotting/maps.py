@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -14,7 +15,7 @@ from matplotlib.image import BboxImage
 from matplotlib.path import Path
 
 from impactbeams.params import ParameterError
-from impactbeams.plotting.labels import axis_label, format_number
+from impactbeams.plotting.labels import axis_label, display_units, format_number
 from impactbeams.plotting.missing import add_missing_legend, missing_note
 from impactbeams.plotting.scales import (
     MISSING_COLOUR,
@@ -28,7 +29,7 @@ from impactbeams.plotting.scales import (
 if TYPE_CHECKING:
     from matplotlib.cm import ScalarMappable
 
-    from impactbeams.plotting.arrays import PlainDataset
+    from impactbeams.plotting.arrays import PlainArray, PlainDataset
 
 # cells equal on the axes within this fraction of their width (relative to their mean): a
 # boundary then lies within cells x UNIFORM widths of the mesh's, 0.01 of a cell for 10^4 cells
@@ -41,11 +42,15 @@ def draw_map(axes: Axes, dataset: PlainDataset, variable: str, scale: str | None
 
     The variable's first dimension is the x axis, its second the y axis; log grid axes stay
     log. ``scale`` ("log", "linear" or None for automatic) is the colour scale of a continuous
-    variable; ``contours`` adds labelled contour lines: a number of round levels, or levels.
+    variable; ``contours`` adds labelled contour lines: a number of round levels, or levels
+    (in the variable's units). Lengths, forces and times are drawn in the prefix of their
+    size (`display_units`: a first-impact time in ms), the bar labelled so.
     A variable without any value (no cell impacts) is drawn all grey, without a colour bar
     (None is returned).
     """
-    field = dataset[variable]
+    field, factor = _in_display_units(dataset[variable])
+    if contours is not None and not isinstance(contours, int):
+        contours = [level * factor for level in contours]
     x_name, y_name = field.dims
     x, x_log = grid_axis(axes, "x", dataset[x_name])
     y, y_log = grid_axis(axes, "y", dataset[y_name])
@@ -72,6 +77,16 @@ def draw_map(axes: Axes, dataset: PlainDataset, variable: str, scale: str | None
     if np.isnan(values).any():
         add_missing_legend(bar.ax, missing_note(dataset, variable), below=True)
     return bar
+
+
+def _in_display_units(field: PlainArray) -> tuple[PlainArray, float]:
+    """``field`` in the units it is drawn in (`display_units`), and the factor applied."""
+    factor, units = display_units(np.asarray(field.values, dtype=float),
+                                  field.attrs.get("units", ""))
+    if factor == 1.0:
+        return field, factor
+    return dataclasses.replace(field, values=field.values * factor,
+                               attrs={**field.attrs, "units": units}), factor
 
 
 def draw_cells(axes: Axes, cells: tuple[np.ndarray, np.ndarray], logs: tuple[bool, bool],

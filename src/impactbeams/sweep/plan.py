@@ -63,13 +63,14 @@ class Plan:
     axis_values: tuple[np.ndarray, ...]  # every axis's values, computed once for all chunks
 
 
-def code_digest(package: Path = Path(__file__).parents[1]) -> str:
-    """Short hash of the `NUMERIC_CODE` files of ``package`` (default: this one).
+def code_digest(package: Path = Path(__file__).parents[1],
+                patterns: tuple[str, ...] = NUMERIC_CODE) -> str:
+    """Short hash of the files of ``package`` (default: this one) that ``patterns`` match.
 
     Part of a run's identity next to the sweep's fingerprint: a changed kernel without a new
     version number must not resume from the old code's chunks.
     """
-    paths = sorted(path for pattern in NUMERIC_CODE for path in package.glob(pattern))
+    paths = sorted(path for pattern in patterns for path in package.glob(pattern))
     digest = hashlib.sha256()
     for path in paths:
         digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes())

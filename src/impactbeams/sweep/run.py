@@ -19,7 +19,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from impactbeams.params import MAX_CHUNK_CELLS, is_integer, is_path, require, require_type
+from impactbeams.params import (
+    MAX_CHUNK_CELLS,
+    is_integer,
+    is_path,
+    moving_stop,
+    require,
+    require_type,
+)
 from impactbeams.preflight import require_memory
 from impactbeams.sweep.definition import Sweep, as_sweep, expected_cost
 from impactbeams.sweep.lock import output_lock
@@ -164,6 +171,7 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
                    expected_cost(sweep, threads, in_memory=True),
                    "give an output file, to which the map is written chunk by chunk")
     _warn_unresolved(sweep)
+    _warn_moving_stop(sweep)
     chunking = _chunking(sweep, chunk_cells)
     # every cell is filled by its chunk
     results = {name: np.empty((sweep.size, *shape), dtype)
@@ -230,6 +238,7 @@ def _write_sweep(sweep: Sweep, output: Path, threads: int | None, progress: bool
     if finished_output(output, sweep):
         return False
     _warn_unresolved(sweep)
+    _warn_moving_stop(sweep)
     store = ChunkStore(output, sweep, _chunking(sweep, chunk_cells), chunk_cells)
     chunking = store.chunking
     bar = chunk_progress(sweep, chunking, progress)
@@ -286,6 +295,20 @@ def _one_behind(keep: Keep) -> Iterator[Keep]:
         yield submit
         if previous is not None:
             previous.result()
+
+
+def _warn_moving_stop(sweep: Sweep) -> None:
+    """Warn once (not per cell) if ``sweep`` moves a stop with a shaker left to its default.
+
+    (The counterpart and the shaker are not swept: the base parameters' hold for every cell.)
+    """
+    axes = {axis.name: axis.values for axis in sweep.axes}
+    base = sweep.base
+    note = moving_stop(base.counterpart == "stop",
+                       float(np.max(axes.get("base_amplitude", base.base_amplitude))) > 0.0,
+                       base.shaker, base.shaker_named)
+    if note:
+        warnings.warn(f"{sweep.source}: {note}", UserWarning, stacklevel=3)
 
 
 def _warn_unresolved(sweep: Sweep) -> None:

@@ -185,6 +185,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         warnings.warn(f"n_modes = {n_modes} does not resolve the spring contact of stiffness "
                       f"{params.contact_stiffness:g} N/m: use n_modes >= {resolution} "
                       "(docs/model.md, Resolution)", RuntimeWarning, stacklevel=2)
+    if params.moving_stop():
+        warnings.warn(params.moving_stop(), UserWarning, stacklevel=2)
     if lyapunov:
         check_request(params, n_modes, t_max, lyapunov, transient_periods)
     out_times = run_inputs.times
