@@ -165,15 +165,34 @@ def performance() -> str:
          f"{full['peak_rss_mb']:.0f} MB, {full['file_mb']:.0f} MB file",
          recorded({**cube, "date": full.get("date", cube.get("date"))})),
         ("a continuation's branch point, default Hertz contact, zeta = 0.05, 32 modes per beam, "
-         "period-1 impacting branch in Omega ([continuation](docs/benchmarks/continuation.md))",
+         "period-1 impacting branch in Omega, micro-contacts summarised "
+         "([continuation](docs/benchmarks/continuation.md))",
          f"{1e3 * branch['newton-picard']['seconds_per_point']:.0f} ms by Newton-Picard "
          f"(of which {1e3 * branch['measures']:.0f} ms the point's measures), "
          f"{1e3 * branch['newton']['seconds_per_point']:.0f} ms by Newton",
          recorded(continuation)),
     ]
+    stiff = _results("stiff_continuation")
+    rows.append(("frequency response of a stiff stop on a shaker, 0.5 to 2 omega_1, up and down, "
+                 "default settings, each run stopped at "
+                 f"{stiff['cap']:.0f} s ([stiff continuation]"
+                 "(docs/benchmarks/stiff_continuation.md))",
+                 "; ".join(_stiff_case(case) for case in stiff["cases"]), recorded(stiff)))
     lines = ["| quantity | value | measured |", "|---|---|---|"]
     lines += [f"| {what} | {value} | {when} |" for what, value, when in rows]
     return "\n".join(lines) + "\n"
+
+
+def _stiff_case(case: dict) -> str:
+    """One run of the stiff continuation benchmark: time, what branch 0 covered, the earlier's."""
+    def covered(run: dict) -> str:
+        low, high = (float(v) for v in run["covered"][0].split(":"))
+        ending = "stopped at the cap" if run["capped"] else f"ended {run['endings'][0]}"
+        return f"{low:.1f} to {high:.1f} rad/s in {run['seconds']:.0f} s, {ending}"
+
+    contact = ("Hertz" if case["stiffness"] is None else f"k = {case['stiffness']:g} N/m")
+    before = f" (previous release: {covered(case['before'])})" if "before" in case else ""
+    return f"{contact}, {case['n_modes']} modes, {case['direction']}: {covered(case)}{before}"
 
 
 def speed_targets() -> str:
