@@ -209,10 +209,13 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
             _append(follower, branch, _advance_or_end(follower, current, end or current), progress)
             branch.ending = BOUND
             break
-        if point is not None and not same_piece(current, point):
+        if point is not None:
+            # the events between located (`_advance`: nonsmooth ones where the contacts
+            # changed, smooth ones within each piece)
             try:
                 _append(follower, branch, _advance(follower, current, point), progress)
-            except _Jumped:  # the step reached another branch (near a fold at an event)
+            except _Jumped:  # another branch reached (near a fold at an event), or a piece
+                # of the search met a change it could not locate: a shorter step
                 if taken / 2.0 < settings.min_step:
                     branch.ending = MIN_STEP
                     break
@@ -221,7 +224,7 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
             current, ds, near = point, follower.next_step(taken, point), None
             steps.append(current)
             continue
-        crossing = point is None and crosses(current.evaluation.grazing, grazing)
+        crossing = crosses(current.evaluation.grazing, grazing)  # no point: a failed step
         resumed = crossing and _cross_grazing(follower, branch, current, taken, progress)
         if resumed:
             near, (current, ds) = current, resumed
@@ -230,10 +233,9 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
         if crossing and taken / 2.0 >= settings.min_step:
             ds = taken / 2.0  # an iterate crossed, not the branch, or no way across: smaller
             continue
-        if point is None and near is None and len(steps) > 1 and not same_piece(steps[-2],
-                                                                                current):
+        if near is None and len(steps) > 1 and not same_piece(steps[-2], current):
             near = steps[-2]  # current was reached across a change of the contacts
-        if point is None and near is not None:
+        if near is not None:
             # no step from a point at the grazing (the far side's Jacobian is singular
             # there): on from a point a little beyond it, across the grazing surface
             found = _reached_beyond(follower, near, current)
@@ -243,19 +245,8 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
                 _append(follower, branch, points, progress)
                 steps.append(current)
                 continue
-        if point is None:
-            branch.ending = MIN_STEP
-            break
-        try:
-            _append(follower, branch, _between(follower, current, point), progress)
-        except _Jumped:  # a piece of its search met a change it could not locate: shorter
-            if taken / 2.0 < settings.min_step:
-                branch.ending = MIN_STEP
-                break
-            ds = taken / 2.0
-            continue
-        current, ds, near = point, follower.next_step(taken, point), None
-        steps.append(current)
+        branch.ending = MIN_STEP
+        break
     else:
         branch.ending = MAX_POINTS
     return [i for i, point in enumerate(branch.points) if point.label == PERIOD_DOUBLING]
