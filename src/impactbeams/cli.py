@@ -381,8 +381,11 @@ def _continuation_cost(continuation: Continuation) -> str:
     return (f"about {per_point * 1e3:.2g} ms of CPU per branch point with "
             f"{modes_per_beam(mode_count(continuation), continuation.params.counterpart)} "
             f"(measured on the shipped soft stop: stiffer contacts cost more), and at least "
-            f"{points} points at max_step: {per_point * points:.2g} s or more, after the start "
-            f"({continuation.transient_periods} transient periods)")
+            f"{points} points at max_step ({per_point * points:.2g} s), after the start "
+            f"({continuation.transient_periods} transient periods): a floor only, as each "
+            "fold, grazing or change of the contacts located costs tens of corrections more "
+            "(a stiff contact's branch has hundreds); the progress lines give the time left "
+            "as measured")
 
 
 def _continuation_output(args: argparse.Namespace, continuation: Continuation) -> Path:
