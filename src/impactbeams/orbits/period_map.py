@@ -232,12 +232,22 @@ class PeriodMap:
         if not candidates:
             return math.nan
         value, k, i = min(candidates, key=lambda candidate: abs(candidate[0]))
-        lo, hi = times[k, i - 1], times[k, i + 1]
+        stationary = self._stationary(trajectory, times[k, i - 1], times[k, i + 1], False)
+        return float(value if stationary is None else max(value, stationary[1]))
+
+    def _stationary(self, trajectory: Trajectory, lo: float, hi: float, minimum: bool,
+                    ) -> tuple[float, float] | None:
+        """The gap's minimum (``minimum``) or maximum in (lo, hi): its time (s) and value (m).
+
+        Brent's method on the gap's rate: a simple root, found to round-off in some 10
+        samples of the run. None if the rate does not change sign that way between the ends.
+        """
         rate = functools.partial(self._gap_rate, trajectory)
-        if rate(lo) > 0.0 > rate(hi):
-            t = brentq(rate, lo, hi, xtol=1e-14 * max(hi, 1.0))
-            value = max(value, float(self._gap(trajectory, np.array([t]))[0][0]))
-        return float(value)
+        sign = 1.0 if minimum else -1.0
+        if not sign * rate(lo) < 0.0 < sign * rate(hi):
+            return None
+        t = brentq(rate, lo, hi, xtol=1e-14 * max(hi, 1.0))
+        return t, float(self._gap(trajectory, np.array([t]))[0][0])
 
     @staticmethod
     def _onsets(trajectory: Trajectory) -> np.ndarray:
@@ -345,9 +355,8 @@ class PeriodMap:
                  free: np.ndarray) -> tuple[float, float]:
         """The smallest interior minimum of the sampled ``gap`` in free flight, and its time.
 
-        Refined at the root of the gap's rate between the sample's neighbours (Brent: a
-        simple root, found to round-off in some 10 samples of the run), or by minimising
-        the gap where the rate does not change sign there.
+        Refined at the root of the gap's rate between the sample's neighbours
+        (`_stationary`), or by minimising the gap where the rate does not change sign there.
         """
         interior = free[1:-1] & free[:-2] & free[2:] & (gap[1:-1] <= gap[:-2]) & (
             gap[1:-1] <= gap[2:])
@@ -355,16 +364,15 @@ class PeriodMap:
             return math.nan, math.nan
         i = 1 + int(np.argmin(np.where(interior, gap[1:-1], np.inf)))
         lo, hi = times[i - 1], times[i + 1]
-        rate = functools.partial(self._gap_rate, trajectory)
-        if rate(lo) < 0.0 < rate(hi):
-            t = brentq(rate, lo, hi, xtol=1e-14 * max(hi, 1.0))
-            value = float(self._gap(trajectory, np.array([t]))[0][0])
+        stationary = self._stationary(trajectory, lo, hi, True)
+        if stationary is not None:
+            t, value = stationary
             return (value, t) if value < gap[i] else (float(gap[i]), float(times[i]))
         return self._refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
                              lo, hi, gap[i], times[i])
 
     def _gap_rate(self, trajectory: Trajectory, t: float) -> float:
-        """dg/dt (m/s) at ``t`` in a free phase, whose coordinates' rates are the sampled q'."""
+        """dg/dt (m/s) at ``t`` of the gap read from the free coordinates (their rates: q')."""
         _, _, v = sample(self.packed, trajectory, np.array([t]))
         scalars = self.packed.phase_scalars[FREE]
         omega = self.params.omega
