@@ -29,6 +29,9 @@ from impactbeams.orbits.shooting import (
 )
 from impactbeams.params import Params, require_integer
 
+# the round-off of a gap read from a run (m, per metre of clearance): a gap is the clearance
+# less the tips' deflections, each to a few eps of itself (measured: 1e-19 m at 5e-4 m)
+GAP_ROUND_OFF = 1e3 * np.finfo(float).eps
 CACHED_MAPS = 8  # period maps kept by parameter value (a corrector asks for 3 values a step)
 
 
@@ -55,6 +58,11 @@ class BeamOrbits:
         self.subspace = require_integer("subspace", subspace, GUARD + 1, dimension)
         self.basis: np.ndarray | None = None  # V: orthonormal in the energy coordinates
         self._warned = False
+
+    @property
+    def gap_round_off(self) -> float:
+        """How well a gap (the grazing or interval value) is known (m): below it, round-off."""
+        return GAP_ROUND_OFF * self.params.clearance
 
     @property
     def approximate(self) -> bool:

@@ -450,17 +450,47 @@ def _located_change(follower: Follower, a: Point, b: Point, normal: np.ndarray,
 
     width, tolerance = float(normal @ (b.x - a.x)), follower.settings.locate_tolerance
     if test in (grazing_test, interval_test):
-        located = locate(point_at, a, width, b, test, tolerance,
-                         tolerance * abs(test(a)), may_jump=True)
+        located = locate(point_at, a, width, b, _sided(test, a), tolerance,
+                         _value_tolerance(follower, test, a), may_jump=True)
         if located.root:
             return located
+        if located.beyond is not None:  # bisection within the test's last bracket
+            rest = locate(lambda s: point_at(located.s + s),
+                          located.before, float(normal @ (located.beyond.x - a.x)) - located.s,
+                          located.beyond, _contacts_of(a), tolerance)
+            return rest._replace(s=located.s + rest.s)
         test = _contacts_of(a)
     return locate(point_at, a, width, b, test, tolerance)
 
 
-def _gap_tolerance(follower: Follower, start: Point) -> float:
-    """How small a located grazing's gap must be (m): the location tolerance of its start's."""
-    return follower.settings.locate_tolerance * abs(grazing_test(start))
+def _sided(test: Callable[[Point], float], a: Point) -> Callable[[Point], float]:
+    """``test``'s magnitude, signed by the side of the change a point's contacts are on.
+
+    The side of ``a`` (its contacts per orbit) has ``a``'s sign. Where the test jumps (a gap's
+    extremum that the samples of a long contact miss, so that another contact's stands in
+    for it), its sign may belie the contacts: a bracket by sign alone would then hold the
+    change on one side only, and shrink toward the wrong end.
+    """
+    contacts, sign = a.evaluation.contacts, math.copysign(1.0, test(a))
+
+    def sided(point: Point) -> float:
+        same = point.evaluation.contacts == contacts
+        return abs(test(point)) * (sign if same else -sign)
+
+    return sided
+
+
+def _value_tolerance(follower: Follower, test: Callable[[Point], float], start: Point,
+                     ) -> float:
+    """How small a located grazing's gap, or interval value, must be (m).
+
+    The location tolerance of its value at ``start``, but not below the problem's
+    ``gap_round_off`` (if it has one): from a start already near the event, a tolerance
+    relative to its value asks for less than the round-off of a gap, which no bracket
+    reaches (each solve then halves a bracket pinned long before, up to MAX_LOCATING).
+    """
+    return max(follower.settings.locate_tolerance * abs(test(start)),
+               getattr(follower.problem, "gap_round_off", 0.0))
 
 
 def _advance_or_end(follower: Follower, a: Point, b: Point) -> list[Point]:
@@ -547,7 +577,8 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     _, grazing, past, root = locate(lambda s: follower.at_arclength(current, s).point,
                                     current, taken, None, grazing_test,
                                     follower.settings.locate_tolerance,
-                                    _gap_tolerance(follower, current), may_jump=True)
+                                    _value_tolerance(follower, grazing_test, current),
+                                    may_jump=True)
     if past is not None:  # the branch is reachable across it on these planes after all
         try:
             _append(follower, branch, _advance(follower, current, past), progress)

@@ -171,6 +171,9 @@ PointAt = Callable[[float], "Point | None"]
 # an unbracketed end (no corrected point beyond) is a root if the test's value there is within
 # this many times the secant's slope from the start times the bracket's width (a root in it)
 ROOT_MARGIN = 1e3
+# a far end whose test value is this many times the near end's says nothing of the root: the
+# test jumps between them (`_next_arclength`)
+JUMP_RATIO = 1e3
 
 
 class Located(NamedTuple):
@@ -208,7 +211,9 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
     """
     low: Bracket = (0.0, test(start), start)
     high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
+    before: list[Bracket | None] = [None, None]  # each end's previous place (its secant)
     side = 0  # which end kept its place last (Illinois halves its value the second time)
+    widths = (math.inf, math.inf)  # the bracket's widths before the last two solves
     for _ in range(MAX_LOCATING):
         if _known(low, high, tolerance) and abs(test(low[2])) <= value_tolerance:
             break
@@ -218,16 +223,22 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
             # there (e.g. a free-flight minimum of the gap vanishes), or the corrector fails
             # beyond it (a fold's reach); narrowing the bracket cannot change that
             break
-        s = _next_arclength(low, high)
+        s = _next_arclength(low, high, *before)
+        width = high[0] - low[0]
+        if width > 0.5 * widths[0]:
+            # two solves did not halve the bracket (a secant creeps from one end): the middle,
+            # as in Dekker's method
+            s = low[0] + 0.5 * width
+        widths = (widths[1], width)
         point = point_at(s)
         value = test(point) if point is not None else math.nan
         if point is not None and math.isfinite(value) and (value > 0) == (low[1] > 0):
-            low = (s, value, point)
+            low, before[0] = (s, value, point), _true(low, test)
             if side == -1:
                 high = (high[0], high[1] / 2.0, high[2])
             side = -1
         else:
-            high = (s, value, point)
+            high, before[1] = (s, value, point), _true(high, test)
             if side == 1:
                 low = (low[0], low[1] / 2.0, low[2])
             side = 1
@@ -267,15 +278,51 @@ def _known(low: Bracket, high: Bracket, tolerance: float) -> bool:
     return (high[0] - low[0]) * rate <= tolerance
 
 
-def _next_arclength(low: Bracket, high: Bracket) -> float:
-    """Regula falsi between the ends (off them by a margin), bisection when a value is missing."""
+def _next_arclength(low: Bracket, high: Bracket, low_before: Bracket | None = None,
+                    high_before: Bracket | None = None) -> float:
+    """Regula falsi between the ends, or one end's secant (off the ends by a margin).
+
+    Where one end has no value (the corrector failed there: past a grazing, or beyond a
+    fold's reach) or one ``JUMP_RATIO`` times the other's (the test jumps on that side), that
+    end says nothing of the root: the other end's secant (through its previous place,
+    ``low_before`` or ``high_before``) is extrapolated to 0, doubled so that the solve lands
+    past the root (a root is then bracketed from one side's slope in a few solves, not crept
+    up on, or bisected from a step down to the tolerance). Without such a secant inside the
+    bracket, regula falsi (its next solve gives that end a previous place), or the middle
+    where the far end has no value.
+    """
     (s0, f0, _), (s1, f1, _) = low, high
-    middle = 0.5 * (s0 + s1)
-    if not (math.isfinite(f0) and math.isfinite(f1)) or f0 == f1:
-        return middle
+    if not math.isfinite(f0):
+        return 0.5 * (s0 + s1)
+    secant = None
+    if not math.isfinite(f1) or abs(f1) > JUMP_RATIO * abs(f0):
+        secant = _doubled_secant(low, low_before, (s0, s1))
+    elif abs(f0) > JUMP_RATIO * abs(f1):
+        secant = _doubled_secant(high, high_before, (s0, s1))
+    if secant is not None:
+        return secant
+    if not math.isfinite(f1) or f0 == f1:
+        return 0.5 * (s0 + s1)
     s = s0 - f0 * (s1 - s0) / (f1 - f0)
     # kept off the ends by a margin, not sent to the middle: a root close to an end (where
     # the other end's value is large, e.g. at a grazing reached by a step much longer than
     # the gap's curvature allows) is then bracketed a thousand times closer in one solve
     margin = 1e-3 * (s1 - s0)
     return min(max(s, s0 + margin), s1 - margin)
+
+
+def _true(end: Bracket, test: Callable[[Point], float]) -> Bracket | None:
+    """``end`` with its test value as read (Illinois may have halved it); None without one."""
+    s, _, point = end
+    value = test(point) if point is not None else math.nan
+    return (s, value, point) if math.isfinite(value) else None
+
+
+def _doubled_secant(end: Bracket, previous: Bracket | None, bracket: tuple[float, float],
+                    ) -> float | None:
+    """``end``'s secant through ``previous`` to 0, doubled; None if none, or not within."""
+    if previous is None or previous[1] == end[1]:
+        return None
+    s = end[0] - 2.0 * end[1] * (previous[0] - end[0]) / (previous[1] - end[1])
+    margin = 1e-3 * (bracket[1] - bracket[0])
+    return s if bracket[0] + margin < s < bracket[1] - margin else None
