@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from impactbeams import __version__
+from impactbeams.configuration import LAWS, counterpart_named
 from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.longtime import LongTime, Stepping
 from impactbeams.params import (
@@ -200,7 +201,7 @@ class Sweep:
     @property
     def free_coordinates(self) -> int:
         """N, the free modal coordinates of a cell: n_modes per beam (beam 1 only at a stop)."""
-        return self.n_modes * (1 if self.base.counterpart == "stop" else 2)
+        return self.n_modes * self.base.partner.beams
 
     @property
     def stored(self) -> list[str]:
@@ -285,7 +286,7 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
     _check_conflicts(fixed, axes, source)
-    if fixed.get("counterpart") == "stop":  # a stop has no beam 2: its keys are mistakes
+    if not counterpart_named(fixed.get("counterpart")).has_beam2:  # its keys are mistakes
         refuse_beam2(fixed, f"[params] of {source}")
         refuse_beam2([axis.name for axis in axes], f"[axes] of {source}")
     long_time = _long_time(data, observables, source)
@@ -472,7 +473,7 @@ def _check_grid(sweep: Sweep) -> None:
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
-    check_joint(values, point, sweep.base.counterpart, sweep.base.shaker)
+    check_joint(values, point, sweep.base.partner, sweep.base.mount)
     check_run(values, sweep.t_max, sweep.n_modes, point)
     _check_long_time(sweep, values, point)
 
@@ -504,7 +505,7 @@ def _check_lyapunov(sweep: Sweep) -> None:
         return
     laws = [axis.choices for axis in sweep.axes if axis.name == "contact_law"]
     require(f"observables in {sweep.source}", LYAPUNOV,
-            set(laws[0] if laws else [sweep.base.contact_law]) == {"spring"},
+            all(LAWS[law].tangent_flow for law in (laws[0] if laws else [sweep.base.contact_law])),
             "needs the spring contact law on every cell (the tied law's projections and "
             "instantaneous impacts are not a flow whose linearisation converges in n_modes)")
 
@@ -598,22 +599,22 @@ def cell_seconds(sweep: Sweep, points: list[Params]) -> np.ndarray:
     from impactbeams import costs
 
     seconds = np.zeros(len(points))
-    for law in set(point.contact_law for point in points):
-        index = [k for k, point in enumerate(points) if point.contact_law == law]
+    for law in set(point.law for point in points):
+        index = [k for k, point in enumerate(points) if point.law == law]
         values = {name: np.array([points[k].numeric()[name] for k in index])
                   for name in points[0].numeric()}
         if not sweep.needs_dynamics:
             seconds[index] += costs.cell_search_seconds(values, sweep.n_modes, sweep.t_max)
         elif any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables):
             seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, sweep.t_max,
-                                                     "dynamics", sweep.base.counterpart)
+                                                     "dynamics", sweep.base.partner)
         if LYAPUNOV in sweep.observables:
             seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, sweep.t_max,
-                                                     "lyapunov", sweep.base.counterpart)
+                                                     "lyapunov", sweep.base.partner)
         if sweep.long_time is not None:
             horizon = sweep.long_time.horizon(values["omega"], sweep.transient_periods)
             seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, horizon,
-                                                     "long_time", sweep.base.counterpart)
+                                                     "long_time", sweep.base.partner)
     return seconds
 
 

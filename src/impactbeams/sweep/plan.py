@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from impactbeams.configuration import LAWS, ContactLaw
 from impactbeams.kernels import layout
 from impactbeams.longtime import LongTime
 from impactbeams.params import Params
@@ -37,7 +38,8 @@ MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov e
 # The code that decides a sweep's numbers: every kernel and the modules that build their inputs
 # (paths in the package). Saved chunks and finished files of other code are never reused.
 NUMERIC_CODE = ("kernels/*.py", "packing.py", "contact/*.py", "drive.py", "modes.py", "blas.py",
-                "brent.py", "params.py", "sweep/definition.py", "sweep/plan.py")
+                "brent.py", "params.py", "configuration.py", "sweep/definition.py",
+                "sweep/plan.py")
 # a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
 LONG_RUN_CAPACITY = 2048
 MAX_PHASES_PER_PERIOD = 2000  # cap of a long run, per forcing period; more: dynamics_status = 1
@@ -84,28 +86,30 @@ def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
     damping ratio changes the modes too.
     """
     per_cell = set(CELL_PARAMETERS)
-    if sweep.needs_dynamics and "spring" in _laws(sweep):
+    if sweep.needs_dynamics and any(law.compliant for law in _laws(sweep)):
         per_cell.discard("damping_ratio")
     return tuple(k for k, a in enumerate(sweep.axes) if a.name not in per_cell)
 
 
 def contact_resolution(sweep: Sweep) -> int | None:
     """n_modes that resolves a spring-law dynamics map's stiffest contact; None otherwise."""
-    if not sweep.needs_dynamics or "spring" not in _laws(sweep):
+    compliant = [law for law in _laws(sweep) if law.compliant]
+    if not sweep.needs_dynamics or not compliant:
         return None
     from impactbeams.contact.spring import required_modes  # SciPy's optimisers: only when needed
 
     swept = [axis.max for axis in sweep.axes if axis.name == "contact_stiffness"]
     stiffest = swept[0] if swept else sweep.base.contact_stiffness
-    return required_modes(sweep.base.replace(contact_law="spring", contact_stiffness=stiffest))
+    return required_modes(sweep.base.replace(contact_law=compliant[0].name,
+                                             contact_stiffness=stiffest))
 
 
-def _laws(sweep: Sweep) -> set[str]:
+def _laws(sweep: Sweep) -> list[ContactLaw]:
     """The contact laws a sweep runs."""
     for axis in sweep.axes:
         if axis.name == "contact_law":
-            return set(axis.choices)
-    return {sweep.base.contact_law}
+            return [LAWS[name] for name in axis.choices]
+    return [sweep.base.law]
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:
@@ -144,7 +148,7 @@ def check_contact_phases(sweep: Sweep) -> None:
     if not sweep.needs_dynamics:
         return
     for params in _geometries(sweep):
-        if params.contact_law == "spring" and (params.contact_damping or params.damping_ratio):
+        if params.law.compliant and (params.contact_damping or params.damping_ratio):
             _geometry_arrays(params, sweep)
 
 
@@ -546,7 +550,7 @@ def _with_end_states(sweep: Sweep, values: dict[str, np.ndarray],
     contact, whose coordinates are the contact modes'.
     """
     end = carried["end_state"][:, :, :sweep.free_coordinates].copy()
-    if sweep.base.contact_law == "tied":
+    if sweep.base.law.projects:  # the contact modes' coordinates, not the free ones
         end[carried["end_phase"] == layout.CONTACT] = np.nan
     return {**values, **dict(zip(STEPPED_END_STATE, (end[:, 0], end[:, 1]), strict=True))}
 

@@ -304,9 +304,9 @@ def _warn_moving_stop(sweep: Sweep) -> None:
     """
     axes = {axis.name: axis.values for axis in sweep.axes}
     base = sweep.base
-    note = moving_stop(base.counterpart == "stop",
+    note = moving_stop(not base.partner.has_beam2,
                        float(np.max(axes.get("base_amplitude", base.base_amplitude))) > 0.0,
-                       base.shaker, base.shaker_named)
+                       base.shaker_named)
     if note:
         warnings.warn(f"{sweep.source}: {note}", UserWarning, stacklevel=3)
 
