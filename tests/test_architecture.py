@@ -109,6 +109,51 @@ def test_sweep_never_imports_trajectory():
         assert "trajectory" not in _internal_parts(path), path.name
 
 
+def _sweep_imports() -> dict[str, set[str]]:
+    """The modules of ``sweep/`` each module there imports, lazily too (``plan``, ``run``)."""
+    names = {path.stem for path in (PACKAGE / "sweep").glob("*.py")} - {"__init__"}
+    graph = {}
+    for name in names:
+        imported = set()
+        for module, members in _imports(PACKAGE / "sweep" / f"{name}.py"):
+            if module == "impactbeams.sweep":
+                imported.update(members)
+            elif module.startswith("impactbeams.sweep."):
+                imported.add(module.split(".")[2])
+        graph[name] = imported & names - {name}
+    return graph
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str]:
+    """A cycle of ``graph`` (a path that comes back to its start), or [] if it has none."""
+    done: set[str] = set()
+
+    def walk(node: str, path: list[str]) -> list[str]:
+        if node in path:
+            return path[path.index(node):] + [node]
+        if node in done:
+            return []
+        for after in sorted(graph[node]):
+            found = walk(after, [*path, node])
+            if found:
+                return found
+        done.add(node)
+        return []
+
+    return next((found for node in sorted(graph) if (found := walk(node, []))), [])
+
+
+def test_the_sweep_modules_import_without_a_cycle():
+    """A sweep's definition, cost estimate and plan each build on the ones before (issue 33).
+
+    The definition imports neither the plan nor the estimate (once it imported the plan, which
+    imports it, for its cost check and geometry count).
+    """
+    assert _cycle(_sweep_imports()) == []
+    assert _cycle({"definition": {"plan"}, "plan": {"definition"}, "estimate": set()}) == [
+        "definition", "plan", "definition"]
+
+
 # The contact seam: only the dispatch module and the laws' own modules name a law's index.
 CONTACT_SEAM = {"kernels/contact.py", "kernels/contact_tied.py", "kernels/contact_spring.py",
                 "kernels/layout.py"}

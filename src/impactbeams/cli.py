@@ -182,7 +182,7 @@ def _sweep_output(args: argparse.Namespace, sweep: Sweep) -> Path:
     An existing file there must be a netCDF file of impactbeams (reused if it is this sweep's).
     """
     from impactbeams.preflight import require_disk, require_netcdf, require_output_file
-    from impactbeams.sweep.definition import expected_file_size
+    from impactbeams.sweep.estimate import expected_file_size
 
     output = require_output_file(args.output or Path("results") / (Path(args.sweep).stem + ".nc"),
                                  "-o/--output", {".nc"}, "netCDF")
@@ -198,7 +198,8 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     """The run's size, expected cost and destination, on stderr."""
     from impactbeams.compilation import kernels_cached
     from impactbeams.costs import compile_estimate
-    from impactbeams.sweep.definition import expected_cost, run_kind
+    from impactbeams.sweep.definition import run_kind
+    from impactbeams.sweep.estimate import expected_cost
     from impactbeams.sweep.plan import entry_kernel
 
     long_time = sweep.long_time

@@ -19,7 +19,6 @@ from pathlib import Path
 
 import numpy as np
 
-from impactbeams.configuration import LAWS, ContactLaw
 from impactbeams.kernels import layout
 from impactbeams.longtime import LongTime
 from impactbeams.params import Params
@@ -27,21 +26,21 @@ from impactbeams.sweep.definition import (
     CELL_PARAMETERS,
     DYNAMICS_OBSERVABLES,
     FIRST_IMPACT,
+    LONG_RUN_CAPACITY,
     LYAPUNOV,
+    MAX_SEGMENTS,
     STEPPED_END_STATE,
     Axis,
     Sweep,
+    contact_laws,
+    geometry_axes,
 )
 
-MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov exponent's
-# windowed run) in a full-dynamics sweep; more: dynamics_status = 1
 # The code that decides a sweep's numbers: every kernel and the modules that build their inputs
 # (paths in the package). Saved chunks and finished files of other code are never reused.
 NUMERIC_CODE = ("kernels/*.py", "packing.py", "contact/*.py", "drive.py", "modes.py", "blas.py",
                 "brent.py", "params.py", "configuration.py", "sweep/definition.py",
                 "sweep/plan.py")
-# a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
-LONG_RUN_CAPACITY = 2048
 MAX_PHASES_PER_PERIOD = 2000  # cap of a long run, per forcing period; more: dynamics_status = 1
 
 
@@ -79,21 +78,9 @@ def code_digest(package: Path = Path(__file__).parents[1],
     return digest.hexdigest()[:16]
 
 
-def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
-    """Positions of the axes that change the modes: all but the cell parameters' axes.
-
-    A spring-law dynamics map solves its contact phase for the damping ratio, so there the
-    damping ratio changes the modes too.
-    """
-    per_cell = set(CELL_PARAMETERS)
-    if sweep.needs_dynamics and any(law.compliant for law in _laws(sweep)):
-        per_cell.discard("damping_ratio")
-    return tuple(k for k, a in enumerate(sweep.axes) if a.name not in per_cell)
-
-
 def contact_resolution(sweep: Sweep) -> int | None:
     """n_modes that resolves a spring-law dynamics map's stiffest contact; None otherwise."""
-    compliant = [law for law in _laws(sweep) if law.compliant]
+    compliant = [law for law in contact_laws(sweep) if law.compliant]
     if not sweep.needs_dynamics or not compliant:
         return None
     from impactbeams.contact.spring import required_modes  # SciPy's optimisers: only when needed
@@ -102,14 +89,6 @@ def contact_resolution(sweep: Sweep) -> int | None:
     stiffest = swept[0] if swept else sweep.base.contact_stiffness
     return required_modes(sweep.base.replace(contact_law=compliant[0].name,
                                              contact_stiffness=stiffest))
-
-
-def _laws(sweep: Sweep) -> list[ContactLaw]:
-    """The contact laws a sweep runs."""
-    for axis in sweep.axes:
-        if axis.name == "contact_law":
-            return [LAWS[name] for name in axis.choices]
-    return [sweep.base.law]
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:
@@ -308,34 +287,6 @@ class Chunking:
         first = outer * self.shape[self.axis] + j * self.run
         last = outer * self.shape[self.axis] + min((j + 1) * self.run, self.shape[self.axis])
         return first * line, last * line
-
-
-def default_chunk_cells(sweep: Sweep) -> int:
-    """2^20 cells per chunk (2^16 for full dynamics, far costlier per cell): about a second of work.
-
-    Large enough that the fixed cost of a chunk (starting the kernel's threads, its file, its
-    netCDF block, a Dask task) stays small beside its computation, which matters on a busy
-    machine where every start of the threads waits for the cores; small enough that an
-    interrupt loses little and a cube streams in pieces of tens of MB. A map of up to 2^20 cells
-    is therefore computed in one pass. Long-time observables take seconds per cell: chunks of
-    a hundredth of the sweep, 1 to 64 cells, so that progress shows, an interrupt loses little
-    and the threads, each running a chunk of its own (``run.local_runner``), finish together.
-    """
-    if sweep.stepping is not None:
-        return row_cells(sweep)
-    if sweep.long_time is not None:
-        return int(min(max(sweep.size // 100, 1), 64))
-    return 2**16 if sweep.needs_dynamics else 2**20
-
-
-def row_cells(sweep: Sweep) -> int:
-    """The cells of a stepped sweep's chunk of one row: the stepped axis and every later axis.
-
-    A row's cells run one after the other, each from its predecessor's state: a chunk holds
-    whole rows (the later axes' rows run beside it), so that it is computed, saved and
-    resumed as a unit and a resumed run gives the same file.
-    """
-    return math.prod(sweep.shape[sweep.stepped_dimension:])
 
 
 MAX_COLUMN_CELLS = 4096  # a first-impact map's columns: at most this many cells each

@@ -28,7 +28,13 @@ from impactbeams.params import (
     require_type,
 )
 from impactbeams.preflight import require_memory
-from impactbeams.sweep.definition import Sweep, as_sweep, expected_cost
+from impactbeams.sweep.definition import (
+    Sweep,
+    as_sweep,
+    default_chunk_cells,
+    expected_memory,
+    row_cells,
+)
 from impactbeams.sweep.lock import output_lock
 from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.plan import (
@@ -37,8 +43,6 @@ from impactbeams.sweep.plan import (
     check_contact_phases,
     compute_chunk,
     contact_resolution,
-    default_chunk_cells,
-    row_cells,
 )
 from impactbeams.sweep.progress import Progress, chunk_progress
 from impactbeams.sweep.store import ChunkStore, finished_output, reporting_kept_chunks
@@ -168,7 +172,7 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
                     discard_corrupt)
         return xr.open_dataset(output)  # as registered: written so, or checked if reused
     require_memory(f"a map of {sweep.size} cells held in memory ({sweep.source})",
-                   expected_cost(sweep, threads, in_memory=True),
+                   expected_memory(sweep, threads, in_memory=True),
                    "give an output file, to which the map is written chunk by chunk")
     _warn_unresolved(sweep)
     _warn_moving_stop(sweep)

@@ -307,7 +307,7 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
                            max_events)
     grid = "times" if times is not None else f"dt_output = {dt_output!r} s"
     require_memory(f"{grid} ({n_times:.3g} output times over t_max = {t_max!r} s; n_modes = "
-                   f"{n_modes}, max_events = {max_events})", cost,
+                   f"{n_modes}, max_events = {max_events})", cost.memory,
                    "use a larger dt_output or a shorter t_max (or fewer fields, modes or "
                    "max_events)")
     return _RunInputs(t_max, n_modes, resolution, _output_times(t_max, dt_output, times), span,
