@@ -22,7 +22,7 @@ FLOORS = {
     "configuration": 0.5,  # the variants' objects: the registry names their notes
     "variables": 1, "io": 1, "brent": 1, "blas": 1,
     "params": 2,
-    "modes": 3, "longtime": 3, "structure": 3,
+    "modes": 3, "longtime": 3, "structure": 3, "lock": 3,  # lock: io's writer, one per output
     "contact": 4,
     "model": 5, "compliant": 5,  # old import paths, re-exporting contact
     "drive": 5,

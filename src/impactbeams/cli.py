@@ -130,9 +130,9 @@ def _modes(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from impactbeams.lock import output_lock
     from impactbeams.preflight import require_input_file
     from impactbeams.sweep import load_sweep
-    from impactbeams.sweep.lock import output_lock
     from impactbeams.sweep.plan import check_contact_phases
     from impactbeams.sweep.store import reporting_kept_chunks
 
@@ -341,8 +341,8 @@ def _continue(args: argparse.Namespace) -> int:
         saved_points,
     )
     from impactbeams.continuation.run import orbits_problem
+    from impactbeams.lock import output_lock
     from impactbeams.preflight import require_input_file
-    from impactbeams.sweep.lock import output_lock
     from impactbeams.sweep.store import partial_folder
 
     continuation = load_continuation(require_input_file(args.file, "continuation"))
@@ -467,8 +467,8 @@ def _short_branches(dataset: xr.Dataset, continuation: Continuation) -> list[str
 def _simulate(args: argparse.Namespace) -> int:
     from impactbeams.costs import clearance_hint
     from impactbeams.io import write_netcdf
+    from impactbeams.lock import output_lock
     from impactbeams.preflight import require_output_file
-    from impactbeams.sweep.lock import output_lock
     from impactbeams.trajectory import simulate
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")

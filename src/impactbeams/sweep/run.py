@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from impactbeams.lock import output_lock
 from impactbeams.params import (
     MAX_CHUNK_CELLS,
     is_integer,
@@ -35,7 +36,6 @@ from impactbeams.sweep.definition import (
     expected_memory,
     row_cells,
 )
-from impactbeams.sweep.lock import output_lock
 from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.plan import (
     Chunking,
@@ -214,9 +214,9 @@ def write_sweep(sweep: Sweep | str | Path, output: str | Path, threads: int | No
     see `impactbeams.sweep.dask_runner` for a Dask cluster); they may finish in any order.
     ``sweep`` may be the path of a sweep TOML file (read by [`load_sweep`][]).
 
-    One writer per output: the run holds the lock of `impactbeams.sweep.lock` from its
+    One writer per output: the run holds the lock of `impactbeams.lock` from its
     start to its end; while another run holds it, this one raises
-    [`OutputInUse`][impactbeams.sweep.lock.OutputInUse] (a ParameterError) naming that run. A file
+    [`OutputInUse`][impactbeams.lock.OutputInUse] (a ParameterError) naming that run. A file
     that cannot be written (a full disk, a removed or read-only folder, a quota) raises
     [`WriteError`][impactbeams.io.WriteError] (an OSError), one line naming the file, its cause and
     the chunks kept: the same call resumes from them once the cause is fixed.
