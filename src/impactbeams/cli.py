@@ -133,16 +133,17 @@ def _run(args: argparse.Namespace) -> int:
     from impactbeams.lock import output_lock
     from impactbeams.preflight import require_input_file
     from impactbeams.sweep import load_sweep
-    from impactbeams.sweep.plan import check_contact_phases
+    from impactbeams.sweep.plan import check_contact_phases, reusing_geometries
     from impactbeams.sweep.store import reporting_kept_chunks
 
     sweep = load_sweep(require_input_file(args.sweep, "sweep"))
     output = _sweep_output(args, sweep)
     _check_scheduler(args.scheduler)
     _check_threads(args)
-    check_contact_phases(sweep)
-    with reporting_kept_chunks(output), output_lock(output):  # before anything is printed,
-        return _locked_run(args, sweep, output)  # created or computed
+    with reusing_geometries():  # the check's geometries are the plan's
+        check_contact_phases(sweep)
+        with reporting_kept_chunks(output), output_lock(output):  # before anything is printed,
+            return _locked_run(args, sweep, output)  # created or computed
 
 
 def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:

@@ -10,6 +10,7 @@ computed once per geometry (the plan).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import itertools
@@ -100,8 +101,46 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
         yield sweep.params_at(changes)
 
 
-def _geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
-    """One geometry's packed arrays: (tables, geometry row[, switching arrays])."""
+# the geometries built while a run is prepared (`reusing_geometries`), by (parameters, n_modes,
+# full dynamics): what the checks before a run build, its plan takes, not building it again
+_BUILT: list[dict[tuple[Params, int, bool], tuple[np.ndarray, ...]]] = []
+
+
+@contextlib.contextmanager
+def reusing_geometries() -> Iterator[None]:
+    """Within the body (a run: its checks, then its plan) each geometry is built once.
+
+    The arrays a check builds (`check_contact_phases`) are kept until the plan (`build_plan`)
+    takes them; a body inside another shares the outer one's; the rest go at its end.
+    """
+    if _BUILT:
+        yield
+        return
+    _BUILT.append({})
+    try:
+        yield
+    finally:
+        _BUILT.clear()
+
+
+def _geometry_arrays(params: Params, sweep: Sweep, keep: bool = False,
+                     ) -> tuple[np.ndarray, ...]:
+    """One geometry's packed arrays: (tables, geometry row[, switching arrays]).
+
+    Those a check built in this run (`reusing_geometries`) are taken, not built again;
+    ``keep``: a check's, left for the run's plan.
+    """
+    key = (params, sweep.n_modes, sweep.needs_dynamics)
+    built = _BUILT[0] if _BUILT else {}
+    arrays = built.get(key) if keep else built.pop(key, None)
+    if arrays is None:
+        arrays = _build_geometry_arrays(params, sweep)
+    if keep:
+        built[key] = arrays
+    return arrays
+
+
+def _build_geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
     from impactbeams import packing
     from impactbeams.contact.free import build_free_phase
 
@@ -120,15 +159,15 @@ def check_contact_phases(sweep: Sweep) -> None:
 
     An overdamped contact phase (real eigenvalues) is found only when its modes are built, so
     the geometries with a damped spring contact build their dynamics arrays here, the plan's
-    own SciPy work (done again by the run's plan); a ParameterError names the largest contact
-    damping allowed. Other sweeps cost nothing.
+    own SciPy work (kept for the run's plan within `reusing_geometries`); a ParameterError
+    names the largest contact damping allowed. Other sweeps cost nothing.
     """
     _check_steady_start(sweep)
     if not sweep.needs_dynamics:
         return
     for params in _geometries(sweep):
         if params.law.compliant and (params.contact_damping or params.damping_ratio):
-            _geometry_arrays(params, sweep)
+            _geometry_arrays(params, sweep, keep=True)
 
 
 def _check_steady_start(sweep: Sweep) -> None:

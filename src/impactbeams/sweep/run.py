@@ -43,6 +43,7 @@ from impactbeams.sweep.plan import (
     check_contact_phases,
     compute_chunk,
     contact_resolution,
+    reusing_geometries,
 )
 from impactbeams.sweep.progress import Progress, chunk_progress
 from impactbeams.sweep.store import ChunkStore, finished_output, reporting_kept_chunks
@@ -166,11 +167,20 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
     _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
-    check_contact_phases(sweep)
-    if output is not None:
-        write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk, runner,
-                    discard_corrupt)
-        return xr.open_dataset(output)  # as registered: written so, or checked if reused
+    with reusing_geometries():  # the check's geometries are the plan's
+        check_contact_phases(sweep)
+        if output is not None:
+            write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk,
+                        runner, discard_corrupt)
+            return xr.open_dataset(output)  # as registered: written so, or checked if reused
+        return _run_in_memory(sweep, threads, progress, parallel, chunk_cells, on_chunk,
+                              runner)
+
+
+def _run_in_memory(sweep: Sweep, threads: int | None, progress: bool, parallel: bool,
+                   chunk_cells: int | None, on_chunk: Callable[[int], None] | None,
+                   runner: ChunkRunner | None) -> xr.Dataset:
+    """`run_sweep` without an output, once checked: the map computed in memory."""
     require_memory(f"a map of {sweep.size} cells held in memory ({sweep.source})",
                    expected_memory(sweep, threads, in_memory=True),
                    "give an output file, to which the map is written chunk by chunk")
@@ -227,11 +237,12 @@ def write_sweep(sweep: Sweep | str | Path, output: str | Path, threads: int | No
     _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
-    check_contact_phases(sweep)
     output = Path(output)
-    with reporting_kept_chunks(output), output_lock(output):
-        return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk,
-                            runner, discard_corrupt)
+    with reusing_geometries():  # the check's geometries are the plan's
+        check_contact_phases(sweep)
+        with reporting_kept_chunks(output), output_lock(output):
+            return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells,
+                                on_chunk, runner, discard_corrupt)
 
 
 def _write_sweep(sweep: Sweep, output: Path, threads: int | None, progress: bool,
