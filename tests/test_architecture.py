@@ -248,8 +248,8 @@ def _name_branches(tree: ast.AST, names: set[str], keyed_data: set[str] = frozen
 def test_configuration_branches_only_in_its_seam(path):
     """A law, counterpart or shaker is asked through its object, never by its name (issue 33)."""
     where = str(path.relative_to(PACKAGE))
-    if where in CONFIGURATION_SEAM or where.startswith("structure/"):
-        return  # structure/: the attachments' package, not yet part of a configuration
+    if where in CONFIGURATION_SEAM:
+        return
     names = CONFIGURATION_NAMES - {name for module, name in OTHER_MEANING if module == where}
     keyed = {data for module, data in KEYED_DATA if module == where}
     lines = _name_branches(ast.parse(path.read_text(), str(path)), names, keyed)
