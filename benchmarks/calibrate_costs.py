@@ -59,7 +59,7 @@ def timed(function, repeat=2):
 def impacting_cycles(sweep, horizon_of):
     """Cycles of the sweep's cells that the model says impact, and that fraction."""
     from impactbeams import costs
-    from impactbeams.sweep.definition import sample_points
+    from impactbeams.sweep.estimate import sample_points
 
     points = sample_points(sweep, limit=sweep.size)
     values = {name: np.array([p.numeric()[name] for p in points]) for name in points[0].numeric()}
@@ -107,7 +107,7 @@ def cell_search_costs(log):
                 found.append(seconds / sweep.size / n)
             else:
                 from impactbeams import costs
-                from impactbeams.sweep.definition import sample_points
+                from impactbeams.sweep.estimate import sample_points
 
                 points = sample_points(sweep, limit=sweep.size)
                 values = {k: np.array([p.numeric()[k] for p in points])
@@ -171,7 +171,7 @@ def free_cost(log, observable="impact_count"):
         sweep = sweep_mapping(n, 10.0, [observable], "spring", axes, num=4)
         points_cycles = impacting_cycles(sweep, lambda v, sweep=sweep: sweep.t_max)
         assert points_cycles[1] == 0.0
-        from impactbeams.sweep.definition import sample_points
+        from impactbeams.sweep.estimate import sample_points
 
         points = sample_points(sweep, limit=sweep.size)
         values = {k: np.array([p.numeric()[k] for p in points]) for k in points[0].numeric()}

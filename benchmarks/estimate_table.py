@@ -94,7 +94,8 @@ def random_case(rng, index):
 def estimate(case, threads):
     """(kind, compute, cold compile) of a case in s, from the package's cost model."""
     from impactbeams import Params, costs
-    from impactbeams.sweep.definition import expected_cost, run_kind, sweep_from_mapping
+    from impactbeams.sweep.definition import run_kind, sweep_from_mapping
+    from impactbeams.sweep.estimate import expected_cost
     from impactbeams.sweep.plan import first_impact_kernel
     from impactbeams.trajectory.simulation import _checked_inputs
 

@@ -12,14 +12,17 @@ from pathlib import Path
 
 import pytest
 
+from impactbeams import configuration
+
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "impactbeams"
 
 # The floor of each top-level part: a module may import parts on lower floors and its own part.
 FLOORS = {
     "kernels": 0,
+    "configuration": 0.5,  # the variants' objects: the registry names their notes
     "variables": 1, "io": 1, "brent": 1, "blas": 1,
     "params": 2,
-    "modes": 3, "longtime": 3, "structure": 3,
+    "modes": 3, "longtime": 3, "structure": 3, "lock": 3,  # lock: io's writer, one per output
     "contact": 4,
     "model": 5, "compliant": 5,  # old import paths, re-exporting contact
     "drive": 5,
@@ -106,6 +109,51 @@ def test_sweep_never_imports_trajectory():
         assert "trajectory" not in _internal_parts(path), path.name
 
 
+def _sweep_imports() -> dict[str, set[str]]:
+    """The modules of ``sweep/`` each module there imports, lazily too (``plan``, ``run``)."""
+    names = {path.stem for path in (PACKAGE / "sweep").glob("*.py")} - {"__init__"}
+    graph = {}
+    for name in names:
+        imported = set()
+        for module, members in _imports(PACKAGE / "sweep" / f"{name}.py"):
+            if module == "impactbeams.sweep":
+                imported.update(members)
+            elif module.startswith("impactbeams.sweep."):
+                imported.add(module.split(".")[2])
+        graph[name] = imported & names - {name}
+    return graph
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str]:
+    """A cycle of ``graph`` (a path that comes back to its start), or [] if it has none."""
+    done: set[str] = set()
+
+    def walk(node: str, path: list[str]) -> list[str]:
+        if node in path:
+            return path[path.index(node):] + [node]
+        if node in done:
+            return []
+        for after in sorted(graph[node]):
+            found = walk(after, [*path, node])
+            if found:
+                return found
+        done.add(node)
+        return []
+
+    return next((found for node in sorted(graph) if (found := walk(node, []))), [])
+
+
+def test_the_sweep_modules_import_without_a_cycle():
+    """A sweep's definition, cost estimate and plan each build on the ones before (issue 33).
+
+    The definition imports neither the plan nor the estimate (once it imported the plan, which
+    imports it, for its cost check and geometry count).
+    """
+    assert _cycle(_sweep_imports()) == []
+    assert _cycle({"definition": {"plan"}, "plan": {"definition"}, "estimate": set()}) == [
+        "definition", "plan", "definition"]
+
+
 # The contact seam: only the dispatch module and the laws' own modules name a law's index.
 CONTACT_SEAM = {"kernels/contact.py", "kernels/contact_tied.py", "kernels/contact_spring.py",
                 "kernels/layout.py"}
@@ -141,6 +189,88 @@ def test_the_seam_check_sees_a_law_branch():
             "if settings.contact_law == SPRING:\n    pass\n"
             "spring = geometry[GEO_LAW] != layout.TIED\n")
     assert _law_uses(ast.parse(code)) == [1, 2, 4]
+
+
+# The configuration's seam (issue 33): a contact law, counterpart or shaker mount is named only
+# in its objects' module; elsewhere the code asks the object (``params.law.compliant``).
+CONFIGURATION_SEAM = {"configuration.py", "kernels/layout.py"}
+CONFIGURATION_NAMES = (set(configuration.LAWS) | set(configuration.COUNTERPARTS)
+                       | set(configuration.MOUNTS))
+# a name that means something else in a module: a stepped sweep's rows (up, down or "both")
+OTHER_MEANING = {("longtime.py", "both")}
+# data keyed by a law's name: the calibrated constants, written by benchmarks/calibrate_costs.py
+# from docs/benchmarks/costs.json (keyed so), looked up by `ContactLaw.name`
+KEYED_DATA = {("costs.py", "IMPACT_CYCLE")}
+CHOICE_KEYWORDS = {"contact_law", "counterpart", "shaker"}
+
+
+def _names_in(node: ast.AST | None, names: set[str]) -> bool:
+    """Whether ``node`` is one of ``names`` as a string, or a tuple, list or set holding one."""
+    if isinstance(node, ast.Constant):
+        return isinstance(node.value, str) and node.value in names
+    if isinstance(node, ast.Tuple | ast.List | ast.Set):
+        return any(_names_in(element, names) for element in node.elts)
+    return False
+
+
+def _name_branches(tree: ast.AST, names: set[str], keyed_data: set[str] = frozenset()) -> list[int]:
+    """Lines that branch on a variant's name: compared (``==``, ``in``), matched, a dict's key,
+    a subscript, ``.get``/``.index`` of one, or passed as ``contact_law=``/``counterpart=``/
+    ``shaker=``. ``keyed_data``: the names of assignments whose dict literals are data."""
+    skipped = {id(node) for assign in ast.walk(tree) if isinstance(assign, ast.Assign)
+               and any(isinstance(t, ast.Name) and t.id in keyed_data for t in assign.targets)
+               for node in ast.walk(assign.value)}
+    lines = []
+    for node in ast.walk(tree):
+        if id(node) in skipped:
+            continue
+        if isinstance(node, ast.Compare):
+            hit = any(_names_in(side, names) for side in (node.left, *node.comparators))
+        elif isinstance(node, ast.Dict):
+            hit = any(_names_in(key, names) for key in node.keys)
+        elif isinstance(node, ast.Subscript):
+            hit = _names_in(node.slice, names)
+        elif isinstance(node, ast.MatchValue):
+            hit = _names_in(node.value, names)
+        elif isinstance(node, ast.Call):
+            hit = ((isinstance(node.func, ast.Attribute) and node.func.attr in ("get", "index")
+                    and any(_names_in(arg, names) for arg in node.args[:1]))
+                   or any(k.arg in CHOICE_KEYWORDS and _names_in(k.value, names)
+                          for k in node.keywords))
+        else:
+            continue
+        if hit:
+            lines.append(node.lineno)
+    return sorted(set(lines))
+
+
+@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_configuration_branches_only_in_its_seam(path):
+    """A law, counterpart or shaker is asked through its object, never by its name (issue 33)."""
+    where = str(path.relative_to(PACKAGE))
+    if where in CONFIGURATION_SEAM:
+        return
+    names = CONFIGURATION_NAMES - {name for module, name in OTHER_MEANING if module == where}
+    keyed = {data for module, data in KEYED_DATA if module == where}
+    lines = _name_branches(ast.parse(path.read_text(), str(path)), names, keyed)
+    assert not lines, (f"{where}:{lines[0]} branches on a contact law's, counterpart's or "
+                       "shaker's name: ask its object (impactbeams.configuration) instead")
+
+
+def test_the_configuration_check_sees_the_old_branches():
+    """Each form of branch the package had before issue 33 is seen; names in text are not."""
+    code = ('if p.contact_law == "tied":\n    pass\n'
+            'beams = 1 if p.counterpart == "stop" else 2\n'
+            'WORDS = {("both", "beam"): "on both clamps"}\n'
+            'x = CLAMPS["beam1"]\n'
+            'law in {"spring"}\n'
+            'p.replace(contact_law="spring")\n'
+            'CONTACT_LAWS.index("tied")\n'
+            'match p.shaker:\n    case "beam2":\n        pass\n'
+            'message = "with contact_law = \'tied\' the shaker must carry both clamps"\n'
+            'COSTS = {"tied": 1.0}\n')
+    assert _name_branches(ast.parse(code), CONFIGURATION_NAMES, {"COSTS"}) == [1, 3, 4, 5, 6, 7,
+                                                                              8, 10]
 
 
 def _settings_records(tree: ast.AST) -> list[int]:

@@ -666,7 +666,7 @@ def test_sweep_memory_estimate_bounds_the_measured_peak(tmp_path):
     results, then the Dataset written), each with the part that grows with the cells
     (measured 1.6x and 1.7x)."""
     from impactbeams.sweep import run_sweep, write_sweep
-    from impactbeams.sweep.definition import expected_cost
+    from impactbeams.sweep.estimate import expected_cost
 
     sweep = sweep_from_mapping({"t_max": 0.3, "n_modes": 4, "axes": {
         "omega": {"min": 50.0, "max": 200.0, "num": 500},

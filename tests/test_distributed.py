@@ -129,7 +129,7 @@ def test_interrupted_client_resumes_from_saved_chunks(client, tmp_path):
 def test_the_client_holds_the_output_lock_while_the_cluster_computes(client, tmp_path):
     """The writes happen in the client: a run on the same output from another thread (as
     from another process) is refused while the cluster's chunks come in."""
-    from impactbeams.sweep.lock import OutputInUse, lock_path
+    from impactbeams.lock import OutputInUse, lock_path
 
     sweep = sweep_from_mapping(GRID, source="grid")
     out, refusals = tmp_path / "map.nc", []

@@ -51,6 +51,30 @@ def test_one_list_of_contact_laws():
     assert CONTACT_LAWS[0] == DEFAULT_CONTACT_LAW == Params().contact_law == "spring"
 
 
+def test_params_compose_the_configuration_objects():
+    """The flat keys name the objects (issue 33); the objects say what the strings did."""
+    from impactbeams import configuration as c
+
+    stop = Params(counterpart="stop", contact_law="tied", shaker="beam2")
+    assert (stop.law, stop.partner, stop.mount) == (c.TIED_LAW, c.STOP, c.BEAM2)
+    assert (Params().law, Params().partner, Params().mount) == (c.SPRING_LAW, c.BEAM, c.BOTH)
+    assert [law.index for law in (c.TIED_LAW, c.SPRING_LAW)] == [layout.TIED, layout.SPRING]
+    assert [(law.compliant, law.tangent_flow) for law in c.LAWS.values()] == [(True, True),
+                                                                             (False, False)]
+    assert [(p.beams, p.has_beam2) for p in c.COUNTERPARTS.values()] == [(2, True), (1, False)]
+    # the clamps moved and the words of each (shaker, counterpart), as the tables before
+    assert [m.clamps for m in c.MOUNTS.values()] == [(1.0, 1.0), (1.0, 0.0), (0.0, 1.0)]
+    assert {(m.name, p.name): m.place(p) for m in c.MOUNTS.values()
+            for p in c.COUNTERPARTS.values()} == {
+        ("both", "beam"): "on both clamps", ("beam1", "beam"): "on beam 1's clamp",
+        ("beam2", "beam"): "on beam 2's clamp", ("both", "stop"): "on beam 1's clamp and the stop",
+        ("beam1", "stop"): "on beam 1's clamp", ("beam2", "stop"): "on the stop"}
+    assert [m.moves_stop(c.STOP) for m in c.MOUNTS.values()] == [True, False, True]
+    assert not any(m.moves_stop(c.BEAM) for m in c.MOUNTS.values())
+    assert [m.shaken_beams(c.BEAM) for m in c.MOUNTS.values()] == [("1", "2"), ("1",), ("2",)]
+    assert {m.shaken_beams(c.STOP) for m in c.MOUNTS.values()} == {("1",)}
+
+
 def test_dir_shows_the_public_api():
     names = dir(impactbeams)
     assert names == sorted(impactbeams.__all__)

@@ -14,10 +14,15 @@ import pytest
 
 from coupled_beams import coupled_frequencies
 from impactbeams import Params, simulate
-from impactbeams.compliant import recommended_modes, resolution_modes, spring_contact
+from impactbeams.compliant import (
+    recommended_modes,
+    required_modes,
+    resolution_modes,
+    spring_contact,
+)
 from impactbeams.model import build_free_phase
 from impactbeams.modes import contact_frequencies
-from impactbeams.params import ParameterError
+from impactbeams.params import MAX_CONTACT_STIFFNESS, MAX_MODES, ParameterError
 from spring_modal_reference import spring_modal_contacts
 
 FIG3 = Params(contact_stiffness=1e4)  # the paper's Fig. 3 forcing, k = 1e4 N/m
@@ -78,6 +83,59 @@ def test_resolution_rule():
     k = 0.5 * (stiffness1[4] + stiffness1[5])  # between beam 1's 5th and 6th modes
     assert resolution_modes(free, k) >= 5
     assert recommended_modes(Params(contact_stiffness=k)) == 4 * resolution_modes(free, k)
+
+
+def _required_modes_built(params):
+    """`required_modes` as it was before issue 33: both beams' MAX_MODES modes built."""
+    free = build_free_phase(params, MAX_MODES)
+    return int(max(5, 4 * resolution_modes(free, params.contact_stiffness)))
+
+
+def _modal_tip_stiffnesses(params):
+    """Each free mode's omega^2 / Y(l)^2 (N/m), as `resolution_modes` computes it."""
+    free = build_free_phase(params, MAX_MODES)
+    return free.frequencies**2 / (free.tip1 - free.tip2) ** 2
+
+
+def test_required_modes_counts_as_many_as_building_them_all():
+    """The count without MAX_MODES modes per beam is the built count, at every kind of k.
+
+    Random geometries and stiffnesses from a soft contact to one past the 200th mode, both
+    counterparts, and the edges where a bit decides: k equal to a mode's modal tip stiffness
+    as `resolution_modes` computes it (that mode is not below k), and the floats either side.
+    """
+    rng = np.random.default_rng(33)
+    cases = []
+    for _ in range(40):
+        beam2 = {"l2": rng.uniform(0.05, 0.3), "EI2": rng.uniform(0.05, 2.0)}
+        params = Params(l1=rng.uniform(0.05, 0.3), EI1=rng.uniform(0.05, 2.0),
+                        rhoA1=rng.uniform(0.05, 1.0), contact_stiffness=10 ** rng.uniform(2, 12),
+                        **(beam2 if rng.uniform() < 0.5 else {"counterpart": "stop"}))
+        cases.append(params)
+        stiffnesses = _modal_tip_stiffnesses(params)
+        stiffnesses = stiffnesses[stiffnesses < MAX_CONTACT_STIFFNESS]
+        for edge in stiffnesses[rng.integers(0, stiffnesses.size, 3)]:
+            cases += [params.replace(contact_stiffness=float(k))
+                      for k in (edge, np.nextafter(edge, 0.0), np.nextafter(edge, np.inf))]
+    cases.append(Params(l1=0.3, l2=0.3, EI1=0.05, EI2=0.05, contact_stiffness=1e12))  # all soft
+    counts = [(required_modes(p), _required_modes_built(p)) for p in cases]
+    assert all(new == old for new, old in counts), counts
+    assert {old for _, old in counts} >= {5, 4 * MAX_MODES}  # the floor and the cap reached
+    assert len({old for _, old in counts}) > 30
+
+
+@pytest.mark.parametrize("params", [Params(), Params(counterpart="stop", contact_stiffness=1e9),
+                                    Params(contact_stiffness=1e3)], ids=["default", "stop", "soft"])
+def test_required_modes_builds_only_the_modes_that_decide(monkeypatch, params):
+    """At most 3 modes past n* per beam are built, not MAX_MODES (issue 33)."""
+    import impactbeams.modes
+
+    built = []
+    roots = impactbeams.modes.cantilever_roots
+    monkeypatch.setattr(impactbeams.modes, "cantilever_roots",
+                        lambda n: built.append(n) or roots(n))
+    count = max(5, required_modes(params)) // 4
+    assert built and max(built) <= count + 3, (built, count)
 
 
 # --- contacts against a different integrator of the same equations ------------------------------

@@ -112,3 +112,41 @@ def test_contact_law_and_stiffness_axes():
     # the tied law ignores the stiffness: its two columns are the same
     tied = ds.sel(contact_law="tied")
     assert np.array_equal(tied.impact_count[0], tied.impact_count[1])
+
+
+@pytest.mark.parametrize("how", ["run_sweep", "write_sweep", "cli"])
+def test_each_geometry_is_built_once_per_run(how, tmp_path, monkeypatch):
+    """The check of damped spring contacts builds what the plan needs; the plan takes it.
+
+    Before issue 33 a damped geometry was built twice by `run_sweep` and `write_sweep` (the
+    check, the plan) and three times by ``impactbeams run`` (its own check too). The map is
+    the same either way: the arrays taken are those built.
+    """
+    from impactbeams import packing
+    from impactbeams.cli import main
+    from impactbeams.sweep import plan, run_sweep, write_sweep
+
+    definition = {"t_max": 0.01, "n_modes": 5, "observables": ["impact_count"],
+                  "params": {"damping_ratio": 0.01, "contact_damping": 0.05,
+                             "contact_stiffness": 100.0},
+                  "axes": {"l1": {"min": 0.1, "max": 0.11, "num": 2},
+                           "omega": {"min": 50.0, "max": 60.0, "num": 2}}}
+    built = []
+    build = packing.dynamics_arrays
+    monkeypatch.setattr(packing, "dynamics_arrays",
+                        lambda params, n_modes: built.append(params.l1) or build(params, n_modes))
+    path = tmp_path / "sweep.toml"  # the same sweep as a file
+    path.write_text('t_max = 0.01\nn_modes = 5\nobservables = ["impact_count"]\n'
+                    "[params]\ndamping_ratio = 0.01\ncontact_damping = 0.05\n"
+                    "contact_stiffness = 100.0\n"
+                    "[axes.l1]\nmin = 0.1\nmax = 0.11\nnum = 2\n"
+                    "[axes.omega]\nmin = 50.0\nmax = 60.0\nnum = 2\n")
+    if how == "run_sweep":
+        run_sweep(sweep_from_mapping(definition))
+    elif how == "write_sweep":
+        write_sweep(sweep_from_mapping(definition), tmp_path / "out.nc")
+    else:
+        assert main(["run", str(path), "-o", str(tmp_path / "out.nc")]) == 0
+    assert sorted(built) == [0.1, 0.11]
+    assert plan._BUILT == []  # nothing kept past the run
+

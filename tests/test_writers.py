@@ -25,9 +25,9 @@ import xarray as xr
 
 from impactbeams.cli import main
 from impactbeams.io import WriteError
+from impactbeams.lock import OutputInUse, lock_path, output_lock
 from impactbeams.params import ParameterError
 from impactbeams.sweep import load_sweep, write_sweep
-from impactbeams.sweep.lock import OutputInUse, lock_path, output_lock
 
 # a first-impact map of 6 x 5 cells in 6 chunks of one omega line each: fast, and enough chunks
 # for a fault before, between and after them
@@ -80,7 +80,7 @@ def one_error_line(capsys):
 
 HOLDER = """
 import sys, time
-from impactbeams.sweep.lock import output_lock
+from impactbeams.lock import output_lock
 with output_lock(sys.argv[1]):
     print("locked", flush=True)
     time.sleep(120)

@@ -26,6 +26,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
+from impactbeams.configuration import counterpart_named
 from impactbeams.params import (
     CHOICES,
     MAX_CHUNK_CELLS,
@@ -80,7 +81,7 @@ def params_from_args(args: argparse.Namespace) -> Params:
     params = (Params.from_toml(require_input_file(args.params, "--params")) if args.params
               else Params())
     overrides = {n: getattr(args, n) for n in PARAMETERS if getattr(args, n, None) is not None}
-    if overrides.get("counterpart", params.counterpart) == "stop":
+    if not counterpart_named(overrides.get("counterpart", params.counterpart)).has_beam2:
         refuse_beam2([f"--{n.replace('_', '-')}" for n in overrides], "the command line")
     return params.replace(**overrides) if overrides else params
 
@@ -91,7 +92,7 @@ def _contact_frequencies(p: Params, n: int) -> list[float]:
     Tied: the roots of eq. (9) (against a stop: the clamped-pinned beam 1's); spring: the
     undamped contact oscillators at the n_modes that resolve the contact (at least n).
     """
-    if p.contact_law == "tied":  # no SciPy: eq. (9) is solved by impactbeams.brent
+    if p.law.projects:  # its own contact modes; no SciPy: eq. (9) is solved by impactbeams.brent
         from impactbeams.modes import contact_frequencies
 
         return contact_frequencies(p, n).tolist()
@@ -106,7 +107,7 @@ def _modes(args: argparse.Namespace) -> int:
     from impactbeams.modes import free_modes
 
     p = params_from_args(args)
-    beams = ("beam1",) if p.counterpart == "stop" else ("beam1", "beam2")
+    beams = ("beam1", "beam2")[:p.partner.beams]
     result = {
         "free": {beam: free_modes(getattr(p, "EI" + beam[-1]), getattr(p, "rhoA" + beam[-1]),
                                   getattr(p, "l" + beam[-1]), args.n).frequencies.tolist()
@@ -118,7 +119,7 @@ def _modes(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(result))
         return 0
-    against = " against a stop" if p.counterpart == "stop" else ""
+    against = f" {p.partner.words}" if p.partner.words else ""
     print(f"natural frequencies (rad/s); contact phase of the {p.contact_law} law{against}")
     print(f"{'mode':>4} " + " ".join(f"{'beam ' + b[-1] + ' free':>16}" for b in beams)
           + f" {'contact':>16}")
@@ -129,19 +130,20 @@ def _modes(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from impactbeams.lock import output_lock
     from impactbeams.preflight import require_input_file
     from impactbeams.sweep import load_sweep
-    from impactbeams.sweep.lock import output_lock
-    from impactbeams.sweep.plan import check_contact_phases
+    from impactbeams.sweep.plan import check_contact_phases, reusing_geometries
     from impactbeams.sweep.store import reporting_kept_chunks
 
     sweep = load_sweep(require_input_file(args.sweep, "sweep"))
     output = _sweep_output(args, sweep)
     _check_scheduler(args.scheduler)
     _check_threads(args)
-    check_contact_phases(sweep)
-    with reporting_kept_chunks(output), output_lock(output):  # before anything is printed,
-        return _locked_run(args, sweep, output)  # created or computed
+    with reusing_geometries():  # the check's geometries are the plan's
+        check_contact_phases(sweep)
+        with reporting_kept_chunks(output), output_lock(output):  # before anything is printed,
+            return _locked_run(args, sweep, output)  # created or computed
 
 
 def _locked_run(args: argparse.Namespace, sweep: Sweep, output: Path) -> int:
@@ -181,7 +183,7 @@ def _sweep_output(args: argparse.Namespace, sweep: Sweep) -> Path:
     An existing file there must be a netCDF file of impactbeams (reused if it is this sweep's).
     """
     from impactbeams.preflight import require_disk, require_netcdf, require_output_file
-    from impactbeams.sweep.definition import expected_file_size
+    from impactbeams.sweep.estimate import expected_file_size
 
     output = require_output_file(args.output or Path("results") / (Path(args.sweep).stem + ".nc"),
                                  "-o/--output", {".nc"}, "netCDF")
@@ -197,7 +199,8 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     """The run's size, expected cost and destination, on stderr."""
     from impactbeams.compilation import kernels_cached
     from impactbeams.costs import compile_estimate
-    from impactbeams.sweep.definition import expected_cost, run_kind
+    from impactbeams.sweep.definition import run_kind
+    from impactbeams.sweep.estimate import expected_cost
     from impactbeams.sweep.plan import entry_kernel
 
     long_time = sweep.long_time
@@ -209,7 +212,7 @@ def _announce(sweep: Sweep, output: Path, args: argparse.Namespace) -> None:
     grid = f"{' x '.join(map(str, sweep.shape))} = " if len(sweep.shape) > 1 else ""
     print(f"{sweep.source}: {grid}{sweep.size} cells over "
           f"{', '.join(a.name for a in sweep.axes)}{rows}; {horizon}, "
-          f"{modes_per_beam(sweep.n_modes, sweep.base.counterpart)} -> {output}\nexpected: "
+          f"{modes_per_beam(sweep.n_modes, sweep.base.partner)} -> {output}\nexpected: "
           f"{expected_cost(sweep, args.threads).describe()}"
           + ("" if kernels_cached(run_kind(sweep), entry_kernel(sweep)) else
              f", after compiling its kernels (once per install), expected "
@@ -339,8 +342,8 @@ def _continue(args: argparse.Namespace) -> int:
         saved_points,
     )
     from impactbeams.continuation.run import orbits_problem
+    from impactbeams.lock import output_lock
     from impactbeams.preflight import require_input_file
-    from impactbeams.sweep.lock import output_lock
     from impactbeams.sweep.store import partial_folder
 
     continuation = load_continuation(require_input_file(args.file, "continuation"))
@@ -379,7 +382,7 @@ def _continuation_cost(continuation: Continuation) -> str:
     per_point, points = continuation_point_seconds(state_size(continuation)), fewest_points(
         continuation)
     return (f"about {per_point * 1e3:.2g} ms of CPU per branch point with "
-            f"{modes_per_beam(mode_count(continuation), continuation.params.counterpart)} "
+            f"{modes_per_beam(mode_count(continuation), continuation.params.partner)} "
             f"(measured on the shipped soft stop: stiffer contacts cost more), and at least "
             f"{points} points at max_step ({per_point * points:.2g} s), after the start "
             f"({continuation.transient_periods} transient periods): a floor only, as each "
@@ -465,8 +468,8 @@ def _short_branches(dataset: xr.Dataset, continuation: Continuation) -> list[str
 def _simulate(args: argparse.Namespace) -> int:
     from impactbeams.costs import clearance_hint
     from impactbeams.io import write_netcdf
+    from impactbeams.lock import output_lock
     from impactbeams.preflight import require_output_file
-    from impactbeams.sweep.lock import output_lock
     from impactbeams.trajectory import simulate
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")

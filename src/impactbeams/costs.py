@@ -43,6 +43,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from impactbeams.configuration import BEAM, ContactLaw, Counterpart
+
 if TYPE_CHECKING:
     from impactbeams.params import Params
 
@@ -273,18 +275,19 @@ def clearance_hint(params: Params, t_max: float) -> str | None:
             f"({params.clearance:g} mm is {params.clearance * 1e-3:g} m)")
 
 
-def dynamics_seconds(values: Mapping[str, Any], law: str, n_modes: int, horizon: Any,
-                     kind: str, counterpart: str = "beam") -> np.ndarray:
+def dynamics_seconds(values: Mapping[str, Any], law: ContactLaw, n_modes: int, horizon: Any,
+                     kind: str, partner: Counterpart = BEAM) -> np.ndarray:
     """Seconds on one core of full-dynamics runs over ``horizon`` (s), per point of ``values``.
 
     ``kind``: of ``IMPACT_CYCLE`` (dynamics, lyapunov, long_time, simulate); ``law``: the
     contact law of every point. The constants are per mode of each of two beams: against a
-    stop (``counterpart``), beam 1's ``n_modes`` coordinates cost as half as many per beam.
+    stop (``partner`` of one beam), beam 1's ``n_modes`` coordinates cost as half as many per
+    beam.
     """
-    scale, power = IMPACT_CYCLE[kind][law]
+    scale, power = IMPACT_CYCLE[kind][law.name]
     free = LYAPUNOV_FREE_CYCLE if kind == "lyapunov" else FREE_CYCLE
     share = impacting_fraction(values, n_modes, horizon)
-    per_beam = n_modes / 2 if counterpart == "stop" else n_modes
+    per_beam = n_modes * partner.beams / 2
     per_cycle = share * scale * per_beam**power + (1.0 - share) * free * per_beam
     return cycles(values, horizon) * per_cycle
 

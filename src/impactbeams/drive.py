@@ -12,24 +12,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from impactbeams.params import SHAKERS, require
+from impactbeams.configuration import MOUNTS
+from impactbeams.params import require
 
 if TYPE_CHECKING:
     from impactbeams.contact import FreePhase, ModalModel
     from impactbeams.modes import BeamShapes
     from impactbeams.params import Params
-
-# which clamps each ``shaker`` value moves (beam 1's, beam 2's): both beams' (one shaker under
-# the whole rig), beam 1's, or beam 2's (the counterpart's: with a fixed stop, the stop's mount)
-CLAMPS_MOVED = dict(zip(SHAKERS, ((1.0, 1.0), (1.0, 0.0), (0.0, 1.0)), strict=True))
-
-
-# where the shaker sits, in words, by (shaker, counterpart): a stop's mount is beam 2's clamp
-SHAKER_WORDS = {("both", "beam"): "on both clamps", ("beam1", "beam"): "on beam 1's clamp",
-                ("beam2", "beam"): "on beam 2's clamp",
-                ("both", "stop"): "on beam 1's clamp and the stop",
-                ("beam1", "stop"): "on beam 1's clamp", ("beam2", "stop"): "on the stop"}
-
 
 def drive_summary(params: Params) -> str:
     """One line naming every drive of ``params``, e.g. for a command's header.
@@ -39,8 +28,8 @@ def drive_summary(params: Params) -> str:
     """
     drives = [f"tip force F0 = {params.force_amplitude:g} N"] if params.force_amplitude else []
     if params.base_amplitude:
-        words = SHAKER_WORDS[params.shaker, params.counterpart]
-        moving_stop = params.counterpart == "stop" and params.shaker != "beam1"
+        words = params.mount.place(params.partner)
+        moving_stop = params.mount.moves_stop(params.partner)
         drives.append(f"base motion U0 = {params.base_amplitude:g} m {words}" + (
             " (the stop moves with the shaker: shaker = 'beam1' keeps it fixed)" if moving_stop
             else ""))
@@ -49,7 +38,7 @@ def drive_summary(params: Params) -> str:
 
 def moving_clamps(shaker: str) -> tuple[float, float]:
     """(1.0 if beam 1's clamp moves else 0.0, likewise beam 2's) for a ``shaker`` value."""
-    return CLAMPS_MOVED[shaker]
+    return MOUNTS[shaker].clamps
 
 
 def participation(shapes: BeamShapes, rhoA: float) -> np.ndarray:
@@ -78,7 +67,7 @@ def check_steady(params: Params, free: FreePhase) -> None:
 
 def base_participation(params: Params, free: FreePhase) -> np.ndarray:
     """Each free mode's ``Gamma_n`` if the shaker moves its beam's clamp, else 0 (kg^1/2)."""
-    moves1, moves2 = moving_clamps(params.shaker)
+    moves1, moves2 = params.mount.clamps
     return np.concatenate([moves1 * participation(free.beam1.shapes, params.rhoA1),
                            moves2 * participation(free.beam2.shapes, params.rhoA2)])
 
@@ -90,8 +79,8 @@ def contact_participation(model: ModalModel) -> np.ndarray:
     would move the tied tips' clearance too.
     """
     p, contact = model.params, model.contact
-    moves1, moves2 = moving_clamps(p.shaker)
+    moves1, moves2 = p.mount.clamps
     gamma = moves1 * participation(contact.beam1, p.rhoA1)
-    if p.counterpart == "stop":  # the contact modes live on beam 1: a stop's mount moves no mass
+    if not p.partner.has_beam2:  # the contact modes live on beam 1: a stop's mount moves no mass
         return gamma
     return gamma + moves2 * participation(contact.beam2, p.rhoA2)

@@ -188,9 +188,9 @@ def contact_frequencies(params: Params, n: int) -> np.ndarray:
     Coincident free frequencies (equal tip-to-tip beams) are themselves contact frequencies;
     next to such a double pole the secular function has a simple zero at the bracket end, so
     that end is moved inside by a relative 1e-9 of the bracket width before root finding.
-    Against a stop (``params.counterpart``): the clamped-pinned beam 1's, roots of tan b = tanh b.
+    Against a stop (``params.partner``): the clamped-pinned beam 1's, roots of tan b = tanh b.
     """
-    if params.counterpart == "stop":
+    if not params.partner.has_beam2:
         return clamped_pinned_modes(params.EI1, params.rhoA1, params.l1, n).frequencies
     poles = _merged_free_frequencies(params, n + 1)
     coincident = np.diff(poles) <= _COINCIDENT * poles[1:]
@@ -257,7 +257,7 @@ def clamped_pinned_modes(EI: float, rhoA: float, length: float, n: int) -> Conta
 
 def contact_modes(params: Params, n: int) -> ContactModes:
     """First ``n`` mass-normalised modes of the contact phase (tied tips, or a stop)."""
-    if params.counterpart == "stop":
+    if not params.partner.has_beam2:
         return clamped_pinned_modes(params.EI1, params.rhoA1, params.l1, n)
     omega = contact_frequencies(params, n)
     a1, a2 = params.wave_constant

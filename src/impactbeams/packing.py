@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from impactbeams.configuration import SPRING_LAW
 from impactbeams.kernels import layout
 from impactbeams.kernels.forcing import run_inputs
 
@@ -109,12 +110,10 @@ def geometry_row(params: Params, free: FreePhase, spring: SpringContact | None =
     dynamics.run_events), the contact law, the spring law's effective k_e, c_e, the clamps the
     shaker moves and the initial state.
     """
-    from impactbeams.drive import moving_clamps
-
-    shaker1, shaker2 = moving_clamps(params.shaker)
+    shaker1, shaker2 = params.mount.clamps
     fields = {"c1": params.tip_compliance[0], "c2": params.tip_compliance[1],
               "accumulation": math.pi / np.max(free.frequencies),
-              "contact_law": layout.CONTACT_LAWS.index(params.contact_law),
+              "contact_law": params.law.index,
               "contact_stiffness": spring.effective_stiffness if spring else 0.0,
               "contact_damping": spring.effective_damping if spring else 0.0,
               "residual1": spring.residual1 if spring else 0.0,
@@ -160,7 +159,7 @@ def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
     """
     from impactbeams.contact import build_free_phase, build_tied_model, spring_contact
 
-    if params.contact_law == "tied":
+    if params.law.projects:
         model = build_tied_model(params, n_modes)
         tables, shifts = phase_tables(model)
         return Dynamics(params, model.free, model, None, bases(model), tables,
@@ -295,7 +294,7 @@ def reduced_model(params: Params, n_modes: int) -> ReducedModel:
     from impactbeams.contact import build_free_phase, spring_contact
     from impactbeams.params import ParameterError
 
-    for name, value, allowed in (("contact_law", params.contact_law, "spring"),
+    for name, value, allowed in (("contact_law", params.contact_law, SPRING_LAW.name),
                                  ("contact_damping", params.contact_damping, 0.0),
                                  ("base_amplitude", params.base_amplitude, 0.0)):
         if value != allowed:

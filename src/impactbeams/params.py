@@ -57,6 +57,8 @@ from typing import Any
 
 import numpy as np
 
+from impactbeams import configuration
+from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount
 from impactbeams.kernels import layout
 from impactbeams.variables import PARAMETERS
 
@@ -295,21 +297,21 @@ def check_range(name: str, value: Any, point: PointName = no_point) -> None:
 
 
 def check_joint(values: Mapping[str, Any], point: PointName = no_point,
-                counterpart: str = "beam", shaker: str = "both") -> None:
+                partner: Counterpart = BEAM, mount: Mount = BOTH) -> None:
     """Raise ParameterError unless the resolved parameters are jointly allowed.
 
     ``values``: every numeric field of [`Params`][] (EI/rhoA form), as floats or arrays that
     broadcast against each other (a sweep's corner grid). Each condition is monotone in every
     parameter, so a sweep that passes at the corners of its box passes everywhere. Against a
-    ``counterpart = "stop"`` beam 1 alone closes the clearance, and uplift2 must be 0.
+    ``partner`` without beam 2 (a stop) beam 1 alone closes the clearance, and uplift2 must be 0.
 
     Small deflections bound every drive by a tip deflection of MAX_DEFLECTION times the
     beam's length: the tip force by its static deflection F0 l1^3 / (3 EI1), the shaker by
-    its own motion U0, which each beam it carries (``shaker``; a stop's mount drives beam 1)
+    its own motion U0, which each beam it carries (``mount``; a stop's mount drives beam 1)
     passes to its tip against a counterpart that does not follow, and more near a resonance.
     """
     v = {name: np.asarray(value, dtype=float) for name, value in values.items()}
-    stop = counterpart == "stop"
+    stop = not partner.has_beam2
     if stop:
         require_all("uplift2", v["uplift2"], v["uplift2"] == 0, point, lambda j: (
             "must be 0 with counterpart = 'stop' (there is no beam 2 to lift)"))
@@ -332,11 +334,13 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
                     f"its static tip deflection F0 l1^3 / (3 EI1) = {value_at(static, j):.3g} m",
                     "l1", v["l1"], j) + ", i.e. force_amplitude <= "
                 f"{MAX_DEFLECTION * value_at(v['l1'] / compliance, j):.3g} N for this beam 1")
-    shaken = _shaken_length(v, counterpart, shaker)
+    beams = mount.shaken_beams(partner)
+    shaken = v["l" + beams[0]] if len(beams) == 1 else np.minimum(v["l1"], v["l2"])
     require_all("base_amplitude", v["base_amplitude"],
                 v["base_amplitude"] <= MAX_DEFLECTION * shaken, point,
                 lambda j: _deflection_rule(
-                    "the shaker's motion", _SHAKEN[counterpart == "stop" or shaker][1], shaken, j))
+                    "the shaker's motion", "l" + beams[0] if len(beams) == 1 else "min(l1, l2)",
+                    shaken, j))
     for i in ("1", "2"):
         fundamental = (np.sqrt(v[f"EI{i}"] / v[f"rhoA{i}"])
                        * (FIRST_CANTILEVER_ROOT / v[f"l{i}"]) ** 2)
@@ -346,18 +350,6 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
                         f" = {value_at(f, j):.3g} rad/s must be <= {MAX_FREQUENCY:g} rad/s: a "
                         "continuum beam model does not hold at higher frequencies (check "
                         f"l{i}, EI{i}, rhoA{i} or the material keys)"))
-
-
-# the beams a shaker's motion deflects: by shaker, or True against a stop (its mount or beam 1's
-# clamp, or both, move beam 1 only), and how a message names their shortest length
-_SHAKEN = {"both": (("1", "2"), "min(l1, l2)"), "beam1": (("1",), "l1"),
-           "beam2": (("2",), "l2"), True: (("1",), "l1")}
-
-
-def _shaken_length(values: Mapping[str, np.ndarray], counterpart: str, shaker: str) -> Any:
-    """The shortest beam the shaker's motion deflects (m, elementwise)."""
-    lengths = [values["l" + i] for i in _SHAKEN[counterpart == "stop" or shaker][0]]
-    return np.minimum(*lengths) if len(lengths) == 2 else lengths[0]
 
 
 def value_at(array: Any, index: tuple[int, ...]) -> float:
@@ -397,16 +389,15 @@ def hertz_stiffness(tip_radius: float, force: float, youngs_modulus1: float = ST
     return (6.0 * contact_modulus**2 * tip_radius * force) ** (1.0 / 3.0)
 
 
-DEFAULT_CONTACT_LAW = "spring"  # compliant: its first contacts converge in the number of modes
-# the kernels' laws (one list: layout.CONTACT_LAWS, whose order is the kernels' integer codes),
-# offered to users the default first
-CONTACT_LAWS = (DEFAULT_CONTACT_LAW,
-                *(law for law in layout.CONTACT_LAWS if law != DEFAULT_CONTACT_LAW))
+# the laws, counterparts and shaker mounts by name (`impactbeams.configuration`), the default
+# first: the spring law, whose first contacts converge in the number of modes
+CONTACT_LAWS = tuple(configuration.LAWS)
+DEFAULT_CONTACT_LAW = CONTACT_LAWS[0]
 # what beam 1's tip meets: beam 2's tip, or a fixed rigid stop (no modes, no compliance)
-COUNTERPARTS = ("beam", "stop")
-# keys that describe beam 2: refused when given with counterpart = "stop"
+COUNTERPARTS = tuple(configuration.COUNTERPARTS)
+# keys that describe beam 2: refused when given with a counterpart that has no beam 2
 BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS))
-SHAKERS = ("both", "beam1", "beam2")  # which clamps the shaker carries (impactbeams.drive)
+SHAKERS = tuple(configuration.MOUNTS)  # which clamps the shaker carries (impactbeams.drive)
 # the parameters whose value is a name, and the names allowed (the default first)
 CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS, "shaker": SHAKERS,
            "start": layout.STARTS}
@@ -419,9 +410,12 @@ MOVING_STOP = ("shaker = 'both' (the default) moves the stop with beam 1's clamp
 DRIVES = ("force_amplitude", "base_amplitude")  # their defaults depend on which are given
 
 
-def moving_stop(stop: bool, shaken: bool, shaker: str, named: bool) -> str | None:
-    """`MOVING_STOP` where a ``stop`` on a shaker (``shaken``) moves with it unasked."""
-    return MOVING_STOP if stop and shaken and shaker == "both" and not named else None
+def moving_stop(stop: bool, shaken: bool, named: bool) -> str | None:
+    """`MOVING_STOP` where a ``stop`` on a shaker (``shaken``) moves with it unasked.
+
+    ``named``: whether the shaker was given; one not given carries both clamps (the default).
+    """
+    return MOVING_STOP if stop and shaken and not named else None
 
 
 DEFAULT_TIP_RADIUS = 1e-3  # m, of the default contact stiffness
@@ -454,9 +448,9 @@ class Params:
     contact_law: str = DEFAULT_CONTACT_LAW
     contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS
     contact_damping: float = 0.0
-    counterpart: str = "beam"
+    counterpart: str = BEAM.name
     base_amplitude: float | None = None  # 0.0; None: not given (`_resolve_drives`)
-    shaker: str = "both"
+    shaker: str = BOTH.name
     start: str = "rest"
 
     def __init__(self, **values: Any) -> None:
@@ -476,7 +470,7 @@ class Params:
                     f"must be one of {', '.join(map(repr, allowed))}")
         for name in self.numeric_names():
             self._set_checked(name, getattr(self, name))
-        if self.counterpart == "stop":
+        if not self.partner.has_beam2:
             for field in dataclasses.fields(Params):
                 if field.name in BEAM2_KEYS:
                     require(field.name, getattr(self, field.name),
@@ -491,12 +485,12 @@ class Params:
 
     def _check_together(self) -> None:
         """The joint rules of the numeric parameters and the choices."""
-        check_joint(self.numeric(), counterpart=self.counterpart, shaker=self.shaker)
+        check_joint(self.numeric(), partner=self.partner, mount=self.mount)
         # with one clamp moving, the tied tips' quasi-static part would carry a moving
         # clearance: not built
         require("base_amplitude", self.base_amplitude,
-                self.base_amplitude == 0.0 or self.contact_law == "spring"
-                or self.shaker == "both",
+                self.base_amplitude == 0.0 or self.law.tangent_flow
+                or self.mount.clamps == BOTH.clamps,
                 "with contact_law = 'tied' the shaker must carry both clamps (shaker = 'both', "
                 f"not {self.shaker!r}), or use contact_law = 'spring'")
 
@@ -528,6 +522,21 @@ class Params:
         return {name: getattr(self, name) for name in self.numeric_names()}
 
     @property
+    def law(self) -> ContactLaw:
+        """The contact law (`impactbeams.configuration.ContactLaw`) named by ``contact_law``."""
+        return configuration.LAWS[self.contact_law]
+
+    @property
+    def partner(self) -> Counterpart:
+        """What beam 1's tip meets (`impactbeams.configuration.Counterpart`): ``counterpart``."""
+        return configuration.COUNTERPARTS[self.counterpart]
+
+    @property
+    def mount(self) -> Mount:
+        """The clamps the shaker carries (`impactbeams.configuration.Mount`): ``shaker``."""
+        return configuration.MOUNTS[self.shaker]
+
+    @property
     def shaker_named(self) -> bool:
         """Whether ``shaker`` was given (not left to its default, "both")."""
         return getattr(self, "_shaker_named", True)
@@ -539,7 +548,7 @@ class Params:
         mount with beam 1's clamp (a shaker table with both on it): the gap sees only beam 1's
         motion relative to its clamp. Said once per run where the shaker was not named.
         """
-        return moving_stop(self.counterpart == "stop", self.base_amplitude > 0.0, self.shaker,
+        return moving_stop(not self.partner.has_beam2, self.base_amplitude > 0.0,
                            self.shaker_named)
 
     @property
@@ -553,7 +562,7 @@ class Params:
 
         A rigid stop gives way by nothing: c2 = 0.
         """
-        c2 = 0.0 if self.counterpart == "stop" else self.l2**3 / (3 * self.EI2)
+        c2 = self.l2**3 / (3 * self.EI2) if self.partner.has_beam2 else 0.0
         return self.l1**3 / (3 * self.EI1), c2
 
     @property
@@ -573,7 +582,7 @@ class Params:
         is ``Params(base_amplitude=U0)``, a shaker study without tip force.
         """
         if changes.keys() <= set(self.numeric_names()) - set(DRIVES) and not (
-                self.counterpart == "stop" and changes.keys() & set(BEAM2_KEYS)):
+                not self.partner.has_beam2 and changes.keys() & set(BEAM2_KEYS)):
             # numbers other than the drives, on parameters already checked: only the changes
             # and the joint rules need checking (a continuation changes one per period map)
             changed = copy.copy(self)
@@ -588,7 +597,8 @@ class Params:
         for i in ("1", "2"):
             if any(k + i in changes for k in MATERIAL_KEYS):
                 del base["EI" + i], base["rhoA" + i]
-        if changes.get("counterpart", self.counterpart) == "stop":  # beam 2 left at defaults
+        if not configuration.counterpart_named(changes.get("counterpart", self.counterpart)
+                                               ).has_beam2:  # beam 2 left at its defaults
             base = {key: value for key, value in base.items() if key not in BEAM2_KEYS}
         return Params.from_mapping({**base, **changes})
 
@@ -617,9 +627,9 @@ class Params:
 _NO_BEAM2 = "counterpart = 'stop' has no beam 2: leave beam 2's keys out"
 
 
-def modes_per_beam(n_modes: int, counterpart: str) -> str:
+def modes_per_beam(n_modes: int, partner: Counterpart) -> str:
     """``"16 modes per beam"``, or against a stop (one beam) ``"16 modes of beam 1"``."""
-    return f"{n_modes} modes {'of beam 1' if counterpart == 'stop' else 'per beam'}"
+    return f"{n_modes} modes {partner.modes_words}"
 
 
 def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
@@ -634,7 +644,7 @@ def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
     for key in values:
         if key not in PARAMETERS:
             raise unknown_key("parameter", key, source, sorted(PARAMETERS))
-    if values.get("counterpart") == "stop":
+    if not configuration.counterpart_named(values.get("counterpart")).has_beam2:
         refuse_beam2([key for key in values if given_fields or key[:-1] in MATERIAL_KEYS],
                      source)
     return resolve_materials(values, source)

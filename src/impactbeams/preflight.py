@@ -98,15 +98,15 @@ def machine_memory() -> int:
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
-def require_memory(what: str, cost: Cost, advice: str) -> None:
-    """Raise ParameterError if ``cost.memory`` exceeds MEMORY_FRACTION of this machine's memory.
+def require_memory(what: str, memory: float, advice: str) -> None:
+    """Raise ParameterError if ``memory`` (bytes) exceeds MEMORY_FRACTION of this machine's.
 
     ``what`` names the input and its value; ``advice`` says what to change.
     """
     physical = machine_memory()
-    if cost.memory > MEMORY_FRACTION * physical:
+    if memory > MEMORY_FRACTION * physical:
         raise ParameterError(f"{what} is not allowed: it needs about "
-                             f"{format_bytes(cost.memory)} of memory, more than "
+                             f"{format_bytes(memory)} of memory, more than "
                              f"{MEMORY_FRACTION:.0%} of this machine's {format_bytes(physical)}: "
                              f"{advice}")
 

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from impactbeams.configuration import LAWS, counterpart_named
+
 if TYPE_CHECKING:
     import xarray as xr
 
@@ -24,16 +26,6 @@ DAMPING_LAW = ("modal: each cantilever mode's whole coordinate eta_n = <y, Y_n> 
                "eta'' + 2 zeta omega_n eta' + omega_n^2 eta = generalised force, quasi-static "
                "part included (mass- or stiffness-proportional and modal damping all give this; "
                "docs/model.md)")
-
-
-CONTACT_LAW_NOTES = {
-    "spring": "compliant tip contact R = -k g - c g' while positive, free coordinates kept in "
-              "both phases, static correction of the missed modes; the first contacts and "
-              "episodes' totals converge in n_modes, the chaotic trace after the first rattle "
-              "does not (docs/model.md, Compliant contact)",
-    "tied": "the paper's tied tips with projections at the switches; results after the first "
-            "impact do not converge in n_modes (docs/model.md)",
-}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -523,7 +515,7 @@ def global_attributes(title: str, action: str, parameters: Mapping[str, Any],
         "source": f"impactbeams {__version__}",
         "references": REFERENCES,
         "damping_law": DAMPING_LAW,
-        **({"contact_law_note": CONTACT_LAW_NOTES[parameters["contact_law"]]}
+        **({"contact_law_note": LAWS[parameters["contact_law"]].note}
            if "contact_law" in parameters else {}),
         **run,
         **_described(parameters),
@@ -532,7 +524,7 @@ def global_attributes(title: str, action: str, parameters: Mapping[str, Any],
 
 def _described(parameters: Mapping[str, Any]) -> dict[str, Any]:
     """The parameters that describe the run: against a stop, none of beam 2's (its defaults)."""
-    if parameters.get("counterpart") != "stop":
+    if counterpart_named(parameters.get("counterpart")).has_beam2:
         return dict(parameters)
     return {name: value for name, value in parameters.items() if name not in _BEAM2_FIELDS}
 

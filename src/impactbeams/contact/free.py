@@ -86,7 +86,7 @@ def build_free_phase(params: Params, n_modes: int) -> FreePhase:
     p = params
     c1, c2 = p.tip_compliance
     beam1 = free_modes(p.EI1, p.rhoA1, p.l1, n)
-    beam2 = free_modes(p.EI2, p.rhoA2, p.l2, 0 if p.counterpart == "stop" else n)
+    beam2 = free_modes(p.EI2, p.rhoA2, p.l2, n if p.partner.has_beam2 else 0)
     n2 = beam2.frequencies.size
     frequencies = np.concatenate([beam1.frequencies, beam2.frequencies])
     tip1 = np.concatenate([beam1.shapes.tip(), np.zeros(n2)])

@@ -40,7 +40,8 @@ from collections.abc import Callable
 import numpy as np
 
 from impactbeams.blas import one_blas_thread
-from impactbeams.contact.free import FreePhase, build_free_phase
+from impactbeams.contact.free import FreePhase
+from impactbeams.modes import free_modes
 from impactbeams.params import MAX_MODES, ParameterError, Params
 
 __all__ = ["SpringContact", "rank_one_modes", "recommended_modes", "required_modes",
@@ -295,10 +296,35 @@ def _overdamped(modes: Callable[[float], object], damping: float, damping_ratio:
 def required_modes(params: Params) -> int:
     """n_modes per beam that resolves the spring contact of ``params``: 4 n*, at least 5.
 
-    May exceed the package's limit of ``MAX_MODES`` for a very stiff contact.
+    n* is `resolution_modes` of ``MAX_MODES`` modes per beam, counted on as few of them as
+    decide it (`_softer_modes`). May exceed the package's limit of ``MAX_MODES`` for a very
+    stiff contact.
     """
-    free = build_free_phase(params, MAX_MODES)
-    return int(max(5, 4 * resolution_modes(free, params.contact_stiffness)))
+    p, k = params, params.contact_stiffness
+    counts = [_softer_modes(p.EI1, p.rhoA1, p.l1, k)]
+    if p.partner.has_beam2:
+        counts.append(_softer_modes(p.EI2, p.rhoA2, p.l2, k))
+    return int(max(5, 4 * max(counts)))
+
+
+def _softer_modes(EI: float, rhoA: float, length: float, stiffness: float) -> int:
+    """How many of a cantilever's first ``MAX_MODES`` modes are softer at the tip than k (N/m).
+
+    Mode n's modal tip stiffness omega_n^2 / Y_n(l)^2 is EI b_n^4 / (4 l^3) (mass-normalised
+    cantilever modes all have Y_n(l)^2 = 4 / (rhoA l)): it rises with n, so the soft modes come
+    first and the count is settled by the first stiff one. The modes are built as
+    `build_free_phase` builds them (each mode's values do not depend on how many are built),
+    from a few past b* = (4 k l^3 / EI)^(1/4) (b_n is about (n - 1/2) pi), more if all of
+    those are soft: the same count as `resolution_modes` of ``MAX_MODES`` modes, bit for bit.
+    """
+    b_soft = (4.0 * stiffness * length**3 / EI) ** 0.25
+    n = min(MAX_MODES, int(b_soft / math.pi) + 3)
+    while True:
+        modes = free_modes(EI, rhoA, length, n)
+        soft = modes.frequencies**2 / modes.shapes.tip()**2 < stiffness
+        if not soft[-1] or n == MAX_MODES:
+            return int(np.sum(soft))
+        n = min(2 * n, MAX_MODES)
 
 
 def recommended_modes(params: Params) -> int:

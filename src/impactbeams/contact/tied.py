@@ -80,7 +80,7 @@ def _free_on_beam(shapes: BeamShapes, n_before: int, n_after: int, x: np.ndarray
 def build_tied_model(params: Params, n_modes: int) -> ModalModel:
     """The tied law's modal model: ``n_modes`` free modes per beam and as many contact modes."""
     free = build_free_phase(params, n_modes)
-    if params.counterpart == "stop":
+    if not params.partner.has_beam2:
         return _stop_model(params, free)
     n = free.beam1.frequencies.size
     p = params

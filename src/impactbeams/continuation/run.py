@@ -252,7 +252,7 @@ def orbits_problem(c: Continuation) -> BeamOrbits:
 
 def state_size(c: Continuation) -> int:
     """The section state's length 2 N: positions and velocities of the free coordinates."""
-    return 2 * (1 if c.params.counterpart == "stop" else 2) * mode_count(c)
+    return 2 * c.params.partner.beams * mode_count(c)
 
 
 def fewest_points(c: Continuation) -> int:

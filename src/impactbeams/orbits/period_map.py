@@ -481,7 +481,7 @@ def _between_contacts(contact: np.ndarray) -> list[list[int]]:
 
 def check_law(params: Params) -> None:
     """Raise ParameterError unless the law has tangent dynamics (the spring law)."""
-    if params.contact_law != "spring":
+    if not params.law.tangent_flow:
         raise ParameterError("periodic orbits need the spring contact law: the tied law's "
                              "projections, instantaneous impacts and accumulations are not a "
                              "flow whose linearisation converges in n_modes (docs/model.md)")

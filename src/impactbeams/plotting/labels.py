@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from impactbeams.drive import SHAKER_WORDS
+from impactbeams.configuration import MOUNTS, counterpart_named
 from impactbeams.variables import LONG_TIME_VARIABLES, PARAMETERS, VARIABLES
 
 if TYPE_CHECKING:
@@ -145,7 +145,8 @@ def base_motion(amplitude: float, attrs: Mapping[str, Any]) -> str:
 
 def shaker_place(attrs: Mapping[str, Any]) -> str:
     """Where the shaker of ``attrs`` sits, e.g. ``"on both clamps"`` (``""`` if not said)."""
-    return SHAKER_WORDS.get((attrs.get("shaker"), attrs.get("counterpart", "beam")), "")
+    mount = MOUNTS.get(attrs.get("shaker"))
+    return mount.place(counterpart_named(attrs.get("counterpart"))) if mount else ""
 
 
 def case_title(dataset: PlainDataset | xr.Dataset, variable: str, shown: tuple[str, ...]) -> str:
@@ -183,6 +184,7 @@ def _run_settings(attrs: Mapping[str, Any], law: bool, long_time: bool) -> list[
         parts.append(f"{attrs['n_modes']} modes")
     if law and "contact_law" in attrs:
         parts.append(f"{attrs['contact_law']} law")
-    if attrs.get("counterpart") == "stop":
-        parts.append("against a stop")
+    against = counterpart_named(attrs.get("counterpart")).words
+    if against:
+        parts.append(against)
     return parts

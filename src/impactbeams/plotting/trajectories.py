@@ -13,6 +13,7 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from impactbeams.configuration import BEAM, LAWS, counterpart_named
 from impactbeams.plotting.arrays import PlainDataset
 from impactbeams.plotting.files import save_figure
 from impactbeams.plotting.labels import base_motion, quantity
@@ -22,7 +23,7 @@ _MICRO = 1e6  # m -> µm
 _MILLI = 1e3  # N -> mN, s -> ms
 _LEGEND_ROOM = 1.3  # a force panel's top over its largest peak: a row of legend above them
 # the tips in mathtext, as in docs/model.md: y2 is drawn minus the clearance
-_TIP1, _TIP2 = "$y_1(l_1)$", r"$y_2(l_2) - \Delta$"
+_TIP1, _TIP2 = "$y_1(l_1)$", BEAM.second_tip
 
 
 def _parameter(dataset: xr.Dataset, name: str) -> str:
@@ -43,9 +44,12 @@ def _law(dataset: xr.Dataset) -> str:
     """Contact law, its stiffness and the number of modes, e.g. for a column title."""
     a = dataset.attrs
     modes = f"{a.get('n_modes', '?')} modes"
-    if a.get("contact_law") != "spring":
-        return f"tied law, {modes}" if "contact_law" in a else modes
-    text = f"spring law, {_parameter(dataset, 'contact_stiffness')}"
+    if "contact_law" not in a:
+        return modes
+    law = LAWS[a["contact_law"]]
+    if not law.compliant:
+        return f"{law.name} law, {modes}"
+    text = f"{law.name} law, {_parameter(dataset, 'contact_stiffness')}"
     if a.get("contact_damping", 0.0):
         text += f", {_parameter(dataset, 'contact_damping')}"
     resolved = a.get("contact_resolved", 1)
@@ -53,17 +57,16 @@ def _law(dataset: xr.Dataset) -> str:
 
 
 def _title(dataset: xr.Dataset) -> str:
-    against = ", against a stop" if dataset.attrs.get("counterpart") == "stop" else ""
-    return f"{_case(dataset)}{against}\n{_law(dataset)}"
+    against = counterpart_named(dataset.attrs.get("counterpart")).words
+    return f"{_case(dataset)}{', ' + against if against else ''}\n{_law(dataset)}"
 
 
 def plot_tips(axis: Axes, dataset: xr.Dataset) -> None:
     """Tip deflections y1(l1) and y2(l2) - Delta (µm) against time (s), as the paper's Fig. 3a."""
     t = dataset.time.values
     axis.plot(t, dataset.tip_deflection_1 * _MICRO, lw=0.7, label=_TIP1)
-    stop = dataset.attrs.get("counterpart") == "stop"  # tip 2 is the stop's position there
     axis.plot(t, dataset.tip_deflection_2 * _MICRO, lw=0.7,
-              label=r"stop, $-\Delta$" if stop else _TIP2)
+              label=counterpart_named(dataset.attrs.get("counterpart")).second_tip)
     axis.set_ylabel("tip deflection (µm)")
     axis.legend(loc="upper right", fontsize="small")
 

@@ -1,7 +1,7 @@
 """Parameter sweeps: definitions (TOML), validation, chunked parallel runs that resume.
 
-The data flow, one module each: `definition` (what a sweep is) ->
-`plan` (the kernels' inputs, `compute_chunk`) ->
+The data flow, one module each: `definition` (what a sweep is, what it refuses) ->
+`plan` (the kernels' inputs, `compute_chunk`; `estimate`: what a run costs) ->
 `run` (chunks through a runner; `store` keeps
 finished ones for a resume) -> `output` (the map, in memory or streamed
 into netCDF). Importing this package loads NumPy only: xarray, netCDF4 and Numba load on use.
@@ -16,6 +16,7 @@ from impactbeams.sweep.definition import (
     OBSERVABLES,
     Axis,
     Sweep,
+    default_chunk_cells,
     load_sweep,
     sweep_from_mapping,
 )
@@ -27,7 +28,6 @@ from impactbeams.sweep.plan import (
     build_plan,
     code_digest,
     compute_chunk,
-    default_chunk_cells,
 )
 from impactbeams.sweep.progress import Progress
 from impactbeams.sweep.run import (

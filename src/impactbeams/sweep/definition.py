@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from impactbeams import __version__
+from impactbeams.configuration import LAWS, ContactLaw, counterpart_named
 from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.longtime import LongTime, Stepping
 from impactbeams.params import (
@@ -60,7 +61,6 @@ from impactbeams.params import (
 )
 from impactbeams.preflight import (
     MAX_PHASE,
-    Cost,
     check_run,
     highest_frequency,
     require_memory,
@@ -93,6 +93,10 @@ _AXIS_KEYS = ("min", "max", "num", "scale")
 # computed serially before the map runs, 0.4 ms (5 modes, first impact) to 2 s (200 modes, tied
 # dynamics) each (docs/limits.md).
 MAX_GEOMETRIES = 10_000
+MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov exponent's
+# windowed run) in a full-dynamics sweep; more: dynamics_status = 1
+# a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
+LONG_RUN_CAPACITY = 2048
 
 
 EXACT_VALUES = 2**20  # the longest axis whose values Axis.value builds
@@ -200,7 +204,7 @@ class Sweep:
     @property
     def free_coordinates(self) -> int:
         """N, the free modal coordinates of a cell: n_modes per beam (beam 1 only at a stop)."""
-        return self.n_modes * (1 if self.base.counterpart == "stop" else 2)
+        return self.n_modes * self.base.partner.beams
 
     @property
     def stored(self) -> list[str]:
@@ -285,7 +289,7 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
     _check_conflicts(fixed, axes, source)
-    if fixed.get("counterpart") == "stop":  # a stop has no beam 2: its keys are mistakes
+    if not counterpart_named(fixed.get("counterpart")).has_beam2:  # its keys are mistakes
         refuse_beam2(fixed, f"[params] of {source}")
         refuse_beam2([axis.name for axis in axes], f"[axes] of {source}")
     long_time = _long_time(data, observables, source)
@@ -472,7 +476,7 @@ def _check_grid(sweep: Sweep) -> None:
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
-    check_joint(values, point, sweep.base.counterpart, sweep.base.shaker)
+    check_joint(values, point, sweep.base.partner, sweep.base.mount)
     check_run(values, sweep.t_max, sweep.n_modes, point)
     _check_long_time(sweep, values, point)
 
@@ -504,7 +508,7 @@ def _check_lyapunov(sweep: Sweep) -> None:
         return
     laws = [axis.choices for axis in sweep.axes if axis.name == "contact_law"]
     require(f"observables in {sweep.source}", LYAPUNOV,
-            set(laws[0] if laws else [sweep.base.contact_law]) == {"spring"},
+            all(LAWS[law].tangent_flow for law in (laws[0] if laws else [sweep.base.contact_law])),
             "needs the spring contact law on every cell (the tied law's projections and "
             "instantaneous impacts are not a flow whose linearisation converges in n_modes)")
 
@@ -515,13 +519,59 @@ def geometry_count(sweep: Sweep) -> int:
 
 
 def _geometry_axes(sweep: Sweep) -> list[Axis]:
-    from impactbeams.sweep.plan import geometry_axes  # plan builds on this module
-
     return [sweep.axes[k] for k in geometry_axes(sweep)]
 
 
-def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = False) -> Cost:
-    """Peak memory and wall time of running ``sweep`` on ``threads`` (default: all cores).
+def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
+    """Positions of the axes that change the modes: all but the cell parameters' axes.
+
+    A spring-law dynamics map solves its contact phase for the damping ratio, so there the
+    damping ratio changes the modes too.
+    """
+    per_cell = set(CELL_PARAMETERS)
+    if sweep.needs_dynamics and any(law.compliant for law in contact_laws(sweep)):
+        per_cell.discard("damping_ratio")
+    return tuple(k for k, a in enumerate(sweep.axes) if a.name not in per_cell)
+
+
+def contact_laws(sweep: Sweep) -> list[ContactLaw]:
+    """The contact laws a sweep runs."""
+    for axis in sweep.axes:
+        if axis.name == "contact_law":
+            return [LAWS[name] for name in axis.choices]
+    return [sweep.base.law]
+
+
+def default_chunk_cells(sweep: Sweep) -> int:
+    """2^20 cells per chunk (2^16 for full dynamics, far costlier per cell): about a second of work.
+
+    Large enough that the fixed cost of a chunk (starting the kernel's threads, its file, its
+    netCDF block, a Dask task) stays small beside its computation, which matters on a busy
+    machine where every start of the threads waits for the cores; small enough that an
+    interrupt loses little and a cube streams in pieces of tens of MB. A map of up to 2^20 cells
+    is therefore computed in one pass. Long-time observables take seconds per cell: chunks of
+    a hundredth of the sweep, 1 to 64 cells, so that progress shows, an interrupt loses little
+    and the threads, each running a chunk of its own (``run.local_runner``), finish together.
+    """
+    if sweep.stepping is not None:
+        return row_cells(sweep)
+    if sweep.long_time is not None:
+        return int(min(max(sweep.size // 100, 1), 64))
+    return 2**16 if sweep.needs_dynamics else 2**20
+
+
+def row_cells(sweep: Sweep) -> int:
+    """The cells of a stepped sweep's chunk of one row: the stepped axis and every later axis.
+
+    A row's cells run one after the other, each from its predecessor's state: a chunk holds
+    whole rows (the later axes' rows run beside it), so that it is computed, saved and
+    resumed as a unit and a resumed run gives the same file.
+    """
+    return math.prod(sweep.shape[sweep.stepped_dimension:])
+
+
+def expected_memory(sweep: Sweep, threads: int | None = None, in_memory: bool = False) -> int:
+    """Peak memory (bytes) of running ``sweep`` on ``threads`` (default: all cores).
 
     Memory: a streamed run (``write_sweep``, what ``impactbeams run`` does) holds a chunk at a
     time (`chunk_memory`); ``in_memory`` (``run_sweep`` without an output) also holds the
@@ -530,14 +580,13 @@ def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = Fa
     of a first-impact map, netCDF writing included, is 18.04 bytes per cell). Both add the plan
     (8 x 2N float64 per geometry; a dynamics map 10 (2N)^2, with its stacking copy) and a
     dynamics map's per-thread segment buffers (MAX_SEGMENTS x (4 x 2N + 3) float64; a long
-    run's LONG_RUN_CAPACITY of them and its samples' states). Time: `expected_seconds`.
+    run's LONG_RUN_CAPACITY of them and its samples' states). Time and both:
+    `impactbeams.sweep.estimate`.
     """
-    from impactbeams.sweep.plan import LONG_RUN_CAPACITY, MAX_SEGMENTS
-
     threads = threads or os.cpu_count() or 1
     coordinates = 2 * sweep.n_modes
     geometries = geometry_count(sweep)
-    results = sweep.size * (16 * _stored_values(sweep) + 4) if in_memory else 0
+    results = sweep.size * (16 * stored_values(sweep) + 4) if in_memory else 0
     over_t_max = _runs_over_t_max(sweep)
     if sweep.needs_dynamics:
         plan = 2 * geometries * 8 * 10 * coordinates**2
@@ -547,7 +596,7 @@ def expected_cost(sweep: Sweep, threads: int | None = None, in_memory: bool = Fa
     if sweep.long_time is not None:  # each cell's own run, in windows of LONG_RUN_CAPACITY
         buffers += threads * (LONG_RUN_CAPACITY * (4 * coordinates + 3)
                               + sweep.long_time.sampled_periods * (2 * coordinates + 5)) * 8
-    return Cost(chunk_memory(sweep) + results + plan + buffers, expected_seconds(sweep, threads))
+    return chunk_memory(sweep) + results + plan + buffers
 
 
 def run_kind(sweep: Sweep) -> str:
@@ -564,94 +613,6 @@ def _runs_over_t_max(sweep: Sweep) -> bool:
     return any(name not in LONG_TIME_OBSERVABLES for name in sweep.observables)
 
 
-# cells of the grid at which a sweep's cost is evaluated (a regular sub-grid)
-COST_SAMPLES = 64
-
-
-def expected_seconds(sweep: Sweep, threads: int | None = None) -> float:
-    """Wall time (s) of computing ``sweep`` on ``threads``: `impactbeams.costs`' model.
-
-    The set-up of every geometry, then the cells over the threads: a first-impact map's cost
-    per cell, or the full dynamics' per cycle of each run (over t_max for the dynamics
-    observables, again for the Lyapunov exponent, and over the long run's periods), averaged
-    over a regular sub-grid of at most ``COST_SAMPLES`` cells. Start-up and compile are apart
-    (``costs.START_UP``, ``costs.COMPILE``).
-    """
-    from impactbeams import costs
-
-    threads = threads or os.cpu_count() or 1
-    set_up = costs.geometry_seconds(geometry_count(sweep), sweep.n_modes)
-    from impactbeams.sweep.plan import by_columns
-
-    if not sweep.needs_dynamics and by_columns(sweep):
-        return set_up + costs.first_impact_seconds(sweep.size, sweep.n_modes) / costs.speedup(
-            threads)
-    return set_up + sweep.size * float(np.mean(cell_seconds(sweep, sample_points(sweep)))
-                                       ) / costs.speedup(threads)
-
-
-def cell_seconds(sweep: Sweep, points: list[Params]) -> np.ndarray:
-    """Seconds on one core of the cells with parameters ``points``.
-
-    Full dynamics, or first impacts searched cell by cell (a map not run by columns).
-    """
-    from impactbeams import costs
-
-    seconds = np.zeros(len(points))
-    for law in set(point.contact_law for point in points):
-        index = [k for k, point in enumerate(points) if point.contact_law == law]
-        values = {name: np.array([points[k].numeric()[name] for k in index])
-                  for name in points[0].numeric()}
-        if not sweep.needs_dynamics:
-            seconds[index] += costs.cell_search_seconds(values, sweep.n_modes, sweep.t_max)
-        elif any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables):
-            seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, sweep.t_max,
-                                                     "dynamics", sweep.base.counterpart)
-        if LYAPUNOV in sweep.observables:
-            seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, sweep.t_max,
-                                                     "lyapunov", sweep.base.counterpart)
-        if sweep.long_time is not None:
-            horizon = sweep.long_time.horizon(values["omega"], sweep.transient_periods)
-            seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, horizon,
-                                                     "long_time", sweep.base.counterpart)
-    return seconds
-
-
-def chunk_seconds(sweep: Sweep, start: int, stop: int, limit: int = 4) -> float:
-    """Expected seconds on one core of a full-dynamics sweep's flat cells start..stop.
-
-    From ``limit`` cells spread over them (`cell_seconds`): weights of a progress bar.
-    """
-    return (stop - start) * float(np.mean(cell_seconds(sweep, sample_points(sweep, start, stop,
-                                                                            limit))))
-
-
-def sample_points(sweep: Sweep, start: int = 0, stop: int | None = None,
-                  limit: int = COST_SAMPLES) -> list[Params]:
-    """Parameters of at most ``limit`` cells spread evenly over the flat cells start..stop."""
-    stop = sweep.size if stop is None else stop
-    count = min(limit, stop - start)
-    # Python integers: a grid may have more cells than int64 holds (it is refused afterwards)
-    flat = sorted({start + (stop - 1 - start) * k // max(count - 1, 1) for k in range(count)})
-    return [sweep.params_at({axis.name: axis.value(i) for axis, i in
-                             zip(sweep.axes, _axis_indices(sweep, cell), strict=True)})
-            for cell in flat]
-
-
-def _axis_indices(sweep: Sweep, cell: int) -> list[int]:
-    """The index along each axis of flat ``cell`` (a stepped sweep's direction left out)."""
-    return _grid_index(cell, sweep.shape)[-len(sweep.axes):]
-
-
-def _grid_index(cell: int, shape: tuple[int, ...]) -> list[int]:
-    """The index along each axis of flat (C-order) ``cell`` of a grid of ``shape``."""
-    index = []
-    for length in reversed(shape):
-        cell, along = divmod(cell, length)
-        index.append(along)
-    return index[::-1]
-
-
 def chunk_memory(sweep: Sweep) -> int:
     """Bytes a run of ``sweep`` holds for its chunk being computed and the one being written.
 
@@ -662,25 +623,15 @@ def chunk_memory(sweep: Sweep) -> int:
     69 to 81 bytes per chunk cell (against 106 here).
     """
     from impactbeams.kernels.layout import OUT_COLUMNS
-    from impactbeams.sweep.plan import default_chunk_cells
 
     columns = len(OUT_COLUMNS) if sweep.needs_dynamics else 1
     cells = min(sweep.size, default_chunk_cells(sweep))
-    return cells * (56 + 8 * columns + 24 * _stored_values(sweep) + 18)
+    return cells * (56 + 8 * columns + 24 * stored_values(sweep) + 18)
 
 
-def _stored_values(sweep: Sweep) -> int:
+def stored_values(sweep: Sweep) -> int:
     """Values per cell of the stored arrays (a stroboscopic observable has one per sample)."""
     return sum(math.prod(sweep.value_shape(name)) for name in sweep.stored)
-
-
-def expected_file_size(sweep: Sweep) -> int:
-    """Disk space (bytes) a run of ``sweep`` needs at its peak.
-
-    The finished chunks under ``OUT.nc.partial/`` and the netCDF file: 8 bytes per cell and
-    stored value each.
-    """
-    return sweep.size * (16 * _stored_values(sweep) + 1)
 
 
 def _check_cost(sweep: Sweep) -> None:
@@ -694,5 +645,5 @@ def _check_cost(sweep: Sweep) -> None:
             f"geometries; at most {MAX_GEOMETRIES} are allowed, since each one's modes are "
             "computed one after the other before the map starts: use fewer values there")
     require_memory(f"the grid of {sweep.source} ({' x '.join(map(str, sweep.shape))} = "
-                   f"{sweep.size} cells)", expected_cost(sweep),
+                   f"{sweep.size} cells)", expected_memory(sweep),
                    "use fewer cells (smaller num) or split the sweep into several files")

@@ -10,6 +10,7 @@ computed once per geometry (the plan).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import itertools
@@ -26,20 +27,21 @@ from impactbeams.sweep.definition import (
     CELL_PARAMETERS,
     DYNAMICS_OBSERVABLES,
     FIRST_IMPACT,
+    LONG_RUN_CAPACITY,
     LYAPUNOV,
+    MAX_SEGMENTS,
     STEPPED_END_STATE,
     Axis,
     Sweep,
+    contact_laws,
+    geometry_axes,
 )
 
-MAX_SEGMENTS = 100_000  # phases per cell (per forcing period for the Lyapunov exponent's
-# windowed run) in a full-dynamics sweep; more: dynamics_status = 1
 # The code that decides a sweep's numbers: every kernel and the modules that build their inputs
 # (paths in the package). Saved chunks and finished files of other code are never reused.
 NUMERIC_CODE = ("kernels/*.py", "packing.py", "contact/*.py", "drive.py", "modes.py", "blas.py",
-                "brent.py", "params.py", "sweep/definition.py", "sweep/plan.py")
-# a long run holds this many segments at once (4 arrays of 2 n_modes floats each, per thread)
-LONG_RUN_CAPACITY = 2048
+                "brent.py", "params.py", "configuration.py", "sweep/definition.py",
+                "sweep/plan.py")
 MAX_PHASES_PER_PERIOD = 2000  # cap of a long run, per forcing period; more: dynamics_status = 1
 
 
@@ -77,35 +79,17 @@ def code_digest(package: Path = Path(__file__).parents[1],
     return digest.hexdigest()[:16]
 
 
-def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
-    """Positions of the axes that change the modes: all but the cell parameters' axes.
-
-    A spring-law dynamics map solves its contact phase for the damping ratio, so there the
-    damping ratio changes the modes too.
-    """
-    per_cell = set(CELL_PARAMETERS)
-    if sweep.needs_dynamics and "spring" in _laws(sweep):
-        per_cell.discard("damping_ratio")
-    return tuple(k for k, a in enumerate(sweep.axes) if a.name not in per_cell)
-
-
 def contact_resolution(sweep: Sweep) -> int | None:
     """n_modes that resolves a spring-law dynamics map's stiffest contact; None otherwise."""
-    if not sweep.needs_dynamics or "spring" not in _laws(sweep):
+    compliant = [law for law in contact_laws(sweep) if law.compliant]
+    if not sweep.needs_dynamics or not compliant:
         return None
     from impactbeams.contact.spring import required_modes  # SciPy's optimisers: only when needed
 
     swept = [axis.max for axis in sweep.axes if axis.name == "contact_stiffness"]
     stiffest = swept[0] if swept else sweep.base.contact_stiffness
-    return required_modes(sweep.base.replace(contact_law="spring", contact_stiffness=stiffest))
-
-
-def _laws(sweep: Sweep) -> set[str]:
-    """The contact laws a sweep runs."""
-    for axis in sweep.axes:
-        if axis.name == "contact_law":
-            return set(axis.choices)
-    return {sweep.base.contact_law}
+    return required_modes(sweep.base.replace(contact_law=compliant[0].name,
+                                             contact_stiffness=stiffest))
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:
@@ -117,8 +101,46 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
         yield sweep.params_at(changes)
 
 
-def _geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
-    """One geometry's packed arrays: (tables, geometry row[, switching arrays])."""
+# the geometries built while a run is prepared (`reusing_geometries`), by (parameters, n_modes,
+# full dynamics): what the checks before a run build, its plan takes, not building it again
+_BUILT: list[dict[tuple[Params, int, bool], tuple[np.ndarray, ...]]] = []
+
+
+@contextlib.contextmanager
+def reusing_geometries() -> Iterator[None]:
+    """Within the body (a run: its checks, then its plan) each geometry is built once.
+
+    The arrays a check builds (`check_contact_phases`) are kept until the plan (`build_plan`)
+    takes them; a body inside another shares the outer one's; the rest go at its end.
+    """
+    if _BUILT:
+        yield
+        return
+    _BUILT.append({})
+    try:
+        yield
+    finally:
+        _BUILT.clear()
+
+
+def _geometry_arrays(params: Params, sweep: Sweep, keep: bool = False,
+                     ) -> tuple[np.ndarray, ...]:
+    """One geometry's packed arrays: (tables, geometry row[, switching arrays]).
+
+    Those a check built in this run (`reusing_geometries`) are taken, not built again;
+    ``keep``: a check's, left for the run's plan.
+    """
+    key = (params, sweep.n_modes, sweep.needs_dynamics)
+    built = _BUILT[0] if _BUILT else {}
+    arrays = built.get(key) if keep else built.pop(key, None)
+    if arrays is None:
+        arrays = _build_geometry_arrays(params, sweep)
+    if keep:
+        built[key] = arrays
+    return arrays
+
+
+def _build_geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
     from impactbeams import packing
     from impactbeams.contact.free import build_free_phase
 
@@ -137,15 +159,15 @@ def check_contact_phases(sweep: Sweep) -> None:
 
     An overdamped contact phase (real eigenvalues) is found only when its modes are built, so
     the geometries with a damped spring contact build their dynamics arrays here, the plan's
-    own SciPy work (done again by the run's plan); a ParameterError names the largest contact
-    damping allowed. Other sweeps cost nothing.
+    own SciPy work (kept for the run's plan within `reusing_geometries`); a ParameterError
+    names the largest contact damping allowed. Other sweeps cost nothing.
     """
     _check_steady_start(sweep)
     if not sweep.needs_dynamics:
         return
     for params in _geometries(sweep):
-        if params.contact_law == "spring" and (params.contact_damping or params.damping_ratio):
-            _geometry_arrays(params, sweep)
+        if params.law.compliant and (params.contact_damping or params.damping_ratio):
+            _geometry_arrays(params, sweep, keep=True)
 
 
 def _check_steady_start(sweep: Sweep) -> None:
@@ -304,34 +326,6 @@ class Chunking:
         first = outer * self.shape[self.axis] + j * self.run
         last = outer * self.shape[self.axis] + min((j + 1) * self.run, self.shape[self.axis])
         return first * line, last * line
-
-
-def default_chunk_cells(sweep: Sweep) -> int:
-    """2^20 cells per chunk (2^16 for full dynamics, far costlier per cell): about a second of work.
-
-    Large enough that the fixed cost of a chunk (starting the kernel's threads, its file, its
-    netCDF block, a Dask task) stays small beside its computation, which matters on a busy
-    machine where every start of the threads waits for the cores; small enough that an
-    interrupt loses little and a cube streams in pieces of tens of MB. A map of up to 2^20 cells
-    is therefore computed in one pass. Long-time observables take seconds per cell: chunks of
-    a hundredth of the sweep, 1 to 64 cells, so that progress shows, an interrupt loses little
-    and the threads, each running a chunk of its own (``run.local_runner``), finish together.
-    """
-    if sweep.stepping is not None:
-        return row_cells(sweep)
-    if sweep.long_time is not None:
-        return int(min(max(sweep.size // 100, 1), 64))
-    return 2**16 if sweep.needs_dynamics else 2**20
-
-
-def row_cells(sweep: Sweep) -> int:
-    """The cells of a stepped sweep's chunk of one row: the stepped axis and every later axis.
-
-    A row's cells run one after the other, each from its predecessor's state: a chunk holds
-    whole rows (the later axes' rows run beside it), so that it is computed, saved and
-    resumed as a unit and a resumed run gives the same file.
-    """
-    return math.prod(sweep.shape[sweep.stepped_dimension:])
 
 
 MAX_COLUMN_CELLS = 4096  # a first-impact map's columns: at most this many cells each
@@ -546,7 +540,7 @@ def _with_end_states(sweep: Sweep, values: dict[str, np.ndarray],
     contact, whose coordinates are the contact modes'.
     """
     end = carried["end_state"][:, :, :sweep.free_coordinates].copy()
-    if sweep.base.contact_law == "tied":
+    if sweep.base.law.projects:  # the contact modes' coordinates, not the free ones
         end[carried["end_phase"] == layout.CONTACT] = np.nan
     return {**values, **dict(zip(STEPPED_END_STATE, (end[:, 0], end[:, 1]), strict=True))}
 

@@ -9,7 +9,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from impactbeams.progress import Progress
-from impactbeams.sweep.definition import Sweep, chunk_seconds
+from impactbeams.sweep.definition import Sweep
+from impactbeams.sweep.estimate import chunk_seconds
 
 if TYPE_CHECKING:
     from impactbeams.sweep.plan import Chunking
@@ -23,7 +24,7 @@ WEIGHED_CHUNKS = 4096
 def chunk_progress(sweep: Sweep, chunking: Chunking, enabled: bool) -> Progress:
     """The progress bar of ``sweep`` run in ``chunking``'s chunks.
 
-    A full-dynamics chunk weighs its expected cost (``definition.chunk_seconds``), so that the
+    A full-dynamics chunk weighs its expected cost (``estimate.chunk_seconds``), so that the
     ETA holds when the chunks differ in cost (a first-impact map's chunks cost their cells).
     """
     if not (sweep.needs_dynamics and chunking.count <= WEIGHED_CHUNKS):

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from impactbeams.lock import output_lock
 from impactbeams.params import (
     MAX_CHUNK_CELLS,
     is_integer,
@@ -28,8 +29,13 @@ from impactbeams.params import (
     require_type,
 )
 from impactbeams.preflight import require_memory
-from impactbeams.sweep.definition import Sweep, as_sweep, expected_cost
-from impactbeams.sweep.lock import output_lock
+from impactbeams.sweep.definition import (
+    Sweep,
+    as_sweep,
+    default_chunk_cells,
+    expected_memory,
+    row_cells,
+)
 from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.plan import (
     Chunking,
@@ -37,8 +43,7 @@ from impactbeams.sweep.plan import (
     check_contact_phases,
     compute_chunk,
     contact_resolution,
-    default_chunk_cells,
-    row_cells,
+    reusing_geometries,
 )
 from impactbeams.sweep.progress import Progress, chunk_progress
 from impactbeams.sweep.store import ChunkStore, finished_output, reporting_kept_chunks
@@ -162,13 +167,22 @@ def run_sweep(sweep: Sweep | str | Path, output: str | Path | None = None,
     _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
-    check_contact_phases(sweep)
-    if output is not None:
-        write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk, runner,
-                    discard_corrupt)
-        return xr.open_dataset(output)  # as registered: written so, or checked if reused
+    with reusing_geometries():  # the check's geometries are the plan's
+        check_contact_phases(sweep)
+        if output is not None:
+            write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk,
+                        runner, discard_corrupt)
+            return xr.open_dataset(output)  # as registered: written so, or checked if reused
+        return _run_in_memory(sweep, threads, progress, parallel, chunk_cells, on_chunk,
+                              runner)
+
+
+def _run_in_memory(sweep: Sweep, threads: int | None, progress: bool, parallel: bool,
+                   chunk_cells: int | None, on_chunk: Callable[[int], None] | None,
+                   runner: ChunkRunner | None) -> xr.Dataset:
+    """`run_sweep` without an output, once checked: the map computed in memory."""
     require_memory(f"a map of {sweep.size} cells held in memory ({sweep.source})",
-                   expected_cost(sweep, threads, in_memory=True),
+                   expected_memory(sweep, threads, in_memory=True),
                    "give an output file, to which the map is written chunk by chunk")
     _warn_unresolved(sweep)
     _warn_moving_stop(sweep)
@@ -210,9 +224,9 @@ def write_sweep(sweep: Sweep | str | Path, output: str | Path, threads: int | No
     see `impactbeams.sweep.dask_runner` for a Dask cluster); they may finish in any order.
     ``sweep`` may be the path of a sweep TOML file (read by [`load_sweep`][]).
 
-    One writer per output: the run holds the lock of `impactbeams.sweep.lock` from its
+    One writer per output: the run holds the lock of `impactbeams.lock` from its
     start to its end; while another run holds it, this one raises
-    [`OutputInUse`][impactbeams.sweep.lock.OutputInUse] (a ParameterError) naming that run. A file
+    [`OutputInUse`][impactbeams.lock.OutputInUse] (a ParameterError) naming that run. A file
     that cannot be written (a full disk, a removed or read-only folder, a quota) raises
     [`WriteError`][impactbeams.io.WriteError] (an OSError), one line naming the file, its cause and
     the chunks kept: the same call resumes from them once the cause is fixed.
@@ -223,11 +237,12 @@ def write_sweep(sweep: Sweep | str | Path, output: str | Path, threads: int | No
     _check_options(output, threads, {"on_chunk": on_chunk, "runner": runner},
                    {"progress": progress, "parallel": parallel,
                     "discard_corrupt": discard_corrupt})
-    check_contact_phases(sweep)
     output = Path(output)
-    with reporting_kept_chunks(output), output_lock(output):
-        return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells, on_chunk,
-                            runner, discard_corrupt)
+    with reusing_geometries():  # the check's geometries are the plan's
+        check_contact_phases(sweep)
+        with reporting_kept_chunks(output), output_lock(output):
+            return _write_sweep(sweep, output, threads, progress, parallel, chunk_cells,
+                                on_chunk, runner, discard_corrupt)
 
 
 def _write_sweep(sweep: Sweep, output: Path, threads: int | None, progress: bool,
@@ -304,9 +319,9 @@ def _warn_moving_stop(sweep: Sweep) -> None:
     """
     axes = {axis.name: axis.values for axis in sweep.axes}
     base = sweep.base
-    note = moving_stop(base.counterpart == "stop",
+    note = moving_stop(not base.partner.has_beam2,
                        float(np.max(axes.get("base_amplitude", base.base_amplitude))) > 0.0,
-                       base.shaker, base.shaker_named)
+                       base.shaker_named)
     if note:
         warnings.warn(f"{sweep.source}: {note}", UserWarning, stacklevel=3)
 

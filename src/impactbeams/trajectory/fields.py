@@ -7,7 +7,6 @@ from collections.abc import Callable
 import numpy as np
 
 from impactbeams.contact.free import unit_tip_shape
-from impactbeams.drive import moving_clamps
 from impactbeams.kernels.drive import harmonic
 from impactbeams.kernels.layout import CONTACT, FREE
 from impactbeams.kernels.records import Segments
@@ -108,7 +107,7 @@ def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_poi
             y2[rows] = -c2 * q2[phase == ph, None] * unit_tip_shape(p.l2, x2) + qs @ shapes2[ph]
     if p.base_amplitude != 0.0:
         clamp, _ = harmonic.py_func(p.base_amplitude, p.omega, times[reached])
-        moves1, moves2 = moving_clamps(p.shaker)
+        moves1, moves2 = p.mount.clamps
         y1[reached] += moves1 * clamp[:, None]
         y2[reached] += moves2 * clamp[:, None]
     return x1, x2, y1, y2

@@ -44,11 +44,11 @@ def check_request(params: Params, n_modes: int, t_max: float, count: int,
     Checked before any model is built: the renormalisation interval needs only the forcing
     frequency, or without forcing the slowest free mode (both beams' fundamentals).
     """
-    if params.contact_law != "spring":
+    if not params.law.tangent_flow:
         raise ParameterError("Lyapunov exponents need the spring contact law: the tied law's "
                              "projections, instantaneous impacts and accumulations are not a "
                              "flow whose linearisation converges in n_modes (docs/model.md)")
-    beams = 1 if params.counterpart == "stop" else 2
+    beams = params.partner.beams
     dimension = 2 * beams * n_modes
     require("lyapunov", count, isinstance(count, (int, np.integer)) and 0 < count <= dimension,
             f"must be True or a number of exponents from 1 to {dimension} "

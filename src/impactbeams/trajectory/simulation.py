@@ -96,8 +96,8 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
     series = 1 + SERIES + ENERGY_SERIES * energy_balance + 2 * n_points * fields
     sampling = SAMPLING_ARRAYS * 8 * min(n_times, SAMPLE_CHUNK) * coordinates
     segments = max_events * (4 * coordinates + 3) * 8
-    seconds = float(costs.dynamics_seconds(params.numeric(), params.contact_law, n_modes, t_max,
-                                           "simulate", params.counterpart)
+    seconds = float(costs.dynamics_seconds(params.numeric(), params.law, n_modes, t_max,
+                                           "simulate", params.partner)
                     ) + costs.SAMPLING * n_times * n_modes
     if energy_balance:
         fastest = float(highest_frequency(params.numeric(), n_modes))
@@ -181,7 +181,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     t_max, n_modes, resolution = run_inputs.t_max, run_inputs.n_modes, run_inputs.resolution
     if long_time is not None:
         _check_long_time(params, t_max, transient_periods, long_time)
-    if n_modes < resolution and params.contact_law == "spring":
+    if n_modes < resolution and params.law.compliant:
         warnings.warn(f"n_modes = {n_modes} does not resolve the spring contact of stiffness "
                       f"{params.contact_stiffness:g} N/m: use n_modes >= {resolution} "
                       "(docs/model.md, Resolution)", RuntimeWarning, stacklevel=2)
@@ -225,7 +225,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         dataset = long_time_variables(packed, trajectory, dataset, long_time, transient_periods)
     dataset = _with_final_state(dataset, final_state(packed, trajectory))
     dataset.attrs.update(_global_attributes(params, n_modes, t_max, trajectory))
-    if params.contact_law == "spring":
+    if params.law.compliant:
         dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
     validate(dataset)  # as registered, or a bug of the package
     return dataset
@@ -297,7 +297,7 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
         episode_separation = require_finite("episode_separation", episode_separation, "s")
         require("episode_separation", episode_separation, episode_separation >= 0,
                 "must be >= 0", "s")
-    resolution = required_modes(params) if params.contact_law == "spring" else 5
+    resolution = required_modes(params) if params.law.compliant else 5
     if n_modes is None:
         n_modes = min(resolution, MAX_MODES)
     n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
@@ -307,7 +307,7 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
                            max_events)
     grid = "times" if times is not None else f"dt_output = {dt_output!r} s"
     require_memory(f"{grid} ({n_times:.3g} output times over t_max = {t_max!r} s; n_modes = "
-                   f"{n_modes}, max_events = {max_events})", cost,
+                   f"{n_modes}, max_events = {max_events})", cost.memory,
                    "use a larger dt_output or a shorter t_max (or fewer fields, modes or "
                    "max_events)")
     return _RunInputs(t_max, n_modes, resolution, _output_times(t_max, dt_output, times), span,
@@ -322,7 +322,7 @@ def _announce(params: Params, run_inputs: _RunInputs) -> None:
                     ", after compiling its kernels (once per install), expected "
                     f"{costs.compile_estimate('simulate').describe()}")
     print(f"simulate: {params.contact_law} contact, "
-          f"{modes_per_beam(run_inputs.n_modes, params.counterpart)}, "
+          f"{modes_per_beam(run_inputs.n_modes, params.partner)}, "
           f"t_max = {run_inputs.t_max:g} s; expected: roughly "
           f"{format_time(run_inputs.seconds)}{compile_note}", file=sys.stderr)
 

@@ -167,7 +167,7 @@ def _projection(field: Callable[[np.ndarray], np.ndarray] | None, name: str, sha
 def projected_fields(packed: Packed, fields: InitialFields) -> np.ndarray:
     """The section state z = (q, q') of ``fields`` (see `InitialFields`)."""
     p, free = packed.params, packed.dynamics.free
-    if p.counterpart == "stop":
+    if not p.partner.has_beam2:
         for name in ("deflection2", "velocity2"):
             if getattr(fields, name) is not None:
                 raise ParameterError(f"initial_state.{name} is not allowed: counterpart = "
