@@ -38,6 +38,7 @@ from impactbeams.continuation.branch import (
 from impactbeams.continuation.checkpoint import CourseLog, reporting_kept_points
 from impactbeams.continuation.output import branches_dataset
 from impactbeams.io import write_netcdf
+from impactbeams.lock import output_lock
 from impactbeams.orbits.period_map import check_law
 from impactbeams.orbits.shooting import DEFAULT_SUBSPACE, GUARD, METHODS
 from impactbeams.params import (
@@ -51,7 +52,6 @@ from impactbeams.params import (
     require_integer,
     require_type,
 )
-from impactbeams.sweep.lock import output_lock
 from impactbeams.variables import PARAMETERS, global_attributes
 
 if TYPE_CHECKING:
@@ -183,7 +183,7 @@ def continue_orbits(continuation: Continuation, progress: Progress | None = None
     With ``output`` (a netCDF path) the Dataset is also written there, and the continuation
     checkpoints every step under ``OUTPUT.partial/`` (`impactbeams.continuation.checkpoint`):
     killed or interrupted, the same call resumes from its last step and writes the same file,
-    bit for bit. One writer per output (the lock of `impactbeams.sweep.lock`); the partial run
+    bit for bit. One writer per output (the lock of `impactbeams.lock`); the partial run
     of another continuation or other code is refused. An existing ``output`` is replaced.
 
     On Ctrl-C raises `ContinuationInterrupted` whose ``dataset`` holds what was computed
