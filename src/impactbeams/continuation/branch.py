@@ -338,6 +338,9 @@ FAR = 100
 # first sampling finds crossings that hide each other at the step's ends; within a piece, the
 # detected crossing is then narrowed by fewer samples a level
 SAMPLES = (16, 16, 4, 4)
+# ... when a multiplier other than the crossing ones lies this near the circle at an end, in
+# units of the largest change of a modulus over the step (`_may_hide_crossings`)
+NEAR_CIRCLE = 4.0
 # bisections of a step whose signature changed without its test function changing sign (two
 # crossings, or a multiplier that left the kind in between, e.g. a complex pair turned real)
 MAX_SUBDIVISIONS = 6
@@ -358,7 +361,7 @@ def _between(follower: Follower, a: Point, b: Point,
         return follower.correct(origin + s * normal, normal, normal).point
 
     found = detected(a, b)
-    if found and depth < len(SAMPLES):
+    if found and depth < len(SAMPLES) and _may_hide_crossings(a, b, len(found)):
         # crossings close together (a pair that leaves and returns within the step) show at
         # the ends as one, or none: the step is sampled, and each piece searched on its own
         width, pieces = float(normal @ (b.x - origin)), SAMPLES[depth]
@@ -390,6 +393,22 @@ def _between(follower: Follower, a: Point, b: Point,
             return (_advance(follower, a, middle, depth + 1)
                     + _advance(follower, middle, b, depth + 1))
     return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
+
+
+def _may_hide_crossings(a: Point, b: Point, crossings: int) -> bool:
+    """Whether more multipliers than the ``crossings`` detected could cross within the step.
+
+    A crossing hidden at the step's ends (a pair that leaves and returns, a second pair
+    that leaves with it) needs a multiplier other than the detected ones near the circle at
+    either end: within ``NEAR_CIRCLE`` times the most any modulus changed over the step.
+    Elsewhere (a stiff contact's branch: every multiplier but the crossing one far inside)
+    the step is searched without sampling it.
+    """
+    moduli = [np.sort(np.abs(point.evaluation.multipliers)) for point in (a, b)]
+    if moduli[0].size != moduli[1].size:
+        return True
+    near = NEAR_CIRCLE * float(np.max(np.abs(moduli[1] - moduli[0]), initial=0.0))
+    return max(int(np.count_nonzero(np.abs(m - 1.0) <= near)) for m in moduli) > crossings
 
 
 def _brackets(test: Callable[[Point], float], a: Point, b: Point) -> bool:
