@@ -14,6 +14,7 @@ contacts on both sides of a nonsmooth event.
 """
 
 import contextlib
+import functools
 import warnings
 
 import numpy as np
@@ -197,10 +198,10 @@ def test_summary_counts_each_event_once(tmp_path, capsys):
 # onset of impacts below the resonance (omega_1 = 131 rad/s), where the orbit starts to impact
 # and then gains and loses contacts and doubles (the whole range and both directions at the
 # default modes: the slow test below and benchmarks/bench_stiff_continuation.py)
-SHAKER = ib.Params.from_mapping({
-    "l1": 0.2, "width1": 0.02, "thickness1": 0.001, "counterpart": "stop", "clearance": 5e-4,
-    "shaker": "beam1", "base_amplitude": 1e-4, "force_amplitude": 0.0, "damping_ratio": 0.01,
-    "contact_stiffness": 1e4})
+SHAKER_KEYS = {"l1": 0.2, "width1": 0.02, "thickness1": 0.001, "counterpart": "stop",
+               "clearance": 5e-4, "shaker": "beam1", "base_amplitude": 1e-4,
+               "force_amplitude": 0.0, "damping_ratio": 0.01}
+SHAKER = ib.Params.from_mapping({**SHAKER_KEYS, "contact_stiffness": 1e4})
 
 
 @pytest.fixture(scope="module")
@@ -228,6 +229,44 @@ def test_stiff_stop_grazings_exact_and_the_onset_of_impacts_where_the_linear_res
         warnings.simplefilter("ignore", RuntimeWarning)  # the branch's, on purpose
         onset = reference.stop_grazing(SHAKER, 4, 100.0, 120.0)
     assert float(shaker_up.omega[grazings[0]]) == pytest.approx(onset, abs=1e-8)
+
+
+@functools.cache
+def whole_shaker_range(stiffness, direction):
+    """The stiff case over 0.5 to 2 omega_1 at its default modes (None: the Hertz default)."""
+    stiff = {} if stiffness is None else {"contact_stiffness": stiffness}
+    params = ib.Params.from_mapping({**SHAKER_KEYS, **stiff})
+    return continue_orbits(Continuation(params, "omega", 65.6, 262.5, direction=direction,
+                                        max_points=10_000))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stiffness", [None, 1e4])
+def test_stiff_stop_on_a_shaker_whole_range_both_ways(stiffness):
+    """Up and down, the period-1 branch covers 0.5 to 2 omega_1 (main 8abdbab: the Hertz case
+    stopped at 115.87 up and 143.98 down), nine in ten grazings at zero gap to 1e-9 of the
+    clearance (located at the grazing value's root) and all to 5e-8 (where the value jumps on
+    one side, by bisection on the contacts: the parameter pinned to 1e-9 relative leaves the
+    gap of a steep onset at a few 1e-12 m), and the two directions locate the same grazings
+    where both label one: most of each direction's are the other's to 1e-9 relative (the
+    rest: a change of the contacts one direction reads as a grazing and the other as a merge
+    or split)."""
+    grazing = BIFURCATIONS.index("grazing")
+    found = {}
+    for direction in ("up", "down"):
+        dataset = whole_shaker_range(stiffness, direction)
+        origin = dataset.branch.values == 0
+        assert dataset.attrs["branch_endings"].split()[0] == "bound"
+        omega = dataset.omega.values
+        assert (omega[origin].min(), omega[origin].max()) == (65.6, 262.5)
+        labelled = dataset.bifurcation.values == grazing
+        gaps = np.abs(dataset.grazing_gap.values[labelled]) / SHAKER.clearance
+        assert np.mean(gaps < 1e-9) >= 0.9 and gaps.max() < 5e-8  # (measured: 1.3e-8)
+        found[direction] = omega[origin & labelled]
+    for one, other in ((found["up"], found["down"]), (found["down"], found["up"])):
+        assert one.size >= 15
+        matched = np.abs(one[:, None] - other[None, :]).min(axis=1) <= 1e-9 * one
+        assert matched.mean() >= 0.85  # (measured: 13 of 15 at k = 1e4 N/m)
 
 
 def test_an_undamped_continuation_warns_that_its_labels_follow_round_off():

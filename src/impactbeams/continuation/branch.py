@@ -454,6 +454,10 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
                     else past.x - a.x)
     near = _between(follower, a, before)[:-1] if before is not a else []
     rest = [] if past is b else _advance(follower, past, b, depth + 1)
+    if label == GRAZING and abs(grazing_test(past)) < abs(grazing_test(before)):
+        # the contact at zero depth is the far side's (on the near side another contact, or
+        # free flight, was nearer 0): its point carries the label and its zero gap
+        return [*near, before, dataclasses.replace(past, label=label), *rest]
     return [*near, dataclasses.replace(before, label=label), past, *rest]
 
 
