@@ -139,7 +139,10 @@ class LinearGap:
         Omega = 0 drives nothing; an undamped mode driven exactly at its natural frequency has
         no steady orbit.
         """
-        values = np.atleast_1d(np.asarray(omega, dtype=float))
+        try:
+            values = np.atleast_1d(np.asarray(omega, dtype=float))
+        except (TypeError, ValueError):  # not numbers: refused below
+            values = np.empty((0, 0))
         require("omega", omega, values.ndim == 1 and values.size > 0,
                 "must be a positive frequency or a 1-d sequence of them", "rad/s")
         bad = values[~(np.isfinite(values) & (values > 0.0))]
