@@ -8,9 +8,11 @@ grazings located by `continue_orbits` on the nonlinear period map.
 
 import numpy as np
 import pytest
+import xarray as xr
 
 import continuation_reference as reference
 import impactbeams as ib
+from impactbeams.cli import main
 from impactbeams.continuation import Continuation, continue_orbits
 from impactbeams.params import ParameterError
 from impactbeams.variables import BIFURCATIONS, validate
@@ -173,3 +175,43 @@ def test_undamped_resonance_refused():
     with pytest.raises(ParameterError, match=r"omega = .* is a natural frequency and "
                                              r"damping_ratio = 0"):
         ib.steady_gap(STOP.replace(damping_ratio=0.0, omega=omega), N_MODES)
+
+
+STOP_OPTIONS = ["--counterpart", "stop", "--contact-stiffness", "100", "--damping-ratio",
+                "0.02", "--force-amplitude", "1e-4", "--n-modes", "5"]
+
+
+@pytest.mark.parametrize(("parameter", "extra"), [("force_amplitude", ["--points", "7"]),
+                                                  ("omega", [])])
+def test_the_command_writes_the_librarys_curve(tmp_path, capsys, parameter, extra):
+    output = tmp_path / "grazing.nc"
+    assert main(["grazing", parameter, "--omega-min", "100", "--omega-max", "400", *extra,
+                 *STOP_OPTIONS, "-o", str(output)]) == 0
+    expected = (ib.grazing_frequencies(STOP, N_MODES, 100.0, 400.0) if parameter == "omega"
+                else ib.grazing_curve(STOP, N_MODES, parameter, np.linspace(100.0, 400.0, 7)))
+    with xr.open_dataset(output) as written:
+        validate(written)
+        for name in ("omega", "grazing_phase", *([parameter] if parameter != "omega" else [])):
+            np.testing.assert_array_equal(written[name].values, expected[name].values)
+    assert capsys.readouterr().err.startswith(f"wrote {output}: ")
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["clearance", "--omega-min", "0", "--omega-max", "10"],
+     "--omega-min = 0.0 is not allowed: must be finite and > 0 (rad/s)"),
+    (["clearance", "--omega-min", "20", "--omega-max", "10"],
+     "--omega-max = 10.0 is not allowed: the range [20.0, 10.0] is empty"),
+    (["clearance", "--omega-min", "1", "--omega-max", "10", "--omega", "5"],
+     "--omega is not allowed with grazing"),
+    (["clearance", "--omega-min", "1", "--omega-max", "10", "--start", "steady"],
+     "--start is not allowed with grazing"),
+    (["clearance", "--omega-min", "1", "--omega-max", "10", "--points", "1"],
+     "argument --points: 1 is not allowed: must be an integer >= 2"),
+    (["uplift1", "--omega-min", "1", "--omega-max", "10"], "invalid choice: 'uplift1'"),
+])
+def test_the_commands_bad_input_exits_2_in_one_line(tmp_path, capsys, argv, message):
+    output = tmp_path / "grazing.nc"
+    assert main(["grazing", *argv, "-o", str(output)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("impactbeams: error: ") and message in err[-1]
+    assert len(err) <= 2 and not output.exists()  # a usage line before argparse's errors

@@ -475,7 +475,9 @@ VARIABLES.update({
 })
 
 # grazing curves of the non-impacting steady orbit (impactbeams.orbits.grazing): points of the
-# curve in the plane of Omega and a drive or the clearance, along "grazing_point"
+# curve in the plane of Omega and a drive or the clearance, along "grazing_point"; the
+# parameters whose grazing value a curve gives at each Omega in closed form
+GRAZING_PARAMETERS = ("force_amplitude", "base_amplitude", "clearance")
 VARIABLES.update({
     "grazing_point": Variable(("grazing_point",), "1", "grazing curve point number",
                               "index of the point along the grazing curve, from 0",

@@ -33,6 +33,7 @@ from scipy.optimize import brentq
 from impactbeams.contact import build_free_phase
 from impactbeams.drive import base_participation, moving_clamps
 from impactbeams.params import (
+    GRAZING_BRACKETS,
     MAX_MODES,
     Params,
     require,
@@ -41,6 +42,7 @@ from impactbeams.params import (
     require_type,
 )
 from impactbeams.variables import (
+    GRAZING_PARAMETERS,
     attributes,
     global_attributes,
     parameter_attributes,
@@ -50,11 +52,7 @@ from impactbeams.variables import (
 if TYPE_CHECKING:
     import xarray as xr
 
-# what a grazing curve can give at each Omega in closed form: a drive's amplitude (the other
-# drives fixed) or the clearance
-GRAZING_PARAMETERS = ("force_amplitude", "base_amplitude", "clearance")
 POINT = "grazing_point"
-DEFAULT_BRACKETS = 2001  # grid points of `grazing_frequencies` over its range
 
 
 @dataclasses.dataclass(frozen=True)
@@ -211,10 +209,10 @@ def grazing_curve(params: Params, n_modes: int, parameter: str,
     a drive's grazing value keeps the other drive at ``params``' value, and is NaN where that
     drive alone already closes the gap.
 
-    Returns a Dataset along ``grazing_point``, one point per frequency: the coordinates
-    ``omega`` and ``parameter``, ``grazing_phase`` (the forcing phase of the touch), the
-    fixed parameters as attributes. A curve continued in two parameters is checked against
-    it point by point: `grazing_curve` at the continued points' frequencies.
+    Returns a Dataset along ``grazing_point``, one point per frequency: the coordinate
+    ``omega``, the variables ``parameter`` and ``grazing_phase`` (the forcing phase of the
+    touch), the fixed parameters as attributes. A curve continued in two parameters is
+    checked against it point by point: `grazing_curve` at the continued points' frequencies.
     """
     linear = LinearGap(params, n_modes)
     require("parameter", parameter, parameter in GRAZING_PARAMETERS,
@@ -227,7 +225,7 @@ def grazing_curve(params: Params, n_modes: int, parameter: str,
 
 
 def grazing_frequencies(params: Params, n_modes: int, low: float, high: float,
-                        brackets: int = DEFAULT_BRACKETS) -> xr.Dataset:
+                        brackets: int = GRAZING_BRACKETS) -> xr.Dataset:
     """The forcing frequencies in [low, high] (rad/s) where ``params``' orbit just touches.
 
     The roots of the smallest gap ``Delta - |G(Omega)|`` (m) at ``params``' drives and
@@ -264,13 +262,14 @@ def _dataset(params: Params, n_modes: int, parameter: str, omega: np.ndarray,
 
     coords = {POINT: (POINT, np.arange(omega.size, dtype=np.int64), attributes(POINT)),
               "omega": (POINT, omega, parameter_attributes("omega"))}
-    if parameter != "omega":
-        coords[parameter] = (POINT, values, parameter_attributes(parameter))
+    # the grazing value is data, not a coordinate: NaN where the other drive closes the gap
+    data = {} if parameter == "omega" else {
+        parameter: (POINT, values, parameter_attributes(parameter))}
+    data["grazing_phase"] = (POINT, phase_of_minimum(touching), attributes("grazing_phase"))
     fixed = {name: value for name, value in params.as_dict().items()
              if name not in ("omega", parameter)}
     dataset = xr.Dataset(
-        {"grazing_phase": (POINT, phase_of_minimum(touching), attributes("grazing_phase"))},
-        coords=coords,
+        data, coords=coords,
         attrs=global_attributes(
             "Grazing curve of the non-impacting steady orbit (linear response)",
             f"grazing curve in (omega, {parameter})", fixed, n_modes=n_modes,
