@@ -161,7 +161,8 @@ def steady_gap(params: Params, n_modes: int) -> SteadyGap:
     ``SteadyGap.time_of_minimum`` (s); the orbit is that of the linear free phase whether or
     not it touches (``minimum <= 0``: it does, and the true orbit impacts). ``n_modes``: free
     modes per beam, as in `impactbeams.simulate`. Every counterpart and drive: tip force,
-    base motion of either or both clamps, or both drives.
+    base motion of either or both clamps, or both drives. The uplifts and ``start`` do not
+    enter: they set a run's start, not its periodic orbit.
     """
     linear = LinearGap(params, n_modes)
     (omega,) = linear.check_frequencies(params.omega)
