@@ -452,7 +452,7 @@ def test_bad_input_is_refused_with_one_line_and_nothing_written(scratch, capsys,
     command = argv[0] if argv and argv[0] in USAGE else None
     assert usage in ([], [f"usage: impactbeams {command} {USAGE[command]}" if command else
                           "usage: impactbeams [-h] [--version] {modes,simulate,run,continue,"
-                          "plot} ..."]), err
+                          "grazing,plot} ..."]), err
     assert lines[-1].startswith("impactbeams: error: "), err
     for fragment in fragments:
         assert fragment in lines[-1]

@@ -602,7 +602,8 @@ class _Parser(argparse.ArgumentParser):
         self.commands: dict[str, _Parser] = {}
 
     def error(self, message: str) -> NoReturn:
-        raise UsageError(message, self.format_usage().strip())
+        # one line whatever the terminal's width (argparse wraps a long list of commands)
+        raise UsageError(message, " ".join(self.format_usage().split()))
 
     def parse_args(self, args: Sequence[str] | None = None,  # type: ignore[override]
                    namespace: None = None) -> argparse.Namespace:
