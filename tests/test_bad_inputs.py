@@ -452,7 +452,7 @@ def test_bad_input_is_refused_with_one_line_and_nothing_written(scratch, capsys,
     command = argv[0] if argv and argv[0] in USAGE else None
     assert usage in ([], [f"usage: impactbeams {command} {USAGE[command]}" if command else
                           "usage: impactbeams [-h] [--version] {modes,simulate,run,continue,"
-                          "plot} ..."]), err
+                          "grazing,plot} ..."]), err
     assert lines[-1].startswith("impactbeams: error: "), err
     for fragment in fragments:
         assert fragment in lines[-1]
@@ -733,6 +733,13 @@ def _public_calls():
                                     "data = 't_max = 1' (str) is not allowed: must be a mapping"),
         "sweep_from_mapping-source": (lambda: sweep_from_mapping({}, source=3),
                                       "source = 3 (int)"),
+        "steady_gap-params": (lambda: ib.steady_gap(5, 5), "params = 5 (int) is not allowed: "
+                              "must be an impactbeams.Params"),
+        "grazing_curve-omega": (lambda: ib.grazing_curve(Params(), 5, "clearance", "fast"),
+                                "omega = 'fast' is not allowed: must be a positive frequency"),
+        "grazing_frequencies-brackets": (
+            lambda: ib.grazing_frequencies(Params(), 5, 10.0, 20.0, brackets=2.5),
+            "brackets = 2.5"),
         "Params-contact_law": (lambda: Params(contact_law=np.array(["tied"])),
                                "contact_law = array(['tied']"),
         "Params-l1": (lambda: Params(l1=[0.1]), "l1 = [0.1] is not allowed: must be a finite"),

@@ -3,7 +3,8 @@
 The command-line interface, a thin argparse layer over the library; the line above is the
 description `impactbeams --help` opens with. Subcommands: ``modes`` (natural frequencies),
 ``run`` (a sweep from a TOML file), ``simulate`` (one full trajectory), ``continue`` (periodic
-orbits along a parameter, from a TOML file), ``plot`` (draw a saved Dataset). Every model
+orbits along a parameter, from a TOML file), ``grazing`` (where the non-impacting orbit first
+touches, in closed form), ``plot`` (draw a saved Dataset). Every model
 parameter is an option named like the parameter, with dashes
 (``--force-amplitude``, ``--EI1``, ``--thickness2``).
 
@@ -29,6 +30,7 @@ from typing import TYPE_CHECKING, NoReturn
 from impactbeams.configuration import counterpart_named
 from impactbeams.params import (
     CHOICES,
+    GRAZING_BRACKETS,
     MAX_CHUNK_CELLS,
     MAX_EVENTS,
     MAX_MODES,
@@ -38,7 +40,7 @@ from impactbeams.params import (
     nearest,
     refuse_beam2,
 )
-from impactbeams.variables import PARAMETERS
+from impactbeams.variables import GRAZING_PARAMETERS, PARAMETERS
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -52,6 +54,7 @@ EXIT_SYSTEM_ERROR = 1  # a file could not be written (full disk, ...) or memory 
 EXIT_USER_ERROR = 2  # an input was rejected: nothing was computed or written
 EXIT_INCOMPLETE = 3  # the result was written, but some runs stopped before t_max
 EXIT_INTERRUPTED = 130
+GRAZING_POINTS = 201  # frequencies of a grazing curve in a drive or the clearance
 
 _ALIASES = {"force_amplitude": ["--force"]}
 
@@ -374,6 +377,53 @@ def _continue(args: argparse.Namespace) -> int:
     return EXIT_INCOMPLETE if short and not args.allow_incomplete else 0
 
 
+def _grazing(args: argparse.Namespace) -> int:
+    """``grazing``: the closed-form grazing curve over [--omega-min, --omega-max], to netCDF."""
+    import numpy as np
+
+    from impactbeams.io import write_netcdf
+    from impactbeams.orbits import grazing_curve, grazing_frequencies
+    from impactbeams.preflight import require_output_file
+    from impactbeams.sweep.lock import output_lock
+
+    output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
+    params = params_from_args(args)
+    n_modes = args.n_modes or 5
+    _require_grazing_options(args)
+    with output_lock(output):
+        if args.parameter == "omega":
+            dataset = grazing_frequencies(params, n_modes, args.omega_min, args.omega_max,
+                                          args.points or GRAZING_BRACKETS)
+        else:
+            dataset = grazing_curve(params, n_modes, args.parameter, np.linspace(
+                args.omega_min, args.omega_max, args.points or GRAZING_POINTS))
+        write_netcdf(dataset, output)
+    plane = "grazing frequencies" if args.parameter == "omega" else (
+        f"points of the grazing curve in (omega, {args.parameter})")
+    _say(args, f"wrote {output}: {dataset.grazing_point.size} {plane}, {n_modes} modes per beam")
+    return 0
+
+
+# options that set nothing of the steady orbit's grazing (its start, its one frequency)
+_NOT_GRAZING = ("omega", "uplift1", "uplift2", "start")
+
+
+def _require_grazing_options(args: argparse.Namespace) -> None:
+    """Refuse a range that is empty or not above 0, and options that would be ignored."""
+    low, high = args.omega_min, args.omega_max
+    if not 0.0 < low < float("inf"):
+        raise ParameterError(f"--omega-min = {low!r} is not allowed: must be finite and > 0 "
+                             "(rad/s)")
+    if not high > low:
+        raise ParameterError(f"--omega-max = {high!r} is not allowed: the range [{low!r}, "
+                             f"{high!r}] is empty: need --omega-max > --omega-min (rad/s)")
+    for name in _NOT_GRAZING:
+        if getattr(args, name) is not None:
+            raise ParameterError(f"--{name} is not allowed with grazing: the steady orbit does "
+                                 "not depend on the start, and the frequencies are "
+                                 "--omega-min to --omega-max")
+
+
 def _continuation_cost(continuation: Continuation) -> str:
     """The expected time of a continuation: per point (calibrated), and at least how many."""
     from impactbeams.continuation.run import fewest_points, mode_count, state_size
@@ -555,7 +605,8 @@ class _Parser(argparse.ArgumentParser):
         self.commands: dict[str, _Parser] = {}
 
     def error(self, message: str) -> NoReturn:
-        raise UsageError(message, self.format_usage().strip())
+        # one line whatever the terminal's width (argparse wraps a long list of commands)
+        raise UsageError(message, " ".join(self.format_usage().split()))
 
     def parse_args(self, args: Sequence[str] | None = None,  # type: ignore[override]
                    namespace: None = None) -> argparse.Namespace:
@@ -683,6 +734,27 @@ def build_parser() -> argparse.ArgumentParser:
                       help="exit 0, not 3, when a branch stops short of its range "
                            "(stalled, max_points, min_step, retraced)")
     cont.set_defaults(handler=_continue)
+
+    grazing = command("grazing", "PARAMETER --omega-min LOW --omega-max HIGH -o OUT.nc "
+                      "[OPTIONS] [PARAMETER OPTIONS]",
+                      help="where the non-impacting orbit first touches, in closed form")
+    grazing.add_argument("parameter", metavar="PARAMETER",
+                         choices=(*GRAZING_PARAMETERS, "omega"),
+                         help="force_amplitude, base_amplitude or clearance: its grazing value "
+                              "at each Omega; omega: the grazing frequencies")
+    grazing.add_argument("--omega-min", type=_number, required=True, metavar="RAD/S",
+                         help="lowest forcing frequency (rad/s)")
+    grazing.add_argument("--omega-max", type=_number, required=True, metavar="RAD/S",
+                         help="highest forcing frequency (rad/s)")
+    grazing.add_argument("--points", type=_integer_from(2), metavar="N",
+                         help=f"frequencies, evenly spaced (default {GRAZING_POINTS}; for "
+                              f"omega the bracketing grid, default {GRAZING_BRACKETS})")
+    grazing.add_argument("--n-modes", type=_MODE_COUNT, default=None, metavar="N",
+                         help="free modes per beam (default 5)")
+    grazing.add_argument("-o", "--output", required=True, metavar="OUT.nc",
+                         help="netCDF file to write (replaced if it exists)")
+    add_parameter_options(grazing)
+    grazing.set_defaults(handler=_grazing)
 
     plot = command("plot", "IN.nc [-o OUT.png] [OPTIONS]",
                    help="draw a saved sweep map, simulated run or continuation")

@@ -180,6 +180,9 @@ MAX_EVENTS = 200_000
 # and an output per cell), and well below HDF5's 4 GiB limit on a compressed block (here, not in
 # sweep/, so that `impactbeams --help` need not import the sweep package)
 MAX_CHUNK_CELLS = 2**24
+# the frequencies on which `impactbeams.orbits.grazing_frequencies` brackets its roots by
+# default (here, not in orbits/, so that `impactbeams --help` need not import the orbits)
+GRAZING_BRACKETS = 2001
 # rad/s: a continuum beam's frequencies stay far below its lattice vibrations (~1e13 rad/s)
 MAX_FREQUENCY = 1e12
 MAX_CONTACT_STIFFNESS = 1e12  # N/m: beyond it the contact frequencies leave double precision

@@ -466,6 +466,21 @@ VARIABLES.update({
         "(docs/continuation.md); NaN if neither exists"),
 })
 
+# grazing curves of the non-impacting steady orbit (impactbeams.orbits.grazing): points of the
+# curve in the plane of Omega and a drive or the clearance, along "grazing_point"; the
+# parameters whose grazing value a curve gives at each Omega in closed form
+GRAZING_PARAMETERS = ("force_amplitude", "base_amplitude", "clearance")
+VARIABLES.update({
+    "grazing_point": Variable(("grazing_point",), "1", "grazing curve point number",
+                              "index of the point along the grazing curve, from 0",
+                              dtype="int64"),
+    "grazing_phase": Variable(
+        ("grazing_point",), "rad", "forcing phase of the grazing contact",
+        "Omega t mod 2 pi, in [0, 2 pi), at which the steady non-impacting orbit's gap "
+        "touches zero at the point (its minimum over the forcing period; phase 0 where the "
+        "drives' sines rise through 0); NaN where the curve has no point"),
+})
+
 # what the long-time response gives: computed over sampled_periods forcing periods after
 # transient_periods, not over [0, t_max] (the sweeps' long-time observables; plot titles name
 # that window instead of t_max)

@@ -1,11 +1,20 @@
 """Periodic orbits of the spring law: the period map, shooting, Floquet multipliers.
 
 `period_map`: the period map P^p with its exact
-Jacobian; `shooting`: periodic orbits by Newton (and Newton-Picard) on z = P^p(z).
+Jacobian; `shooting`: periodic orbits by Newton (and Newton-Picard) on z = P^p(z);
+`grazing`: the non-impacting orbit's smallest gap and grazing curves, in closed form.
 """
 
+from impactbeams.orbits.grazing import (
+    GRAZING_PARAMETERS,
+    SteadyGap,
+    grazing_curve,
+    grazing_frequencies,
+    steady_gap,
+)
 from impactbeams.orbits.period_map import PeriodMap, PeriodMapResult
 from impactbeams.orbits.shooting import OrbitNotConverged, PeriodicOrbit, periodic_orbit
 
-__all__ = ["OrbitNotConverged", "PeriodMap", "PeriodMapResult", "PeriodicOrbit",
-           "periodic_orbit"]
+__all__ = ["GRAZING_PARAMETERS", "OrbitNotConverged", "PeriodMap", "PeriodMapResult",
+           "PeriodicOrbit", "SteadyGap", "grazing_curve", "grazing_frequencies", "periodic_orbit",
+           "steady_gap"]

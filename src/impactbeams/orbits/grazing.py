@@ -1,0 +1,279 @@
+"""Grazing of the non-impacting periodic orbit, in closed form from the linear response.
+
+Below contact every free coordinate is a linear oscillator driven at the one frequency Omega
+(docs/model.md): on the steady (periodic) orbit each mode is ``Im(P_n e^(i Omega t))``,
+``P_n = A_n / D_n``, ``D_n = omega_n^2 - Omega^2 + 2 i zeta omega_n Omega``, and the gap
+
+    g(t) = Delta + Im(G e^(i Omega t)),   G = S + sum_n w_n P_n
+
+(``w_n`` the coordinates' gap weights, ``S`` the gap's explicit harmonic: the tip force's
+quasi-static part and the clamps' relative motion) is a trigonometric polynomial of degree
+one. Its minimum over a period, ``Delta - |G|``, is where the rate ``Re(G e^(i Omega t))``
+vanishes rising, ``Omega t = -pi/2 - arg G`` (mod 2 pi): exact, no sampling. The model has no
+static load (no gravity, no preload), so nothing shifts the mean gap from ``Delta``.
+
+Every drive enters G linearly: ``G = F0 G_F + U0 G_U`` with ``G_F``, ``G_U`` the phasors per
+unit tip force (m/N) and per unit base amplitude (m/m), and G does not depend on the
+clearance. The grazing drive or clearance at each Omega is therefore a closed form
+(`grazing_curve`); at fixed drives the grazing frequencies are the roots of
+``Delta - |G(Omega)|``, bracketed on a grid and refined by Brent's method
+(`grazing_frequencies`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.optimize import brentq
+
+from impactbeams.contact import build_free_phase
+from impactbeams.drive import base_participation, moving_clamps
+from impactbeams.params import (
+    GRAZING_BRACKETS,
+    MAX_MODES,
+    Params,
+    require,
+    require_finite,
+    require_integer,
+    require_type,
+)
+from impactbeams.variables import (
+    GRAZING_PARAMETERS,
+    attributes,
+    global_attributes,
+    parameter_attributes,
+    validate,
+)
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+POINT = "grazing_point"
+
+
+@dataclasses.dataclass(frozen=True)
+class SteadyGap:
+    """The gap on the non-impacting steady orbit, ``g(t) = clearance + Im(phasor e^(i omega t))``.
+
+    Attributes (SI units): ``clearance`` Delta (m), ``phasor`` G (m, complex), ``omega`` the
+    forcing frequency Omega (rad/s).
+    """
+
+    clearance: float
+    phasor: complex
+    omega: float
+
+    @property
+    def minimum(self) -> float:
+        """The smallest gap over a forcing period, ``Delta - |G|`` (m); <= 0: the orbit touches."""
+        return self.clearance - abs(self.phasor)
+
+    @property
+    def phase_of_minimum(self) -> float:
+        """The forcing phase ``Omega t`` in [0, 2 pi) where the gap is smallest (rad).
+
+        The root of the rate ``Omega Re(G e^(i Omega t))`` where the gap turns from falling to
+        rising: ``Omega t + arg G = -pi/2``.
+        """
+        return float(phase_of_minimum(self.phasor))
+
+    @property
+    def time_of_minimum(self) -> float:
+        """The time in [0, 2 pi / Omega) of the smallest gap (s), forcing phase 0 at t = 0."""
+        return self.phase_of_minimum / self.omega
+
+    def __call__(self, t: ArrayLike) -> np.ndarray:
+        """The gap (m) at times ``t`` (s)."""
+        return self.clearance + np.imag(self.phasor * np.exp(1j * self.omega * np.asarray(t)))
+
+
+class LinearGap:
+    """The gap's phasor per unit drive of a configuration, at any forcing frequency.
+
+    Built once per ``(params, n_modes)`` (the free modes and the drives' modal data); the
+    phasors at many frequencies are then array sums. ``params``' own ``omega`` is not used.
+    """
+
+    def __init__(self, params: Params, n_modes: int) -> None:
+        require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
+        require_integer("n_modes", n_modes, 1, MAX_MODES)
+        free = build_free_phase(params, n_modes)
+        moves1, moves2 = moving_clamps(params.shaker)
+        self.params = params
+        self.frequencies = free.frequencies
+        self.weights = free.tip1 - free.tip2   # the gap's weight of each free coordinate
+        self.force_drive = free.drive          # b_n: Y_1n(l1) / omega_n^2 (m kg^1/2 / N)
+        self.base_drive = base_participation(params, free)  # Gamma_n (kg^1/2)
+        self.force_harmonic = -params.tip_compliance[0]      # S per unit F0: -c1 (m/N)
+        self.base_harmonic = moves1 - moves2   # S per unit U0: the clamps' relative motion
+
+    def per_unit(self, omega: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """``(G_F, G_U)`` at each Omega (rad/s): the gap's phasor per N of F0, per m of U0.
+
+        A mode's drive is ``A = F0 Omega b (-Omega + 2 i zeta omega_n) + U0 Gamma Omega^2``
+        (`impactbeams.kernels.drive.mode_drive`).
+        """
+        big = np.asarray(omega, dtype=float)[..., None]
+        wn, zeta = self.frequencies, self.params.damping_ratio
+        response = self.weights / (wn**2 - big**2 + 2j * zeta * wn * big)  # w_n / D_n
+        force = big * self.force_drive * (-big + 2j * zeta * wn)
+        base = self.base_drive * big**2
+        return (self.force_harmonic + np.sum(response * force, axis=-1),
+                self.base_harmonic + np.sum(response * base, axis=-1))
+
+    def phasor(self, omega: ArrayLike) -> np.ndarray:
+        """G at each Omega (rad/s) for ``params``' drives F0 and U0 (m, complex)."""
+        force, base = self.per_unit(omega)
+        p = self.params
+        return p.force_amplitude * force + p.base_amplitude * base
+
+    def check_frequencies(self, omega: ArrayLike) -> np.ndarray:
+        """``omega`` as an array of positive, finite frequencies with a steady orbit (rad/s).
+
+        Omega = 0 drives nothing; an undamped mode driven exactly at its natural frequency has
+        no steady orbit.
+        """
+        try:
+            values = np.atleast_1d(np.asarray(omega, dtype=float))
+        except (TypeError, ValueError):  # not numbers: refused below
+            values = np.empty((0, 0))
+        require("omega", omega, values.ndim == 1 and values.size > 0,
+                "must be a positive frequency or a 1-d sequence of them", "rad/s")
+        bad = values[~(np.isfinite(values) & (values > 0.0))]
+        require("omega", float(bad[0]) if bad.size else 0.0, bad.size == 0,
+                "must be finite and > 0: Omega = 0 drives nothing", "rad/s")
+        if self.params.damping_ratio == 0.0:
+            resonant = values[np.isin(values, self.frequencies)]
+            require("omega", float(resonant[0]) if resonant.size else 0.0, resonant.size == 0,
+                    "is a natural frequency and damping_ratio = 0: an undamped mode driven at "
+                    "resonance has no steady orbit", "rad/s")
+        return values
+
+
+def steady_gap(params: Params, n_modes: int) -> SteadyGap:
+    """The gap of ``params``' non-impacting steady orbit at its ``omega``, exactly.
+
+    Its smallest value over a period is ``SteadyGap.minimum`` (m), reached at
+    ``SteadyGap.time_of_minimum`` (s); the orbit is that of the linear free phase whether or
+    not it touches (``minimum <= 0``: it does, and the true orbit impacts). ``n_modes``: free
+    modes per beam, as in `impactbeams.simulate`. Every counterpart and drive: tip force,
+    base motion of either or both clamps, or both drives. The uplifts and ``start`` do not
+    enter: they set a run's start, not its periodic orbit.
+    """
+    linear = LinearGap(params, n_modes)
+    (omega,) = linear.check_frequencies(params.omega)
+    return SteadyGap(params.clearance, complex(linear.phasor(omega)), float(omega))
+
+
+def grazing_values(linear: LinearGap, parameter: str,
+                   omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The value of ``parameter`` at which the orbit first touches at each Omega, and G there.
+
+    The clearance: ``|G|``. A drive x with the rest of G fixed, ``G = x g + r``: the positive
+    root of ``|x g + r| = Delta``, unique while ``|r| < Delta`` (NaN where the other drive
+    already closes the gap), in the form without cancellation. Values in SI units, G in m.
+    """
+    force, base = linear.per_unit(omega)
+    p = linear.params
+    if parameter == "clearance":
+        touching = p.force_amplitude * force + p.base_amplitude * base
+        return np.abs(touching), touching
+    unit, rest = (force, p.base_amplitude * base) if parameter == "force_amplitude" else (
+        base, p.force_amplitude * force)
+    a = np.abs(unit) ** 2
+    b = np.real(unit * np.conj(rest))
+    c = np.abs(rest) ** 2 - p.clearance**2  # < 0 where the other drive leaves a gap
+    root = np.sqrt(np.maximum(b * b - a * c, 0.0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        x = np.where(c < 0.0, np.where(b > 0.0, -c / (b + root), (root - b) / a), np.nan)
+    return x, x * unit + rest
+
+
+def phase_of_minimum(phasor: ArrayLike) -> np.ndarray:
+    """The forcing phase in [0, 2 pi) where ``Im(G e^(i Omega t))`` is least, per G (rad)."""
+    return (-0.5 * math.pi - np.angle(phasor)) % (2.0 * math.pi)
+
+
+def grazing_curve(params: Params, n_modes: int, parameter: str,
+                  omega: ArrayLike) -> xr.Dataset:
+    """The grazing curve in the plane (Omega, ``parameter``): where the orbit first touches.
+
+    At each forcing frequency of ``omega`` (rad/s), the value of ``parameter`` (N for
+    ``force_amplitude``, m for ``base_amplitude`` or ``clearance``) at which the
+    non-impacting steady orbit of ``params`` (``n_modes`` free modes per beam) touches: below
+    it (above it, for the clearance) the orbit has no contact. Closed form (module
+    docstring): the response is linear in each drive and does not depend on the clearance;
+    a drive's grazing value keeps the other drive at ``params``' value, and is NaN where that
+    drive alone already closes the gap.
+
+    Returns a Dataset along ``grazing_point``, one point per frequency: the coordinate
+    ``omega``, the variables ``parameter`` and ``grazing_phase`` (the forcing phase of the
+    touch), the fixed parameters as attributes. A curve continued in two parameters is
+    checked against it point by point: `grazing_curve` at the continued points' frequencies.
+    """
+    linear = LinearGap(params, n_modes)
+    require("parameter", parameter, parameter in GRAZING_PARAMETERS,
+            f"must be one of {', '.join(map(repr, GRAZING_PARAMETERS))}")
+    frequencies = linear.check_frequencies(omega)
+    values, touching = grazing_values(linear, parameter, frequencies)
+    return _dataset(params, n_modes, parameter, frequencies, values, touching,
+                    "closed form: the steady gap's amplitude |G|, linear in each drive, "
+                    "equal to the clearance")
+
+
+def grazing_frequencies(params: Params, n_modes: int, low: float, high: float,
+                        brackets: int = GRAZING_BRACKETS) -> xr.Dataset:
+    """The forcing frequencies in [low, high] (rad/s) where ``params``' orbit just touches.
+
+    The roots of the smallest gap ``Delta - |G(Omega)|`` (m) at ``params``' drives and
+    clearance: bracketed on ``brackets`` evenly spaced frequencies, each sign change refined
+    by Brent's method (`scipy.optimize.brentq`, to 4 machine epsilons of Omega). Two roots
+    closer together than the grid's step (a curve just touching the line of fixed drive) can
+    be missed: a finer grid finds them. Returns the `grazing_curve` Dataset of the roots, in
+    increasing Omega, with the drives and clearance as attributes.
+    """
+    linear = LinearGap(params, n_modes)
+    require_integer("brackets", brackets, 2)
+    low, high = require_finite("low", low, "rad/s"), require_finite("high", high, "rad/s")
+    require("high", high, low < high, f"the range [{low!r}, {high!r}] is empty: need high > low",
+            "rad/s")
+    grid = linear.check_frequencies(np.linspace(low, high, brackets))
+
+    def smallest_gap(omega: float) -> float:
+        return params.clearance - abs(complex(linear.phasor(omega)))
+
+    gaps = params.clearance - np.abs(linear.phasor(grid))
+    roots = [brentq(smallest_gap, a, b, xtol=1e-300, rtol=4 * np.finfo(float).eps)
+             for a, b, ga, gb in zip(grid[:-1], grid[1:], gaps[:-1], gaps[1:], strict=True)
+             if ga * gb < 0.0]
+    roots = np.array(sorted([*roots, *grid[gaps == 0.0]]))
+    return _dataset(params, n_modes, "omega", roots, roots, linear.phasor(roots),
+                    f"roots of Delta - |G(Omega)|: sign changes on {brackets} evenly spaced "
+                    "frequencies refined by Brent's method")
+
+
+def _dataset(params: Params, n_modes: int, parameter: str, omega: np.ndarray,
+             values: np.ndarray, touching: np.ndarray, method: str) -> xr.Dataset:
+    """A grazing curve's points along ``grazing_point`` (registry: impactbeams.variables)."""
+    import xarray as xr
+
+    coords = {POINT: (POINT, np.arange(omega.size, dtype=np.int64), attributes(POINT)),
+              "omega": (POINT, omega, parameter_attributes("omega"))}
+    # the grazing value is data, not a coordinate: NaN where the other drive closes the gap
+    data = {} if parameter == "omega" else {
+        parameter: (POINT, values, parameter_attributes(parameter))}
+    data["grazing_phase"] = (POINT, phase_of_minimum(touching), attributes("grazing_phase"))
+    fixed = {name: value for name, value in params.as_dict().items()
+             if name not in ("omega", parameter)}
+    dataset = xr.Dataset(
+        data, coords=coords,
+        attrs=global_attributes(
+            "Grazing curve of the non-impacting steady orbit (linear response)",
+            f"grazing curve in (omega, {parameter})", fixed, n_modes=n_modes,
+            grazing_parameter=parameter, grazing_method=method))
+    validate(dataset)
+    return dataset
