@@ -89,6 +89,13 @@ def baseline(tree: Path, stiffness: float | None, direction: str, cap: float) ->
     return json.loads(done.stdout.splitlines()[-1])
 
 
+def _commit(tree: Path) -> str:
+    """The earlier version's commit (and its tree), as the report names it."""
+    commit = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
+                            check=True, capture_output=True, text=True).stdout.strip()
+    return f"{commit} ({tree})"
+
+
 def label(stiffness: float | None) -> str:
     return "Hertz (default)" if stiffness is None else f"{stiffness:g} N/m"
 
@@ -136,7 +143,8 @@ def main() -> None:
     parser.add_argument("--baseline", type=Path, help="an earlier version's source tree")
     args = parser.parse_args()
     run(1e4, "up", 30.0)  # warm-up: compilation
-    report = report_header(cap=args.cap, baseline=str(args.baseline or ""))
+    report = report_header(cap=args.cap, baseline=_commit(args.baseline) if args.baseline
+                           else "", max_points=MAX_POINTS)
     for stiffness in STIFFNESSES:
         for direction in DIRECTIONS:
             case = {**run(stiffness, direction, args.cap), "cap": args.cap}

@@ -174,7 +174,8 @@ def performance() -> str:
     ]
     stiff = _results("stiff_continuation")
     rows.append(("frequency response of a stiff stop on a shaker, 0.5 to 2 omega_1, up and down, "
-                 "default settings, each run stopped at "
+                 f"default settings but max_points {stiff['max_points']}, each run "
+                 "stopped at "
                  f"{stiff['cap']:.0f} s ([stiff continuation]"
                  "(docs/benchmarks/stiff_continuation.md))",
                  "; ".join(_stiff_case(case) for case in stiff["cases"]), recorded(stiff)))
