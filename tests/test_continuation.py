@@ -1,5 +1,6 @@
 """The continuation engine on small problems with exact answers (tests/continuation_toys.py)."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -252,6 +253,75 @@ def test_locate_stops_where_the_test_jumps():
     assert not jump.root and jump.s < 0.3 < jump.beyond.x[-1]
     pinned = locate(point_at, point_at(0.0), 1.0, point_at(1.0), grazing_test, 1e-11)
     assert pinned.root and pinned.beyond.x[-1] - pinned.s <= 1e-11
+
+
+def _located_on_a_line(test_value):
+    """``locate`` on points s in [0, 1] of a line whose test is ``test_value(s)``; its solves."""
+    solves = []
+
+    def point_at(s, guess=None):
+        solves.append(s)
+        evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)), np.ones(1),
+                                grazing=test_value(s))
+        return Point(np.array([0.0, s]), np.array([0.0, 1.0]), evaluation, 1)
+
+    found = locate(point_at, point_at(0.0), 1.0, point_at(1.0), grazing_test, 1e-11)
+    return found, len(solves) - 2
+
+
+@pytest.mark.parametrize(("test_value", "solves"), [
+    (lambda s: 0.3 - s if s < 0.3 else -1e6, 10),  # a jump past the root: 7 solves
+    (lambda s: 0.3 - s if s < 0.3 else 1e4 * (0.3 - s), 10),  # a kink, steep past it: 7
+    (lambda s: 1e4 * (0.3 - s) if s < 0.3 else 0.3 - s, 58),  # steep before it: 56
+    (lambda s: 1e6 if s < 0.3 else 0.3 - s, 55),  # a jump before it: 51
+    (lambda s: (0.3 - s) * (1 + 3 * s), 16),  # smooth (concave): 16
+])
+def test_locate_where_the_test_jumps_or_kinks_at_the_root(test_value, solves):
+    """A test continuous on one side of its root and jumping, or a thousand times steeper,
+    on the other (a merge's interval value where another contact's rise stands in; a grazing
+    value where the near side's minimum is another contact's): the root pinned to the
+    tolerance within the solves measured (+- a few). Main 018dd4a crept from one end by
+    regula falsi and stopped at its 60-solve cap 1e-3, 6e-6, 6e-6 and 4e-4 short of it."""
+    found, used = _located_on_a_line(test_value)
+    assert abs(found.s - 0.3) <= 1e-11 and found.beyond.x[-1] - found.s <= 1e-11
+    assert used <= solves
+
+
+def test_a_gaps_value_tolerance_is_not_below_its_round_off():
+    """From a start 5.8e-10 m from a merge, 1e-11 of it (5.8e-21 m) is below a gap's round-off
+    (1e-19 m at 5e-4 m): no bracket met it, and each such search ran to its cap of 60 solves.
+    The beams' problem gives its round-off, 1e3 eps of the clearance."""
+    import impactbeams as ib
+    from impactbeams.continuation.arclength import Follower
+    from impactbeams.continuation.beams import BeamOrbits
+    from impactbeams.continuation.branch import _value_tolerance
+
+    params = ib.Params(clearance=5e-4, omega=200.0)
+    problem = BeamOrbits(params, "omega", n_modes=3)
+    assert problem.gap_round_off == pytest.approx(1e3 * np.finfo(float).eps * 5e-4, rel=1e-15)
+    near = Point(np.zeros(2), np.array([0.0, 1.0]),
+                 Evaluation(np.zeros(1), np.zeros((1, 1)), np.ones(1), grazing=5.8e-10), 1)
+    follower = Follower(problem, Scaling(np.ones(12), 1.0), Settings())
+    assert _value_tolerance(follower, grazing_test, near) == problem.gap_round_off
+    far = dataclasses.replace(near, evaluation=dataclasses.replace(near.evaluation,
+                                                                   grazing=1e-3))
+    assert _value_tolerance(follower, grazing_test, far) == pytest.approx(1e-14)
+
+
+@pytest.mark.parametrize(("other", "sampled"), [(0.5, False), (0.9, True), (1.1, True)])
+def test_a_step_is_sampled_for_hidden_crossings_where_another_multiplier_is_near(other,
+                                                                                  sampled):
+    """A step where one multiplier crosses (1.02 to 0.98: moduli change 0.04 at most) is
+    searched in pieces only if another lies within 4 x 0.04 of the circle at an end: only
+    such a one could leave and return within the step unseen at its ends."""
+    from impactbeams.continuation.branch import _may_hide_crossings
+
+    def point(moduli):
+        evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)), np.array(moduli, complex))
+        return Point(np.zeros(2), np.array([0.0, 1.0]), evaluation, 1)
+
+    a, b = point([1.02, other, 0.3]), point([0.98, other, 0.3])
+    assert _may_hide_crossings(a, b, crossings=1) == sampled
 
 
 @pytest.mark.parametrize(("options", "refused"), [

@@ -421,8 +421,8 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
 
     On one smooth piece: `_between`. Across a change of the contact sequence: the nonsmooth
     event is located on planes across the chord from ``a`` to ``b`` (the grazing value, or the
-    contacts per orbit
-    by bisection for a merge or split), labelled at the last point before it, and smooth
+    contacts per orbit by bisection for a merge or split), labelled at the last point before
+    it (a grazing whose contact at zero depth is the far side's: at the first past it), and smooth
     bifurcations are sought only within each side's piece; then on from the first point past
     it. Unlocated (no corrected point past it on the planes, or more than ``MAX_SUBDIVISIONS``
     events in a row): ``b`` unlabelled, or `_Jumped` for a step longer than ``KINK_STEP`` (a
@@ -454,7 +454,7 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
                     else past.x - a.x)
     near = _between(follower, a, before)[:-1] if before is not a else []
     rest = [] if past is b else _advance(follower, past, b, depth + 1)
-    if label == GRAZING and abs(grazing_test(past)) < abs(grazing_test(before)):
+    if label == GRAZING and not _at_zero_depth(a, b, before, before):
         # the contact at zero depth is the far side's (on the near side another contact, or
         # free flight, was nearer 0): its point carries the label and its zero gap
         return [*near, before, dataclasses.replace(past, label=label), *rest]
