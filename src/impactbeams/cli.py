@@ -382,9 +382,9 @@ def _grazing(args: argparse.Namespace) -> int:
     import numpy as np
 
     from impactbeams.io import write_netcdf
+    from impactbeams.lock import output_lock
     from impactbeams.orbits import grazing_curve, grazing_frequencies
     from impactbeams.preflight import require_output_file
-    from impactbeams.sweep.lock import output_lock
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
     params = params_from_args(args)
