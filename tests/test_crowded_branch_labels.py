@@ -15,7 +15,6 @@ import re
 import numpy as np
 import pytest
 import xarray as xr
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Annotation, Text
 from matplotlib.transforms import Bbox
 
@@ -64,20 +63,6 @@ def crowded_branch():
 @pytest.fixture(scope="module")
 def branch():
     return crowded_branch()
-
-
-@pytest.fixture
-def captured(monkeypatch):
-    """The figures `plot_dataset` would save, drawn on the Agg canvas instead."""
-    figures = []
-
-    def keep(figure, path, dpi=150):
-        FigureCanvasAgg(figure)
-        figure.canvas.draw()
-        figures.append(figure)
-
-    monkeypatch.setattr("impactbeams.plotting.save_figure", keep)
-    return figures
 
 
 def drawn(branch, captured, tmp_path, events=None):
