@@ -247,3 +247,31 @@ def test_the_command_line_draws_the_chosen_kinds(branch, captured, tmp_path, cap
     lines = [line for line in figure.axes[0].lines if re.match(r"^[A-Z]+: ", line.get_label())]
     assert [line.get_label().split(":")[0] for line in lines] == ["NS"]
     assert len(lines[0].get_xdata()) == 75
+
+
+def test_the_layouts_geometry_agrees_with_matplotlibs_paths():
+    """Segments against boxes and segments, on random ones (crossing or not), as matplotlib's
+    `Path.intersects_bbox` and `Path.intersects_path` find them."""
+    from matplotlib.path import Path
+
+    from impactbeams.plotting.room import _segments_cross, _segments_meet_boxes
+
+    rng = np.random.default_rng(4)
+    segments = rng.uniform(0.0, 100.0, (300, 4))
+    corners = rng.uniform(0.0, 100.0, (200, 2))
+    boxes = np.column_stack([corners, corners + rng.uniform(1.0, 20.0, (200, 2))])
+    paths = [Path(segment.reshape(2, 2)) for segment in segments]
+    expected = [[path.intersects_bbox(Bbox(box.reshape(2, 2))) for box in boxes]
+                for path in paths]
+    met = _segments_meet_boxes(segments, boxes)
+    np.testing.assert_array_equal(met, expected)
+    assert 0.05 < met.mean() < 0.95  # both answers tested
+    crossed = np.array([_segments_cross(segment, segments[:100]) for segment in segments[100:]])
+    np.testing.assert_array_equal(crossed, [[a.intersects_path(b) for b in paths[:100]]
+                                            for a in paths[100:]])
+    assert 0.05 < crossed.mean() < 0.95
+    # a box a segment lies in, or one it only passes by; a vertical and a horizontal segment
+    assert _segments_meet_boxes(np.array([[1.0, 1.0, 2.0, 2.0], [0.0, 5.0, 5.0, 5.0],
+                                          [3.0, 0.0, 3.0, 9.0]]),
+                                np.array([[0.0, 0.0, 4.0, 4.0]])).ravel().tolist() == [
+        True, False, True]

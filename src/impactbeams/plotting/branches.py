@@ -273,8 +273,8 @@ def _place(label: Annotation, point: np.ndarray, renderer: RendererBase, room: R
     for offset in _OFFSETS:
         label.xyann = offset
         box = _text_box(label, renderer)
-        line = np.concatenate([point, box.get_points().mean(axis=0)]) \
-            if abs(offset[1]) > _LINE_FROM else None
+        far = abs(offset[1]) > _LINE_FROM
+        line = np.concatenate([point, box.get_points().mean(axis=0)]) if far else None
         if _contains(inside, box) and room.is_free(box.extents, line, own):
             label.arrow_patch.set_visible(line is not None)
             room.take(box.extents, line)
