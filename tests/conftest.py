@@ -41,3 +41,20 @@ def default_params() -> Params:
 def model50(default_params):
     """Default geometry, 50 free modes per beam, 100 contact modes."""
     return build_tied_model(default_params, 50)
+
+
+@pytest.fixture
+def captured(monkeypatch):
+    """The figures the plotting functions would save, laid out on the Agg canvas."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    figures = []
+
+    def keep(figure, path, dpi=150):
+        FigureCanvasAgg(figure)
+        figure.canvas.draw()
+        figures.append(figure)
+
+    for module in ("impactbeams.plotting.trajectories", "impactbeams.plotting"):
+        monkeypatch.setattr(f"{module}.save_figure", keep)
+    return figures

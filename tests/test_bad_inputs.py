@@ -343,6 +343,14 @@ CASES = {
                                ["'ok.toml' is a file, not a folder"]),
     "plot-output-proc": (["plot", "map.nc", "-o", "/proc/x.png"], {},
                          ["'/proc/x.png' cannot be written"]),
+    "plot-events-unknown": (["plot", "map.nc", "--events", "fold,gazing"], {},
+                            ["--events = 'fold,gazing' is not allowed: 'gazing' is not an "
+                             "event kind (did you mean 'grazing'?); give all, none, or kinds "
+                             "separated by commas from fold, period_doubling"]),
+    "plot-events-none-and-kinds": (["plot", "map.nc", "--events", "none,fold"], {},
+                                   ["'all' and 'none' stand alone"]),
+    "plot-events-on-a-map": (["plot", "map.nc", "--events", "fold"], {},
+                             ["events (--events) is for a continuation's file only"]),
     # --- issue 32: no abbreviations, the nearest name, every drive's small-deflection limit
     "simulate-abbreviated-option": (
         ["simulate", "--t-max", "1", "--clear", "1e-5", "-o", "r.nc"], {},
@@ -796,6 +804,8 @@ def _public_calls():
                                  "dataset = 5 (int) is not allowed: must be an xarray.Dataset"),
         "plot_dataset-dpi": (lambda: ib.plot_dataset(xr.Dataset(), "x.png", dpi=-1),
                              "dpi = -1"),
+        "plot_dataset-events": (lambda: ib.plot_dataset(xr.Dataset(), "x.png", events="PD"),
+                                "events = 'PD' is not allowed: 'PD' is not an event kind"),
     }
 
 

@@ -20,21 +20,6 @@ from impactbeams.variables import BIFURCATIONS, attributes, parameter_attributes
 TIED = Params(contact_law="tied")  # the paper's case: 10 contacts in 0.06 s
 
 
-@pytest.fixture
-def captured(monkeypatch):
-    """The figures the plotting functions would save, laid out on the Agg canvas."""
-    figures = []
-
-    def keep(figure, path, dpi=150):
-        FigureCanvasAgg(figure)
-        figure.canvas.draw()
-        figures.append(figure)
-
-    for module in ("impactbeams.plotting.trajectories", "impactbeams.plotting"):
-        monkeypatch.setattr(f"{module}.save_figure", keep)
-    return figures
-
-
 def _largest_drawn(axis):
     """The largest y drawn on ``axis`` by its lines and line collections (data units)."""
     values = [np.nanmax(np.asarray(line.get_ydata(), dtype=float)) for line in axis.lines

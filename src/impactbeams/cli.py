@@ -307,8 +307,10 @@ def _plot(args: argparse.Namespace) -> int:
         _hide_dask()
     from impactbeams.plotting import parse_assignments, parse_levels, plot_dataset
     from impactbeams.plotting.arrays import read_figure_data
+    from impactbeams.plotting.events import chosen_events
     from impactbeams.preflight import image_output, read_netcdf
 
+    chosen_events(args.events, "--events")  # before the file is read
     # a map's file is read without xarray (a third of the start-up), a run's with it
     dataset = read_figure_data(args.dataset, "input")
     output = image_output(args.output or Path(args.dataset).with_suffix(".png"), "-o/--output")
@@ -317,7 +319,8 @@ def _plot(args: argparse.Namespace) -> int:
                          values=parse_assignments(args.slice, "--slice"),
                          indices=parse_assignments(args.slice_index, "--slice-index"),
                          scale=args.scale, contours=parse_levels(args.contours),
-                         title=args.title, dpi=args.dpi, diagram=diagram, hz=args.hz)
+                         title=args.title, dpi=args.dpi, diagram=diagram, hz=args.hz,
+                         events=args.events)
     for note in notes:
         _say(args, f"impactbeams: {note}")
     _say(args, f"wrote {output}")
@@ -787,6 +790,10 @@ def build_parser() -> argparse.ArgumentParser:
                            "long-time sweep along the continued parameter)")
     plot.add_argument("--hz", action="store_true",
                       help="a continuation's frequency axis in Hz (Omega / 2 pi), not rad/s")
+    plot.add_argument("--events", metavar="KINDS",
+                      help="a continuation's events drawn and labelled: all, none, or kinds with "
+                           "commas (fold,grazing,...); default all, merges/splits/chatter "
+                           "unlabelled")
     plot.set_defaults(handler=_plot)
     return parser
 

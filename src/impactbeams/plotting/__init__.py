@@ -19,6 +19,7 @@ from matplotlib.figure import Figure
 
 from impactbeams.params import ParameterError, is_path, is_real, require, require_type
 from impactbeams.plotting.arrays import PlainArray, PlainDataset, as_plain, is_dataset
+from impactbeams.plotting.events import chosen_events
 from impactbeams.plotting.files import save_figure
 from impactbeams.plotting.labels import case_title
 from impactbeams.plotting.missing import note_empty
@@ -108,8 +109,8 @@ def draw(axes: Axes, dataset: xr.Dataset | PlainDataset, variable: str | None = 
 
 
 def _check_arguments(dataset: object, path: object, variable: object, values: object,
-                     indices: object, title: object, dpi: object) -> None:
-    """The types of [`plot_dataset`][]'s arguments (same names), and dpi's value.
+                     indices: object, title: object, dpi: object, events: object) -> None:
+    """The types of [`plot_dataset`][]'s arguments (same names), dpi's and events' values.
 
     The dataset's registered names must be as registered (`impactbeams.variables.validate`).
     """
@@ -123,11 +124,12 @@ def _check_arguments(dataset: object, path: object, variable: object, values: ob
         require_type(name, value, value is None or isinstance(value, Mapping),
                      "None or a mapping of dimension names to values")
     require("dpi", dpi, is_real(dpi) and 0 < dpi < float("inf"), "must be a finite number > 0")
+    chosen_events(events)
 
 
 def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
                    title: str | None, dpi: float, diagram: xr.Dataset | None,
-                   hz: bool) -> list[str]:
+                   hz: bool, events: str | Sequence[str] | None) -> list[str]:
     """A continuation's frequency-response curve into ``path``."""
     from impactbeams.plotting.branches import draw_branches
 
@@ -137,7 +139,7 @@ def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
     axes = figure.subplots()
     axes.set_title(case_title(dataset, variable or "tip_amplitude_1", ("branch_point",))
                    if title is None else title, loc="left", fontsize="medium", wrap=True)
-    draw_branches(axes, dataset, variable, diagram, hz)  # last: it places labels laid out
+    draw_branches(axes, dataset, variable, diagram, hz, events)  # last: it places labels laid out
     save_figure(figure, path, dpi)
     return []
 
@@ -172,27 +174,29 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
                  indices: Mapping[str, int | str] | None = None, scale: str | None = None,
                  contours: int | Sequence[float] | None = None, title: str | None = None,
                  dpi: float = 150, diagram: xr.Dataset | None = None,
-                 hz: bool = False) -> list[str]:
+                 hz: bool = False, events: str | Sequence[str] | None = None) -> list[str]:
     """Draw ``dataset`` into the image file ``path`` (format from its extension).
 
     A simulated run without options gets its overview (tips, force, restitution, energy); a
     continuation's branches their frequency-response curve (over the bifurcation diagram
-    ``diagram`` if given; its frequency axis in Hz if ``hz``); anything else is drawn by
+    ``diagram`` if given; its frequency axis in Hz if ``hz``; the events drawn and labelled as
+    ``events`` says, `impactbeams.plotting.branches.draw_branches`); anything else is drawn by
     [`draw`][], whose options these are.
     ``dataset``: an xarray Dataset, or for a sweep's map a
     [`PlainDataset`][impactbeams.plotting.arrays.PlainDataset] (a file read without xarray).
     Returns its notes.
     """
-    _check_arguments(dataset, path, variable, values, indices, title, dpi)
+    _check_arguments(dataset, path, variable, values, indices, title, dpi, events)
     if "branch_point" in dataset.dims:
         _require_xarray(dataset, "a continuation's branches")
         _refuse_options("a continuation's branches, drawn whole along their parameter,",
                         values=values, indices=indices, scale=scale, contours=contours)
-        return _plot_branches(dataset, path, variable, title, dpi, diagram, hz)
-    if diagram is not None or hz:
-        raise ParameterError(f"{'diagram (--over)' if diagram is not None else '--hz'} is for "
-                             "a continuation's file only: this Dataset has no branch_point "
-                             "dimension")
+        return _plot_branches(dataset, path, variable, title, dpi, diagram, hz, events)
+    given = [name for name, value in (("diagram (--over)", diagram is not None), ("--hz", hz),
+                                      ("events (--events)", events is not None)) if value]
+    if given:
+        raise ParameterError(f"{given[0]} is for a continuation's file only: this Dataset has "
+                             "no branch_point dimension")
     options = values or indices or scale or contours is not None or title is not None
     if "time" in dataset.dims and variable is None and not options:
         from impactbeams.plotting.trajectories import plot_run

@@ -1,16 +1,18 @@
 """Frequency-response curves: a continuation's branches against the continued parameter.
 
-Stable orbits solid, unstable dashed, one colour per branch, bifurcations marked and
-labelled (the labels placed apart, `place_labels`); optionally over a brute-force bifurcation
-diagram (its stroboscopic samples as grey dots, against the branches' own samples
-``section_deflection_1``: p curves for a period-p branch, one per section t = k T). Lengths
-and forces are drawn in the prefixed units of their size (µm, mm, mN), never in metres with an
-offset; Omega in rad/s, or in Hz if asked.
+Stable orbits solid, unstable dashed, one colour per branch, events marked and labelled (the
+labels placed apart, `place_labels`; which kinds, `impactbeams.plotting.events`); optionally
+over a brute-force bifurcation diagram (its stroboscopic samples as grey dots, against the
+branches' own samples ``section_deflection_1``: p curves for a period-p branch, one per section
+t = k T). Lengths and forces are drawn in the prefixed units of their size (µm, mm, mN), never
+in metres with an offset; Omega in rad/s, or in Hz if asked.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import xarray as xr
@@ -18,11 +20,14 @@ from matplotlib.axes import Axes
 from matplotlib.backend_bases import RendererBase
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.text import Annotation, Text
 from matplotlib.transforms import Bbox
 
 from impactbeams.params import ParameterError
+from impactbeams.plotting.events import EventChoice, chosen_events, priority
 from impactbeams.plotting.labels import axis_label, display_units
+from impactbeams.plotting.room import Room
 from impactbeams.variables import BIFURCATIONS
 
 DEFAULT_MEASURE = "tip_amplitude_1"
@@ -33,21 +38,36 @@ MARKERS = {"fold": ("o", "F"), "period_doubling": ("s", "PD"), "neimark_sacker":
            "grazing": ("^", "G"), "branch_point": ("v", "BP"), "contact_merge": ("<", "M"),
            "contact_split": (">", "S"), "chatter": ("x", "C")}
 OTHER_MARKER = "*"  # an event kind without a marker of its own
+MARKER_SIZE, SMALL_MARKER_SIZE = 6.0, 3.5  # points: a labelled kind's markers, the others'
 # where an event's label may go, in points from its marker, tried in this order: beside it,
 # then further up or down (joined to it by a line)
 _OFFSETS = ((5, 5), (5, -13), (-17, 5), (-17, -13), *((dx, dy) for dy in (18, -26, 30, -38,
             42, -50, 54, -62) for dx in (5, -17)))
-_MARKER_HALF_WIDTH = 4.0  # points: a marker's extent, kept free of labels
+_LINE_FROM = 15  # points: a label further above or below its point is joined to it
+_MARKER_HALF_WIDTH = 4.0  # points: a marker's half extent and a margin, kept free of labels
 
 
 def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
-                  diagram: xr.Dataset | None = None, hz: bool = False) -> None:
+                  diagram: xr.Dataset | None = None, hz: bool = False,
+                  events: str | Sequence[str] | None = None) -> None:
     """Draw ``variable`` (default max |y1|, or y1 on the section over a ``diagram``).
 
     ``hz``: a frequency axis in Hz (Omega / 2 pi) instead of rad/s. Lengths and forces are
     drawn in the units `branch_units` gives; draw anything else first, in those units, and set
     the axes' limits before: the event labels are placed last, on the laid-out axes.
+
+    ``events``: which located events are drawn and labelled (`chosen_events`). By default every
+    event is marked, and folds, period doublings, Neimark-Sacker and branch points, then
+    grazings, are labelled where a label fits, in that order; contact merges, splits and
+    chatter get small markers and no label. A branch on a stiff contact carries hundreds of
+    events, many of them changes within the contact sequence (92 merges and splits of 340
+    events on the stop-and-shaker case of issue 31, up): labelled, they would take the room of
+    the bifurcations a reader looks for; marked, where the contacts change still shows. "all"
+    labels every kind where it fits, "none" draws none, a list of kinds draws and labels those.
+    Nothing is left out unsaid: each kind's legend entry counts its events and those without a
+    label (no room, or out of view), and one entry counts the kinds not drawn.
     """
+    choice = chosen_events(events)
     parameter = dataset.attrs["continued_parameter"]
     name = variable or (OVERLAY_MEASURE if diagram is not None else DEFAULT_MEASURE)
     if name not in dataset or dataset[name].dims not in ALONG:
@@ -63,7 +83,8 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
         _draw_branch(axes, x, y, dataset.stable.values, dataset.branch.values == branch,
                      f"C{int(branch)}", f"branch {int(branch)} (period "
                      f"{int(dataset.orbit_period.values[dataset.branch.values == branch][0])})")
-    events = _mark_bifurcations(axes, x, y[:, 0], dataset.bifurcation.values)
+    kinds = _event_kinds(x, y[:, 0], dataset.bifurcation.values, choice)
+    lines = _mark_events(axes, kinds)
     axes.set_xlabel(r"$\Omega / 2\pi$ (Hz)" if x_units == "Hz"
                     else axis_label(dataset[parameter], x_units))
     axes.set_ylabel(axis_label(dataset[name], y_units))
@@ -71,7 +92,11 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
     axes.plot([], [], "k-", label="stable")
     axes.plot([], [], "k--", label="unstable")
     axes.legend(fontsize="small", loc="best")
-    place_labels(axes, events)
+    labelled = [(x, y, _marker(kind.name)[1]) for kind in kinds if kind.labelled
+                for x, y in sorted(kind.points)]
+    marked = [point for kind in kinds if kind.drawn and not kind.labelled
+              for point in kind.points]
+    _count_unlabelled(axes, kinds, lines, place_labels(axes, labelled, marked))
 
 
 def branch_units(dataset: xr.Dataset, name: str, hz: bool = False,
@@ -112,55 +137,112 @@ def _marker(kind: str) -> tuple[str, str]:
     return MARKERS.get(kind, (OTHER_MARKER, "".join(w[0] for w in kind.split("_")).upper()))
 
 
-def _mark_bifurcations(axes: Axes, x: np.ndarray, y: np.ndarray, codes: np.ndarray,
-                       ) -> list[tuple[float, float, str]]:
-    """Mark each located event; returns (x, y, short label) of each, for `place_labels`."""
-    events = []
+@dataclasses.dataclass
+class _Kind:
+    """The events of one kind on the branches, drawn or not."""
+
+    name: str
+    points: list[tuple[float, float]]  # (x, y) of each, drawn units
+    drawn: bool
+    labelled: bool
+
+    def legend_text(self, unlabelled: int) -> str:
+        """Its legend entry: short label, name, count, and how many of them are unlabelled."""
+        count = len(self.points)
+        if not self.labelled:
+            tally = f"{count}, unlabelled"
+        else:
+            tally = f"{count}; {unlabelled} unlabelled" if unlabelled else f"{count}"
+        return f"{_marker(self.name)[1]}: {self.name.replace('_', ' ')} ({tally})"
+
+
+def _event_kinds(x: np.ndarray, y: np.ndarray, codes: np.ndarray,
+                 choice: EventChoice) -> list[_Kind]:
+    """The events of each kind the branches carry, in the order their labels are placed."""
+    kinds = []
     for code in np.unique(codes[codes > 0]):
-        kind = BIFURCATIONS[code] if code < len(BIFURCATIONS) else f"event_{code}"
-        marker, short = _marker(kind)
+        name = BIFURCATIONS[code] if code < len(BIFURCATIONS) else f"event_{code}"
         where = np.flatnonzero(codes == code)
-        axes.plot(x[where], y[where], marker, color="k", markerfacecolor="none",
-                  label=f"{short}: {kind.replace('_', ' ')}")
-        events += [(float(x[i]), float(y[i]), short) for i in where]
-    return sorted(events)
+        kinds.append(_Kind(name, [(float(x[i]), float(y[i])) for i in where],
+                           choice.is_drawn(name), choice.is_labelled(name)))
+    return sorted(kinds, key=lambda kind: priority(kind.name))
 
 
-def place_labels(axes: Axes, events: list[tuple[float, float, str]]) -> None:
+def _mark_events(axes: Axes, kinds: list[_Kind]) -> dict[str, Line2D]:
+    """A marker at each drawn event (small for the kinds not labelled); one line a kind.
+
+    The legend text of each is the longest it can be (every event unlabelled), for the legend
+    to shrink, not grow, when the count of unlabelled ones is known (`_count_unlabelled`).
+    """
+    lines = {}
+    for kind in kinds:
+        if kind.drawn:
+            x, y = np.array(kind.points).T
+            lines[kind.name] = axes.plot(
+                x, y, _marker(kind.name)[0], color="k", markerfacecolor="none",
+                markersize=MARKER_SIZE if kind.labelled else SMALL_MARKER_SIZE,
+                label=kind.legend_text(len(kind.points)))[0]
+    hidden = [kind for kind in kinds if not kind.drawn]
+    if hidden:  # nothing left out unsaid
+        names = [f"{len(kind.points)} {kind.name.replace('_', ' ')}" for kind in hidden]
+        rows = [", ".join(names[i:i + 2]) for i in range(0, len(names), 2)]
+        axes.plot([], [], linestyle="none", label="not drawn: " + ",\n".join(rows))
+    return lines
+
+
+def _count_unlabelled(axes: Axes, kinds: list[_Kind], lines: dict[str, Line2D],
+                      unlabelled: list[tuple[float, float, str]]) -> None:
+    """Each drawn kind's legend entry with the count of its events left without a label."""
+    legend = axes.get_legend()
+    texts = {text.get_text(): text for text in legend.get_texts()}
+    for kind in kinds:
+        if kind.name in lines:
+            short = _marker(kind.name)[1]
+            text = kind.legend_text(sum(1 for *_, label in unlabelled if label == short))
+            texts[lines[kind.name].get_label()].set_text(text)
+            lines[kind.name].set_label(text)
+
+
+def place_labels(axes: Axes, events: list[tuple[float, float, str]],
+                 marked: Sequence[tuple[float, float]] = ()) -> list[tuple[float, float, str]]:
     """Label each event (x, y, text) near its point, clear of the labels, legend and markers.
 
-    Greedy, left to right: each label takes the first of ``_OFFSETS`` whose box is free and
-    inside the axes (a far one is joined to its point by a line); if none is, it is left out
-    (on a branch with hundreds of events: the markers and the legend still name them).
-    Positions are measured on the laid-out figure; events out of the
-    axes' view are not labelled.
+    Greedy, in the order given (the first get the room): each label takes the first of
+    ``_OFFSETS`` whose box is free and inside the axes; a far one is joined to its point by a
+    line, which crosses no other line, label, marker or the legend. If none is free the label
+    is left out. The markers of ``events`` and of ``marked`` (points drawn without a label)
+    are kept free. Positions are measured on the laid-out figure; events out of the axes'
+    view are not labelled. Returns the events left without a label (on a branch with
+    hundreds of events, the caller says how many).
     """
     figure = axes.get_figure(root=True)
     figure.draw_without_rendering()  # the layout: positions as they will be drawn
     renderer = _renderer(figure)
     points_to_pixels = figure.dpi / 72.0
     inside = axes.get_window_extent(renderer)
-    taken = [_marker_box(axes, x, y, points_to_pixels) for x, y, _ in events]
+    taken = [_marker_box(axes, x, y, points_to_pixels)
+             for x, y in [(x, y) for x, y, _ in events] + list(marked)]
     legend = axes.get_legend()
     if legend is not None:  # kept where it is now: it would move away from the labels
         box = legend.get_window_extent(renderer)
         legend.set_loc(tuple(axes.transAxes.inverted().transform((box.x0, box.y0))))
         taken.append(box)
-    for x, y, text in events:
-        if not inside.contains(*axes.transData.transform((x, y))):
-            continue  # out of view (limits set by the caller): no label
+    room = Room(np.array([box.extents for box in taken]))
+    left_out = []
+    for own, (x, y, text) in enumerate(events):
+        point = axes.transData.transform((x, y))
+        if not inside.contains(*point):
+            left_out.append((x, y, text))  # out of view (limits set by the caller)
+            continue
         label = axes.annotate(text, (x, y), textcoords="offset points", xytext=_OFFSETS[0],
                               fontsize="x-small", annotation_clip=False,
                               arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.5,
                                           "shrinkA": 0, "shrinkB": 4})
         label.set_in_layout(False)
-        offset = _free_offset(label, renderer, taken, inside)
-        if offset is None:  # no room: its marker and the legend name it
+        if not _place(label, point, renderer, room, own, inside):  # no room: the legend counts it
             label.remove()
-            continue
-        label.xyann = offset
-        label.arrow_patch.set_visible(abs(label.xyann[1]) > 15)  # a line to a far label
-        taken.append(_text_box(label, renderer))
+            left_out.append((x, y, text))
+    return left_out
 
 
 def _renderer(figure: Figure) -> RendererBase:
@@ -179,18 +261,25 @@ def _text_box(label: Annotation, renderer: RendererBase) -> Bbox:
     return Text.get_window_extent(label, renderer)
 
 
-def _free_offset(label: Annotation, renderer: RendererBase, taken: list[Bbox],
-                 inside: Bbox) -> tuple[float, float] | None:
-    """The first offset of ``_OFFSETS`` putting ``label`` clear of ``taken``, inside ``inside``.
+def _place(label: Annotation, point: np.ndarray, renderer: RendererBase, room: Room,
+           own: int, inside: Bbox) -> bool:
+    """Put ``label`` at the first offset of ``_OFFSETS`` where it and its line are free.
 
-    None if there is none (a crowded branch: the label is left out).
+    ``point``: its event's, display units. The line (drawn to a label more than ``_LINE_FROM``
+    points above or below its point) is the segment from the point to the text's centre: the
+    drawn one is part of it. False if no offset is free (a crowded branch: the label is left
+    out); ``room`` then is unchanged.
     """
     for offset in _OFFSETS:
         label.xyann = offset
         box = _text_box(label, renderer)
-        if _contains(inside, box) and not any(box.overlaps(other) for other in taken):
-            return offset
-    return None
+        far = abs(offset[1]) > _LINE_FROM
+        line = np.concatenate([point, box.get_points().mean(axis=0)]) if far else None
+        if _contains(inside, box) and room.is_free(box.extents, line, own):
+            label.arrow_patch.set_visible(line is not None)
+            room.take(box.extents, line)
+            return True
+    return False
 
 
 def _marker_box(axes: Axes, x: float, y: float, points_to_pixels: float) -> Bbox:
