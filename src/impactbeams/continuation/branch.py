@@ -454,7 +454,7 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
                     else past.x - a.x)
     near = _between(follower, a, before)[:-1] if before is not a else []
     rest = [] if past is b else _advance(follower, past, b, depth + 1)
-    if label == GRAZING and not _at_zero_depth(a, b, before, before):
+    if label == GRAZING and not _at_zero_depth(a, b, before):
         # the contact at zero depth is the far side's (on the near side another contact, or
         # free flight, was nearer 0): its point carries the label and its zero gap
         return [*near, before, dataclasses.replace(past, label=label), *rest]
@@ -570,9 +570,10 @@ def _contacts_of(a: Point) -> Callable[[Point], float]:
 ZERO_DEPTH = 1e-3
 
 
-def _at_zero_depth(a: Point, b: Point, before: Point, past: Point) -> bool:
+def _at_zero_depth(a: Point, b: Point, *points: Point) -> bool:
+    """Whether one of ``points`` has a contact at zero depth against the step's ends a, b."""
     scale = max(abs(a.evaluation.grazing), abs(b.evaluation.grazing))
-    return min(abs(before.evaluation.grazing), abs(past.evaluation.grazing)) <= ZERO_DEPTH * scale
+    return min(abs(point.evaluation.grazing) for point in points) <= ZERO_DEPTH * scale
 
 
 def _merge_or_split(a: Point, b: Point) -> str:
