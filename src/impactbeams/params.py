@@ -313,7 +313,10 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
     its own motion U0, which each beam it carries (``mount``; a stop's mount drives beam 1)
     passes to its tip against a counterpart that does not follow, and more near a resonance.
     """
-    v = {name: np.asarray(value, dtype=float) for name, value in values.items()}
+    # one set of parameters (floats: the common case, a period map per corrector iterate) is
+    # checked in float arithmetic, a grid in arrays
+    v = {name: value if type(value) is float else np.asarray(value, dtype=float)
+         for name, value in values.items()}
     stop = not partner.has_beam2
     if stop:
         require_all("uplift2", v["uplift2"], v["uplift2"] == 0, point, lambda j: (

@@ -186,7 +186,7 @@ class Follower:
             size = float(np.max(np.abs(delta)))
             if size <= self.settings.tolerance:
                 tangent = tangent_of(jacobian, orientation)
-                measured = self._measured(x + delta, evaluation)
+                measured = self._measured(x + delta, evaluation.with_multipliers())
                 point = Point(x + delta, tangent, measured, iteration,
                               crossed=bool(contacts - {measured.contacts}))
                 return Correction(point, tuple(iterates))

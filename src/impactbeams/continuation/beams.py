@@ -16,7 +16,7 @@ import warnings
 
 import numpy as np
 
-from impactbeams.continuation.problem import Evaluation, multipliers_of
+from impactbeams.continuation.problem import Evaluation
 from impactbeams.kernels.layout import FREE, ROW_FREQUENCY, TIP_Y1
 from impactbeams.orbits import PeriodMap, PeriodMapResult
 from impactbeams.orbits.shooting import (
@@ -94,8 +94,8 @@ class BeamOrbits:
             return Evaluation(residual, np.empty((0, 0)), np.empty(0), value, result.contacts,
                               result.episodes, interval=interval)
         if self.method == "newton":
-            drz = period_map.jacobian(result, "all") - np.eye(len(z))
-            multipliers = multipliers_of(drz)
+            # the multipliers are the corrector's to compute, at the point it finds only
+            drz, multipliers = period_map.jacobian(result, "all") - np.eye(len(z)), None
         else:
             drz, multipliers = self._subspace_jacobian(period_map, result, residual)
         return Evaluation(residual, drz, multipliers, value, result.contacts, result.episodes,
@@ -189,8 +189,7 @@ def grazing_value(period_map: PeriodMap, result: PeriodMapResult) -> float:
     """The signed grazing value (m): see the module's docstring; NaN if neither exists."""
     candidates = [result.min_gap] if math.isfinite(result.min_gap) else []
     if result.contacts:
-        peaks = result.peak_forces
-        candidates.append(-float(np.min(peaks)) / period_map.params.contact_stiffness)
+        candidates.append(-result.least_peak_force / period_map.params.contact_stiffness)
     return min(candidates, key=abs) if candidates else math.nan
 
 

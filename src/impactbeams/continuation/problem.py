@@ -34,8 +34,9 @@ class Evaluation:
     """The residual at (z, p) and what is read along a branch there.
 
     ``jacobian``: dr/dz (n x n), for a map r = P - z the monodromy minus the identity.
-    ``multipliers``: the Floquet multipliers (eigenvalues of dr/dz + I when the problem does
-    not give them, e.g. from a Newton-Picard subspace), leading first. ``grazing``: a number
+    ``multipliers``: the Floquet multipliers, leading first: given by the problem (e.g. a
+    Newton-Picard subspace's), or None for the eigenvalues of dr/dz + I, which a corrector
+    computes at the point it finds only (`with_multipliers`). ``grazing``: a number
     whose sign change along the branch is a grazing (the orbit's smallest free-flight gap), NaN
     if the problem has none. ``interval``: a number whose sign change is a merge or split of
     two contacts (the gap's local maximum between contacts nearest 0), NaN if none or not
@@ -47,12 +48,19 @@ class Evaluation:
 
     residual: np.ndarray
     jacobian: np.ndarray
-    multipliers: np.ndarray
+    multipliers: np.ndarray | None
     grazing: float = math.nan
     contacts: int = 0
     episodes: int = 0
     measures: Mapping[str, float | np.ndarray] = dataclasses.field(default_factory=dict)
     interval: float = math.nan
+
+
+    def with_multipliers(self) -> Evaluation:
+        """The evaluation with its multipliers (those of dr/dz + I if not given)."""
+        if self.multipliers is not None:
+            return self
+        return dataclasses.replace(self, multipliers=multipliers_of(self.jacobian))
 
 
 class Problem(Protocol):

@@ -137,6 +137,34 @@ def peak_force(table, force, scalars, settings, q_s, v_s, t_s, t_e):
 
 
 @kernel
+def least_peak_force(table, force, scalars, settings, q, v, starts, ends):
+    """The smallest of the peak forces (N) of the contact segments [starts[i], ends[i]] (s).
+
+    ``q``, ``v``: each contact's state at its start (rows). ``peak_force`` of each contact in
+    the order of R at its middle, a lower bound of its peak (a grazing reads only the least
+    peak, and all but one contact are far above it): a contact whose bound exceeds the least
+    peak so far by more than R's rounding there cannot be lower and is not searched. The value
+    is the one ``peak_force`` gives that contact; inf without contacts.
+    """
+    omega = settings.forcing_frequency
+    oscillators = phase_oscillators(table, force, omega)
+    event = phase_event_function(table, scalars, omega)
+    x, u = np.empty(q.shape[1]), np.empty(q.shape[1])
+    below = np.empty(starts.size)
+    for i in range(starts.size):
+        value, scale = _force_at(oscillators, event, (q[i], v[i], starts[i]),
+                                 0.5 * (starts[i] + ends[i]), x, u)
+        below[i] = value - 2.0 * PEAK_TOLERANCE * _EPS * scale
+    least = np.inf
+    for i in np.argsort(below):
+        if below[i] >= least:
+            break
+        least = min(least, peak_force(table, force, scalars, settings, q[i], v[i], starts[i],
+                                      ends[i])[0])
+    return least
+
+
+@kernel
 def _push(stack, size, a, b, r_a, r_b):
     """Put the interval (a, b, R(a), R(b)) on ``stack`` above its ``size`` entries; the new size.
 

@@ -38,6 +38,7 @@ from impactbeams.kernels.layout import (
     TIP_Y1,
     TIP_Y2,
 )
+from impactbeams.kernels.peaks import least_peak_force
 from impactbeams.kernels.records import Tangent
 from impactbeams.kernels.stroboscope import tip_motions
 from impactbeams.kernels.tangent import carry_tangents
@@ -51,7 +52,7 @@ from impactbeams.params import (
     require_type,
 )
 from impactbeams.trajectory.episodes import default_separation, episode_labels
-from impactbeams.trajectory.impacts import impact_table, peak_forces
+from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory, run, sample
 from impactbeams.trajectory.start import checked_state, final_state, phase_state
 
@@ -78,9 +79,11 @@ class PeriodMapResult:
     the gap has no interior minimum), located to round-off in t. ``peak_force`` (N) and
     ``impulse`` (N s, summed) of the contacts, 0 without contact. ``max_tip1``,
     ``max_tip2``: max |y1(l1)|, max |y2(l2)| (m) over [0, pT]. ``status``: the run's
-    (``dynamics.STATUS_NAMES``). ``trajectory``: the recorded segments. ``peak_forces`` (N):
-    each contact phase's peak force, in order (empty without measures): the grazing value of
-    a continuation reads the shallowest one without a second search. ``impact_velocities``
+    (``dynamics.STATUS_NAMES``). ``trajectory``: the recorded segments.
+    ``peak_forces`` (N): each contact phase's peak force, in order (empty without measures).
+    ``least_peak_force`` (N): the smallest of them (NaN without contact), also without the
+    other measures: a continuation's grazing value reads it at every corrected point.
+    ``impact_velocities``
     (m/s): the gap's rate dg/dt at each contact's onset in (0, pT), in order (< 0: closing;
     empty without measures; a contact under way at t = 0 had its onset before).
     ``max_relative_tip1`` (m): max |y1(l1) - u_b1| over [0, pT], beam 1's
@@ -101,6 +104,8 @@ class PeriodMapResult:
     status: str
     trajectory: Trajectory
     peak_forces: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
+    least_peak_force: float = math.nan
+    approached: bool = False
     impact_velocities: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
     max_relative_tip1: float = math.nan
     interval_gap: float = math.nan
@@ -179,29 +184,41 @@ class PeriodMap:
         impacts = impact_table(self.packed, result.trajectory)
         max_tip1, max_tip2, relative = self._tip_maxima(result.trajectory)
         return dataclasses.replace(
-            result, impulse=float(np.sum(impacts["impact_impulse"])), max_tip1=max_tip1,
+            result, peak_force=float(np.max(impacts["impact_peak_force"], initial=0.0)),
+            peak_forces=impacts["impact_peak_force"],
+            impulse=float(np.sum(impacts["impact_impulse"])), max_tip1=max_tip1,
             max_tip2=max_tip2,
             impact_velocities=impacts["impact_velocity"][self._onsets(result.trajectory)],
             max_relative_tip1=relative)
 
     def approach(self, result: PeriodMapResult) -> PeriodMapResult:
-        """``result`` with what a grazing is read from: the gap's minimum and the peak forces.
+        """``result`` with what a grazing is read from: the gap's minima and the least peak force.
 
-        ``min_gap``, ``min_gap_time``, ``peak_force`` and ``peak_forces`` only (the other
-        measures stay NaN): a continuation reads them at every corrected point, and its
+        ``min_gap``, ``min_gap_time``, ``interval_gap`` and ``least_peak_force`` only (the
+        other measures stay NaN): a continuation reads them at every corrected point, and its
         measures only at the points it keeps.
         """
-        if math.isfinite(result.peak_force):
+        if result.approached:
             return result
-        peaks = peak_forces(self.packed, result.trajectory)
         times = self._grid()
         phase, q, _ = sample(self.packed, result.trajectory, times)
         min_gap, min_gap_time = self._min_gap(result.trajectory, times, self._gap_of(times, q),
                                               phase == FREE)
         return dataclasses.replace(result, min_gap=min_gap, min_gap_time=min_gap_time,
-                                   peak_force=float(np.max(peaks, initial=0.0)),
-                                   peak_forces=peaks,
+                                   least_peak_force=self._least_peak_force(result.trajectory),
+                                   approached=True,
                                    interval_gap=self._interval_gap(result.trajectory))
+
+    def _least_peak_force(self, trajectory: Trajectory) -> float:
+        """The smallest contact phase's peak force (N); NaN without contact."""
+        k = np.flatnonzero(trajectory.phase == CONTACT)
+        if not k.size:
+            return math.nan
+        packed = self.packed
+        return least_peak_force(packed.tables[CONTACT], packed.forces[CONTACT],
+                                packed.phase_scalars[CONTACT], packed.settings,
+                                trajectory.q[k], trajectory.v[k], trajectory.time[k],
+                                trajectory.segment_end[k])
 
     def _interval_gap(self, trajectory: Trajectory) -> float:
         """The gap's local maximum nearest 0 between contacts (m); NaN if there is none.
