@@ -25,6 +25,8 @@ import impactbeams as ib
 from impactbeams.cli import main
 from impactbeams.continuation import Continuation, continue_orbits
 from impactbeams.params import ParameterError
+from impactbeams.sweep.definition import sweep_from_mapping
+from impactbeams.sweep.run import run_sweep
 from impactbeams.variables import BIFURCATIONS
 
 PARAMS = ib.Params(contact_stiffness=1e4, damping_ratio=0.02, force_amplitude=3e-5,
@@ -267,6 +269,59 @@ def test_stiff_stop_on_a_shaker_whole_range_both_ways(stiffness):
         assert one.size >= 10  # (measured: 14 to 20 on the period-1 branch)
         matched = np.abs(one[:, None] - other[None, :]).min(axis=1) <= 1e-9 * one
         assert matched.mean() >= 0.85  # (measured: 13 of 15 at k = 1e4 N/m)
+
+
+def from_rest(keys, n_modes, omegas):
+    """Contacts per forcing period and response period of the attractors reached from rest.
+
+    A long-time sweep (the stroboscope's kernels, not the period map's) over ``omegas``:
+    1000 periods of transient (13 time constants of the slowest mode at 65 rad/s, a decay to
+    2e-6 of the transient; far more for a stable orbit whose multipliers are below 0.99),
+    then the contact onsets counted over 100 periods.
+    """
+    omegas = np.asarray(omegas)
+    sweep = sweep_from_mapping({
+        "n_modes": n_modes, "observables": ["steady_impact_rate", "response_period"],
+        "transient_periods": 1000, "sampled_periods": 100, "params": keys,
+        "axes": {"omega": {"min": float(omegas[0]), "max": float(omegas[-1]),
+                           "num": omegas.size}}})
+    out = run_sweep(sweep, progress=False)
+    omega = out.omega.values
+    return (out.steady_impact_rate.values.ravel() * 2 * np.pi / omega,
+            out.response_period.values.ravel())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stiffness", [None, 1e4])
+def test_stiff_stop_grazings_are_where_the_motion_from_rest_changes_its_contacts(stiffness):
+    """Each grazing of the period-1 branch between stable points, checked by time stepping
+    from rest 1e-8 relative below and above it (a long-time sweep): where the motion from rest
+    settles on the continued orbit on one side (period 1, that side's contacts per period), it
+    settles on the other side's orbit on the other side: the contacts change within 1e-8 of
+    the located frequency. Elsewhere the motion from rest settles on another attractor on
+    both sides (measured at 1e4 N/m: 2 of 4, a period-4 orbit at the onset of impacts and an
+    impacting orbit past the last grazing at 152.75 rad/s)."""
+    dataset = whole_shaker_range(stiffness, "up")
+    keys = {**SHAKER_KEYS, **({} if stiffness is None else {"contact_stiffness": stiffness})}
+    on = dataset.branch.values == 0
+    omega = dataset.omega.values[on]
+    label = dataset.bifurcation.values[on]
+    stable = dataset.stable.values[on].astype(bool)
+    contacts = dataset.contacts_per_orbit.values[on]
+    grazings = [i for i in np.flatnonzero(label == BIFURCATIONS.index("grazing"))
+                if 0 < i < omega.size - 1 and stable[i - 1] and stable[i + 1]]
+    agreed = 0
+    for i in grazings:
+        below, above = (omega[i] * (1 - 1e-8), omega[i] * (1 + 1e-8))
+        counts, periods = from_rest(keys, int(dataset.n_modes), (below, above))
+        # the side reached first along the branch is the one at the lower frequency only if
+        # the branch goes up there
+        sides = ((contacts[i - 1], contacts[i + 1]) if omega[i + 1] > omega[i - 1]
+                 else (contacts[i + 1], contacts[i - 1]))
+        on_orbit = (periods == 1) & (np.abs(counts - np.array(sides)) < 1e-6)
+        assert on_orbit.all() or not on_orbit.any(), (omega[i], sides, counts, periods)
+        agreed += bool(on_orbit.all())
+    assert agreed >= 2, (agreed, len(grazings))
 
 
 def test_an_undamped_continuation_warns_that_its_labels_follow_round_off():
