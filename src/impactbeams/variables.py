@@ -481,7 +481,7 @@ VARIABLES.update({
         "drives' sines rise through 0); NaN where the curve has no point"),
 })
 
-# basins of attraction (impactbeams.orbits.basins): one label per initial state ("*": the plane's
+# basins of attraction (impactbeams.orbits.basin_map): one label per initial state ("*": the plane's
 # two axes, or "cell" for a list of states), and the attractors found, along "attractor"
 BASIN_LABELS = {-1: "not_settled", -2: "stopped"}  # the labels that name no attractor
 VARIABLES.update({

@@ -3,11 +3,11 @@
 `period_map`: the period map P^p with its exact
 Jacobian; `shooting`: periodic orbits by Newton (and Newton-Picard) on z = P^p(z);
 `grazing`: the non-impacting orbit's smallest gap and grazing curves, in closed form;
-`basins`: basins of attraction of the attractors runs settle on (cells: `basin_cells`).
+`basin_map`: basins of attraction, the attractors runs settle on (cells: `basin_cells`).
 """
 
 from impactbeams.orbits.basin_cells import Settling
-from impactbeams.orbits.basins import basin_stability, basins
+from impactbeams.orbits.basin_map import basin_stability, basins
 from impactbeams.orbits.grazing import (
     GRAZING_PARAMETERS,
     SteadyGap,

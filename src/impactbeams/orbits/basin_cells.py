@@ -10,7 +10,7 @@ samples; the next block starts from the state the last one ended in, on the sect
 
 A settled cell records its period p, its contacts per orbit (contact onsets over its last p
 periods), its last p samples and its end state; its label is given later, by matching these
-against the attractors found so far (`impactbeams.orbits.basins`), so that the labels do not
+against the attractors found so far (`impactbeams.orbits.basin_map`), so that the labels do not
 depend on the order in which chunks of cells finish.
 
 A sample is x = (y1, y2, v1 / Omega, v2 / Omega) (m), as in `response_period`: tip deflections

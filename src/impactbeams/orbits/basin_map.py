@@ -145,8 +145,7 @@ def basins(params: Params, axes: tuple[ArrayLike, ArrayLike] | None = None, *,
         require("axes", axes, axes is None, "leave it None with initial_states")
         require("coordinates", coordinates, coordinates is None,
                 "leave it None with initial_states (they are whole states)")
-        states = np.array([checked_state(setup.packed, z) for z in _rows(initial_states,
-                                                                          setup.dimension)])
+        states = _rows(initial_states, setup.dimension)
         return setup.run(states, _cell_coords(setup, states, {}), "list of initial states")
     require("axes", axes, axes is not None, "give the plane's two axes, or initial_states")
     plane = Plane.checked(setup, coordinates)
@@ -311,6 +310,8 @@ class _Setup:
             shape: tuple[int, ...] | None = None) -> xr.Dataset:
         """The cells of ``states`` run, labelled and described; written to ``output``."""
         shape = (states.shape[0],) if shape is None else shape
+        for z in states:  # finite, and within the small-deflection limit: before any run
+            checked_state(self.packed, z)
         identity = self._identity(states)
         if self.output is None:
             cells = self._cells(states, None)
@@ -352,15 +353,18 @@ class _Setup:
                 done[chunk] = saved
                 bar.update(stop - start, computed=False)
         pending = [chunk for chunk in range(len(bounds)) if chunk not in done]
-        with concurrent.futures.ThreadPoolExecutor(self.workers) as pool:
+        pool = concurrent.futures.ThreadPoolExecutor(self.workers)
+        try:
             futures = {pool.submit(runner.run_cells, states[slice(*bounds[chunk])]): chunk
                        for chunk in pending}
             for future in concurrent.futures.as_completed(futures):
                 chunk = futures[future]
                 done[chunk] = future.result()
-                if store is not None:
+                if store is not None:  # saved at once: an interrupt after it loses nothing
                     store.save(chunk, done[chunk])
                 bar.update(bounds[chunk][1] - bounds[chunk][0])
+        finally:  # an error or an interrupt: the chunks not started are not run
+            pool.shutdown(wait=True, cancel_futures=True)
         return Cells(*(np.concatenate([getattr(done[chunk], field.name)
                                        for chunk in range(len(bounds))])
                        for field in dataclasses.fields(Cells)))
@@ -479,15 +483,18 @@ def _merged(labels: np.ndarray, known: list[Attractor],
             kept.append(attractor)
             same = len(kept) - 1
         mapping[k] = same
-    settled = labels >= 0
-    return (np.where(settled, mapping[np.where(settled, labels, 0)], labels).astype(np.int32),
-            kept)
+    merged = labels.copy()
+    merged[labels >= 0] = mapping[labels[labels >= 0]]
+    return merged, kept
 
 
 def _rows(states: ArrayLike, dimension: int) -> np.ndarray:
-    """``initial_states`` as rows of 2 N values (checked one by one afterwards)."""
-    array = np.asarray(states)
-    require("initial_states", f"an array of shape {array.shape}", array.ndim == 2
+    """``initial_states`` as rows of 2 N numbers (checked one by one afterwards)."""
+    try:
+        array = np.asarray(states, dtype=float)
+    except (TypeError, ValueError):
+        array = np.empty((0, 0))
+    require("initial_states", f"{states!r:.60}", array.ndim == 2
             and array.shape[0] >= 1 and array.shape[1] == dimension,
             f"must be an array (cells, {dimension}) of section states z = (q, q')")
     return array
