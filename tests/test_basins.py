@@ -246,3 +246,51 @@ def test_bad_sampling_input(change, match, monkeypatch):
 def test_settling_refuses_a_window_shorter_than_two_periods():
     with pytest.raises(ParameterError, match="window"):
         Settling(window=10, max_period=8)
+
+
+def test_basin_map_plots_from_its_file(tmp_path, coarse):
+    """`impactbeams plot` of a basins file: the map and its legend, one entry per attractor;
+    a random sample as points; a slice option is refused (the map is drawn whole)."""
+    from matplotlib.figure import Figure
+
+    from impactbeams.io import write_netcdf
+    from impactbeams.plotting import plot_dataset
+    from impactbeams.plotting.arrays import read_figure_data
+    from impactbeams.plotting.basins import draw_basins
+
+    path = tmp_path / "basins.nc"
+    write_netcdf(coarse, path)
+    dataset = read_figure_data(path, "input")
+    plot_dataset(dataset, tmp_path / "basins.png")
+    assert (tmp_path / "basins.png").stat().st_size > 10_000
+    axes = Figure().subplots()
+    draw_basins(axes, dataset)
+    texts = [text.get_text() for text in axes.get_legend().get_texts()]
+    assert len(texts) == 2 and texts[0].startswith("0: period 1, 1 contacts/orbit, fraction")
+    sampled = basin_stability(PARAMS, 8, BOX, n_modes=N_MODES)
+    plot_dataset(sampled, tmp_path / "sampled.png")
+    with pytest.raises(ParameterError, match="--slice"):
+        plot_dataset(dataset, tmp_path / "x.png", values={"start_tip_velocity": 0.0})
+
+
+def test_cli_basins_writes_and_refuses(tmp_path, capsys):
+    """The command writes its file and says what it found; bad input: one line, exit 2."""
+    from impactbeams.cli import main
+
+    model = ["--counterpart", "stop", "--contact-stiffness", "100", "--damping-ratio", "0.02",
+             "--force-amplitude", "1e-4", "--omega", "300", "--n-modes", "5"]
+    output = tmp_path / "basins.nc"
+    assert main(["basins", *model, "--axis1", "-4e-5,4e-5", "--axis2", "-1.2e-2,1.2e-2",
+                 "--points", "3", "-o", str(output)]) == 0
+    assert "9 initial states, 2 attractors" in capsys.readouterr().err
+    for bad, word in ((["--axis1", "4e-5,-4e-5"], "--axis1"), (["--axis1", "1"], "--axis1"),
+                      (["--coordinates", "0,x"], "--coordinates"),
+                      (["--random", "4", "--points", "3"], "--points")):
+        arguments = {"--axis1": "-4e-5,4e-5", "--axis2": "0,1e-2"}
+        arguments.update(dict(zip(bad[::2], bad[1::2], strict=True)))
+        flat = [item for pair in arguments.items() for item in pair]
+        assert main(["basins", *model, *flat, "-o", str(tmp_path / "x.nc")]) == 2
+        err = capsys.readouterr().err
+        assert word in err and "Traceback" not in err
+        assert err.strip().splitlines()[-1].startswith("impactbeams: error:")
+    assert not (tmp_path / "x.nc").exists()
