@@ -175,10 +175,10 @@ def basin_stability(params: Params, samples: int, box: tuple[tuple[float, float]
     Dataset is along ``cell``, with each state's plane values and whole state. Other
     arguments as `basins`'.
     """
-    setup = _Setup.checked(params, n_modes, settling, attractors, chunk_cells, workers, output,
-                           progress)
     samples = require_integer("samples", samples, 1)
     require_type("seed", seed, is_integer(seed) and seed >= 0, "an integer >= 0")
+    setup = _Setup.checked(params, n_modes, settling, attractors, chunk_cells, workers, output,
+                           progress)
     plane = Plane.checked(setup, coordinates)
     bounds = _box(box, plane.names)
     rng = np.random.default_rng(int(seed))
