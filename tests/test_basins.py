@@ -22,7 +22,7 @@ from scipy.stats import binomtest
 
 from impactbeams import LongTime, ParameterError, Params, simulate
 from impactbeams.orbits import Settling, basin_map, basin_stability, basins, periodic_orbit
-from impactbeams.orbits.basin_cells import NOT_SETTLED, STOPPED, CellRunner
+from impactbeams.orbits.basin_cells import NOT_SETTLED, STOPPED, CellRunner, settled_from
 from impactbeams.orbits.basin_map import wilson
 
 PARAMS = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
@@ -68,14 +68,16 @@ def test_sampled_cells_agree_with_a_direct_long_simulation(coarse):
     """A direct run of 600 periods from every cell next to a basin boundary (a neighbour with
     another label) and 6 others ends on the cell's attractor: its last samples lie within 1e-6
     of the scale of that attractor's section point (the transient, decaying by |mu| = 0.90 per
-    period, leaves 0.9^600 = 3e-28), and at more than 10 % of it from the other one."""
+    period, leaves 0.9^600 = 3e-28), and at more than 10 % of it from the other one. Its
+    samples repeat from the period the basin map says the cell needed (the same number: the
+    map's runs restart each block on the section, the direct run does not)."""
     rng = np.random.default_rng(1)
     label_map = coarse.basin.values
     padded = np.pad(label_map, 1, mode="edge")
     boundary = np.zeros(label_map.shape, bool)
     for shift in ((0, 1), (2, 1), (1, 0), (1, 2)):
         boundary |= padded[shift[0]:shift[0] + 11, shift[1]:shift[1] + 11] != label_map
-    labels = label_map.ravel()
+    labels, needed = label_map.ravel(), coarse.settle_periods.values.ravel()
     chosen = [*np.flatnonzero(boundary), *rng.choice(np.flatnonzero(~boundary), 6,
                                                      replace=False)]
     assert np.flatnonzero(boundary).size > 20 and set(labels[chosen]) == {0, 1}
@@ -89,12 +91,16 @@ def test_sampled_cells_agree_with_a_direct_long_simulation(coarse):
         coarse.start_tip_deflection.values, coarse.start_tip_velocity.values, indexing="ij"))
     for cell in chosen:
         z = plane.states(a[cell:cell + 1], b[cell:cell + 1])[0]
-        run = simulate(PARAMS, 604 * period, N_MODES, dt_output=period, initial_state=z,
-                       transient_periods=600, long_time=LongTime(sampled_periods=4))
+        run = simulate(PARAMS, 600 * period, N_MODES, dt_output=period, initial_state=z,
+                       long_time=LongTime(sampled_periods=600, max_period=8))
         end = np.array([run.poincare_deflection1[-1], run.poincare_velocity1[-1] / omega])
         apart = np.abs(points - end).max(axis=-1) / scale
         assert apart[labels[cell]] < 1e-6, (cell, apart)
         assert apart[1 - labels[cell]] > 0.1, (cell, apart)
+        # the periods it needed: the direct samples x_k, k >= 1, repeat from the same one on
+        x = np.stack([run.poincare_deflection1, run.poincare_deflection2 + PARAMS.clearance,
+                      run.poincare_velocity1 / omega, run.poincare_velocity2 / omega], -1)[1:]
+        assert settled_from(x, 1, Settling().tolerance) == needed[cell]
 
 
 def test_attractors_are_periodic_orbit_s(coarse):
@@ -158,11 +164,11 @@ def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch,
     calls = []
     original = CellRunner.run_cells
 
-    def failing(self, states):
+    def failing(self, states, periods=None):
         calls.append(states.shape[0])
         if len(calls) == 3:
             raise KeyboardInterrupt
-        return original(self, states)
+        return original(self, states, periods)
 
     monkeypatch.setattr(CellRunner, "run_cells", failing)
     with pytest.raises(KeyboardInterrupt):
@@ -170,8 +176,12 @@ def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch,
     assert not output.exists()
     assert len(list((tmp_path / "basins.nc.partial").glob("chunk_*.npz"))) == 2
     calls.clear()
-    monkeypatch.setattr(CellRunner, "run_cells", lambda self, states: (
-        calls.append(states.shape[0]), original(self, states))[1])
+    def counted(self, states, periods=None):  # the chunks' runs (not the settle periods')
+        if periods is None:
+            calls.append(states.shape[0])
+        return original(self, states, periods)
+
+    monkeypatch.setattr(CellRunner, "run_cells", counted)
     resumed = basins(PARAMS, grid(11), n_modes=N_MODES, output=output, workers=1,
                      chunk_cells=16)
     assert len(calls) == 6 and not (tmp_path / "basins.nc.partial").exists()

@@ -168,8 +168,12 @@ class CellRunner:
         window_start = self.times[-1] - period * self.forcing_period
         return int(np.count_nonzero(onsets >= window_start))
 
-    def run_cells(self, states: np.ndarray) -> Cells:
-        """Every section state of ``states`` (cells, 2 N) run until it settles."""
+    def run_cells(self, states: np.ndarray, periods: np.ndarray | None = None) -> Cells:
+        """Every section state of ``states`` (cells, 2 N) run until it settles.
+
+        ``periods``: each cell's known period (its attractor's), tested alone; None: the
+        smallest that repeats (`periodic`).
+        """
         s, n = self.settling, self.packed.q0.size
         count = states.shape[0]
         out = Cells(np.zeros(count, np.int32), np.zeros(count, np.int32),
@@ -177,11 +181,11 @@ class CellRunner:
                     np.full((count, s.max_period, 4), np.nan), np.full((count, n), np.nan),
                     np.full((count, n), np.nan), np.full(count, -1, np.int32))
         for i, z in enumerate(states):
-            self._settle(z, i, out)
+            self._settle(z, i, out, None if periods is None else int(periods[i]))
         return out
 
-    def _settle(self, z: np.ndarray, i: int, out: Cells) -> None:
-        """Run cell i from z until it settles; its row of ``out``."""
+    def _settle(self, z: np.ndarray, i: int, out: Cells, known: int | None) -> None:
+        """Run cell i from z until it settles (with period ``known`` if given); row i of out."""
         s = self.settling
         start = self.start(z)
         history: list[np.ndarray] = []
@@ -193,7 +197,7 @@ class CellRunner:
             trajectory, x, start, _ = result
             history.append(x)
             samples = np.concatenate(history)
-            period = periodic(samples[-s.window:], s) if samples.shape[0] >= s.window else 0
+            period = periodic(samples[-s.window:], s, known) if samples.shape[0] >= s.window else 0
             if period:
                 out.period[i], out.contacts[i] = period, self.contacts(trajectory, period)
                 out.settle_periods[i] = settled_from(samples, period, s.tolerance)
@@ -208,8 +212,14 @@ class CellRunner:
             out.status[i], out.settle_periods[i] = NOT_SETTLED, periods
 
 
-def periodic(x: np.ndarray, settling: Settling) -> int:
-    """The period of the samples x (samples, 4), 0 if none (`response_period`)."""
+def periodic(x: np.ndarray, settling: Settling, known: int | None = None) -> int:
+    """The period of the samples x (samples, 4), 0 if none (`response_period`).
+
+    With ``known``: that period if the samples repeat with it (the same test), else 0.
+    """
+    if known is not None:
+        step = np.abs(x[known:] - x[:-known]).max()
+        return known if step <= settling.tolerance * np.abs(x).max() else 0
     y1, y2, v1, v2 = x.T
     return int(response_period(y1, y2, v1, v2, 1.0, settling.tolerance, settling.max_period))
 

@@ -378,6 +378,7 @@ class _Setup:
         known = [attractor if attractor.given else _described(runner, attractor, self)
                  for attractor in known]
         labels, known = _merged(labels, known, self.settling.match_tolerance)
+        _resettled(runner, states, cells, labels, known)
         return _basin_dataset(self, states, cells, labels, known, coords, shape, plane,
                               identity)
 
@@ -460,6 +461,22 @@ def _described(runner: CellRunner, attractor: Attractor, setup: _Setup) -> Attra
                                samples=x[-p:], start=start, state=z,
                                amplitude=amplitude, residual=residual,
                                multipliers=_multipliers(setup, z, p))
+
+
+def _resettled(runner: CellRunner, states: np.ndarray, cells: Cells, labels: np.ndarray,
+               known: list[Attractor]) -> None:
+    """The settle periods of cells that settled on a multiple of their attractor's period.
+
+    A slow transient can repeat after a few periods within the tolerance sooner than after
+    one: such cells run again, testing their attractor's period alone, so that
+    ``settle_periods`` counts the periods until the samples repeat with the attractor's.
+    """
+    periods = np.array([attractor.period for attractor in known], dtype=np.int32)
+    settled = np.flatnonzero(labels >= 0)
+    again = settled[cells.period[settled] != periods[labels[settled]]]
+    if again.size:
+        redone = runner.run_cells(states[again], periods[labels[again]])
+        cells.settle_periods[again] = redone.settle_periods
 
 
 def _multipliers(setup: _Setup, z: np.ndarray, period: int) -> np.ndarray | None:
