@@ -29,6 +29,7 @@ from impactbeams.kernels.stroboscope import tip_motions
 from impactbeams.longtime import DEFAULT_PERIOD_TOLERANCE, response_period
 from impactbeams.packing import Packed
 from impactbeams.params import is_integer, is_real, require
+from impactbeams.sweep.plan import MAX_PHASES_PER_PERIOD
 from impactbeams.trajectory.phases import Trajectory, run, sample
 from impactbeams.trajectory.start import phase_state, section_gap
 
@@ -37,7 +38,6 @@ NOT_SETTLED = -1
 # the label of a cell whose run stopped before its horizon (the event limit), or whose start the
 # tied law refuses (the tips overlap at t = 0: the tied law starts from an open gap only)
 STOPPED = -2
-MAX_EVENTS_PER_PERIOD = 2000  # contact phases and free segments per forcing period of a block
 
 
 @dataclasses.dataclass(frozen=True)
@@ -121,7 +121,7 @@ class CellRunner:
         self.omega = packed.params.omega
         self.forcing_period = 2.0 * math.pi / self.omega
         self.times = self.forcing_period * np.arange(1, settling.block_periods + 1)
-        self.max_events = MAX_EVENTS_PER_PERIOD * settling.block_periods
+        self.max_events = MAX_PHASES_PER_PERIOD * settling.block_periods  # a sweep's cap
 
     def start(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, int] | None:
         """The run's start from the section state z; None if the tied law refuses it."""

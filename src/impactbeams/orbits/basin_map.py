@@ -81,6 +81,9 @@ DEFAULT_CHUNK_CELLS = 16
 AMPLITUDE_SAMPLES = 256  # per forcing period, for an attractor's tip amplitude
 TIP_PLANE = ("start_tip_deflection", "start_tip_velocity")
 RECORD = "run.json"
+# what computes a basin map beyond a sweep's numeric code: a change makes saved chunks stale
+BASIN_CODE = ("orbits/basin_cells.py", "trajectory/phases.py", "trajectory/start.py",
+              "longtime.py")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -329,7 +332,7 @@ class _Setup:
 
     def _identity(self, states: np.ndarray) -> dict[str, str]:
         """The run's fingerprint (model, states, settling, given orbits) and code digest."""
-        from impactbeams.sweep.plan import code_digest
+        from impactbeams.sweep.plan import NUMERIC_CODE, code_digest
 
         digest = hashlib.sha256(json.dumps(
             {"params": self.params.as_dict(), "n_modes": self.n_modes,
@@ -338,7 +341,8 @@ class _Setup:
         digest.update(np.ascontiguousarray(states).tobytes())
         for orbit in self.given:
             digest.update(np.ascontiguousarray(orbit.state).tobytes())
-        return {"basin_fingerprint": digest.hexdigest()[:16], "code_digest": code_digest()}
+        return {"basin_fingerprint": digest.hexdigest()[:16],
+                "code_digest": code_digest(patterns=(*NUMERIC_CODE, *BASIN_CODE))}
 
     def _cells(self, states: np.ndarray, store: _ChunkStore | None) -> Cells:
         """Every cell settled, chunk by chunk (the saved ones loaded)."""
