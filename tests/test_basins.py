@@ -21,7 +21,7 @@ import pytest
 from scipy.stats import binomtest
 
 from impactbeams import LongTime, ParameterError, Params, simulate
-from impactbeams.orbits import Settling, basin_map, basin_stability, basins, periodic_orbit
+from impactbeams.orbits import Settling, basin_stability, basins, periodic_orbit
 from impactbeams.orbits.basin_cells import NOT_SETTLED, STOPPED, CellRunner, settled_from
 from impactbeams.orbits.basin_map import wilson
 
@@ -85,12 +85,10 @@ def test_sampled_cells_agree_with_a_direct_long_simulation(coarse):
     points = np.stack([coarse.attractor_section_deflection1[:, 0],
                        coarse.attractor_section_velocity1[:, 0] / omega], axis=-1)
     scale = np.abs(points).max()
-    plane = basin_map.Plane.checked(basin_map._Setup.checked(
-        PARAMS, N_MODES, None, (), None, 1, None, False), None)
-    a, b = (axis.ravel() for axis in np.meshgrid(
-        coarse.start_tip_deflection.values, coarse.start_tip_velocity.values, indexing="ij"))
+    starts = np.concatenate([coarse.start_displacement.values, coarse.start_velocity.values],
+                            axis=-1).reshape(labels.size, -1)
     for cell in chosen:
-        z = plane.states(a[cell:cell + 1], b[cell:cell + 1])[0]
+        z = starts[cell]
         run = simulate(PARAMS, 600 * period, N_MODES, dt_output=period, initial_state=z,
                        long_time=LongTime(sampled_periods=600, max_period=8))
         end = np.array([run.poincare_deflection1[-1], run.poincare_velocity1[-1] / omega])
@@ -117,6 +115,30 @@ def test_attractors_are_periodic_orbit_s(coarse):
         mu = (coarse.attractor_multiplier_real[k] + 1j * coarse.attractor_multiplier_imag[k])
         np.testing.assert_allclose(np.abs(mu.values[:4]), np.abs(orbit.multipliers[:4]),
                                    rtol=1e-8)
+
+
+def test_the_tip_plane_moves_beam_1_s_first_mode_alone(coarse):
+    """Each state is the rest state plus beam 1's first mode: its tip deflection and velocity
+    at t = 0 (a simulate from it, read back) are the cell's axis values; the other
+    coordinates are at rest (the rest state: no deflection, and the velocity that cancels the
+    tip force's quasi-static part, as far as 5 modes resolve it: 3.6e-7 m/s of tip velocity
+    left). (A state whose tip starts in the spring's contact reads back the static correction
+    of the contact force too: 1.2e-3 of the tip at -24 um.)"""
+    cell = coarse.isel(start_tip_deflection=7, start_tip_velocity=8)  # gap open at t = 0
+    z = np.concatenate([cell.start_displacement.values, cell.start_velocity.values])
+    centre = coarse.isel(start_tip_deflection=5, start_tip_velocity=5)  # (0, 0): at rest
+    rest = np.concatenate([centre.start_displacement.values, centre.start_velocity.values])
+    assert np.flatnonzero(z != rest).tolist() == [0, N_MODES]
+    period = 2 * math.pi / PARAMS.omega
+    tips = [simulate(PARAMS, period, N_MODES, dt_output=period, initial_state=state)
+            for state in (z, rest)]
+    moved = [float(tips[0][name][0] - tips[1][name][0])
+             for name in ("tip_deflection_1", "tip_velocity_1")]
+    np.testing.assert_allclose(moved, [float(cell.start_tip_deflection),
+                                       float(cell.start_tip_velocity)], rtol=1e-12)
+    # the rest state's tip: still, up to the 5 modes' truncation of the quasi-static velocity
+    assert abs(float(tips[1].tip_deflection_1[0])) < 1e-18  # the centre: linspace round-off
+    assert abs(float(tips[1].tip_velocity_1[0])) < 1e-3 * float(cell.start_tip_velocity)
 
 
 def test_given_orbits_label_the_same_basins(coarse):

@@ -149,7 +149,7 @@ def basins(params: Params, axes: tuple[ArrayLike, ArrayLike] | None = None, *,
         require("coordinates", coordinates, coordinates is None,
                 "leave it None with initial_states (they are whole states)")
         states = _rows(initial_states, setup.dimension)
-        return setup.run(states, _cell_coords(setup, states, {}), "list of initial states")
+        return setup.run(states, _cell_coords(states, {}), "list of initial states")
     require("axes", axes, axes is not None, "give the plane's two axes, or initial_states")
     plane = Plane.checked(setup, coordinates)
     first, second = (_axis(name, values) for name, values in zip(plane.names, axes, strict=True)
@@ -189,7 +189,7 @@ def basin_stability(params: Params, samples: int, box: tuple[tuple[float, float]
     states = plane.states(a, b)
     drawn = {name: ("cell", values, plane.attributes(k))
              for k, (name, values) in enumerate(zip(plane.names, (a, b), strict=True))}
-    return setup.run(states, _cell_coords(setup, states, drawn),
+    return setup.run(states, _cell_coords(states, drawn),
                      f"{samples} random states in {plane.names[0]} {bounds[0]} x "
                      f"{plane.names[1]} {bounds[1]} (seed {seed})")
 
@@ -556,14 +556,9 @@ def _box(box: object, names: tuple[str, str]) -> tuple[tuple[float, float], ...]
     return tuple(bounds)
 
 
-def _cell_coords(setup: _Setup, states: np.ndarray, drawn: dict) -> dict:
-    """The coordinates of a list of states: ``cell``, the whole states, the plane's values."""
-    n = setup.dimension // 2
+def _cell_coords(states: np.ndarray, drawn: dict) -> dict:
+    """The coordinates of a list of states: ``cell`` and the plane's values if drawn in one."""
     return {"cell": ("cell", np.arange(states.shape[0], dtype=np.int64), attributes("cell")),
-            "start_displacement": (("cell", "coordinate"), states[:, :n],
-                                   attributes("start_displacement")),
-            "start_velocity": (("cell", "coordinate"), states[:, n:],
-                               attributes("start_velocity")),
             **drawn}
 
 
@@ -589,7 +584,12 @@ def _basin_dataset(setup: _Setup, states: np.ndarray, cells: Cells, labels: np.n
     dims = tuple(coords) if "cell" not in coords else ("cell",)
     data = {"basin": (dims, labels.reshape(shape), attributes("basin")),
             "settle_periods": (dims, cells.settle_periods.reshape(shape),
-                               attributes("settle_periods"))}
+                               attributes("settle_periods")),
+            # each state whole: simulate(params, ..., initial_state=...) of a cell reruns it
+            "start_displacement": ((*dims, "coordinate"), states[:, :n].reshape(*shape, n),
+                                   attributes("start_displacement")),
+            "start_velocity": ((*dims, "coordinate"), states[:, n:].reshape(*shape, n),
+                               attributes("start_velocity"))}
     count = np.array([np.count_nonzero(labels == k) for k in range(len(known))])
     fraction = count / total
     low, high = wilson(count, total)
