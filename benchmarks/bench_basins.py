@@ -32,7 +32,7 @@ import numpy as np
 
 from impactbeams import LongTime, Params, __version__, basins, simulate
 from impactbeams.contact.spring import required_modes
-from impactbeams.orbits import Settling, basin_map
+from impactbeams.orbits import Settling
 
 SOFT = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
               force_amplitude=1e-4, omega=300.0)
@@ -62,16 +62,15 @@ def measure(params: Params, n_modes: int, points: int, stride: int) -> dict:
     wall, _ = timed(lambda: basins(params, axes(points), n_modes=n_modes, workers=2),
                     time.perf_counter)
     horizon = int(dataset.settle_periods.max()) + Settling().window
-    setup = basin_map._Setup.checked(params, n_modes, None, (), None, 1, None, False)
-    plane = basin_map.Plane.checked(setup, None)
-    a, b = (x.ravel() for x in np.meshgrid(*axes(points), indexing="ij"))
+    starts = np.concatenate([dataset.start_displacement.values, dataset.start_velocity.values],
+                            axis=-1).reshape(cells, -1)
     period = 2 * math.pi / params.omega
     chosen = np.arange(0, cells, stride)
 
     def direct() -> None:
         for cell in chosen:
-            z = plane.states(a[cell:cell + 1], b[cell:cell + 1])[0]
-            simulate(params, horizon * period, n_modes, dt_output=period, initial_state=z,
+            simulate(params, horizon * period, n_modes, dt_output=period,
+                     initial_state=starts[cell],
                      long_time=LongTime(sampled_periods=horizon, max_period=8))
 
     simulate(params, 10 * period, n_modes, dt_output=period,  # compiles
