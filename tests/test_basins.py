@@ -326,3 +326,14 @@ def test_cli_basins_writes_and_refuses(tmp_path, capsys):
         assert word in err and "Traceback" not in err
         assert err.strip().splitlines()[-1].startswith("impactbeams: error:")
     assert not (tmp_path / "x.nc").exists()
+
+
+def test_chunks_on_a_dask_cluster_give_the_same_map(coarse):
+    """Each chunk one task on a local cluster (the model packed on the worker): the same map,
+    bit for bit, as the threads here."""
+    from test_distributed import local_cluster
+
+    with local_cluster(1) as client:
+        remote = basins(PARAMS, grid(11), n_modes=N_MODES, client=client, chunk_cells=40)
+    for name in ("basin", "settle_periods", "attractor_displacement", "attractor_velocity"):
+        np.testing.assert_array_equal(remote[name].values, coarse[name].values)

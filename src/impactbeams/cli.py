@@ -45,6 +45,7 @@ from impactbeams.variables import GRAZING_PARAMETERS, PARAMETERS
 
 if TYPE_CHECKING:
     import xarray as xr
+    from distributed import Client
 
     from impactbeams.continuation import Continuation
     from impactbeams.continuation.arclength import Point
@@ -289,18 +290,30 @@ def _check_scheduler(address: str | None) -> None:
 
 
 @contextlib.contextmanager
-def _cluster_runner(args: argparse.Namespace) -> Iterator[ChunkRunner | None]:
-    """A Dask chunk runner for --scheduler / --local-cluster (closed on exit), else None."""
+def _cluster_client(args: argparse.Namespace) -> Iterator[Client | None]:
+    """A Dask client for --scheduler / --local-cluster (closed on exit), else None."""
     if args.scheduler is None and args.local_cluster is None:
         yield None
         return
-    from impactbeams.sweep.dask_runner import dask_client, dask_runner, require_dask
+    from impactbeams.sweep.dask_runner import dask_client, require_dask
 
     try:
         require_dask()
     except ImportError as error:
         raise ParameterError(str(error)) from None
     with dask_client(args.scheduler, args.local_cluster) as client:
+        yield client
+
+
+@contextlib.contextmanager
+def _cluster_runner(args: argparse.Namespace) -> Iterator[ChunkRunner | None]:
+    """A Dask chunk runner for --scheduler / --local-cluster (closed on exit), else None."""
+    with _cluster_client(args) as client:
+        if client is None:
+            yield None
+            return
+        from impactbeams.sweep.dask_runner import dask_runner
+
         yield dask_runner(client, threads_per_task=args.threads)
 
 
@@ -417,24 +430,25 @@ def _basins(args: argparse.Namespace) -> int:
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
     params = params_from_args(args)
     settling = Settling(**({"max_periods": args.max_periods} if args.max_periods else {}))
-    common = {"coordinates": args.coordinates, "n_modes": args.n_modes, "settling": settling,
-              "output": output, "chunk_cells": args.chunk_cells, "workers": args.workers,
-              "progress": not args.quiet}
+    _check_scheduler(args.scheduler)
     box = (args.axis1, args.axis2)
-    if args.random:
-        if args.points is not None:
-            raise ParameterError("--points is not allowed with --random: the states are "
-                                 "drawn at random in the box")
-        dataset = basin_stability(params, args.random, box, seed=args.seed, **common)
-    else:
-        import numpy as np
+    if args.random and args.points is not None:
+        raise ParameterError("--points is not allowed with --random: the states are drawn at "
+                             "random in the box")
+    for name, (low, high) in (("--axis1", args.axis1), ("--axis2", args.axis2)):
+        if not low < high:
+            raise ParameterError(f"{name} = {low!r},{high!r} is not allowed: need LOW < HIGH")
+    with _cluster_client(args) as client:
+        common = {"coordinates": args.coordinates, "n_modes": args.n_modes,
+                  "settling": settling, "output": output, "chunk_cells": args.chunk_cells,
+                  "workers": args.workers, "progress": not args.quiet, "client": client}
+        if args.random:
+            dataset = basin_stability(params, args.random, box, seed=args.seed, **common)
+        else:
+            import numpy as np
 
-        for name, (low, high) in (("--axis1", args.axis1), ("--axis2", args.axis2)):
-            if not low < high:
-                raise ParameterError(f"{name} = {low!r},{high!r} is not allowed: need LOW < HIGH")
-        points = args.points or BASIN_POINTS
-        dataset = basins(params, tuple(np.linspace(low, high, points) for low, high in box),
-                         **common)
+            axes = tuple(np.linspace(low, high, args.points or BASIN_POINTS) for low, high in box)
+            dataset = basins(params, axes, **common)
     found = ", ".join(f"{k}: period {int(dataset.attractor_period[k])}, "
                       f"{int(dataset.attractor_contacts[k])} contacts, "
                       f"{float(dataset.basin_fraction[k]):.3g} +- "
@@ -845,6 +859,13 @@ def build_parser() -> argparse.ArgumentParser:
                             "same")
     basin.add_argument("--workers", type=_POSITIVE_INTEGER, metavar="N",
                        help="threads running chunks (default: all cores)")
+    basin_cluster = basin.add_mutually_exclusive_group()
+    basin_cluster.add_argument("--scheduler", metavar="ADDRESS",
+                               help="run the chunks on the Dask cluster at ADDRESS, e.g. "
+                                    "tcp://host:8786 (needs impactbeams[distributed])")
+    basin_cluster.add_argument("--local-cluster", type=_POSITIVE_INTEGER, metavar="N",
+                               help="run the chunks on a Dask LocalCluster of N worker "
+                                    "processes")
     basin.add_argument("-o", "--output", required=True, metavar="OUT.nc",
                        help="netCDF file; chunks are kept in OUT.nc.partial/ until it is "
                             "complete, and the same command resumes")

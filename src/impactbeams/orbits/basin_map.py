@@ -16,9 +16,9 @@ attractor is run on from its first cell until it repeats to ``Settling.state_tol
 state, its tip amplitude and (spring law) its Floquet multipliers, from the period map's exact
 Jacobian, describe it.
 
-Cells run in chunks, in parallel threads (the kernels release the GIL); with an ``output``
-file each finished chunk is saved under ``OUT.nc.partial/`` at once, so an interrupted run
-loses no finished chunk and the same call resumes it.
+Cells run in chunks, in parallel threads (the kernels release the GIL) or one Dask task each
+(``client``); with an ``output`` file each finished chunk is saved under ``OUT.nc.partial/`` at
+once, so an interrupted run loses no finished chunk and the same call resumes it.
 
 Basin fractions: the share f of the n initial states on each attractor, its standard error
 sqrt(f (1 - f) / n) and the Wilson score interval at ``CONFIDENCE``: the sampling error of
@@ -28,11 +28,12 @@ random states (`basin_stability`); for a grid they are a guide only, refining it
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import dataclasses
 import hashlib
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -73,6 +74,7 @@ from impactbeams.variables import (
 
 if TYPE_CHECKING:
     import xarray as xr
+    from distributed import Client
 
     from impactbeams.orbits.shooting import PeriodicOrbit
 
@@ -116,7 +118,7 @@ def basins(params: Params, axes: tuple[ArrayLike, ArrayLike] | None = None, *,
            n_modes: int | None = None, attractors: Sequence[PeriodicOrbit] = (),
            settling: Settling | None = None, output: str | Path | None = None,
            chunk_cells: int | None = None, workers: int | None = None,
-           progress: bool = False) -> xr.Dataset:
+           progress: bool = False, client: Client | None = None) -> xr.Dataset:
     """The basins of attraction of ``params`` over a plane of initial states (module doc).
 
     Args:
@@ -137,13 +139,15 @@ def basins(params: Params, axes: tuple[ArrayLike, ArrayLike] | None = None, *,
         chunk_cells: cells per chunk (default 16).
         workers: threads running chunks (default: Numba's thread count).
         progress: a progress bar on stderr.
+        client: a ``dask.distributed`` Client: each chunk one task on its cluster (the model
+            packed on the worker, the same bits), instead of threads here.
 
     Returns the Dataset: ``basin`` (the label of each cell: an index along ``attractor``, or
     -1 not settled, -2 stopped), ``settle_periods``, the attractors' table and the basin
     fractions (see `impactbeams.variables`).
     """
     setup = _Setup.checked(params, n_modes, settling, attractors, chunk_cells, workers, output,
-                           progress)
+                           progress, client)
     if initial_states is not None:
         require("axes", axes, axes is None, "leave it None with initial_states")
         require("coordinates", coordinates, coordinates is None,
@@ -169,7 +173,7 @@ def basin_stability(params: Params, samples: int, box: tuple[tuple[float, float]
                     n_modes: int | None = None, attractors: Sequence[PeriodicOrbit] = (),
                     settling: Settling | None = None, output: str | Path | None = None,
                     chunk_cells: int | None = None, workers: int | None = None,
-                    progress: bool = False) -> xr.Dataset:
+                    progress: bool = False, client: Client | None = None) -> xr.Dataset:
     """Basin stability: the basins of ``samples`` random initial states in a box of the plane.
 
     ``box``: ((low, high), (low, high)) of the plane's two axes (as `basins`' ``axes``),
@@ -181,7 +185,7 @@ def basin_stability(params: Params, samples: int, box: tuple[tuple[float, float]
     samples = require_integer("samples", samples, 1)
     require_type("seed", seed, is_integer(seed) and seed >= 0, "an integer >= 0")
     setup = _Setup.checked(params, n_modes, settling, attractors, chunk_cells, workers, output,
-                           progress)
+                           progress, client)
     plane = Plane.checked(setup, coordinates)
     bounds = _box(box, plane.names)
     rng = np.random.default_rng(int(seed))
@@ -265,11 +269,12 @@ class _Setup:
     output: Path | None
     progress: bool
     packed: Packed
+    client: Client | None = None
 
     @classmethod
     def checked(cls, params: object, n_modes: object, settling: object, attractors: object,
                 chunk_cells: object, workers: object, output: object,
-                progress: object) -> _Setup:
+                progress: object, client: object = None) -> _Setup:
         """Every common argument checked, one line each (ParameterError), before any run."""
         from impactbeams.contact.spring import required_modes
 
@@ -294,12 +299,15 @@ class _Setup:
         require_type("output", output, output is None or is_path(output),
                      "None or the path of a netCDF file (str or pathlib.Path)")
         require_type("progress", progress, isinstance(progress, bool), "True or False")
-        period = 2.0 * math.pi / params.omega
-        horizon = settling.block_periods * period
-        packed = pack_run(params, n_modes, horizon, horizon)
+        if client is not None:
+            from impactbeams.sweep.dask_runner import require_dask
+
+            require_type("client", client, isinstance(client, require_dask().Client),
+                         "None or a dask.distributed Client")
+        packed = _packed(params, n_modes, settling)
         given = _given(attractors, params, n_modes, settling)
         return cls(params, n_modes, settling, given, chunk_cells, workers,
-                   None if output is None else Path(output), progress, packed)
+                   None if output is None else Path(output), progress, packed, client)
 
     @property
     def dimension(self) -> int:
@@ -356,19 +364,16 @@ class _Setup:
             if saved is not None:
                 done[chunk] = saved
                 bar.update(stop - start, computed=False)
-        pending = [chunk for chunk in range(len(bounds)) if chunk not in done]
-        pool = concurrent.futures.ThreadPoolExecutor(self.workers)
-        try:
-            futures = {pool.submit(runner.run_cells, states[slice(*bounds[chunk])]): chunk
-                       for chunk in pending}
-            for future in concurrent.futures.as_completed(futures):
-                chunk = futures[future]
-                done[chunk] = future.result()
+        pending = {chunk: states[slice(*bounds[chunk])] for chunk in range(len(bounds))
+                   if chunk not in done}
+        run = (_on_threads(runner, pending, self.workers) if self.client is None else
+               _on_cluster(self, pending))
+        with contextlib.closing(run):  # an error or an interrupt: the pending ones cancelled
+            for chunk, cells in run:
+                done[chunk] = cells
                 if store is not None:  # saved at once: an interrupt after it loses nothing
-                    store.save(chunk, done[chunk])
+                    store.save(chunk, cells)
                 bar.update(bounds[chunk][1] - bounds[chunk][0])
-        finally:  # an error or an interrupt: the chunks not started are not run
-            pool.shutdown(wait=True, cancel_futures=True)
         return Cells(*(np.concatenate([getattr(done[chunk], field.name)
                                        for chunk in range(len(bounds))])
                        for field in dataclasses.fields(Cells)))
@@ -385,6 +390,44 @@ class _Setup:
         _resettled(runner, states, cells, labels, known)
         return _basin_dataset(self, states, cells, labels, known, coords, shape, plane,
                               identity)
+
+
+def _on_threads(runner: CellRunner, pending: dict[int, np.ndarray],
+                workers: int) -> Iterator[tuple[int, Cells]]:
+    """Each pending chunk's cells, run on ``workers`` threads, as they finish."""
+    pool = concurrent.futures.ThreadPoolExecutor(workers)
+    try:
+        futures = {pool.submit(runner.run_cells, states): chunk
+                   for chunk, states in pending.items()}
+        for future in concurrent.futures.as_completed(futures):
+            yield futures[future], future.result()
+    finally:  # the chunks not started are not run
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _on_cluster(setup: _Setup, pending: dict[int, np.ndarray]) -> Iterator[tuple[int, Cells]]:
+    """Each pending chunk's cells, one Dask task each, as they finish."""
+    from distributed import as_completed
+
+    futures = {setup.client.submit(run_chunk, setup.params, setup.n_modes, setup.settling,
+                                   states, pure=False): chunk
+               for chunk, states in pending.items()}
+    try:
+        for future in as_completed(futures):
+            yield futures[future], future.result()
+    finally:
+        setup.client.cancel(list(futures))
+
+
+def run_chunk(params: Params, n_modes: int, settling: Settling, states: np.ndarray) -> Cells:
+    """A chunk's cells on a Dask worker: the model packed there, as `basins` packs it."""
+    return CellRunner(_packed(params, n_modes, settling), settling).run_cells(states)
+
+
+def _packed(params: Params, n_modes: int, settling: Settling) -> Packed:
+    """The run of one block of ``settling.block_periods`` forcing periods."""
+    horizon = settling.block_periods * (2.0 * math.pi / params.omega)  # the last sample
+    return pack_run(params, n_modes, horizon, horizon)
 
 
 def _threads() -> int:
