@@ -105,12 +105,16 @@ def test_attractors_are_periodic_orbit_s(coarse):
     """Each attractor's state, run on to state_tolerance = 1e-10 of its samples, is the orbit
     Newton converges to from it (tolerance 1e-11) to 1e-9 of the state's largest coordinate:
     a leftover transient changing by r per period lies r / (1 - |mu|) = 10 r away (|mu| =
-    0.90); measured 1.2e-11 and 1.8e-11. Its leading multipliers are the monodromy's (1e-8)."""
+    0.90); measured 1.2e-11 and 1.8e-11. Its leading multipliers are the monodromy's (1e-8),
+    its tip amplitude the orbit's maximum."""
     for k in coarse.attractor.values:
         z = state_of(coarse, k)
-        orbit = periodic_orbit(PARAMS, N_MODES, int(coarse.attractor_period[k]), guess=z,
-                               measures=False)
+        orbit = periodic_orbit(PARAMS, N_MODES, int(coarse.attractor_period[k]), guess=z)
         assert np.abs(orbit.state - z).max() < 1e-9 * np.abs(z).max()
+        # the tip amplitude sampled 256 times a period: within 1 - cos(pi / 256) = 7.5e-5 of
+        # the orbit's maximum, which Brent's method refines
+        amplitude = float(coarse.attractor_amplitude[k])
+        assert orbit.max_tip1 * (1 - 1e-4) < amplitude <= orbit.max_tip1 * (1 + 1e-9)
         assert orbit.stable and orbit.contacts == int(coarse.attractor_contacts[k])
         mu = (coarse.attractor_multiplier_real[k] + 1j * coarse.attractor_multiplier_imag[k])
         np.testing.assert_allclose(np.abs(mu.values[:4]), np.abs(orbit.multipliers[:4]),
@@ -147,6 +151,8 @@ def test_given_orbits_label_the_same_basins(coarse):
               for k in (1, 0)]
     given = basins(PARAMS, grid(11), n_modes=N_MODES, attractors=orbits)
     assert given.attractor.size == 2 and given.attractor_given.values.tolist() == [1, 1]
+    np.testing.assert_allclose(given.attractor_amplitude.values,
+                               coarse.attractor_amplitude.values[::-1], rtol=1e-9)
     np.testing.assert_array_equal(given.basin.values, 1 - coarse.basin.values)
     np.testing.assert_array_equal(given.settle_periods.values, coarse.settle_periods.values)
 

@@ -241,4 +241,7 @@ def distance(a: np.ndarray, b: np.ndarray) -> float:
     """Hausdorff distance (max norm) of two sets of samples (k, 4), relative to their scale."""
     apart = np.max(np.abs(a[:, None, :] - b[None, :, :]), axis=-1)
     hausdorff = max(apart.min(axis=1).max(), apart.min(axis=0).max())
-    return float(hausdorff / max(np.abs(a).max(), np.abs(b).max()))
+    scale = max(np.abs(a).max(), np.abs(b).max())
+    if scale == 0.0:  # both at rest (no drive): the same state
+        return 0.0
+    return float(hausdorff / scale)

@@ -64,6 +64,7 @@ from impactbeams.params import (
     require_type,
 )
 from impactbeams.progress import Progress
+from impactbeams.trajectory.phases import Trajectory
 from impactbeams.trajectory.start import checked_state
 from impactbeams.variables import (
     BASIN_LABELS,
@@ -463,7 +464,16 @@ def _given_attractor(runner: CellRunner, orbit: PeriodicOrbit) -> Attractor:
     order = np.argsort(-np.abs(orbit.multipliers), kind="stable")
     return Attractor(orbit.period, runner.contacts(trajectory, orbit.period),
                      x[-orbit.period:], start, True, orbit.state,
-                     float(orbit.max_tip1), orbit.multipliers[order], float(orbit.residual))
+                     _amplitude(runner, trajectory, orbit.period), orbit.multipliers[order],
+                     float(orbit.residual))
+
+
+def _amplitude(runner: CellRunner, trajectory: Trajectory, period: int) -> float:
+    """Max |y1| (m) over the last ``period`` forcing periods of a block, densely sampled."""
+    t_end = runner.times[-1]
+    times = np.linspace(t_end - period * runner.forcing_period, t_end,
+                        AMPLITUDE_SAMPLES * period + 1)
+    return float(np.abs(runner.tips(trajectory, times)[:, TIP_Y1]).max())
 
 
 def _labels(cells: Cells, known: list[Attractor], tolerance: float) -> np.ndarray:
@@ -501,12 +511,9 @@ def _described(runner: CellRunner, attractor: Attractor, setup: _Setup) -> Attra
     # whole turn), and a cell then settles on a multiple of the attractor's true period
     p = periodic(x[-s.window:], s) or p
     residual = float(np.abs(x[p:] - x[:-p]).max(axis=-1)[-1] / np.abs(x).max())
-    t_end = runner.times[-1]
-    times = np.linspace(t_end - p * runner.forcing_period, t_end, AMPLITUDE_SAMPLES * p + 1)
-    amplitude = float(np.abs(runner.tips(trajectory, times)[:, TIP_Y1]).max())
     return dataclasses.replace(attractor, period=p, contacts=runner.contacts(trajectory, p),
                                samples=x[-p:], start=start, state=z,
-                               amplitude=amplitude, residual=residual,
+                               amplitude=_amplitude(runner, trajectory, p), residual=residual,
                                multipliers=_multipliers(setup, z, p))
 
 
