@@ -460,7 +460,7 @@ def test_bad_input_is_refused_with_one_line_and_nothing_written(scratch, capsys,
     command = argv[0] if argv and argv[0] in USAGE else None
     assert usage in ([], [f"usage: impactbeams {command} {USAGE[command]}" if command else
                           "usage: impactbeams [-h] [--version] {modes,simulate,run,continue,"
-                          "grazing,plot} ..."]), err
+                          "grazing,basins,plot} ..."]), err
     assert lines[-1].startswith("impactbeams: error: "), err
     for fragment in fragments:
         assert fragment in lines[-1]
@@ -748,6 +748,11 @@ def _public_calls():
         "grazing_frequencies-brackets": (
             lambda: ib.grazing_frequencies(Params(), 5, 10.0, 20.0, brackets=2.5),
             "brackets = 2.5"),
+        "basins-params": (lambda: ib.basins(5, None), "params = 5 (int) is not allowed: "
+                           "must be an impactbeams.Params"),
+        "basin_stability-samples": (lambda: ib.basin_stability(Params(omega=100.0), 0, ()),
+                                    "samples = 0 is not allowed"),
+        "Settling-window": (lambda: ib.Settling(window="24"), "window = '24'"),
         "Params-contact_law": (lambda: Params(contact_law=np.array(["tied"])),
                                "contact_law = array(['tied']"),
         "Params-l1": (lambda: Params(l1=[0.1]), "l1 = [0.1] is not allowed: must be a finite"),

@@ -4,7 +4,8 @@ The command-line interface, a thin argparse layer over the library; the line abo
 description `impactbeams --help` opens with. Subcommands: ``modes`` (natural frequencies),
 ``run`` (a sweep from a TOML file), ``simulate`` (one full trajectory), ``continue`` (periodic
 orbits along a parameter, from a TOML file), ``grazing`` (where the non-impacting orbit first
-touches, in closed form), ``plot`` (draw a saved Dataset). Every model
+touches, in closed form), ``basins`` (basins of attraction over a plane of initial states),
+``plot`` (draw a saved Dataset). Every model
 parameter is an option named like the parameter, with dashes
 (``--force-amplitude``, ``--EI1``, ``--thickness2``).
 
@@ -44,6 +45,7 @@ from impactbeams.variables import GRAZING_PARAMETERS, PARAMETERS
 
 if TYPE_CHECKING:
     import xarray as xr
+    from distributed import Client
 
     from impactbeams.continuation import Continuation
     from impactbeams.continuation.arclength import Point
@@ -55,6 +57,7 @@ EXIT_USER_ERROR = 2  # an input was rejected: nothing was computed or written
 EXIT_INCOMPLETE = 3  # the result was written, but some runs stopped before t_max
 EXIT_INTERRUPTED = 130
 GRAZING_POINTS = 201  # frequencies of a grazing curve in a drive or the clearance
+BASIN_POINTS = 41  # initial states along each axis of a basin map
 
 _ALIASES = {"force_amplitude": ["--force"]}
 
@@ -287,18 +290,30 @@ def _check_scheduler(address: str | None) -> None:
 
 
 @contextlib.contextmanager
-def _cluster_runner(args: argparse.Namespace) -> Iterator[ChunkRunner | None]:
-    """A Dask chunk runner for --scheduler / --local-cluster (closed on exit), else None."""
+def _cluster_client(args: argparse.Namespace) -> Iterator[Client | None]:
+    """A Dask client for --scheduler / --local-cluster (closed on exit), else None."""
     if args.scheduler is None and args.local_cluster is None:
         yield None
         return
-    from impactbeams.sweep.dask_runner import dask_client, dask_runner, require_dask
+    from impactbeams.sweep.dask_runner import dask_client, require_dask
 
     try:
         require_dask()
     except ImportError as error:
         raise ParameterError(str(error)) from None
     with dask_client(args.scheduler, args.local_cluster) as client:
+        yield client
+
+
+@contextlib.contextmanager
+def _cluster_runner(args: argparse.Namespace) -> Iterator[ChunkRunner | None]:
+    """A Dask chunk runner for --scheduler / --local-cluster (closed on exit), else None."""
+    with _cluster_client(args) as client:
+        if client is None:
+            yield None
+            return
+        from impactbeams.sweep.dask_runner import dask_runner
+
         yield dask_runner(client, threads_per_task=args.threads)
 
 
@@ -405,6 +420,61 @@ def _grazing(args: argparse.Namespace) -> int:
         f"points of the grazing curve in (omega, {args.parameter})")
     _say(args, f"wrote {output}: {dataset.grazing_point.size} {plane}, {n_modes} modes per beam")
     return 0
+
+
+def _basins(args: argparse.Namespace) -> int:
+    """``basins``: the basin map of a plane of initial states (or random ones), to netCDF."""
+    from impactbeams.orbits import Settling, basin_stability, basins
+    from impactbeams.preflight import require_output_file
+
+    output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
+    params = params_from_args(args)
+    settling = Settling(**({"max_periods": args.max_periods} if args.max_periods else {}))
+    _check_scheduler(args.scheduler)
+    box = (args.axis1, args.axis2)
+    if args.random and args.points is not None:
+        raise ParameterError("--points is not allowed with --random: the states are drawn at "
+                             "random in the box")
+    for name, (low, high) in (("--axis1", args.axis1), ("--axis2", args.axis2)):
+        if not low < high:
+            raise ParameterError(f"{name} = {low!r},{high!r} is not allowed: need LOW < HIGH")
+    with _cluster_client(args) as client:
+        common = {"coordinates": args.coordinates, "n_modes": args.n_modes,
+                  "settling": settling, "output": output, "chunk_cells": args.chunk_cells,
+                  "workers": args.workers, "progress": not args.quiet, "client": client}
+        if args.random:
+            dataset = basin_stability(params, args.random, box, seed=args.seed, **common)
+        else:
+            import numpy as np
+
+            axes = tuple(np.linspace(low, high, args.points or BASIN_POINTS) for low, high in box)
+            dataset = basins(params, axes, **common)
+    found = ", ".join(f"{k}: period {int(dataset.attractor_period[k])}, "
+                      f"{int(dataset.attractor_contacts[k])} contacts, "
+                      f"{float(dataset.basin_fraction[k]):.3g} +- "
+                      f"{float(dataset.basin_fraction_error[k]):.2g}"
+                      for k in dataset.attractor.values)
+    _say(args, f"wrote {output}: {dataset.attrs['cells']} initial states, "
+               f"{dataset.attractor.size} attractors ({found or 'none'}); not settled "
+               f"{dataset.attrs['not_settled_fraction']:.3g}, stopped "
+               f"{dataset.attrs['stopped_fraction']:.3g}")
+    return 0
+
+
+def _range(text: str) -> tuple[float, float]:
+    """LOW,HIGH: two numbers (the library checks them against the plane)."""
+    parts = text.split(",")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be LOW,HIGH")
+    return _number(parts[0]), _number(parts[1])
+
+
+def _index_pair(text: str) -> tuple[int, int]:
+    """I,J: two integers (the library checks them against the model's coordinates)."""
+    parts = text.split(",")
+    if len(parts) == 2 and all(re.fullmatch(r"\s*\d+\s*", part) for part in parts):
+        return int(parts[0]), int(parts[1])
+    raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be I,J, two integers >= 0")
 
 
 # options that set nothing of the steady orbit's grazing (its start, its one frequency)
@@ -637,8 +707,9 @@ class _Version(argparse.Action):
 
 
 # a negative number as an option's value (argparse reads "-1e-5" as an option)
-_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$",
-                              re.IGNORECASE)
+_NUMBER = r"(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan"
+# a negative number, or a list of numbers with commas that starts with one (basins' LOW,HIGH)
+_NEGATIVE_NUMBER = re.compile(rf"^-({_NUMBER})(,[-+]?({_NUMBER}))*$", re.IGNORECASE)
 
 
 def _attach_negative_values(argv: Sequence[str]) -> list[str]:
@@ -758,6 +829,48 @@ def build_parser() -> argparse.ArgumentParser:
                          help="netCDF file to write (replaced if it exists)")
     add_parameter_options(grazing)
     grazing.set_defaults(handler=_grazing)
+
+    basin = command("basins", "--axis1 LOW,HIGH --axis2 LOW,HIGH -o OUT.nc [OPTIONS] "
+                    "[PARAMETER OPTIONS]", help="basins of attraction over a plane of initial "
+                                                "states, at fixed parameters")
+    basin.add_argument("--axis1", type=_range, required=True, metavar="LOW,HIGH",
+                       help="first axis: beam 1's initial tip deflection (m) from its first "
+                            "mode, or z[I] with --coordinates")
+    basin.add_argument("--axis2", type=_range, required=True, metavar="LOW,HIGH",
+                       help="second axis: beam 1's initial tip velocity (m/s) from its first "
+                            "mode, or z[J] with --coordinates")
+    basin.add_argument("--coordinates", type=_index_pair, metavar="I,J",
+                       help="the plane of modal coordinates z[I], z[J] of z = (q, q'), in "
+                            "modal units (default: the tip plane)")
+    basin.add_argument("--points", type=_integer_from(1), metavar="N",
+                       help=f"initial states along each axis (default {BASIN_POINTS})")
+    basin.add_argument("--random", type=_POSITIVE_INTEGER, metavar="N",
+                       help="N random initial states in the box instead of a grid (basin "
+                            "stability, Wilson intervals)")
+    basin.add_argument("--seed", type=_integer_from(0), default=0,
+                       help="seed of the random states (default 0)")
+    basin.add_argument("--max-periods", type=_POSITIVE_INTEGER, metavar="N",
+                       help="forcing periods a state may run before it counts as not settled "
+                            "(default 1200)")
+    basin.add_argument("--n-modes", type=_MODE_COUNT, default=None, metavar="N",
+                       help="free modes per beam (default: as simulate)")
+    basin.add_argument("--chunk-cells", type=_POSITIVE_INTEGER, metavar="N",
+                       help="initial states per saved chunk (default 16); resume with the "
+                            "same")
+    basin.add_argument("--workers", type=_POSITIVE_INTEGER, metavar="N",
+                       help="threads running chunks (default: all cores)")
+    basin_cluster = basin.add_mutually_exclusive_group()
+    basin_cluster.add_argument("--scheduler", metavar="ADDRESS",
+                               help="run the chunks on the Dask cluster at ADDRESS, e.g. "
+                                    "tcp://host:8786 (needs impactbeams[distributed])")
+    basin_cluster.add_argument("--local-cluster", type=_POSITIVE_INTEGER, metavar="N",
+                               help="run the chunks on a Dask LocalCluster of N worker "
+                                    "processes")
+    basin.add_argument("-o", "--output", required=True, metavar="OUT.nc",
+                       help="netCDF file; chunks are kept in OUT.nc.partial/ until it is "
+                            "complete, and the same command resumes")
+    add_parameter_options(basin)
+    basin.set_defaults(handler=_basins)
 
     plot = command("plot", "IN.nc [-o OUT.png] [OPTIONS]",
                    help="draw a saved sweep map, simulated run or continuation")

@@ -481,6 +481,92 @@ VARIABLES.update({
         "drives' sines rise through 0); NaN where the curve has no point"),
 })
 
+# basins of attraction (impactbeams.orbits.basin_map): one label per initial state ("*": the plane's
+# two axes, or "cell" for a list of states), and the attractors found, along "attractor"
+BASIN_LABELS = {-1: "not_settled", -2: "stopped"}  # the labels that name no attractor
+VARIABLES.update({
+    "start_tip_deflection": Variable(
+        ("*",), "m", "initial tip deflection of beam 1",
+        "y1(l1) at t = 0 given to beam 1's first free mode, every other coordinate at rest: "
+        "q_1 = y / Y_1(l1)", symbol="$y_1(l_1, 0)$"),
+    "start_tip_velocity": Variable(
+        ("*",), "m s-1", "initial tip velocity of beam 1",
+        "dy1(l1)/dt at t = 0 given to beam 1's first free mode, every other coordinate at "
+        "rest: q_1' = v / Y_1(l1) added to the rest velocity", symbol=r"$\dot y_1(l_1, 0)$"),
+    "cell": Variable(("cell",), "1", "initial state number",
+                     "index of the initial state, from 0", dtype="int64"),
+    "start_displacement": Variable(
+        ("*", "coordinate"), _MODAL_UNITS, "initial modal displacements",
+        "free modal coordinates q at t = 0 (forcing phase 0) of each initial state"),
+    "start_velocity": Variable(
+        ("*", "coordinate"), _MODAL_UNITS + " s-1", "initial modal velocities",
+        "dq/dt of the free modal coordinates at t = 0 of each initial state"),
+    "basin": Variable(
+        ("*",), "1", "attractor reached",
+        "index along attractor of the attractor the run from the initial state settles on; -1 "
+        "not_settled: its stroboscopic samples did not repeat within max_periods; -2 stopped: "
+        "the run stopped early (event limit) or the tied law refused the start (tips "
+        "overlapping)", dtype="int32"),
+    "settle_periods": Variable(
+        ("*",), "1", "forcing periods to settle",
+        "forcing periods from t = 0 until the stroboscopic samples repeat with the attractor's "
+        "period to settle_tolerance of their scale; the periods run if not settled",
+        dtype="int32"),
+    "attractor": Variable(("attractor",), "1", "attractor number",
+                          "index of the attractor: the given orbits first, then those found, "
+                          "in the order of the first initial state reaching each",
+                          dtype="int64"),
+    "attractor_period": Variable(("attractor",), "1", "period of the attractor",
+                                 "its period in forcing periods 2 pi / Omega", dtype="int32"),
+    "attractor_contacts": Variable(("attractor",), "1", "contacts per orbit",
+                                   "contact onsets over one period of the attractor",
+                                   dtype="int32"),
+    "attractor_amplitude": Variable(
+        ("attractor",), "m", "tip amplitude of the attractor",
+        "max |y1(l1)| over one period of the attractor, sampled 256 times per forcing period",
+        symbol=r"$\max |y_1(l_1)|$"),
+    "attractor_displacement": Variable(
+        ("attractor", "coordinate"), _MODAL_UNITS, "section state of the attractor: q",
+        "free modal coordinates q on the section t = 0 mod 2 pi / Omega (a periodic orbit's "
+        "state), converged to state_tolerance; NaN for a tied-law orbit in contact there"),
+    "attractor_velocity": Variable(
+        ("attractor", "coordinate"), _MODAL_UNITS + " s-1", "section state of the attractor: q'",
+        "dq/dt of the free modal coordinates on the section (see attractor_displacement)"),
+    "attractor_section_deflection1": Variable(
+        ("attractor", "section"), "m", "tip deflection of beam 1 on the sections",
+        "y1(l1) at the attractor's stroboscopic samples, k = 0 .. period - 1 (NaN beyond)"),
+    "attractor_section_velocity1": Variable(
+        ("attractor", "section"), "m s-1", "tip velocity of beam 1 on the sections",
+        "dy1(l1)/dt at the attractor's stroboscopic samples (NaN beyond its period)"),
+    "attractor_multiplier_real": Variable(
+        ("attractor", "multiplier"), "1", "real part of the attractor's Floquet multipliers",
+        "eigenvalues of the period map's Jacobian over the attractor's period at its section "
+        "state, by decreasing modulus (NaN where unknown: the tied law has no tangent flow)"),
+    "attractor_multiplier_imag": Variable(
+        ("attractor", "multiplier"), "1", "imaginary part of the attractor's Floquet "
+        "multipliers", "see attractor_multiplier_real"),
+    "attractor_given": Variable(("attractor",), "1", "attractor given as a periodic orbit",
+                                "1 for an orbit given by the caller, 0 for one found",
+                                dtype="int8"),
+    "attractor_residual": Variable(
+        ("attractor",), "1", "relative residual of the attractor's state",
+        "max |x(t + p T) - x(t)| / max |x| of its last stroboscopic samples x = (y1, y2, "
+        "v1 / Omega, v2 / Omega) (a found attractor run on to state_tolerance; a given orbit's "
+        "shooting residual)"),
+    "basin_fraction": Variable(("attractor",), "1", "basin fraction",
+                               "fraction of the initial states that settle on the attractor"),
+    "basin_fraction_error": Variable(
+        ("attractor",), "1", "standard error of the basin fraction",
+        "sqrt(f (1 - f) / n) over the n initial states: the sampling error of f for random "
+        "initial states (for a grid, the same number as a guide; refine the grid to check)"),
+    "basin_fraction_low": Variable(
+        ("attractor",), "1", "lower end of the basin fraction's confidence interval",
+        "Wilson score interval at basin_confidence (random initial states)"),
+    "basin_fraction_high": Variable(
+        ("attractor",), "1", "upper end of the basin fraction's confidence interval",
+        "Wilson score interval at basin_confidence (random initial states)"),
+})
+
 # what the long-time response gives: computed over sampled_periods forcing periods after
 # transient_periods, not over [0, t_max] (the sweeps' long-time observables; plot titles name
 # that window instead of t_max)
@@ -488,8 +574,12 @@ POINCARE_VARIABLES = ("poincare_deflection1", "poincare_deflection2", "poincare_
                       "poincare_velocity2")
 LONG_TIME_VARIABLES = (*POINCARE_VARIABLES, "response_period", "steady_impact_rate",
                        "steady_episode_rate")
-# what a sweep's map can hold along its grid ("*"): observables and what comes with them
-MAP_VARIABLES = tuple(name for name, variable in VARIABLES.items() if variable.dims[0] == "*")
+# what a sweep's map can hold along its grid ("*"): observables and what comes with them (a basin
+# map's "*" is its initial states')
+BASIN_MAP_VARIABLES = ("start_tip_deflection", "start_tip_velocity", "start_displacement",
+                       "start_velocity", "basin", "settle_periods")
+MAP_VARIABLES = tuple(name for name, variable in VARIABLES.items()
+                      if variable.dims[0] == "*" and name not in BASIN_MAP_VARIABLES)
 
 
 def attributes(name: str) -> dict[str, Any]:

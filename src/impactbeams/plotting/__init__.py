@@ -144,6 +144,20 @@ def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
     return []
 
 
+def _plot_basins(dataset: xr.Dataset, path: str | Path, title: str | None,
+                 dpi: float) -> list[str]:
+    """A basin map with its attractors' legend into ``path``."""
+    from impactbeams.plotting.basins import draw_basins
+
+    figure = Figure(figsize=(9, 5), layout="constrained")
+    axes = figure.subplots()
+    draw_basins(axes, dataset)
+    axes.set_title(case_title(dataset, "basin", tuple(dataset["basin"].dims)) if title is None
+                   else title, loc="left", fontsize="medium", wrap=True)
+    save_figure(figure, path, dpi)
+    return []
+
+
 # the command line's name of each option of plot_dataset that a figure may not take
 _OPTIONS = {"values": "--slice", "indices": "--slice-index", "scale": "--log / --linear",
             "contours": "--contours"}
@@ -178,6 +192,8 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
     """Draw ``dataset`` into the image file ``path`` (format from its extension).
 
     A simulated run without options gets its overview (tips, force, restitution, energy); a
+    basin map (`impactbeams.orbits.basins`) its labels over the initial states with the
+    attractors' legend (`impactbeams.plotting.basins`); a
     continuation's branches their frequency-response curve (over the bifurcation diagram
     ``diagram`` if given; its frequency axis in Hz if ``hz``; the events drawn and labelled as
     ``events`` says, `impactbeams.plotting.branches.draw_branches`); anything else is drawn by
@@ -197,6 +213,11 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
     if given:
         raise ParameterError(f"{given[0]} is for a continuation's file only: this Dataset has "
                              "no branch_point dimension")
+    if "attractor" in dataset.dims and variable in (None, "basin"):
+        _require_xarray(dataset, "a basin map")
+        _refuse_options("a basin map, drawn whole over its initial states,", values=values,
+                        indices=indices, scale=scale, contours=contours)
+        return _plot_basins(dataset, path, title, dpi)
     options = values or indices or scale or contours is not None or title is not None
     if "time" in dataset.dims and variable is None and not options:
         from impactbeams.plotting.trajectories import plot_run

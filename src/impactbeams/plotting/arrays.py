@@ -26,8 +26,8 @@ if TYPE_CHECKING:
     import xarray as xr
 
 # dimensions of the files whose figures are drawn from xarray Datasets: a simulated run's
-# (its overview) and a continuation's (its branches)
-XARRAY_DIMENSIONS = frozenset({"time", "branch_point"})
+# (its overview), a continuation's (its branches) and a basin map's (its attractors)
+XARRAY_DIMENSIONS = frozenset({"time", "branch_point", "attractor"})
 # attributes of a variable that xarray's CF decoding acts on (beyond a NaN fill, which reads
 # as it is): a file that has any is read by xarray, so that it means what xarray reads
 _DECODED = frozenset({"scale_factor", "add_offset", "missing_value", "_Unsigned", "dtype",
