@@ -11,7 +11,7 @@ import dataclasses
 import math
 from typing import Any
 
-from impactbeams.params import ParameterError, is_real, require
+from impactbeams.checks import ParameterError, is_real, require
 
 
 def _check_fields(part: Any, units: dict[str, str], positive: bool) -> None:
@@ -78,20 +78,21 @@ class Spring:
 Attachment = PointMass | Spring
 
 
-def check_attachments(attachments: tuple[Any, ...], length: float) -> None:
+def check_attachments(attachments: tuple[Any, ...], length: float,
+                      name: str = "attachments") -> None:
     """Raise ParameterError for an attachment that is not a part, or not on the beam.
 
     Masses and translational springs act at 0 < x <= L (at the clamp the deflection is held,
     so they would do nothing); a rotational spring at x = 0 is the compliant clamp.
     """
     for index, part in enumerate(attachments):
-        name = f"attachments[{index}]"
+        item = f"{name}[{index}]"
         if not isinstance(part, (PointMass, Spring)):
-            raise ParameterError(f"{name} = {part!r} is not allowed: must be a PointMass or a "
-                                 "Spring")
+            raise ParameterError(f"{item} = {part!r} is not allowed: must be a PointMass or a "
+                                 "Spring (impactbeams.structure)")
         at_clamp_allowed = isinstance(part, Spring) and part.stiffness == 0.0
         low = "0 <=" if at_clamp_allowed else "0 <"
-        require(f"{name}.position", part.position,
+        require(f"{item}.position", part.position,
                 (part.position >= 0.0 if at_clamp_allowed else part.position > 0.0)
                 and part.position <= length,
                 f"must lie on the beam, {low} x <= {length!r} (at the clamp, x = 0, only a "
