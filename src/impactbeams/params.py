@@ -647,7 +647,7 @@ def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
     """
     for key in values:
         if key not in PARAMETERS and key not in ATTACHMENTS:
-            raise unknown_key("parameter", key, source, sorted([*PARAMETERS, *ATTACHMENTS]))
+            raise unknown_key("parameter", key, source, [*sorted(PARAMETERS), *ATTACHMENTS])
     if not configuration.counterpart_named(values.get("counterpart")).has_beam2:
         refuse_beam2([key for key in values if given_fields or key[:-1] in MATERIAL_KEYS],
                      source)
