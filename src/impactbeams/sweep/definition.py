@@ -37,6 +37,7 @@ from impactbeams.configuration import LAWS, ContactLaw, counterpart_named
 from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.longtime import LongTime, Stepping
 from impactbeams.params import (
+    ATTACHMENTS,
     CHOICES,
     CONTACT_LAWS,
     MATERIAL_KEYS,
@@ -65,11 +66,13 @@ from impactbeams.preflight import (
     highest_frequency,
     require_memory,
 )
+from impactbeams.structure.parts import check_attachments
 from impactbeams.variables import (
     LONG_TIME_VARIABLES,
     PARAMETERS,
     POINCARE_VARIABLES,
     VARIABLES,
+    parameter_text,
 )
 
 FIRST_IMPACT = "first_impact_time"
@@ -223,7 +226,8 @@ class Sweep:
         stepping = ({} if self.stepping is None else
                     {"stepping": self.stepping.direction, "stepped_axis": self.stepping.axis})
         return {"t_max": self.t_max, "n_modes": self.n_modes,
-                "observables": list(self.observables), "params": dict(self.fixed),
+                "observables": list(self.observables),
+                "params": {name: parameter_text(value) for name, value in self.fixed.items()},
                 "axes": {a.name: a.definition() for a in self.axes}, **transient, **long_time,
                 **stepping}
 
@@ -442,7 +446,7 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
     dims = len(sweep.axes)
     ends = []
     values: dict[str, Any] = {name: value for name, value in sweep.fixed.items()
-                              if name not in CHOICES}
+                              if name not in CHOICES and name not in ATTACHMENTS}
     for k, axis in enumerate(sweep.axes):
         axis_ends = np.array([axis.min, axis.max] if axis.num > 1 and not axis.choices
                              else [axis.min])
@@ -477,6 +481,9 @@ def _check_grid(sweep: Sweep) -> None:
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
     check_joint(values, point, sweep.base.partner, sweep.base.mount)
+    for which, name in enumerate(ATTACHMENTS, start=1):  # on the shortest beam of the grid
+        check_attachments(getattr(sweep.base, name), float(np.min(values[f"l{which}"])),
+                          f"{name} (on the grid's shortest l{which})")
     check_run(values, sweep.t_max, sweep.n_modes, point)
     _check_long_time(sweep, values, point)
 
