@@ -31,6 +31,7 @@ Units: SI (m, s, N, kg, rad/s).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,11 +51,30 @@ from fe_reference import (
 
 
 def build_pair(params, n_elements: tuple[int, int]) -> _Pair:
-    """Block-diagonal FE system of both beams (beam 1's DOFs first); beam 1 alone at a stop."""
+    """Block-diagonal FE system of both beams (beam 1's DOFs first); beam 1 alone at a stop.
+
+    Point masses on a beam (``params.attachments1``, ``attachments2``: objects with
+    ``position`` (m), ``mass`` (kg) and ``rotary_inertia`` (kg m^2), as
+    `impactbeams.structure.PointMass`) are lumped at the node at their position (which must
+    be one), on its deflection and slope; they leave the flexibility as it is.
+    """
     p = params
     if getattr(p, "counterpart", "beam") == "stop":
-        return _Pair.single(p.EI1, p.rhoA1, p.l1, n_elements[0])
-    return _Pair.build(p.EI1, p.rhoA1, p.l1, p.EI2, p.rhoA2, p.l2, tuple(n_elements))
+        pair = _Pair.single(p.EI1, p.rhoA1, p.l1, n_elements[0])
+    else:
+        pair = _Pair.build(p.EI1, p.rhoA1, p.l1, p.EI2, p.rhoA2, p.l2, tuple(n_elements))
+    M = pair.M.copy()
+    for beam, offset in ((1, 0), (2, pair.n1)):
+        for part in getattr(p, f"attachments{beam}", ()):
+            if not hasattr(part, "mass"):
+                raise NotImplementedError("the FE reference lumps point masses only")
+            n, length = n_elements[beam - 1], getattr(p, f"l{beam}")
+            node = round(part.position / length * n)
+            assert abs(node * length / n - part.position) < 1e-12 * length, "not on a node"
+            w = offset + 2 * (node - 1)  # node 0 is the clamp, removed
+            M[w, w] += part.mass
+            M[w + 1, w + 1] += part.rotary_inertia
+    return dataclasses.replace(pair, M=M)
 
 
 def _gap_vector(pair: _Pair) -> np.ndarray:

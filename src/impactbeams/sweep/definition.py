@@ -66,7 +66,6 @@ from impactbeams.preflight import (
     highest_frequency,
     require_memory,
 )
-from impactbeams.structure.parts import check_attachments
 from impactbeams.variables import (
     LONG_TIME_VARIABLES,
     PARAMETERS,
@@ -481,9 +480,6 @@ def _check_grid(sweep: Sweep) -> None:
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
     check_joint(values, point, sweep.base.partner, sweep.base.mount)
-    for which, name in enumerate(ATTACHMENTS, start=1):  # on the shortest beam of the grid
-        check_attachments(getattr(sweep.base, name), float(np.min(values[f"l{which}"])),
-                          f"{name} (on the grid's shortest l{which})")
     check_run(values, sweep.t_max, sweep.n_modes, point)
     _check_long_time(sweep, values, point)
 
