@@ -390,6 +390,8 @@ def _law_axis(spec: Any, where: str) -> Axis:
 
 def _axis(name: str, spec: Any, source: str) -> Axis:
     where = f"[axes.{name}] of {source}"
+    require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: a beam's "
+            "attachments are fixed for a sweep (give them in [params], from Python)")
     if name not in PARAMETERS:
         raise unknown_key("parameter", name, f"[axes] of {source}", PARAMETERS)
     if name == "contact_law":
