@@ -6,13 +6,16 @@ node (its own error shown by refining the mesh), Hermite FE matrices for the sta
 kinetic norm, and the textbook cantilever's results of today's closed forms.
 """
 
+import json
 import math
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from fe_spring import fe_spring_contacts
 from impactbeams import simulate
+from impactbeams.cli import main
 from impactbeams.contact import build_free_phase
 from impactbeams.drive import base_participation
 from impactbeams.modes import beam
@@ -31,16 +34,48 @@ WEIGHTLESS = {"attachments1": (PointMass(0.1, 0.0),), "attachments2": (PointMass
 
 
 @pytest.mark.parametrize(("mu", "eta"), [(0.1, 1e-3), (1.0, 1e-2), (10.0, 0.1)])
-def test_the_engines_frequencies_with_a_tip_mass_solve_the_characteristic_equation(mu, eta):
-    """The free phase the kernels read, against the roots of the closed-form equation.
+def test_modes_with_a_tip_mass_solve_the_characteristic_equation(capsys, tmp_path, mu, eta):
+    """`impactbeams modes` of a parameters file with a tip mass (a TOML table), and the free
+    phase the kernels read, against the roots of the closed-form equation.
 
     Measured: 7e-16 at worst; 1e-10 allowed (the issue's bound).
     """
     p = Params(counterpart="stop")
-    mass = PointMass(p.l1, mu * p.rhoA1 * p.l1, eta * p.rhoA1 * p.l1**3)
-    free = build_free_phase(p.replace(attachments1=(mass,)), 10)
+    mass, inertia = mu * p.rhoA1 * p.l1, eta * p.rhoA1 * p.l1**3
+    path = tmp_path / "rig.toml"
+    path.write_text('[params]\ncounterpart = "stop"\nattachments1 = [{position = 0.1, '
+                    f"mass = {mass!r}, rotary_inertia = {inertia!r}}}]\n")
+    assert main(["modes", "--n", "10", "--json", "--params", str(path)]) == 0
+    listed = np.array(json.loads(capsys.readouterr().out)["free"]["beam1"])
+    free = build_free_phase(p.replace(attachments1=(PointMass(p.l1, mass, inertia),)), 10)
     expected = math.sqrt(p.EI1 / p.rhoA1) * (tip_mass_roots(mu, eta, 10) / p.l1) ** 2
+    assert np.array_equal(listed, free.frequencies)
     assert np.abs(free.frequencies / expected - 1.0).max() < 1e-10
+
+
+def test_a_sweep_file_and_the_command_line_take_attachments(capsys, tmp_path):
+    """A sweep file's [params] table names a tip mass and a spring: the same map as from
+    Python; the tied law with them is refused in one line, exit code 2."""
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(
+        't_max = 0.05\nn_modes = 10\nobservables = ["first_impact_time"]\n[params]\n'
+        'counterpart = "stop"\ncontact_stiffness = 1e4\nattachments1 = [{position = 0.1, '
+        "mass = 1e-3, rotary_inertia = 1e-7}, {position = 0.05, stiffness = 50.0}]\n"
+        "[axes.omega]\nmin = 40.0\nmax = 60.0\nnum = 3\n")
+    assert main(["run", str(sweep), "-o", str(tmp_path / "out.nc"), "--quiet"]) == 0
+    parts = (TIP_MASS, Spring(0.05, 50.0))
+    with xr.open_dataset(tmp_path / "out.nc") as ds:
+        assert ds.attrs["attachments1"] == "; ".join(map(repr, parts))
+        mapped = ds.first_impact_time.values
+    fixed = {"counterpart": "stop", "contact_stiffness": 1e4, "attachments1": parts}
+    python = run_sweep(sweep_from_mapping({
+        "t_max": 0.05, "n_modes": 10, "observables": ["first_impact_time"], "params": fixed,
+        "axes": {"omega": {"min": 40.0, "max": 60.0, "num": 3}}}), parallel=False)
+    assert np.array_equal(mapped, python.first_impact_time.values)
+    params = tmp_path / "rig.toml"
+    params.write_text("[params]\nattachments1 = [{position = 0.1, mass = 1e-3}]\n")
+    assert main(["modes", "--params", str(params), "--contact-law", "tied"]) == 2
+    assert "supports the paper's uniform beams only" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("params", [STOP, PAIR], ids=["stop", "two beams"])
@@ -173,11 +208,13 @@ def test_a_run_says_what_its_beams_carry():
     (lambda: Params(attachments1=(PointMass(0.2, 1e-3),)),
      r"attachments1\[0\].position = 0.2 is not allowed: must lie on the beam"),
     (lambda: Params(attachments1=3), "attachments1 = 3 is not allowed: must be a tuple"),
-    (lambda: Params(attachments1=({"mass": 1e-3},)),
-     r"attachments1\[0\] = \{'mass': 0.001\} is not allowed: must be a PointMass or a Spring"),
+    (lambda: Params(attachments1=(1e-3,)),
+     r"attachments1\[0\] = 0.001 is not allowed: must be a PointMass or a Spring"),
     (lambda: Params(counterpart="stop", attachments2=(TIP_MASS,)),
      "counterpart = 'stop' has no beam 2"),
     (lambda: Params(attachments1=(Spring(0.0),)), "must be > 0"),
+    (lambda: Params.from_mapping({"attachments1": [{"position": 0.1}]}),
+     r"attachments1\[0\] = \{'position': 0.1\} is not allowed: a point mass is a table of"),
 ])
 def test_bad_attachments_are_refused_in_one_line(build, message):
     with pytest.raises(ParameterError, match=message):

@@ -68,7 +68,7 @@ from impactbeams.checks import (  # noqa: F401  (their old home: modules above i
 from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount
 from impactbeams.kernels import layout
 from impactbeams.structure import Cantilever
-from impactbeams.structure.parts import Attachment, check_attachments, check_clamp
+from impactbeams.structure.parts import Attachment, as_part, check_attachments, check_clamp
 from impactbeams.variables import PARAMETERS
 
 STEEL_E = 210e9  # Pa
@@ -457,8 +457,10 @@ class Params:
         for name in ATTACHMENTS:
             parts = getattr(self, name)
             require(name, parts, isinstance(parts, (tuple, list)),
-                    "must be a tuple of impactbeams.structure.PointMass and Spring parts")
-            object.__setattr__(self, name, tuple(parts))
+                    "must be a tuple of impactbeams.structure.PointMass and Spring parts (in a "
+                    "TOML file: an array of tables)")
+            object.__setattr__(self, name, tuple(as_part(f"{name}[{index}]", part)
+                                                 for index, part in enumerate(parts)))
         if not self.partner.has_beam2:
             for field in dataclasses.fields(Params):
                 if field.name in BEAM2_KEYS:

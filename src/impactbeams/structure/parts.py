@@ -110,3 +110,27 @@ def check_clamp(attachments: tuple[Any, ...]) -> None:
         require("Spring.rotational_stiffness at position 0", total, False,
                 "must be > 0 (a spring at the clamp makes it compliant; without stiffness the "
                 "beam would turn freely about it)", "N m/rad")
+
+
+_TABLE_FIELDS = {PointMass: ("position", "mass", "rotary_inertia"),
+                 Spring: ("position", "stiffness", "rotational_stiffness")}
+
+
+def as_part(name: str, value: Any) -> Any:
+    """``value`` as a part: a PointMass or Spring as it is, a table (a TOML file's) built.
+
+    A table with ``position`` and ``mass`` (and ``rotary_inertia``) is a point mass, one with
+    ``position`` and ``stiffness`` and/or ``rotational_stiffness`` a spring; anything else is
+    returned for `check_attachments` to refuse, and a table that fits neither raises
+    ParameterError naming ``name``.
+    """
+    if not isinstance(value, dict):
+        return value
+    for kind, fields in _TABLE_FIELDS.items():
+        if "position" in value and set(value) <= set(fields) and len(value) > 1 and (
+                kind is Spring or "mass" in value):
+            return kind(**value)
+    raise ParameterError(
+        f"{name} = {value!r} is not allowed: a point mass is a table of position, mass and "
+        "rotary_inertia (optional); a spring, of position, stiffness and/or "
+        "rotational_stiffness")
