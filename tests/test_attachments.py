@@ -235,3 +235,17 @@ def test_what_cannot_take_attachments_refuses_them():
         sweep_from_mapping({"t_max": 0.05, "observables": ["first_impact_time"],
                             "params": {"counterpart": "stop", "attachments1": (TIP_MASS,)},
                             "axes": {"l1": {"min": 0.05, "max": 0.1, "num": 2}}})
+
+
+def test_the_preflight_bounds_the_highest_frequency_of_a_beam_with_springs():
+    """Stiff springs raise the frequencies past the uniform beam's (the check would pass runs
+    it should refuse); the bound by interlacing, mode n + springs of the uniform beam, holds."""
+    from impactbeams.preflight import highest_frequency
+
+    parts = (PointMass(0.1, 1e-3), Spring(0.05, 1e9, 1e6), Spring(0.0, rotational_stiffness=3.0))
+    p = Params(counterpart="stop", attachments1=parts)
+    assert p.grounded_springs == 2
+    for n in (5, 20):
+        highest = beam(p, 1).free_modes(n).frequencies[-1]
+        assert highest_frequency(p.numeric(), n) < highest  # the uniform beam's: too low
+        assert highest <= highest_frequency(p.numeric(), n, p.grounded_springs)

@@ -68,7 +68,13 @@ from impactbeams.checks import (  # noqa: F401  (their old home: modules above i
 from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount
 from impactbeams.kernels import layout
 from impactbeams.structure import Cantilever
-from impactbeams.structure.parts import Attachment, as_part, check_attachments, check_clamp
+from impactbeams.structure.parts import (
+    Attachment,
+    Spring,
+    as_part,
+    check_attachments,
+    check_clamp,
+)
 from impactbeams.variables import PARAMETERS
 
 STEEL_E = 210e9  # Pa
@@ -560,6 +566,17 @@ class Params:
         i = str(which)
         return Cantilever.uniform(getattr(self, "EI" + i), getattr(self, "rhoA" + i),
                                   getattr(self, "l" + i), getattr(self, "attachments" + i))
+
+    @property
+    def grounded_springs(self) -> int:
+        """The most springs to ground on one beam (`preflight.highest_frequency`'s bound).
+
+        A translational and a rotational spring at one point count apart; a spring at the clamp
+        does not count (a compliant clamp softens the beam).
+        """
+        return max(sum((part.stiffness > 0) + (part.rotational_stiffness > 0)
+                       for part in parts if isinstance(part, Spring) and part.position > 0)
+                   for parts in (self.attachments1, self.attachments2))
 
     @property
     def tip_compliance(self) -> tuple[float, float]:

@@ -482,7 +482,7 @@ def _check_grid(sweep: Sweep) -> None:
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
     check_joint(values, point, sweep.base.partner, sweep.base.mount)
-    check_run(values, sweep.t_max, sweep.n_modes, point)
+    check_run(values, sweep.t_max, sweep.n_modes, point, sweep.base.grounded_springs)
     _check_long_time(sweep, values, point)
 
 
@@ -499,7 +499,8 @@ def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) 
         "long-time observables sample once per forcing period: need omega > 0 (rad/s)"))
     periods = sweep.transient_periods + sweep.long_time.sampled_periods
     horizon = sweep.long_time.horizon(omega, sweep.transient_periods)
-    phase = np.maximum(highest_frequency(values, sweep.n_modes), omega) * horizon
+    highest = highest_frequency(values, sweep.n_modes, sweep.base.grounded_springs)
+    phase = np.maximum(highest, omega) * horizon
     require_all("transient_periods + sampled_periods", periods, phase <= MAX_PHASE, point,
                 lambda j: (f"the run of {value_at(horizon, j):.3g} s turns the fastest "
                            f"oscillation through {value_at(phase, j):.3g} rad, more than "
