@@ -214,6 +214,10 @@ def test_a_run_says_what_its_beams_carry():
     (lambda: Params(counterpart="stop", attachments2=(TIP_MASS,)),
      "counterpart = 'stop' has no beam 2"),
     (lambda: Params(attachments1=(Spring(0.0),)), "must be > 0"),
+    (lambda: Params(counterpart="stop", force_amplitude=0.1,
+                    attachments1=(Spring(0.0, rotational_stiffness=0.05),)),  # a loose clamp
+     r"force_amplitude = 0.1 is not allowed: its static tip deflection F0 c1 \(c1 with beam "
+     r"1's attachments\) = 0.0237 m must be <= 0.2 l1"),
     (lambda: Params.from_mapping({"attachments1": [{"position": 0.1}]}),
      r"attachments1\[0\] = \{'position': 0.1\} is not allowed: a point mass is a table of"),
 ])

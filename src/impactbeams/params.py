@@ -283,7 +283,8 @@ def check_range(name: str, value: Any, point: PointName = no_point) -> None:
 
 
 def check_joint(values: Mapping[str, Any], point: PointName = no_point,
-                partner: Counterpart = BEAM, mount: Mount = BOTH) -> None:
+                partner: Counterpart = BEAM, mount: Mount = BOTH,
+                compliance1: float | None = None) -> None:
     """Raise ParameterError unless the resolved parameters are jointly allowed.
 
     ``values``: every numeric field of [`Params`][] (EI/rhoA form), as floats or arrays that
@@ -313,11 +314,13 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
     gap = v["clearance"] + v["uplift1"] - v["uplift2"]
     require_all("uplift2", v["uplift2"], gap > 0, point, lambda j: (
         f"the initial gap clearance + uplift1 - uplift2 = {value_at(gap, j)!r} m must be > 0 (m)"))
-    compliance = v["l1"] ** 3 / (3.0 * v["EI1"])
+    uniform = compliance1 is None  # else beam 1's tip compliance with its attachments (m/N)
+    compliance = v["l1"] ** 3 / (3.0 * v["EI1"]) if uniform else compliance1
     static = v["force_amplitude"] * compliance
+    formula = "F0 l1^3 / (3 EI1)" if uniform else "F0 c1 (c1 with beam 1's attachments)"
     require_all("force_amplitude", v["force_amplitude"], static <= MAX_DEFLECTION * v["l1"],
                 point, lambda j: _deflection_rule(
-                    f"its static tip deflection F0 l1^3 / (3 EI1) = {value_at(static, j):.3g} m",
+                    f"its static tip deflection {formula} = {value_at(static, j):.3g} m",
                     "l1", v["l1"], j) + ", i.e. force_amplitude <= "
                 f"{MAX_DEFLECTION * value_at(v['l1'] / compliance, j):.3g} N for this beam 1")
     beams = mount.shaken_beams(partner)
@@ -482,7 +485,6 @@ class Params:
 
     def _check_together(self) -> None:
         """The joint rules of the numeric parameters, the choices and the attachments."""
-        check_joint(self.numeric(), partner=self.partner, mount=self.mount)
         for which, name in enumerate(ATTACHMENTS, start=1):
             parts = getattr(self, name)
             check_attachments(parts, getattr(self, f"l{which}"), name)
@@ -490,6 +492,9 @@ class Params:
             require(name, parts, not parts or self.law.tangent_flow,
                     f"contact_law = {self.contact_law!r} supports the paper's uniform beams "
                     "only: use contact_law = 'spring' for a beam with attachments")
+        # a compliant clamp lets the tip force deflect the tip more than l1^3 / (3 EI1)
+        check_joint(self.numeric(), partner=self.partner, mount=self.mount,
+                    compliance1=self.structure(1).tip_compliance if self.attachments1 else None)
         # with one clamp moving, the tied tips' quasi-static part would carry a moving
         # clearance: not built
         require("base_amplitude", self.base_amplitude,
