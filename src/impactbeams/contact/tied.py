@@ -84,10 +84,10 @@ def build_tied_model(params: Params, n_modes: int) -> ModalModel:
     attachments (which a tied `Params` refuses; a spring law's passed here) raises
     ParameterError.
     """
+    free = build_free_phase(params, n_modes)  # checks both arguments first
     if not (beam(params, 1).closed_form and beam(params, 2).closed_form):
         raise ParameterError("build_tied_model: the tied law supports the paper's uniform beams "
                              "only, not a beam with attachments (use the spring law)")
-    free = build_free_phase(params, n_modes)
     if not params.partner.has_beam2:
         return _stop_model(params, free)
     n = free.beam1.frequencies.size
