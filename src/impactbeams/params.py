@@ -487,9 +487,11 @@ class Params:
         """The joint rules of the numeric parameters, the choices and the attachments."""
         for which, name in enumerate(ATTACHMENTS, start=1):
             parts = getattr(self, name)
+            if not parts:  # the common case, checked once per period map of a continuation
+                continue
             check_attachments(parts, getattr(self, f"l{which}"), name)
             check_clamp(parts)
-            require(name, parts, not parts or self.law.tangent_flow,
+            require(name, parts, self.law.tangent_flow,
                     f"contact_law = {self.contact_law!r} supports the paper's uniform beams "
                     "only: use contact_law = 'spring' for a beam with attachments")
         # a compliant clamp lets the tip force deflect the tip more than l1^3 / (3 EI1)
