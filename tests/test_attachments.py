@@ -30,6 +30,9 @@ TIP_MASS = PointMass(0.1, 1e-3, 1e-7)  # kg, kg m^2: 0.54 of beam 1's mass, a 1 
 STOP = Params(counterpart="stop", contact_stiffness=1e4, attachments1=(TIP_MASS,))
 PAIR = Params(contact_stiffness=1e4, attachments1=(TIP_MASS,),
               attachments2=(PointMass(0.12, 5e-4, 0.0),))
+# masses and a spring (both stiffnesses) inside the span, a lighter mass at the tip
+INTERIOR = Params(counterpart="stop", contact_stiffness=1e4, attachments1=(
+    PointMass(0.05, 2e-3, 1e-7), Spring(0.025, 300.0, 0.4), PointMass(0.1, 5e-4, 0.0)))
 # the textbook cantilever given as a structure: one segment, a massless "mass" at the tip
 WEIGHTLESS = {"attachments1": (PointMass(0.1, 0.0),), "attachments2": (PointMass(0.12, 0.0),)}
 
@@ -79,14 +82,15 @@ def test_a_sweep_file_and_the_command_line_take_attachments(capsys, tmp_path):
     assert "supports the paper's uniform beams only" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("params", [STOP, PAIR], ids=["stop", "two beams"])
-def test_first_contacts_with_tip_masses_agree_with_the_fe_model(params):
-    """The first two contacts of 40 modes per beam against the FE model, masses on tip nodes.
+@pytest.mark.parametrize("params", [STOP, PAIR, INTERIOR], ids=["stop", "two beams", "interior"])
+def test_first_contacts_with_attachments_agree_with_the_fe_model(params):
+    """The first two contacts of 40 modes per beam against the FE model, parts on its nodes.
 
     The FE's onsets converge as h^4 (16x per halving; at least 8x asserted), so |f160 - f320|
     bounds the 320-element run's error 15 times over; ours must lie within it. Measured (stop):
     first onset 1.4e-16 s from f320 (|f160 - f320| = 2.3e-15 s), second 2.9e-14 s (4.1e-13 s);
-    durations and peaks within 1e-9 relative (|f160 - f320| 3e-10, 2e-10).
+    durations and peaks within 1e-9 relative (|f160 - f320| 3e-10, 2e-10); interior parts:
+    onsets 9e-16 s and 8e-14 s from f320 (|f160 - f320| 1.4e-14 s, 1.2e-12 s).
     """
     fe = {n: fe_spring_contacts(params, 1e4, t_max=0.05, n_elements=(n, n), n_contacts=2,
                                 mode_rtol=1e-9) for n in (40, 80, 160, 320)}
