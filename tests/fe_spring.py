@@ -31,6 +31,7 @@ Units: SI (m, s, N, kg, rad/s).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,11 +51,41 @@ from fe_reference import (
 
 
 def build_pair(params, n_elements: tuple[int, int]) -> _Pair:
-    """Block-diagonal FE system of both beams (beam 1's DOFs first); beam 1 alone at a stop."""
+    """Block-diagonal FE system of both beams (beam 1's DOFs first); beam 1 alone at a stop.
+
+    A beam's attachments (``params.attachments1``, ``attachments2``: objects with a
+    ``position`` (m) on a node, as `impactbeams.structure`'s parts) sit on that node: a point
+    mass (``mass`` kg, ``rotary_inertia`` kg m^2) lumped on its deflection and slope, a spring
+    to ground (``stiffness`` N/m, ``rotational_stiffness`` N m/rad) added to K, and to the
+    closed-form flexibility by the Woodbury identity (no solve with K).
+    """
     p = params
     if getattr(p, "counterpart", "beam") == "stop":
-        return _Pair.single(p.EI1, p.rhoA1, p.l1, n_elements[0])
-    return _Pair.build(p.EI1, p.rhoA1, p.l1, p.EI2, p.rhoA2, p.l2, tuple(n_elements))
+        pair = _Pair.single(p.EI1, p.rhoA1, p.l1, n_elements[0])
+    else:
+        pair = _Pair.build(p.EI1, p.rhoA1, p.l1, p.EI2, p.rhoA2, p.l2, tuple(n_elements))
+    K, M = pair.K.copy(), pair.M.copy()
+    springs = []  # (DOF, stiffness)
+    for beam, offset in ((1, 0), (2, pair.n1)):
+        for part in getattr(p, f"attachments{beam}", ()):
+            n, length = n_elements[beam - 1], getattr(p, f"l{beam}")
+            node = round(part.position / length * n)
+            assert node > 0 and abs(node * length / n - part.position) < 1e-12 * length
+            w = offset + 2 * (node - 1)  # node 0 is the clamp, removed
+            if hasattr(part, "mass"):
+                M[w, w] += part.mass
+                M[w + 1, w + 1] += part.rotary_inertia
+                continue
+            springs += [(dof, k) for dof, k in ((w, part.stiffness),
+                                                (w + 1, part.rotational_stiffness)) if k]
+    F = pair.F
+    if springs:
+        dofs, k = np.array([s[0] for s in springs]), np.array([s[1] for s in springs])
+        K[dofs, dofs] += k
+        at = F[:, dofs]
+        F = F - at @ np.linalg.solve(np.eye(len(k)) + k[:, None] * F[np.ix_(dofs, dofs)],
+                                     k[:, None] * at.T)
+    return dataclasses.replace(pair, K=K, M=M, F=F)
 
 
 def _gap_vector(pair: _Pair) -> np.ndarray:

@@ -114,3 +114,31 @@ def damped_modal_gap(free, compliance, clearance, force_amplitude, omega, zeta, 
         return ld(clearance) - residual * force + ((steady + free_part) * weights).sum(-1)
 
     return gap
+
+
+def tip_mass_secular(beta, mu, eta):
+    """The cantilever with a tip mass and rotary inertia, divided by cosh(beta).
+
+    Clamped shape w = A (cosh - cos) + B (sinh - sin) in xi = k x; at the tip, in beta = k L,
+    mu = m / (rhoA L), eta = J / (rhoA L^3) and omega^2 = EI k^4 / rhoA, the moment balances
+    the inertia couple, w'' = eta beta^3 w', and the shear the inertia force,
+    w''' = -mu beta w. The 2x2 determinant in (A, B) is twice
+    1 + cos cosh + mu beta (cos sinh - sin cosh) - eta beta^3 (sin cosh + cos sinh)
+      + mu eta beta^4 (1 - cos cosh).
+    """
+    e = np.exp(-beta)
+    sech, tanh = 2 * e / (1 + e * e), (1 - e * e) / (1 + e * e)
+    c, s = np.cos(beta), np.sin(beta)
+    return (sech + c + mu * beta * (c * tanh - s) - eta * beta**3 * (s + c * tanh)
+            + mu * eta * beta**4 * (sech - c))
+
+
+def tip_mass_roots(mu, eta, count):
+    """The first ``count`` roots beta = k L of `tip_mass_secular` (brentq on a sign scan)."""
+    from scipy.optimize import brentq
+
+    grid = np.linspace(0.01, 40.0, 40000)  # roots lie ~pi apart: a sign scan isolates them
+    values = tip_mass_secular(grid, mu, eta)
+    starts = np.nonzero(np.sign(values[1:]) != np.sign(values[:-1]))[0][:count]
+    return np.array([brentq(tip_mass_secular, grid[i], grid[i + 1], args=(mu, eta),
+                            xtol=1e-300, rtol=1e-15) for i in starts])

@@ -20,9 +20,10 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "impactbeams"
 FLOORS = {
     "kernels": 0,
     "configuration": 0.5,  # the variants' objects: the registry names their notes
-    "variables": 1, "io": 1, "brent": 1, "blas": 1,
+    "variables": 1, "io": 1, "brent": 1, "blas": 1, "checks": 1,
+    "structure": 1.5,  # the beams' parts and modes: Params composes them
     "params": 2,
-    "modes": 3, "longtime": 3, "structure": 3, "lock": 3,  # lock: io's writer, one per output
+    "modes": 3, "longtime": 3, "lock": 3,  # lock: io's writer, one per output
     "contact": 4,
     "model": 5, "compliant": 5,  # old import paths, re-exporting contact
     "drive": 5,

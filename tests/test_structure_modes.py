@@ -1,7 +1,7 @@
 """Cantilevers with attachments (impactbeams.structure) against independent references.
 
 References: the closed-form characteristic equation of a cantilever with a tip mass and rotary
-inertia (derived below), a finite-element model with lumped attachments (Hermite elements,
+inertia (references.py), a finite-element model with lumped attachments (Hermite elements,
 written here from the element matrices, SciPy's eigensolver), the uniform cantilever of
 impactbeams.modes, the static Green's function in closed form, Rayleigh's interlacing theorems.
 """
@@ -16,7 +16,7 @@ from scipy.optimize import brentq
 from impactbeams.modes import free_modes
 from impactbeams.params import ParameterError
 from impactbeams.structure import Cantilever, PointMass, Segment, Spring, waves
-from references import gauss_rule
+from references import gauss_rule, tip_mass_roots
 
 EI, RHOA, L = 9.0167e-3, 1.8402e-2, 0.1  # the default steel strip (N m^2, kg/m, m)
 TIP_STIFFNESS = 3 * EI / L**3  # N/m
@@ -125,30 +125,9 @@ def test_uniform_beam_matches_impactbeams_modes():
         assert error.max() < 1e-12, (derivative, error.max())
 
 
-def tip_mass_secular(beta, mu, eta):
-    """The cantilever with a tip mass and rotary inertia, divided by cosh(beta).
-
-    Clamped shape w = A (cosh - cos) + B (sinh - sin) in xi = k x; at the tip, in beta = k L,
-    mu = m / (rhoA L), eta = J / (rhoA L^3) and omega^2 = EI k^4 / rhoA, the moment balances
-    the inertia couple, w'' = eta beta^3 w', and the shear the inertia force,
-    w''' = -mu beta w. The 2x2 determinant in (A, B) is twice
-    1 + cos cosh + mu beta (cos sinh - sin cosh) - eta beta^3 (sin cosh + cos sinh)
-      + mu eta beta^4 (1 - cos cosh).
-    """
-    e = np.exp(-beta)
-    sech, tanh = 2 * e / (1 + e * e), (1 - e * e) / (1 + e * e)
-    c, s = np.cos(beta), np.sin(beta)
-    return (sech + c + mu * beta * (c * tanh - s) - eta * beta**3 * (s + c * tanh)
-            + mu * eta * beta**4 * (sech - c))
-
-
 @pytest.mark.parametrize("mu, eta", [(0.1, 1e-3), (1.0, 1e-2), (10.0, 0.1), (1.0, 0.0)])
 def test_tip_mass_and_rotary_inertia_against_the_characteristic_equation(mu, eta):
-    grid = np.linspace(0.01, 40.0, 40000)  # roots lie ~pi apart: a sign scan isolates them
-    values = tip_mass_secular(grid, mu, eta)
-    starts = np.nonzero(np.sign(values[1:]) != np.sign(values[:-1]))[0][:10]
-    beta = np.array([brentq(tip_mass_secular, grid[i], grid[i + 1], args=(mu, eta),
-                            xtol=1e-300, rtol=1e-15) for i in starts])
+    beta = tip_mass_roots(mu, eta, 10)
     expected = np.sqrt(EI / RHOA) * (beta / L) ** 2
     beam = Cantilever.uniform(EI, RHOA, L, [PointMass(L, mu * RHOA * L, eta * RHOA * L**3)])
     ours = beam.modes(10).frequencies

@@ -110,14 +110,13 @@ def _contact_frequencies(p: Params, n: int) -> list[float]:
 
 
 def _modes(args: argparse.Namespace) -> int:
-    from impactbeams.modes import free_modes
+    from impactbeams.modes import beam
 
     p = params_from_args(args)
     beams = ("beam1", "beam2")[:p.partner.beams]
     result = {
-        "free": {beam: free_modes(getattr(p, "EI" + beam[-1]), getattr(p, "rhoA" + beam[-1]),
-                                  getattr(p, "l" + beam[-1]), args.n).frequencies.tolist()
-                 for beam in beams},
+        "free": {name: beam(p, int(name[-1])).free_modes(args.n).frequencies.tolist()
+                 for name in beams},
         "contact_law": p.contact_law,
         "counterpart": p.counterpart,
         "contact": _contact_frequencies(p, args.n),

@@ -13,11 +13,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from impactbeams.configuration import MOUNTS
+from impactbeams.modes import beam, participation
 from impactbeams.params import require
 
 if TYPE_CHECKING:
     from impactbeams.contact import FreePhase, ModalModel
-    from impactbeams.modes import BeamShapes
     from impactbeams.params import Params
 
 def drive_summary(params: Params) -> str:
@@ -41,16 +41,6 @@ def moving_clamps(shaker: str) -> tuple[float, float]:
     return MOUNTS[shaker].clamps
 
 
-def participation(shapes: BeamShapes, rhoA: float) -> np.ndarray:
-    """``Gamma_n = rhoA int_0^l Y_n dx`` of each shape on one beam (kg^1/2).
-
-    From the beam equation ``Y'''' = k^4 Y``: ``int_0^l Y dx = (Y'''(l) - Y'''(0)) / k^4``
-    (no quadrature); a free tip has ``Y'''(l) = 0``, a tied contact shape carries the shear.
-    """
-    third_at_clamp = shapes(np.zeros(1), derivative=3)[:, 0]
-    return rhoA * (shapes.tip(3) - third_at_clamp) / shapes.k**4
-
-
 def check_steady(params: Params, free: FreePhase) -> None:
     """Refuse ``start = "steady"`` when an undamped free mode is driven exactly at resonance.
 
@@ -68,8 +58,8 @@ def check_steady(params: Params, free: FreePhase) -> None:
 def base_participation(params: Params, free: FreePhase) -> np.ndarray:
     """Each free mode's ``Gamma_n`` if the shaker moves its beam's clamp, else 0 (kg^1/2)."""
     moves1, moves2 = params.mount.clamps
-    return np.concatenate([moves1 * participation(free.beam1.shapes, params.rhoA1),
-                           moves2 * participation(free.beam2.shapes, params.rhoA2)])
+    return np.concatenate([moves1 * beam(params, 1).participation(free.beam1.shapes),
+                           moves2 * beam(params, 2).participation(free.beam2.shapes)])
 
 
 def contact_participation(model: ModalModel) -> np.ndarray:

@@ -21,12 +21,14 @@ every digit past mode 7 or so; Goncalves, Brennan & Elliott, J. Sound Vib. 2007)
 from __future__ import annotations
 
 import dataclasses
+import functools
 import warnings
 
 import numpy as np
 
 from impactbeams.brent import brentq  # not SciPy's: it costs 0.3 s of start-up (brent.py)
 from impactbeams.params import Params
+from impactbeams.structure import Cantilever, StructureModes
 
 _RTOL = 4 * np.finfo(float).eps
 _COINCIDENT = 1e-12  # relative distance below which two free frequencies are one double pole
@@ -157,6 +159,120 @@ def free_modes(EI: float, rhoA: float, length: float, n: int) -> FreeModes:
     norm = np.sqrt(rhoA / k * psi_norm_squared(b))
     sign = np.sign(psi_tip(b)[0])  # tip displacement positive
     return FreeModes(np.sqrt(EI / rhoA) * k**2, BeamShapes(k, sign / norm, length))
+
+
+def participation(shapes: BeamShapes, rhoA: float) -> np.ndarray:
+    """``Gamma_n = rhoA int_0^l Y_n dx`` of each closed-form shape on one beam (kg^1/2).
+
+    From the beam equation ``Y'''' = k^4 Y``: ``int_0^l Y dx = (Y'''(l) - Y'''(0)) / k^4``
+    (no quadrature); a free tip has ``Y'''(l) = 0``, a tied contact shape carries the shear.
+    """
+    third_at_clamp = shapes(np.zeros(1), derivative=3)[:, 0]
+    return rhoA * (shapes.tip(3) - third_at_clamp) / shapes.k**4
+
+
+# --- one beam's modal data: the seam between a beam and the engine ---------------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class UniformBeam:
+    """The textbook cantilever (EI in N m^2, rhoA in kg/m, length in m): closed forms only.
+
+    Each beam of a run is one of these or an `AttachedBeam`; both give the engine the same
+    data: ``free_modes(n)``, ``tip_compliance`` (m/N), ``participation(shapes)`` (Gamma_n),
+    ``unit_tip_shape(x)``, ``static_mass_per_length`` (for <u, u> of that shape) and
+    ``closed_form``.
+    """
+
+    EI: float
+    rhoA: float
+    length: float
+
+    closed_form = True  # the tied law's contact modes and the quadratures assume it
+
+    def free_modes(self, n: int) -> FreeModes:
+        """The first ``n`` cantilever modes, in closed form."""
+        return free_modes(self.EI, self.rhoA, self.length, n)
+
+    @property
+    def tip_compliance(self) -> float:
+        """The tip compliance c = l^3 / (3 EI) (m/N)."""
+        return self.length**3 / (3 * self.EI)
+
+    def participation(self, shapes: BeamShapes) -> np.ndarray:
+        """Gamma_n of ``shapes`` (kg^1/2), in closed form (`participation`)."""
+        return participation(shapes, self.rhoA)
+
+    def unit_tip_shape(self, x: np.ndarray) -> np.ndarray:
+        """u(x) = (3 l x^2 - x^3) / (2 l^3): static tip-load shape with unit tip deflection."""
+        return (3 * self.length * x**2 - x**3) / (2 * self.length**3)
+
+    @property
+    def static_mass_per_length(self) -> float:
+        """RhoA (kg/m): the unit tip-load shape's <u, u> is 33/140 of it times l."""
+        return self.rhoA
+
+
+@dataclasses.dataclass(frozen=True)
+class AttachedBeam:
+    """A cantilever with attachments (`impactbeams.structure.Cantilever`).
+
+    The same data as `UniformBeam`: exact modes by Wittrick-Williams and wave coefficients,
+    built once per (beam, n) and process; the static data from its Green's function.
+    """
+
+    structure: Cantilever
+
+    closed_form = False
+
+    def free_modes(self, n: int) -> FreeModes:
+        """The first ``n`` modes, mass-normalised with the attachments."""
+        modes = _structure_modes(self.structure, n)
+        return FreeModes(modes.frequencies, modes)
+
+    @property
+    def length(self) -> float:
+        """L (m)."""
+        return self.structure.length
+
+    @property
+    def tip_compliance(self) -> float:
+        """w(L) under a unit tip force (m/N), the springs included."""
+        return self.structure.tip_compliance
+
+    def participation(self, shapes: StructureModes) -> np.ndarray:
+        """Gamma_n = <1, Y_n> of ``shapes`` (kg^1/2), the point masses included."""
+        return shapes.participation()
+
+    def unit_tip_shape(self, x: np.ndarray) -> np.ndarray:
+        """The static tip-load shape with unit tip deflection at ``x`` (m)."""
+        return self.structure.unit_tip_shape(x)
+
+    @property
+    def static_mass_per_length(self) -> float:
+        """The rhoA (kg/m) of the uniform beam of this length whose u has this <u, u>.
+
+        <u, u> of the unit tip-load shape u with the attachments is 33/140 of it times L.
+        """
+        return self.structure.static_mass * 140.0 / (33.0 * self.length)
+
+
+@functools.lru_cache(maxsize=16)
+def _structure_modes(structure: Cantilever, n: int) -> StructureModes:
+    """``structure.modes(n)``, once per process: a run asks for a beam's modes several times."""
+    return structure.modes(n)
+
+
+def beam(params: Params, which: int) -> UniformBeam | AttachedBeam:
+    """Beam ``which`` (1 or 2) of ``params``, as the engine sees it.
+
+    The one place that tells a textbook cantilever (closed forms) from one with attachments.
+    """
+    structure = params.structure(which)
+    if structure.closed_form:
+        segment = structure.segments[0]
+        return UniformBeam(segment.EI, segment.rhoA, segment.length)
+    return AttachedBeam(structure)
 
 
 def _merged_free_frequencies(params: Params, n: int) -> np.ndarray:

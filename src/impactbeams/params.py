@@ -58,8 +58,23 @@ from typing import Any
 import numpy as np
 
 from impactbeams import configuration
+from impactbeams.checks import (  # noqa: F401  (their old home: modules above import them here)
+    ParameterError,
+    is_integer,
+    is_real,
+    require,
+    require_integer,
+)
 from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount
 from impactbeams.kernels import layout
+from impactbeams.structure import Cantilever
+from impactbeams.structure.parts import (
+    Attachment,
+    Spring,
+    as_part,
+    check_attachments,
+    check_clamp,
+)
 from impactbeams.variables import PARAMETERS
 
 STEEL_E = 210e9  # Pa
@@ -72,10 +87,6 @@ STRIP_THICKNESS = PAPER_A / math.sqrt(STEEL_E / (12.0 * STEEL_RHO))  # m, gives 
 MATERIAL_KEYS = ("E", "rho", "width", "thickness")
 MATERIAL_DEFAULTS = {"E": STEEL_E, "rho": STEEL_RHO, "width": STRIP_WIDTH,
                      "thickness": STRIP_THICKNESS}
-
-
-class ParameterError(ValueError):
-    """A model or run parameter has a value that is not allowed."""
 
 
 class ArgumentTypeError(ParameterError, TypeError):
@@ -93,13 +104,6 @@ def _strip_stiffness(material: Mapping[str, Any]) -> tuple[Any, Any]:
 
 
 DEFAULT_EI, DEFAULT_RHOA = _strip_stiffness(MATERIAL_DEFAULTS)
-
-
-def require(name: str, value: Any, condition: bool, allowed: str, unit: str = "") -> None:
-    """Raise ParameterError naming the parameter, its value and what is allowed."""
-    if not condition:
-        unit_text = f" ({unit})" if unit else ""
-        raise ParameterError(f"{name} = {value!r} is not allowed: {allowed}{unit_text}")
 
 
 def require_type(name: str, value: Any, condition: bool, allowed: str) -> None:
@@ -129,27 +133,6 @@ def nearest(key: Any, allowed: Collection[str]) -> str:
     close = difflib.get_close_matches(key, list(allowed), n=1) or sorted(
         name for name in allowed if len(key) > 1 and name.startswith(key))[:1]
     return f" (did you mean {close[0]!r}?)" if close else ""
-
-
-def is_real(value: Any) -> bool:
-    """Whether ``value`` is a real number (int or float, not bool, not a string)."""
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-
-
-def is_integer(value: Any) -> bool:
-    """Whether ``value`` is an integer (Python's or NumPy's, not bool)."""
-    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-
-
-def require_integer(name: str, value: Any, low: int, high: float = math.inf) -> int:
-    """Return ``value`` as an int if it is an integer from ``low`` to ``high``.
-
-    Otherwise raise ParameterError.
-    """
-    allowed = f"from {low} to {high}" if math.isfinite(high) else f">= {low}"
-    require(name, value, is_integer(value) and low <= value <= high,
-            f"must be an integer {allowed}")
-    return int(value)
 
 
 def is_path(value: Any) -> bool:
@@ -300,7 +283,8 @@ def check_range(name: str, value: Any, point: PointName = no_point) -> None:
 
 
 def check_joint(values: Mapping[str, Any], point: PointName = no_point,
-                partner: Counterpart = BEAM, mount: Mount = BOTH) -> None:
+                partner: Counterpart = BEAM, mount: Mount = BOTH,
+                compliance1: float | None = None) -> None:
     """Raise ParameterError unless the resolved parameters are jointly allowed.
 
     ``values``: every numeric field of [`Params`][] (EI/rhoA form), as floats or arrays that
@@ -333,11 +317,13 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
     gap = v["clearance"] + v["uplift1"] - v["uplift2"]
     require_all("uplift2", v["uplift2"], gap > 0, point, lambda j: (
         f"the initial gap clearance + uplift1 - uplift2 = {value_at(gap, j)!r} m must be > 0 (m)"))
-    compliance = v["l1"] ** 3 / (3.0 * v["EI1"])
+    uniform = compliance1 is None  # else beam 1's tip compliance with its attachments (m/N)
+    compliance = v["l1"] ** 3 / (3.0 * v["EI1"]) if uniform else compliance1
     static = v["force_amplitude"] * compliance
+    formula = "F0 l1^3 / (3 EI1)" if uniform else "F0 c1 (c1 with beam 1's attachments)"
     require_all("force_amplitude", v["force_amplitude"], static <= MAX_DEFLECTION * v["l1"],
                 point, lambda j: _deflection_rule(
-                    f"its static tip deflection F0 l1^3 / (3 EI1) = {value_at(static, j):.3g} m",
+                    f"its static tip deflection {formula} = {value_at(static, j):.3g} m",
                     "l1", v["l1"], j) + ", i.e. force_amplitude <= "
                 f"{MAX_DEFLECTION * value_at(v['l1'] / compliance, j):.3g} N for this beam 1")
     beams = mount.shaken_beams(partner)
@@ -402,7 +388,9 @@ DEFAULT_CONTACT_LAW = CONTACT_LAWS[0]
 # what beam 1's tip meets: beam 2's tip, or a fixed rigid stop (no modes, no compliance)
 COUNTERPARTS = tuple(configuration.COUNTERPARTS)
 # keys that describe beam 2: refused when given with a counterpart that has no beam 2
-BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS))
+BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS), "attachments2")
+# each beam's point masses and springs (`impactbeams.structure`), given from Python
+ATTACHMENTS = ("attachments1", "attachments2")
 SHAKERS = tuple(configuration.MOUNTS)  # which clamps the shaker carries (impactbeams.drive)
 # the parameters whose value is a name, and the names allowed (the default first)
 CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS, "shaker": SHAKERS,
@@ -458,6 +446,8 @@ class Params:
     base_amplitude: float | None = None  # 0.0; None: not given (`_resolve_drives`)
     shaker: str = BOTH.name
     start: str = "rest"
+    attachments1: tuple[Attachment, ...] = ()
+    attachments2: tuple[Attachment, ...] = ()
 
     def __init__(self, **values: Any) -> None:
         """Every parameter by keyword (SI units); the material keys replace a beam's EI, rhoA."""
@@ -476,6 +466,13 @@ class Params:
                     f"must be one of {', '.join(map(repr, allowed))}")
         for name in self.numeric_names():
             self._set_checked(name, getattr(self, name))
+        for name in ATTACHMENTS:
+            parts = getattr(self, name)
+            require(name, parts, isinstance(parts, (tuple, list)),
+                    "must be a tuple of impactbeams.structure.PointMass and Spring parts (in a "
+                    "TOML file: an array of tables)")
+            object.__setattr__(self, name, tuple(as_part(f"{name}[{index}]", part)
+                                                 for index, part in enumerate(parts)))
         if not self.partner.has_beam2:
             for field in dataclasses.fields(Params):
                 if field.name in BEAM2_KEYS:
@@ -490,8 +487,19 @@ class Params:
         object.__setattr__(self, name, value)
 
     def _check_together(self) -> None:
-        """The joint rules of the numeric parameters and the choices."""
-        check_joint(self.numeric(), partner=self.partner, mount=self.mount)
+        """The joint rules of the numeric parameters, the choices and the attachments."""
+        for which, name in enumerate(ATTACHMENTS, start=1):
+            parts = getattr(self, name)
+            if not parts:  # the common case, checked once per period map of a continuation
+                continue
+            check_attachments(parts, getattr(self, f"l{which}"), name)
+            check_clamp(parts)
+            require(name, parts, self.law.tangent_flow,
+                    f"contact_law = {self.contact_law!r} supports the paper's uniform beams "
+                    "only: use contact_law = 'spring' for a beam with attachments")
+        # a compliant clamp lets the tip force deflect the tip more than l1^3 / (3 EI1)
+        check_joint(self.numeric(), partner=self.partner, mount=self.mount,
+                    compliance1=self.structure(1).tip_compliance if self.attachments1 else None)
         # with one clamp moving, the tied tips' quasi-static part would carry a moving
         # clearance: not built
         require("base_amplitude", self.base_amplitude,
@@ -521,7 +529,8 @@ class Params:
     @functools.cache
     def numeric_names() -> tuple[str, ...]:
         """Names of the numeric parameters (all but the named choices), in field order."""
-        return tuple(f.name for f in dataclasses.fields(Params) if f.name not in CHOICES)
+        return tuple(f.name for f in dataclasses.fields(Params)
+                     if f.name not in CHOICES and f.name not in ATTACHMENTS)
 
     def numeric(self) -> dict[str, float]:
         """The numeric parameters by name (SI units)."""
@@ -562,24 +571,42 @@ class Params:
         """Gap between the tips at t = 0: clearance + uplift1 - uplift2 (m)."""
         return self.clearance + self.uplift1 - self.uplift2
 
+    def structure(self, which: int) -> Cantilever:
+        """Beam ``which`` (1 or 2) as a cantilever: uniform, carrying its ``attachments``."""
+        i = str(which)
+        return _cantilever(getattr(self, "EI" + i), getattr(self, "rhoA" + i),
+                           getattr(self, "l" + i), getattr(self, "attachments" + i))
+
+    @property
+    def grounded_springs(self) -> int:
+        """The most springs to ground on one beam (`preflight.highest_frequency`'s bound).
+
+        A translational and a rotational spring at one point count apart; a spring at the clamp
+        does not count (a compliant clamp softens the beam).
+        """
+        return max(sum((part.stiffness > 0) + (part.rotational_stiffness > 0)
+                       for part in parts if isinstance(part, Spring) and part.position > 0)
+                   for parts in (self.attachments1, self.attachments2))
+
     @property
     def tip_compliance(self) -> tuple[float, float]:
-        """Static tip compliances c_i = l_i^3 / (3 EI_i) of the two cantilevers (m/N).
+        """Static tip compliances c_i of the two cantilevers (m/N), l_i^3 / (3 EI_i) if uniform.
 
         A rigid stop gives way by nothing: c2 = 0.
         """
-        c2 = self.l2**3 / (3 * self.EI2) if self.partner.has_beam2 else 0.0
-        return self.l1**3 / (3 * self.EI1), c2
+        c2 = self.structure(2).tip_compliance if self.partner.has_beam2 else 0.0
+        return self.structure(1).tip_compliance, c2
 
     @property
     def wave_constant(self) -> tuple[float, float]:
         """a_i = sqrt(EI_i / rhoA_i) of the two beams (m^2/s)."""
         return math.sqrt(self.EI1 / self.rhoA1), math.sqrt(self.EI2 / self.rhoA2)
 
-    def as_dict(self) -> dict[str, float | str]:
-        """All parameters by name, in the resolved EI/rhoA form."""
-        # floats and names only: no deep copy needed (dataclasses.asdict's cost per run)
-        return {field.name: getattr(self, field.name) for field in _FIELDS()}
+    def as_dict(self) -> dict[str, Any]:
+        """All parameters by name, in the resolved EI/rhoA form; attachments only if any."""
+        # floats, names and frozen parts only: no deep copy needed (dataclasses.asdict's cost)
+        return {field.name: getattr(self, field.name) for field in _FIELDS()
+                if field.name not in ATTACHMENTS or getattr(self, field.name)}
 
     def replace(self, **changes: Any) -> Params:
         """Return a copy with some parameters changed (material keys allowed).
@@ -633,6 +660,13 @@ class Params:
 _NO_BEAM2 = "counterpart = 'stop' has no beam 2: leave beam 2's keys out"
 
 
+@functools.lru_cache(maxsize=64)
+def _cantilever(EI: float, rhoA: float, length: float,
+                attachments: tuple[Attachment, ...]) -> Cantilever:
+    """The checked `Cantilever` of a beam, built once (a run asks for it often, 15 us each)."""
+    return Cantilever.uniform(EI, rhoA, length, attachments)
+
+
 def modes_per_beam(n_modes: int, partner: Counterpart) -> str:
     """``"16 modes per beam"``, or against a stop (one beam) ``"16 modes of beam 1"``."""
     return f"{n_modes} modes {partner.modes_words}"
@@ -648,8 +682,8 @@ def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
     their defaults are checked on construction).
     """
     for key in values:
-        if key not in PARAMETERS:
-            raise unknown_key("parameter", key, source, sorted(PARAMETERS))
+        if key not in PARAMETERS and key not in ATTACHMENTS:
+            raise unknown_key("parameter", key, source, [*sorted(PARAMETERS), *ATTACHMENTS])
     if not configuration.counterpart_named(values.get("counterpart")).has_beam2:
         refuse_beam2([key for key in values if given_fields or key[:-1] in MATERIAL_KEYS],
                      source)

@@ -37,27 +37,32 @@ if TYPE_CHECKING:
 MAX_PHASE = 1e10
 
 
-def highest_frequency(values: Mapping[str, Any], n_modes: int) -> np.ndarray:
+def highest_frequency(values: Mapping[str, Any], n_modes: int, springs: int = 0) -> np.ndarray:
     """The highest free-mode frequency (rad/s) of both beams with ``n_modes`` modes each.
 
-    ``values``: resolved parameters (floats or arrays that broadcast, as in `check_run`).
+    ``values``: resolved parameters (floats or arrays that broadcast, as in `check_run`);
+    ``springs``: the springs to ground a beam carries (`Params.grounded_springs`). Each is a
+    rank-one stiffening, which raises the n-th frequency at most to the (n+1)-th: a bound is
+    the uniform beam's mode ``n_modes + springs`` (point masses and a compliant clamp only
+    lower the frequencies).
     """
     from impactbeams.modes import cantilever_roots  # SciPy: only when a run is checked
 
-    root = cantilever_roots(n_modes)[-1]
+    root = cantilever_roots(n_modes + springs)[-1]
     return np.maximum(*(np.sqrt(np.asarray(values[f"EI{i}"]) / values[f"rhoA{i}"])
                         * (root / np.asarray(values[f"l{i}"])) ** 2 for i in ("1", "2")))
 
 
 def check_run(values: Mapping[str, Any], t_max: float, n_modes: int,
-              point: PointName = no_point) -> None:
+              point: PointName = no_point, springs: int = 0) -> None:
     """Refuse a run whose modes or horizon leave the model's or double precision's range.
 
     ``values``: the resolved numeric parameters (floats, or arrays broadcasting over a
     sweep's corner grid); ``t_max`` in s; ``n_modes`` free modes per beam (already checked to
-    be an integer within the package's limit). Raises ParameterError.
+    be an integer within the package's limit); ``springs``: see `highest_frequency`. Raises
+    ParameterError.
     """
-    highest = highest_frequency(values, n_modes)
+    highest = highest_frequency(values, n_modes, springs)
     require_all("n_modes", np.asarray(n_modes), highest <= MAX_FREQUENCY, point, lambda j: (
         f"the highest mode would have the frequency {value_at(highest, j):.3g} rad/s, above "
         f"{MAX_FREQUENCY:g} rad/s where a continuum beam model does not hold: use fewer modes"))

@@ -627,11 +627,25 @@ def global_attributes(title: str, action: str, parameters: Mapping[str, Any],
     }
 
 
+def parameter_text(value: Any) -> Any:
+    """A parameter as an attribute or JSON holds it: numbers and names as they are.
+
+    A tuple of parts (a beam's attachments, `impactbeams.structure`) becomes one text, each part
+    as Python writes it (``"PointMass(position=0.1, mass=0.002, rotary_inertia=0.0)"``), joined
+    by "; ".
+    """
+    return "; ".join(map(repr, value)) if isinstance(value, tuple) else value
+
+
 def _described(parameters: Mapping[str, Any]) -> dict[str, Any]:
-    """The parameters that describe the run: against a stop, none of beam 2's (its defaults)."""
+    """The parameters that describe the run: against a stop, none of beam 2's (its defaults).
+
+    A beam's attachments become one text attribute (`parameter_text`).
+    """
+    described = {name: parameter_text(value) for name, value in parameters.items()}
     if counterpart_named(parameters.get("counterpart")).has_beam2:
-        return dict(parameters)
-    return {name: value for name, value in parameters.items() if name not in _BEAM2_FIELDS}
+        return described
+    return {name: value for name, value in described.items() if name not in _BEAM2_FIELDS}
 
 
 _BEAM2_FIELDS = ("l2", "EI2", "rhoA2")  # Params' fields of beam 2 (params.BEAM2_KEYS' part)

@@ -1,11 +1,14 @@
-"""The free phase: each beam's cantilever modes side by side, in closed form.
+"""The free phase: each beam's cantilever modes side by side.
 
 Quasi-static parts (docs/model.md) are multiples of the unit tip-load shapes
 ``u_i(x) = (3 l_i x^2 - x^3) / (2 l_i^3)`` (unit tip deflection), with ``c_i = l_i^3 / (3 EI_i)``;
 in the free phase ``y_1s = -c_1 F(t) u_1``, ``y_2s = 0``. Projections of ``u_i`` use the exact
 boundary identity ``rhoA int u Y = (EI Y'''(l) + Y(l) / c) / omega^2`` (integration by parts,
 since u'''' = 0 and u''(l) = Y''(l) = 0), which for a free mode (Y'''(l) = 0) is
-``Y(l) / (c omega^2)``.
+``Y(l) / (c omega^2)``. With attachments (`impactbeams.modes.AttachedBeam`) u_i is the beam's
+own static tip-load shape and c_i its tip compliance; the projection is again
+``<u, Y_n> = Y_n(l) / (c omega_n^2)`` (the mass product and the strain energy of the beam with
+its attachments: u is the static response to a tip force 1 / c), so nothing else changes.
 
 Against a stop (``counterpart = "stop"``) beam 2 has no modes and no compliance (c2 = 0): the
 coordinates are beam 1's ``n`` modes only.
@@ -18,7 +21,7 @@ import dataclasses
 import numpy as np
 from numpy.polynomial.legendre import leggauss
 
-from impactbeams.modes import FreeModes, deprecated_omega, free_modes
+from impactbeams.modes import FreeModes, beam, deprecated_omega
 from impactbeams.params import Params, require_integer, require_type
 
 _GAUSS_ORDER = 12
@@ -81,12 +84,15 @@ class FreePhase:
 
 
 def build_free_phase(params: Params, n_modes: int) -> FreePhase:
-    """Free-phase modal data: ``n_modes`` cantilever modes per beam (beam 1's only at a stop)."""
+    """Free-phase modal data: ``n_modes`` cantilever modes per beam (beam 1's only at a stop).
+
+    Each beam's modes come from its `impactbeams.modes.beam`: closed forms or attachments.
+    """
     n = _checked(params, n_modes)
     p = params
     c1, c2 = p.tip_compliance
-    beam1 = free_modes(p.EI1, p.rhoA1, p.l1, n)
-    beam2 = free_modes(p.EI2, p.rhoA2, p.l2, n if p.partner.has_beam2 else 0)
+    beam1 = beam(p, 1).free_modes(n)
+    beam2 = beam(p, 2).free_modes(n if p.partner.has_beam2 else 0)
     n2 = beam2.frequencies.size
     frequencies = np.concatenate([beam1.frequencies, beam2.frequencies])
     tip1 = np.concatenate([beam1.shapes.tip(), np.zeros(n2)])

@@ -41,7 +41,7 @@ import numpy as np
 
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact.free import FreePhase
-from impactbeams.modes import free_modes
+from impactbeams.modes import AttachedBeam, UniformBeam, beam
 from impactbeams.params import MAX_MODES, ParameterError, Params
 
 __all__ = ["SpringContact", "rank_one_modes", "recommended_modes", "required_modes",
@@ -301,26 +301,28 @@ def required_modes(params: Params) -> int:
     stiff contact.
     """
     p, k = params, params.contact_stiffness
-    counts = [_softer_modes(p.EI1, p.rhoA1, p.l1, k)]
+    counts = [_softer_modes(beam(p, 1), k)]
     if p.partner.has_beam2:
-        counts.append(_softer_modes(p.EI2, p.rhoA2, p.l2, k))
+        counts.append(_softer_modes(beam(p, 2), k))
     return int(max(5, 4 * max(counts)))
 
 
-def _softer_modes(EI: float, rhoA: float, length: float, stiffness: float) -> int:
+def _softer_modes(cantilever: UniformBeam | AttachedBeam, stiffness: float) -> int:
     """How many of a cantilever's first ``MAX_MODES`` modes are softer at the tip than k (N/m).
 
-    Mode n's modal tip stiffness omega_n^2 / Y_n(l)^2 is EI b_n^4 / (4 l^3) (mass-normalised
-    cantilever modes all have Y_n(l)^2 = 4 / (rhoA l)): it rises with n, so the soft modes come
-    first and the count is settled by the first stiff one. The modes are built as
-    `build_free_phase` builds them (each mode's values do not depend on how many are built),
-    from a few past b* = (4 k l^3 / EI)^(1/4) (b_n is about (n - 1/2) pi), more if all of
-    those are soft: the same count as `resolution_modes` of ``MAX_MODES`` modes, bit for bit.
+    On a uniform beam mode n's modal tip stiffness omega_n^2 / Y_n(l)^2 is EI b_n^4 / (4 l^3)
+    (mass-normalised cantilever modes all have Y_n(l)^2 = 4 / (rhoA l)): it rises with n, so
+    the soft modes come first and the count is settled by the first stiff one. The modes are
+    built as `build_free_phase` builds them (each mode's values do not depend on how many are
+    built), from a few past b* = (4 k l^3 / EI)^(1/4) = (12 k c)^(1/4) (b_n is about
+    (n - 1/2) pi, c the tip compliance), more if all of those are soft: the same count as
+    `resolution_modes` of ``MAX_MODES`` modes, bit for bit. A beam with attachments is counted
+    the same way, on its own modes, up to the first stiff one.
     """
-    b_soft = (4.0 * stiffness * length**3 / EI) ** 0.25
+    b_soft = (12.0 * stiffness * cantilever.tip_compliance) ** 0.25
     n = min(MAX_MODES, int(b_soft / math.pi) + 3)
     while True:
-        modes = free_modes(EI, rhoA, length, n)
+        modes = cantilever.free_modes(n)
         soft = modes.frequencies**2 / modes.shapes.tip()**2 < stiffness
         if not soft[-1] or n == MAX_MODES:
             return int(np.sum(soft))

@@ -31,8 +31,8 @@ import numpy as np
 
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact.free import FreePhase, build_free_phase, quadrature
-from impactbeams.modes import BeamShapes, ContactModes, contact_modes
-from impactbeams.params import Params
+from impactbeams.modes import BeamShapes, ContactModes, beam, contact_modes
+from impactbeams.params import ParameterError, Params
 
 
 @dataclasses.dataclass(frozen=True)
@@ -78,8 +78,16 @@ def _free_on_beam(shapes: BeamShapes, n_before: int, n_after: int, x: np.ndarray
 
 @one_blas_thread
 def build_tied_model(params: Params, n_modes: int) -> ModalModel:
-    """The tied law's modal model: ``n_modes`` free modes per beam and as many contact modes."""
-    free = build_free_phase(params, n_modes)
+    """The tied law's modal model: ``n_modes`` free modes per beam and as many contact modes.
+
+    Its contact modes and overlaps are the closed forms of uniform beams: a beam with
+    attachments (which a tied `Params` refuses; a spring law's passed here) raises
+    ParameterError.
+    """
+    free = build_free_phase(params, n_modes)  # checks both arguments first
+    if not (beam(params, 1).closed_form and beam(params, 2).closed_form):
+        raise ParameterError("build_tied_model: the tied law supports the paper's uniform beams "
+                             "only, not a beam with attachments (use the spring law)")
     if not params.partner.has_beam2:
         return _stop_model(params, free)
     n = free.beam1.frequencies.size

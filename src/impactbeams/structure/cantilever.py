@@ -25,7 +25,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from impactbeams.brent import brentq
-from impactbeams.params import is_real, require, require_integer
+from impactbeams.checks import is_real, require, require_integer
 from impactbeams.structure import flexibility, waves
 from impactbeams.structure.parts import (
     Attachment,
@@ -151,10 +151,11 @@ class Cantilever:
         n = require_integer("n", n, 1)
         return _modes(self, n)
 
-    def flexibility(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    def flexibility(self, x: np.ndarray, y: np.ndarray, derivative: int = 0) -> np.ndarray:
         """Static deflection at each ``x`` (m) under a unit force at each ``y`` (m).
 
-        The Green's function with the springs (m/N), shape (len(x), len(y)).
+        The Green's function with the springs (m/N), shape (len(x), len(y)); ``derivative``
+        1: its slope in x (1/N).
         """
         x, y = self.positions("x", x), self.positions("y", y)
         p = self.pieces
@@ -162,7 +163,46 @@ class Cantilever:
         ports += [(e, 1) for e, k in zip(p.ends, p.rotational, strict=True) if k]
         stiffness = np.array([k for k in (*p.stiffness, *p.rotational) if k])
         return flexibility.spring_flexibility(x, y, p.starts, p.ends, p.EI, p.clamp, ports,
-                                              stiffness)
+                                              stiffness, derivative)
+
+    @property
+    def closed_form(self) -> bool:
+        """Whether this is one uniform segment with nothing attached: the textbook cantilever.
+
+        Its modes are written in closed form by `impactbeams.modes`.
+        """
+        return len(self.segments) == 1 and not self.attachments
+
+    @property
+    def tip_compliance(self) -> float:
+        """The tip compliance w(L) under a unit tip force (m/N); L^3 / (3 EI) if uniform."""
+        if self.closed_form:
+            segment = self.segments[0]
+            return segment.length**3 / (3 * segment.EI)
+        return float(self.flexibility(self.length, self.length)[0, 0])
+
+    def unit_tip_shape(self, x: np.ndarray, derivative: int = 0) -> np.ndarray:
+        """The static deflection under a tip force with unit tip deflection, at ``x`` (m).
+
+        (3 L x^2 - x^3) / (2 L^3) on the textbook cantilever; ``derivative`` 1: its slope (1/m).
+        """
+        return self.flexibility(x, self.length, derivative)[:, 0] / self.tip_compliance
+
+    @functools.cached_property
+    def static_mass(self) -> float:
+        """<u, u> (kg) of the unit tip-load shape u, the attachments' mass and inertia included.
+
+        33/140 rhoA L on the textbook cantilever. u is cubic on each piece, so four Gauss points
+        per piece integrate u^2 exactly.
+        """
+        p = self.pieces
+        nodes, weights = np.polynomial.legendre.leggauss(4)
+        x = (p.starts[:, None] + p.lengths[:, None] * (nodes[None, :] + 1.0) / 2.0).ravel()
+        w = (p.rhoA[:, None] * p.lengths[:, None] * weights[None, :] / 2.0).ravel()
+        beam = float(w @ self.unit_tip_shape(np.minimum(x, self.length)) ** 2)
+        ends = np.minimum(p.ends, self.length)  # the last end is L to the last bit
+        return beam + float(p.mass @ self.unit_tip_shape(ends) ** 2
+                            + p.inertia @ self.unit_tip_shape(ends, 1) ** 2)
 
     def positions(self, name: str, x: np.ndarray) -> np.ndarray:
         """``x`` as a 1-D float array, or a ParameterError if a value is not on the beam."""
@@ -477,6 +517,32 @@ class StructureModes:
                     values[np.ix_(modes, at)] = k[modes, None] ** derivative * np.einsum(
                         "mxi,mi->mx", base, self.coefficients[modes, j])
         return values
+
+    @property
+    def length(self) -> float:
+        """L (m) of the beam."""
+        return self.beam.length
+
+    def tip(self, derivative: int = 0) -> np.ndarray:
+        """d^n Y / dx^n at the tip x = L, one value per mode."""
+        return self(self.length, derivative)[:, 0]
+
+    def participation(self) -> np.ndarray:
+        """Gamma_n = <1, Y_n>: int rhoA Y_n dx + sum mass Y_n(x_mass), per mode (kg^1/2).
+
+        The inertial load of a rigid translation of the clamp (and of the springs' ground,
+        which moves with it). On each piece the fourth derivative of Y is k^4 Y, so the
+        integral of Y is the jump of its third derivative over k^4.
+        """
+        p = self.beam.pieces
+        out = np.empty(len(self.frequencies))
+        for m, (k, short, c) in enumerate(zip(self.wave_numbers, self.short, self.coefficients,
+                                              strict=True)):
+            start, end = waves.end_values(k * p.lengths, short)
+            third = np.einsum("ji,ji->j", end[:, 3] - start[:, 3], c)
+            at_nodes = np.einsum("ji,ji->j", end[:, 0], c)
+            out[m] = p.rhoA @ (third / k) + p.mass @ at_nodes
+        return out
 
     def with_signs(self) -> StructureModes:
         """The same modes, each with a non-negative tip deflection (tip slope if that is 0)."""

@@ -53,18 +53,20 @@ def clamped_flexibility(x: np.ndarray, d: int, y: np.ndarray, e: int, starts: np
 
 def spring_flexibility(x: np.ndarray, y: np.ndarray, starts: np.ndarray, ends: np.ndarray,
                        EI: np.ndarray, clamp_stiffness: float, ports: list[tuple[float, int]],
-                       stiffness: np.ndarray) -> np.ndarray:
-    """Deflection at each ``x`` under a unit force at each ``y`` (m/N), with springs to ground.
+                       stiffness: np.ndarray, derivative: int = 0) -> np.ndarray:
+    """Deflection (m/N) at each ``x`` under a unit force at each ``y``, with springs to ground.
+
+    ``derivative`` 1: the slope there (1/N).
 
     ``ports``: (position m, 0 deflection | 1 slope) of each spring, ``stiffness`` its value
     (N/m or N m/rad). Shape (len(x), len(y)).
     """
     x, y = np.atleast_1d(x).astype(float), np.atleast_1d(y).astype(float)
     args = (starts, ends, EI, clamp_stiffness)
-    flexibility = clamped_flexibility(x[:, None], 0, y[None, :], 0, *args)
+    flexibility = clamped_flexibility(x[:, None], derivative, y[None, :], 0, *args)
     if not ports:
         return flexibility
-    at_x = np.stack([clamped_flexibility(x, 0, p, e, *args) for p, e in ports], axis=1)
+    at_x = np.stack([clamped_flexibility(x, derivative, p, e, *args) for p, e in ports], axis=1)
     at_y = np.stack([clamped_flexibility(p, d, y, 0, *args) for p, d in ports], axis=0)
     between = np.array([[clamped_flexibility(p, d, q, e, *args) for q, e in ports]
                         for p, d in ports])

@@ -11,7 +11,7 @@ import dataclasses
 import math
 from typing import Any
 
-from impactbeams.params import ParameterError, is_real, require
+from impactbeams.checks import ParameterError, is_real, require
 
 
 def _check_fields(part: Any, units: dict[str, str], positive: bool) -> None:
@@ -78,20 +78,21 @@ class Spring:
 Attachment = PointMass | Spring
 
 
-def check_attachments(attachments: tuple[Any, ...], length: float) -> None:
+def check_attachments(attachments: tuple[Any, ...], length: float,
+                      name: str = "attachments") -> None:
     """Raise ParameterError for an attachment that is not a part, or not on the beam.
 
     Masses and translational springs act at 0 < x <= L (at the clamp the deflection is held,
     so they would do nothing); a rotational spring at x = 0 is the compliant clamp.
     """
     for index, part in enumerate(attachments):
-        name = f"attachments[{index}]"
+        item = f"{name}[{index}]"
         if not isinstance(part, (PointMass, Spring)):
-            raise ParameterError(f"{name} = {part!r} is not allowed: must be a PointMass or a "
-                                 "Spring")
+            raise ParameterError(f"{item} = {part!r} is not allowed: must be a PointMass or a "
+                                 "Spring (impactbeams.structure)")
         at_clamp_allowed = isinstance(part, Spring) and part.stiffness == 0.0
         low = "0 <=" if at_clamp_allowed else "0 <"
-        require(f"{name}.position", part.position,
+        require(f"{item}.position", part.position,
                 (part.position >= 0.0 if at_clamp_allowed else part.position > 0.0)
                 and part.position <= length,
                 f"must lie on the beam, {low} x <= {length!r} (at the clamp, x = 0, only a "
@@ -109,3 +110,27 @@ def check_clamp(attachments: tuple[Any, ...]) -> None:
         require("Spring.rotational_stiffness at position 0", total, False,
                 "must be > 0 (a spring at the clamp makes it compliant; without stiffness the "
                 "beam would turn freely about it)", "N m/rad")
+
+
+_TABLE_FIELDS = {PointMass: ("position", "mass", "rotary_inertia"),
+                 Spring: ("position", "stiffness", "rotational_stiffness")}
+
+
+def as_part(name: str, value: Any) -> Any:
+    """``value`` as a part: a PointMass or Spring as it is, a table (a TOML file's) built.
+
+    A table with ``position`` and ``mass`` (and ``rotary_inertia``) is a point mass, one with
+    ``position`` and ``stiffness`` and/or ``rotational_stiffness`` a spring; anything else is
+    returned for `check_attachments` to refuse, and a table that fits neither raises
+    ParameterError naming ``name``.
+    """
+    if not isinstance(value, dict):
+        return value
+    for kind, fields in _TABLE_FIELDS.items():
+        if "position" in value and set(value) <= set(fields) and len(value) > 1 and (
+                kind is Spring or "mass" in value):
+            return kind(**value)
+    raise ParameterError(
+        f"{name} = {value!r} is not allowed: a point mass is a table of position, mass and "
+        "rotary_inertia (optional); a spring, of position, stiffness and/or "
+        "rotational_stiffness")

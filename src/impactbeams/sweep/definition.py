@@ -37,6 +37,7 @@ from impactbeams.configuration import LAWS, ContactLaw, counterpart_named
 from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.longtime import LongTime, Stepping
 from impactbeams.params import (
+    ATTACHMENTS,
     CHOICES,
     CONTACT_LAWS,
     MATERIAL_KEYS,
@@ -70,6 +71,7 @@ from impactbeams.variables import (
     PARAMETERS,
     POINCARE_VARIABLES,
     VARIABLES,
+    parameter_text,
 )
 
 FIRST_IMPACT = "first_impact_time"
@@ -223,7 +225,8 @@ class Sweep:
         stepping = ({} if self.stepping is None else
                     {"stepping": self.stepping.direction, "stepped_axis": self.stepping.axis})
         return {"t_max": self.t_max, "n_modes": self.n_modes,
-                "observables": list(self.observables), "params": dict(self.fixed),
+                "observables": list(self.observables),
+                "params": {name: parameter_text(value) for name, value in self.fixed.items()},
                 "axes": {a.name: a.definition() for a in self.axes}, **transient, **long_time,
                 **stepping}
 
@@ -387,6 +390,8 @@ def _law_axis(spec: Any, where: str) -> Axis:
 
 def _axis(name: str, spec: Any, source: str) -> Axis:
     where = f"[axes.{name}] of {source}"
+    require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: a beam's "
+            "attachments are fixed for a sweep (give them in [params], from Python)")
     if name not in PARAMETERS:
         raise unknown_key("parameter", name, f"[axes] of {source}", PARAMETERS)
     if name == "contact_law":
@@ -442,7 +447,7 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
     dims = len(sweep.axes)
     ends = []
     values: dict[str, Any] = {name: value for name, value in sweep.fixed.items()
-                              if name not in CHOICES}
+                              if name not in CHOICES and name not in ATTACHMENTS}
     for k, axis in enumerate(sweep.axes):
         axis_ends = np.array([axis.min, axis.max] if axis.num > 1 and not axis.choices
                              else [axis.min])
@@ -477,7 +482,7 @@ def _check_grid(sweep: Sweep) -> None:
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
     check_joint(values, point, sweep.base.partner, sweep.base.mount)
-    check_run(values, sweep.t_max, sweep.n_modes, point)
+    check_run(values, sweep.t_max, sweep.n_modes, point, sweep.base.grounded_springs)
     _check_long_time(sweep, values, point)
 
 
@@ -494,7 +499,8 @@ def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) 
         "long-time observables sample once per forcing period: need omega > 0 (rad/s)"))
     periods = sweep.transient_periods + sweep.long_time.sampled_periods
     horizon = sweep.long_time.horizon(omega, sweep.transient_periods)
-    phase = np.maximum(highest_frequency(values, sweep.n_modes), omega) * horizon
+    highest = highest_frequency(values, sweep.n_modes, sweep.base.grounded_springs)
+    phase = np.maximum(highest, omega) * horizon
     require_all("transient_periods + sampled_periods", periods, phase <= MAX_PHASE, point,
                 lambda j: (f"the run of {value_at(horizon, j):.3g} s turns the fastest "
                            f"oscillation through {value_at(phase, j):.3g} rad, more than "

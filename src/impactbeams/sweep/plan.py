@@ -40,8 +40,8 @@ from impactbeams.sweep.definition import (
 # The code that decides a sweep's numbers: every kernel and the modules that build their inputs
 # (paths in the package). Saved chunks and finished files of other code are never reused.
 NUMERIC_CODE = ("kernels/*.py", "packing.py", "contact/*.py", "drive.py", "modes.py", "blas.py",
-                "brent.py", "params.py", "configuration.py", "sweep/definition.py",
-                "sweep/plan.py")
+                "brent.py", "params.py", "checks.py", "structure/*.py", "configuration.py",
+                "sweep/definition.py", "sweep/plan.py")
 MAX_PHASES_PER_PERIOD = 2000  # cap of a long run, per forcing period; more: dynamics_status = 1
 
 

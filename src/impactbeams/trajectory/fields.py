@@ -6,11 +6,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from impactbeams.contact.free import unit_tip_shape
 from impactbeams.kernels.drive import harmonic
 from impactbeams.kernels.layout import CONTACT, FREE
 from impactbeams.kernels.records import Segments
 from impactbeams.kernels.reductions import work_of_force
+from impactbeams.modes import beam
 from impactbeams.packing import Packed
 from impactbeams.trajectory.observables import loads, observables
 from impactbeams.trajectory.phases import Trajectory, sample
@@ -93,6 +93,7 @@ def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_poi
     shapes1 = (free1, free1 if model is None else model.contact.beam1(x1))
     # against a stop free2 is all zeros, one row per coordinate of either phase
     shapes2 = (free2, free2 if model is None or n2 == 0 else model.contact.beam2(x2))
+    static1, static2 = beam(p, 1).unit_tip_shape(x1), beam(p, 2).unit_tip_shape(x2)
     y1 = np.full((times.size, n_points), np.nan)
     y2 = np.full((times.size, n_points), np.nan)
     reached = np.flatnonzero(times <= trajectory.t_end)
@@ -103,8 +104,8 @@ def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_poi
         for ph in (FREE, CONTACT):
             rows = index[phase == ph]
             qs = q[phase == ph]
-            y1[rows] = -c1 * q1[phase == ph, None] * unit_tip_shape(p.l1, x1) + qs @ shapes1[ph]
-            y2[rows] = -c2 * q2[phase == ph, None] * unit_tip_shape(p.l2, x2) + qs @ shapes2[ph]
+            y1[rows] = -c1 * q1[phase == ph, None] * static1 + qs @ shapes1[ph]
+            y2[rows] = -c2 * q2[phase == ph, None] * static2 + qs @ shapes2[ph]
     if p.base_amplitude != 0.0:
         clamp, _ = harmonic.py_func(p.base_amplitude, p.omega, times[reached])
         moves1, moves2 = p.mount.clamps

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from impactbeams.kernels.tangent import interval_count, recorded_run_sums, renormalization_interval
-from impactbeams.modes import free_modes
+from impactbeams.modes import beam
 from impactbeams.packing import Packed
 from impactbeams.params import ParameterError, Params, require, require_integer
 from impactbeams.trajectory.phases import Trajectory
@@ -53,9 +53,8 @@ def check_request(params: Params, n_modes: int, t_max: float, count: int,
     require("lyapunov", count, isinstance(count, (int, np.integer)) and 0 < count <= dimension,
             f"must be True or a number of exponents from 1 to {dimension} "
             f"({2 * beams} n_modes)")
-    fundamentals = np.array([free_modes(params.EI1, params.rhoA1, params.l1, 1).frequencies[0],
-                             free_modes(params.EI2, params.rhoA2, params.l2, 1).frequencies[0]
-                             ][:beams])
+    fundamentals = np.array([beam(params, which).free_modes(1).frequencies[0]
+                             for which in (1, 2)][:beams])
     # the kernels' own functions, run as Python: nothing compiles for a check
     interval = renormalization_interval.py_func(params.omega, fundamentals)
     periods = interval_count.py_func(t_max, interval)

@@ -12,7 +12,8 @@ Energy of the fields (``a(u, v) = sum_i EI_i int u_i'' v_i''``; quasi-static sha
 
 * strain ``V = 1/2 sum_i c_i Q_i^2 - sum_i Q_i sum_n Y_n(l_i) q_n + 1/2 sum_n omega_n^2 q_n^2``;
 * kinetic ``T = 1/2 sum_i (c_i Q_i')^2 <u_i, u_i> - sum_n q_n' sum_i c_i Q_i' <u_i, Y_n>
-  + 1/2 sum_n q_n'^2``, with ``<u_i, u_i> = rhoA_i l_i 33/140``.
+  + 1/2 sum_n q_n'^2``, with ``<u_i, u_i> = rhoA_i l_i 33/140`` on a uniform beam
+  (with attachments theirs included: `impactbeams.modes.AttachedBeam.static_mass_per_length`).
 
 The modal equations see only the projection of the quasi-static velocity ``y_s_t`` on the
 phase's modes. Its remainder carries the *unresolved kinetic energy*
@@ -28,6 +29,7 @@ import numpy as np
 from impactbeams.kernels.contact_spring import contact_states
 from impactbeams.kernels.layout import CONTACT, TIP_COLUMNS, TIP_V1, TIP_V2, TIP_Y1, TIP_Y2
 from impactbeams.kernels.stroboscope import tip_loads_at, tip_motions
+from impactbeams.modes import beam
 from impactbeams.packing import Packed
 
 
@@ -72,8 +74,10 @@ def observables(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
     tip_motions(packed.tables, packed.forces, packed.phase_scalars, packed.settings, phase, t, q,
                 v, tips)
     static_projection = c1 * q1_rate[:, None] * unit1 + c2 * q2_rate[:, None] * unit2
-    static_kinetic = 0.5 * ((c1 * q1_rate) ** 2 * p.rhoA1 * p.l1
-                            + (c2 * q2_rate) ** 2 * p.rhoA2 * p.l2) * 33.0 / 140.0
+    beam1, beam2 = beam(p, 1), beam(p, 2)
+    static_kinetic = 0.5 * ((c1 * q1_rate) ** 2 * beam1.static_mass_per_length * beam1.length
+                            + (c2 * q2_rate) ** 2 * beam2.static_mass_per_length * beam2.length
+                            ) * 33.0 / 140.0
     kinetic = (static_kinetic - np.einsum("kn,kn->k", v, static_projection)
                + 0.5 * np.einsum("kn,kn->k", v, v))
     strain = (0.5 * (c1 * q1**2 + c2 * q2**2) - q1 * np.einsum("kn,kn->k", tip1, q)

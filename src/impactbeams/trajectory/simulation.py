@@ -100,7 +100,7 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
                                            "simulate", params.partner)
                     ) + costs.SAMPLING * n_times * n_modes
     if energy_balance:
-        fastest = float(highest_frequency(params.numeric(), n_modes))
+        fastest = float(highest_frequency(params.numeric(), n_modes, params.grounded_springs))
         seconds += costs.energy_seconds(fastest, n_modes, t_max, n_times)
     return Cost(2 * 8 * series * n_times + sampling + segments, seconds)
 
@@ -301,7 +301,7 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
     if n_modes is None:
         n_modes = min(resolution, MAX_MODES)
     n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
-    check_run(params.numeric(), t_max, n_modes)
+    check_run(params.numeric(), t_max, n_modes, springs=params.grounded_springs)
     n_times = times.size if times is not None else _output_count(t_max, dt_output)
     cost = simulation_cost(params, t_max, n_modes, n_times, fields, n_points, energy_balance,
                            max_events)
@@ -329,8 +329,8 @@ def _announce(params: Params, run_inputs: _RunInputs) -> None:
 
 def _announce_energy(params: Params, n_modes: int, t_end: float, n_times: int) -> None:
     """The expected time of the energy balance over a run that stopped at ``t_end`` (s)."""
-    seconds = costs.energy_seconds(float(highest_frequency(params.numeric(), n_modes)), n_modes,
-                                   t_end, n_times)
+    fastest = highest_frequency(params.numeric(), n_modes, params.grounded_springs)
+    seconds = costs.energy_seconds(float(fastest), n_modes, t_end, n_times)
     print(f"simulate: the energy balance over the {t_end:.4g} s simulated: roughly "
           f"{format_time(seconds)}", file=sys.stderr)
 

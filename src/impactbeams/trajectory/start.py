@@ -18,6 +18,7 @@ from collections.abc import Callable
 import numpy as np
 import xarray as xr
 
+from impactbeams import modes
 from impactbeams.contact.free import quadrature
 from impactbeams.kernels import contact
 from impactbeams.kernels.events import event_value, phase_event_function
@@ -167,6 +168,10 @@ def _projection(field: Callable[[np.ndarray], np.ndarray] | None, name: str, sha
 def projected_fields(packed: Packed, fields: InitialFields) -> np.ndarray:
     """The section state z = (q, q') of ``fields`` (see `InitialFields`)."""
     p, free = packed.params, packed.dynamics.free
+    if not (modes.beam(p, 1).closed_form and modes.beam(p, 2).closed_form):
+        raise ParameterError("initial_state: initial fields are projected on uniform beams "
+                             "only, not on a beam with attachments (start from rest, a "
+                             "steady state or an earlier run's Dataset)")
     if not p.partner.has_beam2:
         for name in ("deflection2", "velocity2"):
             if getattr(fields, name) is not None:
