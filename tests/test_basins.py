@@ -304,7 +304,8 @@ def test_basin_map_plots_from_its_file(tmp_path, coarse):
     axes = Figure().subplots()
     draw_basins(axes, dataset)
     texts = [text.get_text() for text in axes.get_legend().get_texts()]
-    assert len(texts) == 2 and texts[0].startswith("0: period 1, 1 contacts/orbit, fraction")
+    assert len(texts) == 2 and texts[0].startswith("0: period 1, 1 contact per orbit, fraction")
+    assert axes.get_xlabel().endswith("(µm)")  # tens of µm: no offset, no 1e-5 m
     sampled = basin_stability(PARAMS, 8, BOX, n_modes=N_MODES)
     plot_dataset(sampled, tmp_path / "sampled.png")
     with pytest.raises(ParameterError, match="--slice"):

@@ -17,7 +17,7 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.patches import Patch
 
 from impactbeams.params import ParameterError
-from impactbeams.plotting.labels import axis_label
+from impactbeams.plotting.labels import axis_label, display_units
 from impactbeams.variables import BASIN_LABELS
 
 if TYPE_CHECKING:
@@ -36,21 +36,24 @@ def draw_basins(axes: Axes, dataset: xr.Dataset) -> None:
     cmap = ListedColormap([_STATUS_COLOURS[code] for code in codes] + colours)
     norm = BoundaryNorm(np.arange(codes[0] - 0.5, count + 0.5), cmap.N)
     labels = dataset["basin"]
+    first, second = (_sampled_plane(dataset) if "cell" in labels.dims
+                     else (dataset[name] for name in labels.dims))
+    # lengths in the prefixed unit of their size (µm), as every plot draws them
+    (x_factor, x_units), (y_factor, y_units) = (
+        display_units(coordinate.values, coordinate.attrs.get("units", ""))
+        for coordinate in (first, second))
+    x, y = x_factor * first.values, y_factor * second.values
     if "cell" in labels.dims:
-        first, second = _sampled_plane(dataset)
-        axes.scatter(first.values, second.values, c=labels.values, cmap=cmap, norm=norm, s=12,
-                     linewidths=0)
+        axes.scatter(x, y, c=labels.values, cmap=cmap, norm=norm, s=12, linewidths=0)
     else:
-        first, second = (dataset[name] for name in labels.dims)
-        axes.pcolormesh(first.values, second.values, labels.values.T, cmap=cmap, norm=norm,
-                        shading="nearest")
-    axes.set_xlabel(axis_label(first))
-    axes.set_ylabel(axis_label(second))
+        axes.pcolormesh(x, y, labels.values.T, cmap=cmap, norm=norm, shading="nearest")
+    axes.set_xlabel(axis_label(first, x_units))
+    axes.set_ylabel(axis_label(second, y_units))
     if (first.name, second.name) == _TIP_PLANE:
         for k in range(count):
-            axes.plot(dataset.attractor_section_deflection1[k].values,
-                      dataset.attractor_section_velocity1[k].values, "o", color=colours[k],
-                      markeredgecolor="white", markersize=7)
+            axes.plot(x_factor * dataset.attractor_section_deflection1[k].values,
+                      y_factor * dataset.attractor_section_velocity1[k].values, "o",
+                      color=colours[k], markeredgecolor="white", markersize=7)
     handles = [Patch(color=colours[k], label=_attractor_label(dataset, k)) for k in range(count)]
     handles += [Patch(color=_STATUS_COLOURS[code], label=f"{BASIN_LABELS[code].replace('_', ' ')}"
                       f" {dataset.attrs[BASIN_LABELS[code] + '_fraction']:.3g}")
@@ -60,11 +63,12 @@ def draw_basins(axes: Axes, dataset: xr.Dataset) -> None:
 
 
 def _attractor_label(dataset: xr.Dataset, k: int) -> str:
-    """``k: period p, c contacts, f +- e`` (and ``given`` for a caller's orbit)."""
+    """``k: period p, c contacts per orbit, fraction f ± e`` (``given``: a caller's orbit)."""
     given = " (given)" if int(dataset.attractor_given[k]) else ""
-    return (f"{k}{given}: period {int(dataset.attractor_period[k])}, "
-            f"{int(dataset.attractor_contacts[k])} contacts/orbit, fraction "
-            f"{float(dataset.basin_fraction[k]):.3f} +- "
+    contacts = int(dataset.attractor_contacts[k])
+    return (f"{k}{given}: period {int(dataset.attractor_period[k])}, {contacts} "
+            f"contact{'' if contacts == 1 else 's'} per orbit, fraction "
+            f"{float(dataset.basin_fraction[k]):.3f} ± "
             f"{float(dataset.basin_fraction_error[k]):.3f}")
 
 
