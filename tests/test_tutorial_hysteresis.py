@@ -7,6 +7,7 @@ cell) and the closed-form grazing curve of the linear response; and the basin ma
 attractors (run on from its initial states) against the sweeps' end states.
 """
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -89,14 +90,19 @@ def test_the_dwell_decides_the_last_cell_below_the_upper_fold(example, branch):
     assert 0.0 < last - upper < float(short.omega[1] - short.omega[0])
 
 
-def test_impacts_start_within_a_step_of_the_closed_form_curve(example, branch):
+@pytest.fixture(scope="module")
+def plane(example) -> xr.Dataset:
+    return stepped(example, PLANE, 300, drive=False)
+
+
+def test_impacts_start_within_a_step_of_the_closed_form_curve(example, branch, plane):
     """Over (Omega, F0): no impact at a level the linear response never lifts to the stop;
     every cell inside the grazing curve impacts both ways; swept up, impacts start at the first
     cell past the curve's lower branch; swept down, within one step of its upper branch, and
-    where a cell above it impacts the up sweep impacts there too (the coexisting response).
+    where a cell above it impacts the up sweep impacts there too (the coexisting response);
+    where only the up sweep impacts is right of the curve, where only the down sweep is left.
     At the example's level only the up sweep impacts exactly at the cells between its
     branch's folds."""
-    plane = stepped(example, PLANE, 300, drive=False)
     impacts = plane.steady_impact_rate > 0
     omega = plane.omega.values
     step = omega[1] - omega[0]
@@ -119,6 +125,8 @@ def test_impacts_start_within_a_step_of_the_closed_form_curve(example, branch):
         assert abs(onset - roots[-1]) < step, force
         if onset > roots[-1]:
             assert up[omega == onset].all(), force
+        assert np.all(omega[up & ~down] > roots[-1]), force
+        assert np.all(omega[down & ~up] < low), force
     assert levels_with_roots == 19
     only_up = (impacts.sel(sweep_direction="up") & ~impacts.sel(sweep_direction="down")).sel(
         force_amplitude=example.params.force_amplitude, method="nearest").values
@@ -149,3 +157,18 @@ def test_the_basins_attractors_are_the_sweeps_ends(example, fine):
         scale = np.abs(attractors[k]).max()
         assert np.abs(state - attractors[k]).max() < SAME_STATE * scale, direction
     assert np.all(basins.basin.values >= 0)  # every start settled
+
+
+@pytest.mark.parametrize("force", [4e-5, 7e-5, 1e-4, 1.3e-4])
+def test_the_up_sweeps_last_impact_within_a_step_below_the_upper_fold(example, plane, force):
+    """The right edge of the region where only the up sweep impacts: at four levels, the
+    upper fold of that level's one-parameter branch lies within one step above the up sweep's
+    last impacting cell."""
+    level = continue_orbits(dataclasses.replace(
+        example, params=example.params.replace(force_amplitude=force), max_branches=1))
+    upper = located(level, "fold").max()
+    up = (plane.steady_impact_rate > 0).sel(sweep_direction="up").sel(
+        force_amplitude=force, method="nearest")
+    assert float(up.force_amplitude) == pytest.approx(force, rel=1e-12)
+    omega = plane.omega.values
+    assert 0.0 < upper - omega[up.values].max() < omega[1] - omega[0]
