@@ -67,8 +67,8 @@ def test_the_fe_models_matrices_give_its_contacts(sparse):
 def test_the_low_modes_keep_their_digits_where_plain_eigh_loses_them():
     """200 elements (400 DOFs), the 12 lowest frequencies against the FE's own from its
     closed-form flexibility: shift-invert (sparse) and the flexibility's eigenproblem (dense)
-    within 1e-8 (measured 4e-9 and 2e-9: K's own round-off, cond(K) eps ~ h^-4), plain
-    eigh(K, M) off by 1.1e-7, more than 10 times as much."""
+    within 1e-8 (measured 3.9e-9 and 2.3e-9: K's own round-off, cond(K) eps ~ h^-4), plain
+    eigh(K, M) off by 2e-5, more than 100 times as much."""
     n = 200
     K, M = beam_matrices(STOP.EI1, STOP.rhoA1, STOP.l1, n)
     reference = _eig(beam_flexibility(STOP.EI1, STOP.l1, n), M)[0][:12]
@@ -79,7 +79,7 @@ def test_the_low_modes_keep_their_digits_where_plain_eigh_loses_them():
     assert max(errors) <= 1e-8
     assert "shift-invert" in structure.describe(12)
     plain = np.sqrt(scipy.linalg.eigh(K, M, eigvals_only=True, subset_by_index=[0, 11]))
-    assert np.abs(plain / reference - 1).max() > 10 * max(errors)
+    assert np.abs(plain / reference - 1).max() > 100 * max(errors)
 
 
 def analytic_modal_data(n: int, **keys) -> ModalStructure:

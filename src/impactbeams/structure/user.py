@@ -281,8 +281,10 @@ def _matrix_modes(structure: MatrixStructure, n: int) -> UserModes:
     M, K, size = structure.mass, structure.stiffness, structure.size
     if structure._sparse and n < size - 1:
         # shift-invert about 0: eigenvalues nearest 0, to eps relative to the largest of them
+        # a fixed start: ARPACK's default is random, and the modes' last bits would follow it
+        start = np.random.default_rng(0).standard_normal(size)
         eigenvalues, phi = scipy.sparse.linalg.eigsh(K.tocsc(), k=n, M=M.tocsc(), sigma=0.0,
-                                                     which="LM", tol=0.0)
+                                                     which="LM", tol=0.0, v0=start)
         order = np.argsort(eigenvalues)
         eigenvalues, phi = eigenvalues[order], phi[:, order]
     else:
