@@ -360,3 +360,22 @@ def test_lyapunov_exponents_and_a_steady_start_take_a_matrix_structure():
     assert runs[0].impact.size > 0
     for name in ("impact_onset_time", "lyapunov_exponent"):
         np.testing.assert_array_equal(runs[1][name].values, runs[0][name].values)
+
+
+def test_a_periodic_orbit_of_modal_data_is_todays_and_params_travel_pickled():
+    """The period map uses only the free modes: today's orbit, bit for bit. A Params with a
+    structure pickles (Dask's workers get it so) and keeps its data."""
+    import pickle
+
+    from impactbeams import periodic_orbit
+
+    today = STOP.replace(damping_ratio=0.01, omega=200.0, force_amplitude=3e-3)
+    given = today.replace(structure1=analytic_modal_data(12))
+    orbits = [periodic_orbit(p, n_modes=12) for p in (today, given)]
+    assert orbits[0].contacts >= 1
+    np.testing.assert_array_equal(orbits[1].state, orbits[0].state)
+    np.testing.assert_array_equal(orbits[1].multipliers, orbits[0].multipliers)
+    copy = pickle.loads(pickle.dumps(STOP.replace(structure1=fe_structure())))
+    assert repr(copy.structure1) == repr(fe_structure())
+    np.testing.assert_array_equal(copy.structure1.modes(5).frequencies,
+                                  fe_structure().modes(5).frequencies)
