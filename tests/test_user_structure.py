@@ -113,6 +113,23 @@ def test_modal_data_of_the_textbook_beam_give_todays_results(drive):
                                    atol=1e-13 * scale, err_msg=name)
 
 
+def test_a_modes_sign_is_its_own_choice():
+    """Modes 2 and 5 given with the other sign (contact value and participation factor both
+    flipped) are the same modes: the same shaker run, bit for bit."""
+    params = STOP.replace(shaker="beam1", base_amplitude=2e-6, force_amplitude=0.0, omega=300.0)
+    given = analytic_modal_data(12)
+    sign = np.ones(12)
+    sign[[1, 4]] = -1.0
+    flipped = ModalStructure(given.frequencies, sign * given.contact_values,
+                             given.tip_compliance, given.length,
+                             participation=sign * given.participation,
+                             static_mass=given.static_mass)
+    runs = [simulate(params.replace(structure1=s), 0.05, n_modes=12) for s in (given, flipped)]
+    assert runs[0].impact.size >= 1
+    np.testing.assert_array_equal(runs[1].impact_onset_time.values,
+                                  runs[0].impact_onset_time.values)
+
+
 def _map(params: dict, observable: str, n_modes: int = 12) -> xr.Dataset:
     return run_sweep(sweep_from_mapping({
         "t_max": 0.05, "n_modes": n_modes, "observables": [observable], "params": params,

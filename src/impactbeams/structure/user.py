@@ -214,8 +214,11 @@ class ModalStructure(_UserStructure):
                 bool(np.all(frequencies > 0)) and bool(np.all(np.diff(frequencies) >= 0)),
                 "must be positive and ascending (rad/s)")
         size = frequencies.size
-        values = np.abs(_vector(f"{self.name}.contact_values", self.contact_values, size))
-        gamma = None if self.participation is None else _vector(
+        given = _vector(f"{self.name}.contact_values", self.contact_values, size)
+        # each mode's sign made positive at the contact, its participation factor's with it
+        sign = np.where(given < 0, -1.0, 1.0)
+        values = sign * given
+        gamma = None if self.participation is None else sign * _vector(
             f"{self.name}.participation", self.participation, size)
         _check_length(self.name, self.length)
         modal = float(np.sum(values**2 / frequencies**2))
