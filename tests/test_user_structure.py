@@ -396,3 +396,17 @@ def test_a_periodic_orbit_of_modal_data_is_todays_and_params_travel_pickled():
     assert repr(copy.structure1) == repr(fe_structure())
     np.testing.assert_array_equal(copy.structure1.modes(5).frequencies,
                                   fe_structure().modes(5).frequencies)
+
+
+def test_the_modes_a_contact_needs_are_counted_on_the_structures_own_modes():
+    """required_modes counts the modes softer at the contact than k on the structure's own
+    modes: the FE model's count is the closed-form beam's; a default run takes it, within the
+    modes the structure has."""
+    from impactbeams.contact import recommended_modes, required_modes
+
+    for k in (1e4, 1e6):
+        today = STOP.replace(contact_stiffness=k)
+        given = today.replace(structure1=fe_structure())
+        assert required_modes(given) == required_modes(today)
+    few = STOP.replace(contact_stiffness=1e6, structure1=analytic_modal_data(12))
+    assert required_modes(few) > 12 and recommended_modes(few) == 12
