@@ -91,9 +91,10 @@ class MatrixStructure(_UserStructure):
     """A linear structure given by its mass and stiffness matrices (SI units).
 
     Args:
-        mass, stiffness: M (kg, kg m, kg m^2 per DOF) and K (N/m, ...), N x N, symmetric
-            positive definite (the structure clamped: no rigid-body mode), dense or
+        mass: M (kg, kg m, kg m^2 per DOF), N x N, symmetric positive definite, dense or
             scipy.sparse.
+        stiffness: K (N/m, N/rad, N m/rad per DOF), N x N, symmetric positive definite (the
+            structure clamped: no rigid-body mode), dense or scipy.sparse.
         contact_dof: the index of the translational DOF where the contact (and the tip force)
             acts, 0 <= contact_dof < N.
         length: a length scale of the structure (m): deflections are small against it (the
