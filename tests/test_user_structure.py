@@ -86,10 +86,9 @@ def analytic_modal_data(n: int, **keys) -> ModalStructure:
     """Today's beam 1 (closed forms) as modal data: its first ``n`` modes."""
     uniform = beam(STOP, 1)
     modes = uniform.free_modes(n)
-    data = {"participation": uniform.participation(modes.shapes),
-            "static_mass": 33.0 / 140.0 * STOP.rhoA1 * STOP.l1, **keys}
     return ModalStructure(modes.frequencies, modes.shapes.tip(), uniform.tip_compliance,
-                          STOP.l1, **data)
+                          33.0 / 140.0 * STOP.rhoA1 * STOP.l1, STOP.l1,
+                          participation=uniform.participation(modes.shapes), **keys)
 
 
 @pytest.mark.parametrize("drive", [{}, {"shaker": "beam1", "base_amplitude": 2e-6,
@@ -121,9 +120,8 @@ def test_a_modes_sign_is_its_own_choice():
     sign = np.ones(12)
     sign[[1, 4]] = -1.0
     flipped = ModalStructure(given.frequencies, sign * given.contact_values,
-                             given.tip_compliance, given.length,
-                             participation=sign * given.participation,
-                             static_mass=given.static_mass)
+                             given.tip_compliance, given.static_mass, given.length,
+                             participation=sign * given.participation)
     runs = [simulate(params.replace(structure1=s), 0.05, n_modes=12) for s in (given, flipped)]
     assert runs[0].impact.size >= 1
     np.testing.assert_array_equal(runs[1].impact_onset_time.values,
@@ -188,6 +186,8 @@ def test_an_npz_file_from_the_command_line_and_a_sweep_file(capsys, tmp_path):
         assert f"from {path}" in ds.attrs["structure1"]
         np.testing.assert_array_equal(ds.first_impact_time.values,
                                       python.first_impact_time.values)
+    assert main(["plot", str(tmp_path / "out.nc"), "-o", str(tmp_path / "map.png")]) == 0
+    assert (tmp_path / "map.png").stat().st_size > 0
     bad = tmp_path / "bad.npz"
     np.savez(bad, mass=M40, stiffness=K40, contact_dof=TIP)
     assert main(["modes", "--structure1", str(bad), "--counterpart", "stop"]) == 2
@@ -204,6 +204,15 @@ def test_a_sparse_npz_file_is_the_dense_model():
     # eigsh on the triplets, the flexibility's eigenproblem on the dense: K's round-off apart
     np.testing.assert_allclose(structure.modes(5).frequencies, fe_structure().modes(5).frequencies,
                                rtol=1e-9)
+
+
+def test_a_modal_npz_file_is_the_modal_data():
+    given = analytic_modal_data(6)
+    read = read_npz({"frequencies": given.frequencies, "contact_values": given.contact_values,
+                     "tip_compliance": given.tip_compliance, "static_mass": given.static_mass,
+                     "length": given.length, "participation": given.participation})
+    assert isinstance(read, ModalStructure) and read.digest == given.digest
+    np.testing.assert_array_equal(read.modes(6).participation(), given.modes(6).participation())
 
 
 def read_npz(arrays):
@@ -270,11 +279,11 @@ def _sparse_indefinite():
      "structure1.influence = 'a real vector' is not allowed|structure1.influence = "),
     (lambda: MatrixStructure("M", K40, contact_dof=TIP, length=0.1),
      "structure1.mass = 'str' is not allowed: must be a real matrix"),
-    (lambda: ModalStructure([2.0, 1.0], [1.0, 1.0], 1.0, 0.1),
+    (lambda: ModalStructure([2.0, 1.0], [1.0, 1.0], 1.0, 1.0, 0.1),
      "structure1.frequencies = .* is not allowed: must be positive and ascending"),
-    (lambda: ModalStructure([1.0, 2.0], [1.0, 1.0], 1.0, 0.1),
+    (lambda: ModalStructure([1.0, 2.0], [1.0, 1.0], 1.0, 1.0, 0.1),
      r"structure1.tip_compliance = 1.0 is not allowed: must be at least the modes' flexibility"),
-    (lambda: ModalStructure([1.0, 2.0], [1.0], 10.0, 0.1),
+    (lambda: ModalStructure([1.0, 2.0], [1.0], 10.0, 1.0, 0.1),
      "structure1.contact_values = .* is not allowed: must be a real vector of 2 values"),
     (lambda: STOP.replace(structure1=fe_structure(), l1=0.2),
      "l1 = 0.2 is not allowed: structure1 is beam 1 .*: leave beam 1's keys out"),
@@ -290,9 +299,8 @@ def _sparse_indefinite():
      "n_modes = 81 is not allowed: structure1 has 80 modes"),
     (lambda: simulate(STOP.replace(structure1=fe_structure()), 0.01, n_modes=5, fields=True),
      "fields = True is not allowed: beam 1 is a user structure"),
-    (lambda: simulate(STOP.replace(structure1=analytic_modal_data(5, static_mass=None)), 0.01,
-                      n_modes=5, energy_balance=True),
-     "structure1 has no static_mass: the energy balance needs"),
+    (lambda: ModalStructure([1.0, 2.0], [1.0, 1.0], 10.0, 0.0, 0.1),
+     r"structure1.static_mass = 0.0 is not allowed: must be > 0 \(kg\)"),
     (lambda: sweep_from_mapping({"t_max": 0.05, "observables": ["first_impact_time"],
                                  "axes": {"structure1": {"min": 0.0, "max": 1.0, "num": 2}}}),
      "structure1 is not sweepable"),
@@ -410,3 +418,21 @@ def test_the_modes_a_contact_needs_are_counted_on_the_structures_own_modes():
         assert required_modes(given) == required_modes(today)
     few = STOP.replace(contact_stiffness=1e6, structure1=analytic_modal_data(12))
     assert required_modes(few) > 12 and recommended_modes(few) == 12
+
+
+def test_a_continuation_of_modal_data_is_todays():
+    """Two beams, beam 1 as the textbook beam's modal data: today's branch, bit for bit."""
+    from impactbeams import Continuation, continue_orbits
+
+    today = Params(contact_stiffness=1e4, damping_ratio=0.02, force_amplitude=3e-5)
+    uniform = beam(today, 1)
+    modes = uniform.free_modes(3)
+    given = today.replace(structure1=ModalStructure(
+        modes.frequencies, modes.shapes.tip(), uniform.tip_compliance,
+        33.0 / 140.0 * today.rhoA1 * today.l1, today.l1,
+        participation=uniform.participation(modes.shapes)))
+    branches = [continue_orbits(Continuation(p, "omega", 248.8, 250.5, start=248.9, n_modes=3,
+                                             max_branches=2)) for p in (today, given)]
+    assert branches[0].state.size > 0
+    for name in ("state", "multiplier", "orbit_period", "omega"):
+        np.testing.assert_array_equal(branches[1][name].values, branches[0][name].values)

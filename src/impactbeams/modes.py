@@ -278,11 +278,6 @@ class UserBeam(AttachedBeam):
         """The modes it has (its DOFs, or the modal data given), at most ``MAX_MODES``."""
         return min(MAX_MODES, self.structure.mode_limit)
 
-    @property
-    def static_mass_per_length(self) -> float:
-        """As `AttachedBeam`'s, from the structure's u^T M u (ParameterError if not known)."""
-        return self.structure.kinetic_norm * 140.0 / (33.0 * self.length)
-
 
 @functools.lru_cache(maxsize=16)
 def _structure_modes(structure: Cantilever | MatrixStructure | ModalStructure,

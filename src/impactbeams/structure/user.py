@@ -161,11 +161,6 @@ class MatrixStructure(_UserStructure):
         """Whether a shaker can move it (an influence vector was given)."""
         return self.influence is not None
 
-    @property
-    def kinetic_norm(self) -> float:
-        """u^T M u (kg) of the static contact-load shape u with unit contact deflection."""
-        return self.static_mass
-
     def modes(self, n: int) -> UserModes:
         """The ``n`` lowest modes, mass-normalised, each positive at the contact DOF."""
         return _matrix_modes(self, self._checked_count(n, self.size))
@@ -194,18 +189,19 @@ class ModalStructure(_UserStructure):
         contact_values: each mass-normalised mode's value at the contact DOF (kg^-1/2).
         tip_compliance: its static flexibility at the contact DOF (m/N), at least the modes'
             share sum(contact_values^2 / frequencies^2).
+        static_mass: u^T M u (kg) of the static contact-load shape u with unit deflection at
+            the contact (the energies of every contact need it: the kinetic energy of the
+            quasi-static part).
         length: a length scale (m), as `MatrixStructure`'s.
         participation: phi_n^T M r of a unit support motion (kg^1/2); None: no shaker.
-        static_mass: u^T M u (kg) of the static contact-load shape with unit deflection at the
-            contact (the energy balance needs it); None: not known.
     """
 
     frequencies: np.ndarray
     contact_values: np.ndarray
     tip_compliance: float
+    static_mass: float
     length: float
     participation: np.ndarray | None = None
-    static_mass: float | None = None
     name: str = "structure1"
     source: str = ""
 
@@ -228,18 +224,17 @@ class ModalStructure(_UserStructure):
                 and self.tip_compliance >= modal * (1 - 1e-12),
                 f"must be at least the modes' flexibility sum(contact_values^2 / "
                 f"frequencies^2) = {modal:.6g} m/N (the static flexibility holds every mode)")
-        if self.static_mass is not None:
-            require(f"{self.name}.static_mass", self.static_mass,
-                    is_real(self.static_mass) and 0 < self.static_mass < np.inf,
-                    "must be > 0 (kg)")
+        require(f"{self.name}.static_mass", self.static_mass,
+                is_real(self.static_mass) and 0 < self.static_mass < np.inf, "must be > 0 (kg)")
         for key, value in (("frequencies", frequencies), ("contact_values", values),
                            ("participation", gamma), ("tip_compliance",
                                                       float(self.tip_compliance)),
-                           ("length", float(self.length))):
+                           ("length", float(self.length)),
+                           ("static_mass", float(self.static_mass))):
             object.__setattr__(self, key, value)
         object.__setattr__(self, "digest", _digest(
             frequencies, values, gamma, np.array([self.tip_compliance, self.length,
-                                                  self.static_mass or 0.0])))
+                                                  self.static_mass])))
 
     def __repr__(self) -> str:
         where = f", from {self.source}" if self.source else ""
@@ -266,14 +261,6 @@ class ModalStructure(_UserStructure):
         """What it is, in one line."""
         return (f"{self.name}: modal data of {self.mode_limit} modes (frequencies, values at "
                 f"the contact DOF), {n} used")
-
-    @property
-    def kinetic_norm(self) -> float:
-        """``static_mass`` (kg), or ParameterError if it was not given."""
-        if self.static_mass is None:
-            raise ParameterError(f"{self.name} has no static_mass: the energy balance needs "
-                                 "the kinetic norm u^T M u of its static contact-load shape")
-        return self.static_mass
 
 
 @functools.lru_cache(maxsize=16)
@@ -423,7 +410,7 @@ NPZ_NAMES = {
     MatrixStructure: {"mass": True, "stiffness": True, "contact_dof": True, "length": True,
                       "influence": False},
     ModalStructure: {"frequencies": True, "contact_values": True, "tip_compliance": True,
-                     "length": True, "participation": False, "static_mass": False},
+                     "static_mass": True, "length": True, "participation": False},
 }
 _SCALARS = ("contact_dof", "length", "tip_compliance", "static_mass")
 

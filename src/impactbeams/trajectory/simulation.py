@@ -302,8 +302,6 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
     beam1 = beam(params, 1)
     require("fields", fields, not fields or beam1.continuous,
             "beam 1 is a user structure (structure1): it has no fields along a beam")
-    if energy_balance:
-        beam1.static_mass_per_length  # noqa: B018  (refused if its kinetic norm is not known)
     resolution = required_modes(params) if params.law.compliant else 5
     if n_modes is None:
         n_modes = min(resolution, MAX_MODES, beam1.mode_limit)
