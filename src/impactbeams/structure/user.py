@@ -73,7 +73,8 @@ class _UserStructure:
         """ParameterError if ``base_amplitude`` (m) > 0 anywhere and it has no influence vector."""
         require("base_amplitude", base_amplitude, self.moves_with_support or bool(
             np.all(np.asarray(base_amplitude) == 0.0)), f"{self.name} has no influence vector "
-            "(participation factors): a shaker cannot move it; give one, or shaker = 'beam2'")
+            "(participation factors): a shaker cannot move it; give one, or a shaker that "
+            "leaves beam 1's clamp")
 
     def unit_tip_shape(self, x: np.ndarray, derivative: int = 0) -> np.ndarray:
         """Refused: a user structure has no positions along a beam."""
