@@ -775,6 +775,12 @@ def _public_calls():
                            "allowed: must be a finite real number >= 0 (kg)"),
         "Spring-stiffness": (lambda: ib.Spring(0.1, float("nan")), "Spring.stiffness = nan is "
                              "not allowed: must be a finite real number >= 0 (N/m)"),
+        "MatrixStructure-contact_dof": (
+            lambda: ib.MatrixStructure(np.eye(2), np.eye(2), contact_dof=1.0, length=0.1),
+            "structure1.contact_dof = 1.0 is not allowed: must be a DOF index from 0 to 1"),
+        "ModalStructure-frequencies": (
+            lambda: ib.ModalStructure("a", [1.0], 1.0, 1.0, 0.1),
+            "structure1.frequencies = 'a' is not allowed: must be a real vector"),
         "LongTime-sampled_periods": (lambda: ib.LongTime(sampled_periods="3"),
                                      "sampled_periods = '3'"),
         "simulate-params": (lambda: simulate({"l1": 0.1}, 1.0), "params = {'l1': 0.1} (dict)"),

@@ -33,6 +33,8 @@ _LAZY = {
     "Segment": "impactbeams.structure",
     "PointMass": "impactbeams.structure",
     "Spring": "impactbeams.structure",
+    "MatrixStructure": "impactbeams.structure.user",
+    "ModalStructure": "impactbeams.structure.user",
 }
 
 __all__ = ["ParameterError", "Params", "__version__", *_LAZY]

@@ -35,6 +35,7 @@ from impactbeams.params import (
     MAX_CHUNK_CELLS,
     MAX_EVENTS,
     MAX_MODES,
+    USER_STRUCTURE,
     ParameterError,
     Params,
     modes_per_beam,
@@ -78,6 +79,9 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
             continue
         group.add_argument(*flags, dest=name, type=_number, metavar="VALUE",
                            help=f"{description} ({parameter.units})")
+    group.add_argument("--structure1", metavar="FILE.npz",
+                       help="beam 1 as your own structure: mass and stiffness matrices or modal "
+                       "data (docs/model.md, \"Your own structure\"); with the spring law")
 
 
 def params_from_args(args: argparse.Namespace) -> Params:
@@ -86,7 +90,8 @@ def params_from_args(args: argparse.Namespace) -> Params:
 
     params = (Params.from_toml(require_input_file(args.params, "--params")) if args.params
               else Params())
-    overrides = {n: getattr(args, n) for n in PARAMETERS if getattr(args, n, None) is not None}
+    overrides = {n: getattr(args, n) for n in (*PARAMETERS, USER_STRUCTURE)
+                 if getattr(args, n, None) is not None}
     if not counterpart_named(overrides.get("counterpart", params.counterpart)).has_beam2:
         refuse_beam2([f"--{n.replace('_', '-')}" for n in overrides], "the command line")
     return params.replace(**overrides) if overrides else params
@@ -120,11 +125,14 @@ def _modes(args: argparse.Namespace) -> int:
         "contact_law": p.contact_law,
         "counterpart": p.counterpart,
         "contact": _contact_frequencies(p, args.n),
+        **({"structure1": p.structure1.describe(args.n)} if p.structure1 is not None else {}),
     }
     if args.json:
         print(json.dumps(result))
         return 0
     against = f" {p.partner.words}" if p.partner.words else ""
+    if p.structure1 is not None:  # its eigenproblem: size, method, memory
+        print(p.structure1.describe(args.n))
     print(f"natural frequencies (rad/s); contact phase of the {p.contact_law} law{against}")
     print(f"{'mode':>4} " + " ".join(f"{'beam ' + b[-1] + ' free':>16}" for b in beams)
           + f" {'contact':>16}")

@@ -27,8 +27,9 @@ import warnings
 import numpy as np
 
 from impactbeams.brent import brentq  # not SciPy's: it costs 0.3 s of start-up (brent.py)
-from impactbeams.params import Params
+from impactbeams.params import MAX_MODES, Params
 from impactbeams.structure import Cantilever, StructureModes
+from impactbeams.structure.user import MatrixStructure, ModalStructure, UserModes
 
 _RTOL = 4 * np.finfo(float).eps
 _COINCIDENT = 1e-12  # relative distance below which two free frequencies are one double pole
@@ -181,7 +182,7 @@ class UniformBeam:
     Each beam of a run is one of these or an `AttachedBeam`; both give the engine the same
     data: ``free_modes(n)``, ``tip_compliance`` (m/N), ``participation(shapes)`` (Gamma_n),
     ``unit_tip_shape(x)``, ``static_mass_per_length`` (for <u, u> of that shape) and
-    ``closed_form``.
+    ``closed_form``, ``continuous`` (fields along x) and ``mode_limit`` (the most modes).
     """
 
     EI: float
@@ -189,6 +190,8 @@ class UniformBeam:
     length: float
 
     closed_form = True  # the tied law's contact modes and the quadratures assume it
+    continuous = True
+    mode_limit = MAX_MODES
 
     def free_modes(self, n: int) -> FreeModes:
         """The first ``n`` cantilever modes, in closed form."""
@@ -224,6 +227,8 @@ class AttachedBeam:
     structure: Cantilever
 
     closed_form = False
+    continuous = True
+    mode_limit = MAX_MODES
 
     def free_modes(self, n: int) -> FreeModes:
         """The first ``n`` modes, mass-normalised with the attachments."""
@@ -257,8 +262,26 @@ class AttachedBeam:
         return self.structure.static_mass * 140.0 / (33.0 * self.length)
 
 
+@dataclasses.dataclass(frozen=True)
+class UserBeam(AttachedBeam):
+    """Beam 1 as the user's own structure (`impactbeams.structure.user`).
+
+    Matrices or modal data: the same data as `AttachedBeam` at its contact DOF; no fields.
+    """
+
+    structure: MatrixStructure | ModalStructure  # type: ignore[assignment]
+
+    continuous = False
+
+    @property
+    def mode_limit(self) -> int:  # type: ignore[override]
+        """The modes it has (its DOFs, or the modal data given), at most ``MAX_MODES``."""
+        return min(MAX_MODES, self.structure.mode_limit)
+
+
 @functools.lru_cache(maxsize=16)
-def _structure_modes(structure: Cantilever, n: int) -> StructureModes:
+def _structure_modes(structure: Cantilever | MatrixStructure | ModalStructure,
+                     n: int) -> StructureModes | UserModes:
     """``structure.modes(n)``, once per process: a run asks for a beam's modes several times."""
     return structure.modes(n)
 
@@ -266,8 +289,11 @@ def _structure_modes(structure: Cantilever, n: int) -> StructureModes:
 def beam(params: Params, which: int) -> UniformBeam | AttachedBeam:
     """Beam ``which`` (1 or 2) of ``params``, as the engine sees it.
 
-    The one place that tells a textbook cantilever (closed forms) from one with attachments.
+    The one place that tells a textbook cantilever (closed forms) from one with attachments
+    and from the user's own structure (``params.structure1``).
     """
+    if which == 1 and params.structure1 is not None:
+        return UserBeam(params.structure1)
     structure = params.structure(which)
     if structure.closed_form:
         segment = structure.segments[0]

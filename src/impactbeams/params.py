@@ -75,6 +75,7 @@ from impactbeams.structure.parts import (
     check_attachments,
     check_clamp,
 )
+from impactbeams.structure.user import MatrixStructure, ModalStructure, read_structure
 from impactbeams.variables import PARAMETERS
 
 STEEL_E = 210e9  # Pa
@@ -391,6 +392,11 @@ COUNTERPARTS = tuple(configuration.COUNTERPARTS)
 BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS), "attachments2")
 # each beam's point masses and springs (`impactbeams.structure`), given from Python
 ATTACHMENTS = ("attachments1", "attachments2")
+# beam 1 as the user's own structure (`impactbeams.structure.user`): an object or a .npz file
+USER_STRUCTURE = "structure1"
+# what a user structure replaces: beam 1's keys (l1, EI1, rhoA1 are then its equivalent beam's)
+BEAM1_KEYS = ("l1", "EI1", "rhoA1", *(key + "1" for key in MATERIAL_KEYS), "attachments1")
+_EQUIVALENT_BEAM1 = ("l1", "EI1", "rhoA1")
 SHAKERS = tuple(configuration.MOUNTS)  # which clamps the shaker carries (impactbeams.drive)
 # the parameters whose value is a name, and the names allowed (the default first)
 CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS, "shaker": SHAKERS,
@@ -448,6 +454,7 @@ class Params:
     start: str = "rest"
     attachments1: tuple[Attachment, ...] = ()
     attachments2: tuple[Attachment, ...] = ()
+    structure1: MatrixStructure | ModalStructure | None = None
 
     def __init__(self, **values: Any) -> None:
         """Every parameter by keyword (SI units); the material keys replace a beam's EI, rhoA."""
@@ -478,7 +485,36 @@ class Params:
                 if field.name in BEAM2_KEYS:
                     require(field.name, getattr(self, field.name),
                             getattr(self, field.name) == field.default, _NO_BEAM2)
+        if self.structure1 is not None:
+            self._take_structure1()
         self._check_together()
+
+    def _take_structure1(self) -> None:
+        """Beam 1 as the user's structure (an object, or a .npz file read here).
+
+        Beam 1's own keys must be left out; l1, EI1 and rhoA1 become those of its equivalent
+        uniform cantilever (its length scale, its tip compliance l1^3 / (3 EI1), its fundamental
+        frequency), which only the checks and the cost estimates read.
+        """
+        structure = self.structure1
+        if isinstance(structure, (str, Path)):
+            structure = read_structure(structure, USER_STRUCTURE)
+        require(USER_STRUCTURE, structure, isinstance(structure, (MatrixStructure, ModalStructure)),
+                "must be an impactbeams.MatrixStructure, a ModalStructure or the path of a .npz "
+                "file")
+        for field in dataclasses.fields(Params):
+            if field.name in BEAM1_KEYS:
+                require(field.name, getattr(self, field.name),
+                        getattr(self, field.name) == field.default, _STRUCTURE_IS_BEAM1)
+        require(USER_STRUCTURE, structure, self.law.tangent_flow,
+                f"contact_law = {self.contact_law!r} supports the paper's uniform beams only: "
+                "use contact_law = 'spring' with a user structure")
+        EI = structure.length**3 / (3.0 * structure.tip_compliance)
+        fundamental = float(structure.modes(1).frequencies[0])
+        rhoA = EI * (FIRST_CANTILEVER_ROOT / structure.length) ** 4 / fundamental**2
+        for name, value in (("structure1", structure), ("l1", structure.length), ("EI1", EI),
+                            ("rhoA1", rhoA)):
+            object.__setattr__(self, name, value)
 
     def _set_checked(self, name: str, value: Any) -> None:
         """Set the numeric parameter ``name`` to ``value`` as a float, if allowed."""
@@ -500,6 +536,8 @@ class Params:
         # a compliant clamp lets the tip force deflect the tip more than l1^3 / (3 EI1)
         check_joint(self.numeric(), partner=self.partner, mount=self.mount,
                     compliance1=self.structure(1).tip_compliance if self.attachments1 else None)
+        if self.structure1 is not None and "1" in self.mount.shaken_beams(self.partner):
+            self.structure1.require_support(self.base_amplitude)
         # with one clamp moving, the tied tips' quasi-static part would carry a moving
         # clearance: not built
         require("base_amplitude", self.base_amplitude,
@@ -530,7 +568,8 @@ class Params:
     def numeric_names() -> tuple[str, ...]:
         """Names of the numeric parameters (all but the named choices), in field order."""
         return tuple(f.name for f in dataclasses.fields(Params)
-                     if f.name not in CHOICES and f.name not in ATTACHMENTS)
+                     if f.name not in CHOICES and f.name not in ATTACHMENTS
+                     and f.name != USER_STRUCTURE)
 
     def numeric(self) -> dict[str, float]:
         """The numeric parameters by name (SI units)."""
@@ -595,7 +634,8 @@ class Params:
         A rigid stop gives way by nothing: c2 = 0.
         """
         c2 = self.structure(2).tip_compliance if self.partner.has_beam2 else 0.0
-        return self.structure(1).tip_compliance, c2
+        beam1 = self.structure(1) if self.structure1 is None else self.structure1
+        return beam1.tip_compliance, c2
 
     @property
     def wave_constant(self) -> tuple[float, float]:
@@ -603,10 +643,16 @@ class Params:
         return math.sqrt(self.EI1 / self.rhoA1), math.sqrt(self.EI2 / self.rhoA2)
 
     def as_dict(self) -> dict[str, Any]:
-        """All parameters by name, in the resolved EI/rhoA form; attachments only if any."""
+        """All parameters by name, in the resolved EI/rhoA form; attachments only if any.
+
+        With a user structure (``structure1``) beam 1 is that structure: its equivalent beam's
+        l1, EI1, rhoA1 are left out.
+        """
         # floats, names and frozen parts only: no deep copy needed (dataclasses.asdict's cost)
+        user = self.structure1 is not None
         return {field.name: getattr(self, field.name) for field in _FIELDS()
-                if field.name not in ATTACHMENTS or getattr(self, field.name)}
+                if (field.name not in (*ATTACHMENTS, USER_STRUCTURE) or getattr(self, field.name))
+                and not (user and field.name in _EQUIVALENT_BEAM1)}
 
     def replace(self, **changes: Any) -> Params:
         """Return a copy with some parameters changed (material keys allowed).
@@ -615,7 +661,8 @@ class Params:
         is ``Params(base_amplitude=U0)``, a shaker study without tip force.
         """
         if changes.keys() <= set(self.numeric_names()) - set(DRIVES) and not (
-                not self.partner.has_beam2 and changes.keys() & set(BEAM2_KEYS)):
+                not self.partner.has_beam2 and changes.keys() & set(BEAM2_KEYS)) and not (
+                self.structure1 is not None and changes.keys() & set(BEAM1_KEYS)):
             # numbers other than the drives, on parameters already checked: only the changes
             # and the joint rules need checking (a continuation changes one per period map)
             changed = copy.copy(self)
@@ -658,6 +705,7 @@ class Params:
 
 
 _NO_BEAM2 = "counterpart = 'stop' has no beam 2: leave beam 2's keys out"
+_STRUCTURE_IS_BEAM1 = "structure1 is beam 1 (a user structure): leave beam 1's keys out"
 
 
 @functools.lru_cache(maxsize=64)
@@ -682,8 +730,9 @@ def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
     their defaults are checked on construction).
     """
     for key in values:
-        if key not in PARAMETERS and key not in ATTACHMENTS:
-            raise unknown_key("parameter", key, source, [*sorted(PARAMETERS), *ATTACHMENTS])
+        if key not in PARAMETERS and key not in ATTACHMENTS and key != USER_STRUCTURE:
+            raise unknown_key("parameter", key, source,
+                              [*sorted(PARAMETERS), *ATTACHMENTS, USER_STRUCTURE])
     if not configuration.counterpart_named(values.get("counterpart")).has_beam2:
         refuse_beam2([key for key in values if given_fields or key[:-1] in MATERIAL_KEYS],
                      source)

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from impactbeams.checks import require
 from impactbeams.params import (
     MAX_FREQUENCY,
     ParameterError,
@@ -26,6 +27,7 @@ from impactbeams.params import (
     require_all,
     value_at,
 )
+from impactbeams.structure.user import MatrixStructure, ModalStructure
 from impactbeams.variables import validate
 
 if TYPE_CHECKING:
@@ -37,32 +39,42 @@ if TYPE_CHECKING:
 MAX_PHASE = 1e10
 
 
-def highest_frequency(values: Mapping[str, Any], n_modes: int, springs: int = 0) -> np.ndarray:
+def highest_frequency(values: Mapping[str, Any], n_modes: int, springs: int = 0,
+                      structure1: MatrixStructure | ModalStructure | None = None) -> np.ndarray:
     """The highest free-mode frequency (rad/s) of both beams with ``n_modes`` modes each.
 
     ``values``: resolved parameters (floats or arrays that broadcast, as in `check_run`);
     ``springs``: the springs to ground a beam carries (`Params.grounded_springs`). Each is a
     rank-one stiffening, which raises the n-th frequency at most to the (n+1)-th: a bound is
     the uniform beam's mode ``n_modes + springs`` (point masses and a compliant clamp only
-    lower the frequencies).
+    lower the frequencies). A user structure as beam 1 (``structure1``) gives its own
+    ``n_modes``-th frequency (of the modes it has).
     """
     from impactbeams.modes import cantilever_roots  # SciPy: only when a run is checked
 
     root = cantilever_roots(n_modes + springs)[-1]
-    return np.maximum(*(np.sqrt(np.asarray(values[f"EI{i}"]) / values[f"rhoA{i}"])
-                        * (root / np.asarray(values[f"l{i}"])) ** 2 for i in ("1", "2")))
+    highest = [np.sqrt(np.asarray(values[f"EI{i}"]) / values[f"rhoA{i}"])
+               * (root / np.asarray(values[f"l{i}"])) ** 2 for i in ("1", "2")]
+    if structure1 is not None:
+        highest[0] = structure1.modes(min(n_modes, structure1.mode_limit)).frequencies[-1]
+    return np.maximum(*highest)
 
 
 def check_run(values: Mapping[str, Any], t_max: float, n_modes: int,
-              point: PointName = no_point, springs: int = 0) -> None:
+              point: PointName = no_point, springs: int = 0,
+              structure1: MatrixStructure | ModalStructure | None = None) -> None:
     """Refuse a run whose modes or horizon leave the model's or double precision's range.
 
     ``values``: the resolved numeric parameters (floats, or arrays broadcasting over a
     sweep's corner grid); ``t_max`` in s; ``n_modes`` free modes per beam (already checked to
-    be an integer within the package's limit); ``springs``: see `highest_frequency`. Raises
-    ParameterError.
+    be an integer within the package's limit); ``springs``, ``structure1``: see
+    `highest_frequency`. Raises ParameterError.
     """
-    highest = highest_frequency(values, n_modes, springs)
+    if structure1 is not None:
+        limit = structure1.mode_limit
+        require("n_modes", n_modes, n_modes <= limit,
+                f"{structure1.name} has {limit} modes: n_modes must be at most {limit}")
+    highest = highest_frequency(values, n_modes, springs, structure1)
     require_all("n_modes", np.asarray(n_modes), highest <= MAX_FREQUENCY, point, lambda j: (
         f"the highest mode would have the frequency {value_at(highest, j):.3g} rad/s, above "
         f"{MAX_FREQUENCY:g} rad/s where a continuum beam model does not hold: use fewer modes"))

@@ -632,9 +632,11 @@ def parameter_text(value: Any) -> Any:
 
     A tuple of parts (a beam's attachments, `impactbeams.structure`) becomes one text, each part
     as Python writes it (``"PointMass(position=0.1, mass=0.002, rotary_inertia=0.0)"``), joined
-    by "; ".
+    by "; "; any other object (a user structure) its text (``"MatrixStructure(80 DOFs, ...)"``).
     """
-    return "; ".join(map(repr, value)) if isinstance(value, tuple) else value
+    if isinstance(value, tuple):
+        return "; ".join(map(repr, value))
+    return value if isinstance(value, (str, int, float, np.number)) else repr(value)
 
 
 def _described(parameters: Mapping[str, Any]) -> dict[str, Any]:

@@ -317,18 +317,20 @@ def _softer_modes(cantilever: UniformBeam | AttachedBeam, stiffness: float) -> i
     built), from a few past b* = (4 k l^3 / EI)^(1/4) = (12 k c)^(1/4) (b_n is about
     (n - 1/2) pi, c the tip compliance), more if all of those are soft: the same count as
     `resolution_modes` of ``MAX_MODES`` modes, bit for bit. A beam with attachments is counted
-    the same way, on its own modes, up to the first stiff one.
+    the same way, on its own modes, up to the first stiff one; a user structure too, on at
+    most the modes it has (the guess b* only sets where the count starts).
     """
     b_soft = (12.0 * stiffness * cantilever.tip_compliance) ** 0.25
-    n = min(MAX_MODES, int(b_soft / math.pi) + 3)
+    limit = cantilever.mode_limit  # MAX_MODES, or fewer: the modes a user structure has
+    n = min(limit, int(b_soft / math.pi) + 3)
     while True:
         modes = cantilever.free_modes(n)
         soft = modes.frequencies**2 / modes.shapes.tip()**2 < stiffness
-        if not soft[-1] or n == MAX_MODES:
+        if not soft[-1] or n == limit:
             return int(np.sum(soft))
-        n = min(2 * n, MAX_MODES)
+        n = min(2 * n, limit)
 
 
 def recommended_modes(params: Params) -> int:
-    """The n_modes to use: ``required_modes``, within the limit of ``MAX_MODES``."""
-    return min(MAX_MODES, required_modes(params))
+    """The n_modes to use: ``required_modes``, within ``MAX_MODES`` and a structure's modes."""
+    return min(MAX_MODES, beam(params, 1).mode_limit, required_modes(params))

@@ -38,10 +38,12 @@ from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.longtime import LongTime, Stepping
 from impactbeams.params import (
     ATTACHMENTS,
+    BEAM1_KEYS,
     CHOICES,
     CONTACT_LAWS,
     MATERIAL_KEYS,
     MAX_MODES,
+    USER_STRUCTURE,
     ParameterError,
     Params,
     PointName,
@@ -392,6 +394,8 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
     where = f"[axes.{name}] of {source}"
     require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: a beam's "
             "attachments are fixed for a sweep (give them in [params], from Python)")
+    require(where, name, name != USER_STRUCTURE, f"{name} is not sweepable: give the "
+            "structure in [params] (one sweep per structure)")
     if name not in PARAMETERS:
         raise unknown_key("parameter", name, f"[axes] of {source}", PARAMETERS)
     if name == "contact_law":
@@ -447,7 +451,8 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
     dims = len(sweep.axes)
     ends = []
     values: dict[str, Any] = {name: value for name, value in sweep.fixed.items()
-                              if name not in CHOICES and name not in ATTACHMENTS}
+                              if name not in CHOICES and name not in ATTACHMENTS
+                              and name != USER_STRUCTURE}
     for k, axis in enumerate(sweep.axes):
         axis_ends = np.array([axis.min, axis.max] if axis.num > 1 and not axis.choices
                              else [axis.min])
@@ -468,7 +473,10 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
 
     resolved = resolve_materials(values, f"[params] of {sweep.source}", point)
     defaults = Params().numeric()
-    return {**defaults, **resolved}, point
+    # beam 1 as a user structure: its equivalent beam's l1, EI1, rhoA1 (Params' own)
+    beam1 = {name: sweep.base.numeric()[name] for name in BEAM1_KEYS
+             if sweep.base.structure1 is not None and name in defaults}
+    return {**defaults, **beam1, **resolved}, point
 
 
 def _check_grid(sweep: Sweep) -> None:
@@ -482,7 +490,11 @@ def _check_grid(sweep: Sweep) -> None:
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
     check_joint(values, point, sweep.base.partner, sweep.base.mount)
-    check_run(values, sweep.t_max, sweep.n_modes, point, sweep.base.grounded_springs)
+    if sweep.base.structure1 is not None and "1" in sweep.base.mount.shaken_beams(
+            sweep.base.partner):
+        sweep.base.structure1.require_support(values["base_amplitude"])
+    check_run(values, sweep.t_max, sweep.n_modes, point, sweep.base.grounded_springs,
+              sweep.base.structure1)
     _check_long_time(sweep, values, point)
 
 
@@ -499,7 +511,8 @@ def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) 
         "long-time observables sample once per forcing period: need omega > 0 (rad/s)"))
     periods = sweep.transient_periods + sweep.long_time.sampled_periods
     horizon = sweep.long_time.horizon(omega, sweep.transient_periods)
-    highest = highest_frequency(values, sweep.n_modes, sweep.base.grounded_springs)
+    highest = highest_frequency(values, sweep.n_modes, sweep.base.grounded_springs,
+                                sweep.base.structure1)
     phase = np.maximum(highest, omega) * horizon
     require_all("transient_periods + sampled_periods", periods, phase <= MAX_PHASE, point,
                 lambda j: (f"the run of {value_at(horizon, j):.3g} s turns the fastest "

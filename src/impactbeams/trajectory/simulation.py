@@ -16,6 +16,7 @@ from impactbeams.compilation import compile_in_two_processes
 from impactbeams.contact.spring import required_modes
 from impactbeams.kernels.layout import CONTACT
 from impactbeams.longtime import LongTime
+from impactbeams.modes import beam
 from impactbeams.packing import Packed, pack_run
 from impactbeams.params import (
     MAX_EVENTS,
@@ -100,7 +101,8 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
                                            "simulate", params.partner)
                     ) + costs.SAMPLING * n_times * n_modes
     if energy_balance:
-        fastest = float(highest_frequency(params.numeric(), n_modes, params.grounded_springs))
+        fastest = float(highest_frequency(params.numeric(), n_modes, params.grounded_springs,
+                                        params.structure1))
         seconds += costs.energy_seconds(fastest, n_modes, t_max, n_times)
     return Cost(2 * 8 * series * n_times + sampling + segments, seconds)
 
@@ -297,11 +299,15 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
         episode_separation = require_finite("episode_separation", episode_separation, "s")
         require("episode_separation", episode_separation, episode_separation >= 0,
                 "must be >= 0", "s")
+    beam1 = beam(params, 1)
+    require("fields", fields, not fields or beam1.continuous,
+            "beam 1 is a user structure (structure1): it has no fields along a beam")
     resolution = required_modes(params) if params.law.compliant else 5
     if n_modes is None:
-        n_modes = min(resolution, MAX_MODES)
+        n_modes = min(resolution, MAX_MODES, beam1.mode_limit)
     n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
-    check_run(params.numeric(), t_max, n_modes, springs=params.grounded_springs)
+    check_run(params.numeric(), t_max, n_modes, springs=params.grounded_springs,
+              structure1=params.structure1)
     n_times = times.size if times is not None else _output_count(t_max, dt_output)
     cost = simulation_cost(params, t_max, n_modes, n_times, fields, n_points, energy_balance,
                            max_events)
@@ -329,7 +335,8 @@ def _announce(params: Params, run_inputs: _RunInputs) -> None:
 
 def _announce_energy(params: Params, n_modes: int, t_end: float, n_times: int) -> None:
     """The expected time of the energy balance over a run that stopped at ``t_end`` (s)."""
-    fastest = highest_frequency(params.numeric(), n_modes, params.grounded_springs)
+    fastest = highest_frequency(params.numeric(), n_modes, params.grounded_springs,
+                                        params.structure1)
     seconds = costs.energy_seconds(float(fastest), n_modes, t_end, n_times)
     print(f"simulate: the energy balance over the {t_end:.4g} s simulated: roughly "
           f"{format_time(seconds)}", file=sys.stderr)
