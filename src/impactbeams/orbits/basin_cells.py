@@ -25,12 +25,11 @@ import math
 import numpy as np
 
 from impactbeams.kernels.layout import CONTACT, TIP_V1, TIP_V2, TIP_Y1, TIP_Y2
-from impactbeams.kernels.stroboscope import tip_motions
 from impactbeams.longtime import DEFAULT_PERIOD_TOLERANCE, response_period
 from impactbeams.packing import Packed
 from impactbeams.params import is_integer, is_real, require
 from impactbeams.sweep.plan import MAX_PHASES_PER_PERIOD
-from impactbeams.trajectory.phases import Trajectory, run, sample
+from impactbeams.trajectory.phases import Trajectory, run, sample, tips_at, tips_of
 from impactbeams.trajectory.start import phase_state, section_gap
 
 # the label of a cell whose samples did not settle within Settling.max_periods
@@ -141,7 +140,7 @@ class CellRunner:
         if trajectory.status != "complete":
             return None
         phase, q, v = sample(self.packed, trajectory, self.times)
-        tips = self._tips_of(phase, self.times, q, v)
+        tips = tips_of(self.packed, phase, self.times, q, v)
         x = np.stack([tips[:, TIP_Y1], tips[:, TIP_Y2], tips[:, TIP_V1] / self.omega,
                       tips[:, TIP_V2] / self.omega], axis=-1)
         z = np.concatenate([q[-1], v[-1]])
@@ -152,15 +151,7 @@ class CellRunner:
 
     def tips(self, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
         """The tips' motion (TIP_* columns of `kernels.layout`) of a block at ``times`` (s)."""
-        phase, q, v = sample(self.packed, trajectory, times)
-        return self._tips_of(phase, times, q, v)
-
-    def _tips_of(self, phase: np.ndarray, times: np.ndarray, q: np.ndarray,
-                 v: np.ndarray) -> np.ndarray:
-        p = self.packed
-        out = np.empty((times.size, 4))
-        tip_motions(p.tables, p.forces, p.phase_scalars, p.settings, phase, times, q, v, out)
-        return out
+        return tips_at(self.packed, trajectory, times)
 
     def contacts(self, trajectory: Trajectory, period: int) -> int:
         """Contact onsets in the last ``period`` forcing periods of a block."""

@@ -40,7 +40,6 @@ from impactbeams.kernels.layout import (
 )
 from impactbeams.kernels.peaks import least_peak_force
 from impactbeams.kernels.records import Tangent
-from impactbeams.kernels.stroboscope import tip_motions
 from impactbeams.kernels.tangent import carry_tangents
 from impactbeams.packing import Dynamics, Packed, dynamics_arrays, pack_run
 from impactbeams.params import (
@@ -53,7 +52,7 @@ from impactbeams.params import (
 )
 from impactbeams.trajectory.episodes import default_separation, episode_labels
 from impactbeams.trajectory.impacts import impact_table
-from impactbeams.trajectory.phases import Trajectory, run, sample
+from impactbeams.trajectory.phases import Trajectory, run, sample, tips_at
 from impactbeams.trajectory.start import checked_state, final_state, phase_state
 
 # Samples per forcing period of the gap and the tips, before each extremum is refined by
@@ -402,16 +401,7 @@ class PeriodMap:
         return self._tips(result.trajectory, np.asarray(times, dtype=float))
 
     def _tips(self, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
-        phase, q, v = sample(self.packed, trajectory, times)
-        return self._tips_of(phase, times, q, v)
-
-    def _tips_of(self, phase: np.ndarray, times: np.ndarray, q: np.ndarray, v: np.ndarray,
-                 ) -> np.ndarray:
-        """The tips' motion (TIP_* columns) of the sampled states at ``times``."""
-        out = np.empty((times.size, 4))
-        p = self.packed
-        tip_motions(p.tables, p.forces, p.phase_scalars, p.settings, phase, times, q, v, out)
-        return out
+        return tips_at(self.packed, trajectory, times)
 
     def _largest(self, times: np.ndarray, sampled: np.ndarray,
                  size: Callable[[np.ndarray], np.ndarray]) -> float:

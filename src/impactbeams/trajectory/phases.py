@@ -11,6 +11,7 @@ import numpy as np
 from impactbeams.kernels import dynamics as dyn
 from impactbeams.kernels.layout import FREE
 from impactbeams.kernels.records import Segments, segments
+from impactbeams.kernels.stroboscope import tip_motions
 from impactbeams.packing import Packed
 
 _INITIAL_CAPACITY = 4096  # segments; doubled as needed up to max_events
@@ -125,6 +126,21 @@ def sample(packed: Packed, trajectory: Trajectory, times: np.ndarray,
     dyn.sample_states(packed.tables, packed.forces, packed.dynamics.spring_arrays,
                       packed.drives, packed.settings, trajectory.segments, times, q, v, phase)
     return phase, q, v
+
+
+def tips_of(packed: Packed, phase: np.ndarray, times: np.ndarray, q: np.ndarray,
+            v: np.ndarray) -> np.ndarray:
+    """The tips' motion (``kernels.layout`` TIP_* columns) of sampled states at ``times``."""
+    out = np.empty((times.size, 4))
+    tip_motions(packed.tables, packed.forces, packed.phase_scalars, packed.settings, phase,
+                times, q, v, out)
+    return out
+
+
+def tips_at(packed: Packed, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
+    """The tips' motion (TIP_* columns) of ``trajectory`` at ascending ``times`` (s)."""
+    phase, q, v = sample(packed, trajectory, times)
+    return tips_of(packed, phase, times, q, v)
 
 
 def free_states(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray, v: np.ndarray,
