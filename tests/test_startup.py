@@ -27,7 +27,9 @@ from test_resume import KINDS, assert_same_map
 
 # what a command's cost is made of (docs/benchmarks/startup.json)
 HEAVY = {"scipy", "scipy.linalg", "scipy.optimize", "numba", "xarray", "pandas", "netCDF4",
-         "matplotlib", "matplotlib.pyplot", "dask"}
+         "matplotlib", "matplotlib.pyplot", "dask",
+         # the eigen-solvers of beams with attachments and of user structures: only for those
+         "impactbeams.structure.cantilever", "impactbeams.structure.user"}
 # Numba imports SciPy's top package to check its version; its cached kernels load without
 # scipy.linalg in the command's own process (impactbeams.cached_kernels)
 NUMBA = {"numba", "scipy"}

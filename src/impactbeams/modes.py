@@ -23,13 +23,16 @@ from __future__ import annotations
 import dataclasses
 import functools
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from impactbeams.brent import brentq  # not SciPy's: it costs 0.3 s of start-up (brent.py)
 from impactbeams.params import MAX_MODES, Params
-from impactbeams.structure import Cantilever, StructureModes
-from impactbeams.structure.user import MatrixStructure, ModalStructure, UserModes
+
+if TYPE_CHECKING:  # their modules load with the beams that need them (`Params.structure`)
+    from impactbeams.structure import Cantilever, StructureModes
+    from impactbeams.structure.user import MatrixStructure, ModalStructure, UserModes
 
 _RTOL = 4 * np.finfo(float).eps
 _COINCIDENT = 1e-12  # relative distance below which two free frequencies are one double pole
@@ -294,11 +297,11 @@ def beam(params: Params, which: int) -> UniformBeam | AttachedBeam:
     """
     if which == 1 and params.structure1 is not None:
         return UserBeam(params.structure1)
-    structure = params.structure(which)
-    if structure.closed_form:
-        segment = structure.segments[0]
-        return UniformBeam(segment.EI, segment.rhoA, segment.length)
-    return AttachedBeam(structure)
+    i = str(which)
+    if not getattr(params, "attachments" + i):  # (`Params` builds uniform beams only)
+        return UniformBeam(getattr(params, "EI" + i), getattr(params, "rhoA" + i),
+                           getattr(params, "l" + i))
+    return AttachedBeam(params.structure(which))
 
 
 def _merged_free_frequencies(params: Params, n: int) -> np.ndarray:

@@ -53,7 +53,7 @@ import reprlib
 import tomllib
 from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -67,7 +67,6 @@ from impactbeams.checks import (  # noqa: F401  (their old home: modules above i
 )
 from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount
 from impactbeams.kernels import layout
-from impactbeams.structure import Cantilever
 from impactbeams.structure.parts import (
     Attachment,
     Spring,
@@ -75,8 +74,11 @@ from impactbeams.structure.parts import (
     check_attachments,
     check_clamp,
 )
-from impactbeams.structure.user import MatrixStructure, ModalStructure, read_structure
 from impactbeams.variables import PARAMETERS
+
+if TYPE_CHECKING:  # imported where used: only a run with attachments or a structure needs them
+    from impactbeams.structure.cantilever import Cantilever
+    from impactbeams.structure.user import MatrixStructure, ModalStructure
 
 STEEL_E = 210e9  # Pa
 STEEL_RHO = 7850.0  # kg/m^3
@@ -496,6 +498,8 @@ class Params:
         uniform cantilever (its length scale, its tip compliance l1^3 / (3 EI1), its fundamental
         frequency), which only the checks and the cost estimates read.
         """
+        from impactbeams.structure.user import MatrixStructure, ModalStructure, read_structure
+
         structure = self.structure1
         if isinstance(structure, (str, Path)):
             structure = read_structure(structure, USER_STRUCTURE)
@@ -633,9 +637,19 @@ class Params:
 
         A rigid stop gives way by nothing: c2 = 0.
         """
-        c2 = self.structure(2).tip_compliance if self.partner.has_beam2 else 0.0
-        beam1 = self.structure(1) if self.structure1 is None else self.structure1
-        return beam1.tip_compliance, c2
+        c2 = self._tip_compliance(2) if self.partner.has_beam2 else 0.0
+        return (self._tip_compliance(1) if self.structure1 is None
+                else self.structure1.tip_compliance), c2
+
+    def _tip_compliance(self, which: int) -> float:
+        """Beam ``which``'s tip compliance (m/N), l^3 / (3 EI) for a bare beam.
+
+        With attachments its cantilever's (the Green's function: a module loaded only then).
+        """
+        i = str(which)
+        if getattr(self, "attachments" + i):
+            return self.structure(which).tip_compliance
+        return getattr(self, "l" + i) ** 3 / (3 * getattr(self, "EI" + i))
 
     @property
     def wave_constant(self) -> tuple[float, float]:
@@ -712,6 +726,8 @@ _STRUCTURE_IS_BEAM1 = "structure1 is beam 1 (a user structure): leave beam 1's k
 def _cantilever(EI: float, rhoA: float, length: float,
                 attachments: tuple[Attachment, ...]) -> Cantilever:
     """The checked `Cantilever` of a beam, built once (a run asks for it often, 15 us each)."""
+    from impactbeams.structure.cantilever import Cantilever
+
     return Cantilever.uniform(EI, rhoA, length, attachments)
 
 

@@ -27,11 +27,12 @@ from impactbeams.params import (
     require_all,
     value_at,
 )
-from impactbeams.structure.user import MatrixStructure, ModalStructure
 from impactbeams.variables import validate
 
 if TYPE_CHECKING:
     import xarray as xr
+
+    from impactbeams.structure.user import MatrixStructure, ModalStructure
 
 # rad: the largest phase omega t of any oscillation over a run (the fastest mode's or the
 # forcing's). A phase is rounded to ~0.1 eps omega t per evaluation (docs/limits.md), 2e-7 rad

@@ -8,7 +8,17 @@ mass-normalised including the attachments; ``Cantilever.flexibility`` the exact 
 Green's function with the springs. SciPy only; evaluated once per geometry.
 """
 
-from impactbeams.structure.cantilever import Cantilever, StructureModes
-from impactbeams.structure.parts import PointMass, Segment, Spring
+from importlib import import_module
+from typing import Any
 
+# each name's module, imported when first asked for: `Params` checks its parts on every
+# creation, but the eigen-solvers (cantilever, waves, flexibility) only with attachments
+_MODULES = {"Cantilever": "cantilever", "StructureModes": "cantilever", "PointMass": "parts",
+            "Segment": "parts", "Spring": "parts"}
 __all__ = ["Cantilever", "PointMass", "Segment", "Spring", "StructureModes"]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _MODULES:
+        return getattr(import_module(f"impactbeams.structure.{_MODULES[name]}"), name)
+    raise AttributeError(f"module 'impactbeams.structure' has no attribute {name!r}")
