@@ -43,7 +43,7 @@ MARKER_SIZE, SMALL_MARKER_SIZE = 6.0, 3.5  # points: a labelled kind's markers, 
 # same largest deflection there): drawn over the period-1 curve and over the event markers,
 # and thinner, so that the period-1 curve shows on both sides of it and neither hides the
 # other (each branch keeps its own colour; stable solid, unstable dashed, whatever its period)
-LINE_WIDTH, LONGER_PERIOD_LINE_WIDTH = 1.8, 1.0  # points
+LINE_WIDTH, LONGER_PERIOD_LINE_WIDTH = 1.4, 0.8  # points
 PERIOD_ONE_ZORDER, EVENT_ZORDER, LONGER_PERIOD_ZORDER = 2.0, 2.5, 3.0
 LEGEND_CANDIDATES = 11  # legend positions tried along each axis, corners and edges first
 LEGEND_MARGIN = 3.0  # points: kept free between the legend and anything drawn
