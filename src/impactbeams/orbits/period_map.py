@@ -24,7 +24,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from impactbeams.blas import one_blas_thread
-from impactbeams.contact.spring import required_modes
+from impactbeams.contact.spring import recommended_modes
 from impactbeams.drive import moving_clamps
 from impactbeams.kernels import contact
 from impactbeams.kernels.layout import (
@@ -129,7 +129,7 @@ class PeriodMap:
                 "a period map needs a forcing period: omega > 0", "rad/s")
         self.periods = require_integer("periods", periods, 1)
         if n_modes is None:
-            n_modes = min(required_modes(params), MAX_MODES)
+            n_modes = recommended_modes(params)
         self.n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
         self.max_events = require_integer("max_events", max_events, 1)
         self.params = params
