@@ -203,7 +203,7 @@ class PeriodMap:
         if result.approached:
             return result
         times = self._grid()
-        phase, q, v = sample(self.packed, result.trajectory, times)
+        phase, q, v = sample(self.packed, result.trajectory, times, grid=True)
         min_gap, min_gap_time = self._min_gap(result.trajectory, times, self._gap_of(times, q),
                                               phase == FREE)
         return dataclasses.replace(result, min_gap=min_gap, min_gap_time=min_gap_time,
