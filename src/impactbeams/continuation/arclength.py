@@ -148,8 +148,10 @@ class Follower:
         z, p = self.scaling.unscaled(x)
         evaluation = self.problem.evaluate(z, p, grazing=False)
         if rate is None:
-            rate = parameter_derivative(self.problem, z, p, 1.0 / self.scaling.parameter,
-                                        evaluation)
+            # a problem may difference its own parameter (a curve's: on a grazing curve every
+            # point is at a change of the contacts, where the narrowed step is round-off)
+            derivative = getattr(self.problem, "parameter_derivative", parameter_derivative)
+            rate = derivative(self.problem, z, p, 1.0 / self.scaling.parameter, evaluation)
         w = self.scaling.state
         jacobian = np.hstack([w[:, None] * evaluation.jacobian / w[None, :],
                               (w * rate / self.scaling.parameter)[:, None]])

@@ -1,0 +1,161 @@
+"""Bifurcation curves in two parameters (issue 34, item 1): grazing, fold, codimension two.
+
+Each continued curve is checked against an independent computation: the grazing curve of the
+non-impacting orbit against the closed form through the modal sums (`grazing_curve`), its
+turning point against the maximum of the closed form's |G(Omega)|, a fold curve against the
+folds that one-parameter branches locate at five drive levels, the cusp where two fold curves
+meet against one-parameter branches on both sides of it (two folds above its drive, none
+below).
+"""
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize_scalar
+
+import impactbeams as ib
+from impactbeams.continuation import Continuation, continue_orbits
+from impactbeams.continuation.twoparameter import BifurcationCurve, continue_curve
+from impactbeams.orbits.grazing import LinearGap
+from impactbeams.params import ParameterError
+from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
+
+# the continuation tests' small model: two beams, a stiff spring, 3 modes per beam
+SMALL = ib.Params(contact_stiffness=1e4, damping_ratio=0.02, force_amplitude=3e-5,
+                  clearance=1.1e-5)
+# the shipped example's soft stop, 3 modes: a hysteresis band between two folds at 1e-4 N
+STOP = ib.Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
+                 force_amplitude=1e-4)
+FOLD = BIFURCATIONS.index("fold")
+# a curve point solves the augmented system to Newton's 1e-10 of the scaled unknowns (the
+# parameters per their ranges, O(1) here), and a one-parameter branch locates an event to
+# 1e-11 of its range: the brief's 1e-9 relative
+AGREE = 1e-9
+
+
+def event(curve, label):
+    return np.flatnonzero(curve.curve_event.values == CURVE_EVENTS.index(label))
+
+
+@pytest.fixture(scope="module")
+def small_branch():
+    """The small model's non-impacting orbits up to its first grazing (234.73 rad/s)."""
+    continuation = Continuation(SMALL, "omega", 225.0, 240.0, n_modes=3, max_branches=1,
+                                max_points=20)
+    return continuation, continue_orbits(continuation)
+
+
+@pytest.fixture(scope="module")
+def stop_branch():
+    continuation = Continuation(STOP, "omega", 195.0, 330.0, n_modes=3, subspace=4,
+                                max_branches=1)
+    return continuation, continue_orbits(continuation)
+
+
+def test_grazing_curve_is_the_closed_form_at_every_point(small_branch):
+    curve = continue_curve(BifurcationCurve.from_branch(*small_branch, "grazing",
+                                                        "force_amplitude", 2e-5, 4e-5,
+                                                        max_step=0.02))
+    validate(curve)
+    assert curve.branch_point.size >= 20 and curve.attrs["curve_ending"] == "bound"
+    closed = ib.grazing_curve(SMALL, 3, "force_amplitude", curve.omega.values)
+    np.testing.assert_allclose(curve.force_amplitude.values, closed.force_amplitude.values,
+                               rtol=AGREE, atol=0.0)
+    # it starts at the branch's located grazing and moves along the curve (Omega falls)
+    assert curve.force_amplitude.values[0] == SMALL.force_amplitude
+    assert np.all(np.diff(curve.omega.values) < 0.0)
+    assert curve.force_amplitude.values[-1] == 4e-5  # ended on the box's edge
+    assert list(event(curve, "end")) == [curve.branch_point.size - 1]
+
+
+def test_grazing_curve_turns_where_the_closed_forms_clearance_is_largest(small_branch):
+    """In (Omega, clearance) the grazing curve is Delta = |G(Omega)|: it turns at the
+    resonance, the maximum of |G| (found by Brent's method on the closed form)."""
+    curve = continue_curve(BifurcationCurve.from_branch(
+        *small_branch, "grazing", "clearance", 5e-6, 5e-5, box=(200.0, 300.0)))
+    (turn,) = event(curve, "turning_point")
+    linear = LinearGap(SMALL, 3)
+    peak = minimize_scalar(lambda omega: -abs(complex(linear.phasor(omega))),
+                           bracket=(240.0, 246.0, 250.0), tol=1e-12)
+    # the clearance is flat at the turn: known to the corrector's tolerance; Omega there to
+    # the square root of it (the turn is located where the tangent's part vanishes)
+    assert float(curve.clearance[turn]) == pytest.approx(-peak.fun, rel=AGREE)
+    assert float(curve.omega[turn]) == pytest.approx(peak.x, rel=1e-6)
+    # located until F0 is pinned to 1e-11 of its range: the tangent's part, ~ the arclength
+    # from the turn, to ~1e-11 over the parameter's rate there (~1e-3)
+    assert abs(float(curve.curve_tangent_2[turn])) < 1e-6
+    assert float(curve.clearance.max()) == float(curve.clearance[turn])
+
+
+def _fold(params, omega, state):
+    """The fold the one-parameter branch locates going up from 1 rad/s below ``omega``."""
+    branch = continue_orbits(Continuation(params, "omega", omega - 1.0, omega + 1.0,
+                                          state=state, n_modes=3, subspace=4,
+                                          max_branches=1, transient_periods=0))
+    (located,) = branch.omega.values[branch.bifurcation.values == FOLD]
+    return float(located)
+
+
+@pytest.mark.parametrize("level", [0.6, 0.8, 1.2, 1.4, 1.6])
+def test_fold_curve_passes_through_the_one_parameter_folds(stop_branch, level):
+    """The fold curve from the upper fold at 1e-4 N, ended on the drive level's edge, is at
+    the fold a one-parameter branch in Omega locates at that level (started from the curve's
+    orbit 1 rad/s below: the guess only, the fold is the branch's own)."""
+    force = level * STOP.force_amplitude
+    low, high, direction = ((force, STOP.force_amplitude, "down") if level < 1 else
+                            (STOP.force_amplitude, force, "up"))
+    curve = continue_curve(BifurcationCurve.from_branch(*stop_branch, "fold",
+                                                        "force_amplitude", low, high,
+                                                        direction=direction))
+    assert curve.attrs["curve_ending"] == "bound"
+    end = curve.isel(branch_point=-1)
+    assert float(end.force_amplitude) == force
+    assert abs(float(end.curve_condition)) < 1e-9
+    located = _fold(STOP.replace(force_amplitude=force), float(end.omega),
+                    end.section_state.values)
+    assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
+
+
+def test_two_fold_curves_meet_at_a_cusp(stop_branch):
+    """Both folds' curves, followed down in the drive, reach the same cusp, and go on as the
+    other fold's; one-parameter branches 1 % above its drive have two folds, 1 % below none."""
+    cusps = []
+    for which in (0, 1):
+        curve = continue_curve(BifurcationCurve.from_branch(
+            *stop_branch, "fold", "force_amplitude", 1e-6, 2e-4, which=which,
+            direction="down", max_points=400))
+        (cusp,) = event(curve, "cusp")
+        cusps.append((float(curve.omega[cusp]), float(curve.force_amplitude[cusp])))
+        assert curve.attrs["curve_ending"] == "bound"
+        assert abs(float(curve.curve_tangent_1[cusp])) < 1e-3
+    assert cusps[0] == pytest.approx(cusps[1], rel=1e-9)
+    omega, force = cusps[0]
+    for factor, folds in ((1.01, 2), (0.99, 0)):
+        branch = continue_orbits(Continuation(
+            STOP.replace(force_amplitude=factor * force), "omega", omega - 8.0,
+            omega + 8.0, n_modes=3, subspace=4, max_branches=1))
+        assert np.count_nonzero(branch.bifurcation.values == FOLD) == folds
+
+
+@pytest.mark.parametrize(("changes", "message"), [
+    ({"kind": "hopf"}, "kind = 'hopf' is not allowed: must be one of 'grazing', 'fold'"),
+    ({"second": "omega"}, "second = 'omega' is not allowed: must differ from parameter"),
+    ({"state": np.zeros(3)}, "state = (3,) is not allowed: must be 6 finite numbers"),
+    ({"low": 2e-4}, "force_amplitude = 0.0001 is not allowed: (the start's, from params)"),
+    ({"max_step": 1.0, "step": 2.0}, "step = 2.0 is not allowed: must lie from min_step"),
+])
+def test_bad_input_in_one_line(changes, message):
+    values = {"params": STOP, "kind": "fold", "parameter": "omega", "value": 300.0,
+              "state": np.zeros(6), "second": "force_amplitude", "low": 5e-5, "high": 3e-4,
+              "parameter_low": 200.0, "parameter_high": 400.0, "n_modes": 3, **changes}
+    with pytest.raises(ParameterError) as error:
+        BifurcationCurve(**values)
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_a_start_off_the_bifurcation_is_refused(stop_branch):
+    continuation, branch = stop_branch
+    curve = BifurcationCurve.from_branch(continuation, branch, "fold", "force_amplitude",
+                                         5e-5, 2e-4)
+    far = BifurcationCurve(**{**curve.__dict__, "value": 250.0})
+    with pytest.raises(ParameterError, match="did not converge to a fold"):
+        continue_curve(far)
