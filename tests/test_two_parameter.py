@@ -115,6 +115,7 @@ def test_fold_curve_passes_through_the_one_parameter_folds(stop_branch, level):
     assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
 
 
+@pytest.mark.slow
 def test_two_fold_curves_meet_at_a_cusp(stop_branch):
     """Both folds' curves, followed down in the drive, reach the same cusp, and go on as the
     other fold's; one-parameter branches 1 % above its drive have two folds, 1 % below none."""
@@ -159,3 +160,77 @@ def test_a_start_off_the_bifurcation_is_refused(stop_branch):
     far = BifurcationCurve(**{**curve.__dict__, "value": 250.0})
     with pytest.raises(ParameterError, match="did not converge to a fold"):
         continue_curve(far)
+
+
+@pytest.fixture(scope="module")
+def stiff_branch():
+    """The small model's branch from 261.5 rad/s down: it folds back and forth four times,
+    two of its folds just past grazings (the stiff spring's impacting orbits)."""
+    continuation = Continuation(SMALL, "omega", 255.0, 268.0, start=261.5, direction="down",
+                                n_modes=3, max_branches=1, max_points=150,
+                                transient_periods=600)
+    return continuation, continue_orbits(continuation)
+
+
+def _branch_events(params, omega, state, **range_):
+    branch = continue_orbits(Continuation(params, "omega", omega - 0.3, omega + 0.3,
+                                          state=state, transient_periods=0, n_modes=3,
+                                          max_branches=1, **range_))
+    return [(BIFURCATIONS[code], float(branch.omega[i]))
+            for i, code in enumerate(branch.bifurcation.values) if code]
+
+
+@pytest.fixture(scope="module")
+def fold_to_grazing(stiff_branch):
+    """The fold at 266.05 rad/s followed down in F0: it turns, then ends where its orbit
+    grazes (a third contact appears past it, and the fold has no smooth continuation)."""
+    return continue_curve(BifurcationCurve.from_branch(*stiff_branch, "fold",
+                                                       "force_amplitude", 1e-5, 6e-5,
+                                                       which=3, direction="down"))
+
+
+@pytest.mark.slow
+def test_fold_curve_ends_where_its_fold_meets_the_grazing(fold_to_grazing):
+    """At the curve's end drive, the one-parameter branch in Omega (started 0.3 rad/s above
+    from the end's orbit) locates its fold and a grazing at the curve's end frequency."""
+    curve = fold_to_grazing
+    assert curve.attrs["curve_ending"] == "grazing"
+    assert list(event(curve, "grazing")) == [curve.branch_point.size - 1]
+    end = curve.isel(branch_point=-1)
+    omega = float(end.omega)
+    found = _branch_events(SMALL.replace(force_amplitude=float(end.force_amplitude)), omega,
+                           end.section_state.values, start=omega + 0.3, direction="down")
+    near = {label: [value for name, value in found if name == label and abs(value - omega)
+                    < 1e-3] for label in ("fold", "grazing")}
+    # (the orbit of three contacts past the grazing folds there too)
+    assert near["fold"] and near["grazing"]
+    np.testing.assert_allclose(near["fold"] + near["grazing"], omega, rtol=AGREE, atol=0.0)
+
+
+@pytest.mark.slow
+def test_past_the_fold_grazing_point_the_fold_is_gone(fold_to_grazing):
+    """1e-6 below the end's drive, the branch coming down in Omega folds first, 1.4e-5 rad/s
+    short of its grazing; 1e-6 above, it reaches the grazing first (its fold lay past it,
+    where the contacts differ: the orbit of three contacts folds there on its own)."""
+    end = fold_to_grazing.isel(branch_point=-1)
+    omega, force = float(end.omega), float(end.force_amplitude)
+    for factor, first in ((1 - 1e-6, "fold"), (1 + 1e-6, "grazing")):
+        found = _branch_events(SMALL.replace(force_amplitude=factor * force), omega,
+                               end.section_state.values, start=omega + 0.3, direction="down")
+        near = [(label, value) for label, value in found if abs(value - omega) < 1e-3]
+        assert near[0][0] == first
+        if first == "fold":
+            assert near[1][0] == "grazing" and 0.0 < near[1][1] - near[0][1] < 1e-7 * omega
+
+
+@pytest.mark.slow
+def test_a_jump_of_the_grazing_value_is_not_a_grazing(stiff_branch):
+    """The fold at 261.03 rad/s followed down: its orbit's grazing value changes sign by a
+    jump (another gap minimum becomes the nearest to 0, never at 0): no grazing labelled."""
+    curve = continue_curve(BifurcationCurve.from_branch(*stiff_branch, "fold",
+                                                       "force_amplitude", 1e-5, 6e-5,
+                                                       which=1, direction="down"))
+    gaps = curve.grazing_gap.values
+    assert gaps.min() < 0.0 < gaps.max()
+    assert np.abs(gaps).min() > 1e-3 * np.abs(gaps).max()
+    assert event(curve, "grazing").size == 0 and curve.attrs["curve_ending"] == "bound"

@@ -500,6 +500,11 @@ VARIABLES.update({
         "the second parameter's component of the curve's unit tangent in the scaled unknowns "
         "(per the second parameter's range): 0 where that parameter turns back along the "
         "curve"),
+    "curve_stable": Variable(
+        ("branch_point",), "1", "stability of the orbit but for the bifurcating multiplier",
+        "1 if every Floquet multiplier has |mu| < 1, leaving out on a fold or period-doubling "
+        "curve the one nearest +1 or -1 (on the curve, at it to round-off), else 0: whether "
+        "the orbit is stable on one side of the bifurcation", dtype="int8", flags=STABILITY),
     "curve_event": Variable(
         ("branch_point",), "1", "codimension-two point located at the curve point",
         "0 none; 1 end (the curve's last point: the attribute curve_ending says why); 2 "

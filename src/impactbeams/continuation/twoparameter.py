@@ -13,11 +13,13 @@ Codimension-two points met on the way, each located to ``locate_tolerance`` and 
 - ``turning_point``: p2 turns back along the curve (the tangent's p2 part changes sign; on a
   fold curve the cusp is such a point, where the tangent's p1 part vanishes as well:
   ``cusp`` when it is below ``CUSP_TANGENT`` there);
-- ``grazing``: the curve's orbit touches (its grazing value changes sign along a fold or
-  period-doubling curve; the bifurcation becomes a nonsmooth one there);
-- ``end``: the curve's last point: at the edge of the box (``curve_ending`` "bound"), where
-  the orbit's contact sequence changes and no point beyond it is found (located, "grazing"),
-  or where the corrector finds no point (the orbit stops existing: "min_step").
+- ``grazing``: the curve's orbit touches: its grazing value passes through 0 along a fold or
+  period-doubling curve (a sign change by a jump, where another contact or gap minimum
+  becomes the nearest to 0, is not one: `_at_zero_depth`). Where no point is found beyond
+  it, the curve ends there (``curve_ending`` "grazing"; the last point carries the label);
+- ``end``: the curve's last point otherwise: at the edge of the box (``curve_ending``
+  "bound", corrected onto it) or where the corrector finds no point (the orbit stops
+  existing, or turns within less than ``min_step``: "min_step").
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ from impactbeams.continuation.arclength import (
     crosses,
     oriented,
 )
-from impactbeams.continuation.branch import Branch
+from impactbeams.continuation.branch import ZERO_DEPTH, Branch
 from impactbeams.continuation.curves import CONDITIONS, KINDS, CurveProblem
 from impactbeams.continuation.events import Located, grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
@@ -158,16 +160,11 @@ class BifurcationCurve:
         ``branch``: `continue_orbits`(``continuation``)'s Dataset; the start is its located
         event's orbit, p1's box ``box`` (default the continuation's range).
         """
-        require("kind", kind, kind in KINDS, f"must be one of {', '.join(map(repr, KINDS))}")
-        at = np.flatnonzero(branch.bifurcation.values == BIFURCATIONS.index(kind))
-        require("which", which, 0 <= which < at.size,
-                f"the branch has {at.size} {kind} event(s): must be in [0, {at.size})")
-        i = int(at[which])
-        return cls(continuation.params, kind, continuation.parameter,
-                   float(branch[continuation.parameter][i]),
-                   np.asarray(branch.section_state[i].values), second, low, high,
-                   *(box or (continuation.low, continuation.high)), mode_count(continuation),
-                   period=int(branch.orbit_period[i]), **options)
+        if box is not None:
+            continuation = dataclasses.replace(continuation, low=box[0], high=box[1])
+        plan = CurvePlan(continuation, kind, second, low, high, which,
+                         **options)  # type: ignore[arg-type]
+        return plan.from_branch(branch)
 
     def settings(self) -> Settings:
         """The engine's settings (steps in units of the second parameter's range)."""
@@ -175,13 +172,51 @@ class BifurcationCurve:
                         max_points=self.max_points, max_branches=1)
 
 
-@dataclasses.dataclass
-class Curve:
-    """A followed curve: its points in order (their labels), how it ended, its scaling."""
+@dataclasses.dataclass(frozen=True)
+class CurvePlan:
+    """A curve to follow from the ``which``-th ``kind`` event of ``continuation``'s branch.
 
-    points: list[Point]
-    scaling: Scaling
-    ending: str = ""
+    Checked when made, before the branch is computed (`impactbeams continue` with a
+    ``[curve]`` table): all but whether the branch has that event. ``options``: the
+    remaining `BifurcationCurve` fields (steps, direction, max_points).
+    """
+
+    continuation: Continuation
+    kind: str
+    second: str
+    low: float
+    high: float
+    which: int = 0
+    direction: str = "up"
+    step: float = 0.02
+    min_step: float = 1e-9
+    max_step: float = 0.05
+    max_points: int = 200
+
+    def __post_init__(self) -> None:
+        require_integer("which", self.which, 0)
+        c = self.continuation
+        self.start(c.first, np.zeros(2 * c.params.partner.beams * mode_count(c)),
+                   c.period)  # every check of the curve, on a stand-in start
+
+    def start(self, value: float, state: np.ndarray, period: int) -> BifurcationCurve:
+        """The curve from the orbit ``state`` of ``period`` at ``parameter`` = ``value``."""
+        c = self.continuation
+        return BifurcationCurve(
+            c.params, self.kind, c.parameter, value, state, self.second, self.low, self.high,
+            c.low, c.high, mode_count(c), direction=self.direction, period=period,
+            step=self.step, min_step=self.min_step, max_step=self.max_step,
+            max_points=self.max_points, state_scale=c.state_scale)
+
+    def from_branch(self, branch: xr.Dataset) -> BifurcationCurve:
+        """The curve through the planned event of ``branch`` (ParameterError if it has none)."""
+        at = np.flatnonzero(branch.bifurcation.values == BIFURCATIONS.index(self.kind))
+        require("which", self.which, self.which < at.size,
+                f"the branch has {at.size} {self.kind} event(s): must be below {at.size}")
+        i = int(at[self.which])
+        return self.start(float(branch[self.continuation.parameter][i]),
+                          np.asarray(branch.section_state[i].values),
+                          int(branch.orbit_period[i]))
 
 
 Progress = Callable[[Branch, Point], None]
@@ -209,7 +244,7 @@ def continue_curve(curve: BifurcationCurve, progress: Progress | None = None,
 
 
 def follow(problem: CurveProblem, curve: BifurcationCurve,
-           progress: Progress | None = None) -> Curve:
+           progress: Progress | None = None) -> Branch:
     """The curve's points from its start to its end, events located and labelled."""
     p2 = getattr(curve.params, curve.second)
     scaling = _scaling(problem, curve, p2)
@@ -223,7 +258,7 @@ def follow(problem: CurveProblem, curve: BifurcationCurve,
         raise ParameterError(f"the start at {curve.parameter} = {curve.value!r}, "
                              f"{curve.second} = {p2!r} did not converge to a {curve.kind}: "
                              "give the state and value of a located one (from_branch)")
-    followed = Curve([], scaling)
+    followed = Branch([], curve.period, scaling)
     _keep(follower, followed, [first], progress)
     _steps(follower, followed, _box(curve, scaling), progress)
     end = followed.points[-1]
@@ -252,7 +287,7 @@ def _box(curve: BifurcationCurve, scaling: Scaling) -> np.ndarray:
         [[scaling.state[-1]], [scaling.parameter]])
 
 
-def _steps(follower: Follower, curve: Curve, box: np.ndarray,
+def _steps(follower: Follower, curve: Branch, box: np.ndarray,
            progress: Progress | None) -> None:
     """Step ``curve`` from its last point to its end (``curve.ending``)."""
     settings = follower.settings
@@ -266,7 +301,13 @@ def _steps(follower: Follower, curve: Curve, box: np.ndarray,
                     continue
                 _end_at_grazing(follower, curve, current, taken, progress)
                 return
-            curve.ending = MIN_STEP
+            # no point beyond: the orbit ends here, at a grazing if it touches (the fold of
+            # an impacting orbit that meets its grazing has no smooth continuation): the
+            # steps then creep up to it, its gap falling to ~0 against the curve's
+            grazes = _at_zero_depth(current, *curve.points)
+            curve.ending = GRAZED if grazes else MIN_STEP
+            if grazes:
+                curve.points[-1] = dataclasses.replace(current, label="grazing")
             return
         outside = _outside(point, box)
         if outside is not None:
@@ -284,14 +325,14 @@ def _steps(follower: Follower, curve: Curve, box: np.ndarray,
     curve.ending = MAX_POINTS
 
 
-def _keep(follower: Follower, curve: Curve, points: list[Point],
+def _keep(follower: Follower, curve: Branch, points: list[Point],
           progress: Progress | None) -> None:
     """Append ``points`` with their measures; the condition adapts to the last one."""
     for point in points:
         point = follower.kept(point)
         curve.points.append(point)
         if progress is not None:
-            progress(Branch(curve.points, 1, curve.scaling), point)
+            progress(curve, point)
     if points:
         z, p = follower.scaling.unscaled(points[-1].x)
         follower.problem.border(z, p, points[-1].evaluation)
@@ -326,8 +367,9 @@ def _events(follower: Follower, a: Point, b: Point) -> list[Point]:
     if (a.tangent[-1] > 0) != (b.tangent[-1] > 0):
         found.append(_turning(follower, a, b))
     if crosses(a.evaluation.grazing, (b.evaluation.grazing,)):
-        located = _located(follower, a, b, grazing_test)
-        found.append(dataclasses.replace(located.before, label="grazing"))
+        located = _located(follower, a, b, grazing_test, may_jump=True)
+        if located.root and _at_zero_depth(located.before, a, b):
+            found.append(dataclasses.replace(located.before, label="grazing"))
     found.sort(key=lambda point: float(a.tangent @ (point.x - a.x)))
     return [*found, b]
 
@@ -340,19 +382,32 @@ def _turning(follower: Follower, a: Point, b: Point) -> Point:
     return dataclasses.replace(point, label="cusp" if cusp else "turning_point")
 
 
-def _located(follower: Follower, a: Point, b: Point,
-             test: Callable[[Point], float]) -> Located:
+def _located(follower: Follower, a: Point, b: Point, test: Callable[[Point], float],
+             may_jump: bool = False) -> Located:
     """The root of ``test`` between ``a`` and ``b`` on ``a``'s secant planes."""
     return locate(lambda s: follower.at_arclength(a, s).point, a, float(
-        a.tangent @ (b.x - a.x)), b, test, follower.settings.locate_tolerance)
+        a.tangent @ (b.x - a.x)), b, test, follower.settings.locate_tolerance,
+        may_jump=may_jump)
 
 
-def _end_at_grazing(follower: Follower, curve: Curve, current: Point, taken: float,
+def _at_zero_depth(point: Point, *ends: Point) -> bool:
+    """Whether ``point``'s grazing value is ~0 against those at ``ends``: the orbit touches.
+
+    The grazing value (the smallest free-flight gap, or minus the shallowest overlap) also
+    changes sign by a jump, where another contact or minimum becomes the nearest to 0: no
+    grazing (`ZERO_DEPTH`, as the one-parameter branches tell the two apart).
+    """
+    scale = max(abs(end.evaluation.grazing) for end in ends)
+    return abs(point.evaluation.grazing) <= ZERO_DEPTH * scale
+
+
+def _end_at_grazing(follower: Follower, curve: Branch, current: Point, taken: float,
                     progress: Progress | None) -> None:
     """End the curve at the grazing ahead of ``current``, located (no point found past it)."""
     located = locate(lambda s: follower.at_arclength(current, s).point, current, taken, None,
                      grazing_test, follower.settings.locate_tolerance, may_jump=True)
-    if located.root and located.before is not current:
+    if located.root and located.before is not current and _at_zero_depth(located.before,
+                                                                          current):
         _keep(follower, curve, [dataclasses.replace(located.before, label="grazing")],
               progress)
         curve.ending = GRAZED
@@ -360,15 +415,16 @@ def _end_at_grazing(follower: Follower, curve: Curve, current: Point, taken: flo
         curve.ending = MIN_STEP
 
 
-def curve_dataset(curve: Curve, spec: BifurcationCurve) -> xr.Dataset:
+def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
     """The curve's points along ``branch_point``: both parameters as coordinates.
 
     The variables of a one-parameter branch (the orbit's measures, multipliers, contacts,
     grazing gap, section state) and ``curve_condition`` (the bifurcation's test function at
     the point: ~0, to the corrector's tolerance), ``curve_tangent_1`` and ``curve_tangent_2``
     (the unit tangent's parameter parts, scaled: their zeros are the turning points),
-    ``curve_event`` (the codimension-two points). Attributes: the kind, the parameters, the
-    ending.
+    ``curve_event`` (the codimension-two points), ``curve_stable`` (in place of ``stable``,
+    which the critical multiplier at round-off from the circle would decide). Attributes: the
+    kind, the parameters (``curve_parameters``), the ending (``curve_ending``).
     """
     unlabelled = [dataclasses.replace(point, label="") for point in curve.points]
     attrs = global_attributes(
@@ -383,7 +439,9 @@ def curve_dataset(curve: Curve, spec: BifurcationCurve) -> xr.Dataset:
         newton_tolerance=spec.settings().tolerance)
     dataset = branches_dataset([Branch(unlabelled, spec.period, curve.scaling)], spec.second,
                                attrs)
-    dataset = dataset.drop_vars(["bifurcation", "branch"])
+    dataset = dataset.drop_vars(["bifurcation", "branch", "stable"])
+    dataset["curve_stable"] = ("branch_point", np.array(
+        [_stable_but_critical(point, spec.kind) for point in curve.points], dtype=np.int8))
     states = dataset.section_state.values
     dataset = dataset.isel(state=slice(0, states.shape[1] - 1))
     dataset = dataset.assign_coords({spec.parameter: ("branch_point", states[:, -1])})
@@ -395,9 +453,19 @@ def curve_dataset(curve: Curve, spec: BifurcationCurve) -> xr.Dataset:
                                                    for point in curve.points]))
     dataset["curve_event"] = ("branch_point", np.array(
         [CURVE_EVENTS.index(point.label or "none") for point in curve.points], dtype=np.int8))
-    for name in ("curve_condition", "curve_tangent_1", "curve_tangent_2", "curve_event"):
+    for name in ("curve_condition", "curve_tangent_1", "curve_tangent_2", "curve_event",
+                 "curve_stable"):
         dataset[name].attrs.update(attributes(name))
     dataset.attrs.pop("branch_endings")
     dataset.attrs.pop("branch_origins")
     return dataset
 
+
+
+def _stable_but_critical(point: Point, kind: str) -> bool:
+    """Whether every multiplier but the critical one (at +1 or -1 on the curve) is inside."""
+    mu = np.asarray(point.evaluation.multipliers)
+    if kind != "grazing":
+        sigma = 1.0 if kind == "fold" else -1.0
+        mu = np.delete(mu, np.argmin(np.abs(mu - sigma)))
+    return bool(np.all(np.abs(mu) < 1.0))
