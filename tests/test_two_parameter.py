@@ -10,6 +10,7 @@ below).
 
 import numpy as np
 import pytest
+import xarray as xr
 from scipy.optimize import minimize_scalar
 
 import impactbeams as ib
@@ -86,12 +87,13 @@ def test_grazing_curve_turns_where_the_closed_forms_clearance_is_largest(small_b
     assert float(curve.clearance.max()) == float(curve.clearance[turn])
 
 
-def _fold(params, omega, state):
-    """The fold the one-parameter branch locates going up from 1 rad/s below ``omega``."""
-    branch = continue_orbits(Continuation(params, "omega", omega - 1.0, omega + 1.0,
+def _located(params, omega, state, label="fold", width=1.0):
+    """The ``label`` event the one-parameter branch locates going up from ``omega - width``
+    to ``omega + width`` (its only one there)."""
+    branch = continue_orbits(Continuation(params, "omega", omega - width, omega + width,
                                           state=state, n_modes=3, subspace=4,
                                           max_branches=1, transient_periods=0))
-    (located,) = branch.omega.values[branch.bifurcation.values == FOLD]
+    (located,) = branch.omega.values[branch.bifurcation.values == BIFURCATIONS.index(label)]
     return float(located)
 
 
@@ -110,8 +112,37 @@ def test_fold_curve_passes_through_the_one_parameter_folds(stop_branch, level):
     end = curve.isel(branch_point=-1)
     assert float(end.force_amplitude) == force
     assert abs(float(end.curve_condition)) < 1e-9
-    located = _fold(STOP.replace(force_amplitude=force), float(end.omega),
-                    end.section_state.values)
+    located = _located(STOP.replace(force_amplitude=force), float(end.omega),
+                       end.section_state.values)
+    assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
+
+
+@pytest.fixture(scope="module")
+def doubling_branch():
+    """The small model's impacting orbits (one contact) from 244 rad/s up: they double their
+    period at 244.73 rad/s."""
+    continuation = Continuation(SMALL, "omega", 236.0, 246.0, start=244.0, n_modes=3,
+                                max_branches=1, max_points=60, transient_periods=600)
+    return continuation, continue_orbits(continuation)
+
+
+@pytest.mark.parametrize("level", [0.8, 0.9, 1.1, 1.2, 1.3])
+def test_period_doubling_curve_passes_through_the_one_parameter_doublings(doubling_branch,
+                                                                          level):
+    """As the fold curve's test: the period-doubling curve (a multiplier at -1) ended on the
+    drive level's edge, against the doubling a one-parameter branch locates there."""
+    force = level * SMALL.force_amplitude
+    low, high, direction = ((force, SMALL.force_amplitude, "down") if level < 1 else
+                            (SMALL.force_amplitude, force, "up"))
+    curve = continue_curve(BifurcationCurve.from_branch(*doubling_branch, "period_doubling",
+                                                        "force_amplitude", low, high,
+                                                        direction=direction))
+    end = curve.isel(branch_point=-1)
+    assert curve.attrs["curve_ending"] == "bound" and float(end.force_amplitude) == force
+    mu = end.multiplier_modulus.values * np.exp(1j * end.multiplier_argument.values)
+    assert np.min(np.abs(mu + 1.0)) < 1e-9  # the eigenvalues of M: a multiplier at -1
+    located = _located(SMALL.replace(force_amplitude=force), float(end.omega),
+                       end.section_state.values, "period_doubling", width=0.2)
     assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
 
 
@@ -234,3 +265,66 @@ def test_a_jump_of_the_grazing_value_is_not_a_grazing(stiff_branch):
     assert gaps.min() < 0.0 < gaps.max()
     assert np.abs(gaps).min() > 1e-3 * np.abs(gaps).max()
     assert event(curve, "grazing").size == 0 and curve.attrs["curve_ending"] == "bound"
+
+
+STOP_CURVE_FILE = """n_modes = 3
+[params]
+counterpart = "stop"
+contact_stiffness = 100.0
+damping_ratio = 0.02
+force_amplitude = 1e-4
+[continuation]
+parameter = "omega"
+min = 195.0
+max = 330.0
+subspace = 4
+max_branches = 1
+[curve]
+kind = "fold"
+second = "force_amplitude"
+min = 1e-4
+max = 1.2e-4
+"""
+
+
+def test_the_command_writes_the_curve_and_plot_draws_it(stop_branch, tmp_path, capsys):
+    from impactbeams.cli import main
+
+    path, out = tmp_path / "fold.toml", tmp_path / "fold.nc"
+    path.write_text(STOP_CURVE_FILE)
+    assert main(["continue", str(path), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "the fold of the branch along omega from 195 to 330 (event 0), followed in " \
+        "force_amplitude from 0.0001 to 0.00012" in err
+    assert f"wrote {out}: " in err and "fold curve (ended: bound); end at omega = " in err
+    assert "branch of period 1, point 20: " in err  # the progress lines
+    with xr.open_dataset(out) as written:
+        validate(written)
+        expected = continue_curve(BifurcationCurve.from_branch(*stop_branch, "fold",
+                                                               "force_amplitude", 1e-4, 1.2e-4))
+        np.testing.assert_array_equal(written.omega.values, expected.omega.values)
+        assert written.attrs["curve_kind"] == "fold"
+    assert main(["plot", str(out), "-o", str(tmp_path / "fold.png")]) == 0
+    assert (tmp_path / "fold.png").stat().st_size > 0
+    assert main(["plot", str(out), "--var", "omega"]) == 2
+    assert "variable (--var) is not allowed: a bifurcation curve is drawn in its parameters' " \
+        "plane" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (('second = "force_amplitude"', 'second = "omega"'),
+     "second = 'omega' is not allowed: must differ from parameter = 'omega'"),
+    (("max = 1.2e-4", "mx = 1.2e-4"), "unknown key 'mx' in [curve] of"),
+    (('kind = "fold"', 'kind = "cusp"'), "kind = 'cusp' is not allowed: must be one of"),
+    (("min = 1e-4\n", "min = 2e-4\n"),
+     "high = 0.00012 is not allowed: the range [0.0002, 0.00012] is empty"),
+])
+def test_a_bad_curve_table_is_one_line_before_any_compute(tmp_path, capsys, change, message):
+    from impactbeams.cli import main
+
+    path, out = tmp_path / "fold.toml", tmp_path / "fold.nc"
+    path.write_text(STOP_CURVE_FILE.replace(*change))
+    assert main(["continue", str(path), "-o", str(out)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert message in line and line.startswith("impactbeams: error: ")
+    assert not out.exists()
