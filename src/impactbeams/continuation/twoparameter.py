@@ -327,9 +327,11 @@ def _steps(follower: Follower, curve: Branch, box: np.ndarray,
 
 def _keep(follower: Follower, curve: Branch, points: list[Point],
           progress: Progress | None) -> None:
-    """Append ``points`` with their measures; the condition adapts to the last one."""
+    """Append ``points`` with their measures and own multipliers; the condition adapts."""
     for point in points:
-        point = follower.kept(point)
+        z, p = follower.scaling.unscaled(point.x)
+        point = follower.kept(dataclasses.replace(point, evaluation=dataclasses.replace(
+            point.evaluation, multipliers=follower.problem.multipliers(z, p))))
         curve.points.append(point)
         if progress is not None:
             progress(curve, point)
