@@ -97,20 +97,26 @@ def _located(params, omega, state, label="fold", width=1.0):
     return float(located)
 
 
+def _curve_to_level(started, kind, level):
+    """The drive level times the start's and the curve's end there (on the range's edge)."""
+    continuation, branch = started
+    start = continuation.params.force_amplitude
+    force = level * start
+    low, high, direction = (force, start, "down") if level < 1 else (start, force, "up")
+    curve = continue_curve(BifurcationCurve.from_branch(continuation, branch, kind,
+                                                        "force_amplitude", low, high,
+                                                        direction=direction))
+    end = curve.isel(branch_point=-1)
+    assert curve.attrs["curve_ending"] == "bound" and float(end.force_amplitude) == force
+    return force, end
+
+
 @pytest.mark.parametrize("level", [0.6, 0.8, 1.2, 1.4, 1.6])
 def test_fold_curve_passes_through_the_one_parameter_folds(stop_branch, level):
     """The fold curve from the upper fold at 1e-4 N, ended on the drive level's edge, is at
     the fold a one-parameter branch in Omega locates at that level (started from the curve's
     orbit 1 rad/s below: the guess only, the fold is the branch's own)."""
-    force = level * STOP.force_amplitude
-    low, high, direction = ((force, STOP.force_amplitude, "down") if level < 1 else
-                            (STOP.force_amplitude, force, "up"))
-    curve = continue_curve(BifurcationCurve.from_branch(*stop_branch, "fold",
-                                                        "force_amplitude", low, high,
-                                                        direction=direction))
-    assert curve.attrs["curve_ending"] == "bound"
-    end = curve.isel(branch_point=-1)
-    assert float(end.force_amplitude) == force
+    force, end = _curve_to_level(stop_branch, "fold", level)
     assert abs(float(end.curve_condition)) < 1e-9
     located = _located(STOP.replace(force_amplitude=force), float(end.omega),
                        end.section_state.values)
@@ -131,14 +137,7 @@ def test_period_doubling_curve_passes_through_the_one_parameter_doublings(doubli
                                                                           level):
     """As the fold curve's test: the period-doubling curve (a multiplier at -1) ended on the
     drive level's edge, against the doubling a one-parameter branch locates there."""
-    force = level * SMALL.force_amplitude
-    low, high, direction = ((force, SMALL.force_amplitude, "down") if level < 1 else
-                            (SMALL.force_amplitude, force, "up"))
-    curve = continue_curve(BifurcationCurve.from_branch(*doubling_branch, "period_doubling",
-                                                        "force_amplitude", low, high,
-                                                        direction=direction))
-    end = curve.isel(branch_point=-1)
-    assert curve.attrs["curve_ending"] == "bound" and float(end.force_amplitude) == force
+    force, end = _curve_to_level(doubling_branch, "period_doubling", level)
     mu = end.multiplier_modulus.values * np.exp(1j * end.multiplier_argument.values)
     assert np.min(np.abs(mu + 1.0)) < 1e-9  # the eigenvalues of M: a multiplier at -1
     located = _located(SMALL.replace(force_amplitude=force), float(end.omega),
