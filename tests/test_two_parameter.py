@@ -145,6 +145,29 @@ def test_period_doubling_curve_passes_through_the_one_parameter_doublings(doubli
     assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
 
 
+@pytest.fixture(scope="module")
+def torus_branch():
+    """The small model's one-contact orbits from 244 rad/s down: a complex pair of
+    multipliers leaves the unit circle at 243.83 rad/s (Neimark-Sacker)."""
+    continuation = Continuation(SMALL, "omega", 236.0, 246.0, start=244.0, direction="down",
+                                n_modes=3, max_branches=1, max_points=60,
+                                transient_periods=600)
+    return continuation, continue_orbits(continuation)
+
+
+@pytest.mark.parametrize("level", [0.7, 0.85, 1.1, 1.2, 1.3])
+def test_neimark_sacker_curve_passes_through_the_one_parameter_ones(torus_branch, level):
+    """As the fold curve's test, for a pair on the unit circle (the bialternate product's
+    test function): its end on the drive level against the one-parameter branch's."""
+    force, end = _curve_to_level(torus_branch, "neimark_sacker", level)
+    mu = end.multiplier_modulus.values * np.exp(1j * end.multiplier_argument.values)
+    pair = mu[mu.imag > 0]
+    assert np.min(np.abs(np.abs(pair) - 1.0)) < 1e-9  # the eigenvalues of M: |mu| = 1
+    located = _located(SMALL.replace(force_amplitude=force), float(end.omega),
+                       end.section_state.values, "neimark_sacker", width=0.2)
+    assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
+
+
 @pytest.mark.slow
 def test_two_fold_curves_meet_at_a_cusp(stop_branch):
     """Both folds' curves, followed down in the drive, reach the same cusp, and go on as the

@@ -490,7 +490,8 @@ VARIABLES.update({
         "the augmented system's condition at the point, zero on the curve to the corrector's "
         "tolerance: the signed grazing value (m) on a grazing curve; the minimally augmented "
         "system's s (the bordered M - sigma I's last unknown, sigma = +1 for a fold, -1 for a "
-        "period doubling) on a multiplier's curve"),
+        "period doubling; of the bialternate product M (.) M - I on a Neimark-Sacker curve) on a "
+        "multiplier's curve"),
     "curve_tangent_1": Variable(
         ("branch_point",), "1", "tangent's part along the first parameter",
         "the first parameter's component of the curve's unit tangent in the scaled unknowns "
@@ -503,8 +504,9 @@ VARIABLES.update({
     "curve_stable": Variable(
         ("branch_point",), "1", "stability of the orbit but for the bifurcating multiplier",
         "1 if every Floquet multiplier has |mu| < 1, leaving out on a fold or period-doubling "
-        "curve the one nearest +1 or -1 (on the curve, at it to round-off), else 0: whether "
-        "the orbit is stable on one side of the bifurcation", dtype="int8", flags=STABILITY),
+        "curve the one nearest +1 or -1, on a Neimark-Sacker curve the complex pair nearest "
+        "the unit circle (on the curve, at it to round-off), else 0: whether the orbit is "
+        "stable on one side of the bifurcation", dtype="int8", flags=STABILITY),
     "curve_event": Variable(
         ("branch_point",), "1", "codimension-two point located at the curve point",
         "0 none; 1 end (the curve's last point: the attribute curve_ending says why); 2 "

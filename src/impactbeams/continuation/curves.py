@@ -1,12 +1,12 @@
 """Bifurcations in two parameters as zeros of augmented systems, for the same arclength engine.
 
-A bifurcation of the periodic orbits of one parameter p1 (a grazing, a fold, a period
-doubling) persists along a curve in the plane (p1, p2). On that curve the orbit's section
-state z, p1 and p2 solve
+A bifurcation of the periodic orbits of one parameter p1 (a grazing, a fold, a period doubling, a
+Neimark-Sacker point) persists along a curve in the plane (p1, p2). On that curve the orbit's
+section state z, p1 and p2 solve
 
     P(z; p1, p2) - z = 0,     c(z; p1, p2) = 0,
 
-with c the bifurcation's condition (`Grazing`, `Multiplier`): n + 1 equations in n + 2
+with c the bifurcation's condition (`Grazing`, `Multiplier`, `UnitPair`): n + 1 equations in n + 2
 unknowns, a curve. [`CurveProblem`][] presents it to the one-parameter engine
 (`impactbeams.continuation.arclength`) as a family in p2 whose "state" is y = (z, p1): the
 engine's pseudo-arclength corrector, tangents, step control and root location then follow the
@@ -67,15 +67,15 @@ class Multiplier:
     """A Floquet multiplier at ``sigma`` (+1: a fold; -1: a period doubling).
 
     The test function is the minimally augmented system's (Govaerts, Numerical Methods for
-    Bifurcations of Dynamical Equilibria, 2000, ch. 3-4): with A = D (M - sigma I) D^-1 in
-    the energy coordinates D z = (omega q, q') and borders b, c,
+    Bifurcations of Dynamical Equilibria, 2000, ch. 3-4): with A = M - sigma I of the
+    monodromy in the energy coordinates D z = (omega q, q'), D M D^-1, and borders b, c,
 
         [A  b] [v]   [0]        [A^T c] [w]   [0]
         [c' 0] [s] = [1],       [b'  0] [s] = [1],
 
     s is a smooth function with a simple zero where A is singular (a simple multiplier at
     sigma), of the order of A's smallest singular value nearby. Its gradient is
-    ``-w' A_x v``: differences of M, no second derivatives of the map and no inverse of the
+    ``-w' A_x v``: differences of A, no second derivatives of the map and no inverse of the
     singular A. The determinant det(M - sigma I) would be simpler to state but scales with
     the product of every other multiplier's distance from sigma (it changes by orders of
     magnitude along a curve as they move, and with the model's size), and its gradient is
@@ -91,51 +91,78 @@ class Multiplier:
         self.label = "fold" if sigma > 0 else "period_doubling"
         self.b: np.ndarray | None = None
         self.c: np.ndarray | None = None
-        self._left = self._right = np.empty(0)  # D w and D^-1 v of the last solve
+        self._left = self._right = np.empty(0)  # w and v of the last solve
+
+    def matrix(self, monodromy: np.ndarray) -> np.ndarray:
+        """A of the monodromy in the energy coordinates, D M D^-1: M - sigma I."""
+        return monodromy - self.sigma * np.eye(len(monodromy))
 
     def value(self, period_map: PeriodMap, result: PeriodMapResult,
               drz: np.ndarray | None = None) -> float:
         """The test function s at an orbit's run whose monodromy minus the identity is ``drz``."""
-        weights = state_weights(period_map)
-        if drz is None:
-            drz = period_map.jacobian(result, "all") - np.eye(weights.size)
-        a = self._scaled(drz, weights)
+        a = self._matrix_at(period_map, result, drz)
         if self.b is None:
             self._set_borders(a)
-        n = weights.size
+        n = len(a)
         bordered = np.zeros((n + 1, n + 1))
         bordered[:n, :n], bordered[:n, n], bordered[n, :n] = a, self.b, self.c
         rhs = np.zeros(n + 1)
         rhs[n] = 1.0
         right = np.linalg.solve(bordered, rhs)
-        left = np.linalg.solve(bordered.T, rhs)
-        self._right, self._left = right[:n] / weights, left[:n] * weights
+        self._right, self._left = right[:n], np.linalg.solve(bordered.T, rhs)[:n]
         return float(right[n])
 
     def probe(self, period_map: PeriodMap, result: PeriodMapResult) -> float:
-        """-w' D M D^-1 v at a run, with the last solve's v and w: its differences are s's.
+        """-w' A v at a run, with the last solve's v and w: its differences are s's.
 
-        M in full, then the products: the tangent propagation of v alone rounds otherwise
-        than M's columns do (5e-7 relative, measured), which differences over 1e-8 of the
-        state would magnify; M's columns at two nearby runs round alike.
+        M in full, then A and the products: the tangent propagation of v alone rounds
+        otherwise than M's columns do (5e-7 relative, measured), which differences over 1e-8
+        of the state would magnify; M's columns at two nearby runs round alike.
         """
-        return -float(self._left @ (period_map.jacobian(result, "all") @ self._right))
+        return -float(self._left @ self._matrix_at(period_map, result) @ self._right)
 
     def border(self, drz: np.ndarray, weights: np.ndarray) -> None:
         """New borders from A at a point of the curve (its smallest singular vectors)."""
-        self._set_borders(self._scaled(drz, weights))
+        monodromy = drz + np.eye(weights.size)
+        self._set_borders(self.matrix(weights[:, None] * monodromy / weights[None, :]))
 
-    def _scaled(self, drz: np.ndarray, weights: np.ndarray) -> np.ndarray:
-        a = drz + (1.0 - self.sigma) * np.eye(weights.size)  # M - sigma I
-        return weights[:, None] * a / weights[None, :]
+    def _matrix_at(self, period_map: PeriodMap, result: PeriodMapResult,
+                   drz: np.ndarray | None = None) -> np.ndarray:
+        weights = state_weights(period_map)
+        monodromy = (period_map.jacobian(result, "all") if drz is None
+                     else drz + np.eye(weights.size))
+        return self.matrix(weights[:, None] * monodromy / weights[None, :])
 
     def _set_borders(self, a: np.ndarray) -> None:
         u, _, vt = np.linalg.svd(a)
         self.b, self.c = u[:, -1].copy(), vt[-1].copy()
 
 
+class UnitPair(Multiplier):
+    """A pair of Floquet multipliers on the unit circle, e^(+-i theta): a Neimark-Sacker.
+
+    A = M (.) M - I, with M (.) M the bialternate product (Kuznetsov, Elements of Applied
+    Bifurcation Theory, 3rd ed., sec. 10.2), whose eigenvalues are the products mu_i mu_j,
+    i < j, of M's: singular where two multipliers' product is 1, a pair on the circle (or two
+    real ones mu, 1 / mu: a neutral saddle, which the curve's multipliers tell apart). The
+    same minimally augmented test function as a single multiplier's, on a matrix of order
+    N (2 N - 1).
+    """
+
+    def __init__(self) -> None:
+        super().__init__(1.0)
+        self.label = "neimark_sacker"
+
+    def matrix(self, monodromy: np.ndarray) -> np.ndarray:
+        """M (.) M - I: rows and columns the pairs (p, q), p > q, entries 2 x 2 minors of M."""
+        p, q = np.tril_indices(len(monodromy), -1)
+        product = (monodromy[p][:, p] * monodromy[q][:, q]
+                   - monodromy[p][:, q] * monodromy[q][:, p])
+        return product - np.eye(p.size)
+
+
 CONDITIONS = {"grazing": Grazing, "fold": lambda: Multiplier(1.0),
-              "period_doubling": lambda: Multiplier(-1.0)}
+              "period_doubling": lambda: Multiplier(-1.0), "neimark_sacker": UnitPair}
 KINDS = tuple(CONDITIONS)
 
 

@@ -27,7 +27,8 @@
     [curve]                    # optional: then the branch's event is followed in two
                                # parameters (continuation.twoparameter), the range above
                                # its box for the first
-    kind = "fold"              # "grazing", "fold" or "period_doubling": the branch's event
+    kind = "fold"              # the branch's event: "grazing", "fold", "period_doubling" or
+                               # "neimark_sacker"
     which = 0                  # the first such event located on the branch (0), or a later one
     second = "force_amplitude" # the second parameter (its start value: [params]')
     min = 5e-5

@@ -1,11 +1,11 @@
 """Bifurcation curves in two parameters: `continue_curve` from a one-parameter branch's event.
 
-A grazing, fold or period doubling located on a branch of ``parameter`` (p1) is followed in
-the plane (p1, ``second``) by the one-parameter engine on the augmented system of
+A grazing, fold, period doubling or Neimark-Sacker point located on a branch of ``parameter`` (p1)
+is followed in the plane (p1, ``second``) by the one-parameter engine on the augmented system of
 `impactbeams.continuation.curves` (p2 the engine's parameter, p1 part of its state): the same
-predictor, corrector and step control, and the same Illinois location of events
-(`events.locate`). Lengths: p2 in units of its range, p1 in units of its box, the state as in
-`continue_orbits` (its ``state_scale``).
+predictor, corrector and step control, and the same Illinois location of events (`events.locate`).
+Lengths: p2 in units of its range, p1 in units of its box, the state as in `continue_orbits` (its
+``state_scale``).
 
 Codimension-two points met on the way, each located to ``locate_tolerance`` and labelled in
 ``curve_event``:
@@ -84,9 +84,10 @@ CUSP_TANGENT = 1e-3
 
 @dataclasses.dataclass(frozen=True)
 class BifurcationCurve:
-    """The curve in two parameters of a ``kind`` bifurcation: grazing, fold, period doubling.
+    """The curve in two parameters of a grazing, fold, period doubling or Neimark-Sacker.
 
-    It starts at ``params`` with ``parameter`` (p1) = ``value`` and the orbit's section state
+    ``kind``: "grazing", "fold", "period_doubling" or "neimark_sacker". It starts at
+    ``params`` with ``parameter`` (p1) = ``value`` and the orbit's section state
     ``state`` (the located event's, e.g. `from_branch`), and follows ``second`` (p2) from its
     value in ``params`` ``direction`` "up" or "down" within [``low``, ``high``], p1 within
     [``parameter_low``, ``parameter_high``] (the box; units of each parameter). ``period``:
@@ -465,9 +466,10 @@ def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
 
 
 def _stable_but_critical(point: Point, kind: str) -> bool:
-    """Whether every multiplier but the critical one (at +1 or -1 on the curve) is inside."""
+    """Whether every multiplier but the critical ones (+1, -1, the pair on the circle) is in."""
     mu = np.asarray(point.evaluation.multipliers)
-    if kind != "grazing":
-        sigma = 1.0 if kind == "fold" else -1.0
-        mu = np.delete(mu, np.argmin(np.abs(mu - sigma)))
+    distance = {"fold": np.abs(mu - 1.0), "period_doubling": np.abs(mu + 1.0),
+                "neimark_sacker": np.abs(np.abs(mu) - 1.0) + np.where(mu.imag == 0, np.inf, 0.0)}
+    if kind in distance:
+        mu = np.delete(mu, np.argsort(distance[kind])[:2 if kind == "neimark_sacker" else 1])
     return bool(np.all(np.abs(mu) < 1.0))

@@ -18,7 +18,8 @@ from impactbeams.variables import CURVE_EVENTS
 
 MARKERS = {"end": ("s", "E"), "turning_point": ("v", "T"), "cusp": ("D", "CP"),
            "grazing": ("^", "G")}
-KIND_NAMES = {"grazing": "grazing", "fold": "fold", "period_doubling": "period doubling"}
+KIND_NAMES = {"grazing": "grazing", "fold": "fold", "period_doubling": "period doubling",
+              "neimark_sacker": "Neimark-Sacker"}
 
 
 def draw_curve(axes: Axes, dataset: xr.Dataset, colour: str = "C0",
