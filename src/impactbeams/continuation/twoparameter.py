@@ -16,7 +16,9 @@ Codimension-two points met on the way, each located to ``locate_tolerance`` and 
 - ``grazing``: the curve's orbit touches: its grazing value passes through 0 along a fold or
   period-doubling curve (a sign change by a jump, where another contact or gap minimum
   becomes the nearest to 0, is not one: `_at_zero_depth`). Where no point is found beyond
-  it, the curve ends there (``curve_ending`` "grazing"; the last point carries the label);
+  it, or Newton's iterates at a point whose orbit touches meet another contact sequence (the
+  monodromy jumps there: the far side's has the new contact's saltation), the curve ends
+  there (``curve_ending`` "grazing"; the last point carries the label);
 - ``end``: the curve's last point otherwise: at the edge of the box (``curve_ending``
   "bound", corrected onto it) or where the corrector finds no point (the orbit stops
   existing, or turns within less than ``min_step``: "min_step").
@@ -322,6 +324,13 @@ def _steps(follower: Follower, curve: Branch, box: np.ndarray,
             return
         points = _events(follower, current, point)
         _keep(follower, curve, points, progress)
+        if point.crossed and _at_zero_depth(point, *curve.points):
+            # Newton's iterates met another contact sequence at a point whose orbit touches:
+            # the monodromy jumps there (the far side's has the new contact's saltation), so
+            # the curve of this side's bifurcation ends at the grazing
+            curve.points[-1] = dataclasses.replace(curve.points[-1], label="grazing")
+            curve.ending = GRAZED
+            return
         current, ds = point, follower.next_step(taken, point)
     curve.ending = MAX_POINTS
 
