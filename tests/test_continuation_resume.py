@@ -4,9 +4,9 @@
 (Ctrl-C); the same command again ends with the file an uninterrupted run writes: every
 variable and coordinate bitwise, with its dtype and attributes, every global attribute but the
 time-stamped ``history`` (`test_resume.assert_same_map`, as for the sweeps). The model is
-`test_continuation_events`'s (two beams, 3 modes each) over 248.8 to 250.5 rad/s: ``POINTS`` points on
-two branches (a period doubling switched to), about 3 s; the Newton-Picard variant carries its
-basis from step to step, which the checkpoints must carry too.
+`test_continuation_events`'s (two beams, 3 modes each) over 248.8 to 250.5 rad/s: ``POINTS``
+points on two branches (a period doubling switched to), about 3 s; the Newton-Picard variant
+carries its basis from step to step, which the checkpoints must carry too.
 """
 
 import functools

@@ -51,6 +51,7 @@ if TYPE_CHECKING:
     from impactbeams.continuation import Continuation
     from impactbeams.continuation.arclength import Point
     from impactbeams.continuation.branch import Branch
+    from impactbeams.continuation.twoparameter import CurvePlan
     from impactbeams.sweep import ChunkRunner, Sweep
 
 EXIT_SYSTEM_ERROR = 1  # a file could not be written (full disk, ...) or memory ran out
@@ -369,6 +370,7 @@ def _continue(args: argparse.Namespace) -> int:
         reporting_kept_points,
         saved_points,
     )
+    from impactbeams.continuation.definition import load_curve
     from impactbeams.continuation.run import orbits_problem
     from impactbeams.lock import output_lock
     from impactbeams.preflight import require_input_file
@@ -376,7 +378,10 @@ def _continue(args: argparse.Namespace) -> int:
 
     continuation = load_continuation(require_input_file(args.file, "continuation"))
     orbits_problem(continuation)  # what the file alone cannot tell (the subspace's room)
+    plan = load_curve(args.file, continuation)
     output = _continuation_output(args, continuation)
+    if plan is not None:
+        return _continue_curve(args, plan, output)
     with reporting_kept_points(output), output_lock(output):  # before anything is printed
         kept = saved_points(output) if CourseLog(output, continuation).check() else 0
         resumed = (f" (resuming from the {kept} branch points saved in "
@@ -400,6 +405,34 @@ def _continue(args: argparse.Namespace) -> int:
     for line in short:
         print(f"impactbeams: warning: {line}", file=sys.stderr)
     return EXIT_INCOMPLETE if short and not args.allow_incomplete else 0
+
+
+def _continue_curve(args: argparse.Namespace, plan: CurvePlan, output: Path) -> int:
+    """``continue`` with a ``[curve]``: the branch, then its event in two parameters."""
+    from impactbeams.continuation import continue_orbits
+    from impactbeams.continuation.twoparameter import continue_curve
+    from impactbeams.lock import output_lock
+    from impactbeams.variables import CURVE_EVENTS
+
+    c = plan.continuation
+    with output_lock(output):
+        _say(args, f"{args.file}: the {plan.kind} of the branch along {c.parameter} from "
+             f"{c.low:g} to {c.high:g} (event {plan.which}), followed in {plan.second} from "
+             f"{plan.low:g} to {plan.high:g} -> {output}")
+        progress = None if args.quiet else _BranchProgress(c.low, c.high)
+        with _running_kernels("orbits", args):
+            branch = continue_orbits(c, progress)
+            _say(args, f"branch: {_branch_summary(branch)}")
+            curve = plan.from_branch(branch)
+            progress = None if args.quiet else _BranchProgress(plan.low, plan.high)
+            dataset = continue_curve(curve, progress, output)
+    first, second = dataset.attrs["curve_parameters"].split()
+    located = "; ".join(f"{CURVE_EVENTS[code]} at {first} = {float(dataset[first][i]):.9g}, "
+                        f"{second} = {float(dataset[second][i]):.9g}"
+                        for i, code in enumerate(dataset.curve_event.values) if code)
+    _say(args, f"wrote {output}: {dataset.branch_point.size} points of the {plan.kind} curve "
+               f"(ended: {dataset.attrs['curve_ending']}); {located}")
+    return 0
 
 
 def _grazing(args: argparse.Namespace) -> int:

@@ -159,8 +159,14 @@ class Follower:
         taken by differences at x~.
         """
         z, p = self.scaling.unscaled(x)
-        if rate is not None:
+        own = getattr(self.problem, "parameter_derivative", None)
+        if rate is not None or own is not None:
             evaluation = self.problem.evaluate(z, p, grazing=False)
+            if rate is None:
+                # a problem may difference its own parameter (a curve's: on a grazing curve
+                # every point is at a change of the contacts, where the narrowed step is
+                # round-off)
+                rate = own(self.problem, z, p, 1.0 / self.scaling.parameter, evaluation)
         else:
             scale = 1.0 / self.scaling.parameter
             # the difference's far end runs on the other core while this one runs the

@@ -212,6 +212,27 @@ class PeriodMap:
                                    interval_gap=self._interval_gap(result.trajectory),
                                    grid_states=(phase, q, v))
 
+    def least_gap(self, result: PeriodMapResult) -> float:
+        """The smallest value over the run of the gap read from the free coordinates (m).
+
+        In free flight it is the gap. In a contact the free coordinates leave out the
+        contact force's static part: the value is the overlap times -(1 + that part's
+        compliance times the stiffness), the depth the tips would reach without the contact
+        (quasi-statically), so that it passes through 0 where the orbit touches with the
+        slope it has on the free side (the signed grazing value, minus the overlap on the
+        contact side, changes its slope there by that factor). Sampled as the gap's
+        minimum (`SAMPLES_PER_PERIOD`) and refined at the root of its rate.
+        """
+        times = self._grid()
+        gap = self._gap(result.trajectory, times)[0]
+        i = min(max(int(np.argmin(gap)), 1), times.size - 2)
+        lo, hi = times[i - 1], times[i + 1]
+        stationary = self._stationary(result.trajectory, lo, hi, True)
+        if stationary is not None and stationary[1] <= gap[i]:
+            return stationary[1]
+        return self._refined(lambda t: self._gap(result.trajectory, np.array([t]))[0][0],
+                             lo, hi, gap[i], times[i])[0]
+
     def _least_peak_force(self, trajectory: Trajectory) -> float:
         """The smallest contact phase's peak force (N); NaN without contact."""
         k = np.flatnonzero(trajectory.phase == CONTACT)
