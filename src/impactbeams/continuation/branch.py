@@ -284,6 +284,11 @@ JOINED_SPREAD = 1e-7
 # the steps kept out of the closed-loop test: the branch's own last ones; and a loop is at
 # least this many steps long
 RECENT_STEPS, LOOP_STEPS = 5, 20
+# ... and the branch is back on its earlier path, not beside it, when it is this near (in
+# steps) the polyline of the earlier steps: a chord of a step that turns by max_angle = 0.25
+# rad lies within 0.03 steps of the arc, while two strands of an S between two tight folds
+# run side by side half a step apart (measured on the stiff stop at 156.37 rad/s: 0.47)
+ON_PATH = 0.1
 
 
 def _ended(branch: Branch, steps: Steps, ds: float, settings: Settings) -> str:
@@ -304,8 +309,9 @@ def _ended(branch: Branch, steps: Steps, ds: float, settings: Settings) -> str:
         # the same place the same way: a loop; the other way: the branch retraces itself (a
         # step jumped onto its own earlier part). After a fold the branch returns near its
         # way out only within a few steps of it (excluded).
-        if nearest >= 0 and distances[nearest] < 0.5 * ds and same_piece(earlier[nearest],
-                                                                           steps[-1]):
+        if (nearest >= 0 and distances[nearest] < 0.5 * ds
+                and _off_path(xs[:-RECENT_STEPS], nearest, x) < ON_PATH * ds
+                and same_piece(earlier[nearest], steps[-1])):
             if earlier[nearest].tangent @ tangent > 0.9:
                 return CLOSED_LOOP
             if earlier[nearest].tangent @ tangent < -0.9:
@@ -316,6 +322,16 @@ def _ended(branch: Branch, steps: Steps, ds: float, settings: Settings) -> str:
             x - steps[-1 - settings.stall_points].x) < settings.stall_advance:
         return STALLED
     return ""
+
+
+def _off_path(xs: np.ndarray, k: int, x: np.ndarray) -> float:
+    """The distance from ``x`` to the polyline of the rows ``xs`` next to row ``k``."""
+    def to_segment(a: np.ndarray, b: np.ndarray) -> float:
+        chord = b - a
+        along = float(np.clip((x - a) @ chord / max(chord @ chord, 1e-300), 0.0, 1.0))
+        return float(np.linalg.norm(x - a - along * chord))
+
+    return min(to_segment(xs[k], xs[j]) for j in (k - 1, k + 1) if 0 <= j < len(xs))
 
 
 def _repeats_early(point: Point) -> bool:
