@@ -293,7 +293,8 @@ def check_range(name: str, value: Any, point: PointName = no_point) -> None:
 
 def check_joint(values: Mapping[str, Any], point: PointName = no_point,
                 partner: Counterpart = BEAM, mount: Mount = BOTH,
-                compliance1: float | None = None) -> None:
+                compliance1: float | None = None,
+                contact: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> None:
     """Raise ParameterError unless the resolved parameters are jointly allowed.
 
     ``values``: every numeric field of [`Params`][] (EI/rhoA form), as floats or arrays that
@@ -305,6 +306,10 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
     beam's length: the tip force by its static deflection F0 l1^3 / (3 EI1), the shaker by
     its own motion U0, which each beam it carries (``mount``; a stop's mount drives beam 1)
     passes to its tip against a counterpart that does not follow, and more near a resonance.
+
+    ``contact``: (s, u1(x1), u2(x2)), the contact's side and each beam's unit tip-load shape at
+    its contact point (`Params.contact_shapes`; 1 at the tips): the uplifts must leave the
+    initial gap at the contact point, clearance + s (u1 uplift1 - u2 uplift2), open.
     """
     # one set of parameters (floats: the common case, a period map per corrector iterate) is
     # checked in float arithmetic, a grid in arrays
@@ -323,9 +328,17 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
         require_all(f"uplift{i}", v[f"uplift{i}"],
                     np.abs(v[f"uplift{i}"]) <= MAX_DEFLECTION * v[f"l{i}"], point,
                     lambda j, i=i: _deflection_rule(f"|uplift{i}|", f"l{i}", v[f"l{i}"], j))
-    gap = v["clearance"] + v["uplift1"] - v["uplift2"]
-    require_all("uplift2", v["uplift2"], gap > 0, point, lambda j: (
-        f"the initial gap clearance + uplift1 - uplift2 = {value_at(gap, j)!r} m must be > 0 (m)"))
+    side, shape1, shape2 = contact
+    if contact == (1.0, 1.0, 1.0):  # at the tips, from below
+        gap, formula = v["clearance"] + v["uplift1"] - v["uplift2"], "clearance + uplift1 - uplift2"
+        named = "uplift2"
+    else:
+        gap = v["clearance"] + side * (shape1 * v["uplift1"] - shape2 * v["uplift2"])
+        formula = (f"at the contact point, clearance {'+' if side > 0 else '-'} "
+                   f"({shape1:.6g} uplift1 - {shape2:.6g} uplift2)")
+        named = "uplift1"
+    require_all(named, v[named], gap > 0, point, lambda j: (
+        f"the initial gap {formula} = {value_at(gap, j)!r} m must be > 0 (m)"))
     uniform = compliance1 is None  # else beam 1's tip compliance with its attachments (m/N)
     compliance = v["l1"] ** 3 / (3.0 * v["EI1"]) if uniform else compliance1
     static = v["force_amplitude"] * compliance
@@ -559,7 +572,8 @@ class Params:
         self._check_contact_point()
         # a compliant clamp lets the tip force deflect the tip more than l1^3 / (3 EI1)
         check_joint(self.numeric(), partner=self.partner, mount=self.mount,
-                    compliance1=self.structure(1).tip_compliance if self.attachments1 else None)
+                    compliance1=self.structure(1).tip_compliance if self.attachments1 else None,
+                    contact=self.contact_shapes)
         if self.structure1 is not None and "1" in self.mount.shaken_beams(self.partner):
             self.structure1.require_support(self.base_amplitude)
         # with one clamp moving, the tied tips' quasi-static part would carry a moving
@@ -647,6 +661,25 @@ class Params:
         return x1, self.l2 if self.contact_position2 is None else self.contact_position2
 
     @property
+    def contact_shapes(self) -> tuple[float, float, float]:
+        """(s, u1(x1), u2(x2)): the side's sign and each beam's unit tip-load shape there.
+
+        u_i(x) = (3 l x^2 - x^3) / (2 l^3) on a bare beam (its static deflection under a tip
+        force, per unit tip deflection: how an uplift moves the contact point), that of the
+        beam with its attachments otherwise; exactly (1.0, 1.0, 1.0) at the tips from below.
+        """
+        shapes = []
+        for which, x in enumerate(self.contact_point, start=1):
+            length = getattr(self, f"l{which}")
+            if x == length or (which == 2 and not self.partner.has_beam2):
+                shapes.append(1.0)
+            elif getattr(self, f"attachments{which}"):
+                shapes.append(float(self.structure(which).unit_tip_shape(np.array([x]))[0]))
+            else:
+                shapes.append((3.0 * length * x * x - x**3) / (2.0 * length**3))
+        return self.side.sign, shapes[0], shapes[1]
+
+    @property
     def at_tips(self) -> bool:
         """Whether the contact acts between the tips (or beam 1's tip and a stop)."""
         return (self.contact_position1 in (None, self.l1)
@@ -674,8 +707,14 @@ class Params:
 
     @property
     def initial_gap(self) -> float:
-        """Gap between the tips at t = 0: clearance + uplift1 - uplift2 (m)."""
-        return self.clearance + self.uplift1 - self.uplift2
+        """Gap at the contact point at t = 0 (m): clearance + uplift1 - uplift2 at the tips.
+
+        Elsewhere ``clearance + s (u1(x1) uplift1 - u2(x2) uplift2)`` (`contact_shapes`).
+        """
+        side, shape1, shape2 = self.contact_shapes
+        if (side, shape1, shape2) == (1.0, 1.0, 1.0):
+            return self.clearance + self.uplift1 - self.uplift2
+        return self.clearance + side * (shape1 * self.uplift1 - shape2 * self.uplift2)
 
     def structure(self, which: int) -> Cantilever:
         """Beam ``which`` (1 or 2) as a cantilever: uniform, carrying its ``attachments``."""

@@ -489,7 +489,8 @@ def _check_grid(sweep: Sweep) -> None:
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
-    check_joint(values, point, sweep.base.partner, sweep.base.mount)
+    check_joint(values, point, sweep.base.partner, sweep.base.mount,
+                contact=sweep.base.contact_shapes)
     if sweep.base.structure1 is not None and "1" in sweep.base.mount.shaken_beams(
             sweep.base.partner):
         sweep.base.structure1.require_support(values["base_amplitude"])

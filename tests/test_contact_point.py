@@ -1,0 +1,315 @@
+"""A contact at any point along the beams, from below or from above (issue 33, item 3).
+
+Against independent references (tests/point_reference.py: textbook modes in long double, the
+closed-form Green's function, DOP853 on the modal equations; tests/fe_reference.py's beam
+elements for the static flexibility): the static flexibility at a point, the first impact of a
+contact at mid-span from below and from above, the first contacts of a stop at mid-span and of
+two beams touching at offset points, the mirror symmetry of the two sides, and the refusals.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from impactbeams import Params, simulate
+from impactbeams.contact import build_free_phase, spring_contact
+from impactbeams.modes import beam
+from impactbeams.params import ParameterError
+from impactbeams.structure import Spring
+from point_reference import Beam, PointContact
+
+STOP = Params(counterpart="stop")
+MID = 0.5 * STOP.l1  # mid-span of beam 1 (m)
+
+
+def reference_beam(params: Params, which: int, n: int) -> Beam:
+    i = str(which)
+    return Beam(getattr(params, "EI" + i), getattr(params, "rhoA" + i), getattr(params, "l" + i),
+                n)
+
+
+# --- static flexibility at a point ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("x", [0.01, 0.03, MID, 0.09, STOP.l1])
+def test_static_flexibility_at_a_point_is_x_cubed_over_3_EI_and_the_fe_solve(x):
+    """G(x, x) of the bare beam: x^3 / (3 EI) to 2 ulp, and the static solve K u = e of a
+    beam-element model (Hermite cubics hold a static point-load deflection exactly, so the FE
+    nodal value is exact to its solve's round-off, which grows with K's condition number, ~n^4:
+    2e7 at 10 elements; measured <= 4.5e-13 relative, asserted 1e-11). The free phase carries it as
+    ``point_compliance`` and the modes' share of it converges to it (what the static correction
+    adds: r_N = G - sum Y^2 / omega^2 > 0, falling like N^-3 at mid-span, checked as
+    r_40 < r_10 / 30)."""
+    from fe_reference import beam_matrices
+
+    G = beam(STOP, 1).flexibility(x, x)
+    assert G == pytest.approx(x**3 / (3.0 * STOP.EI1), rel=4e-16, abs=0)
+    n_elements = 10
+    K, _ = beam_matrices(STOP.EI1, STOP.rhoA1, STOP.l1, n_elements)
+    node = round(x / STOP.l1 * n_elements)
+    load = np.zeros(K.shape[0])
+    load[2 * (node - 1)] = 1.0
+    assert np.linalg.solve(K, load)[2 * (node - 1)] == pytest.approx(G, rel=1e-11, abs=0)
+    params = STOP.replace(contact_position1=x)
+    residual = [G - np.sum(build_free_phase(params, n).point1**2
+                           / build_free_phase(params, n).frequencies**2) for n in (10, 40)]
+    assert build_free_phase(params, 10).point_compliance == (G, 0.0)
+    assert 0.0 < residual[1] < residual[0] / 30.0
+
+
+def test_static_flexibility_with_a_spring_to_ground_against_the_fe_solve():
+    """With a spring to ground (50 N/m at 0.08 m), G(x, x) at x = 0.03 from structure/ (the
+    Green's function with Woodbury) against the beam elements' static solve with the spring
+    added to K: 1e-11 relative (10 elements, as above); the free phase carries it."""
+    from fe_reference import beam_matrices
+
+    params = STOP.replace(attachments1=(Spring(position=0.08, stiffness=50.0),))
+    n_elements, x = 10, 0.03
+    K, _ = beam_matrices(STOP.EI1, STOP.rhoA1, STOP.l1, n_elements)
+    spring = 2 * (round(0.08 / STOP.l1 * n_elements) - 1)
+    K[spring, spring] += 50.0
+    at = 2 * (round(x / STOP.l1 * n_elements) - 1)
+    load = np.zeros(K.shape[0])
+    load[at] = 1.0
+    got = beam(params, 1).flexibility(x, x)
+    assert np.linalg.solve(K, load)[at] == pytest.approx(got, rel=1e-11, abs=0)
+    assert got < x**3 / (3.0 * STOP.EI1)  # the spring stiffens the beam
+    assert build_free_phase(params.replace(contact_position1=x), 4).point_compliance[0] == got
+
+
+# --- the first impact at a point ----------------------------------------------------------------
+
+
+def _first_root(gap, t_end: float, points: int) -> float:
+    """The first zero of ``gap`` on [0, t_end]: the first sign change on a fine grid, brentq.
+
+    ``gap`` takes an array of times (the grid) or one time (brentq).
+    """
+    t = np.linspace(0.0, t_end, points)
+    first = np.flatnonzero(gap(t) <= 0.0)[0]
+    return brentq(lambda s: float(gap(np.array([s]))[0]), t[first - 1], t[first], xtol=1e-16,
+                  rtol=1e-15)
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 6 does not resolve:RuntimeWarning")
+def test_first_impact_at_mid_span_of_the_free_vibration():
+    """A stop below mid-span, beam 1 released from a static tip uplift (F0 = 0): the first
+    impact is the first zero of clearance + sum_n delta Y_n(l) Y_n(x) / (c omega_n^2)
+    cos(omega_n t) (closed form with the textbook modes, the same 6 modes): to 1e-11 s
+    (measured 5e-18 s: both are the same series to round-off)."""
+    n, uplift, clearance = 6, 3e-5, 4e-6
+    params = STOP.replace(force_amplitude=0.0, uplift1=uplift, clearance=clearance,
+                          contact_position1=MID)
+    ref = PointContact(reference_beam(params, 1, n), None, MID, 0.0, 1.0, 1e4, clearance, 0.0,
+                       0.0, uplift)
+    eta0, shapes = ref.initial_state()[:n], ref.beam1.shapes(MID)
+
+    def gap(t: np.ndarray) -> np.ndarray:
+        return clearance + (shapes * eta0) @ np.cos(np.outer(ref.frequencies, t))
+
+    expected = _first_root(gap, 0.01, 100001)
+    ds = simulate(params, 0.01, n_modes=n, dt_output=1e-3)
+    assert float(ds.impact_onset_time[0]) == pytest.approx(expected, abs=1e-11)
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 5 does not resolve:RuntimeWarning")
+@pytest.mark.parametrize("side", ["below", "above"])
+def test_first_impact_at_mid_span_of_the_forced_response(side):
+    """The tip force F0 sin(Omega t) from rest, a stop at mid-span below or above beam 1: the
+    first impact is the first zero of clearance + s y(x, t) with the mode-acceleration form
+    y = -R_N(x, l) F + sum_n Y_n(x) eta_n, eta_n = -Y_n(l) F0 (sin(Omega t) - (Omega / omega_n)
+    sin(omega_n t)) / (omega_n^2 - Omega^2) (closed form, textbook modes, the closed-form
+    Green's function): to 1e-11 s (measured below 1e-17 s)."""
+    n, clearance, force, omega = 5, 3e-6, 1e-3, 400.0
+    params = STOP.replace(force_amplitude=force, omega=omega, clearance=clearance,
+                          contact_position1=MID, contact_side=side)
+    s = 1.0 if side == "below" else -1.0
+    ref = PointContact(reference_beam(params, 1, n), None, MID, 0.0, s, 1e4, clearance, force,
+                       omega)
+    w, tip = ref.frequencies[:, None], ref.beam1.shapes(STOP.l1)[:, None]
+
+    def gap(t: np.ndarray) -> np.ndarray:
+        eta = (-tip * force * (np.sin(omega * t) - omega / w * np.sin(w * t))
+               / (w**2 - omega**2))
+        return clearance + s * ref.point_deflection(t, eta)
+
+    expected = _first_root(gap, 0.05, 200001)
+    ds = simulate(params, 0.05, n_modes=n, times=np.array([0.0, expected]))
+    assert float(ds.impact_onset_time[0]) == pytest.approx(expected, abs=1e-11)
+    # beam 1 moves down onto a stop below it, up onto one above: y(x) = -s clearance there
+    assert float(ds.contact_deflection_1[1]) == pytest.approx(-s * clearance, rel=1e-9)
+    assert float(ds.impact_velocity[0]) < 0.0  # the gap closes
+
+
+# --- contacts through the dynamics against DOP853 ---------------------------------------------
+
+
+def _engine_contacts(ds, count):
+    onset = ds.impact_onset_time.values[:count]
+    return {"onset": onset, "release": onset + ds.impact_duration.values[:count],
+            "peak": ds.impact_peak_force.values[:count]}
+
+
+def _compare(got, expected, time_tolerance, force_tolerance):
+    count = expected["release"].size
+    assert count >= 3
+    for key in ("onset", "release"):
+        np.testing.assert_allclose(got[key][:count], expected[key][:count], rtol=0,
+                                   atol=time_tolerance, err_msg=key)
+    np.testing.assert_allclose(got["peak"][:count], expected["peak"], rtol=force_tolerance)
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 4 does not resolve:RuntimeWarning")
+@pytest.mark.parametrize("side", ["below", "above"])
+def test_contacts_at_mid_span_against_dop853(side):
+    """A stop at mid-span (k = 1e4 N/m), 4 modes, forced: the first contacts (onset, release,
+    peak force) against DOP853 on the same modal equations with the contact force at that
+    point (point_reference.PointContact, rtol 1e-13). DOP853's own error, estimated by the
+    same run at rtol 1e-11: 4e-15 s in the event times, 5e-12 relative in the peaks (the peak
+    is located on its dense output); measured against the engine: 2e-16 s and 7e-14. Asserted
+    1e-12 s and 1e-9: DOP853's error at rtol 1e-11 with a margin of 100."""
+    n = 4
+    params = STOP.replace(force_amplitude=1e-3, omega=400.0, clearance=3e-6, contact_stiffness=1e4,
+                          contact_position1=MID, contact_side=side)
+    s = 1.0 if side == "below" else -1.0
+    ref = PointContact(reference_beam(params, 1, n), None, MID, 0.0, s, 1e4, 3e-6, 1e-3, 400.0)
+    expected = ref.contacts(0.04, 4)
+    ds = simulate(params, 0.04, n_modes=n, dt_output=1e-2)
+    _compare(_engine_contacts(ds, 4), expected, 1e-12, 1e-9)
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 3 does not resolve:RuntimeWarning")
+def test_two_beams_touching_at_offset_points_against_dop853():
+    """Beam 1 at x1 = 0.07 m onto beam 2 at x2 = 0.05 m below it (3 modes per beam, k = 1e4
+    N/m): the first contacts against DOP853 on the two beams' modal equations, as above
+    (measured 2e-16 s and 7e-13)."""
+    n = 3
+    params = Params(force_amplitude=1e-3, omega=300.0, clearance=3e-6, contact_stiffness=1e4,
+                    contact_position1=0.07, contact_position2=0.05)
+    ref = PointContact(reference_beam(params, 1, n), reference_beam(params, 2, n), 0.07, 0.05,
+                       1.0, 1e4, 3e-6, 1e-3, 300.0)
+    expected = ref.contacts(0.04, 4)
+    ds = simulate(params, 0.04, n_modes=n, dt_output=1e-2)
+    _compare(_engine_contacts(ds, 4), expected, 1e-12, 1e-9)
+
+
+# --- the two sides mirror each other ------------------------------------------------------------
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 5 does not resolve:RuntimeWarning")
+def test_contact_from_above_mirrors_contact_from_below():
+    """A stop above the point 0.06 m with beam 1 released from a downward uplift -delta is the
+    mirror image of a stop below with +delta: the same impacts, gaps, forces and energies,
+    and the deflections negated, bit for bit (every weight and state flips its sign exactly,
+    and the contact phase's rank-one update sees only w w^T; measured: identical)."""
+    base = STOP.replace(force_amplitude=0.0, clearance=4e-6, contact_stiffness=1e5,
+                        contact_position1=0.06)
+    below = simulate(base.replace(uplift1=3e-5), 0.02, n_modes=5, dt_output=1e-4)
+    above = simulate(base.replace(uplift1=-3e-5, contact_side="above"), 0.02, n_modes=5,
+                     dt_output=1e-4)
+    assert below.impact.size > 3
+    for name in ("impact_onset_time", "impact_duration", "impact_peak_force", "impact_velocity",
+                 "impact_impulse", "gap", "contact_force", "energy"):
+        np.testing.assert_array_equal(above[name], below[name], err_msg=name)
+    for name in ("tip_deflection_1", "contact_deflection_1", "tip_velocity_1"):
+        np.testing.assert_array_equal(above[name], -below[name], err_msg=name)
+
+
+# --- where the tips stay the tips -------------------------------------------------------------
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 4 does not resolve:RuntimeWarning")
+def test_the_tip_stays_the_tip_and_the_gap_is_at_the_contact_point():
+    """With a stop at mid-span the outputs that say tip are the tip's (the tip's static
+    response to R through what the modes miss, R_N(l, x) R), the gap is the contact point's:
+    g = clearance + y(x) in every sample, the stop stays at -clearance, and the energy
+    balances (work of F and the stored energy, to 1e-12 of the energy)."""
+    params = STOP.replace(force_amplitude=1e-3, omega=400.0, clearance=3e-6,
+                          contact_stiffness=1e4, contact_position1=MID)
+    ds = simulate(params, 0.03, n_modes=4, dt_output=1e-5, energy_balance=True)
+    assert ds.impact.size > 2
+    np.testing.assert_allclose(ds.gap, params.clearance + ds.contact_deflection_1, rtol=0,
+                               atol=1e-20)
+    np.testing.assert_array_equal(ds.tip_deflection_2.values, -params.clearance)
+    assert float(np.abs(ds.tip_deflection_1).max()) > 1.5 * float(
+        np.abs(ds.contact_deflection_1).max())  # the tip swings further than mid-span
+    balance = ds.energy - ds.unresolved_kinetic_energy - ds.work_of_force
+    assert float(np.abs(balance - balance[0]).max()) < 1e-12 * float(np.abs(ds.energy).max())
+
+
+def test_the_spring_contact_at_a_point_uses_the_point_flexibility():
+    """k_e = k / (1 + k r) with r = G(x, x) - sum_n Y_n(x)^2 / omega_n^2 at the point (the
+    textbook modes and the closed form: 1e-12), and the tip shift R_N(l, x) likewise."""
+    params = STOP.replace(contact_position1=0.04, contact_stiffness=1e5)
+    free = build_free_phase(params, 5)
+    spring = spring_contact(free, free.point_compliance, 0.0, 1e5)
+    ref = Beam(params.EI1, params.rhoA1, params.l1, 5)
+    assert spring.residual == pytest.approx(ref.residual(0.04, 0.04), rel=1e-10)
+    assert spring.tip_shift1 == pytest.approx(ref.residual(params.l1, 0.04), rel=1e-10)
+    above = build_free_phase(params.replace(contact_side="above"), 5)
+    assert spring_contact(above, above.point_compliance, 0.0, 1e5).tip_shift1 == pytest.approx(
+        -spring.tip_shift1, rel=1e-15)
+
+
+# --- parameters -------------------------------------------------------------------------------
+
+
+def test_the_default_contact_is_at_the_tips_from_below():
+    p = Params()
+    assert p.contact_point == (p.l1, p.l2) and p.at_tips and p.side.sign == 1.0
+    assert "contact_position1" not in p.as_dict() and "contact_side" not in p.as_dict()
+    q = STOP.replace(contact_position1=0.05, contact_side="above")
+    assert q.contact_point == (0.05, 0.0) and not q.at_tips
+    assert q.as_dict()["contact_position1"] == 0.05 and q.as_dict()["contact_side"] == "above"
+    r = Params(contact_position1=0.05, contact_position2=0.1, contact_side="above")
+    assert Params.from_mapping(r.as_dict()) == r
+    free, tip = build_free_phase(p, 3), build_free_phase(p.replace(contact_position1=p.l1), 3)
+    np.testing.assert_array_equal(free.gap_weights, free.tip1 - free.tip2)
+    np.testing.assert_array_equal(tip.gap_weights, free.gap_weights)
+    assert free.gap_compliance == p.tip_compliance[0] == tip.gap_compliance
+
+
+@pytest.mark.parametrize(("changes", "fragment"), [
+    ({"contact_position1": 0.0}, "contact_position1 = 0.0 is not allowed: must be > 0 and <= l1"),
+    ({"contact_position1": 0.2}, "contact_position1 = 0.2 is not allowed: must be > 0 and <= l1"),
+    ({"contact_position1": math.nan}, "contact_position1 = nan is not allowed"),
+    ({"contact_position2": 0.13}, "contact_position2 = 0.13 is not allowed: must be > 0 and <= l2"),
+    ({"contact_side": "left"}, "contact_side = 'left' is not allowed: must be one of 'below'"),
+    ({"contact_law": "tied", "contact_position1": 0.05},
+     "contact_position1 = 0.05 is not allowed: contact_law = 'tied' (the paper's law) ties"),
+    ({"contact_law": "tied", "contact_position2": 0.05}, "contact_position2 = 0.05 is not"),
+    ({"contact_law": "tied", "contact_side": "above"}, "contact_side = 'above' is not allowed"),
+    ({"counterpart": "stop", "contact_position2": 0.05},
+     "contact_position2 = 0.05 is not allowed: counterpart = 'stop' has no beam 2"),
+    ({"counterpart": "stop", "contact_position1": 0.05, "uplift1": -4e-5},
+     "uplift1 = -4e-05 is not allowed: the initial gap at the contact point, clearance + "
+     "(0.3125 uplift1 - 1 uplift2)"),
+])
+def test_contact_point_refusals(changes, fragment):
+    with pytest.raises(ParameterError, match=None) as error:
+        Params(**changes)
+    assert fragment in str(error.value)
+    assert "\n" not in str(error.value)
+
+
+def test_the_tied_law_at_the_tip_given_explicitly_is_allowed():
+    p = Params(contact_law="tied", contact_position1=0.1, contact_position2=0.12)
+    assert p.at_tips
+
+
+def test_command_line_and_toml(tmp_path, capsys):
+    from impactbeams.cli import main
+
+    path = tmp_path / "p.toml"
+    path.write_text('[params]\ncounterpart = "stop"\ncontact_position1 = 0.05\n'
+                    'contact_side = "above"\n')
+    p = Params.from_toml(path)
+    assert p.contact_point == (0.05, 0.0) and p.side.sign == -1.0
+    assert main(["modes", "--counterpart", "stop", "--contact-position1", "0.05",
+                 "--contact-side", "above", "--json"]) == 0
+    capsys.readouterr()
+    assert main(["modes", "--contact-position1", "0.5"]) == 2
+    err = capsys.readouterr().err
+    assert "contact_position1 = 0.5 is not allowed" in err and "Traceback" not in err
