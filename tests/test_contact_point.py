@@ -313,3 +313,104 @@ def test_command_line_and_toml(tmp_path, capsys):
     assert main(["modes", "--contact-position1", "0.5"]) == 2
     err = capsys.readouterr().err
     assert "contact_position1 = 0.5 is not allowed" in err and "Traceback" not in err
+
+
+# --- every run kind on a contact at a point ------------------------------------------------------
+
+POINT_SWEEP = {"t_max": 0.05, "n_modes": 4,
+               "params": {"counterpart": "stop", "contact_stiffness": 1e4, "clearance": 3e-6,
+                          "contact_position1": 0.06, "contact_side": "above"}}
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 4 does not resolve:RuntimeWarning")
+def test_maps_of_a_contact_at_a_point_equal_single_runs():
+    """A first-impact map (the column kernel along Omega) and a dynamics map of a stop above
+    the point 0.06 m: every cell's first impact equals simulate()'s to 1e-12 s (both certified
+    to round-off), its count and peak force bit for bit; the point and side are the Dataset's
+    attributes and part of the fingerprint."""
+    from impactbeams.sweep import run_sweep, sweep_from_mapping
+
+    axes = {"omega": {"min": 100.0, "max": 500.0, "num": 3},
+            "force_amplitude": {"min": 5e-4, "max": 1e-3, "num": 2}}
+    first = sweep_from_mapping({**POINT_SWEEP, "observables": ["first_impact_time"],
+                                "axes": axes}, source="point columns")
+    dynamics = sweep_from_mapping({**POINT_SWEEP, "axes": axes, "observables": [
+        "first_impact_time", "impact_count", "max_contact_force"]}, source="point map")
+    assert not first.needs_dynamics
+    at_tip = {**POINT_SWEEP, "params": {**POINT_SWEEP["params"], "contact_position1": 0.1}}
+    assert sweep_from_mapping({**at_tip, "observables": ["first_impact_time"], "axes": axes}
+                              ).fingerprint() != first.fingerprint()
+    columns, cells = run_sweep(first, parallel=False), run_sweep(dynamics, parallel=False)
+    assert cells.attrs["contact_position1"] == 0.06 and cells.attrs["contact_side"] == "above"
+    assert np.isfinite(columns.first_impact_time.values).sum() >= 4
+    for i, omega in enumerate(cells.omega.values):
+        for j, force in enumerate(cells.force_amplitude.values):
+            params = Params(**POINT_SWEEP["params"], omega=float(omega),
+                            force_amplitude=float(force))
+            run = simulate(params, 0.05, n_modes=4, dt_output=0.05)
+            expected = float(run.impact_onset_time[0]) if run.impact.size else math.nan
+            cell = cells.isel(omega=i, force_amplitude=j)
+            assert float(cell.first_impact_time) == pytest.approx(expected, abs=1e-12, nan_ok=True)
+            assert float(columns.first_impact_time.isel(omega=i, force_amplitude=j)) == (
+                pytest.approx(expected, abs=1e-12, nan_ok=True))
+            assert int(cell.impact_count) == run.impact.size
+            if run.impact.size:
+                assert float(cell.max_contact_force) == float(run.impact_peak_force.max())
+
+
+def test_a_contact_position_is_not_a_sweep_axis():
+    from impactbeams.sweep import sweep_from_mapping
+
+    with pytest.raises(ParameterError, match="contact_position1 is not sweepable"):
+        sweep_from_mapping({**POINT_SWEEP, "observables": ["first_impact_time"],
+                            "axes": {"contact_position1": {"min": 0.02, "max": 0.08, "num": 3}}})
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 6 does not resolve:RuntimeWarning")
+def test_periodic_orbit_and_continuation_of_a_contact_at_a_point():
+    """A damped stop at mid-span: the periodic orbit found by shooting is a fixed point of the
+    dynamics (one forcing period of simulate() from it returns to it: 1e-9 relative in the
+    energy norm's coordinates, the orbit's tolerance being 1e-11), with contacts; a short
+    continuation in Omega starts on it."""
+    from impactbeams import Continuation, continue_orbits, periodic_orbit
+
+    params = STOP.replace(force_amplitude=1e-3, omega=400.0, clearance=3e-6, damping_ratio=0.05,
+                          contact_stiffness=1e4, contact_position1=MID)
+    orbit = periodic_orbit(params, 6)
+    assert orbit.contacts > 0
+    period = 2.0 * math.pi / params.omega
+    run = simulate(params, period, n_modes=6, dt_output=period, initial_state=orbit.state)
+    end = np.concatenate([run.final_displacement.values, run.final_velocity.values])
+    scale = np.abs(orbit.state).max()
+    np.testing.assert_allclose(end, orbit.state, rtol=0, atol=1e-9 * scale)
+    branches = continue_orbits(Continuation(params, "omega", 395.0, 405.0, start=400.0,
+                                            n_modes=6, max_points=4))
+    assert branches.sizes["branch_point"] >= 2 and branches.attrs["contact_position1"] == MID
+    assert np.all(branches.contacts_per_orbit.values > 0)
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 4 does not resolve:RuntimeWarning")
+def test_long_time_samples_of_a_contact_at_a_point_equal_simulate():
+    """A long-time sweep of a damped stop above the point 0.06 m: the kernel's stroboscopic
+    tip samples (Numba) against simulate()'s series at the same times (NumPy, the same events):
+    to 1e-13 of the largest sample, as tests/test_longtime.py; the contacts happen."""
+    from impactbeams import LongTime
+    from impactbeams.sweep import LONG_TIME_OBSERVABLES, run_sweep, sweep_from_mapping
+
+    fixed = {**POINT_SWEEP["params"], "damping_ratio": 0.02, "force_amplitude": 1e-3}
+    sweep = sweep_from_mapping({
+        "n_modes": 4, "observables": list(LONG_TIME_OBSERVABLES), "transient_periods": 5,
+        "sampled_periods": 4, "params": fixed,
+        "axes": {"omega": {"min": 300.0, "max": 500.0, "num": 2}}})
+    ds = run_sweep(sweep, progress=False)
+    setting = LongTime(sampled_periods=4)
+    for i, omega in enumerate(ds.omega.values):
+        run = simulate(Params(**fixed, omega=float(omega)), float(setting.horizon(omega, 5)),
+                       n_modes=4, times=setting.sample_times(omega, 5), transient_periods=5,
+                       long_time=setting)
+        assert run.impact.size > 0
+        cell = ds.isel(omega=i)
+        for name, series in (("poincare_deflection1", "tip_deflection_1"),
+                             ("poincare_velocity1", "tip_velocity_1")):
+            scale = np.max(np.abs(cell[name].values))
+            assert np.max(np.abs(cell[name].values - run[series].values)) <= 1e-13 * scale
