@@ -414,3 +414,40 @@ def test_long_time_samples_of_a_contact_at_a_point_equal_simulate():
                              ("poincare_velocity1", "tip_velocity_1")):
             scale = np.max(np.abs(cell[name].values))
             assert np.max(np.abs(cell[name].values - run[series].values)) <= 1e-13 * scale
+
+
+@pytest.mark.parametrize("side", ["below", "above"])
+def test_the_linear_gap_of_a_contact_at_a_point(side):
+    """The no-contact steady gap per unit F0 (`orbits.grazing.LinearGap`, the grazing curves'
+    phasor) at a point of beam 1 against the mode-acceleration form with the textbook modes:
+    G_F = -s R_N(x, l) - s sum_n Y_n(x) Y_n(l) / (omega_n^2 - Omega^2) (undamped), to 1e-12
+    relative; per unit U0 of a shaker on beam 1's clamp (the stop stays) likewise."""
+    from impactbeams.orbits.grazing import LinearGap
+
+    s = 1.0 if side == "below" else -1.0
+    params = STOP.replace(contact_position1=0.03, contact_side=side, shaker="beam1")
+    omega = np.array([50.0, 400.0, 3000.0])
+    force, base = LinearGap(params, 5).per_unit(omega)
+    ref = Beam(params.EI1, params.rhoA1, params.l1, 5)
+    w = ref.frequencies[:, None]
+    expected = -s * ref.residual(0.03, params.l1) - s * np.sum(
+        (ref.shapes(0.03) * ref.shapes(params.l1))[:, None] / (w**2 - omega**2), axis=0)
+    np.testing.assert_allclose(force.real, expected, rtol=1e-12)
+    assert np.all(force.imag == 0.0)
+    # the shaker: s (1 + sum_n Y_n(x) Gamma_n Omega^2 / (omega_n^2 - Omega^2)), Gamma_n =
+    # rhoA int Y_n by 200-point Gauss-Legendre (exact to round-off for these smooth shapes)
+    nodes, weights = np.polynomial.legendre.leggauss(200)
+    x = 0.5 * params.l1 * (nodes + 1.0)
+    gamma = params.rhoA1 * 0.5 * params.l1 * np.array([ref.shapes(xi) for xi in x]).T @ weights
+    expected = s * (1.0 + np.sum((ref.shapes(0.03) * gamma)[:, None] * omega**2
+                                 / (w**2 - omega**2), axis=0))
+    np.testing.assert_allclose(base.real, expected, rtol=1e-12)
+
+
+def test_the_reduced_model_refuses_a_contact_elsewhere():
+    from impactbeams.packing import reduced_model
+
+    with pytest.raises(ParameterError, match="reduced_model: contact_position1 = 0.05"):
+        reduced_model(STOP.replace(contact_position1=0.05), 4)
+    with pytest.raises(ParameterError, match="reduced_model: contact_side = 'above'"):
+        reduced_model(STOP.replace(contact_side="above"), 4)
