@@ -13,7 +13,7 @@ name               unit    meaning
 ``rho1`` ...       kg/m^3  density
 ``width1`` ...     m       strip width
 ``thickness1``...  m       strip thickness
-``clearance``      m       Delta, gap between the tips at rest (> 0)
+``clearance``      m       Delta, gap between the tips (the contact points) at rest (> 0)
 ``force_amplitude`` N      F0 of the tip force F(t) = F0 sin(omega t) on beam 1 (downward);
                            default 1e-3, but 0 when ``base_amplitude`` is given: a study that
                            names its shaker is driven by it alone unless it names F0 too
