@@ -525,3 +525,28 @@ def test_the_reduced_model_refuses_a_contact_elsewhere():
         reduced_model(STOP.replace(contact_position1=0.05), 4)
     with pytest.raises(ParameterError, match="reduced_model: contact_side = 'above'"):
         reduced_model(STOP.replace(contact_side="above"), 4)
+
+
+@pytest.mark.filterwarnings("ignore:n_modes = 4 does not resolve:RuntimeWarning")
+@pytest.mark.parametrize("side", ["below", "above"])
+def test_the_trajectory_plot_draws_the_contact_point(side, tmp_path):
+    """The run's plot shows beam 1 at its contact point and the stop where it touches,
+    y2(x2) - s clearance (-s clearance for a fixed stop), over the tip; the figure is written."""
+    import matplotlib.pyplot as plt
+
+    from impactbeams.plotting.trajectories import plot_run, plot_tips
+
+    params = STOP.replace(force_amplitude=1e-3, omega=400.0, clearance=3e-6,
+                          contact_stiffness=1e4, contact_position1=MID, contact_side=side)
+    ds = simulate(params, 0.03, n_modes=4, dt_output=1e-4)
+    figure, axis = plt.subplots()
+    plot_tips(axis, ds)
+    lines = {line.get_label(): line for line in axis.get_lines()}
+    np.testing.assert_array_equal(lines[r"$y_1(x_1)$, contact point"].get_ydata(),
+                                  ds.contact_deflection_1 * 1e6)
+    s = 1.0 if side == "below" else -1.0
+    np.testing.assert_allclose(lines[r"counterpart, $y_2(x_2) - s\Delta$"].get_ydata(),
+                               -s * 3.0, rtol=1e-12)
+    plt.close(figure)
+    plot_run(ds, tmp_path / "run.png")
+    assert (tmp_path / "run.png").stat().st_size > 0
