@@ -9,7 +9,8 @@ and as a command), ``bench_cube.py`` (an (Omega, clearance, F0) cube streamed in
 work-precision studies (``work_precision.py``: first-impact map, grazing cells, full dynamics;
 ``spring_precision.py``: full dynamics of the spring law against solve_ivp), the scaling
 series (``scaling.py``), ``bench_distributed.py`` (Dask overhead, if installed),
-``bench_continuation.py`` (the time per branch point of a continuation), then the speed
+``bench_continuation.py`` (the time per branch point of a continuation),
+``bench_two_parameter.py`` (the time per point of a bifurcation curve), then the speed
 targets' benchmarks: ``bench_columns.py`` (every benchmark map by columns), ``bench_longtime.py``
 (the long-time bifurcation diagram, run whole on 2 threads), ``bench_compile.py`` (the first
 run's compile, cold and warm), ``bench_startup.py`` (each command's start-up) and
@@ -21,7 +22,8 @@ compared cell by cell), the first run and the start-up. Results go to
 ``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
 ``sweep.json``/``sweep.md`` from bench_sweep, ``cube.json``/``cube.md`` from bench_cube,
 ``distributed.json``/``.md``, ``columns.json``/``.md``, ``longtime.json``/``.md``,
-``continuation.json``/``.md``, ``compile.json``/``.md``, ``startup.json``,
+``continuation.json``/``.md``, ``two_parameter.json``/``.md``, ``compile.json``/``.md``,
+``startup.json``,
 ``numba_paths.json``); the plots are drawn
 from those JSON files only; ``README.md`` holds the headline tables, the speed targets' first.
 """
@@ -162,6 +164,12 @@ def run_bench_continuation(quick: bool) -> None:
     if quick:
         command += ["--points", "4"]
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+
+
+def run_bench_two_parameter() -> None:
+    """The time per point of a bifurcation curve in two parameters (its JSON and markdown)."""
+    subprocess.run([sys.executable, str(HERE / "bench_two_parameter.py")], check=True,
+                   stdout=subprocess.DEVNULL)
 
 
 def run_bench_first_run(quick: bool, baseline: Path | None) -> None:
@@ -475,6 +483,8 @@ def suite(args: argparse.Namespace, out: Path) -> None:
     if not args.skip_continuation:
         log("bench_continuation.py")
         run_bench_continuation(args.quick)
+        log("bench_two_parameter.py")
+        run_bench_two_parameter()
     about = {"quick": args.quick, **machine()}
     for name, data in (("work_precision", first), ("dynamics", dynamics), ("scaling", scale),
                        ("spring", springs)):

@@ -180,6 +180,14 @@ def performance() -> str:
                  "(docs/benchmarks/stiff_continuation.md))",
                  "; ".join(_stiff_case(case, stiff.get("baseline", "").split(" ")[0])
                            for case in stiff["cases"]), recorded(stiff)))
+    two = _results("two_parameter")
+    curve, branch_point = (two["cases"]["stop fold, 5 modes"][part]
+                           for part in ("curve", "branch"))
+    ratio = curve["cpu_seconds_per_point"] / branch_point["cpu_seconds_per_point"]
+    rows.append(("a point of a fold curve in (Omega, F0), soft stop, 5 modes per beam "
+                 "([two-parameter](docs/benchmarks/two_parameter.md))",
+                 f"{1e3 * curve['seconds_per_point']:.0f} ms, {ratio:.1f} times a branch point",
+                 recorded(two)))
     lines = ["| quantity | value | measured |", "|---|---|---|"]
     lines += [f"| {what} | {value} | {when} |" for what, value, when in rows]
     return "\n".join(lines) + "\n"
@@ -188,13 +196,14 @@ def performance() -> str:
 def _stiff_case(case: dict, baseline: str) -> str:
     """One run of the stiff continuation benchmark, and the earlier version's (``baseline``).
 
-    Its CPU time (what one free core takes: the wall time follows the machine's load) and
+    Its wall and CPU time on 2 cores (the corrector runs dr/dp's far end on the second) and
     what branch 0 covered.
     """
     def covered(run: dict) -> str:
         low, high = (float(v) for v in run["covered"][0].split(":"))
         ending = "stopped at the cap" if run["capped"] else f"ended {run['endings'][0]}"
-        return f"{low:.1f} to {high:.1f} rad/s in {run['cpu_seconds']:.0f} s of CPU, {ending}"
+        return (f"{low:.1f} to {high:.1f} rad/s in {run['seconds']:.0f} s "
+                f"({run['cpu_seconds']:.0f} s of CPU), {ending}")
 
     contact = ("Hertz" if case["stiffness"] is None else f"k = {case['stiffness']:g} N/m")
     before = f" ({baseline}: {covered(case['before'])})" if "before" in case else ""

@@ -811,6 +811,13 @@ def _public_calls():
         "continue_orbits-continuation": (lambda: ib.continue_orbits("omega"),
                                          "continuation = 'omega' (str) is not allowed: must be "
                                          "an impactbeams.Continuation"),
+        "BifurcationCurve-params": (
+            lambda: ib.BifurcationCurve(None, "fold", "omega", 1.0, [], "clearance", 1.0, 2.0,
+                                        0.5, 1.5, 3),
+            "params = None (NoneType) is not allowed: must be an impactbeams.Params"),
+        "continue_curve-curve": (lambda: ib.continue_curve("fold"),
+                                 "curve = 'fold' (str) is not allowed: must be an "
+                                 "impactbeams.continuation.BifurcationCurve"),
         "plot_dataset-dataset": (lambda: ib.plot_dataset(5, "x.png"),
                                  "dataset = 5 (int) is not allowed: must be an xarray.Dataset"),
         "plot_dataset-dpi": (lambda: ib.plot_dataset(xr.Dataset(), "x.png", dpi=-1),

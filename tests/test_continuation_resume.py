@@ -4,9 +4,9 @@
 (Ctrl-C); the same command again ends with the file an uninterrupted run writes: every
 variable and coordinate bitwise, with its dtype and attributes, every global attribute but the
 time-stamped ``history`` (`test_resume.assert_same_map`, as for the sweeps). The model is
-`test_continuation_events`'s (two beams, 3 modes each) over 248.8 to 250.5 rad/s: 77 points on
-two branches (a period doubling switched to), about 3 s; the Newton-Picard variant carries its
-basis from step to step, which the checkpoints must carry too.
+`test_continuation_events`'s (two beams, 3 modes each) over 248.8 to 250.5 rad/s: ``POINTS``
+points on two branches (a period doubling switched to), about 3 s; the Newton-Picard variant
+carries its basis from step to step, which the checkpoints must carry too.
 """
 
 import functools
@@ -27,7 +27,8 @@ FILE = ("n_modes = 3\n[params]\ncontact_stiffness = 1e4\ndamping_ratio = 0.02\n"
         "force_amplitude = 3e-5\nclearance = 1.1e-5\n[continuation]\nparameter = 'omega'\n"
         "min = 248.8\nmax = 250.5\nstart = 248.9\nmax_branches = 2\nmethod = '{method}'\n")
 METHODS = ("newton", "newton-picard")
-SAVED_BEFORE_THE_SIGNAL = 15  # of 77 points: mid-branch
+POINTS = 79  # on both branches, uninterrupted
+SAVED_BEFORE_THE_SIGNAL = 15  # of POINTS: mid-branch
 
 # the command line with every checkpoint 50 ms longer: the signal finds the run going
 SLOW_CLI = ("import sys, time\n"
@@ -73,7 +74,7 @@ def test_a_stopped_continuation_resumes_to_the_uninterrupted_file(files, uninter
     kept = _interrupt(command, partial, how, lambda _: saved_points(out), SLOW_CLI,
                       SAVED_BEFORE_THE_SIGNAL)
     stderr = (tmp_path / "stderr.txt").read_text()
-    assert not out.exists() and SAVED_BEFORE_THE_SIGNAL <= kept < 77
+    assert not out.exists() and SAVED_BEFORE_THE_SIGNAL <= kept < POINTS
     if how == signal.SIGINT:  # what was computed, to look at, and the way on
         assert stderr.splitlines()[-2].endswith(
             f"are in {partial / 'out.nc'}; the continuation's steps are kept in {partial}/ and "
@@ -125,7 +126,7 @@ def test_from_python_resumed_after_each_of_several_interrupts_and_a_cut_log(unin
     log.write_bytes(log.read_bytes()[:-100])  # the last record cut
     assert saved_points(out) == kept - 1
     dataset = continue_orbits(_continuation(method="newton"), None, out)
-    assert dataset.branch_point.size == 77
+    assert dataset.branch_point.size == POINTS
     assert_same_map(out, uninterrupted("newton"))
 
 

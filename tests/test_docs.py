@@ -43,6 +43,9 @@ NOT_EXECUTED = {
     "impactbeams continue sweeps/continuation-stop-fold.toml -o results/fold.nc":
         "the example takes about 30 s; tests/test_continuation_beams.py runs the command on "
         "the same file (slow) and on a reduced range (fast)",
+    "impactbeams continue fold-curve.toml -o results/fold-curve.nc":
+        "a continuation file with the [curve] table shown above it; "
+        "tests/test_two_parameter.py runs the command and the plot on such a file",
     "# once, on the machines of the cluster (same impactbeams version everywhere)":
         "needs a Dask cluster on other machines; the same path runs on a local cluster on "
         "that page",

@@ -28,6 +28,8 @@ _LAZY = {
     "Settling": "impactbeams.orbits",
     "Continuation": "impactbeams.continuation",
     "continue_orbits": "impactbeams.continuation",
+    "BifurcationCurve": "impactbeams.continuation",
+    "continue_curve": "impactbeams.continuation",
     "plot_dataset": "impactbeams.plotting",
     "Cantilever": "impactbeams.structure",
     "Segment": "impactbeams.structure",

@@ -51,6 +51,7 @@ if TYPE_CHECKING:
     from impactbeams.continuation import Continuation
     from impactbeams.continuation.arclength import Point
     from impactbeams.continuation.branch import Branch
+    from impactbeams.continuation.twoparameter import CurvePlan
     from impactbeams.sweep import ChunkRunner, Sweep
 
 EXIT_SYSTEM_ERROR = 1  # a file could not be written (full disk, ...) or memory ran out
@@ -369,6 +370,7 @@ def _continue(args: argparse.Namespace) -> int:
         reporting_kept_points,
         saved_points,
     )
+    from impactbeams.continuation.definition import load_curve
     from impactbeams.continuation.run import orbits_problem
     from impactbeams.lock import output_lock
     from impactbeams.preflight import require_input_file
@@ -376,7 +378,10 @@ def _continue(args: argparse.Namespace) -> int:
 
     continuation = load_continuation(require_input_file(args.file, "continuation"))
     orbits_problem(continuation)  # what the file alone cannot tell (the subspace's room)
+    plan = load_curve(args.file, continuation)
     output = _continuation_output(args, continuation)
+    if plan is not None:
+        return _continue_curve(args, plan, output)
     with reporting_kept_points(output), output_lock(output):  # before anything is printed
         kept = saved_points(output) if CourseLog(output, continuation).check() else 0
         resumed = (f" (resuming from the {kept} branch points saved in "
@@ -400,6 +405,34 @@ def _continue(args: argparse.Namespace) -> int:
     for line in short:
         print(f"impactbeams: warning: {line}", file=sys.stderr)
     return EXIT_INCOMPLETE if short and not args.allow_incomplete else 0
+
+
+def _continue_curve(args: argparse.Namespace, plan: CurvePlan, output: Path) -> int:
+    """``continue`` with a ``[curve]``: the branch, then its event in two parameters."""
+    from impactbeams.continuation import continue_orbits
+    from impactbeams.continuation.twoparameter import continue_curve
+    from impactbeams.lock import output_lock
+    from impactbeams.variables import CURVE_EVENTS
+
+    c = plan.continuation
+    with output_lock(output):
+        _say(args, f"{args.file}: the {plan.kind} of the branch along {c.parameter} from "
+             f"{c.low:g} to {c.high:g} (event {plan.which}), followed in {plan.second} from "
+             f"{plan.low:g} to {plan.high:g} -> {output}")
+        progress = None if args.quiet else _BranchProgress(c.low, c.high)
+        with _running_kernels("orbits", args):
+            branch = continue_orbits(c, progress)
+            _say(args, f"branch: {_branch_summary(branch)}")
+            curve = plan.from_branch(branch)
+            progress = None if args.quiet else _BranchProgress(plan.low, plan.high)
+            dataset = continue_curve(curve, progress, output)
+    first, second = dataset.attrs["curve_parameters"].split()
+    located = "; ".join(f"{CURVE_EVENTS[code]} at {first} = {float(dataset[first][i]):.9g}, "
+                        f"{second} = {float(dataset[second][i]):.9g}"
+                        for i, code in enumerate(dataset.curve_event.values) if code)
+    _say(args, f"wrote {output}: {dataset.branch_point.size} points of the {plan.kind} curve "
+               f"(ended: {dataset.attrs['curve_ending']}); {located}")
+    return 0
 
 
 def _grazing(args: argparse.Namespace) -> int:
@@ -584,15 +617,57 @@ def _short_branches(dataset: xr.Dataset, continuation: Continuation) -> list[str
     for number, ending in enumerate(dataset.attrs["branch_endings"].split()):
         if ending not in INCOMPLETE:
             continue
-        last = dataset.isel(branch_point=int((dataset.branch == number).values.nonzero()[0][-1]))
+        branch = dataset.isel(branch_point=(dataset.branch == number).values.nonzero()[0])
+        last = branch.isel(branch_point=-1)
         lines.append(
             f"branch {number} ended ({ending}) at {parameter} = {float(last[parameter]):.10g}, "
             f"short of [{continuation.low:g}, {continuation.high:g}], with "
             f"{int(last.contacts_per_orbit)} contacts per orbit and largest |mu| "
-            f"{float(last.multiplier_modulus.max()):.4g}: try micro_contacts = \"summarise\" "
-            "(stiff contacts), a larger max_points, fewer n_modes or a smaller "
-            "contact_stiffness, or start a second run past it (start =)")
+            f"{float(last.multiplier_modulus.max()):.4g}: try "
+            + ", or ".join(_what_to_try(branch, ending, continuation)))
     return lines
+
+
+# the last points of a branch whose events tell what it was crossing when it ended
+ENDING_POINTS = 10
+
+
+def _what_to_try(branch: xr.Dataset, ending: str, continuation: Continuation) -> list[str]:
+    """What may take a branch that ended short (``ending``) further: only what applies.
+
+    More points for one that ran out of them, a smaller min_step for one whose step fell
+    below it; summarising micro-contacts only where the branch was crossing changes of the
+    contacts within an episode (merges or splits among its last ``ENDING_POINTS`` points)
+    and they are located: at a fold on a grazing (the stiff stop case's period-2 branch)
+    summarising changes nothing, and the branch turns back or stops the same. A smaller
+    max_step for one that jumped back onto itself. A second run from past the end (of the
+    branch's period), or from the other end of the range, always.
+    """
+    from impactbeams.continuation.arclength import LOCATE
+    from impactbeams.continuation.branch import MAX_POINTS, MIN_STEP, RETRACED, STALLED
+    from impactbeams.variables import BIFURCATIONS
+
+    remedies = []
+    if ending == MAX_POINTS:
+        remedies.append(f"a larger max_points (now {continuation.max_points})")
+    if ending == MIN_STEP:
+        remedies.append("a smaller min_step")
+    kinds = {BIFURCATIONS[code] for code in branch.bifurcation.values[-ENDING_POINTS:]}
+    if (ending in (MIN_STEP, STALLED) and continuation.micro_contacts == LOCATE
+            and kinds & {"contact_merge", "contact_split"}):
+        remedies.append('micro_contacts = "summarise" (its last points cross changes of '
+                        "the contacts within an impact episode, each located)")
+    if ending == RETRACED:
+        remedies.append("a smaller max_step (a step jumped back onto the branch)")
+    period = int(branch.orbit_period.values[0])
+    if period == continuation.period:
+        other = "down" if continuation.direction == "up" else "up"
+        remedies.append(f"a second run from past it (start =) or from the other end "
+                        f"(direction = \"{other}\")")
+    else:  # a branch switched to at a period doubling
+        remedies.append(f"a second run of period {period} from past it (period = {period}, "
+                        "start =)")
+    return remedies
 
 
 def _simulate(args: argparse.Namespace) -> int:

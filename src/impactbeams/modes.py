@@ -156,13 +156,22 @@ class ContactModes:
         return deprecated_omega(self)
 
 
+@functools.lru_cache(maxsize=32)
 def free_modes(EI: float, rhoA: float, length: float, n: int) -> FreeModes:
-    """First ``n`` cantilever modes of a beam (EI in N m^2, rhoA in kg/m, length in m)."""
+    """First ``n`` cantilever modes of a beam (EI in N m^2, rhoA in kg/m, length in m).
+
+    Built once per process for each (EI, rhoA, length, n), which is all they depend on: a run
+    asks for a beam's modes several times (counting the modes its contact needs, then its
+    model). Shared, hence read-only.
+    """
     b = cantilever_roots(n)
     k = b / length
     norm = np.sqrt(rhoA / k * psi_norm_squared(b))
     sign = np.sign(psi_tip(b)[0])  # tip displacement positive
-    return FreeModes(np.sqrt(EI / rhoA) * k**2, BeamShapes(k, sign / norm, length))
+    frequencies, amplitude = np.sqrt(EI / rhoA) * k**2, sign / norm
+    for array in (frequencies, k, amplitude):
+        array.flags.writeable = False
+    return FreeModes(frequencies, BeamShapes(k, amplitude, length))
 
 
 def participation(shapes: BeamShapes, rhoA: float) -> np.ndarray:

@@ -498,6 +498,42 @@ VARIABLES.update({
         "drives' sines rise through 0); NaN where the curve has no point"),
 })
 
+# bifurcation curves in two parameters (impactbeams.continuation.twoparameter), along
+# "branch_point" like a branch: the codimension-two points met on the way
+CURVE_EVENTS = ("none", "end", "turning_point", "cusp", "grazing")
+VARIABLES.update({
+    "curve_condition": Variable(
+        ("branch_point",), "1", "bifurcation test function",
+        "the augmented system's condition at the point, zero on the curve to the corrector's "
+        "tolerance: the signed grazing value (m) on a grazing curve; the minimally augmented "
+        "system's s (the bordered M - sigma I's last unknown, sigma = +1 for a fold, -1 for a "
+        "period doubling; of the bialternate product M (.) M - I on a Neimark-Sacker curve) on a "
+        "multiplier's curve"),
+    "curve_tangent_1": Variable(
+        ("branch_point",), "1", "tangent's part along the first parameter",
+        "the first parameter's component of the curve's unit tangent in the scaled unknowns "
+        "(per the first parameter's box): 0 where that parameter turns back along the curve"),
+    "curve_tangent_2": Variable(
+        ("branch_point",), "1", "tangent's part along the second parameter",
+        "the second parameter's component of the curve's unit tangent in the scaled unknowns "
+        "(per the second parameter's range): 0 where that parameter turns back along the "
+        "curve"),
+    "curve_stable": Variable(
+        ("branch_point",), "1", "stability of the orbit but for the bifurcating multiplier",
+        "1 if every Floquet multiplier has |mu| < 1, leaving out on a fold or period-doubling "
+        "curve the one nearest +1 or -1, on a Neimark-Sacker curve the complex pair nearest "
+        "the unit circle (on the curve, at it to round-off), else 0: whether the orbit is "
+        "stable on one side of the bifurcation", dtype="int8", flags=STABILITY),
+    "curve_event": Variable(
+        ("branch_point",), "1", "codimension-two point located at the curve point",
+        "0 none; 1 end (the curve's last point: the attribute curve_ending says why); 2 "
+        "turning_point (the second parameter turns back: the tangent's part along it changes "
+        "sign); 3 cusp (a turning point of a fold curve where the tangent's part along the "
+        "first parameter is below 1e-3 as well); 4 grazing (the orbit's grazing value changes "
+        "sign along a fold or period-doubling curve), each located to the attribute "
+        "locate_tolerance", dtype="int8", flags=CURVE_EVENTS),
+})
+
 # basins of attraction (impactbeams.orbits.basin_map): one label per initial state ("*": the plane's
 # two axes, or "cell" for a list of states), and the attractors found, along "attractor"
 BASIN_LABELS = {-1: "not_settled", -2: "stopped"}  # the labels that name no attractor

@@ -51,14 +51,17 @@ from impactbeams.contact.free import FreePhase
 from impactbeams.modes import AttachedBeam, UniformBeam, beam, values_at
 from impactbeams.params import MAX_MODES, ParameterError, Params
 
-__all__ = ["SpringContact", "rank_one_modes", "recommended_modes", "required_modes",
-           "residual_flexibilities", "resolution_modes", "spring_contact"]
+__all__ = ["SpringContact", "needed_modes", "rank_one_modes", "recommended_modes",
+           "required_modes", "residual_flexibilities", "resolution_modes", "spring_contact"]
 
 # frequencies of the two beams closer than this (relative) count as equal in the rank-one
 # update: the error it makes in their pair is below it, far better than a dense solver's
 _DEFLATE = 1e-13
 # A contact mode pair counts as underdamped while |Im lambda| exceeds this fraction of |lambda|
 _OVERDAMPED = 1e-6
+# n_modes per beam under the tied law when none is given: its first contacts converge in
+# n_modes (docs/model.md), and 5 is the paper's resolution
+TIED_MODES = 5
 
 
 def residual_flexibilities(free: FreePhase, compliance: tuple[float, float],
@@ -375,6 +378,19 @@ def _softer_modes(cantilever: UniformBeam | AttachedBeam, stiffness: float,
         n = min(2 * n, limit)
 
 
+def needed_modes(params: Params) -> int:
+    """n_modes per beam that resolves the contact of ``params`` (may exceed a run's limit).
+
+    `required_modes` under a compliant law, ``TIED_MODES`` under the tied law.
+    """
+    return required_modes(params) if params.law.compliant else TIED_MODES
+
+
 def recommended_modes(params: Params) -> int:
-    """The n_modes to use: ``required_modes``, within ``MAX_MODES`` and a structure's modes."""
-    return min(MAX_MODES, beam(params, 1).mode_limit, required_modes(params))
+    """The n_modes per beam a run takes when none is given.
+
+    `needed_modes`, within ``MAX_MODES`` and the modes beam 1's structure has: the one
+    answer to "how many modes does this need" of simulate, period maps, basins, continuation
+    and the CLI's contact frequencies.
+    """
+    return min(MAX_MODES, beam(params, 1).mode_limit, needed_modes(params))

@@ -24,12 +24,26 @@
     subspace = 8               # Newton-Picard's carried directions
     micro_contacts = "locate"  # or "summarise": changes of the contacts within an episode
                                # labelled chatter, not located (stiff contacts)
+    [curve]                    # optional: then the branch's event is followed in two
+                               # parameters (continuation.twoparameter), the range above
+                               # its box for the first
+    kind = "fold"              # the branch's event: "grazing", "fold", "period_doubling" or
+                               # "neimark_sacker"
+    which = 0                  # the first such event located on the branch (0), or a later one
+    second = "force_amplitude" # the second parameter (its start value: [params]')
+    min = 5e-5
+    max = 2e-4
+    direction = "up"           # of the second parameter from its start
+    step = 0.02                # arclength steps, in units of the second's range
+    min_step = 1e-9
+    max_step = 0.05
+    max_points = 200
 """
 
 from __future__ import annotations
 
 import os
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from impactbeams.continuation.run import Continuation
 from impactbeams.params import (
@@ -43,14 +57,19 @@ from impactbeams.params import (
     unknown_key,
 )
 
-_TOP_LEVEL = ("n_modes", "period", "transient_periods", "params", "continuation")
+if TYPE_CHECKING:
+    from impactbeams.continuation.twoparameter import CurvePlan
+
+_TOP_LEVEL = ("n_modes", "period", "transient_periods", "params", "continuation", "curve")
 _RANGE_KEYS = {"parameter": "parameter", "min": "low", "max": "high", "direction": "direction",
                "start": "start", "step": "step", "min_step": "min_step", "max_step": "max_step",
                "max_points": "max_points", "max_branches": "max_branches",
                "state_scale": "state_scale", "method": "method", "subspace": "subspace",
                "micro_contacts": "micro_contacts"}
 _INTEGERS = ("n_modes", "period", "transient_periods", "max_points", "max_branches",
-             "subspace")
+             "subspace", "which")
+_CURVE_KEYS = ("kind", "which", "second", "min", "max", "direction", "step", "min_step",
+               "max_step", "max_points")
 
 
 def load_continuation(path: str | os.PathLike[str]) -> Continuation:
@@ -83,7 +102,34 @@ def _check_type(key: str, value: Any, source: str) -> None:
     where = f"{key} in {source}"
     if key in _INTEGERS:
         require(where, value, is_integer(value), "must be an integer")
-    elif key in ("parameter", "direction", "method", "micro_contacts"):
+    elif key in ("parameter", "direction", "method", "micro_contacts", "kind", "second"):
         require(where, value, isinstance(value, str), "must be a name (a string)")
     elif not is_real(value):
         raise ParameterError(f"{where} = {value!r} is not allowed: must be a number")
+
+
+def load_curve(path: str | os.PathLike[str], continuation: Continuation) -> CurvePlan | None:
+    """The ``[curve]`` table of the continuation file ``path``, checked; None without one.
+
+    Everything but the event itself is checked here, before the branch is computed
+    (`CurvePlan`): which event the branch will have is only known after.
+    """
+    from impactbeams.continuation.twoparameter import CurvePlan
+
+    data = read_toml(path)
+    if "curve" not in data:
+        return None
+    source = str(path)
+    table = require_table(data, "curve", source)
+    for key in table:
+        if key not in _CURVE_KEYS:
+            raise unknown_key("key", key, f"[curve] of {source}", _CURVE_KEYS)
+    missing = [key for key in ("kind", "second", "min", "max") if key not in table]
+    if missing:
+        raise ParameterError(f"[curve] of {source} needs kind, second, min and max: "
+                             f"{', '.join(missing)} missing")
+    for key, value in table.items():
+        _check_type(key, value, f"[curve] of {source}")
+    options = {("low" if key == "min" else "high" if key == "max" else key): value
+               for key, value in table.items()}
+    return CurvePlan(continuation, **options)

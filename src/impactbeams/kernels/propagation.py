@@ -94,18 +94,45 @@ def advance_mode(q0, v0, h, w, z, f, forcing_frequency, phase_plus, step_plus):
     ``phase_plus`` = e^(i Omega t0), ``step_plus`` = e^(i Omega h); w, z, f: the mode's
     omega (rad/s), zeta and complex drive amplitude.
     """
+    sigma, wd, decay, c, s, e_plus, e_minus = step_factors(h, w, z, forcing_frequency,
+                                                           step_plus, f != 0.0)
+    return stepped_mode(q0, v0, w, f, sigma, wd, decay, c, s, e_plus, e_minus, phase_plus)
+
+
+@inlined_kernel
+def step_factors(h, w, z, forcing_frequency, step_plus, driven):
+    """What a step of ``h`` (s) of one mode multiplies its state and drive by.
+
+    sigma = zeta omega, omega_d, e^(-sigma h), cos and sin of omega_d h, and (if ``driven``,
+    else 0) the Duhamel integrals E_+ and E_- of the module's docstring; ``step_plus`` =
+    e^(i Omega h). They depend on the step, not on the state or the time: a walk of equal
+    steps computes them once (`stepped_mode`).
+    """
     sigma, wd = z * w, w if z == 0.0 else w * math.sqrt(1.0 - z * z)
     decay = math.exp(-sigma * h)
     c, s = math.cos(wd * h), math.sin(wd * h)
-    q_free = decay * (q0 * c + (v0 + sigma * q0) / wd * s)
-    v_free = decay * (v0 * c - (w * w * q0 + sigma * v0) / wd * s)
-    if f == 0.0:
-        return q_free, v_free
+    if not driven:
+        return sigma, wd, decay, c, s, 0j, 0j
     lam = complex(-sigma, wd)
     growth = decay * complex(c, s)
     e_plus = duhamel(lam, complex(sigma, forcing_frequency - wd), growth, step_plus, h)
     e_minus = duhamel(lam, complex(sigma, -forcing_frequency - wd), growth,
                       step_plus.conjugate(), h)
+    return sigma, wd, decay, c, s, e_plus, e_minus
+
+
+@inlined_kernel
+def stepped_mode(q0, v0, w, f, sigma, wd, decay, c, s, e_plus, e_minus, phase_plus):
+    """(q, q') one step after (q0, v0) at t0, from the step's `step_factors`.
+
+    w, f: the mode's omega (rad/s) and complex drive amplitude; ``phase_plus`` = e^(i Omega
+    t0).
+    """
+    q_free = decay * (q0 * c + (v0 + sigma * q0) / wd * s)
+    v_free = decay * (v0 * c - (w * w * q0 + sigma * v0) / wd * s)
+    if f == 0.0:
+        return q_free, v_free
+    lam = complex(-sigma, wd)
     if f.imag == 0.0:  # a sine drive: the real form, fewer roundings
         combined = phase_plus.conjugate() * e_minus - phase_plus * e_plus
         scale = f.real / (2.0 * wd)

@@ -277,7 +277,7 @@ class _Setup:
                 chunk_cells: object, workers: object, output: object,
                 progress: object, client: object = None) -> _Setup:
         """Every common argument checked, one line each (ParameterError), before any run."""
-        from impactbeams.contact.spring import required_modes
+        from impactbeams.contact.spring import recommended_modes
 
         require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
         require("omega", params.omega, params.omega > 0,
@@ -286,7 +286,7 @@ class _Setup:
                 and params.uplift2 == 0.0, "the initial states replace params.start and the "
                 "uplifts: leave start = 'rest' and uplift1 = uplift2 = 0")
         if n_modes is None:
-            n_modes = min(required_modes(params), MAX_MODES) if params.law.compliant else 5
+            n_modes = recommended_modes(params)
         n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
         settling = Settling() if settling is None else settling
         require_type("settling", settling, isinstance(settling, Settling),

@@ -24,7 +24,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from impactbeams.blas import one_blas_thread
-from impactbeams.contact.spring import required_modes
+from impactbeams.contact.spring import recommended_modes
 from impactbeams.drive import moving_clamps
 from impactbeams.kernels import contact
 from impactbeams.kernels.layout import (
@@ -52,7 +52,7 @@ from impactbeams.params import (
 )
 from impactbeams.trajectory.episodes import default_separation, episode_labels
 from impactbeams.trajectory.impacts import impact_table
-from impactbeams.trajectory.phases import Trajectory, run, sample, tips_at
+from impactbeams.trajectory.phases import Trajectory, run, sample, tips_at, tips_of
 from impactbeams.trajectory.start import checked_state, final_state, phase_state
 
 # Samples per forcing period of the gap and the tips, before each extremum is refined by
@@ -108,6 +108,9 @@ class PeriodMapResult:
     impact_velocities: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
     max_relative_tip1: float = math.nan
     interval_gap: float = math.nan
+    # the run sampled on the grid (phase, q, q'), kept by `approach` for the tips' maxima
+    grid_states: tuple[np.ndarray, np.ndarray, np.ndarray] | None = dataclasses.field(
+        default=None, repr=False, compare=False)
 
 
 class PeriodMap:
@@ -126,7 +129,7 @@ class PeriodMap:
                 "a period map needs a forcing period: omega > 0", "rad/s")
         self.periods = require_integer("periods", periods, 1)
         if n_modes is None:
-            n_modes = min(required_modes(params), MAX_MODES)
+            n_modes = recommended_modes(params)
         self.n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
         self.max_events = require_integer("max_events", max_events, 1)
         self.params = params
@@ -181,7 +184,7 @@ class PeriodMap:
             return result
         result = self.approach(result)
         impacts = impact_table(self.packed, result.trajectory)
-        max_tip1, max_tip2, relative = self._tip_maxima(result.trajectory)
+        max_tip1, max_tip2, relative = self._tip_maxima(result.trajectory, result.grid_states)
         return dataclasses.replace(
             result, peak_force=float(np.max(impacts["impact_peak_force"], initial=0.0)),
             peak_forces=impacts["impact_peak_force"],
@@ -200,13 +203,35 @@ class PeriodMap:
         if result.approached:
             return result
         times = self._grid()
-        phase, q, _ = sample(self.packed, result.trajectory, times)
+        phase, q, v = sample(self.packed, result.trajectory, times, grid=True)
         min_gap, min_gap_time = self._min_gap(result.trajectory, times, self._gap_of(times, q),
                                               phase == FREE)
         return dataclasses.replace(result, min_gap=min_gap, min_gap_time=min_gap_time,
                                    least_peak_force=self._least_peak_force(result.trajectory),
                                    approached=True,
-                                   interval_gap=self._interval_gap(result.trajectory))
+                                   interval_gap=self._interval_gap(result.trajectory),
+                                   grid_states=(phase, q, v))
+
+    def least_gap(self, result: PeriodMapResult) -> float:
+        """The smallest value over the run of the gap read from the free coordinates (m).
+
+        In free flight it is the gap. In a contact the free coordinates leave out the
+        contact force's static part: the value is the overlap times -(1 + that part's
+        compliance times the stiffness), the depth the tips would reach without the contact
+        (quasi-statically), so that it passes through 0 where the orbit touches with the
+        slope it has on the free side (the signed grazing value, minus the overlap on the
+        contact side, changes its slope there by that factor). Sampled as the gap's
+        minimum (`SAMPLES_PER_PERIOD`) and refined at the root of its rate.
+        """
+        times = self._grid()
+        gap = self._gap(result.trajectory, times)[0]
+        i = min(max(int(np.argmin(gap)), 1), times.size - 2)
+        lo, hi = times[i - 1], times[i + 1]
+        stationary = self._stationary(result.trajectory, lo, hi, True)
+        if stationary is not None and stationary[1] <= gap[i]:
+            return stationary[1]
+        return self._refined(lambda t: self._gap(result.trajectory, np.array([t]))[0][0],
+                             lo, hi, gap[i], times[i])[0]
 
     def _least_peak_force(self, trajectory: Trajectory) -> float:
         """The smallest contact phase's peak force (N); NaN without contact."""
@@ -331,10 +356,16 @@ class PeriodMap:
         labels = episode_labels(trajectory.time[k], release, default_separation(self.packed))
         return int(labels[-1]) + 1 if labels.size else 0
 
-    def _tip_maxima(self, trajectory: Trajectory) -> tuple[float, float, float]:
-        """The largest |y1|, |y2| and |y1 - u_b1| (m): the run sampled on the grid, then refined."""
+    def _tip_maxima(self, trajectory: Trajectory,
+                    grid_states: tuple[np.ndarray, np.ndarray, np.ndarray],
+                    ) -> tuple[float, float, float]:
+        """The largest |y1|, |y2| and |y1 - u_b1| (m): the run sampled on the grid, then refined.
+
+        ``grid_states``: the run's (phase, q, q') on the grid, as `approach` sampled them.
+        """
         times = self._grid()
-        tips = self._tips(trajectory, times)
+        phase, q, v = grid_states
+        tips = tips_of(self.packed, phase, times, q, v)
 
         def size(column: int, clamp: bool) -> Callable[[np.ndarray], np.ndarray]:
             """|tip ``column``| at times (relative to beam 1's clamp if ``clamp``)."""

@@ -144,6 +144,24 @@ def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
     return []
 
 
+def _plot_curve(dataset: xr.Dataset, path: str | Path, title: str | None,
+                dpi: float) -> list[str]:
+    """A bifurcation curve in its parameters' plane into ``path``."""
+    from impactbeams.plotting.curves import draw_curve
+
+    figure = Figure(figsize=(7, 5), layout="constrained")
+    axes = figure.subplots()
+    axes.set_title(case_title(dataset, dataset.attrs["curve_parameters"].split()[1],
+                              ("branch_point",)) if title is None else title,
+                   loc="left", fontsize="medium", wrap=True)
+    axes.plot([], [], "k-", label="stable")
+    axes.plot([], [], "k--", label="unstable")
+    draw_curve(axes, dataset)  # last: it places labels laid out
+    axes.legend(fontsize="small", loc="best")
+    save_figure(figure, path, dpi)
+    return []
+
+
 def _plot_basins(dataset: xr.Dataset, path: str | Path, title: str | None,
                  dpi: float) -> list[str]:
     """A basin map with its attractors' legend into ``path``."""
@@ -203,6 +221,17 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
     Returns its notes.
     """
     _check_arguments(dataset, path, variable, values, indices, title, dpi, events)
+    if "curve_kind" in dataset.attrs:
+        _require_xarray(dataset, "a bifurcation curve")
+        _refuse_options("a bifurcation curve, drawn whole in its parameters' plane,",
+                        values=values, indices=indices, scale=scale, contours=contours)
+        given = [name for name, value in (("variable (--var)", variable), ("diagram (--over)",
+                 diagram), ("events (--events)", events)) if value is not None] + (
+            ["--hz"] if hz else [])
+        if given:
+            raise ParameterError(f"{given[0]} is not allowed: a bifurcation curve is drawn in "
+                                 "its parameters' plane with its codimension-two points")
+        return _plot_curve(dataset, path, title, dpi)
     if "branch_point" in dataset.dims:
         _require_xarray(dataset, "a continuation's branches")
         _refuse_options("a continuation's branches, drawn whole along their parameter,",

@@ -39,6 +39,14 @@ MARKERS = {"fold": ("o", "F"), "period_doubling": ("s", "PD"), "neimark_sacker":
            "contact_split": (">", "S"), "chatter": ("x", "C")}
 OTHER_MARKER = "*"  # an event kind without a marker of its own
 MARKER_SIZE, SMALL_MARKER_SIZE = 6.0, 3.5  # points: a labelled kind's markers, the others'
+# A period-p branch leaves its period-1 origin at a period doubling and runs close to it (the
+# same largest deflection there): drawn over the period-1 curve and over the event markers,
+# and thinner, so that the period-1 curve shows on both sides of it and neither hides the
+# other (each branch keeps its own colour; stable solid, unstable dashed, whatever its period)
+LINE_WIDTH, LONGER_PERIOD_LINE_WIDTH = 1.4, 0.8  # points
+PERIOD_ONE_ZORDER, EVENT_ZORDER, LONGER_PERIOD_ZORDER = 2.0, 2.5, 3.0
+LEGEND_CANDIDATES = 11  # legend positions tried along each axis, corners and edges first
+LEGEND_MARGIN = 3.0  # points: kept free between the legend and anything drawn
 # where an event's label may go, in points from its marker, tried in this order: beside it,
 # then further up or down (joined to it by a line)
 _OFFSETS = ((5, 5), (5, -13), (-17, 5), (-17, -13), *((dx, dy) for dy in (18, -26, 30, -38,
@@ -79,10 +87,12 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
         _draw_diagram(axes, diagram, parameter, x_factor, y_factor)
     x = x_factor * dataset[parameter].values
     y = y_factor * dataset[name].values.reshape(dataset.branch_point.size, -1)
+    curves = []
     for branch in np.unique(dataset.branch.values):
-        _draw_branch(axes, x, y, dataset.stable.values, dataset.branch.values == branch,
-                     f"C{int(branch)}", f"branch {int(branch)} (period "
-                     f"{int(dataset.orbit_period.values[dataset.branch.values == branch][0])})")
+        mask = dataset.branch.values == branch
+        period = int(dataset.orbit_period.values[mask][0])
+        curves += _draw_branch(axes, x, y, dataset.stable.values, mask, f"C{int(branch)}",
+                               f"branch {int(branch)} (period {period})", period)
     kinds = _event_kinds(x, y[:, 0], dataset.bifurcation.values, choice)
     lines = _mark_events(axes, kinds)
     axes.set_xlabel(r"$\Omega / 2\pi$ (Hz)" if x_units == "Hz"
@@ -91,12 +101,12 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
     axes.ticklabel_format(useOffset=False)  # values as read, never "+2.523e2" beside an axis
     axes.plot([], [], "k-", label="stable")
     axes.plot([], [], "k--", label="unstable")
-    axes.legend(fontsize="small", loc="best")
+    place_legend(axes)
     labelled = [(x, y, _marker(kind.name)[1]) for kind in kinds if kind.labelled
                 for x, y in sorted(kind.points)]
     marked = [point for kind in kinds if kind.drawn and not kind.labelled
               for point in kind.points]
-    _count_unlabelled(axes, kinds, lines, place_labels(axes, labelled, marked))
+    _count_unlabelled(axes, kinds, lines, place_labels(axes, labelled, marked, curves))
 
 
 def branch_units(dataset: xr.Dataset, name: str, hz: bool = False,
@@ -117,19 +127,25 @@ def branch_units(dataset: xr.Dataset, name: str, hz: bool = False,
 
 
 def _draw_branch(axes: Axes, x: np.ndarray, y: np.ndarray, stable: np.ndarray,
-                 mask: np.ndarray, colour: str, label: str) -> None:
+                 mask: np.ndarray, colour: str, label: str, period: int) -> list[Line2D]:
     """Runs of equal stability, each joined to the next point so that the curve is whole.
 
-    One curve per column of ``y`` (a section of the orbit; NaN columns draw nothing).
+    One curve per column of ``y`` (a section of the orbit; NaN columns draw nothing). A
+    branch of period above 1 is drawn thinner and on top (``LONGER_PERIOD_ZORDER``).
     """
     index = np.flatnonzero(mask)
     runs = np.split(index, np.flatnonzero(np.diff(stable[index])) + 1)
+    width, order = ((LINE_WIDTH, PERIOD_ONE_ZORDER) if period == 1
+                    else (LONGER_PERIOD_LINE_WIDTH, LONGER_PERIOD_ZORDER))
+    drawn = []
     for run in runs:
         joined = np.append(run, run[-1] + 1) if run[-1] + 1 <= index[-1] else run
         for column in range(y.shape[1]):
-            axes.plot(x[joined], y[joined, column], color=colour,
-                      linestyle="-" if stable[run[0]] else "--", linewidth=1.4,
-                      label=label if run is runs[0] and column == 0 else None)
+            drawn += axes.plot(x[joined], y[joined, column], color=colour,
+                               linestyle="-" if stable[run[0]] else "--", linewidth=width,
+                               zorder=order,
+                               label=label if run is runs[0] and column == 0 else None)
+    return drawn
 
 
 def _marker(kind: str) -> tuple[str, str]:
@@ -181,7 +197,7 @@ def _mark_events(axes: Axes, kinds: list[_Kind]) -> dict[str, Line2D]:
             lines[kind.name] = axes.plot(
                 x, y, _marker(kind.name)[0], color="k", markerfacecolor="none",
                 markersize=MARKER_SIZE if kind.labelled else SMALL_MARKER_SIZE,
-                label=kind.legend_text(len(kind.points)))[0]
+                zorder=EVENT_ZORDER, label=kind.legend_text(len(kind.points)))[0]
     hidden = [kind for kind in kinds if not kind.drawn]
     if hidden:  # nothing left out unsaid
         names = [f"{len(kind.points)} {kind.name.replace('_', ' ')}" for kind in hidden]
@@ -203,15 +219,91 @@ def _count_unlabelled(axes: Axes, kinds: list[_Kind], lines: dict[str, Line2D],
             lines[kind.name].set_label(text)
 
 
+def place_legend(axes: Axes) -> None:
+    """The axes' legend where it covers nothing drawn, else beside the axes (on the right).
+
+    matplotlib's "best" only keeps the legend's cover of the data least: on a crowded curve it
+    covers some (the top of the stiff stop-and-shaker branch of issue 31, 165-172 rad/s).
+    Here the legend's places in the axes are tried, corners and edges first, and the first
+    whose box (and ``LEGEND_MARGIN``) meets no segment of a drawn line and no marker is
+    taken. Measured on the laid-out figure; the labels, placed after, keep clear of it.
+    """
+    legend = axes.legend(fontsize="small", loc=(0.0, 0.0))
+    figure = axes.get_figure(root=True)
+    figure.draw_without_rendering()
+    renderer = _renderer(figure)
+    inside = axes.get_window_extent(renderer)
+    size = legend.get_window_extent(renderer).size
+    margin = LEGEND_MARGIN * figure.dpi / 72.0
+    room = Room(_marker_extents(axes.lines, figure.dpi / 72.0), _segments(axes.lines))
+    for corner in _legend_corners(inside, size, margin):
+        if room.is_free(np.concatenate([corner - margin, corner + size + margin]), None, 0):
+            legend.set_loc(tuple(axes.transAxes.inverted().transform(corner)))
+            return
+    legend.set_loc("upper left")  # no room inside: beside the axes, which shrink for it
+    legend.set_bbox_to_anchor((1.02, 1.0), transform=axes.transAxes)
+
+
+def _legend_corners(inside: Bbox, size: np.ndarray, margin: float) -> list[np.ndarray]:
+    """The lower-left corners (display) of a box of ``size`` within ``inside`` to try, in order.
+
+    ``LEGEND_CANDIDATES`` along each axis, nearest a corner of the axes first (upper right,
+    upper left, lower right, lower left: where a reader looks for a legend).
+    """
+    low = np.array([inside.x0, inside.y0]) + margin
+    high = np.array([inside.x1, inside.y1]) - margin - size
+    if (high < low).any():
+        return []
+    steps = np.arange(LEGEND_CANDIDATES)
+    grid = [(i, j) for j in steps[::-1] for i in steps]
+    last = LEGEND_CANDIDATES - 1
+    corners = ((last, last), (0, last), (last, 0), (0, 0))
+
+    def order(ij: tuple[int, int]) -> tuple[int, int]:
+        away = [abs(ij[0] - ci) + abs(ij[1] - cj) for ci, cj in corners]
+        return min(away), int(np.argmin(away))
+
+    return [low + (high - low) * np.array(ij) / last for ij in sorted(grid, key=order)]
+
+
+def _segments(lines: Sequence[Line2D]) -> np.ndarray:
+    """The segments (x0, y0, x1, y1), display units, of the lines drawn with a line style."""
+    segments = [np.empty((0, 4))]
+    for line in lines:
+        if line.get_linestyle() in ("None", "") or len(line.get_xdata()) < 2:
+            continue
+        xy = line.get_transform().transform(np.column_stack(
+            [line.get_xdata(), line.get_ydata()]).astype(float))
+        pairs = np.hstack([xy[:-1], xy[1:]])
+        segments.append(pairs[np.isfinite(pairs).all(axis=1)])
+    return np.vstack(segments)
+
+
+def _marker_extents(lines: Sequence[Line2D], points_to_pixels: float) -> np.ndarray:
+    """The boxes (x0, y0, x1, y1), display units, of the markers drawn by ``lines``."""
+    boxes = [np.empty((0, 4))]
+    for line in lines:
+        if line.get_marker() in ("None", "", " ", None) or not len(line.get_xdata()):
+            continue
+        xy = line.get_transform().transform(np.column_stack(
+            [line.get_xdata(), line.get_ydata()]).astype(float))
+        xy = xy[np.isfinite(xy).all(axis=1)]
+        half = 0.5 * line.get_markersize() * points_to_pixels
+        boxes.append(np.hstack([xy - half, xy + half]))
+    return np.vstack(boxes)
+
+
 def place_labels(axes: Axes, events: list[tuple[float, float, str]],
-                 marked: Sequence[tuple[float, float]] = ()) -> list[tuple[float, float, str]]:
+                 marked: Sequence[tuple[float, float]] = (),
+                 curves: Sequence[Line2D] = ()) -> list[tuple[float, float, str]]:
     """Label each event (x, y, text) near its point, clear of the labels, legend and markers.
 
     Greedy, in the order given (the first get the room): each label takes the first of
     ``_OFFSETS`` whose box is free and inside the axes; a far one is joined to its point by a
     line, which crosses no other line, label, marker or the legend. If none is free the label
     is left out. The markers of ``events`` and of ``marked`` (points drawn without a label)
-    are kept free. Positions are measured on the laid-out figure; events out of the axes'
+    are kept free, and no label covers a line of ``curves`` (its leader line may cross them:
+    it starts on one). Positions are measured on the laid-out figure; events out of the axes'
     view are not labelled. Returns the events left without a label (on a branch with
     hundreds of events, the caller says how many).
     """
@@ -223,11 +315,9 @@ def place_labels(axes: Axes, events: list[tuple[float, float, str]],
     taken = [_marker_box(axes, x, y, points_to_pixels)
              for x, y in [(x, y) for x, y, _ in events] + list(marked)]
     legend = axes.get_legend()
-    if legend is not None:  # kept where it is now: it would move away from the labels
-        box = legend.get_window_extent(renderer)
-        legend.set_loc(tuple(axes.transAxes.inverted().transform((box.x0, box.y0))))
-        taken.append(box)
-    room = Room(np.array([box.extents for box in taken]))
+    if legend is not None:  # placed (`place_legend`): it stays where it is
+        taken.append(legend.get_window_extent(renderer))
+    room = Room(np.array([box.extents for box in taken]), _segments(curves))
     left_out = []
     for own, (x, y, text) in enumerate(events):
         point = axes.transData.transform((x, y))

@@ -1,8 +1,10 @@
 """The room left on a figure for one more label: boxes and leader lines it must keep clear of.
 
 All in display units (pixels), measured on the laid-out figure. A box is a row (x0, y0, x1,
-y1); a leader line the segment (x0, y0, x1, y1) from a label to its point. Touching counts as
-meeting (as `matplotlib.transforms.Bbox.overlaps`), so that what is drawn is apart.
+y1); a leader line the segment (x0, y0, x1, y1) from a label to its point; a curve's segment
+likewise (the drawn data a label or the legend must not cover; a leader line starts on a curve,
+so it may cross them). Touching counts as meeting (as `matplotlib.transforms.Bbox.overlaps`),
+so that what is drawn is apart.
 """
 
 from __future__ import annotations
@@ -11,19 +13,21 @@ import numpy as np
 
 
 class Room:
-    """The boxes (markers, legend, labels) and leader lines placed so far."""
+    """The boxes (markers, legend, labels) and leader lines placed so far, and the curves."""
 
-    def __init__(self, boxes: np.ndarray) -> None:
+    def __init__(self, boxes: np.ndarray, curves: np.ndarray | None = None) -> None:
         self.boxes = np.asarray(boxes, dtype=float).reshape(-1, 4)
         self.lines = np.empty((0, 4))
+        self.curves = np.empty((0, 4)) if curves is None else np.asarray(
+            curves, dtype=float).reshape(-1, 4)
 
     def is_free(self, box: np.ndarray, line: np.ndarray | None, own: int) -> bool:
         """Whether a label's ``box`` and its leader ``line`` (None if it has none) meet nothing.
 
         ``own``: the row of the label's own marker among the boxes, which its line starts at.
         """
-        if _boxes_overlap(box, self.boxes).any() or _segments_meet_boxes(self.lines,
-                                                                          box[None]).any():
+        if _boxes_overlap(box, self.boxes).any() or _segments_meet_boxes(
+                np.vstack([self.lines, self.curves]), box[None]).any():
             return False
         if line is None:
             return True

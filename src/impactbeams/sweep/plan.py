@@ -84,12 +84,12 @@ def contact_resolution(sweep: Sweep) -> int | None:
     compliant = [law for law in contact_laws(sweep) if law.compliant]
     if not sweep.needs_dynamics or not compliant:
         return None
-    from impactbeams.contact.spring import required_modes  # SciPy's optimisers: only when needed
+    from impactbeams.contact.spring import needed_modes  # SciPy's optimisers: only when needed
 
     swept = [axis.max for axis in sweep.axes if axis.name == "contact_stiffness"]
     stiffest = swept[0] if swept else sweep.base.contact_stiffness
-    return required_modes(sweep.base.replace(contact_law=compliant[0].name,
-                                             contact_stiffness=stiffest))
+    return needed_modes(sweep.base.replace(contact_law=compliant[0].name,
+                                           contact_stiffness=stiffest))
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:

@@ -13,7 +13,7 @@ import xarray as xr
 from impactbeams import costs
 from impactbeams.blas import one_blas_thread
 from impactbeams.compilation import compile_in_two_processes
-from impactbeams.contact.spring import required_modes
+from impactbeams.contact.spring import needed_modes, recommended_modes
 from impactbeams.kernels.layout import CONTACT
 from impactbeams.longtime import LongTime
 from impactbeams.modes import beam
@@ -302,9 +302,9 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
     beam1 = beam(params, 1)
     require("fields", fields, not fields or beam1.continuous,
             "beam 1 is a user structure (structure1): it has no fields along a beam")
-    resolution = required_modes(params) if params.law.compliant else 5
+    resolution = needed_modes(params)
     if n_modes is None:
-        n_modes = min(resolution, MAX_MODES, beam1.mode_limit)
+        n_modes = recommended_modes(params)
     n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
     check_run(params.numeric(), t_max, n_modes, springs=params.grounded_springs,
               structure1=params.structure1)

@@ -1,0 +1,484 @@
+"""Bifurcation curves in two parameters: `continue_curve` from a one-parameter branch's event.
+
+A grazing, fold, period doubling or Neimark-Sacker point located on a branch of ``parameter`` (p1)
+is followed in the plane (p1, ``second``) by the one-parameter engine on the augmented system of
+`impactbeams.continuation.curves` (p2 the engine's parameter, p1 part of its state): the same
+predictor, corrector and step control, and the same Illinois location of events (`events.locate`).
+Lengths: p2 in units of its range, p1 in units of its box, the state as in `continue_orbits` (its
+``state_scale``).
+
+Codimension-two points met on the way, each located to ``locate_tolerance`` and labelled in
+``curve_event``:
+
+- ``turning_point``: p2 turns back along the curve (the tangent's p2 part changes sign; on a
+  fold curve the cusp is such a point, where the tangent's p1 part vanishes as well:
+  ``cusp`` when it is below ``CUSP_TANGENT`` there);
+- ``grazing``: the curve's orbit touches: its grazing value passes through 0 along a fold or
+  period-doubling curve (a sign change by a jump, where another contact or gap minimum
+  becomes the nearest to 0, is not one: `_at_zero_depth`). Where no point is found beyond
+  it, or Newton's iterates at a point whose orbit touches meet another contact sequence (the
+  monodromy jumps there: the far side's has the new contact's saltation), the curve ends
+  there (``curve_ending`` "grazing"; the last point carries the label);
+- ``end``: the curve's last point otherwise: at the edge of the box (``curve_ending``
+  "bound", corrected onto it) or where the corrector finds no point (the orbit stops
+  existing, or turns within less than ``min_step``: "min_step").
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from impactbeams.blas import one_blas_thread
+from impactbeams.continuation.arclength import (
+    Follower,
+    Point,
+    Scaling,
+    Settings,
+    crosses,
+    oriented,
+)
+from impactbeams.continuation.branch import ZERO_DEPTH, Branch
+from impactbeams.continuation.curves import CONDITIONS, KINDS, CurveProblem
+from impactbeams.continuation.events import Located, grazing_test, locate
+from impactbeams.continuation.output import branches_dataset
+from impactbeams.continuation.run import (
+    CONTINUABLE,
+    DIRECTIONS,
+    STATE_SCALE_CLEARANCES,
+    Continuation,
+    mode_count,
+)
+from impactbeams.io import write_netcdf
+from impactbeams.params import (
+    MAX_MODES,
+    ParameterError,
+    Params,
+    check_range,
+    is_path,
+    require,
+    require_finite,
+    require_integer,
+    require_type,
+)
+from impactbeams.variables import (
+    BIFURCATIONS,
+    CURVE_EVENTS,
+    attributes,
+    global_attributes,
+    parameter_attributes,
+)
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+# how a curve ended (`curve_ending`): at the box's edge, at a change of the orbit's contacts
+# past which no point was found, no point found by the corrector (the orbit ends), too long
+BOUND, GRAZED, MIN_STEP, MAX_POINTS = "bound", "grazing", "min_step", "max_points"
+# a p2 turning point is a cusp where the unit tangent's p1 part (scaled) is also this small:
+# the curve's tangent then lies in the state space (the parameter plane's curve has a cusp)
+CUSP_TANGENT = 1e-3
+
+
+@dataclasses.dataclass(frozen=True)
+class BifurcationCurve:
+    """The curve in two parameters of a grazing, fold, period doubling or Neimark-Sacker.
+
+    ``kind``: "grazing", "fold", "period_doubling" or "neimark_sacker". It starts at
+    ``params`` with ``parameter`` (p1) = ``value`` and the orbit's section state
+    ``state`` (the located event's, e.g. `from_branch`), and follows ``second`` (p2) from its
+    value in ``params`` ``direction`` "up" or "down" within [``low``, ``high``], p1 within
+    [``parameter_low``, ``parameter_high``] (the box; units of each parameter). ``period``:
+    forcing periods of the orbit; ``n_modes`` per beam. Steps are fractions of the arclength
+    unit (p2's range): ``step`` (default 0.02), ``min_step`` (1e-9), ``max_step`` (0.05);
+    ``state_scale`` (m) as in `Continuation`.
+    """
+
+    params: Params
+    kind: str
+    parameter: str
+    value: float
+    state: np.ndarray
+    second: str
+    low: float
+    high: float
+    parameter_low: float
+    parameter_high: float
+    n_modes: int
+    direction: str = "up"
+    period: int = 1
+    step: float = 0.02
+    min_step: float = 1e-9
+    max_step: float = 0.05
+    max_points: int = 200
+    state_scale: float | None = None
+
+    def __post_init__(self) -> None:
+        require_type("params", self.params, isinstance(self.params, Params),
+                     "an impactbeams.Params")
+        require("kind", self.kind, self.kind in KINDS,
+                f"must be one of {', '.join(map(repr, KINDS))}")
+        for name in ("parameter", "second"):
+            require(name, getattr(self, name), getattr(self, name) in CONTINUABLE,
+                    f"must be one of {', '.join(CONTINUABLE)}")
+        require("second", self.second, self.second != self.parameter,
+                f"must differ from parameter = {self.parameter!r}")
+        for name, parameter in (("low", self.second), ("high", self.second),
+                                ("parameter_low", self.parameter),
+                                ("parameter_high", self.parameter)):
+            check_range(parameter, require_finite(name, getattr(self, name)))
+        require("high", self.high, self.high > self.low,
+                f"the range [{self.low!r}, {self.high!r}] is empty: need high > low")
+        require("parameter_high", self.parameter_high,
+                self.parameter_high > self.parameter_low,
+                f"the box [{self.parameter_low!r}, {self.parameter_high!r}] is empty")
+        start = getattr(self.params, self.second)
+        require(self.second, start, self.low <= start <= self.high,
+                f"(the start's, from params) must lie in [{self.low!r}, {self.high!r}]")
+        require("value", self.value, self.parameter_low <= require_finite("value", self.value)
+                <= self.parameter_high,
+                f"must lie in [{self.parameter_low!r}, {self.parameter_high!r}]")
+        require("direction", self.direction, self.direction in DIRECTIONS,
+                f"must be one of {', '.join(map(repr, DIRECTIONS))}")
+        require_integer("n_modes", self.n_modes, 1, MAX_MODES)
+        require_integer("period", self.period, 1)
+        require_integer("max_points", self.max_points, 2)
+        Settings(step=self.step, min_step=self.min_step, max_step=self.max_step)  # checks
+        state = np.asarray(self.state, dtype=float)
+        size = 2 * self.params.partner.beams * self.n_modes
+        require("state", state.shape, state.shape == (size,) and bool(np.all(np.isfinite(
+            state))), f"must be {size} finite numbers (the orbit's section state)")
+
+    @classmethod
+    def from_branch(cls, continuation: Continuation, branch: xr.Dataset, kind: str,
+                    second: str, low: float, high: float, which: int = 0,
+                    box: tuple[float, float] | None = None,
+                    **options: object) -> BifurcationCurve:
+        """The curve through the ``which``-th ``kind`` event of ``branch``.
+
+        ``branch``: `continue_orbits`(``continuation``)'s Dataset; the start is its located
+        event's orbit, p1's box ``box`` (default the continuation's range).
+        """
+        if box is not None:
+            continuation = dataclasses.replace(continuation, low=box[0], high=box[1])
+        plan = CurvePlan(continuation, kind, second, low, high, which,
+                         **options)  # type: ignore[arg-type]
+        return plan.from_branch(branch)
+
+    def settings(self) -> Settings:
+        """The engine's settings (steps in units of the second parameter's range)."""
+        return Settings(step=self.step, min_step=self.min_step, max_step=self.max_step,
+                        max_points=self.max_points, max_branches=1)
+
+
+@dataclasses.dataclass(frozen=True)
+class CurvePlan:
+    """A curve to follow from the ``which``-th ``kind`` event of ``continuation``'s branch.
+
+    Checked when made, before the branch is computed (`impactbeams continue` with a
+    ``[curve]`` table): all but whether the branch has that event. ``options``: the
+    remaining `BifurcationCurve` fields (steps, direction, max_points).
+    """
+
+    continuation: Continuation
+    kind: str
+    second: str
+    low: float
+    high: float
+    which: int = 0
+    direction: str = "up"
+    step: float = 0.02
+    min_step: float = 1e-9
+    max_step: float = 0.05
+    max_points: int = 200
+
+    def __post_init__(self) -> None:
+        require_integer("which", self.which, 0)
+        c = self.continuation
+        self.start(c.first, np.zeros(2 * c.params.partner.beams * mode_count(c)),
+                   c.period)  # every check of the curve, on a stand-in start
+
+    def start(self, value: float, state: np.ndarray, period: int) -> BifurcationCurve:
+        """The curve from the orbit ``state`` of ``period`` at ``parameter`` = ``value``."""
+        c = self.continuation
+        return BifurcationCurve(
+            c.params, self.kind, c.parameter, value, state, self.second, self.low, self.high,
+            c.low, c.high, mode_count(c), direction=self.direction, period=period,
+            step=self.step, min_step=self.min_step, max_step=self.max_step,
+            max_points=self.max_points, state_scale=c.state_scale)
+
+    def from_branch(self, branch: xr.Dataset) -> BifurcationCurve:
+        """The curve through the planned event of ``branch`` (ParameterError if it has none)."""
+        at = np.flatnonzero(branch.bifurcation.values == BIFURCATIONS.index(self.kind))
+        require("which", self.which, self.which < at.size,
+                f"the branch has {at.size} {self.kind} event(s): must be below {at.size}")
+        i = int(at[self.which])
+        return self.start(float(branch[self.continuation.parameter][i]),
+                          np.asarray(branch.section_state[i].values),
+                          int(branch.orbit_period[i]))
+
+
+Progress = Callable[[Branch, Point], None]
+
+
+@one_blas_thread
+def continue_curve(curve: BifurcationCurve, progress: Progress | None = None,
+                   output: str | Path | None = None) -> xr.Dataset:
+    """Follow ``curve`` and return its Dataset (written to netCDF ``output`` if given).
+
+    ParameterError if the start does not converge on the augmented system (the state is not
+    at such a bifurcation). ``progress(branch, point)`` is called with each point kept.
+    """
+    require_type("curve", curve, isinstance(curve, BifurcationCurve),
+                 "an impactbeams.continuation.BifurcationCurve")
+    require_type("output", output, output is None or is_path(output),
+                 "None or the path of a netCDF file (str or pathlib.Path)")
+    problem = CurveProblem(curve.params, curve.parameter, curve.second, curve.n_modes,
+                           curve.period, CONDITIONS[curve.kind]())
+    followed = follow(problem, curve, progress)
+    dataset = curve_dataset(followed, curve)
+    if output is not None:
+        write_netcdf(dataset, Path(output))
+    return dataset
+
+
+def follow(problem: CurveProblem, curve: BifurcationCurve,
+           progress: Progress | None = None) -> Branch:
+    """The curve's points from its start to its end, events located and labelled."""
+    p2 = getattr(curve.params, curve.second)
+    scaling = _scaling(problem, curve, p2)
+    settings = curve.settings()
+    follower = Follower(problem, scaling, settings)
+    orientation = np.zeros(scaling.state.size + 1)
+    orientation[-1] = 1.0 if curve.direction == "up" else -1.0
+    y0 = np.append(np.asarray(curve.state, dtype=float), curve.value)
+    first = follower.at_parameter(scaling.scaled(y0, p2), orientation).point
+    if first is None:
+        raise ParameterError(f"the start at {curve.parameter} = {curve.value!r}, "
+                             f"{curve.second} = {p2!r} did not converge to a {curve.kind}: "
+                             "give the state and value of a located one (from_branch)")
+    followed = Branch([], curve.period, scaling)
+    _keep(follower, followed, [first], progress)
+    _steps(follower, followed, _box(curve, scaling), progress)
+    end = followed.points[-1]
+    followed.points[-1] = dataclasses.replace(end, label=end.label or "end")
+    return followed
+
+
+def _scaling(problem: CurveProblem, curve: BifurcationCurve, p2: float) -> Scaling:
+    """x~: p2 per its range, p1 per its box, the state as `continue_orbits`' (state_scale)."""
+    orbits = problem.orbits(p2)
+    z = np.asarray(curve.state, dtype=float)
+    weights = orbits.state_weights()
+    tip = orbits.period_map(curve.value)(z, measures=True).max_tip1
+    size = float(np.linalg.norm(weights * z))
+    scale = curve.state_scale or STATE_SCALE_CLEARANCES * curve.params.clearance
+    per_metre = size / tip if tip > 0 and size > 0 else 1.0
+    return Scaling(np.append(weights / (per_metre * scale),
+                             1.0 / (curve.parameter_high - curve.parameter_low)),
+                   1.0 / (curve.high - curve.low))
+
+
+def _box(curve: BifurcationCurve, scaling: Scaling) -> np.ndarray:
+    """The box in x~: rows (low, high) of p1 (index -2) and p2 (index -1)."""
+    return np.array([[curve.parameter_low, curve.parameter_high],
+                     [curve.low, curve.high]]) * np.array(
+        [[scaling.state[-1]], [scaling.parameter]])
+
+
+def _steps(follower: Follower, curve: Branch, box: np.ndarray,
+           progress: Progress | None) -> None:
+    """Step ``curve`` from its last point to its end (``curve.ending``)."""
+    settings = follower.settings
+    current, ds = curve.points[-1], settings.step
+    while len(curve.points) < settings.max_points:
+        point, taken, grazing = follower.step(current, ds)
+        if point is None:
+            if crosses(current.evaluation.grazing, grazing):
+                if taken / 2.0 >= settings.min_step:
+                    ds = taken / 2.0  # an iterate crossed: nearer first
+                    continue
+                _end_at_grazing(follower, curve, current, taken, progress)
+                return
+            # no point beyond: the orbit ends here, at a grazing if it touches (the fold of
+            # an impacting orbit that meets its grazing has no smooth continuation): the
+            # steps then creep up to it, its gap falling to ~0 against the curve's
+            grazes = _at_zero_depth(current, *curve.points)
+            curve.ending = GRAZED if grazes else MIN_STEP
+            if grazes:
+                curve.points[-1] = dataclasses.replace(current, label="grazing")
+            return
+        outside = _outside(point, box)
+        if outside is not None:
+            end = _at_edge(follower, current, point, box, outside)
+            if end is None and taken / 2.0 >= settings.min_step:
+                ds = taken / 2.0
+                continue
+            points = _events(follower, current, end) if end is not None else []
+            _keep(follower, curve, points, progress)
+            curve.ending = BOUND
+            return
+        points = _events(follower, current, point)
+        _keep(follower, curve, points, progress)
+        if point.crossed and _at_zero_depth(point, *curve.points):
+            # Newton's iterates met another contact sequence at a point whose orbit touches:
+            # the monodromy jumps there (the far side's has the new contact's saltation), so
+            # the curve of this side's bifurcation ends at the grazing
+            curve.points[-1] = dataclasses.replace(curve.points[-1], label="grazing")
+            curve.ending = GRAZED
+            return
+        current, ds = point, follower.next_step(taken, point)
+    curve.ending = MAX_POINTS
+
+
+def _keep(follower: Follower, curve: Branch, points: list[Point],
+          progress: Progress | None) -> None:
+    """Append ``points`` with their measures and own multipliers; the condition adapts."""
+    for point in points:
+        z, p = follower.scaling.unscaled(point.x)
+        point = follower.kept(dataclasses.replace(point, evaluation=dataclasses.replace(
+            point.evaluation, multipliers=follower.problem.multipliers(z, p))))
+        curve.points.append(point)
+        if progress is not None:
+            progress(curve, point)
+    if points:
+        z, p = follower.scaling.unscaled(points[-1].x)
+        follower.problem.border(z, p, points[-1].evaluation)
+
+
+def _outside(point: Point, box: np.ndarray) -> tuple[int, float] | None:
+    """(index in x~, bound) of the box's edge ``point`` is past, None inside."""
+    for index, (low, high) in zip((-2, -1), box, strict=True):
+        if not low <= point.x[index] <= high:
+            return index, low if point.x[index] < low else high
+    return None
+
+
+def _at_edge(follower: Follower, a: Point, b: Point, box: np.ndarray,
+             edge: tuple[int, float]) -> Point | None:
+    """The curve's point on the box's edge between ``a`` (inside) and ``b`` (past it)."""
+    index, bound = edge
+    weight = (bound - a.x[index]) / (b.x[index] - a.x[index])
+    guess = a.x + weight * (b.x - a.x)
+    guess[index] = bound
+    along = np.zeros_like(guess)
+    along[index] = 1.0
+    end = follower.correct(guess, along, a.tangent).point
+    if end is None or _outside(end, box) is not None and not np.isclose(end.x[index], bound):
+        return None
+    return oriented(end, end.x - a.x)
+
+
+def _events(follower: Follower, a: Point, b: Point) -> list[Point]:
+    """The codimension-two points between ``a`` and ``b``, located and labelled, then ``b``."""
+    found = []
+    if (a.tangent[-1] > 0) != (b.tangent[-1] > 0):
+        found.append(_turning(follower, a, b))
+    if crosses(a.evaluation.grazing, (b.evaluation.grazing,)):
+        located = _located(follower, a, b, grazing_test, may_jump=True)
+        if located.root and _at_zero_depth(located.before, a, b):
+            found.append(dataclasses.replace(located.before, label="grazing"))
+    found.sort(key=lambda point: float(a.tangent @ (point.x - a.x)))
+    return [*found, b]
+
+
+def _turning(follower: Follower, a: Point, b: Point) -> Point:
+    """The p2 turning point between ``a`` and ``b``: a cusp if the p1 part vanishes too."""
+    located = _located(follower, a, b, lambda point: float(point.tangent[-1]))
+    point = located.before
+    cusp = abs(point.tangent[-2]) < CUSP_TANGENT and follower.problem.condition.label == "fold"
+    return dataclasses.replace(point, label="cusp" if cusp else "turning_point")
+
+
+def _located(follower: Follower, a: Point, b: Point, test: Callable[[Point], float],
+             may_jump: bool = False) -> Located:
+    """The root of ``test`` between ``a`` and ``b`` on ``a``'s secant planes."""
+    return locate(lambda s: follower.at_arclength(a, s).point, a, float(
+        a.tangent @ (b.x - a.x)), b, test, follower.settings.locate_tolerance,
+        may_jump=may_jump)
+
+
+def _at_zero_depth(point: Point, *ends: Point) -> bool:
+    """Whether ``point``'s grazing value is ~0 against those at ``ends``: the orbit touches.
+
+    The grazing value (the smallest free-flight gap, or minus the shallowest overlap) also
+    changes sign by a jump, where another contact or minimum becomes the nearest to 0: no
+    grazing (`ZERO_DEPTH`, as the one-parameter branches tell the two apart).
+    """
+    scale = max(abs(end.evaluation.grazing) for end in ends)
+    return abs(point.evaluation.grazing) <= ZERO_DEPTH * scale
+
+
+def _end_at_grazing(follower: Follower, curve: Branch, current: Point, taken: float,
+                    progress: Progress | None) -> None:
+    """End the curve at the grazing ahead of ``current``, located (no point found past it)."""
+    located = locate(lambda s: follower.at_arclength(current, s).point, current, taken, None,
+                     grazing_test, follower.settings.locate_tolerance, may_jump=True)
+    if located.root and located.before is not current and _at_zero_depth(located.before,
+                                                                          current):
+        _keep(follower, curve, [dataclasses.replace(located.before, label="grazing")],
+              progress)
+        curve.ending = GRAZED
+    else:
+        curve.ending = MIN_STEP
+
+
+def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
+    """The curve's points along ``branch_point``: both parameters as coordinates.
+
+    The variables of a one-parameter branch (the orbit's measures, multipliers, contacts,
+    grazing gap, section state) and ``curve_condition`` (the bifurcation's test function at
+    the point: ~0, to the corrector's tolerance), ``curve_tangent_1`` and ``curve_tangent_2``
+    (the unit tangent's parameter parts, scaled: their zeros are the turning points),
+    ``curve_event`` (the codimension-two points), ``curve_stable`` (in place of ``stable``,
+    which the critical multiplier at round-off from the circle would decide). Attributes: the
+    kind, the parameters (``curve_parameters``), the ending (``curve_ending``).
+    """
+    unlabelled = [dataclasses.replace(point, label="") for point in curve.points]
+    attrs = global_attributes(
+        f"{spec.kind} curve of periodic orbits in ({spec.parameter}, {spec.second})",
+        f"continue a {spec.kind} in {spec.second} from {spec.low!r} to {spec.high!r}",
+        {name: value for name, value in spec.params.as_dict().items()
+         if name not in (spec.parameter, spec.second)},
+        n_modes=spec.n_modes, start_period=spec.period,
+        curve_kind=spec.kind, curve_parameters=f"{spec.parameter} {spec.second}",
+        curve_ending=curve.ending,
+        locate_tolerance=spec.settings().locate_tolerance * (spec.high - spec.low),
+        newton_tolerance=spec.settings().tolerance)
+    dataset = branches_dataset([Branch(unlabelled, spec.period, curve.scaling)], spec.second,
+                               attrs)
+    dataset = dataset.drop_vars(["bifurcation", "branch", "stable"])
+    dataset["curve_stable"] = ("branch_point", np.array(
+        [_stable_but_critical(point, spec.kind) for point in curve.points], dtype=np.int8))
+    states = dataset.section_state.values
+    dataset = dataset.isel(state=slice(0, states.shape[1] - 1))
+    dataset = dataset.assign_coords({spec.parameter: ("branch_point", states[:, -1])})
+    dataset[spec.parameter].attrs.update(parameter_attributes(spec.parameter))
+    dataset["curve_condition"] = ("branch_point", np.array(
+        [point.evaluation.residual[-1] for point in curve.points]))
+    for name, index in (("curve_tangent_1", -2), ("curve_tangent_2", -1)):
+        dataset[name] = ("branch_point", np.array([point.tangent[index]
+                                                   for point in curve.points]))
+    dataset["curve_event"] = ("branch_point", np.array(
+        [CURVE_EVENTS.index(point.label or "none") for point in curve.points], dtype=np.int8))
+    for name in ("curve_condition", "curve_tangent_1", "curve_tangent_2", "curve_event",
+                 "curve_stable"):
+        dataset[name].attrs.update(attributes(name))
+    dataset.attrs.pop("branch_endings")
+    dataset.attrs.pop("branch_origins")
+    return dataset
+
+
+
+def _stable_but_critical(point: Point, kind: str) -> bool:
+    """Whether every multiplier but the critical ones (+1, -1, the pair on the circle) is in."""
+    mu = np.asarray(point.evaluation.multipliers)
+    distance = {"fold": np.abs(mu - 1.0), "period_doubling": np.abs(mu + 1.0),
+                "neimark_sacker": np.abs(np.abs(mu) - 1.0) + np.where(mu.imag == 0, np.inf, 0.0)}
+    if kind in distance:
+        mu = np.delete(mu, np.argsort(distance[kind])[:2 if kind == "neimark_sacker" else 1])
+    return bool(np.all(np.abs(mu) < 1.0))

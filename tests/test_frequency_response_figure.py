@@ -1,0 +1,205 @@
+"""A frequency-response figure that can be published as drawn (issue 31, item 4).
+
+The branches have the shape of the stiff stop-and-shaker case of docs/continuation.md at
+contact_stiffness = 1e4 N/m and 4 modes (the branch from 65.6 to 262.5 rad/s bends right to
+1.53 mm at 174 rad/s, folds back unstable to 152 rad/s and goes on below), with a period-2
+branch that leaves the upper part at a period doubling and runs a hair above it. Drawn as
+`impactbeams plot` draws it, on the Agg canvas, and measured with matplotlib's own path
+geometry and the rendered pixels (not the placement code's): the legend covers no line or
+marker, no event label covers a branch, the period-2 branch shows over the period-1 one and
+its markers while the period-1 one shows beside it.
+"""
+
+import numpy as np
+import pytest
+import xarray as xr
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import to_rgb
+from matplotlib.text import Annotation, Text
+from matplotlib.transforms import Bbox
+
+from impactbeams.plotting import plot_dataset
+from impactbeams.plotting.branches import place_legend
+from impactbeams.variables import BIFURCATIONS, attributes, parameter_attributes
+
+SHAKER = {"l1": 0.2, "width1": 0.02, "thickness1": 0.001, "counterpart": "stop",
+          "clearance": 5e-4, "shaker": "beam1", "base_amplitude": 1e-4,
+          "force_amplitude": 0.0, "damping_ratio": 0.01}
+# (Omega rad/s, max |y1| m) along the period-1 branch: up the stable impacting part to the top,
+# back down the unstable part to the fold, on along the non-impacting part
+KNOTS = ((65.6, 1.5e-4), (100.0, 3.2e-4), (112.0, 5.0e-4), (140.0, 8.0e-4), (160.0, 1.05e-3),
+         (175.0, 1.53e-3), (174.0, 1.2e-3), (170.0, 8.0e-4), (152.5, 5.0e-4), (160.0, 4.0e-4),
+         (200.0, 1.8e-4), (262.5, 1.2e-4))
+TOP = 5  # the knot at the top: stable before it, unstable from there to the fold
+FOLD = 8
+PER_KNOT = 40
+EVENTS = ("period_doubling", "neimark_sacker", "grazing", "fold", "contact_merge",
+          "contact_split")
+
+
+def stiff_shaped_branches():
+    """The period-1 branch along KNOTS, an event every 5th point of its impacting part, and
+    a stable period-2 branch from a doubling at 130 rad/s to 150 rad/s, 0.4 % above it."""
+    t = np.linspace(0.0, len(KNOTS) - 1, PER_KNOT * (len(KNOTS) - 1) + 1)
+    knots = np.array(KNOTS)
+    omega = np.interp(t, np.arange(len(KNOTS)), knots[:, 0])
+    amplitude = np.interp(t, np.arange(len(KNOTS)), knots[:, 1])
+    stable = ((t <= TOP) | (t >= FOLD)).astype(np.int8)
+    codes = np.zeros(t.size, np.int8)
+    impacting = np.flatnonzero((t >= 2) & (t <= FOLD))[::5]
+    codes[impacting] = [BIFURCATIONS.index(EVENTS[i % len(EVENTS)])
+                        for i in range(impacting.size)]
+    on_top = (omega >= 130.0) & (omega <= 150.0) & (t < TOP)
+    doubling = np.flatnonzero(on_top)[0]
+    codes[doubling] = BIFURCATIONS.index("period_doubling")
+    period_two = np.linspace(130.0, 150.0, 120)
+    upper = t < TOP
+    period_two_amplitude = 1.004 * np.interp(period_two, omega[upper], amplitude[upper])
+    variables = {
+        "omega": np.concatenate([omega, period_two]),
+        "tip_amplitude_1": np.concatenate([amplitude, period_two_amplitude]),
+        "stable": np.concatenate([stable, np.ones(period_two.size, np.int8)]),
+        "bifurcation": np.concatenate([codes, np.zeros(period_two.size, np.int8)]),
+        "branch": np.repeat(np.array([0, 1], np.int32), [t.size, period_two.size]),
+        "orbit_period": np.repeat(np.array([1, 2], np.int32), [t.size, period_two.size])}
+    n = t.size + period_two.size
+    return xr.Dataset(
+        {name: ("branch_point", values, attributes(name)) for name, values in variables.items()
+         if name != "omega"},
+        coords={"branch_point": ("branch_point", np.arange(n), attributes("branch_point")),
+                "omega": ("branch_point", variables["omega"], parameter_attributes("omega"))},
+        attrs={**SHAKER, "continued_parameter": "omega", "n_modes": 4, "contact_law": "spring",
+               "contact_stiffness": 1e4})
+
+
+@pytest.fixture
+def figure(captured, tmp_path):
+    plot_dataset(stiff_shaped_branches(), tmp_path / "branch.png")
+    (drawn,) = captured
+    return drawn
+
+
+def _paths(axes):
+    """Each drawn line with data: its display path and whether it is drawn with a line."""
+    return [(line, line.get_path().transformed(line.get_transform())) for line in axes.lines
+            if len(line.get_xdata())]
+
+
+def _markers(line):
+    """The display boxes of ``line``'s markers (none if it has no marker)."""
+    if line.get_marker() in ("None", "", " ", None):
+        return []
+    half = 0.5 * line.get_markersize() * line.get_figure(root=True).dpi / 72.0
+    xy = line.get_transform().transform(np.column_stack([line.get_xdata(),
+                                                          line.get_ydata()]))
+    return [Bbox([[x - half, y - half], [x + half, y + half]]) for x, y in xy]
+
+
+def _assert_legend_covers_nothing(axes):
+    legend = axes.get_legend().get_window_extent(axes.get_figure(root=True).canvas.get_renderer())
+    for line, path in _paths(axes):
+        if line.get_linestyle() not in ("None", ""):
+            assert not path.intersects_bbox(legend, filled=False), line.get_label()
+        assert not any(marker.overlaps(legend) for marker in _markers(line)), line.get_label()
+
+
+def test_the_legend_covers_no_line_and_no_marker(figure):
+    """On main ("best") the legend covered the branch's top, 165-172 rad/s."""
+    _assert_legend_covers_nothing(figure.axes[0])
+
+
+def test_a_legend_with_no_room_inside_goes_beside_the_axes(captured, tmp_path):
+    """A curve that sweeps the whole axes leaves no free place: the legend goes beside them,
+    within the figure."""
+    dataset = stiff_shaped_branches()
+    omega = dataset.omega.values
+    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, omega.size))) * 8e-4
+    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
+                                                 dataset.tip_amplitude_1.attrs)),
+                 tmp_path / "full.png")
+    figure = captured[0]
+    axes = figure.axes[0]
+    legend = axes.get_legend().get_window_extent(figure.canvas.get_renderer())
+    assert legend.x0 > axes.get_window_extent().x1
+    assert figure.bbox.contains(legend.x1, legend.y1) and figure.bbox.contains(legend.x0,
+                                                                               legend.y0)
+    _assert_legend_covers_nothing(axes)
+
+
+def test_place_legend_keeps_a_free_place_inside(tmp_path):
+    """A line across the lower half only: the legend goes in the upper right corner."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(6, 4), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots()
+    x = np.linspace(0.0, 1.0, 50)
+    axes.plot(x, 0.3 * x, label="a line")
+    axes.set_ylim(0.0, 1.0)
+    place_legend(axes)
+    figure.canvas.draw()
+    legend = axes.get_legend().get_window_extent(figure.canvas.get_renderer())
+    inside = axes.get_window_extent()
+    assert inside.contains(legend.x0, legend.y0) and inside.contains(legend.x1, legend.y1)
+    assert inside.x1 - legend.x1 < 0.05 * inside.width  # the upper right corner
+    assert inside.y1 - legend.y1 < 0.05 * inside.height
+    _assert_legend_covers_nothing(axes)
+
+
+def test_no_event_label_covers_a_branch(figure):
+    axes = figure.axes[0]
+    renderer = figure.canvas.get_renderer()
+    labels = [text for text in axes.texts if isinstance(text, Annotation)]
+    assert len(labels) > 10
+    branches = [path for line, path in _paths(axes) if line.get_linestyle() not in ("None", "")]
+    for label in labels:
+        box = Text.get_window_extent(label, renderer)
+        assert not any(path.intersects_bbox(box, filled=False) for path in branches), label
+
+
+def _rendered(figure):
+    figure.canvas.draw()
+    return np.asarray(figure.canvas.buffer_rgba())[..., :3] / 255.0
+
+
+def _colour_near(image, figure, xy, colour):
+    """The smallest distance of ``colour`` to the pixels within 1 of display point ``xy``."""
+    column, row = int(round(xy[0])), int(round(figure.bbox.height - xy[1]))
+    patch = image[row - 1:row + 2, column - 1:column + 2].reshape(-1, 3)
+    return float(np.min(np.linalg.norm(patch - np.array(to_rgb(colour)), axis=1)))
+
+
+def test_the_period_two_branch_shows_over_the_period_one_branch_and_its_markers(figure):
+    """On main the period-2 line lay under the period-1 branch's event markers, same width:
+    where it ran within a marker of the period-1 branch it was hidden. Now it is drawn over
+    them, thinner: its colour shows at each of its points, and the period-1 colour shows
+    beside it where they overlap."""
+    axes = figure.axes[0]
+    dataset = stiff_shaped_branches()
+    period_two = dataset.where(dataset.branch == 1, drop=True)
+    image = _rendered(figure)
+    points = axes.transData.transform(np.column_stack([period_two.omega.values,
+                                                       period_two.tip_amplitude_1.values
+                                                       * 1e3]))
+    far = [_colour_near(image, figure, xy, "C1") for xy in points]
+    # its own colour, up to the anti-aliasing of a 1.7-pixel line: C1 lies 1.07 or more from
+    # white, black and C0 (RGB distance), a pixel within 0.3 of it reads as C1
+    assert max(far) < 0.3
+    # the period-1 line, wider, shows on each side of the period-2 one above it
+    (one,) = [line for line in axes.lines if line.get_label() == "branch 0 (period 1)"]
+    (two,) = [line for line in axes.lines if line.get_label() == "branch 1 (period 2)"]
+    assert two.get_linewidth() < one.get_linewidth()
+    markers = [line for line in axes.lines if ":" in line.get_label()]
+    assert all(two.get_zorder() > line.get_zorder() for line in [one, *markers])
+    below = [xy - [0.0, 0.45 * one.get_linewidth() * figure.dpi / 72.0] for xy in points]
+    assert np.median([_colour_near(image, figure, xy, "C0") for xy in below]) < 0.2
+
+
+def test_the_stiff_cases_figure_says_its_drive_in_millimetres(figure):
+    axes = figure.axes[0]
+    assert "$U_0$ = 100 µm on beam 1's clamp" in axes.get_title(loc="left")
+    assert "F_0" not in axes.get_title(loc="left")  # no tip force: not named
+    assert axes.get_ylabel().endswith("(mm)") and axes.get_xlabel() == "$\\Omega$ (rad/s)"
+    styles = {line.get_label(): line.get_linestyle() for line in axes.lines
+              if line.get_label() in ("stable", "unstable")}
+    assert styles == {"stable": "-", "unstable": "--"}

@@ -1,0 +1,352 @@
+"""Bifurcation curves in two parameters (issue 34, item 1): grazing, fold, codimension two.
+
+Each continued curve is checked against an independent computation: the grazing curve of the
+non-impacting orbit against the closed form through the modal sums (`grazing_curve`), its
+turning point against the maximum of the closed form's |G(Omega)|, a fold curve against the
+folds that one-parameter branches locate at five drive levels, the cusp where two fold curves
+meet against one-parameter branches on both sides of it (two folds above its drive, none
+below).
+"""
+
+import numpy as np
+import pytest
+import xarray as xr
+from scipy.optimize import minimize_scalar
+
+import impactbeams as ib
+from impactbeams.continuation import Continuation, continue_orbits
+from impactbeams.continuation.twoparameter import BifurcationCurve, continue_curve
+from impactbeams.orbits.grazing import LinearGap
+from impactbeams.params import ParameterError
+from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
+
+# the continuation tests' small model: two beams, a stiff spring, 3 modes per beam
+SMALL = ib.Params(contact_stiffness=1e4, damping_ratio=0.02, force_amplitude=3e-5,
+                  clearance=1.1e-5)
+# the shipped example's soft stop, 3 modes: a hysteresis band between two folds at 1e-4 N
+STOP = ib.Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
+                 force_amplitude=1e-4)
+FOLD = BIFURCATIONS.index("fold")
+# a curve point solves the augmented system to Newton's 1e-10 of the scaled unknowns (the
+# parameters per their ranges, O(1) here), and a one-parameter branch locates an event to
+# 1e-11 of its range: the brief's 1e-9 relative
+AGREE = 1e-9
+
+
+def event(curve, label):
+    return np.flatnonzero(curve.curve_event.values == CURVE_EVENTS.index(label))
+
+
+@pytest.fixture(scope="module")
+def small_branch():
+    """The small model's non-impacting orbits up to its first grazing (234.73 rad/s)."""
+    continuation = Continuation(SMALL, "omega", 225.0, 240.0, n_modes=3, max_branches=1,
+                                max_points=20)
+    return continuation, continue_orbits(continuation)
+
+
+@pytest.fixture(scope="module")
+def stop_branch():
+    continuation = Continuation(STOP, "omega", 195.0, 330.0, n_modes=3, subspace=4,
+                                max_branches=1)
+    return continuation, continue_orbits(continuation)
+
+
+def test_grazing_curve_is_the_closed_form_at_every_point(small_branch):
+    curve = continue_curve(BifurcationCurve.from_branch(*small_branch, "grazing",
+                                                        "force_amplitude", 2e-5, 4e-5,
+                                                        max_step=0.02))
+    validate(curve)
+    assert curve.branch_point.size >= 20 and curve.attrs["curve_ending"] == "bound"
+    closed = ib.grazing_curve(SMALL, 3, "force_amplitude", curve.omega.values)
+    np.testing.assert_allclose(curve.force_amplitude.values, closed.force_amplitude.values,
+                               rtol=AGREE, atol=0.0)
+    # it starts at the branch's located grazing and moves along the curve (Omega falls)
+    assert curve.force_amplitude.values[0] == SMALL.force_amplitude
+    assert np.all(np.diff(curve.omega.values) < 0.0)
+    assert curve.force_amplitude.values[-1] == 4e-5  # ended on the box's edge
+    assert list(event(curve, "end")) == [curve.branch_point.size - 1]
+
+
+def test_grazing_curve_turns_where_the_closed_forms_clearance_is_largest(small_branch):
+    """In (Omega, clearance) the grazing curve is Delta = |G(Omega)|: it turns at the
+    resonance, the maximum of |G| (found by Brent's method on the closed form)."""
+    curve = continue_curve(BifurcationCurve.from_branch(
+        *small_branch, "grazing", "clearance", 5e-6, 5e-5, box=(200.0, 300.0)))
+    (turn,) = event(curve, "turning_point")
+    linear = LinearGap(SMALL, 3)
+    peak = minimize_scalar(lambda omega: -abs(complex(linear.phasor(omega))),
+                           bracket=(240.0, 246.0, 250.0), tol=1e-12)
+    # the clearance is flat at the turn: known to the corrector's tolerance; Omega there to
+    # the square root of it (the turn is located where the tangent's part vanishes)
+    assert float(curve.clearance[turn]) == pytest.approx(-peak.fun, rel=AGREE)
+    assert float(curve.omega[turn]) == pytest.approx(peak.x, rel=1e-6)
+    # located until F0 is pinned to 1e-11 of its range: the tangent's part, ~ the arclength
+    # from the turn, to ~1e-11 over the parameter's rate there (~1e-3)
+    assert abs(float(curve.curve_tangent_2[turn])) < 1e-6
+    assert float(curve.clearance.max()) == float(curve.clearance[turn])
+
+
+def _located(params, omega, state, label="fold", width=1.0):
+    """The ``label`` event the one-parameter branch locates going up from ``omega - width``
+    to ``omega + width`` (its only one there)."""
+    branch = continue_orbits(Continuation(params, "omega", omega - width, omega + width,
+                                          state=state, n_modes=3, subspace=4,
+                                          max_branches=1, transient_periods=0))
+    (located,) = branch.omega.values[branch.bifurcation.values == BIFURCATIONS.index(label)]
+    return float(located)
+
+
+def _curve_to_level(started, kind, level):
+    """The drive level times the start's and the curve's end there (on the range's edge)."""
+    continuation, branch = started
+    start = continuation.params.force_amplitude
+    force = level * start
+    low, high, direction = (force, start, "down") if level < 1 else (start, force, "up")
+    curve = continue_curve(BifurcationCurve.from_branch(continuation, branch, kind,
+                                                        "force_amplitude", low, high,
+                                                        direction=direction))
+    end = curve.isel(branch_point=-1)
+    assert curve.attrs["curve_ending"] == "bound" and float(end.force_amplitude) == force
+    return force, end
+
+
+@pytest.mark.parametrize("level", [0.6, 0.8, 1.2, 1.4, 1.6])
+def test_fold_curve_passes_through_the_one_parameter_folds(stop_branch, level):
+    """The fold curve from the upper fold at 1e-4 N, ended on the drive level's edge, is at
+    the fold a one-parameter branch in Omega locates at that level (started from the curve's
+    orbit 1 rad/s below: the guess only, the fold is the branch's own)."""
+    force, end = _curve_to_level(stop_branch, "fold", level)
+    assert abs(float(end.curve_condition)) < 1e-9
+    located = _located(STOP.replace(force_amplitude=force), float(end.omega),
+                       end.section_state.values)
+    assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
+
+
+@pytest.fixture(scope="module")
+def doubling_branch():
+    """The small model's impacting orbits (one contact) from 244 rad/s up: they double their
+    period at 244.73 rad/s."""
+    continuation = Continuation(SMALL, "omega", 236.0, 246.0, start=244.0, n_modes=3,
+                                max_branches=1, max_points=60, transient_periods=600)
+    return continuation, continue_orbits(continuation)
+
+
+@pytest.mark.parametrize("level", [0.8, 0.9, 1.1, 1.2, 1.3])
+def test_period_doubling_curve_passes_through_the_one_parameter_doublings(doubling_branch,
+                                                                          level):
+    """As the fold curve's test: the period-doubling curve (a multiplier at -1) ended on the
+    drive level's edge, against the doubling a one-parameter branch locates there."""
+    force, end = _curve_to_level(doubling_branch, "period_doubling", level)
+    mu = end.multiplier_modulus.values * np.exp(1j * end.multiplier_argument.values)
+    assert np.min(np.abs(mu + 1.0)) < 1e-9  # the eigenvalues of M: a multiplier at -1
+    located = _located(SMALL.replace(force_amplitude=force), float(end.omega),
+                       end.section_state.values, "period_doubling", width=0.2)
+    assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
+
+
+@pytest.fixture(scope="module")
+def torus_branch():
+    """The small model's one-contact orbits from 244 rad/s down: a complex pair of
+    multipliers leaves the unit circle at 243.83 rad/s (Neimark-Sacker)."""
+    continuation = Continuation(SMALL, "omega", 236.0, 246.0, start=244.0, direction="down",
+                                n_modes=3, max_branches=1, max_points=60,
+                                transient_periods=600)
+    return continuation, continue_orbits(continuation)
+
+
+@pytest.mark.parametrize("level", [0.7, 0.85, 1.1, 1.2, 1.3])
+def test_neimark_sacker_curve_passes_through_the_one_parameter_ones(torus_branch, level):
+    """As the fold curve's test, for a pair on the unit circle (the bialternate product's
+    test function): its end on the drive level against the one-parameter branch's."""
+    force, end = _curve_to_level(torus_branch, "neimark_sacker", level)
+    mu = end.multiplier_modulus.values * np.exp(1j * end.multiplier_argument.values)
+    pair = mu[mu.imag > 0]
+    assert np.min(np.abs(np.abs(pair) - 1.0)) < 1e-9  # the eigenvalues of M: |mu| = 1
+    located = _located(SMALL.replace(force_amplitude=force), float(end.omega),
+                       end.section_state.values, "neimark_sacker", width=0.2)
+    assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
+
+
+@pytest.mark.slow
+def test_two_fold_curves_meet_at_a_cusp(stop_branch):
+    """Both folds' curves, followed down in the drive, reach the same cusp, and go on as the
+    other fold's; one-parameter branches 1 % above its drive have two folds, 1 % below none."""
+    cusps = []
+    for which in (0, 1):
+        curve = continue_curve(BifurcationCurve.from_branch(
+            *stop_branch, "fold", "force_amplitude", 1e-6, 2e-4, which=which,
+            direction="down", max_points=400))
+        (cusp,) = event(curve, "cusp")
+        cusps.append((float(curve.omega[cusp]), float(curve.force_amplitude[cusp])))
+        assert curve.attrs["curve_ending"] == "bound"
+        assert abs(float(curve.curve_tangent_1[cusp])) < 1e-3
+    assert cusps[0] == pytest.approx(cusps[1], rel=1e-9)
+    omega, force = cusps[0]
+    for factor, folds in ((1.01, 2), (0.99, 0)):
+        branch = continue_orbits(Continuation(
+            STOP.replace(force_amplitude=factor * force), "omega", omega - 8.0,
+            omega + 8.0, n_modes=3, subspace=4, max_branches=1))
+        assert np.count_nonzero(branch.bifurcation.values == FOLD) == folds
+
+
+@pytest.mark.parametrize(("changes", "message"), [
+    ({"kind": "hopf"}, "kind = 'hopf' is not allowed: must be one of 'grazing', 'fold'"),
+    ({"second": "omega"}, "second = 'omega' is not allowed: must differ from parameter"),
+    ({"state": np.zeros(3)}, "state = (3,) is not allowed: must be 6 finite numbers"),
+    ({"low": 2e-4}, "force_amplitude = 0.0001 is not allowed: (the start's, from params)"),
+    ({"max_step": 1.0, "step": 2.0}, "step = 2.0 is not allowed: must lie from min_step"),
+])
+def test_bad_input_in_one_line(changes, message):
+    values = {"params": STOP, "kind": "fold", "parameter": "omega", "value": 300.0,
+              "state": np.zeros(6), "second": "force_amplitude", "low": 5e-5, "high": 3e-4,
+              "parameter_low": 200.0, "parameter_high": 400.0, "n_modes": 3, **changes}
+    with pytest.raises(ParameterError) as error:
+        BifurcationCurve(**values)
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_a_start_off_the_bifurcation_is_refused(stop_branch):
+    continuation, branch = stop_branch
+    curve = BifurcationCurve.from_branch(continuation, branch, "fold", "force_amplitude",
+                                         5e-5, 2e-4)
+    far = BifurcationCurve(**{**curve.__dict__, "value": 250.0})
+    with pytest.raises(ParameterError, match="did not converge to a fold"):
+        continue_curve(far)
+
+
+@pytest.fixture(scope="module")
+def stiff_branch():
+    """The small model's branch from 261.5 rad/s down: it folds back and forth four times,
+    two of its folds just past grazings (the stiff spring's impacting orbits)."""
+    continuation = Continuation(SMALL, "omega", 255.0, 268.0, start=261.5, direction="down",
+                                n_modes=3, max_branches=1, max_points=150,
+                                transient_periods=600)
+    return continuation, continue_orbits(continuation)
+
+
+def _branch_events(params, omega, state, **range_):
+    branch = continue_orbits(Continuation(params, "omega", omega - 0.3, omega + 0.3,
+                                          state=state, transient_periods=0, n_modes=3,
+                                          max_branches=1, **range_))
+    return [(BIFURCATIONS[code], float(branch.omega[i]))
+            for i, code in enumerate(branch.bifurcation.values) if code]
+
+
+@pytest.fixture(scope="module")
+def fold_to_grazing(stiff_branch):
+    """The fold at 266.05 rad/s followed down in F0: it turns, then ends where its orbit
+    grazes (a third contact appears past it, and the fold has no smooth continuation)."""
+    return continue_curve(BifurcationCurve.from_branch(*stiff_branch, "fold",
+                                                       "force_amplitude", 1e-5, 6e-5,
+                                                       which=3, direction="down"))
+
+
+@pytest.mark.slow
+def test_fold_curve_ends_where_its_fold_meets_the_grazing(fold_to_grazing):
+    """At the curve's end drive, the one-parameter branch in Omega (started 0.3 rad/s above
+    from the end's orbit) locates its fold and a grazing at the curve's end frequency."""
+    curve = fold_to_grazing
+    assert curve.attrs["curve_ending"] == "grazing"
+    assert list(event(curve, "grazing")) == [curve.branch_point.size - 1]
+    end = curve.isel(branch_point=-1)
+    omega = float(end.omega)
+    found = _branch_events(SMALL.replace(force_amplitude=float(end.force_amplitude)), omega,
+                           end.section_state.values, start=omega + 0.3, direction="down")
+    near = {label: [value for name, value in found if name == label and abs(value - omega)
+                    < 1e-3] for label in ("fold", "grazing")}
+    # (the orbit of three contacts past the grazing folds there too)
+    assert near["fold"] and near["grazing"]
+    np.testing.assert_allclose(near["fold"] + near["grazing"], omega, rtol=AGREE, atol=0.0)
+
+
+@pytest.mark.slow
+def test_past_the_fold_grazing_point_the_fold_is_gone(fold_to_grazing):
+    """1e-6 below the end's drive, the branch coming down in Omega folds first, 1.4e-5 rad/s
+    short of its grazing; 1e-6 above, it reaches the grazing first (its fold lay past it,
+    where the contacts differ: the orbit of three contacts folds there on its own)."""
+    end = fold_to_grazing.isel(branch_point=-1)
+    omega, force = float(end.omega), float(end.force_amplitude)
+    for factor, first in ((1 - 1e-6, "fold"), (1 + 1e-6, "grazing")):
+        found = _branch_events(SMALL.replace(force_amplitude=factor * force), omega,
+                               end.section_state.values, start=omega + 0.3, direction="down")
+        near = [(label, value) for label, value in found if abs(value - omega) < 1e-3]
+        assert near[0][0] == first
+        if first == "fold":
+            assert near[1][0] == "grazing" and 0.0 < near[1][1] - near[0][1] < 1e-7 * omega
+
+
+@pytest.mark.slow
+def test_a_jump_of_the_grazing_value_is_not_a_grazing(stiff_branch):
+    """The fold at 261.03 rad/s followed down: its orbit's grazing value changes sign by a
+    jump (another gap minimum becomes the nearest to 0, never at 0): no grazing labelled."""
+    curve = continue_curve(BifurcationCurve.from_branch(*stiff_branch, "fold",
+                                                       "force_amplitude", 1e-5, 6e-5,
+                                                       which=1, direction="down"))
+    gaps = curve.grazing_gap.values
+    assert gaps.min() < 0.0 < gaps.max()
+    assert np.abs(gaps).min() > 1e-3 * np.abs(gaps).max()
+    assert event(curve, "grazing").size == 0 and curve.attrs["curve_ending"] == "bound"
+
+
+STOP_CURVE_FILE = """n_modes = 3
+[params]
+counterpart = "stop"
+contact_stiffness = 100.0
+damping_ratio = 0.02
+force_amplitude = 1e-4
+[continuation]
+parameter = "omega"
+min = 195.0
+max = 330.0
+subspace = 4
+max_branches = 1
+[curve]
+kind = "fold"
+second = "force_amplitude"
+min = 1e-4
+max = 1.2e-4
+"""
+
+
+def test_the_command_writes_the_curve_and_plot_draws_it(stop_branch, tmp_path, capsys):
+    from impactbeams.cli import main
+
+    path, out = tmp_path / "fold.toml", tmp_path / "fold.nc"
+    path.write_text(STOP_CURVE_FILE)
+    assert main(["continue", str(path), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "the fold of the branch along omega from 195 to 330 (event 0), followed in " \
+        "force_amplitude from 0.0001 to 0.00012" in err
+    assert f"wrote {out}: " in err and "fold curve (ended: bound); end at omega = " in err
+    assert "branch of period 1, point 20: " in err  # the progress lines
+    with xr.open_dataset(out) as written:
+        validate(written)
+        expected = continue_curve(BifurcationCurve.from_branch(*stop_branch, "fold",
+                                                               "force_amplitude", 1e-4, 1.2e-4))
+        np.testing.assert_array_equal(written.omega.values, expected.omega.values)
+        assert written.attrs["curve_kind"] == "fold"
+    assert main(["plot", str(out), "-o", str(tmp_path / "fold.png")]) == 0
+    assert (tmp_path / "fold.png").stat().st_size > 0
+    assert main(["plot", str(out), "--var", "omega"]) == 2
+    assert "variable (--var) is not allowed: a bifurcation curve is drawn in its parameters' " \
+        "plane" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (('second = "force_amplitude"', 'second = "omega"'),
+     "second = 'omega' is not allowed: must differ from parameter = 'omega'"),
+    (("max = 1.2e-4", "mx = 1.2e-4"), "unknown key 'mx' in [curve] of"),
+    (('kind = "fold"', 'kind = "cusp"'), "kind = 'cusp' is not allowed: must be one of"),
+    (("min = 1e-4\n", "min = 2e-4\n"),
+     "high = 0.00012 is not allowed: the range [0.0002, 0.00012] is empty"),
+])
+def test_a_bad_curve_table_is_one_line_before_any_compute(tmp_path, capsys, change, message):
+    from impactbeams.cli import main
+
+    path, out = tmp_path / "fold.toml", tmp_path / "fold.nc"
+    path.write_text(STOP_CURVE_FILE.replace(*change))
+    assert main(["continue", str(path), "-o", str(out)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert message in line and line.startswith("impactbeams: error: ")
+    assert not out.exists()
