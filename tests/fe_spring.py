@@ -294,3 +294,16 @@ def fe_spring_contacts(
             force[mask] = sys.force(modal, t_out[mask], qs) if seg_contact else 0.0
         result.update(t=t_out, energy=energy, gap=gap, contact_force=force)
     return result
+
+
+def mesh_deviations(got: dict[str, np.ndarray], coarse: dict[str, np.ndarray],
+                    fine: dict[str, np.ndarray]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Per quantity of ``got``: its deviation from the ``fine`` mesh's values and the FE's own
+    error estimate |fine - coarse|, both relative (onsets to the shortest contact duration)."""
+    out = {}
+    for key, values in got.items():
+        count = values.size
+        norm = fine["duration"][:count].min() if key == "onset" else np.abs(fine[key][:count])
+        out[key] = (np.abs(values - fine[key][:count]) / norm,
+                    np.abs(fine[key][:count] - coarse[key][:count]) / norm)
+    return out
