@@ -50,8 +50,34 @@ from fe_reference import (
 )
 
 
+@dataclass(frozen=True)
+class _PointPair(_Pair):
+    """The pair with its gap at nodes of the beams, from side s (docs/model.md, "Where the
+    contact acts"): g = clearance + s (y1(x1) - y2(x2)), DOFs ``contact1`` and ``contact2``
+    (None at a stop); the tip force stays at beam 1's tip (``tip1``)."""
+
+    contact1: int = 0
+    contact2: int | None = None
+    side: float = 1.0
+
+    def gap_rows(self, matrix: np.ndarray) -> np.ndarray:
+        rows = matrix[self.contact1] - (0.0 if self.contact2 is None else matrix[self.contact2])
+        return self.side * rows
+
+
+def _node_dof(position: float, length: float, n_elements: int, offset: int) -> int:
+    """The deflection DOF of the node at ``position`` (m), which must be a node of the mesh."""
+    node = round(position / length * n_elements)
+    assert node > 0 and abs(node * length / n_elements - position) < 1e-12 * length
+    return offset + 2 * (node - 1)  # node 0 is the clamp, removed
+
+
 def build_pair(params, n_elements: tuple[int, int]) -> _Pair:
     """Block-diagonal FE system of both beams (beam 1's DOFs first); beam 1 alone at a stop.
+
+    A contact elsewhere than the tips or from above (``params.contact_position1``,
+    ``contact_position2``, ``contact_side``, as in impactbeams' Params; the positions on nodes)
+    gives a `_PointPair`, whose gap is at those nodes.
 
     A beam's attachments (``params.attachments1``, ``attachments2``: objects with a
     ``position`` (m) on a node, as `impactbeams.structure`'s parts) sit on that node: a point
@@ -85,7 +111,16 @@ def build_pair(params, n_elements: tuple[int, int]) -> _Pair:
         at = F[:, dofs]
         F = F - at @ np.linalg.solve(np.eye(len(k)) + k[:, None] * F[np.ix_(dofs, dofs)],
                                      k[:, None] * at.T)
-    return dataclasses.replace(pair, K=K, M=M, F=F)
+    pair = dataclasses.replace(pair, K=K, M=M, F=F)
+    x1, x2 = getattr(p, "contact_position1", None), getattr(p, "contact_position2", None)
+    side = -1.0 if getattr(p, "contact_side", "below") == "above" else 1.0
+    if x1 is None and x2 is None and side == 1.0:
+        return pair
+    contact1 = _node_dof(p.l1 if x1 is None else x1, p.l1, n_elements[0], 0)
+    contact2 = None if pair.tip2 is None else _node_dof(p.l2 if x2 is None else x2, p.l2,
+                                                         n_elements[1], pair.n1)
+    fields = {f.name: getattr(pair, f.name) for f in dataclasses.fields(_Pair)}
+    return _PointPair(**fields, contact1=contact1, contact2=contact2, side=side)
 
 
 def _gap_vector(pair: _Pair) -> np.ndarray:
@@ -259,3 +294,16 @@ def fe_spring_contacts(
             force[mask] = sys.force(modal, t_out[mask], qs) if seg_contact else 0.0
         result.update(t=t_out, energy=energy, gap=gap, contact_force=force)
     return result
+
+
+def mesh_deviations(got: dict[str, np.ndarray], coarse: dict[str, np.ndarray],
+                    fine: dict[str, np.ndarray]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Per quantity of ``got``: its deviation from the ``fine`` mesh's values and the FE's own
+    error estimate |fine - coarse|, both relative (onsets to the shortest contact duration)."""
+    out = {}
+    for key, values in got.items():
+        count = values.size
+        norm = fine["duration"][:count].min() if key == "onset" else np.abs(fine[key][:count])
+        out[key] = (np.abs(values - fine[key][:count]) / norm,
+                    np.abs(fine[key][:count] - coarse[key][:count]) / norm)
+    return out

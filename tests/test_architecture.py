@@ -196,13 +196,13 @@ def test_the_seam_check_sees_a_law_branch():
 # in its objects' module; elsewhere the code asks the object (``params.law.compliant``).
 CONFIGURATION_SEAM = {"configuration.py", "kernels/layout.py"}
 CONFIGURATION_NAMES = (set(configuration.LAWS) | set(configuration.COUNTERPARTS)
-                       | set(configuration.MOUNTS))
+                       | set(configuration.MOUNTS) | set(configuration.SIDES))
 # a name that means something else in a module: a stepped sweep's rows (up, down or "both")
 OTHER_MEANING = {("longtime.py", "both")}
 # data keyed by a law's name: the calibrated constants, written by benchmarks/calibrate_costs.py
 # from docs/benchmarks/costs.json (keyed so), looked up by `ContactLaw.name`
 KEYED_DATA = {("costs.py", "IMPACT_CYCLE")}
-CHOICE_KEYWORDS = {"contact_law", "counterpart", "shaker"}
+CHOICE_KEYWORDS = {"contact_law", "counterpart", "shaker", "contact_side"}
 
 
 def _names_in(node: ast.AST | None, names: set[str]) -> bool:

@@ -111,7 +111,7 @@ def _contact_frequencies(p: Params, n: int) -> list[float]:
     from impactbeams.contact import build_free_phase, recommended_modes, spring_contact
 
     free = build_free_phase(p, max(n, recommended_modes(p)))
-    spring = spring_contact(free, p.tip_compliance, 0.0, p.contact_stiffness)
+    spring = spring_contact(free, free.point_compliance, 0.0, p.contact_stiffness)
     return spring.frequencies[:n].tolist()
 
 

@@ -1,12 +1,12 @@
-"""A configuration's variants as objects: the contact law, the counterpart and the shaker mount.
+"""A configuration's variants as objects: contact law, counterpart, contact side, shaker mount.
 
-`Params` keeps each as a name (``contact_law``, ``counterpart``, ``shaker``: the flat keys of
-TOML files, the command line and Datasets) and hands out its object (``Params.law``,
-``Params.partner``, ``Params.mount``). What the code does differently for each variant is an
-attribute of its object, read where it matters; this module is the only Python place that
-names them (``tests/test_architecture.py`` fails on a branch on a name elsewhere), and
-`impactbeams.kernels.contact` and `impactbeams.kernels.drive` the only kernels that dispatch on
-a law's index or a clamp's motion.
+`Params` keeps each as a name (``contact_law``, ``counterpart``, ``contact_side``, ``shaker``:
+the flat keys of TOML files, the command line and Datasets) and hands out its object
+(``Params.law``, ``Params.partner``, ``Params.side``, ``Params.mount``). What the code does
+differently for each variant is an attribute of its object, read where it matters; this
+module is the only Python place that names them (``tests/test_architecture.py`` fails on a
+branch on a name elsewhere), and `impactbeams.kernels.contact` and `impactbeams.kernels.drive`
+the only kernels that dispatch on a law's index or a clamp's motion.
 """
 
 from __future__ import annotations
@@ -67,6 +67,21 @@ class Counterpart:
 
 
 @dataclasses.dataclass(frozen=True)
+class Side:
+    """Which way beam 1 moves to close the contact (``contact_side``).
+
+    ``sign``: s in the gap ``g = clearance + s (y1(x1) - y2(x2))`` (docs/model.md, "Where the
+    contact acts"): +1.0 when what beam 1 meets is below it (beam 1 moves down onto it, today's
+    and the paper's configuration), -1.0 when it is above (beam 1 moves up onto it); the
+    contact force pushes beam 1 by s R and beam 2 by -s R. ``words``: where the counterpart is.
+    """
+
+    name: str
+    sign: float
+    words: str
+
+
+@dataclasses.dataclass(frozen=True)
 class Mount:
     """Which clamps the shaker carries (``shaker``): a stop's mount is beam 2's clamp.
 
@@ -109,6 +124,8 @@ TIED_LAW = ContactLaw(
          "impact do not converge in n_modes (docs/model.md)")
 BEAM = Counterpart("beam", 2, "", r"$y_2(l_2) - \Delta$", "per beam")
 STOP = Counterpart("stop", 1, "against a stop", r"stop, $-\Delta$", "of beam 1")
+BELOW = Side("below", 1.0, "below beam 1")
+ABOVE = Side("above", -1.0, "above beam 1")
 BOTH = Mount("both", (1.0, 1.0), "on both clamps", "on beam 1's clamp and the stop")
 BEAM1 = Mount("beam1", (1.0, 0.0), "on beam 1's clamp", "on beam 1's clamp")
 BEAM2 = Mount("beam2", (0.0, 1.0), "on beam 2's clamp", "on the stop")
@@ -117,6 +134,7 @@ BEAM2 = Mount("beam2", (0.0, 1.0), "on beam 2's clamp", "on the stop")
 LAWS = {law.name: law for law in (SPRING_LAW, TIED_LAW)}
 COUNTERPARTS = {partner.name: partner for partner in (BEAM, STOP)}
 MOUNTS = {mount.name: mount for mount in (BOTH, BEAM1, BEAM2)}
+SIDES = {side.name: side for side in (BELOW, ABOVE)}
 
 
 def counterpart_named(name: object) -> Counterpart:

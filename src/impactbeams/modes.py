@@ -214,6 +214,17 @@ class UniformBeam:
         """The tip compliance c = l^3 / (3 EI) (m/N)."""
         return self.length**3 / (3 * self.EI)
 
+    def flexibility(self, x: float, y: float) -> float:
+        """Deflection at ``x`` (m) under a unit force at ``y`` (m): the Green's function (m/N).
+
+        ``G(x, y) = a^2 (3 b - a) / (6 EI)``, a = min(x, y), b = max(x, y); at the tip
+        (x = y = l) the tip compliance itself, bit for bit.
+        """
+        if x == y == self.length:
+            return self.tip_compliance
+        a, b = min(x, y), max(x, y)
+        return a * a * (3.0 * b - a) / (6.0 * self.EI)
+
     def participation(self, shapes: BeamShapes) -> np.ndarray:
         """Gamma_n of ``shapes`` (kg^1/2), in closed form (`participation`)."""
         return participation(shapes, self.rhoA)
@@ -256,6 +267,15 @@ class AttachedBeam:
     def tip_compliance(self) -> float:
         """w(L) under a unit tip force (m/N), the springs included."""
         return self.structure.tip_compliance
+
+    def flexibility(self, x: float, y: float) -> float:
+        """Deflection at ``x`` (m) under a unit force at ``y`` (m), the springs included (m/N).
+
+        The tip compliance itself at the tip (x = y = L).
+        """
+        if x == y == self.length:
+            return self.tip_compliance
+        return float(self.structure.flexibility(x, y)[0, 0])
 
     def participation(self, shapes: StructureModes) -> np.ndarray:
         """Gamma_n = <1, Y_n> of ``shapes`` (kg^1/2), the point masses included."""
@@ -311,6 +331,18 @@ def beam(params: Params, which: int) -> UniformBeam | AttachedBeam:
         return UniformBeam(getattr(params, "EI" + i), getattr(params, "rhoA" + i),
                            getattr(params, "l" + i))
     return AttachedBeam(params.structure(which))
+
+
+def values_at(shapes: BeamShapes | StructureModes | UserModes, x: float,
+              length: float) -> np.ndarray:
+    """Each mode's deflection at ``x`` (m) of its beam of ``length`` (m), per unit coordinate.
+
+    At the tip, ``shapes.tip()`` itself (the closed forms' tip values, bit for bit; a user
+    structure's contact DOF).
+    """
+    if x == length:
+        return shapes.tip()
+    return shapes(np.array([x]))[:, 0]
 
 
 def _merged_free_frequencies(params: Params, n: int) -> np.ndarray:

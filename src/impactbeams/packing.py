@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from impactbeams.configuration import SPRING_LAW
+from impactbeams.configuration import BELOW, SPRING_LAW
 from impactbeams.kernels import layout
 from impactbeams.kernels.forcing import run_inputs
 
@@ -57,7 +57,7 @@ def free_basis(free: FreePhase, params: Params | None) -> Basis:
     base = (np.zeros(free.frequencies.size) if params is None
             else base_participation(params, free))
     return Basis(free.frequencies, free.drive, free.tip1, free.tip2, free.unit1, free.unit2,
-                 free.tip1 - free.tip2, base)
+                 free.gap_weights, base)
 
 
 def bases(model: ModalModel) -> tuple[Basis, Basis]:
@@ -73,7 +73,7 @@ def bases(model: ModalModel) -> tuple[Basis, Basis]:
 def phase_table(basis: Basis) -> np.ndarray:
     """A phase's table, rows ``layout.TABLE_ROWS``, with zero damping ratios."""
     rows = {"frequency": basis.frequencies, "zeta": 0.0 * basis.frequencies, "drive": basis.drive,
-            "event": basis.event, "tip1": basis.tip1, "unit1": basis.unit1,
+            "event": basis.event, "tip1": basis.tip1, "tip2": basis.tip2, "unit1": basis.unit1,
             "unit2": basis.unit2, "base": basis.base}
     return np.array([rows[name] for name in layout.TABLE_ROWS])
 
@@ -96,7 +96,8 @@ def spring_table(spring: SpringContact) -> np.ndarray:
     """The spring law's contact table: its oscillators and the contact force weights."""
     zeros = np.zeros(spring.eigenvalues.size)
     rows = {"frequency": spring.frequencies, "zeta": spring.damping_ratios, "drive": zeros,
-            "event": spring.force_weights, "tip1": zeros, "unit1": zeros, "unit2": zeros,
+            "event": spring.force_weights, "tip1": zeros, "tip2": zeros, "unit1": zeros,
+            "unit2": zeros,
             "base": zeros}
     return np.array([rows[name] for name in layout.TABLE_ROWS])
 
@@ -105,18 +106,22 @@ def geometry_row(params: Params, free: FreePhase, spring: SpringContact | None =
                  ) -> np.ndarray:
     """A geometry's ``layout.GEOMETRY`` fields (SI units).
 
-    Tip compliances, the accumulation time (an instantaneous impact re-closing within half a
+    Tip compliances, the gap's compliance to the tip force and the contact's side, the
+    accumulation time (an instantaneous impact re-closing within half a
     period of the fastest free mode is the truncated bases disagreeing, not a new impact: see
-    dynamics.run_events), the contact law, the spring law's effective k_e, c_e, the clamps the
+    dynamics.run_events), the contact law, the spring law's effective k_e, c_e and the tips'
+    shifts per unit contact force (`impactbeams.contact.spring.tip_shifts`), the clamps the
     shaker moves and the initial state.
     """
     shaker1, shaker2 = params.mount.clamps
     fields = {"c1": params.tip_compliance[0], "c2": params.tip_compliance[1],
+              "gap_compliance": free.gap_compliance, "side": free.side,
               "accumulation": math.pi / np.max(free.frequencies),
               "contact_law": params.law.index,
               "contact_stiffness": spring.effective_stiffness if spring else 0.0,
               "contact_damping": spring.effective_damping if spring else 0.0,
-              "residual1": spring.residual1 if spring else 0.0,
+              "residual1": spring.tip_shift1 if spring else 0.0,
+              "residual2": spring.tip_shift2 if spring else 0.0,
               "shaker1": shaker1, "shaker2": shaker2,
               "start": float(layout.STARTS.index(params.start))}
     return np.array([fields[name] for name in layout.GEOMETRY])
@@ -166,7 +171,7 @@ def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
                         geometry_row(params, model.free), model.overlap, shifts,
                         _no_spring(model.free.frequencies.size))
     free = build_free_phase(params, n_modes)
-    spring = spring_contact(free, params.tip_compliance, params.damping_ratio,
+    spring = spring_contact(free, free.point_compliance, params.damping_ratio,
                             params.contact_stiffness, params.contact_damping)
     tables = np.array([phase_table(free_basis(free, params)), spring_table(spring)])
     modes = np.array([spring.eigenvalues, spring.phase])
@@ -289,19 +294,23 @@ class ReducedModel:
 def reduced_model(params: Params, n_modes: int) -> ReducedModel:
     """The reduced model of ``params`` with ``n_modes`` per beam (spring law, tip force only).
 
-    Raises ParameterError for what it cannot express: the tied law, a dashpot, base excitation.
+    Raises ParameterError for what it cannot express: the tied law, a dashpot, base excitation,
+    a contact elsewhere than the tips or from above.
     """
     from impactbeams.contact import build_free_phase, spring_contact
     from impactbeams.params import ParameterError
 
     for name, value, allowed in (("contact_law", params.contact_law, SPRING_LAW.name),
                                  ("contact_damping", params.contact_damping, 0.0),
-                                 ("base_amplitude", params.base_amplitude, 0.0)):
+                                 ("base_amplitude", params.base_amplitude, 0.0),
+                                 ("contact_position1", params.contact_position1, None),
+                                 ("contact_position2", params.contact_position2, None),
+                                 ("contact_side", params.contact_side, BELOW.name)):
         if value != allowed:
             raise ParameterError(f"reduced_model: {name} = {value!r}; it supports {allowed!r}"
                                  " only (a linear modal model with a spring gap element)")
     free = build_free_phase(params, n_modes)
-    spring = spring_contact(free, params.tip_compliance, params.damping_ratio,
+    spring = spring_contact(free, free.point_compliance, params.damping_ratio,
                             params.contact_stiffness)
     return ReducedModel(free.frequencies, 2.0 * params.damping_ratio * free.frequencies,
                         free.tip1, free.tip2, spring.residual1, spring.residual2,

@@ -13,7 +13,7 @@ name               unit    meaning
 ``rho1`` ...       kg/m^3  density
 ``width1`` ...     m       strip width
 ``thickness1``...  m       strip thickness
-``clearance``      m       Delta, gap between the tips at rest (> 0)
+``clearance``      m       Delta, gap between the tips (the contact points) at rest (> 0)
 ``force_amplitude`` N      F0 of the tip force F(t) = F0 sin(omega t) on beam 1 (downward);
                            default 1e-3, but 0 when ``base_amplitude`` is given: a study that
                            names its shaker is driven by it alone unless it names F0 too
@@ -32,6 +32,12 @@ name               unit    meaning
 ``base_amplitude`` m       U0 of the shaker's motion u_b(t) = U0 sin(omega t) (default 0; the
                            tied law takes it with shaker = "both" only); at most 0.2 times the
                            shortest shaken beam (small deflections, ``check_joint``)
+``contact_position1`` m  where the contact acts on beam 1: its distance from the clamp,
+                           0 < x1 <= l1 (default: not given, the tip l1, bit for bit)
+``contact_position2`` m  where it acts on beam 2 (counterpart = "beam"): 0 < x2 <= l2
+                           (default: the tip l2)
+``contact_side``   -       which way beam 1 closes the contact: "below" (default: what it meets
+                           is below it, it moves down onto it) or "above" (it moves up onto it)
 ``shaker``         -       which clamps the shaker carries: "both" (default: both beams'
                            clamps, or beam 1's and the stop's mount, which then moves with it),
                            "beam1" (a stop stays fixed) or "beam2" (beam 2's clamp, or a stop's
@@ -65,7 +71,7 @@ from impactbeams.checks import (  # noqa: F401  (their old home: modules above i
     require,
     require_integer,
 )
-from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount
+from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount, Side
 from impactbeams.kernels import layout
 from impactbeams.structure.parts import (
     Attachment,
@@ -287,7 +293,8 @@ def check_range(name: str, value: Any, point: PointName = no_point) -> None:
 
 def check_joint(values: Mapping[str, Any], point: PointName = no_point,
                 partner: Counterpart = BEAM, mount: Mount = BOTH,
-                compliance1: float | None = None) -> None:
+                compliance1: float | None = None,
+                contact: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> None:
     """Raise ParameterError unless the resolved parameters are jointly allowed.
 
     ``values``: every numeric field of [`Params`][] (EI/rhoA form), as floats or arrays that
@@ -299,6 +306,10 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
     beam's length: the tip force by its static deflection F0 l1^3 / (3 EI1), the shaker by
     its own motion U0, which each beam it carries (``mount``; a stop's mount drives beam 1)
     passes to its tip against a counterpart that does not follow, and more near a resonance.
+
+    ``contact``: (s, u1(x1), u2(x2)), the contact's side and each beam's unit tip-load shape at
+    its contact point (`Params.contact_shapes`; 1 at the tips): the uplifts must leave the
+    initial gap at the contact point, clearance + s (u1 uplift1 - u2 uplift2), open.
     """
     # one set of parameters (floats: the common case, a period map per corrector iterate) is
     # checked in float arithmetic, a grid in arrays
@@ -317,9 +328,17 @@ def check_joint(values: Mapping[str, Any], point: PointName = no_point,
         require_all(f"uplift{i}", v[f"uplift{i}"],
                     np.abs(v[f"uplift{i}"]) <= MAX_DEFLECTION * v[f"l{i}"], point,
                     lambda j, i=i: _deflection_rule(f"|uplift{i}|", f"l{i}", v[f"l{i}"], j))
-    gap = v["clearance"] + v["uplift1"] - v["uplift2"]
-    require_all("uplift2", v["uplift2"], gap > 0, point, lambda j: (
-        f"the initial gap clearance + uplift1 - uplift2 = {value_at(gap, j)!r} m must be > 0 (m)"))
+    side, shape1, shape2 = contact
+    if contact == (1.0, 1.0, 1.0):  # at the tips, from below
+        gap, formula = v["clearance"] + v["uplift1"] - v["uplift2"], "clearance + uplift1 - uplift2"
+        named = "uplift2"
+    else:
+        gap = v["clearance"] + side * (shape1 * v["uplift1"] - shape2 * v["uplift2"])
+        formula = (f"at the contact point, clearance {'+' if side > 0 else '-'} "
+                   f"({shape1:.6g} uplift1 - {shape2:.6g} uplift2)")
+        named = "uplift1"
+    require_all(named, v[named], gap > 0, point, lambda j: (
+        f"the initial gap {formula} = {value_at(gap, j)!r} m must be > 0 (m)"))
     uniform = compliance1 is None  # else beam 1's tip compliance with its attachments (m/N)
     compliance = v["l1"] ** 3 / (3.0 * v["EI1"]) if uniform else compliance1
     static = v["force_amplitude"] * compliance
@@ -390,19 +409,26 @@ CONTACT_LAWS = tuple(configuration.LAWS)
 DEFAULT_CONTACT_LAW = CONTACT_LAWS[0]
 # what beam 1's tip meets: beam 2's tip, or a fixed rigid stop (no modes, no compliance)
 COUNTERPARTS = tuple(configuration.COUNTERPARTS)
+# where the contact acts along each beam (m from the clamp; None: the tip), `Params.contact_point`
+CONTACT_POSITIONS = ("contact_position1", "contact_position2")
 # keys that describe beam 2: refused when given with a counterpart that has no beam 2
-BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS), "attachments2")
+BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS), "attachments2",
+              "contact_position2")
 # each beam's point masses and springs (`impactbeams.structure`), given from Python
 ATTACHMENTS = ("attachments1", "attachments2")
 # beam 1 as the user's own structure (`impactbeams.structure.user`): an object or a .npz file
 USER_STRUCTURE = "structure1"
 # what a user structure replaces: beam 1's keys (l1, EI1, rhoA1 are then its equivalent beam's)
-BEAM1_KEYS = ("l1", "EI1", "rhoA1", *(key + "1" for key in MATERIAL_KEYS), "attachments1")
+BEAM1_KEYS = ("l1", "EI1", "rhoA1", *(key + "1" for key in MATERIAL_KEYS), "attachments1",
+              "contact_position1")
 _EQUIVALENT_BEAM1 = ("l1", "EI1", "rhoA1")
+# fields a run's parameters (Datasets, files) name only when they differ from the default: the
+# attachments, a user structure and where and from which side the contact acts
+_ONLY_IF_GIVEN = (*ATTACHMENTS, USER_STRUCTURE, *CONTACT_POSITIONS, "contact_side")
 SHAKERS = tuple(configuration.MOUNTS)  # which clamps the shaker carries (impactbeams.drive)
 # the parameters whose value is a name, and the names allowed (the default first)
-CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS, "shaker": SHAKERS,
-           "start": layout.STARTS}
+CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS,
+           "contact_side": tuple(configuration.SIDES), "shaker": SHAKERS, "start": layout.STARTS}
 # N, the paper's tip force: the default drive of a study that names no base motion
 DEFAULT_FORCE_AMPLITUDE = 1e-3
 # said once per run of a stop on a shaker whose shaker is left to its default (`moving_stop`)
@@ -457,6 +483,9 @@ class Params:
     attachments1: tuple[Attachment, ...] = ()
     attachments2: tuple[Attachment, ...] = ()
     structure1: MatrixStructure | ModalStructure | None = None
+    contact_position1: float | None = None  # m from beam 1's clamp; None: its tip
+    contact_position2: float | None = None  # m from beam 2's clamp; None: its tip
+    contact_side: str = configuration.BELOW.name
 
     def __init__(self, **values: Any) -> None:
         """Every parameter by keyword (SI units); the material keys replace a beam's EI, rhoA."""
@@ -475,6 +504,9 @@ class Params:
                     f"must be one of {', '.join(map(repr, allowed))}")
         for name in self.numeric_names():
             self._set_checked(name, getattr(self, name))
+        for name in CONTACT_POSITIONS:
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, require_finite(name, getattr(self, name), "m"))
         for name in ATTACHMENTS:
             parts = getattr(self, name)
             require(name, parts, isinstance(parts, (tuple, list)),
@@ -537,9 +569,11 @@ class Params:
             require(name, parts, self.law.tangent_flow,
                     f"contact_law = {self.contact_law!r} supports the paper's uniform beams "
                     "only: use contact_law = 'spring' for a beam with attachments")
+        self._check_contact_point()
         # a compliant clamp lets the tip force deflect the tip more than l1^3 / (3 EI1)
         check_joint(self.numeric(), partner=self.partner, mount=self.mount,
-                    compliance1=self.structure(1).tip_compliance if self.attachments1 else None)
+                    compliance1=self.structure(1).tip_compliance if self.attachments1 else None,
+                    contact=self.contact_shapes)
         if self.structure1 is not None and "1" in self.mount.shaken_beams(self.partner):
             self.structure1.require_support(self.base_amplitude)
         # with one clamp moving, the tied tips' quasi-static part would carry a moving
@@ -549,6 +583,27 @@ class Params:
                 or self.mount.clamps == BOTH.clamps,
                 "with contact_law = 'tied' the shaker must carry both clamps (shaker = 'both', "
                 f"not {self.shaker!r}), or use contact_law = 'spring'")
+
+    def _check_contact_point(self) -> None:
+        """A contact position on its beam (0 < x <= l); elsewhere than the tips only if compliant.
+
+        The tied law (the paper's) ties the tips from below: its contact modes are those of
+        tied tips (or of beam 1 pinned at its tip), so a contact elsewhere or from above is
+        refused, naming the parameter, before any compute.
+        """
+        for which, name in enumerate(CONTACT_POSITIONS, start=1):
+            position, length = getattr(self, name), getattr(self, f"l{which}")
+            require(name, position, position is None or 0.0 < position <= length,
+                    f"must be > 0 and <= l{which} = {length!r} (m: a point of beam {which}, "
+                    "its distance from the clamp)")
+        if (self.at_tips and self.side.sign > 0.0) or self.law.tangent_flow:
+            return
+        name = next((key for key, tip in zip(CONTACT_POSITIONS, (self.l1, self.l2), strict=True)
+                     if getattr(self, key) not in (None, tip)), "contact_side")
+        require(name, getattr(self, name), False,
+                f"contact_law = {self.contact_law!r} (the paper's law) ties the tips, beam 1 "
+                "moving down onto its counterpart: use contact_law = 'spring' for a contact "
+                "elsewhere or from above")
 
     def _resolve_drives(self) -> None:
         """The drives not given: no base motion; the tip force only if no base motion is named.
@@ -573,7 +628,7 @@ class Params:
         """Names of the numeric parameters (all but the named choices), in field order."""
         return tuple(f.name for f in dataclasses.fields(Params)
                      if f.name not in CHOICES and f.name not in ATTACHMENTS
-                     and f.name != USER_STRUCTURE)
+                     and f.name != USER_STRUCTURE and f.name not in CONTACT_POSITIONS)
 
     def numeric(self) -> dict[str, float]:
         """The numeric parameters by name (SI units)."""
@@ -588,6 +643,47 @@ class Params:
     def partner(self) -> Counterpart:
         """What beam 1's tip meets (`impactbeams.configuration.Counterpart`): ``counterpart``."""
         return configuration.COUNTERPARTS[self.counterpart]
+
+    @property
+    def side(self) -> Side:
+        """Which way beam 1 closes the contact (`impactbeams.configuration.Side`)."""
+        return configuration.SIDES[self.contact_side]
+
+    @property
+    def contact_point(self) -> tuple[float, float]:
+        """Where the contact acts: (x1, x2), m from each beam's clamp (x2 = 0.0 at a stop).
+
+        The tips (l1, l2) unless ``contact_position1`` / ``contact_position2`` say otherwise.
+        """
+        x1 = self.l1 if self.contact_position1 is None else self.contact_position1
+        if not self.partner.has_beam2:
+            return x1, 0.0
+        return x1, self.l2 if self.contact_position2 is None else self.contact_position2
+
+    @property
+    def contact_shapes(self) -> tuple[float, float, float]:
+        """(s, u1(x1), u2(x2)): the side's sign and each beam's unit tip-load shape there.
+
+        u_i(x) = (3 l x^2 - x^3) / (2 l^3) on a bare beam (its static deflection under a tip
+        force, per unit tip deflection: how an uplift moves the contact point), that of the
+        beam with its attachments otherwise; exactly (1.0, 1.0, 1.0) at the tips from below.
+        """
+        shapes = []
+        for which, x in enumerate(self.contact_point, start=1):
+            length = getattr(self, f"l{which}")
+            if x == length or (which == 2 and not self.partner.has_beam2):
+                shapes.append(1.0)
+            elif getattr(self, f"attachments{which}"):
+                shapes.append(float(self.structure(which).unit_tip_shape(np.array([x]))[0]))
+            else:
+                shapes.append((3.0 * length * x * x - x**3) / (2.0 * length**3))
+        return self.side.sign, shapes[0], shapes[1]
+
+    @property
+    def at_tips(self) -> bool:
+        """Whether the contact acts between the tips (or beam 1's tip and a stop)."""
+        return (self.contact_position1 in (None, self.l1)
+                and (self.contact_position2 in (None, self.l2) or not self.partner.has_beam2))
 
     @property
     def mount(self) -> Mount:
@@ -611,8 +707,14 @@ class Params:
 
     @property
     def initial_gap(self) -> float:
-        """Gap between the tips at t = 0: clearance + uplift1 - uplift2 (m)."""
-        return self.clearance + self.uplift1 - self.uplift2
+        """Gap at the contact point at t = 0 (m): clearance + uplift1 - uplift2 at the tips.
+
+        Elsewhere ``clearance + s (u1(x1) uplift1 - u2(x2) uplift2)`` (`contact_shapes`).
+        """
+        side, shape1, shape2 = self.contact_shapes
+        if (side, shape1, shape2) == (1.0, 1.0, 1.0):
+            return self.clearance + self.uplift1 - self.uplift2
+        return self.clearance + side * (shape1 * self.uplift1 - shape2 * self.uplift2)
 
     def structure(self, which: int) -> Cantilever:
         """Beam ``which`` (1 or 2) as a cantilever: uniform, carrying its ``attachments``."""
@@ -665,7 +767,8 @@ class Params:
         # floats, names and frozen parts only: no deep copy needed (dataclasses.asdict's cost)
         user = self.structure1 is not None
         return {field.name: getattr(self, field.name) for field in _FIELDS()
-                if (field.name not in (*ATTACHMENTS, USER_STRUCTURE) or getattr(self, field.name))
+                if (field.name not in _ONLY_IF_GIVEN or getattr(self, field.name)
+                    not in (None, (), configuration.BELOW.name))
                 and not (user and field.name in _EQUIVALENT_BEAM1)}
 
     def replace(self, **changes: Any) -> Params:

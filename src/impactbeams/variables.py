@@ -64,6 +64,12 @@ PARAMETERS: dict[str, Parameter] = {
     "contact_damping": Parameter("N s/m", "damping c of the tip contact dashpot", "$c$"),
     "counterpart": Parameter("1", "what beam 1's tip meets: beam (beam 2's tip) or stop (a fixed "
                                   "rigid stop, clearance below it)"),
+    "contact_position1": Parameter("m", "where the contact acts on beam 1: distance from its "
+                                        "clamp (default: the tip, l1)", "$x_1$"),
+    "contact_position2": Parameter("m", "where the contact acts on beam 2: distance from its "
+                                        "clamp (default: the tip, l2)", "$x_2$"),
+    "contact_side": Parameter("1", "which way beam 1 closes the contact: below (it moves down "
+                                   "onto its counterpart, default) or above (up onto it)"),
     "base_amplitude": Parameter("m", "amplitude of the shaker's clamp motion (U0)", "$U_0$"),
     "shaker": Parameter("1", "clamps the shaker moves: both, beam1 or beam2 (beam 2's clamp or "
                              "the stop's mount)"),
@@ -152,11 +158,22 @@ VARIABLES.update({
     "tip_velocity_1": Variable(("time",), "m s-1", "tip velocity of beam 1", "dy1(l1, t)/dt"),
     "tip_velocity_2": Variable(("time",), "m s-1", "tip velocity of beam 2",
                                "dy2(l2, t)/dt; 0 against a stop"),
+    "contact_deflection_1": Variable(
+        ("time",), "m", "deflection of beam 1 at the contact point",
+        "y1(x1, t) at x1 = contact_position1, upward positive, absolute like the tips; only "
+        "when the contact acts elsewhere than the tips (there it is tip_deflection_1)",
+        "$y_1(x_1)$"),
+    "contact_deflection_2": Variable(
+        ("time",), "m", "deflection of beam 2 at the contact point",
+        "y2(x2, t) at x2 = contact_position2 (not minus the clearance), upward positive; only "
+        "for two beams whose contact acts elsewhere than the tips", "$y_2(x_2)$"),
     "gap": Variable(
-        ("time",), "m", "gap between the tips",
-        "g = Delta + y1(l1) - y2(l2) (Delta + y1(l1) against a stop); 0 in contact; just after "
-        "a release it is the free basis' representation of the contact field (a truncation "
-        "error of the modal model)"),
+        ("time",), "m", "gap at the contact point",
+        "g = Delta + s (y1(x1) - y2(x2)) at the contact points x1, x2 (the tips by default), "
+        "s = +1 with the counterpart below beam 1 (contact_side = below, default), -1 above "
+        "(y2 the stop's motion against a stop); 0 in contact; just after a release it is the "
+        "free basis' representation of the contact field (a truncation error of the modal "
+        "model)"),
     "contact_force": Variable(
         ("time",), "N", "contact force",
         "R(t) = EI2 d3y2/dx3 (l2, t) (against a stop -EI1 d3y1/dx3 (l1, t)) in contact, 0 out "

@@ -12,6 +12,13 @@ its attachments: u is the static response to a tip force 1 / c), so nothing else
 
 Against a stop (``counterpart = "stop"``) beam 2 has no modes and no compliance (c2 = 0): the
 coordinates are beam 1's ``n`` modes only.
+
+The contact acts at ``Params.contact_point`` (x1 on beam 1, x2 on beam 2; the tips by default),
+from ``Params.side`` (s = +1 below beam 1, -1 above): the gap is
+``g = clearance + s (y1(x1) - y2(x2))``, whose weights on the coordinates are
+``s (Y_1n(x1) - Y_2n(x2))`` and whose quasi-static part under the tip force is
+``-s G1(x1, l1) F`` (G the beam's static Green's function). At the tips these are the tip
+values and c1 themselves, bit for bit.
 """
 
 from __future__ import annotations
@@ -21,7 +28,7 @@ import dataclasses
 import numpy as np
 from numpy.polynomial.legendre import leggauss
 
-from impactbeams.modes import FreeModes, beam, deprecated_omega
+from impactbeams.modes import FreeModes, beam, deprecated_omega, values_at
 from impactbeams.params import Params, require_integer, require_type
 
 _GAUSS_ORDER = 12
@@ -60,6 +67,15 @@ class FreePhase:
             the other beam's modes).
         drive: b_n with q_n'' + omega_n^2 q_n = b_n F''(t): Y_1n(l1) / omega_1n^2, 0 on beam 2.
         static_shift: <s, Y_n> = c_1 unit1 - c_2 unit2.
+        point1, point2: each coordinate's deflection at the contact point of beam 1 / beam 2
+            (x1, x2; zero for the other beam's modes): the tips' values by default.
+        gap_weights: the gap's weight of each coordinate, s (point1 - point2) (m per unit).
+        gap_compliance: s G1(x1, l1) (m/N): the gap's quasi-static part is -gap_compliance F.
+        point_compliance: (G1(x1, x1), G2(x2, x2)) (m/N): each beam's static flexibility at
+            its contact point (c1, c2 at the tips; G2 = 0 against a stop).
+        tip_transfer: (G1(l1, x1), G2(l2, x2)) (m/N): each tip's deflection under a unit force
+            at its beam's contact point.
+        side: s, +1.0 (the counterpart below beam 1) or -1.0 (above).
     """
 
     beam1: FreeModes
@@ -71,6 +87,13 @@ class FreePhase:
     unit2: np.ndarray
     drive: np.ndarray
     static_shift: np.ndarray
+    point1: np.ndarray
+    point2: np.ndarray
+    gap_weights: np.ndarray
+    gap_compliance: float
+    point_compliance: tuple[float, float]
+    tip_transfer: tuple[float, float]
+    side: float
 
     @property
     def omega(self) -> np.ndarray:
@@ -100,8 +123,19 @@ def build_free_phase(params: Params, n_modes: int) -> FreePhase:
     unit1 = tip1 / (c1 * frequencies**2)
     # a stop: no beam-2 coordinates and c2 = 0 (an empty 0/0 would be fine, but say it)
     unit2 = tip2 / (c2 * frequencies**2) if n2 else np.zeros(n)
+    (x1, x2), side = p.contact_point, p.side.sign
+    cantilever1, cantilever2 = beam(p, 1), beam(p, 2)
+    point1 = np.concatenate([values_at(beam1.shapes, x1, p.l1), np.zeros(n2)])
+    point2 = np.concatenate([np.zeros(n), values_at(beam2.shapes, x2, p.l2) if n2
+                             else np.zeros(0)])
+    compliance2 = cantilever2.flexibility(x2, x2) if n2 else 0.0
+    transfer2 = cantilever2.flexibility(p.l2, x2) if n2 else 0.0
     return FreePhase(beam1, beam2, frequencies, tip1, tip2, unit1, unit2,
-                     drive=tip1 / frequencies**2, static_shift=c1 * unit1 - c2 * unit2)
+                     drive=tip1 / frequencies**2, static_shift=c1 * unit1 - c2 * unit2,
+                     point1=point1, point2=point2, gap_weights=side * (point1 - point2),
+                     gap_compliance=side * cantilever1.flexibility(x1, p.l1),
+                     point_compliance=(cantilever1.flexibility(x1, x1), compliance2),
+                     tip_transfer=(cantilever1.flexibility(p.l1, x1), transfer2), side=side)
 
 
 def _checked(params: Params, n_modes: int) -> int:

@@ -29,6 +29,13 @@ loss at a switch).
 
 Against a stop (``counterpart = "stop"``) the same holds with beam 1's coordinates only:
 w = Y_1n(l1), c2 = 0 and r_N = r_1, beam 1's residual alone.
+
+A contact elsewhere (``Params.contact_point`` x1, x2, from ``Params.side`` s) is the same law
+with the gap weights w = s (Y_1n(x1) - Y_2n(x2)), the gap's quasi-static part -s G1(x1, l1) F
+(`impactbeams.contact.free`) and the flexibility each beam's modes miss at its contact point,
+r_i = G_i(x_i, x_i) - sum_n Y_in(x_i)^2 / omega_in^2 (G the static Green's function); the tips,
+which the outputs report, move through what the modes miss between tip and contact point by
+``s (G1(l1, x1) - sum_n Y_1n(l1) Y_1n(x1) / omega_n^2) R`` (beam 1) and minus its like (beam 2).
 """
 
 from __future__ import annotations
@@ -41,7 +48,7 @@ import numpy as np
 
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact.free import FreePhase
-from impactbeams.modes import AttachedBeam, UniformBeam, beam
+from impactbeams.modes import AttachedBeam, UniformBeam, beam, values_at
 from impactbeams.params import MAX_MODES, ParameterError, Params
 
 __all__ = ["SpringContact", "needed_modes", "rank_one_modes", "recommended_modes",
@@ -57,14 +64,31 @@ _OVERDAMPED = 1e-6
 TIED_MODES = 5
 
 
-def residual_flexibilities(free: FreePhase, tip_compliance: tuple[float, float],
+def residual_flexibilities(free: FreePhase, compliance: tuple[float, float],
                            ) -> tuple[float, float]:
-    """r_i = c_i - sum_n Y_in(l_i)^2 / omega_in^2 (m/N): what each beam's modes miss at its tip.
+    """r_i = c_i - sum_n Y_in(x_i)^2 / omega_in^2 (m/N): what each beam's modes miss there.
 
-    Their sum is r_N, the flexibility the truncated modes miss between the tips.
+    ``compliance``: each beam's static flexibility at its contact point, (c1, c2) at the tips
+    (``free.point_compliance``). Their sum is r_N, the flexibility the truncated modes miss
+    between the contact points.
     """
-    return (float(tip_compliance[0] - np.sum(free.tip1**2 / free.frequencies**2)),
-            float(tip_compliance[1] - np.sum(free.tip2**2 / free.frequencies**2)))
+    return (float(compliance[0] - np.sum(free.point1**2 / free.frequencies**2)),
+            float(compliance[1] - np.sum(free.point2**2 / free.frequencies**2)))
+
+
+def tip_shifts(free: FreePhase) -> tuple[float, float]:
+    """How far each tip moves per unit contact force R through what the modes miss (m/N).
+
+    Beam 1's: ``s (G1(l1, x1) - sum_n Y_1n(l1) Y_1n(x1) / omega_n^2)`` (R pushes it by s R);
+    beam 2's the same of its own, its tip moving by minus that times R. Beam 2's is summed in
+    order, as the kernels summed it when the contact sat at the tips (the same bits).
+    """
+    transfer1, transfer2 = free.tip_transfer
+    shift1 = free.side * float(transfer1 - np.sum(free.tip1 * free.point1 / free.frequencies**2))
+    missed = transfer2
+    for tip, point, frequency in zip(free.tip2, free.point2, free.frequencies, strict=True):
+        missed -= float(tip) * float(point) / (float(frequency) * float(frequency))
+    return shift1, free.side * float(missed)
 
 
 def resolution_modes(free: FreePhase, stiffness: float) -> int:
@@ -74,8 +98,9 @@ def resolution_modes(free: FreePhase, stiffness: float) -> int:
     recommended n_modes is at least 4 n* (docs/model.md, "Resolution").
     """
     n = free.modes_per_beam[0]
-    weights = free.tip1 - free.tip2
-    below = free.frequencies**2 / weights**2 < stiffness
+    weights = free.gap_weights
+    with np.errstate(divide="ignore"):  # a mode with a node at the contact point never counts
+        below = free.frequencies**2 / weights**2 < stiffness
     return int(max(np.sum(below[:n]), np.sum(below[n:])))
 
 
@@ -86,7 +111,10 @@ class SpringContact:
     Attributes:
         stiffness, damping: k (N/m) and c (N s/m) of the law.
         effective_stiffness, effective_damping: k_e, c_e after the static correction.
-        residual: r_N (m/N); residual1, residual2: each beam's share (c_i minus its modes').
+        residual: r_N (m/N); residual1, residual2: each beam's share (c_i minus its modes',
+            at its contact point).
+        tip_shift1, tip_shift2: each tip's static response to R through what the modes miss
+            (m/N, `tip_shifts`): beam 1's tip moves by tip_shift1 R, beam 2's by -tip_shift2 R.
         eigenvalues: lambda_j (1/s) of the contact phase's first-order form, Im > 0.
         right: (2 M, M) complex, x = (q, q') = 2 Re(right z).
         left: (M, 2 M) complex, z = left x.
@@ -101,6 +129,8 @@ class SpringContact:
     residual: float
     residual1: float
     residual2: float
+    tip_shift1: float
+    tip_shift2: float
     eigenvalues: np.ndarray
     right: np.ndarray
     left: np.ndarray
@@ -238,14 +268,18 @@ def _damped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
 
 
 @one_blas_thread
-def spring_contact(free: FreePhase, tip_compliance: tuple[float, float], damping_ratio: float,
+def spring_contact(free: FreePhase, compliance: tuple[float, float], damping_ratio: float,
                    stiffness: float, damping: float = 0.0) -> SpringContact:
-    """The contact phase of the spring law (k = ``stiffness`` N/m, c = ``damping`` N s/m)."""
-    residual1, residual2 = residual_flexibilities(free, tip_compliance)
+    """The contact phase of the spring law (k = ``stiffness`` N/m, c = ``damping`` N s/m).
+
+    ``compliance``: each beam's static flexibility at its contact point (m/N),
+    ``free.point_compliance`` (the tip compliances for a contact at the tips).
+    """
+    residual1, residual2 = residual_flexibilities(free, compliance)
     residual = residual1 + residual2
     k_e = stiffness / (1.0 + stiffness * residual)
     c_e = damping / (1.0 + stiffness * residual) ** 2
-    w = free.tip1 - free.tip2
+    w = free.gap_weights
     if damping_ratio == 0.0 and damping == 0.0:
         eigenvalues, right, left = _undamped_modes(free.frequencies, k_e, w)
     else:
@@ -268,7 +302,8 @@ def spring_contact(free: FreePhase, tip_compliance: tuple[float, float], damping
     phase = np.where(normal, force_weight / np.where(normal, magnitude, 1.0),
                      np.exp(1j * np.angle(force_weight)))
     return SpringContact(float(stiffness), float(damping), float(k_e), float(c_e), residual,
-                         residual1, residual2, eigenvalues, right, left, phase, magnitude)
+                         residual1, residual2, *tip_shifts(free), eigenvalues, right, left,
+                         phase, magnitude)
 
 
 def _overdamped(modes: Callable[[float], object], damping: float, damping_ratio: float,
@@ -304,14 +339,20 @@ def required_modes(params: Params) -> int:
     stiff contact.
     """
     p, k = params, params.contact_stiffness
-    counts = [_softer_modes(beam(p, 1), k)]
+    x1, x2 = p.contact_point
+    counts = [_softer_modes(beam(p, 1), k, x1)]
     if p.partner.has_beam2:
-        counts.append(_softer_modes(beam(p, 2), k))
+        counts.append(_softer_modes(beam(p, 2), k, x2))
     return int(max(5, 4 * max(counts)))
 
 
-def _softer_modes(cantilever: UniformBeam | AttachedBeam, stiffness: float) -> int:
-    """How many of a cantilever's first ``MAX_MODES`` modes are softer at the tip than k (N/m).
+def _softer_modes(cantilever: UniformBeam | AttachedBeam, stiffness: float,
+                  position: float) -> int:
+    """How many of a cantilever's first ``MAX_MODES`` modes are softer than k (N/m) at a point.
+
+    ``position``: the contact point (m from the clamp), the tip by default; the count stops as
+    at the tip (whose modal stiffness is the lowest of the span's on a uniform beam: its
+    |Y_n| is the largest), the modes softer at the point are counted.
 
     On a uniform beam mode n's modal tip stiffness omega_n^2 / Y_n(l)^2 is EI b_n^4 / (4 l^3)
     (mass-normalised cantilever modes all have Y_n(l)^2 = 4 / (rhoA l)): it rises with n, so
@@ -330,7 +371,10 @@ def _softer_modes(cantilever: UniformBeam | AttachedBeam, stiffness: float) -> i
         modes = cantilever.free_modes(n)
         soft = modes.frequencies**2 / modes.shapes.tip()**2 < stiffness
         if not soft[-1] or n == limit:
-            return int(np.sum(soft))
+            with np.errstate(divide="ignore"):  # a node at the point: infinitely stiff there
+                at_point = modes.frequencies**2 / values_at(modes.shapes, position,
+                                                            cantilever.length)**2 < stiffness
+            return int(np.sum(at_point))
         n = min(2 * n, limit)
 
 

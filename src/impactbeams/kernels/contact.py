@@ -100,17 +100,20 @@ def tip_loads(phase, t, settings, load1, rate1):
 
 @kernel
 def residual_flexibility2(free_table, settings):
-    """Beam 2's tip flexibility its modes miss (m/N) where the law lets it respond (spring)."""
-    if keeps_free_coordinates(settings.contact_law):
-        return contact_spring.residual_flexibility2(free_table, settings.c2)
-    return 0.0
+    """Beam 2's tip shift per unit contact force through what its modes miss (m/N).
+
+    Packed per geometry (``settings.residual2``: 0 for the tied law, whose tips move with
+    their contact shapes; `impactbeams.contact.spring.tip_shifts` for the spring law).
+    """
+    return settings.residual2
 
 
 @kernel
 def correct_tips(phase, tables, forces, phase_scalars, settings, residual2, t, q, v, out):
     """Add the tips' static response to the contact force (``TIP_COLUMNS`` of ``out``).
 
-    Spring contact: the flexibility the modes miss moves the tips by ``+r_1 R``, ``-r_2 R``.
+    Spring contact: the flexibility the modes miss moves the tips by ``+r_1 R``, ``-r_2 R``
+    (``settings.residual1``, ``residual2``: the tips' shifts, side and contact point included).
     """
     if phase == CONTACT and keeps_free_coordinates(settings.contact_law):
         contact_spring.correct_tips(tables, forces, phase_scalars, settings, residual2, t, q, v,

@@ -41,8 +41,6 @@ from impactbeams.kernels.layout import (
     MODE_EIGENVALUE,
     MODE_PHASE,
     ROW_EVENT,
-    ROW_FREQUENCY,
-    ROW_TIP1,
     SPRING_DRIVE_ROWS,
     TIP_V1,
     TIP_V2,
@@ -163,22 +161,6 @@ def free_state(y, y_rate, t, spring, drives, settings, q, v):
     """Free coordinates (q, q') at time t of the contact oscillators (y, y')."""
     _, right, modes = spring
     to_free(y, y_rate, t, right, modes, drives, settings.forcing_frequency, q, v)
-
-
-@kernel
-def residual_flexibility2(free_table, c2):
-    """r_2 = c_2 - sum_n Y_2n(l2)^2 / omega_2n^2 (m/N): what beam 2's modes miss at its tip.
-
-    The free modes belong to one beam each, so beam 2's tip values are ``tip1 - event``
-    exactly (0 for beam 1's modes).
-    """
-    missed = c2
-    tip1, event = free_table[ROW_TIP1], free_table[ROW_EVENT]
-    frequencies = free_table[ROW_FREQUENCY]
-    for j in range(frequencies.size):
-        tip2 = tip1[j] - event[j]
-        missed -= tip2 * tip2 / (frequencies[j] * frequencies[j])
-    return missed
 
 
 @kernel

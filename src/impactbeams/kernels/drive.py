@@ -9,8 +9,10 @@ Two drives act at the forcing frequency Omega, alone or together (superposition)
   moving clamp's beam is driven by ``-Gamma_n u_b'' = Gamma_n U0 Omega^2 sin(Omega t)``.
 
 Both enter every mode as ``Im(A e^(i Omega t))`` (``mode_drive``) and the gap as an explicit
-harmonic term ``S sin(Omega t)``, ``S = U0 ([beam 1 moves] - [beam 2 moves]) - c1 F0``
-(``gap_harmonic``). Arrays and fields are named in `impactbeams.kernels.layout`; SI units.
+harmonic term ``S sin(Omega t)``,
+``S = s U0 ([beam 1 moves] - [beam 2 moves]) - s G1(x1, l1) F0`` (``gap_harmonic``; s the
+contact's side, x1 its point on beam 1: ``U0 (...) - c1 F0`` at the tips, from below). Arrays
+and fields are named in `impactbeams.kernels.layout`; SI units.
 """
 
 import math
@@ -22,9 +24,10 @@ from impactbeams.kernels.layout import (
     CELL_F0,
     CELL_FORCING_FREQUENCY,
     CELL_U0,
-    GEO_C1,
+    GEO_GAP_COMPLIANCE,
     GEO_SHAKER1,
     GEO_SHAKER2,
+    GEO_SIDE,
 )
 
 
@@ -89,12 +92,15 @@ def mode_drives(table_drive, table_base, frequencies, zeta, cell, out):
 
 @kernel
 def gap_harmonic(cell, geometry):
-    """S (m) of the gap's explicit term ``S sin(Omega t)``: ``u_b1 - u_b2 - c1 F`` over sin."""
-    tip = -geometry[GEO_C1] * cell[CELL_F0]
+    """S (m) of the gap's explicit term ``S sin(Omega t)``: ``s (u_b1 - u_b2) - s G1 F`` over sin.
+
+    ``s G1`` = ``GEO_GAP_COMPLIANCE`` (m/N; c1 for a contact at the tips, from below).
+    """
+    tip = -geometry[GEO_GAP_COMPLIANCE] * cell[CELL_F0]
     amplitude = base_amplitude(cell)
     if amplitude == 0.0:
         return tip
-    return amplitude * (geometry[GEO_SHAKER1] - geometry[GEO_SHAKER2]) + tip
+    return amplitude * (geometry[GEO_SIDE] * (geometry[GEO_SHAKER1] - geometry[GEO_SHAKER2])) + tip
 
 
 @kernel

@@ -34,8 +34,10 @@ from impactbeams.kernels.layout import (
     GEO_DAMPING,
     GEO_LAW,
     GEO_RESIDUAL1,
+    GEO_RESIDUAL2,
     GEO_SHAKER1,
     GEO_SHAKER2,
+    GEO_SIDE,
     GEO_START,
     GEO_STIFFNESS,
     PHASE_SCALARS,
@@ -127,6 +129,8 @@ def settings(cell, geometry, t_max, search_span):
     record.contact_stiffness = geometry[GEO_STIFFNESS]
     record.contact_damping = geometry[GEO_DAMPING]
     record.residual1 = geometry[GEO_RESIDUAL1]
+    record.residual2 = geometry[GEO_RESIDUAL2]
+    record.side = geometry[GEO_SIDE]
     record.base_amplitude = base_amplitude(cell)
     record.shaker1 = geometry[GEO_SHAKER1]
     record.shaker2 = geometry[GEO_SHAKER2]

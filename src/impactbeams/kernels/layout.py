@@ -12,8 +12,10 @@ first-impact map packs the free phase alone), rows ``TABLE_ROWS``:
 * ``drive``: b with ``q'' + 2 zeta omega q' + omega^2 q = b (F'' + 2 zeta omega F')``
   (m kg^1/2 / N); also ``-<y_s_t, mode> / F'``, the quasi-static velocity seen by each mode;
 * ``event``: weights of the phase's event function on the modal coordinates (free: the gap
-  ``Y_1n(l1) - Y_2n(l2)`` in m; contact: the contact force in N);
-* ``tip1``: tip displacement of each shape on beam 1 (m per unit coordinate);
+  ``s (Y_1n(x1) - Y_2n(x2))`` at the contact points, ``Y_1n(l1) - Y_2n(l2)`` at the tips from
+  below, in m; contact: the contact force in N);
+* ``tip1``, ``tip2``: tip displacement of each shape on beam 1 / beam 2 (m per unit
+  coordinate);
 * ``unit1``, ``unit2``: ``<u_1, mode>``, ``<u_2, mode>``, projections of the unit-tip-load
   shapes (the uplift and quasi-static shapes);
 * ``base``: the participation factor ``Gamma_n = rhoA int Y_n dx`` of each mode whose beam's
@@ -32,8 +34,11 @@ t_max (s), search span (s; the event search restarts from the exactly propagated
 often), accumulation time (s; see
 `impactbeams.kernels.dynamics.run_events`), contact law (``CONTACT_LAWS`` index), and the
 spring law's effective stiffness k_e (N/m) and dashpot c_e (N s/m) after the static correction,
-beam 1's residual tip flexibility r_1 (m/N: what its modes miss of c1), the base amplitude U0 (m)
-and whether the shaker moves beam 1's and beam 2's clamp (1.0 or 0.0).
+the tips' shifts per unit contact force through what the modes miss (``residual1``,
+``residual2``, m/N: beam 1's tip moves by residual1 R, beam 2's by -residual2 R; at the tips
+from below, r_1 and r_2), the contact's side s (+1.0: the counterpart below beam 1, -1.0:
+above), the base amplitude U0 (m) and whether the shaker moves beam 1's and beam 2's clamp
+(1.0 or 0.0).
 
 Contact laws: ``TIED`` (the paper's: tips tied in contact, contact modes of the tied pair,
 projections at switches: ``overlap``, ``shifts``) and ``SPRING`` (compliant: the free
@@ -43,7 +48,8 @@ coordinates kept, the contact phase as the oscillators of `impactbeams.kernels.c
 oscillators' frequencies and damping ratios, the contact force weights as ``event`` and zeros in
 the other rows.
 
-``geometry[g]``, fields ``GEOMETRY``: c1, c2 (m/N) and the accumulation time (s) of
+``geometry[g]``, fields ``GEOMETRY``: c1, c2 (m/N), the gap's compliance to the tip force
+(``gap_compliance``, s G1(x1, l1), m/N: c1 at the tips), the side s, the accumulation time (s) of
 geometry g of a map, which clamps the shaker moves (``shaker1``, ``shaker2``: 1.0 or 0.0) and
 the initial state (``start``, an index of ``STARTS``). ``cells[i]``, columns ``CELL_COLUMNS``:
 one map cell's parameters and the index of its geometry. ``out[i]``, columns ``OUT_COLUMNS``:
@@ -60,8 +66,8 @@ import numpy as np
 FREE, CONTACT = 0, 1
 
 # each group unpacks range(len(names)) in the names' order: a missing name fails at import
-TABLE_ROWS = ("frequency", "zeta", "drive", "event", "tip1", "unit1", "unit2", "base")
-(ROW_FREQUENCY, ROW_ZETA, ROW_DRIVE, ROW_EVENT, ROW_TIP1, ROW_UNIT1, ROW_UNIT2,
+TABLE_ROWS = ("frequency", "zeta", "drive", "event", "tip1", "tip2", "unit1", "unit2", "base")
+(ROW_FREQUENCY, ROW_ZETA, ROW_DRIVE, ROW_EVENT, ROW_TIP1, ROW_TIP2, ROW_UNIT1, ROW_UNIT2,
  ROW_BASE) = range(len(TABLE_ROWS))
 
 PHASE_SCALARS = ("event_const", "event_sine", "event_cosine", "load_rate")
@@ -78,13 +84,15 @@ DRIVE_RISING, DRIVE_FALLING, DRIVE_CONSTANT, DRIVE_EQUILIBRIUM = range(len(SPRIN
 # a structured record (fields read by name in the kernels, ``settings.t_max``)
 SETTINGS = ("clearance", "c1", "c2", "force_amplitude", "forcing_frequency", "t_max",
             "search_span", "accumulation", "contact_law", "contact_stiffness", "contact_damping",
-            "residual1", "base_amplitude", "shaker1", "shaker2")
+            "residual1", "residual2", "side", "base_amplitude", "shaker1", "shaker2")
 SETTINGS_DTYPE = np.dtype([(name, np.float64) for name in SETTINGS])
 
-GEOMETRY = ("c1", "c2", "accumulation", "contact_law", "contact_stiffness", "contact_damping",
-            "residual1", "shaker1", "shaker2", "start")
-(GEO_C1, GEO_C2, GEO_ACCUMULATION, GEO_LAW, GEO_STIFFNESS, GEO_DAMPING,
- GEO_RESIDUAL1, GEO_SHAKER1, GEO_SHAKER2, GEO_START) = range(len(GEOMETRY))
+GEOMETRY = ("c1", "c2", "gap_compliance", "side", "accumulation", "contact_law",
+            "contact_stiffness", "contact_damping", "residual1", "residual2", "shaker1", "shaker2",
+            "start")
+(GEO_C1, GEO_C2, GEO_GAP_COMPLIANCE, GEO_SIDE, GEO_ACCUMULATION, GEO_LAW, GEO_STIFFNESS,
+ GEO_DAMPING, GEO_RESIDUAL1, GEO_RESIDUAL2, GEO_SHAKER1, GEO_SHAKER2,
+ GEO_START) = range(len(GEOMETRY))
 
 # initial states (``start``): at rest in the absolute frame, or on the no-contact steady state
 STARTS = ("rest", "steady")

@@ -88,7 +88,8 @@ def _power(tables, forces, phase_scalars, spring, drives, settings, recorded, k,
         _, clamp_rate, clamp_acceleration = clamp_motion(settings, t)
         # the inertial load on the modes, and the clamps pushing the spring through the gap
         power -= (clamp_acceleration * base_rate
-                  + (settings.shaker1 - settings.shaker2) * clamp_rate * contact_force)
+                  + settings.side * (settings.shaker1 - settings.shaker2) * clamp_rate
+                  * contact_force)
     return power, dissipation
 
 

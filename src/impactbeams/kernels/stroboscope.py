@@ -40,9 +40,9 @@ from impactbeams.kernels.layout import (
     CELL_GEOMETRY,
     CONTACT,
     FREE,
-    ROW_EVENT,
     ROW_FREQUENCY,
     ROW_TIP1,
+    ROW_TIP2,
     STROBE_EPISODES,
     STROBE_ONSETS,
     STROBE_STATUS,
@@ -76,9 +76,9 @@ def tip_motion(tables, forces, phase_scalars, settings, residual2, phase, t, q, 
     table = tables[observed]
     y1, y2 = -settings.c1 * load1, -settings.c2 * load2
     v1, v2 = -settings.c1 * rate1, -settings.c2 * rate2
-    tip1, event = table[ROW_TIP1], table[ROW_EVENT]
+    tip1, tip2_row = table[ROW_TIP1], table[ROW_TIP2]
     for j in range(q.size):
-        tip2 = tip1[j] if shared_tips else tip1[j] - event[j]
+        tip2 = tip1[j] if shared_tips else tip2_row[j]
         y1 += tip1[j] * q[j]
         y2 += tip2 * q[j]
         v1 += tip1[j] * v[j]

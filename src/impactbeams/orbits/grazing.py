@@ -105,11 +105,12 @@ class LinearGap:
         moves1, moves2 = moving_clamps(params.shaker)
         self.params = params
         self.frequencies = free.frequencies
-        self.weights = free.tip1 - free.tip2   # the gap's weight of each free coordinate
+        self.weights = free.gap_weights        # the gap's weight of each free coordinate
         self.force_drive = free.drive          # b_n: Y_1n(l1) / omega_n^2 (m kg^1/2 / N)
         self.base_drive = base_participation(params, free)  # Gamma_n (kg^1/2)
-        self.force_harmonic = -params.tip_compliance[0]      # S per unit F0: -c1 (m/N)
-        self.base_harmonic = moves1 - moves2   # S per unit U0: the clamps' relative motion
+        self.force_harmonic = -free.gap_compliance  # S per unit F0: -s G1(x1, l1), -c1 (m/N)
+        # S per unit U0: the clamps' relative motion, seen from the contact's side
+        self.base_harmonic = free.side * (moves1 - moves2)
 
     def per_unit(self, omega: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """``(G_F, G_U)`` at each Omega (rad/s): the gap's phasor per N of F0, per m of U0.

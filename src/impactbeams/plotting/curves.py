@@ -35,6 +35,7 @@ def draw_curve(axes: Axes, dataset: xr.Dataset, colour: str = "C0",
     (y_factor, y_units) = display_units(dataset[second].values,
                                         dataset[second].attrs["units"])
     x, y = x_factor * dataset[first].values, y_factor * dataset[second].values
+    # one line in the parameters' plane: drawn as a period-1 branch is (full width)
     _draw_branch(axes, x, y[:, None], dataset.curve_stable.values, np.ones(x.size, dtype=bool),
                  colour, f"{KIND_NAMES[dataset.attrs['curve_kind']]} curve", period=1)
     axes.plot(x[:1], y[:1], "o", color=colour, markerfacecolor="none", markersize=7)

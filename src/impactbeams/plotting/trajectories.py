@@ -13,7 +13,7 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from impactbeams.configuration import BEAM, LAWS, counterpart_named
+from impactbeams.configuration import BEAM, BELOW, LAWS, SIDES, counterpart_named
 from impactbeams.plotting.arrays import PlainDataset
 from impactbeams.plotting.files import save_figure
 from impactbeams.plotting.labels import base_motion, quantity
@@ -62,12 +62,31 @@ def _title(dataset: xr.Dataset) -> str:
 
 
 def plot_tips(axis: Axes, dataset: xr.Dataset) -> None:
-    """Tip deflections y1(l1) and y2(l2) - Delta (µm) against time (s), as the paper's Fig. 3a."""
+    """Tip deflections y1(l1) and y2(l2) - Delta (µm) against time (s), as the paper's Fig. 3a.
+
+    A contact elsewhere than the tips (``contact_deflection_1`` in the Dataset): beam 1's
+    deflection at its contact point and, where it touches, its counterpart's there,
+    y2(x2) - s Delta (s the contact's side), over beam 1's tip in grey.
+    """
     t = dataset.time.values
-    axis.plot(t, dataset.tip_deflection_1 * _MICRO, lw=0.7, label=_TIP1)
-    axis.plot(t, dataset.tip_deflection_2 * _MICRO, lw=0.7,
-              label=counterpart_named(dataset.attrs.get("counterpart")).second_tip)
-    axis.set_ylabel("tip deflection (µm)")
+    if "contact_deflection_1" not in dataset:
+        axis.plot(t, dataset.tip_deflection_1 * _MICRO, lw=0.7, label=_TIP1)
+        axis.plot(t, dataset.tip_deflection_2 * _MICRO, lw=0.7,
+                  label=counterpart_named(dataset.attrs.get("counterpart")).second_tip)
+        axis.set_ylabel("tip deflection (µm)")
+        axis.legend(loc="upper right", fontsize="small")
+        return
+    clearance = float(dataset.attrs["clearance"])
+    side = SIDES[dataset.attrs.get("contact_side", BELOW.name)].sign
+    # against a stop, y2 is the stop's own motion: tip_deflection_2 is it minus the clearance
+    other = (dataset.contact_deflection_2 if "contact_deflection_2" in dataset
+             else dataset.tip_deflection_2 + clearance)
+    axis.plot(t, dataset.tip_deflection_1 * _MICRO, lw=0.5, color="0.6", label=_TIP1)
+    axis.plot(t, dataset.contact_deflection_1 * _MICRO, lw=0.7, color="C0",
+              label=r"$y_1(x_1)$, contact point")
+    axis.plot(t, (other - side * clearance) * _MICRO, lw=0.7, color="C1",
+              label=r"counterpart, $y_2(x_2) - s\Delta$")
+    axis.set_ylabel("deflection (µm)")
     axis.legend(loc="upper right", fontsize="small")
 
 

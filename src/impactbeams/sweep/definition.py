@@ -41,6 +41,7 @@ from impactbeams.params import (
     BEAM1_KEYS,
     CHOICES,
     CONTACT_LAWS,
+    CONTACT_POSITIONS,
     MATERIAL_KEYS,
     MAX_MODES,
     USER_STRUCTURE,
@@ -396,6 +397,8 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
             "attachments are fixed for a sweep (give them in [params], from Python)")
     require(where, name, name != USER_STRUCTURE, f"{name} is not sweepable: give the "
             "structure in [params] (one sweep per structure)")
+    require(where, name, name not in CONTACT_POSITIONS, f"{name} is not sweepable: give it in "
+            "[params] (one sweep per contact point)")
     if name not in PARAMETERS:
         raise unknown_key("parameter", name, f"[axes] of {source}", PARAMETERS)
     if name == "contact_law":
@@ -452,7 +455,7 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
     ends = []
     values: dict[str, Any] = {name: value for name, value in sweep.fixed.items()
                               if name not in CHOICES and name not in ATTACHMENTS
-                              and name != USER_STRUCTURE}
+                              and name != USER_STRUCTURE and name not in CONTACT_POSITIONS}
     for k, axis in enumerate(sweep.axes):
         axis_ends = np.array([axis.min, axis.max] if axis.num > 1 and not axis.choices
                              else [axis.min])
@@ -489,7 +492,8 @@ def _check_grid(sweep: Sweep) -> None:
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
-    check_joint(values, point, sweep.base.partner, sweep.base.mount)
+    check_joint(values, point, sweep.base.partner, sweep.base.mount,
+                contact=sweep.base.contact_shapes)
     if sweep.base.structure1 is not None and "1" in sweep.base.mount.shaken_beams(
             sweep.base.partner):
         sweep.base.structure1.require_support(values["base_amplitude"])

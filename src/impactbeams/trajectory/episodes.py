@@ -19,7 +19,7 @@ from numpy.polynomial.legendre import leggauss
 from impactbeams.kernels.layout import CONTACT, ROW_FREQUENCY
 from impactbeams.packing import Packed
 from impactbeams.trajectory.fields import energy_integrals
-from impactbeams.trajectory.observables import observables
+from impactbeams.trajectory.observables import gap_rate, observables
 from impactbeams.trajectory.phases import Trajectory, sample
 
 _PANELS_PER_HALF_PERIOD = 4  # Gauss panels per half period of the fastest mode in contact
@@ -55,7 +55,7 @@ def _contact_work(packed: Packed, trajectory: Trajectory, k: int) -> tuple[float
     phase, q, v = sample(packed, trajectory, times)
     phase[:] = CONTACT  # within the contact, also at its closing instant
     obs = observables(packed, phase, times, q, v)
-    power = obs["contact_force"] * (obs["tip_velocity_1"] - obs["tip_velocity_2"])
+    power = obs["contact_force"] * gap_rate(obs, packed.dynamics.free.side)
     return float(np.sum(weights * np.minimum(power, 0.0))), float(np.sum(weights *
                                                                           np.maximum(power, 0.0)))
 

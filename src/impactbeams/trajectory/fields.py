@@ -26,16 +26,20 @@ def time_series(packed: Packed, trajectory: Trajectory, times: np.ndarray, energ
     `energy_integrals`).
     """
     inside = times <= trajectory.t_end
-    names = ["tip_deflection_1", "tip_deflection_2", "tip_velocity_1", "tip_velocity_2", "gap",
-             "contact_force", "kinetic_energy", "energy", "unresolved_kinetic_energy",
-             "in_contact"] + (["work_of_force", "damping_dissipation"] if energy else [])
+    p = packed.params
+    points = [] if p.at_tips else ["contact_deflection_1", "contact_deflection_2"][:p.partner.beams]
+    names = ["tip_deflection_1", "tip_deflection_2", "tip_velocity_1", "tip_velocity_2",
+             *points, "gap", "contact_force", "kinetic_energy", "energy",
+             "unresolved_kinetic_energy", "in_contact"] + (
+        ["work_of_force", "damping_dissipation"] if energy else [])
     out = {name: np.full(times.size, np.nan) for name in names}
     reached = np.flatnonzero(inside)
     for start in range(0, reached.size, SAMPLE_CHUNK):
         index = reached[start:start + SAMPLE_CHUNK]
         phase, q, v = sample(packed, trajectory, times[index])
         for name, values in observables(packed, phase, times[index], q, v).items():
-            out[name][index] = values
+            if name in out:  # the contact points' series only where they are not the tips'
+                out[name][index] = values
         out["in_contact"][index] = phase
     if not energy:
         return out

@@ -20,7 +20,7 @@ from impactbeams.kernels.layout import (
 )
 from impactbeams.kernels.reductions import peak_force
 from impactbeams.packing import Packed
-from impactbeams.trajectory.observables import observables
+from impactbeams.trajectory.observables import gap_rate, observables
 from impactbeams.trajectory.phases import Trajectory, free_states
 
 _REPORT_EVERY = 256  # contacts between progress reports
@@ -34,10 +34,6 @@ def _segment_observables(packed: Packed, trajectory: Trajectory, k: np.ndarray, 
     v = trajectory.end_v[k] if end else trajectory.v[k]
     q, v = free_states(packed, trajectory.phase[k], t, q, v)
     return observables(packed, trajectory.phase[k], t, q, v)
-
-
-def _gap_rate(obs: dict[str, np.ndarray]) -> np.ndarray:
-    return obs["tip_velocity_1"] - obs["tip_velocity_2"]
 
 
 def _harmonic_integrals(omega: float, t0: np.ndarray, t1: np.ndarray,
@@ -112,7 +108,8 @@ def impact_table(packed: Packed, trajectory: Trajectory,
     separated = _segment_observables(packed, trajectory,
                                      np.minimum(k + 1, trajectory.time.size - 1), end=False)
     nan = np.full(k.size, np.nan)
-    onset_rate, separation_rate = _gap_rate(before), _gap_rate(separated)
+    side = packed.dynamics.free.side
+    onset_rate, separation_rate = gap_rate(before, side), gap_rate(separated, side)
     peaks = peak_forces(packed, trajectory, report)
     return {
         "impact_onset_time": trajectory.time[k],

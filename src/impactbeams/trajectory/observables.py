@@ -20,6 +20,13 @@ phase's modes. Its remainder carries the *unresolved kinetic energy*
 ``U = 1/2 |(1 - P) y_s_t|^2``; within a phase ``d(T + V - U)/dt`` equals the power of F minus
 the damping dissipation exactly, so ``energy - unresolved_kinetic_energy`` is what the energy
 balance checks (U vanishes when F0 = 0; it is ~1e-8 of the energy for the paper's case).
+
+The gap and its rate are those at the contact points (``Params.contact_point``, from
+``Params.side`` s): ``g = clearance + s (y1(x1) - y2(x2))``, with each contact point's deflection
+``y_i(x_i)`` (``contact_deflection_i``: the tips' at the tips; elsewhere, spring law only,
+``-G_1(x1, l1) F + sum_n Y_1n(x1) q_n + s r_1 R`` on beam 1 and
+``sum_n Y_2n(x2) q_n - s r_2 R`` on beam 2, r_i the flexibility each beam's modes miss at its
+point, in the absolute frame like the tips).
 """
 
 from __future__ import annotations
@@ -85,17 +92,26 @@ def observables(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
               + 0.5 * np.einsum("kn,kn->k", frequencies**2, q**2))
     contact = phase == CONTACT
     if packed.spring_law:
-        force, spring_energy = _spring_contact(packed, phase, t, q, v)
+        force, force_rate, spring_energy = _spring_contact(packed, phase, t, q, v)
         strain = strain + spring_energy
     else:
         event = per_phase(packed, phase, "event")
         force = np.where(contact, q2 + np.einsum("kn,kn->k", event, q), 0.0)
+    if p.at_tips:  # the tips' own arrays: the gap's bits as they were
+        points = tips[:, TIP_Y1], tips[:, TIP_Y2], tips[:, TIP_V1], tips[:, TIP_V2]
+    else:  # the spring law only (`Params` refuses the tied law elsewhere)
+        points = _contact_points(packed, t, q, v, force, force_rate)
+    side = packed.dynamics.free.side
     return {
         "tip_deflection_1": tips[:, TIP_Y1],
         "tip_deflection_2": tips[:, TIP_Y2],
         "tip_velocity_1": tips[:, TIP_V1],
         "tip_velocity_2": tips[:, TIP_V2],
-        "gap": p.clearance + tips[:, TIP_Y1] - tips[:, TIP_Y2],
+        "contact_deflection_1": points[0],
+        "contact_deflection_2": points[1],
+        "contact_velocity_1": points[2],
+        "contact_velocity_2": points[3],
+        "gap": p.clearance + side * points[0] - side * points[1],
         "contact_force": force,
         "kinetic_energy": kinetic,
         "energy": kinetic + strain,
@@ -104,23 +120,51 @@ def observables(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
     }
 
 
-def _spring_contact(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
-                    v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The spring law's contact force R (N, 0 out of contact) and energy (J).
+def gap_rate(obs: dict[str, np.ndarray], side: float) -> np.ndarray:
+    """The gap's rate g' (m/s) of `observables` ``obs``: s (y1'(x1) - y2'(x2)), s = ``side``."""
+    return side * obs["contact_velocity_1"] - side * obs["contact_velocity_2"]
 
-    The energy, ``k_e g^2 / 2 - r_1 F R``, is the spring's (its static correction included;
+
+def _contact_points(packed: Packed, t: np.ndarray, q: np.ndarray, v: np.ndarray,
+                    force: np.ndarray, force_rate: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Deflections (m) and velocities (m/s) of the contact points, spring law (module doc).
+
+    ``force``, ``force_rate``: R (N) and R' (N/s), 0 out of contact. Returns
+    (y1(x1), y2(x2), y1'(x1), y2'(x2)) in the absolute frame.
+    """
+    p, free, spring = packed.params, packed.dynamics.free, packed.dynamics.spring
+    tip_force, tip_force_rate = p.force_amplitude * np.sin(p.omega * t), (
+        p.force_amplitude * p.omega * np.cos(p.omega * t))
+    transfer = free.tip_transfer[0]  # G1(x1, l1) = G1(l1, x1): Maxwell's reciprocity
+    shift1, shift2 = free.side * spring.residual1, -free.side * spring.residual2
+    y1 = -transfer * tip_force + q @ free.point1 + shift1 * force
+    v1 = -transfer * tip_force_rate + v @ free.point1 + shift1 * force_rate
+    y2, v2 = q @ free.point2 + shift2 * force, v @ free.point2 + shift2 * force_rate
+    clamp = p.base_amplitude * np.sin(p.omega * t)
+    clamp_rate = p.base_amplitude * p.omega * np.cos(p.omega * t)
+    moves1, moves2 = p.mount.clamps
+    return (y1 + moves1 * clamp, y2 + moves2 * clamp, v1 + moves1 * clamp_rate,
+            v2 + moves2 * clamp_rate)
+
+
+def _spring_contact(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
+                    v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The spring law's contact force R (N, 0 out of contact), its rate (N/s) and energy (J).
+
+    The energy, ``k_e g^2 / 2 - s_1 F R``, is the spring's (its static correction included;
     held while the tips overlap, also after an early release by the dashpot) plus the work of
-    F through beam 1's residual flexibility under R, so that energy, work of F and dissipation
-    balance exactly; g is the modal gap, on which R = -k_e g - c_e g' acts.
+    F through beam 1's residual flexibility under R (s_1 = ``tip_shift1``: its tip moves by
+    s_1 R), so that energy, work of F and dissipation balance exactly; g is the modal gap, on
+    which R = -k_e g - c_e g' acts.
     """
     p, spring = packed.params, packed.dynamics.spring
     states = np.empty((t.size, 3))
     contact_states(packed.tables, packed.forces, packed.phase_scalars, packed.settings, phase, t,
                    q, v, states)
-    gap, force = states[:, 0], states[:, 1]
+    gap, force, force_rate = states[:, 0], states[:, 1], states[:, 2]
     tip_force = p.force_amplitude * np.sin(p.omega * t)
     # the spring holds its energy while the tips overlap, also after an early release
     energy = (np.where((phase == CONTACT) | (gap < 0.0),
                        0.5 * spring.effective_stiffness * gap**2, 0.0)
-              - spring.residual1 * tip_force * force)
-    return force, energy
+              - spring.tip_shift1 * tip_force * force)
+    return force, force_rate, energy
