@@ -8,12 +8,11 @@ A step of length ds predicts x~ + ds t and corrects by Newton on
     r(z, p) = 0,    t . (x~ - x~_predicted) = 0     (Keller's pseudo-arclength condition).
 
 The step halves when Newton fails to converge within ``max_iterations`` (or stops
-contracting), and shrinks at least by half when the angle between consecutive tangents
-exceeds ``max_angle`` on one smooth piece of the branch, to where it would have turned by
-``ANGLE_TARGET`` of it (across a change of the orbit's contact sequence the tangent jumps
-however small the step: such a step is kept once below ``KINK_STEP`` and the event between
-located); it grows by 1.5 after a step that took at most 3 iterations, up to ``max_step``,
-and no more than keeps the turn near ``ANGLE_TARGET`` of ``max_angle``.
+contracting) and when the angle between consecutive tangents, or between the tangent and the
+step's secant, exceeds ``max_angle`` on one smooth piece of the branch (across a change of
+the orbit's contact sequence the tangent jumps however small the step: such a step is kept
+once below ``KINK_STEP`` and the event between located); it grows by 1.5 after a step that
+took at most 3 iterations, up to ``max_step``.
 """
 
 from __future__ import annotations
@@ -39,9 +38,6 @@ _BESIDE = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impactbeams-dr/d
 # this short (x~ units: 1e-4 of the range): the kink is then the branch's, not a jump of the
 # corrector onto another part of the branch (which a longer step can reach)
 KINK_STEP = 1e-4
-# the tangent's turn a step aims at, as a fraction of max_angle (`Follower.next_step`), and the
-# smallest factor a turn shrinks the step by
-ANGLE_TARGET, MIN_TURN_FACTOR = 0.8, 0.1
 # what to do with a change of the contacts within an episode (Settings.micro_contacts)
 LOCATE, SUMMARISE = "locate", "summarise"
 MICRO_CONTACTS = (LOCATE, SUMMARISE)
@@ -214,7 +210,10 @@ class Follower:
             size = float(np.max(np.abs(delta)))
             if size <= self.settings.tolerance:
                 tangent = tangent_of(jacobian, orientation)
-                measured = self._measured(x + delta, evaluation.with_multipliers())
+                try:
+                    measured = self._measured(x + delta, evaluation.with_multipliers())
+                except (ParameterError, RuntimeError):  # the point found is out of reach
+                    break
                 point = Point(x + delta, tangent, measured, iteration,
                               crossed=bool(contacts - {measured.contacts}))
                 return Correction(point, tuple(iterates))
@@ -290,53 +289,33 @@ class Follower:
         while True:
             correction = self.at_arclength(start, ds)
             point = correction.point
-            if point is not None:
-                turn = angle(point.tangent, start.tangent)
-                if (turn <= self.settings.max_angle or ds <= self.settings.min_step
-                        or (ds <= KINK_STEP and not same_piece(start, point))):
-                    # across a change of the contact sequence the tangent jumps however small
-                    # the step (the branch has a kink): the caller locates the event in
-                    # between. Past a kink of more than 90 degrees the tangent oriented like
-                    # the previous one would point back: forward is away from the start
-                    return oriented(point, point.x - start.x), ds, ()
-                # a point that turned too far: its own grazing value tells whether a grazing
-                # lies ahead, and the turn how much shorter a step turns less
-                grazing, shrink = (point.evaluation.grazing,), min(
-                    0.5, self._turn_factor(turn))
-            else:
-                grazing, shrink = self.grazing_values(correction), 0.5
+            if point is not None and (_turn(start, point) <= self.settings.max_angle
+                                      or ds <= self.settings.min_step
+                                      or (ds <= KINK_STEP and not same_piece(start, point))):
+                # across a change of the contact sequence the tangent jumps however small the
+                # step (the branch has a kink): the caller locates the event in between. Past
+                # a kink of more than 90 degrees the tangent oriented like the previous one
+                # would point back: forward is away from the start
+                return oriented(point, point.x - start.x), ds, ()
+            grazing = self.grazing_values(correction)
             if crosses(start.evaluation.grazing, grazing):
                 return None, ds, grazing
-            ds *= shrink
+            ds /= 2.0
             if ds < self.settings.min_step:
                 return None, ds, grazing
 
-    def next_step(self, taken: float, point: Point, start: Point) -> float:
-        """The step after one of length ``taken`` from ``start`` that reached ``point``.
+    def next_step(self, taken: float, point: Point) -> float:
+        """The step after one of length ``taken`` that reached ``point``.
 
         It grows after a quick convergence and shrinks after a slow one, unless Newton's
         iterates met another contact sequence: then a nonsmooth event is just ahead, where
         Newton converges slowly however small the step (the map's Jacobian jumps there), and
-        the step grows to cross it (the event is then located between). On one smooth piece
-        it grows no more than keeps the tangent's turn below ``ANGLE_TARGET`` of
-        ``max_angle`` (the turn grows like the step): a step turned too far is a corrector
-        solve lost.
+        the step grows to cross it (the event is then located between).
         """
         iterations = point.iterations
         factor = 1.5 if iterations <= 3 or point.crossed else (
             1.0 if iterations <= 5 else 0.7)
-        if not point.crossed and same_piece(start, point):
-            factor = min(factor, self._turn_factor(angle(point.tangent, start.tangent)))
         return min(max(taken * factor, self.settings.min_step), self.settings.max_step)
-
-    def _turn_factor(self, turn: float) -> float:
-        """The step's factor that would have turned the tangent by ``ANGLE_TARGET`` max_angle.
-
-        At least ``MIN_TURN_FACTOR``: a kink's turn does not shrink with the step.
-        """
-        if turn <= 0.0:
-            return math.inf
-        return max(MIN_TURN_FACTOR, ANGLE_TARGET * self.settings.max_angle / turn)
 
 
 def tangent_of(jacobian: np.ndarray, orientation: np.ndarray) -> np.ndarray:
@@ -346,6 +325,17 @@ def tangent_of(jacobian: np.ndarray, orientation: np.ndarray) -> np.ndarray:
     rhs[-1] = 1.0
     tangent = np.linalg.solve(system, rhs)
     return tangent / np.linalg.norm(tangent)
+
+
+def _turn(start: Point, point: Point) -> float:
+    """How far a step from ``start`` to ``point`` turned (rad): its tangent's and its secant's.
+
+    The secant's too: a step that Newton carried across a tight fold onto the branch's way
+    back has a tangent parallel to the start's (oriented like it), but a secant across the
+    two strands.
+    """
+    secant = (point.x - start.x) / np.linalg.norm(point.x - start.x)
+    return max(angle(point.tangent, start.tangent), angle(secant, start.tangent))
 
 
 def angle(a: np.ndarray, b: np.ndarray) -> float:

@@ -246,7 +246,7 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
                     break
                 ds = taken / 2.0
                 continue
-            current, ds, near = point, follower.next_step(taken, point, current), None
+            current, ds, near = point, follower.next_step(taken, point), None
             steps.append(current)
             continue
         crossing = crosses(current.evaluation.grazing, grazing)  # no point: a failed step

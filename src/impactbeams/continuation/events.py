@@ -223,11 +223,11 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
             # there (e.g. a free-flight minimum of the gap vanishes), or the corrector fails
             # beyond it (a fold's reach); narrowing the bracket cannot change that
             break
-        s, one_sided = _next_arclength(low, high, *before, side=side)
+        s = _next_arclength(low, high, *before)
         width = high[0] - low[0]
-        if width > 0.5 * widths[0] and not one_sided:
+        if width > 0.5 * widths[0]:
             # two solves did not halve the bracket (a secant creeps from one end): the middle,
-            # as in Dekker's method (a one-sided secant halves it in its own way, `_one_sided`)
+            # as in Dekker's method
             s = low[0] + 0.5 * width
         widths = (widths[1], width)
         point = point_at(s)
@@ -279,82 +279,36 @@ def _known(low: Bracket, high: Bracket, tolerance: float) -> bool:
 
 
 def _next_arclength(low: Bracket, high: Bracket, low_before: Bracket | None = None,
-                    high_before: Bracket | None = None, side: int = 0) -> tuple[float, bool]:
-    """The next solve's arclength, and whether it follows one end's secant alone.
+                    high_before: Bracket | None = None) -> float:
+    """Regula falsi between the ends, or one end's secant (off the ends by a margin).
 
-    Regula falsi between the ends (off the ends by a margin), or one end's secant.
-
-    Where one end says nothing of the root (`_says_nothing`: the corrector failed there,
-    past a grazing or beyond a fold's reach, or the test jumps on that side), the other end's
-    secant (through its previous place, ``low_before`` or ``high_before``) is followed from
-    that end alone (`_one_sided`), or the middle if that secant does not land inside the
-    bracket. Without a previous place, regula falsi (its next solve gives that end one), or
-    the middle where the far end has no value. ``side``: the end the last solve moved (-1
-    low, +1 high, 0 none yet).
+    Where one end has no value (the corrector failed there: past a grazing, or beyond a
+    fold's reach) or one ``JUMP_RATIO`` times the other's (the test jumps on that side), that
+    end says nothing of the root: the other end's secant (through its previous place,
+    ``low_before`` or ``high_before``) is extrapolated to 0, doubled so that the solve lands
+    past the root (a root is then bracketed from one side's slope in a few solves, not crept
+    up on, or bisected from a step down to the tolerance). Without such a secant inside the
+    bracket, regula falsi (its next solve gives that end a previous place), or the middle
+    where the far end has no value.
     """
     (s0, f0, _), (s1, f1, _) = low, high
     if not math.isfinite(f0):
-        return 0.5 * (s0 + s1), False
-    for end, previous, far, moved in ((low, low_before, high, -1), (high, high_before, low, 1)):
-        if previous is not None and _says_nothing(far, end, previous):
-            secant = _one_sided(end, previous, far, closing=side == moved)
-            # (no secant inside the bracket: it overshot, the test curving away from it)
-            return (0.5 * (s0 + s1) if secant is None else secant), True
+        return 0.5 * (s0 + s1)
+    secant = None
+    if not math.isfinite(f1) or abs(f1) > JUMP_RATIO * abs(f0):
+        secant = _doubled_secant(low, low_before, (s0, s1))
+    elif abs(f0) > JUMP_RATIO * abs(f1):
+        secant = _doubled_secant(high, high_before, (s0, s1))
+    if secant is not None:
+        return secant
     if not math.isfinite(f1) or f0 == f1:
-        return 0.5 * (s0 + s1), False
+        return 0.5 * (s0 + s1)
     s = s0 - f0 * (s1 - s0) / (f1 - f0)
     # kept off the ends by a margin, not sent to the middle: a root close to an end (where
     # the other end's value is large, e.g. at a grazing reached by a step much longer than
     # the gap's curvature allows) is then bracketed a thousand times closer in one solve
     margin = 1e-3 * (s1 - s0)
-    return min(max(s, s0 + margin), s1 - margin), False
-
-
-# a far end whose test value is this many times what the near end's secant predicts there
-# jumps: the test's root is one-sided (e.g. a free interval's height that goes to 0 at a
-# merge, where the far side's value is another interval's)
-SECANT_JUMP = 10.0
-# a one-sided solve aims this fraction of the way short of the near end's secant root
-UNDERSHOOT = 1e-3
-
-
-def _says_nothing(far: Bracket, near: Bracket, near_before: Bracket | None) -> bool:
-    """Whether ``far``'s value says nothing of the root: none, or a jump from ``near``'s side.
-
-    A jump: ``JUMP_RATIO`` times ``near``'s value, or ``SECANT_JUMP`` times the value that
-    ``near``'s secant (through ``near_before``) predicts at ``far``.
-    """
-    (s_far, f_far, _), (s_near, f_near, _) = far, near
-    if not math.isfinite(f_far) or abs(f_far) > JUMP_RATIO * abs(f_near):
-        return True
-    if near_before is None or near_before[0] == s_near:
-        return False
-    slope = (near_before[1] - f_near) / (near_before[0] - s_near)
-    return abs(f_far) > SECANT_JUMP * abs(f_near + slope * (s_far - s_near))
-
-
-def _one_sided(end: Bracket, previous: Bracket | None, far: Bracket, closing: bool,
-               ) -> float | None:
-    """The next solve from ``end`` toward its secant's root, the far end saying nothing.
-
-    The secant through ``previous`` reaches 0 at a distance d from ``end``. After a solve
-    that moved ``end`` (``closing``) the next lands past the root, at 2 d, and closes the
-    bracket there (unless the far end is nearer); else just short of it, at (1 -
-    ``UNDERSHOOT``) d, and moves ``end`` to within about ``UNDERSHOOT`` d of the root (the
-    secant's own error permitting). A one-sided root (a test that jumps at it) is bracketed to
-    a width w in some 2 log(d / w) / log(1 / UNDERSHOOT) solves, as a simple root of a
-    continuous test is. None if there is no secant, or if its step does not land strictly
-    inside the bracket.
-    """
-    if previous is None or previous[1] == end[1]:
-        return None
-    distance = -end[1] * (previous[0] - end[0]) / (previous[1] - end[1])
-    low, high = sorted((end[0], far[0]))
-    for factor in ((2.0, 1.0 - UNDERSHOOT) if closing else (1.0 - UNDERSHOOT,)):
-        s = end[0] + factor * distance
-        if low < s < high:
-            return s
-    return None
+    return min(max(s, s0 + margin), s1 - margin)
 
 
 def _true(end: Bracket, test: Callable[[Point], float]) -> Bracket | None:
@@ -362,3 +316,13 @@ def _true(end: Bracket, test: Callable[[Point], float]) -> Bracket | None:
     s, _, point = end
     value = test(point) if point is not None else math.nan
     return (s, value, point) if math.isfinite(value) else None
+
+
+def _doubled_secant(end: Bracket, previous: Bracket | None, bracket: tuple[float, float],
+                    ) -> float | None:
+    """``end``'s secant through ``previous`` to 0, doubled; None if none, or not within."""
+    if previous is None or previous[1] == end[1]:
+        return None
+    s = end[0] - 2.0 * end[1] * (previous[0] - end[0]) / (previous[1] - end[1])
+    margin = 1e-3 * (bracket[1] - bracket[0])
+    return s if bracket[0] + margin < s < bracket[1] - margin else None

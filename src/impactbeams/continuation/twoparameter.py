@@ -331,7 +331,7 @@ def _steps(follower: Follower, curve: Branch, box: np.ndarray,
             curve.points[-1] = dataclasses.replace(curve.points[-1], label="grazing")
             curve.ending = GRAZED
             return
-        current, ds = point, follower.next_step(taken, point, current)
+        current, ds = point, follower.next_step(taken, point)
     curve.ending = MAX_POINTS
 
 
