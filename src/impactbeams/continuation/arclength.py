@@ -19,21 +19,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from concurrent.futures import ThreadPoolExecutor, wait
 
 import numpy as np
 
-from impactbeams.continuation.problem import (
-    Evaluation,
-    Problem,
-    parameter_derivative,
-    parameter_step,
-)
+from impactbeams.continuation.problem import Evaluation, Problem, parameter_derivative
 from impactbeams.params import ParameterError
 
 GRADIENT_STEP = 1e-7  # x~ units
-# one thread beside the corrector's: dr/dp's far end (`Follower.linearised`)
-_BESIDE = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impactbeams-dr/dp")
 # a step that turns by more than max_angle onto another contact sequence is kept once it is
 # this short (x~ units: 1e-4 of the range): the kink is then the branch's, not a jump of the
 # corrector onto another part of the branch (which a longer step can reach)
@@ -155,25 +147,12 @@ class Follower:
         taken by differences at x~.
         """
         z, p = self.scaling.unscaled(x)
-        own = getattr(self.problem, "parameter_derivative", None)
-        if rate is not None or own is not None:
-            evaluation = self.problem.evaluate(z, p, grazing=False)
-            if rate is None:
-                # a problem may difference its own parameter (a curve's: on a grazing curve
-                # every point is at a change of the contacts, where the narrowed step is
-                # round-off)
-                rate = own(self.problem, z, p, 1.0 / self.scaling.parameter, evaluation)
-        else:
-            scale = 1.0 / self.scaling.parameter
-            # the difference's far end runs on the other core while this one runs the
-            # evaluation with its Jacobian (the kernels release the GIL): the same numbers
-            ahead = _BESIDE.submit(self.problem.evaluate, z, p + parameter_step(p, scale),
-                                   jacobian=False, grazing=False)
-            try:
-                evaluation = self.problem.evaluate(z, p, grazing=False)
-            finally:
-                wait([ahead])  # (never left running into the next evaluation)
-            rate = parameter_derivative(self.problem, z, p, scale, evaluation, ahead.result())
+        evaluation = self.problem.evaluate(z, p, grazing=False)
+        if rate is None:
+            # a problem may difference its own parameter (a curve's: on a grazing curve every
+            # point is at a change of the contacts, where the narrowed step is round-off)
+            derivative = getattr(self.problem, "parameter_derivative", parameter_derivative)
+            rate = derivative(self.problem, z, p, 1.0 / self.scaling.parameter, evaluation)
         w = self.scaling.state
         jacobian = np.hstack([w[:, None] * evaluation.jacobian / w[None, :],
                               (w * rate / self.scaling.parameter)[:, None]])

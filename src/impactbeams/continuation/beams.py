@@ -12,7 +12,6 @@ overlap).
 from __future__ import annotations
 
 import math
-import threading
 import warnings
 
 import numpy as np
@@ -53,7 +52,6 @@ class BeamOrbits:
         self.params, self.parameter, self.n_modes, self.period = (
             params, parameter, n_modes, period)
         self._maps: dict[float, PeriodMap] = {}
-        self._maps_lock = threading.Lock()
         self._last: tuple[float, bytes, PeriodMapResult] | None = None
         dimension = self.period_map(getattr(params, parameter)).dimension
         self.method = checked_method(method, dimension)
@@ -73,13 +71,12 @@ class BeamOrbits:
 
     def period_map(self, p: float) -> PeriodMap:
         """The period map at parameter value ``p`` (ParameterError if not allowed)."""
-        with self._maps_lock:  # (a corrector asks for p and p + h in two threads)
-            if p not in self._maps:
-                if len(self._maps) >= CACHED_MAPS:
-                    self._maps.pop(next(iter(self._maps)))
-                self._maps[p] = PeriodMap(self.params.replace(**{self.parameter: p}),
-                                          n_modes=self.n_modes, periods=self.period)
-            return self._maps[p]
+        if p not in self._maps:
+            if len(self._maps) >= CACHED_MAPS:
+                self._maps.pop(next(iter(self._maps)))
+            self._maps[p] = PeriodMap(self.params.replace(**{self.parameter: p}),
+                                      n_modes=self.n_modes, periods=self.period)
+        return self._maps[p]
 
     def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,
                  grazing: bool = True) -> Evaluation:

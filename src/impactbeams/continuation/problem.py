@@ -89,24 +89,17 @@ def multipliers_of(jacobian: np.ndarray) -> np.ndarray:
     return values[np.argsort(-np.abs(values), kind="stable")]
 
 
-def parameter_step(p: float, scale: float) -> float:
-    """The forward difference's first step in the parameter from ``p`` (`parameter_derivative`)."""
-    return PARAMETER_STEP * max(abs(p), scale)
-
-
 def parameter_derivative(problem: Problem, z: np.ndarray, p: float, scale: float,
-                         at: Evaluation, ahead: Evaluation | None = None) -> np.ndarray:
+                         at: Evaluation) -> np.ndarray:
     """dr/dp by a forward difference from ``at``, the evaluation at (z, p).
 
-    The step is `parameter_step` upward (never below a parameter's smallest allowed value,
-    e.g. 0 for a force amplitude); ``ahead``: the evaluation there (without dr/dz and the
-    grazing value) if already made. Where the two ends have other contacts per orbit the step
-    is narrowed (``NARROWING``).
+    The step is ``PARAMETER_STEP * max(|p|, scale)`` upward (never below a parameter's
+    smallest allowed value, e.g. 0 for a force amplitude). Where the two ends have other
+    contacts per orbit the step is narrowed (``NARROWING``).
     """
-    h = parameter_step(p, scale)
-    for narrowing in range(NARROWINGS + 1):
-        other = ahead if narrowing == 0 and ahead is not None else problem.evaluate(
-            z, p + h, jacobian=False, grazing=False)
+    h = PARAMETER_STEP * max(abs(p), scale)
+    for _ in range(NARROWINGS + 1):
+        other = problem.evaluate(z, p + h, jacobian=False, grazing=False)
         if other.contacts == at.contacts:
             break
         h *= NARROWING  # the difference straddles a change of the contacts: nearer
