@@ -196,8 +196,8 @@ def performance() -> str:
 def _stiff_case(case: dict, baseline: str) -> str:
     """One run of the stiff continuation benchmark, and the earlier version's (``baseline``).
 
-    Its wall and CPU time on 2 cores (the corrector runs dr/dp's far end on the second) and
-    what branch 0 covered.
+    Its wall and CPU time (the wall time follows the machine's load; the run is on one core)
+    and what branch 0 covered.
     """
     def covered(run: dict) -> str:
         low, high = (float(v) for v in run["covered"][0].split(":"))
