@@ -52,7 +52,14 @@ from impactbeams.params import (
 )
 from impactbeams.trajectory.episodes import default_separation, episode_labels
 from impactbeams.trajectory.impacts import impact_table
-from impactbeams.trajectory.phases import Trajectory, run, sample, tips_at, tips_of
+from impactbeams.trajectory.phases import (
+    Trajectory,
+    run,
+    sample,
+    sample_segments,
+    tips_at,
+    tips_of,
+)
 from impactbeams.trajectory.start import checked_state, final_state, phase_state
 
 # Samples per forcing period of the gap and the tips, before each extremum is refined by
@@ -261,18 +268,23 @@ class PeriodMap:
             return math.nan
         lasting = ends > starts  # (a contact of zero duration has no interior)
         times = np.linspace(starts, ends, INTERVAL_SAMPLES, axis=1)
-        gap = self._gap_of(times.ravel(), sample(self.packed, trajectory, times.ravel())[1])
+        # stepped samples choose the candidate; its value is then sampled exactly
+        gap = self._gap_of(times.ravel(), sample_segments(self.packed, trajectory,
+                                                          INTERVAL_SAMPLES)[0])
         gap = gap.reshape(times.shape)
-        candidates = [(gap[k, i], k, i) for k in np.flatnonzero(contact & lasting)
-                      for i in _interior_maxima(gap[k])]
+        # each lasting contact's interior maxima (in segment, then time order), then each
+        # free interval's highest sample if inside a segment: the first nearest 0 is refined
+        k, i = _interior_maxima(gap, contact & lasting)
+        candidates = [(int(k[j]), int(i[j])) for j in range(k.size)]
         for interval in _between_contacts(contact):
-            k = max(interval, key=lambda segment: np.max(gap[segment]))
-            i = int(np.argmax(gap[k]))
-            if 0 < i < INTERVAL_SAMPLES - 1:
-                candidates.append((gap[k, i], k, i))
+            highest = max(interval, key=lambda segment: np.max(gap[segment]))
+            at = int(np.argmax(gap[highest]))
+            if 0 < at < INTERVAL_SAMPLES - 1:
+                candidates.append((highest, at))
         if not candidates:
             return math.nan
-        value, k, i = min(candidates, key=lambda candidate: abs(candidate[0]))
+        k, i = min(candidates, key=lambda candidate: abs(gap[candidate]))
+        value = self._gap(trajectory, times[k, i:i + 1])[0][0]
         stationary = self._stationary(trajectory, times[k, i - 1], times[k, i + 1], False)
         return float(value if stationary is None else max(value, stationary[1]))
 
@@ -494,10 +506,15 @@ def _cell_defaults() -> dict[str, float]:
     return {name: getattr(defaults, name) for name in _CELL_ONLY}
 
 
-def _interior_maxima(values: np.ndarray) -> np.ndarray:
-    """Indices of the samples above the one before and not below the one after (not the ends)."""
-    middle = values[1:-1]
-    return 1 + np.flatnonzero((middle > values[:-2]) & (middle >= values[2:]))
+def _interior_maxima(values: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(row, column) of the samples above the one before and not below the one after.
+
+    In the ``rows`` (a mask) of ``values``, the ends of a row excluded; row by row, in order.
+    """
+    middle = values[:, 1:-1]
+    found = rows[:, None] & (middle > values[:, :-2]) & (middle >= values[:, 2:])
+    k, i = np.nonzero(found)
+    return k, i + 1
 
 
 def _between_contacts(contact: np.ndarray) -> list[list[int]]:
