@@ -398,8 +398,9 @@ def test_a_branch_reuses_the_geometry_bit_for_bit():
 
 
 def test_segment_samples_and_the_interval_value_against_exact_samples():
-    """A shaken beam hitting its stop 7 times per period (Hertz contact, 16 modes). The stepped samples of each segment are `sample`'s closed-form ones at the same
-    times to round-off (a step's roundings, 4 eps of the motion per step); the interval
+    """A shaken beam hitting its stop 7 times per period (Hertz contact, 16 modes). The
+    stepped samples of each segment are `sample`'s closed-form ones at the same times to
+    round-off (a step's roundings, 4 eps of the motion per step); the interval
     value (the gap's local maximum nearest 0 between or within contacts) is the one a dense
     exact scan of every segment finds (20001 samples: its grid error, the gap's curvature
     times (spacing / 2)^2 / 2, measured 8e-14 of the clearance here)."""
