@@ -392,9 +392,12 @@ def test_a_branch_reuses_the_geometry_bit_for_bit():
         module._GEOMETRY_CACHE.clear()
         fresh = PeriodMap(params, n_modes=N_MODES)
         assert fresh.packed.dynamics.spring is not reused.packed.dynamics.spring
-        a, b = reused(z, directions="all"), fresh(z, directions="all")
-        assert np.array_equal(a.state, b.state) and np.array_equal(a.jacobian, b.jacobian)
-        assert a.peak_force == b.peak_force and a.max_tip1 == b.max_tip1
+        at = PeriodMap(first, n_modes=N_MODES).at(params)  # a continuation's way to it
+        assert at.params is params and at.horizon == fresh.horizon
+        for a in (reused(z, directions="all"), at(z, directions="all")):
+            b = fresh(z, directions="all")
+            assert np.array_equal(a.state, b.state) and np.array_equal(a.jacobian, b.jacobian)
+            assert a.peak_force == b.peak_force and a.max_tip1 == b.max_tip1
 
 
 def test_segment_samples_and_the_interval_value_against_exact_samples():

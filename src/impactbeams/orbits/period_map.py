@@ -15,6 +15,7 @@ for Lyapunov exponents. SI units throughout.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import math
@@ -144,6 +145,23 @@ class PeriodMap:
         self.horizon = self.periods * self.forcing_period
         self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
                                        geometry_arrays(params, self.n_modes))
+
+    def at(self, params: Params) -> PeriodMap:
+        """The map of ``params``: this one's but for the cell's parameters (``CELL_ONLY``).
+
+        The same map as ``PeriodMap(params, self.n_modes, self.periods, self.max_events)``,
+        bit for bit, built on this one's geometry (a continuation in Omega, F0, U0 or the
+        clearance asks for a map at every corrector iterate and parameter difference).
+        """
+        require("omega", params.omega, params.omega > 0,
+                "a period map needs a forcing period: omega > 0", "rad/s")
+        changed = copy.copy(self)
+        changed.params = params
+        changed.forcing_period = 2.0 * math.pi / params.omega
+        changed.horizon = self.periods * changed.forcing_period
+        changed.packed = pack_run(params, self.n_modes, changed.horizon, changed.horizon,
+                                  dataclasses.replace(self.packed.dynamics, params=params))
+        return changed
 
     @property
     def dimension(self) -> int:
@@ -472,7 +490,7 @@ class PeriodMap:
 
 # the cell's parameters (`packing.cell_rows`) that the geometry's arrays do not depend on; the
 # damping ratio is one too, but the spring law's contact modes are solved for it
-_CELL_ONLY = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "base_amplitude")
+CELL_ONLY = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "base_amplitude")
 GEOMETRIES = 4  # geometries whose arrays are kept
 
 
@@ -486,7 +504,7 @@ def geometry_arrays(params: Params, n_modes: int) -> Dynamics:
     `Params` copy per look-up cost more than the run at 16 modes).
     """
     key = (n_modes, *(value for name, value in params.as_dict().items()
-                      if name not in _CELL_ONLY))
+                      if name not in CELL_ONLY))
     dynamics = _GEOMETRY_CACHE.pop(key, None)
     if dynamics is None:
         dynamics = dynamics_arrays(params.replace(**_cell_defaults()), n_modes)
@@ -501,9 +519,9 @@ _GEOMETRY_CACHE: dict[tuple, Dynamics] = {}
 
 @functools.cache
 def _cell_defaults() -> dict[str, float]:
-    """The default values of the cell's parameters (``_CELL_ONLY``)."""
+    """The default values of the cell's parameters (``CELL_ONLY``)."""
     defaults = Params()
-    return {name: getattr(defaults, name) for name in _CELL_ONLY}
+    return {name: getattr(defaults, name) for name in CELL_ONLY}
 
 
 def _interior_maxima(values: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
