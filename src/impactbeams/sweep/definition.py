@@ -42,6 +42,7 @@ from impactbeams.params import (
     CHOICES,
     CONTACT_LAWS,
     CONTACT_POSITIONS,
+    CONTACTS,
     MATERIAL_KEYS,
     MAX_MODES,
     USER_STRUCTURE,
@@ -57,6 +58,7 @@ from impactbeams.params import (
     refuse_beam2,
     require,
     require_all,
+    require_one_contact,
     require_table,
     require_type,
     resolve_materials,
@@ -395,6 +397,8 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
     where = f"[axes.{name}] of {source}"
     require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: a beam's "
             "attachments are fixed for a sweep (give them in [params], from Python)")
+    require(where, name, name != CONTACTS, f"{name} is not sweepable: give the contacts in "
+            "[params] (one sweep per set of contacts)")
     require(where, name, name != USER_STRUCTURE, f"{name} is not sweepable: give the "
             "structure in [params] (one sweep per structure)")
     require(where, name, name not in CONTACT_POSITIONS, f"{name} is not sweepable: give it in "
@@ -488,7 +492,7 @@ def _check_grid(sweep: Sweep) -> None:
     The fixed parameters are checked at the grid's first point (names, types, values); every
     condition on several parameters, and the modes and horizon, at all corners of the grid.
     """
-    sweep.params_at({})
+    require_one_contact(sweep.params_at({}), "a sweep")
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
