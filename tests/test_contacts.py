@@ -2,15 +2,23 @@
 
 The API (`impactbeams.Contact`, ``Params(contacts=...)``, ``[[params.contacts]]``): one contact
 given through it is today's run bit for bit; what it cannot do yet is refused in one line.
-The first contact among several (`impactbeams.first_contact`) against the finite-element
-reference extended to several contacts at any node (tests/fe_spring.py, `fe_several_contacts`:
-one FE eigen-decomposition per active set, the first root among all gaps and forces).
+The first contact among several (`impactbeams.first_contact`) and the contacts of a two-sided
+stop (`impactbeams.contact_sequence`) against the finite-element reference extended to several
+contacts at any node (tests/fe_spring.py, `fe_several_contacts`: one FE eigen-decomposition per
+active set, the first root among all gaps and forces).
 """
 
 import numpy as np
 import pytest
 
-from impactbeams import Contact, Params, first_contact, simulate, two_sided_stop
+from impactbeams import (
+    Contact,
+    Params,
+    contact_sequence,
+    first_contact,
+    simulate,
+    two_sided_stop,
+)
 from impactbeams.params import ParameterError
 
 STOP = Params(counterpart="stop")
@@ -172,3 +180,59 @@ def test_first_contact_of_one_contact_is_simulates_first_contact_bit_for_bit():
     assert (got.contact, got.onset, got.duration) == (
         0, float(ds.impact_onset_time[0]), float(ds.impact_duration[0]))
     assert got.episode_certain
+
+
+def test_the_contacts_of_one_contact_are_simulates_bit_for_bit():
+    """contact_sequence restarts the event kernel at each release from the recorded free state,
+    where simulate's own windows resume: the same onsets, durations and peaks, bit for bit (the
+XX
+    their closed forms evaluated one contact at a time, simulate's vectorised over all, sum in
+    another order)."""
+    params = FORCED.replace(clearance=3e-6, contact_position1=MID)
+    got = contact_sequence(params, 0.03, n_modes=12)
+    ds = simulate(params, 0.03, n_modes=12, dt_output=0.01)
+    assert got.sizes["impact"] == ds.sizes["impact"] == 5 and got.attrs["status"] == "complete"
+    for name in ("impact_onset_time", "impact_duration", "impact_peak_force"):
+        np.testing.assert_array_equal(got[name].values, ds[name].values)
+    for name in ("impact_impulse", "impact_velocity", "separation_velocity"):
+        np.testing.assert_allclose(got[name].values, ds[name].values, rtol=1e-14, atol=0)
+    assert np.all(got.impact_contact.values == 0)
+    limited = contact_sequence(params, 0.03, n_modes=12, max_contacts=2)
+    assert limited.sizes["impact"] == 2 and limited.attrs["status"] == "event_limit"
+
+
+def test_the_contacts_of_a_two_sided_stop_against_the_fe_model():
+    """A stop below and one above mid-span, 3 um each (k = 1e4 N/m, forced): the first three
+    contacts (twice below, then above) at 20 modes against the FE model with both gaps at the
+    mid-span node, as the first contact above (the FE's own error |f_40 - f_20| plus 1e-6,
+    onsets and durations relative to the shortest duration). Measured: at most 2e-5 (the third
+    peak; the FE's estimate 3e-4), onsets 3.2e-7, durations 6.3e-6."""
+    from fe_spring import fe_several_contacts
+
+    params = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6))
+    got = contact_sequence(params, 0.03, n_modes=20)
+    coarse, fine = (fe_several_contacts(params.each_contact(), 0.03, (n, n), n_events=3)
+                    for n in (20, 40))
+    assert list(got.impact_contact.values[:3]) == [e["contact"] for e in fine] == [0, 0, 1]
+    assert [e["contact"] for e in coarse] == [0, 0, 1]
+    shortest = min(e["release"] - e["onset"] for e in fine)
+    for key, name in (("onset", "impact_onset_time"), ("duration", "impact_duration"),
+                      ("impulse", "impact_impulse"), ("peak", "impact_peak_force")):
+        def of(episodes, key=key):
+            return np.array([e["release"] - e["onset"] if key == "duration" else e[key]
+                             for e in episodes])
+        norm = shortest if key in ("onset", "duration") else np.abs(of(fine))
+        deviation = np.abs(got[name].values[:3] - of(fine)) / norm
+        fe_error = np.abs(of(fine) - of(coarse)) / norm
+        assert np.all(deviation <= fe_error + 1e-6), (key, deviation, fe_error)
+        assert deviation.max() < 5e-5, key
+
+
+def test_the_contacts_of_contacts_that_can_close_together_are_refused():
+    params = FORCED.replace(contacts=(Contact(MID, clearance=2e-6), Contact(clearance=3e-6)))
+    with pytest.raises(ParameterError, match="contacts: 2 contacts that can be closed together "
+                                             "are not allowed in contact_sequence"):
+        contact_sequence(params, 0.03)
+    damped = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6, damping=0.1))
+    with pytest.raises(ParameterError, match="can be closed together"):
+        contact_sequence(damped, 0.03)

@@ -38,6 +38,7 @@ _LAZY = {
     "Contact": "impactbeams.structure",
     "two_sided_stop": "impactbeams.structure",
     "first_contact": "impactbeams.trajectory",
+    "contact_sequence": "impactbeams.trajectory",
     "MatrixStructure": "impactbeams.structure.user",
     "ModalStructure": "impactbeams.structure.user",
 }
