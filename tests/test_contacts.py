@@ -206,7 +206,7 @@ def test_the_contacts_of_a_two_sided_stop_against_the_fe_model():
     contacts (twice below, then above) at 20 modes against the FE model with both gaps at the
     mid-span node, as the first contact above (the FE's own error |f_40 - f_20| plus 1e-6,
     onsets and durations relative to the shortest duration). Measured: at most 2e-5 (the third
-    peak; the FE's estimate 3e-4), onsets 3.2e-7, durations 6.3e-6."""
+    peak; the FE's estimate 3e-4), onsets 2.4e-6, durations 6.3e-6."""
     from fe_spring import fe_several_contacts
 
     params = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6))
