@@ -95,16 +95,23 @@ def test_what_several_contacts_cannot_do_yet_is_refused_before_any_compute(tmp_p
 
     params = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6))
     calls = [lambda: simulate(params, 0.01), lambda: PeriodMap(params, 8),
-             lambda: build_free_phase(params, 8),
-             lambda: sweep_from_mapping({"params": {"counterpart": "stop", "contacts": [
-                 {"side": "below"}, {"side": "above"}]}, "axes": {"omega": {
-                     "min": 10.0, "max": 20.0, "num": 2}}, "t_max": 0.01})]
+             lambda: build_free_phase(params, 8)]
     for call in calls:
         with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in"):
             call()
     with pytest.raises(ParameterError, match=r"contacts is not sweepable"):
         sweep_from_mapping({"axes": {"contacts": {"min": 1.0, "max": 2.0, "num": 2}},
                             "t_max": 0.01})
+    several = {"counterpart": "stop", "contacts": [{"side": "below"}, {"side": "above"}]}
+    omega = {"omega": {"min": 10.0, "max": 20.0, "num": 2}}
+    with pytest.raises(ParameterError, match=r"^observables in sweep = \['impact_count'\] is "
+                                             "not allowed: with 2 contacts a sweep maps "
+                                             "'first_impact_time' only"):
+        sweep_from_mapping({"params": several, "axes": omega, "t_max": 0.01,
+                            "observables": ["impact_count"]})
+    with pytest.raises(ParameterError, match=r"clearance is not sweepable with contacts"):
+        sweep_from_mapping({"params": several, "t_max": 0.01, "axes": {
+            **omega, "clearance": {"min": 1e-6, "max": 2e-6, "num": 2}}})
 
 
 # --- the first contact among several, against the FE reference --------------------------------
@@ -236,3 +243,51 @@ def test_the_contacts_of_contacts_that_can_close_together_are_refused():
     damped = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6, damping=0.1))
     with pytest.raises(ParameterError, match="can be closed together"):
         contact_sequence(damped, 0.03)
+
+
+# --- first-impact maps of several contacts ----------------------------------------------------
+
+_OMEGA = {"omega": {"min": 100.0, "max": 400.0, "num": 4},
+          "force_amplitude": {"min": 1e-3, "max": 3e-3, "num": 2}}
+
+
+def _map(params: dict, n_modes: int = 8, axes: dict = _OMEGA):
+    from impactbeams.sweep import run_sweep, sweep_from_mapping
+
+    return run_sweep(sweep_from_mapping({"params": {"counterpart": "stop", **params},
+                                         "axes": axes, "t_max": 0.05, "n_modes": n_modes}),
+                     parallel=False).first_impact_time.values
+
+
+def test_a_first_impact_map_of_several_contacts_is_the_earliest_of_each_contacts_map():
+    """Cell by cell the earliest of each contact's own map (NaN where none closes), bit for
+    bit; one contact through [[params.contacts]] is the flat keys' map bit for bit."""
+    mid = {"position1": MID, "clearance": 0.5e-6}
+    tip = {"clearance": 6e-6}
+    several = _map({"contacts": [mid, tip]})
+    alone = [_map({"contact_position1": MID, "clearance": 0.5e-6}), _map({"clearance": 6e-6})]
+    np.testing.assert_array_equal(several, np.fmin(*alone))
+    assert np.any(several == alone[0]) and np.any(several == alone[1])  # both win somewhere
+    np.testing.assert_array_equal(_map({"contacts": [{**mid, "side": "above"}]}),
+                                  _map({"contact_position1": MID, "clearance": 0.5e-6,
+                                        "contact_side": "above"}))
+
+
+def test_a_first_impact_map_of_stops_at_mid_span_and_tip_against_the_fe_model():
+    """Two cells of a map of a stop at mid-span and one at the tip (20 modes, the free phase
+    alone) against the FE model's first contact among both gaps (20 and 40 elements), as
+    `first_contact` above: within the FE's own error plus 1e-6 of its contact's duration."""
+    from fe_spring import fe_several_contacts
+
+    axes = {"omega": {"min": 200.0, "max": 400.0, "num": 2}}
+    times = _map({"force_amplitude": 1e-3, "contacts": [{"position1": MID, "clearance": 0.5e-6},
+                                                        {"clearance": 6e-6}]}, 20, axes)
+    for omega, time in zip((200.0, 400.0), times, strict=True):
+        params = FORCED.replace(omega=omega, contacts=(Contact(MID, clearance=0.5e-6),
+                                                       Contact(clearance=6e-6)))
+        # the first episode's release comes after the tip's (closed meanwhile): 3 events
+        coarse, fine = (fe_several_contacts(params.each_contact(), 0.05, (n, n), n_events=3)[0]
+                        for n in (20, 40))
+        duration = fine["release"] - fine["onset"]
+        deviation = abs(time - fine["onset"]) / duration
+        assert deviation <= abs(fine["onset"] - coarse["onset"]) / duration + 1e-6, deviation

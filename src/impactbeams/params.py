@@ -73,7 +73,7 @@ from impactbeams.checks import (  # noqa: F401  (their old home: modules above i
 )
 from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount, Side
 from impactbeams.kernels import layout
-from impactbeams.structure.contacts import Contact, as_contact
+from impactbeams.structure.contacts import FLAT_KEYS, Contact, as_contact
 from impactbeams.structure.parts import (
     Attachment,
     Spring,
@@ -417,6 +417,8 @@ BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS), "atta
               "contact_position2")
 # several contacts (`impactbeams.Contact`), each with its own point, side, clearance and law
 CONTACTS = "contacts"
+# the run's keys a Contact stands for (with several contacts, each contact's own)
+CONTACT_FIELDS = tuple(FLAT_KEYS.values())
 # the flat keys that say where and from which side the one contact acts: given with
 # ``contacts``, they would say it twice
 _CONTACT_PLACE = (*CONTACT_POSITIONS, "contact_side")
@@ -496,7 +498,7 @@ class Params:
 
     def __init__(self, **values: Any) -> None:
         """Every parameter by keyword (SI units); the material keys replace a beam's EI, rhoA."""
-        given = _field_values(_fold_contacts(values, "Params()"), "Params()", given_fields=False)
+        given = _field_values(fold_contacts(values, "Params()"), "Params()", given_fields=False)
         for field in dataclasses.fields(self):
             object.__setattr__(self, field.name, given.get(field.name, field.default))
         # kept as the drives are (`replace`): whether ``shaker = "both"`` moves a stop unasked
@@ -916,7 +918,7 @@ def require_one_contact(params: Params, what: str) -> None:
             "impactbeams.first_contact (docs/limits.md, 'Several contacts')")
 
 
-def _fold_contacts(values: Mapping[str, Any], source: str) -> dict[str, Any]:
+def fold_contacts(values: Mapping[str, Any], source: str) -> dict[str, Any]:
     """``values`` with ``contacts`` checked: one contact becomes the flat keys it stands for.
 
     A contact's point and side given twice (``contacts`` with ``contact_position1``,

@@ -40,6 +40,7 @@ from impactbeams.params import (
     ATTACHMENTS,
     BEAM1_KEYS,
     CHOICES,
+    CONTACT_FIELDS,
     CONTACT_LAWS,
     CONTACT_POSITIONS,
     CONTACTS,
@@ -51,6 +52,7 @@ from impactbeams.params import (
     PointName,
     check_joint,
     check_range,
+    fold_contacts,
     is_integer,
     is_path,
     is_real,
@@ -58,7 +60,6 @@ from impactbeams.params import (
     refuse_beam2,
     require,
     require_all,
-    require_one_contact,
     require_table,
     require_type,
     resolve_materials,
@@ -291,7 +292,10 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
             f"must be an integer from 1 to {MAX_MODES}")
     observables = _observables(data.get("observables", [FIRST_IMPACT]), source)
     transient = _transient_periods(data, observables, source)
-    fixed = {name: _plain(value) for name, value in require_table(data, "params", source).items()}
+    # one contact given as a table is its flat keys (`impactbeams.params.fold_contacts`)
+    given = require_table(data, "params", source)
+    fixed = fold_contacts({name: _plain(value) for name, value in given.items()},
+                          f"[params] of {source}")
     axes_table = require_table(data, "axes", source)
     require(f"[axes] of {source}", axes_table, bool(axes_table),
             "a sweep needs at least one [axes.NAME] table")
@@ -486,13 +490,47 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
     return {**defaults, **beam1, **resolved}, point
 
 
+def contact_sweeps(sweep: Sweep) -> tuple[Sweep, ...]:
+    """Each contact's own sweep: ``sweep`` with that contact of ``contacts`` alone (flat keys).
+
+    The first contact among several is, cell by cell, the earliest of these sweeps' first
+    impacts (`impactbeams.trajectory.several`): the free phase does not depend on the contacts.
+    """
+    fixed = {name: value for name, value in sweep.fixed.items() if name != CONTACTS}
+    return tuple(dataclasses.replace(sweep, fixed={**fixed, **contact.flat()},
+                                     source=f"{sweep.source}, {CONTACTS}[{index}]")
+                 for index, contact in enumerate(sweep.base.contacts))
+
+
+def _check_several(sweep: Sweep) -> None:
+    """Refuse what a sweep of several contacts cannot do yet: one line, before any work.
+
+    It maps the first contact among them (``first_impact_time``) and sweeps no contact field
+    (each contact has its own: which one an axis would change is not said).
+    """
+    require(f"observables in {sweep.source}", list(sweep.observables),
+            not sweep.needs_dynamics and sweep.long_time is None,
+            f"with {len(sweep.base.contacts)} contacts a sweep maps {FIRST_IMPACT!r} only (the "
+            "first contact among them); the dynamics after it is not built for several contacts "
+            "(docs/limits.md, 'Several contacts')")
+    for axis in sweep.axes:
+        require(f"[axes.{axis.name}] of {sweep.source}", axis.name,
+                axis.name not in CONTACT_FIELDS,
+                f"{axis.name} is not sweepable with {CONTACTS}: each contact has its own (one "
+                "sweep per set of contacts)")
+
+
 def _check_grid(sweep: Sweep) -> None:
     """Reject a grid with any non-physical point before computing anything.
 
     The fixed parameters are checked at the grid's first point (names, types, values); every
     condition on several parameters, and the modes and horizon, at all corners of the grid.
     """
-    require_one_contact(sweep.params_at({}), "a sweep")
+    if sweep.params_at({}).several_contacts:
+        _check_several(sweep)
+        for each in contact_sweeps(sweep):
+            _check_grid(each)
+        return
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
