@@ -251,23 +251,30 @@ _OMEGA = {"omega": {"min": 100.0, "max": 400.0, "num": 4},
           "force_amplitude": {"min": 1e-3, "max": 3e-3, "num": 2}}
 
 
-def _map(params: dict, n_modes: int = 8, axes: dict = _OMEGA):
+def _map(params: dict, n_modes: int = 8, axes: dict = _OMEGA, first: bool = False):
     from impactbeams.sweep import run_sweep, sweep_from_mapping
 
-    return run_sweep(sweep_from_mapping({"params": {"counterpart": "stop", **params},
-                                         "axes": axes, "t_max": 0.05, "n_modes": n_modes}),
-                     parallel=False).first_impact_time.values
+    ds = run_sweep(sweep_from_mapping({"params": {"counterpart": "stop", **params},
+                                       "axes": axes, "t_max": 0.05, "n_modes": n_modes}),
+                   parallel=False)
+    return (ds.first_impact_time.values, ds.first_contact.values) if first else (
+        ds.first_impact_time.values)
 
 
 def test_a_first_impact_map_of_several_contacts_is_the_earliest_of_each_contacts_map():
     """Cell by cell the earliest of each contact's own map (NaN where none closes), bit for
-    bit; one contact through [[params.contacts]] is the flat keys' map bit for bit."""
+    bit, and ``first_contact`` says which (-1 where none); one contact through
+    [[params.contacts]] is the flat keys' map bit for bit."""
     mid = {"position1": MID, "clearance": 0.5e-6}
     tip = {"clearance": 6e-6}
-    several = _map({"contacts": [mid, tip]})
+    several, first = _map({"contacts": [mid, tip]}, first=True)
     alone = [_map({"contact_position1": MID, "clearance": 0.5e-6}), _map({"clearance": 6e-6})]
     np.testing.assert_array_equal(several, np.fmin(*alone))
-    assert np.any(several == alone[0]) and np.any(several == alone[1])  # both win somewhere
+    np.testing.assert_array_equal(first, np.where(alone[0] <= alone[1], 0, 1))
+    assert 0 < first.sum() < first.size  # both close first somewhere
+    _, none = _map({"contacts": [{"clearance": 1e-2}, {"side": "above", "clearance": 1e-2}]},
+                   first=True)
+    assert np.all(none == -1)
     np.testing.assert_array_equal(_map({"contacts": [{**mid, "side": "above"}]}),
                                   _map({"contact_position1": MID, "clearance": 0.5e-6,
                                         "contact_side": "above"}))

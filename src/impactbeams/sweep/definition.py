@@ -81,6 +81,7 @@ from impactbeams.variables import (
 )
 
 FIRST_IMPACT = "first_impact_time"
+FIRST_CONTACT = "first_contact"  # several contacts: which one closes first
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
 LYAPUNOV = "lyapunov_exponent"  # spring law only; its own windowed run (kernels.lyapunov)
@@ -218,9 +219,11 @@ class Sweep:
     def stored(self) -> list[str]:
         """Arrays a chunk yields: the observables, the status of full-dynamics runs, end states.
 
-        The end states (``STEPPED_END_STATE``) are a stepped sweep's only.
+        The end states (``STEPPED_END_STATE``) are a stepped sweep's only; ``first_contact``
+        a sweep's of several contacts (whose ``[params]`` keep ``contacts`` only then).
         """
         return [*self.observables, *(["dynamics_status"] if self.needs_dynamics else []),
+                *([FIRST_CONTACT] if CONTACTS in self.fixed else []),
                 *(STEPPED_END_STATE if self.stepping is not None else ())]
 
     def definition(self) -> dict[str, Any]:

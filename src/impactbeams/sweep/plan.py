@@ -26,6 +26,7 @@ from impactbeams.params import Params
 from impactbeams.sweep.definition import (
     CELL_PARAMETERS,
     DYNAMICS_OBSERVABLES,
+    FIRST_CONTACT,
     FIRST_IMPACT,
     LONG_RUN_CAPACITY,
     LYAPUNOV,
@@ -94,6 +95,21 @@ def contact_resolution(sweep: Sweep) -> int | None:
     stiffest = swept[0] if swept else sweep.base.contact_stiffness
     return needed_modes(sweep.base.replace(contact_law=compliant[0].name,
                                            contact_stiffness=stiffest))
+
+
+def _first_contact(sweep: Sweep, start: int, stop: int, parallel: bool, plan: Plan,
+                   ) -> dict[str, np.ndarray]:
+    """The first contact among several: each contact's own map's chunk, the earliest.
+
+    ``first_contact``: which (the lowest index of equal times; -1 where none closes).
+    """
+    times = np.array([compute_chunk(each, start, stop, parallel, each_plan)[FIRST_IMPACT]
+                      for each, each_plan in zip(contact_sweeps(sweep), plan.per_contact,
+                                                 strict=True)])
+    closed = np.isfinite(times)
+    first = np.argmin(np.where(closed, times, np.inf), axis=0)
+    return {FIRST_IMPACT: np.ascontiguousarray(np.fmin.reduce(times, axis=0)),
+            FIRST_CONTACT: np.where(closed.any(axis=0), first, -1)}
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:
@@ -429,10 +445,8 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
         plan = build_plan(sweep)
     if plan.fingerprint != sweep.fingerprint():
         raise ValueError("the plan was built for another sweep")
-    if plan.per_contact:  # the first contact among several: each contact's earliest
-        times = [compute_chunk(each, start, stop, parallel, each_plan)[FIRST_IMPACT]
-                 for each, each_plan in zip(contact_sweeps(sweep), plan.per_contact, strict=True)]
-        return {FIRST_IMPACT: np.ascontiguousarray(np.fmin.reduce(np.array(times), axis=0))}
+    if plan.per_contact:
+        return _first_contact(sweep, start, stop, parallel, plan)
     if plan.switching is None:
         columns = first_impact_columns(sweep, start, stop)
         cells = chunk_cells(sweep, plan, columns.start, columns.stop)

@@ -97,13 +97,18 @@ def exclusive(params: Params) -> bool:
 
 def _packs(params: Params, t_max: float, n_modes: int | None) -> tuple[list[Packed], int]:
     """Each contact's packed run at one n_modes (default: the most any of them recommends)."""
-    require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
-    t_max = require_finite("t_max", t_max, "s")
-    require("t_max", t_max, t_max > 0, "must be > 0", "s")
+    _check_run(params, t_max)
     runs = params.each_contact()
     n = (max(recommended_modes(run) for run in runs) if n_modes is None
          else require_integer("n_modes", n_modes, 1, MAX_MODES))
     return [pack_run(run, n, t_max, t_max) for run in runs], n
+
+
+def _check_run(params: Params, t_max: float) -> None:
+    """Raise ParameterError (an ArgumentTypeError for a type) unless both are allowed."""
+    require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
+    t_max = require_finite("t_max", t_max, "s")
+    require("t_max", t_max, t_max > 0, "must be > 0", "s")
 
 
 def _episode(packed: Packed, q: np.ndarray, v: np.ndarray, t: float) -> Trajectory:
@@ -164,6 +169,7 @@ def contact_sequence(params: Params, t_max: float, n_modes: int | None = None,
     `impactbeams.simulate`'s impact table), and ``attrs["status"]`` ("complete", or
     "event_limit" after ``max_contacts``). Contacts that can be closed together are refused.
     """
+    _check_run(params, t_max)
     if not exclusive(params):
         raise ParameterError(
             f"contacts: {len(params.contacts)} contacts that can be closed together are not "
