@@ -38,6 +38,9 @@ name               unit    meaning
                            (default: the tip l2)
 ``contact_side``   -       which way beam 1 closes the contact: "below" (default: what it meets
                            is below it, it moves down onto it) or "above" (it moves up onto it)
+``contacts``       -       two or more contacts (`impactbeams.Contact`: each its point, side,
+                           clearance and law; a TOML array of tables [[params.contacts]]); one
+                           contact given so is the keys above (`fold_contacts`)
 ``shaker``         -       which clamps the shaker carries: "both" (default: both beams'
                            clamps, or beam 1's and the stop's mount, which then moves with it),
                            "beam1" (a stop stays fixed) or "beam2" (beam 2's clamp, or a stop's
