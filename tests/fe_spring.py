@@ -307,3 +307,106 @@ def mesh_deviations(got: dict[str, np.ndarray], coarse: dict[str, np.ndarray],
         out[key] = (np.abs(values - fine[key][:count]) / norm,
                     np.abs(fine[key][:count] - coarse[key][:count]) / norm)
     return out
+
+
+@dataclass(frozen=True)
+class _ActiveSet:
+    """One contact phase of several contacts: the set ``active`` closed, the others open.
+
+    modal: the phase's FE modes (K + sum_a k_a e_a e_a^T, its flexibility by Woodbury on the
+    closed-form F); outputs: per contact, its gap c_b + e_b . x if open, its force
+    -k_a (c_a + e_a . x) if closed (an event when either falls through 0).
+    """
+
+    active: frozenset
+    modal: _Modal
+    outputs: tuple
+
+
+def _active_set(pair: _Pair, gaps: np.ndarray, clearances: np.ndarray, stiffnesses: np.ndarray,
+                active: frozenset, F0: float, Omega: float) -> _ActiveSet:
+    closed = sorted(active)
+    E, k, c = gaps[:, closed], stiffnesses[closed], clearances[closed]
+    F = pair.F
+    if closed:
+        FE = F @ E
+        F = F - FE @ np.linalg.solve(np.diag(1.0 / k) + E.T @ FE, FE.T)
+    x_static = F @ (-(E @ (k * c))) if closed else np.zeros(F.shape[0])
+    omega, phi = _eig(F, pair.M)
+    p1 = -F0 * pair.unit(pair.tip1)
+    modal = _Modal(omega, phi, phi.T @ pair.M @ x_static, phi.T @ p1, Omega)
+    outputs = tuple(
+        _Output(c0=-stiffnesses[j] * clearances[j], c_sin=0.0,
+                r=-stiffnesses[j] * (gaps[:, j] @ phi))
+        if j in active else _Output(c0=clearances[j], c_sin=0.0, r=gaps[:, j] @ phi)
+        for j in range(gaps.shape[1]))
+    return _ActiveSet(active, modal, outputs)
+
+
+def fe_several_contacts(runs, t_max: float, n_elements: tuple[int, int] = (40, 40),
+                        n_events: int = 2, samples_per_period: float = 8.0,
+                        mode_rtol: float = 1e-12) -> list[dict]:
+    """Event-driven exact FE simulation of several spring contacts (c = 0, zeta = 0).
+
+    ``runs``: each contact as a run of one contact (impactbeams' ``Params.each_contact()``, or
+    any objects with its attributes: the geometry, drive and uplifts shared, each its own
+    ``contact_position1``/``2``, ``contact_side``, ``clearance``, ``contact_stiffness``). The
+    contacts act at FE nodes. Each phase is one active set, with its own FE modes (cached);
+    the event is the first root among the open gaps and the closed contacts' forces
+    (`fe_reference._first_negative` per output, the earliest). Stops after ``n_events``
+    releases or at t_max.
+
+    Returns one dict per contact episode, in order of onset: "contact" (its index), "onset",
+    "release" (s; NaN if still closed at t_max), "impulse" (N s), "peak" (N), integrated over
+    the phases it spans.
+    """
+    p = runs[0]
+    pairs = [build_pair(run, n_elements) for run in runs]
+    pair = pairs[0]
+    gaps = np.column_stack([_gap_vector(each) for each in pairs])
+    clearances = np.array([run.clearance for run in runs])
+    stiffnesses = np.array([run.contact_stiffness for run in runs])
+    assert all(run.contact_damping == 0.0 for run in runs) and p.damping_ratio == 0.0
+    F0, Omega = p.force_amplitude, p.omega
+    phases = {}
+
+    def phase(active: frozenset) -> _ActiveSet:
+        if active not in phases:
+            phases[active] = _active_set(pair, gaps, clearances, stiffnesses, active, F0, Omega)
+        return phases[active]
+
+    n1 = pair.n1
+    x = static_tip_shape(pair.F[:n1, :n1], p.uplift1)
+    if pair.tip2 is not None:
+        x = np.concatenate([x, static_tip_shape(pair.F[n1:, n1:], p.uplift2)])
+    v = np.zeros(x.size)
+    t0, active, switched = 0.0, frozenset(), None
+    episodes, open_episode, releases = [], {}, 0
+    while releases < n_events:
+        now = phase(active)
+        modal = now.modal
+        q, qd = modal.phi.T @ pair.M @ x, modal.phi.T @ pair.M @ v
+        dt = min(_grid_step(modal, out, t0, q, qd, samples_per_period, mode_rtol)
+                 for out in now.outputs)
+        times = [_first_negative(modal, out, t0, q, qd, t_max, dt, starts_at_zero=j == switched)
+                 for j, out in enumerate(now.outputs)]
+        found = [(t, j) for j, t in enumerate(times) if t is not None]
+        t1, which = min(found) if found else (t_max, None)
+        q1, v1 = (a[0] for a in modal.propagate(t0, q, qd, [t1]))
+        for j in active:  # the closed contacts' impulses and peaks over this phase
+            out = now.outputs[j]
+            open_episode[j]["impulse"] += _impulse(modal, out, t0, t1, qd, v1)
+            open_episode[j]["peak"] = max(open_episode[j]["peak"],
+                                          _peak(modal, out, t0, q, qd, t1, dt))
+        x, v = modal.phi @ q1, modal.phi @ v1
+        if which is None:
+            break
+        if which in active:
+            open_episode.pop(which)["release"] = t1
+            releases += 1
+        else:
+            open_episode[which] = {"contact": which, "onset": t1, "release": np.nan,
+                                   "impulse": 0.0, "peak": 0.0}
+            episodes.append(open_episode[which])
+        t0, active, switched = t1, active ^ {which}, which
+    return episodes

@@ -818,6 +818,14 @@ def _public_calls():
         "continue_curve-curve": (lambda: ib.continue_curve("fold"),
                                  "curve = 'fold' (str) is not allowed: must be an "
                                  "impactbeams.continuation.BifurcationCurve"),
+        "Contact-side": (lambda: ib.Contact(side="left"),
+                         "Contact.side = 'left' is not allowed: must be one of"),
+        "two_sided_stop-clearance_below": (lambda: ib.two_sided_stop(clearance_below=-1.0),
+                                           "Contact.clearance = -1.0 is not allowed"),
+        "first_contact-params": (lambda: ib.first_contact(None, 1.0), "params = None (NoneType) "
+                                 "is not allowed: must be an impactbeams.Params"),
+        "contact_sequence-t_max": (lambda: ib.contact_sequence(Params(), -1.0),
+                                   "t_max = -1.0 is not allowed: must be > 0"),
         "plot_dataset-dataset": (lambda: ib.plot_dataset(5, "x.png"),
                                  "dataset = 5 (int) is not allowed: must be an xarray.Dataset"),
         "plot_dataset-dpi": (lambda: ib.plot_dataset(xr.Dataset(), "x.png", dpi=-1),

@@ -41,7 +41,8 @@ IN_CHUNKS = [name for name in MAP_VARIABLES if name not in NOT_IN_CHUNKS]
 def test_every_map_variable_is_stored_in_chunks_or_derived():
     """A new map variable of the registry is a sweep observable (and so tested below) or is
     listed in NOT_IN_CHUNKS with the reason."""
-    assert set(IN_CHUNKS) == {*OBSERVABLES, "dynamics_status", *STEPPED_END_STATE}
+    assert set(IN_CHUNKS) == {*OBSERVABLES, "dynamics_status", *STEPPED_END_STATE,
+                              "first_contact"}
     assert set(NOT_IN_CHUNKS) < set(MAP_VARIABLES)
 
 
@@ -53,7 +54,11 @@ def _storing(name):
     if name in STEPPED_END_STATE:  # a stepped sweep's, with its long-time samples
         observable = "poincare_deflection1"
         long_time = {"sampled_periods": 4, "stepping": "up", "n_modes": 2}
-    return sweep_from_mapping({"observables": [observable], **long_time,
+    params = {}
+    if name == "first_contact":  # a map of several contacts'
+        observable = "first_impact_time"
+        params = {"params": {"contacts": [{"side": "below"}, {"side": "above"}]}}
+    return sweep_from_mapping({"observables": [observable], **long_time, **params,
                                "axes": {"omega": {"min": 100.0, "max": 300.0, "num": 3}}})
 
 
@@ -114,6 +119,12 @@ def test_every_stored_observable_round_trips_with_its_registered_dtype_and_shape
 KINDS = {
     "first-impact": (  # omega last: no affine column, one cell per chunk; a third impacts
         "t_max = 0.5\nn_modes = 5\n"
+        '[axes.force_amplitude]\nmin = 1e-6\nmax = 1e-3\nnum = 15\nscale = "log"\n'
+        "[axes.omega]\nmin = 100.0\nmax = 500.0\nnum = 40\n"),
+    "several-contacts": (  # a two-sided stop at mid-span: first_contact too
+        "t_max = 0.5\nn_modes = 5\n[params]\ncounterpart = \"stop\"\n"
+        "[[params.contacts]]\nposition1 = 0.05\n"
+        "[[params.contacts]]\nposition1 = 0.05\nside = \"above\"\nclearance = 5e-6\n"
         '[axes.force_amplitude]\nmin = 1e-6\nmax = 1e-3\nnum = 15\nscale = "log"\n'
         "[axes.omega]\nmin = 100.0\nmax = 500.0\nnum = 40\n"),
     "dynamics": (  # and a categorical axis

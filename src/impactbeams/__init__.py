@@ -35,6 +35,10 @@ _LAZY = {
     "Segment": "impactbeams.structure",
     "PointMass": "impactbeams.structure",
     "Spring": "impactbeams.structure",
+    "Contact": "impactbeams.structure",
+    "two_sided_stop": "impactbeams.structure",
+    "first_contact": "impactbeams.trajectory",
+    "contact_sequence": "impactbeams.trajectory",
     "MatrixStructure": "impactbeams.structure.user",
     "ModalStructure": "impactbeams.structure.user",
 }

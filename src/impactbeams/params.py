@@ -38,6 +38,9 @@ name               unit    meaning
                            (default: the tip l2)
 ``contact_side``   -       which way beam 1 closes the contact: "below" (default: what it meets
                            is below it, it moves down onto it) or "above" (it moves up onto it)
+``contacts``       -       two or more contacts (`impactbeams.Contact`: each its point, side,
+                           clearance and law; a TOML array of tables [[params.contacts]]); one
+                           contact given so is the keys above (`fold_contacts`)
 ``shaker``         -       which clamps the shaker carries: "both" (default: both beams'
                            clamps, or beam 1's and the stop's mount, which then moves with it),
                            "beam1" (a stop stays fixed) or "beam2" (beam 2's clamp, or a stop's
@@ -73,6 +76,7 @@ from impactbeams.checks import (  # noqa: F401  (their old home: modules above i
 )
 from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount, Side
 from impactbeams.kernels import layout
+from impactbeams.structure.contacts import FLAT_KEYS, Contact, as_contact
 from impactbeams.structure.parts import (
     Attachment,
     Spring,
@@ -415,6 +419,13 @@ CONTACT_POSITIONS = ("contact_position1", "contact_position2")
 # keys that describe beam 2: refused when given with a counterpart that has no beam 2
 BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS), "attachments2",
               "contact_position2")
+# several contacts (`impactbeams.Contact`), each with its own point, side, clearance and law
+CONTACTS = "contacts"
+# the run's keys a Contact stands for (with several contacts, each contact's own)
+CONTACT_FIELDS = tuple(FLAT_KEYS.values())
+# the flat keys that say where and from which side the one contact acts: given with
+# ``contacts``, they would say it twice
+_CONTACT_PLACE = (*CONTACT_POSITIONS, "contact_side")
 # each beam's point masses and springs (`impactbeams.structure`), given from Python
 ATTACHMENTS = ("attachments1", "attachments2")
 # beam 1 as the user's own structure (`impactbeams.structure.user`): an object or a .npz file
@@ -425,7 +436,7 @@ BEAM1_KEYS = ("l1", "EI1", "rhoA1", *(key + "1" for key in MATERIAL_KEYS), "atta
 _EQUIVALENT_BEAM1 = ("l1", "EI1", "rhoA1")
 # fields a run's parameters (Datasets, files) name only when they differ from the default: the
 # attachments, a user structure and where and from which side the contact acts
-_ONLY_IF_GIVEN = (*ATTACHMENTS, USER_STRUCTURE, *CONTACT_POSITIONS, "contact_side")
+_ONLY_IF_GIVEN = (*ATTACHMENTS, USER_STRUCTURE, *CONTACT_POSITIONS, "contact_side", "contacts")
 SHAKERS = tuple(configuration.MOUNTS)  # which clamps the shaker carries (impactbeams.drive)
 # the parameters whose value is a name, and the names allowed (the default first)
 CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS,
@@ -487,10 +498,11 @@ class Params:
     contact_position1: float | None = None  # m from beam 1's clamp; None: its tip
     contact_position2: float | None = None  # m from beam 2's clamp; None: its tip
     contact_side: str = configuration.BELOW.name
+    contacts: tuple[Contact, ...] = ()  # two or more (`impactbeams.Contact`); one: the flat keys
 
     def __init__(self, **values: Any) -> None:
         """Every parameter by keyword (SI units); the material keys replace a beam's EI, rhoA."""
-        given = _field_values(values, "Params()", given_fields=False)
+        given = _field_values(fold_contacts(values, "Params()"), "Params()", given_fields=False)
         for field in dataclasses.fields(self):
             object.__setattr__(self, field.name, given.get(field.name, field.default))
         # kept as the drives are (`replace`): whether ``shaker = "both"`` moves a stop unasked
@@ -560,7 +572,22 @@ class Params:
         object.__setattr__(self, name, value)
 
     def _check_together(self) -> None:
-        """The joint rules of the numeric parameters, the choices and the attachments."""
+        """The joint rules of the numeric parameters, the choices and the attachments.
+
+        With several contacts each contact's own run (`each_contact`) is checked whole.
+        """
+        if self.contacts:
+            if self.law.projects:
+                raise ParameterError(
+                    f"{CONTACTS}: {len(self.contacts)} contacts are not allowed with contact_law "
+                    f"= {self.contact_law!r} (the paper's law ties the tips in one contact): use "
+                    "contact_law = 'spring' for several contacts")
+            for index, contact in enumerate(self.contacts):
+                require(f"{CONTACTS}[{index}]", contact, contact not in self.contacts[:index],
+                        "must differ from the contacts before it (the same contact twice)")
+            object.__setattr__(self, "_each_contact",
+                               tuple(self._alone(i) for i in range(len(self.contacts))))
+            return
         for which, name in enumerate(ATTACHMENTS, start=1):
             parts = getattr(self, name)
             if not parts:  # the common case, checked once per period map of a continuation
@@ -584,6 +611,27 @@ class Params:
                 or self.mount.clamps == BOTH.clamps,
                 "with contact_law = 'tied' the shaker must carry both clamps (shaker = 'both', "
                 f"not {self.shaker!r}), or use contact_law = 'spring'")
+
+    def _alone(self, index: int) -> Params:
+        """These parameters with contact ``index`` of ``contacts`` alone (its errors named)."""
+        try:
+            return self.replace(**{CONTACTS: (self.contacts[index],)})
+        except ParameterError as error:
+            raise ParameterError(f"{CONTACTS}[{index}]: {error}") from None
+
+    @property
+    def several_contacts(self) -> bool:
+        """Whether the run has two or more contacts (``contacts``)."""
+        return bool(self.contacts)
+
+    def each_contact(self) -> tuple[Params, ...]:
+        """Each contact's own run: these parameters with that contact alone, by the flat keys.
+
+        ``(self,)`` for one contact. The free phase of all of them is the same (the contacts'
+        points, sides and laws act only in contact), which is what the first contact among
+        several is found from (`impactbeams.trajectory.first_contact`).
+        """
+        return getattr(self, "_each_contact", (self,))
 
     def _check_contact_point(self) -> None:
         """A contact position on its beam (0 < x <= l); elsewhere than the tips only if compliant.
@@ -629,7 +677,8 @@ class Params:
         """Names of the numeric parameters (all but the named choices), in field order."""
         return tuple(f.name for f in dataclasses.fields(Params)
                      if f.name not in CHOICES and f.name not in ATTACHMENTS
-                     and f.name != USER_STRUCTURE and f.name not in CONTACT_POSITIONS)
+                     and f.name not in (USER_STRUCTURE, CONTACTS)
+                     and f.name not in CONTACT_POSITIONS)
 
     def numeric(self) -> dict[str, float]:
         """The numeric parameters by name (SI units)."""
@@ -850,13 +899,54 @@ def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
     their defaults are checked on construction).
     """
     for key in values:
-        if key not in PARAMETERS and key not in ATTACHMENTS and key != USER_STRUCTURE:
+        if key not in PARAMETERS and key not in ATTACHMENTS and key not in (USER_STRUCTURE,
+                                                                             CONTACTS):
             raise unknown_key("parameter", key, source,
-                              [*sorted(PARAMETERS), *ATTACHMENTS, USER_STRUCTURE])
+                              [*sorted(PARAMETERS), *ATTACHMENTS, USER_STRUCTURE, CONTACTS])
     if not configuration.counterpart_named(values.get("counterpart")).has_beam2:
         refuse_beam2([key for key in values if given_fields or key[:-1] in MATERIAL_KEYS],
                      source)
     return resolve_materials(values, source)
+
+
+def require_one_contact(params: Params, what: str) -> None:
+    """Raise ParameterError if ``params`` has several contacts, which ``what`` cannot take yet.
+
+    What several contacts can do so far is the first contact among them
+    (`impactbeams.trajectory.first_contact`; docs/limits.md, "Several contacts").
+    """
+    if params.several_contacts:
+        raise ParameterError(
+            f"{CONTACTS}: {len(params.contacts)} contacts are not allowed in {what}, which takes "
+            "one contact so far; the first contact among several is "
+            "impactbeams.first_contact (docs/limits.md, 'Several contacts')")
+
+
+def fold_contacts(values: Mapping[str, Any], source: str) -> dict[str, Any]:
+    """``values`` with ``contacts`` checked: one contact becomes the flat keys it stands for.
+
+    A contact's point and side given twice (``contacts`` with ``contact_position1``,
+    ``contact_position2`` or ``contact_side``) raise ParameterError; the run's ``clearance``,
+    ``contact_stiffness`` and ``contact_damping`` are the defaults of a contact's fields left
+    None. One contact is the simple form: its fields replace the flat keys, so that it gives
+    today's run bit for bit; two or more stay ``contacts``.
+    """
+    if CONTACTS not in values:
+        return dict(values)
+    contacts = values[CONTACTS]
+    require(CONTACTS, contacts, isinstance(contacts, (tuple, list)),
+            "must be a tuple of impactbeams.Contact (in a TOML file: an array of tables, "
+            "[[params.contacts]])")
+    contacts = tuple(as_contact(f"{CONTACTS}[{i}]", c) for i, c in enumerate(contacts))
+    for key in _CONTACT_PLACE:  # a copy (dataclasses.replace) passes the default side whole
+        if contacts and values.get(key) not in (None, configuration.BELOW.name):
+            raise ParameterError(
+                f"{key} = {values[key]!r} in {source} is not allowed with {CONTACTS}: give each "
+                f"contact's point and side in its Contact, or one contact by the flat keys")
+    rest = {key: value for key, value in values.items() if key != CONTACTS}
+    if len(contacts) == 1:
+        return {**rest, **contacts[0].flat()}
+    return {**rest, CONTACTS: contacts} if contacts else rest
 
 
 def refuse_beam2(given: Any, source: str) -> None:

@@ -113,6 +113,10 @@ VARIABLES: dict[str, Variable] = {
     "impacted": Variable(
         ("*",), "1", "impact flag",
         "1 where the tips impact by t_max, 0 where they do not", dtype="int8"),
+    "first_contact": Variable(
+        ("*",), "1", "contact that closes first",
+        "index in the run's contacts of the contact whose gap closes first (the lowest of equal "
+        "times); -1 where none closes by t_max (maps of several contacts)", dtype="int32"),
     "impact_count": Variable(
         ("*",), "1", "number of impacts",
         "number of contact onsets in [0, t_max] (full dynamics)", dtype="int32"),

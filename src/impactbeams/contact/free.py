@@ -29,7 +29,7 @@ import numpy as np
 from numpy.polynomial.legendre import leggauss
 
 from impactbeams.modes import FreeModes, beam, deprecated_omega, values_at
-from impactbeams.params import Params, require_integer, require_type
+from impactbeams.params import Params, require_integer, require_one_contact, require_type
 
 _GAUSS_ORDER = 12
 
@@ -142,4 +142,5 @@ def _checked(params: Params, n_modes: int) -> int:
     """``n_modes`` as an int, once both arguments are checked (ParameterError, TypeError)."""
     n = require_integer("n_modes", n_modes, 1)
     require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
+    require_one_contact(params, "a run's free phase (one gap)")
     return n

@@ -49,6 +49,7 @@ from impactbeams.params import (
     Params,
     require,
     require_integer,
+    require_one_contact,
     require_type,
 )
 from impactbeams.trajectory.episodes import default_separation, episode_labels
@@ -558,3 +559,4 @@ def check_law(params: Params) -> None:
         raise ParameterError("periodic orbits need the spring contact law: the tied law's "
                              "projections, instantaneous impacts and accumulations are not a "
                              "flow whose linearisation converges in n_modes (docs/model.md)")
+    require_one_contact(params, "periodic orbits and their continuation")

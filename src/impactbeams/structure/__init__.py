@@ -5,7 +5,8 @@ one) carrying ``PointMass`` and ``Spring`` attachments anywhere (a rotational sp
 clamp makes it compliant). ``Cantilever.modes(n)`` gives the first ``n`` natural frequencies
 from the exact characteristic equation, none missed (Wittrick-Williams count), with shapes
 mass-normalised including the attachments; ``Cantilever.flexibility`` the exact static
-Green's function with the springs. SciPy only; evaluated once per geometry.
+Green's function with the springs. SciPy only; evaluated once per geometry. Where the
+structure is touched: ``Contact``s (``two_sided_stop``: one below and one above a point).
 """
 
 from importlib import import_module
@@ -14,8 +15,10 @@ from typing import Any
 # each name's module, imported when first asked for: `Params` checks its parts on every
 # creation, but the eigen-solvers (cantilever, waves, flexibility) only with attachments
 _MODULES = {"Cantilever": "cantilever", "StructureModes": "cantilever", "PointMass": "parts",
-            "Segment": "parts", "Spring": "parts"}
-__all__ = ["Cantilever", "PointMass", "Segment", "Spring", "StructureModes"]
+            "Segment": "parts", "Spring": "parts", "Contact": "contacts",
+            "two_sided_stop": "contacts"}
+__all__ = ["Cantilever", "Contact", "PointMass", "Segment", "Spring", "StructureModes",
+           "two_sided_stop"]
 
 
 def __getattr__(name: str) -> Any:

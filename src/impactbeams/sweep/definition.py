@@ -40,8 +40,10 @@ from impactbeams.params import (
     ATTACHMENTS,
     BEAM1_KEYS,
     CHOICES,
+    CONTACT_FIELDS,
     CONTACT_LAWS,
     CONTACT_POSITIONS,
+    CONTACTS,
     MATERIAL_KEYS,
     MAX_MODES,
     USER_STRUCTURE,
@@ -50,6 +52,7 @@ from impactbeams.params import (
     PointName,
     check_joint,
     check_range,
+    fold_contacts,
     is_integer,
     is_path,
     is_real,
@@ -78,6 +81,7 @@ from impactbeams.variables import (
 )
 
 FIRST_IMPACT = "first_impact_time"
+FIRST_CONTACT = "first_contact"  # several contacts: which one closes first
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
 LYAPUNOV = "lyapunov_exponent"  # spring law only; its own windowed run (kernels.lyapunov)
@@ -215,9 +219,11 @@ class Sweep:
     def stored(self) -> list[str]:
         """Arrays a chunk yields: the observables, the status of full-dynamics runs, end states.
 
-        The end states (``STEPPED_END_STATE``) are a stepped sweep's only.
+        The end states (``STEPPED_END_STATE``) are a stepped sweep's only; ``first_contact``
+        a sweep's of several contacts (whose ``[params]`` keep ``contacts`` only then).
         """
         return [*self.observables, *(["dynamics_status"] if self.needs_dynamics else []),
+                *([FIRST_CONTACT] if CONTACTS in self.fixed else []),
                 *(STEPPED_END_STATE if self.stepping is not None else ())]
 
     def definition(self) -> dict[str, Any]:
@@ -289,7 +295,10 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
             f"must be an integer from 1 to {MAX_MODES}")
     observables = _observables(data.get("observables", [FIRST_IMPACT]), source)
     transient = _transient_periods(data, observables, source)
-    fixed = {name: _plain(value) for name, value in require_table(data, "params", source).items()}
+    # one contact given as a table is its flat keys (`impactbeams.params.fold_contacts`)
+    given = require_table(data, "params", source)
+    fixed = fold_contacts({name: _plain(value) for name, value in given.items()},
+                          f"[params] of {source}")
     axes_table = require_table(data, "axes", source)
     require(f"[axes] of {source}", axes_table, bool(axes_table),
             "a sweep needs at least one [axes.NAME] table")
@@ -395,6 +404,8 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
     where = f"[axes.{name}] of {source}"
     require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: a beam's "
             "attachments are fixed for a sweep (give them in [params], from Python)")
+    require(where, name, name != CONTACTS, f"{name} is not sweepable: give the contacts in "
+            "[params] (one sweep per set of contacts)")
     require(where, name, name != USER_STRUCTURE, f"{name} is not sweepable: give the "
             "structure in [params] (one sweep per structure)")
     require(where, name, name not in CONTACT_POSITIONS, f"{name} is not sweepable: give it in "
@@ -482,13 +493,47 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
     return {**defaults, **beam1, **resolved}, point
 
 
+def contact_sweeps(sweep: Sweep) -> tuple[Sweep, ...]:
+    """Each contact's own sweep: ``sweep`` with that contact of ``contacts`` alone (flat keys).
+
+    The first contact among several is, cell by cell, the earliest of these sweeps' first
+    impacts (`impactbeams.trajectory.several`): the free phase does not depend on the contacts.
+    """
+    fixed = {name: value for name, value in sweep.fixed.items() if name != CONTACTS}
+    return tuple(dataclasses.replace(sweep, fixed={**fixed, **contact.flat()},
+                                     source=f"{sweep.source}, {CONTACTS}[{index}]")
+                 for index, contact in enumerate(sweep.base.contacts))
+
+
+def _check_several(sweep: Sweep) -> None:
+    """Refuse what a sweep of several contacts cannot do yet: one line, before any work.
+
+    It maps the first contact among them (``first_impact_time``) and sweeps no contact field
+    (each contact has its own: which one an axis would change is not said).
+    """
+    require(f"observables in {sweep.source}", list(sweep.observables),
+            not sweep.needs_dynamics and sweep.long_time is None,
+            f"with {len(sweep.base.contacts)} contacts a sweep maps {FIRST_IMPACT!r} only (the "
+            "first contact among them); the dynamics after it is not built for several contacts "
+            "(docs/limits.md, 'Several contacts')")
+    for axis in sweep.axes:
+        require(f"[axes.{axis.name}] of {sweep.source}", axis.name,
+                axis.name not in CONTACT_FIELDS,
+                f"{axis.name} is not sweepable with {CONTACTS}: each contact has its own (one "
+                "sweep per set of contacts)")
+
+
 def _check_grid(sweep: Sweep) -> None:
     """Reject a grid with any non-physical point before computing anything.
 
     The fixed parameters are checked at the grid's first point (names, types, values); every
     condition on several parameters, and the modes and horizon, at all corners of the grid.
     """
-    sweep.params_at({})
+    if sweep.params_at({}).several_contacts:
+        _check_several(sweep)
+        for each in contact_sweeps(sweep):
+            _check_grid(each)
+        return
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)

@@ -26,6 +26,7 @@ from impactbeams.params import Params
 from impactbeams.sweep.definition import (
     CELL_PARAMETERS,
     DYNAMICS_OBSERVABLES,
+    FIRST_CONTACT,
     FIRST_IMPACT,
     LONG_RUN_CAPACITY,
     LYAPUNOV,
@@ -34,6 +35,7 @@ from impactbeams.sweep.definition import (
     Axis,
     Sweep,
     contact_laws,
+    contact_sweeps,
     geometry_axes,
 )
 
@@ -63,6 +65,9 @@ class Plan:
     geometry_axes: tuple[int, ...]  # positions of the axes that change the geometry
     switching: tuple[np.ndarray, ...] | None  # a dynamics map's switching arrays
     axis_values: tuple[np.ndarray, ...]  # every axis's values, computed once for all chunks
+    # several contacts: each contact's own sweep's plan (`contact_sweeps`); the fields above
+    # are then the first's
+    per_contact: tuple[Plan, ...] = ()
 
 
 def code_digest(package: Path = Path(__file__).parents[1],
@@ -90,6 +95,21 @@ def contact_resolution(sweep: Sweep) -> int | None:
     stiffest = swept[0] if swept else sweep.base.contact_stiffness
     return needed_modes(sweep.base.replace(contact_law=compliant[0].name,
                                            contact_stiffness=stiffest))
+
+
+def _first_contact(sweep: Sweep, start: int, stop: int, parallel: bool, plan: Plan,
+                   ) -> dict[str, np.ndarray]:
+    """The first contact among several: each contact's own map's chunk, the earliest.
+
+    ``first_contact``: which (the lowest index of equal times; -1 where none closes).
+    """
+    times = np.array([compute_chunk(each, start, stop, parallel, each_plan)[FIRST_IMPACT]
+                      for each, each_plan in zip(contact_sweeps(sweep), plan.per_contact,
+                                                 strict=True)])
+    closed = np.isfinite(times)
+    first = np.argmin(np.where(closed, times, np.inf), axis=0)
+    return {FIRST_IMPACT: np.ascontiguousarray(np.fmin.reduce(times, axis=0)),
+            FIRST_CONTACT: np.where(closed.any(axis=0), first, -1)}
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:
@@ -181,8 +201,9 @@ def _check_steady_start(sweep: Sweep) -> None:
         return
     from impactbeams.contact.free import build_free_phase  # SciPy: only when needed
     from impactbeams.drive import check_steady
-    for params in _geometries(sweep):
-        for frequency in build_free_phase(params, sweep.n_modes).frequencies:
+    for params in _geometries(sweep):  # (the free phase does not depend on the contacts)
+        for frequency in build_free_phase(params.each_contact()[0],
+                                          sweep.n_modes).frequencies:
             if _takes(axes, sweep.base, "omega", float(frequency)):
                 undamped = params.replace(omega=float(frequency), damping_ratio=0.0)
                 check_steady(undamped, build_free_phase(undamped, sweep.n_modes))
@@ -208,7 +229,14 @@ def _takes(axes: dict[str, Axis], base: Params, name: str, value: float) -> bool
 
 
 def build_plan(sweep: Sweep) -> Plan:
-    """The modes of every geometry of ``sweep``, packed for the kernels (SciPy work)."""
+    """The modes of every geometry of ``sweep``, packed for the kernels (SciPy work).
+
+    With several contacts, each contact's own sweep's plan (`per_contact`).
+    """
+    if sweep.base.several_contacts:
+        plans = tuple(build_plan(each) for each in contact_sweeps(sweep))
+        return dataclasses.replace(plans[0], fingerprint=sweep.fingerprint(), base=sweep.base,
+                                   per_contact=plans)
     per_geometry = [_geometry_arrays(params, sweep) for params in _geometries(sweep)]
     tables, geometry, *switching = (np.array(arrays) for arrays in zip(*per_geometry,
                                                                         strict=True))
@@ -417,6 +445,8 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
         plan = build_plan(sweep)
     if plan.fingerprint != sweep.fingerprint():
         raise ValueError("the plan was built for another sweep")
+    if plan.per_contact:
+        return _first_contact(sweep, start, stop, parallel, plan)
     if plan.switching is None:
         columns = first_impact_columns(sweep, start, stop)
         cells = chunk_cells(sweep, plan, columns.start, columns.stop)

@@ -27,6 +27,7 @@ from impactbeams.params import (
     require,
     require_finite,
     require_integer,
+    require_one_contact,
     require_type,
 )
 from impactbeams.preflight import (
@@ -281,6 +282,7 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
     (`simulation_cost`) are checked too, before the output grid is allocated.
     """
     require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
+    require_one_contact(params, "simulate")
     t_max = require_finite("t_max", t_max, "s")
     require("t_max", t_max, t_max > 0, "must be > 0", "s")
     times = _checked_times(times, t_max)
