@@ -118,3 +118,39 @@ def test_peak_force_and_amplitudes_against_the_simulated_orbit(impacting):
         assert sampled <= measures[name] * (1 + 1e-12), name
         assert sampled >= measures[name] * (1 - 1e-6), name
     assert measures["transmissibility"] == measures["tip_amplitude_1"] / p.base_amplitude
+
+
+@pytest.mark.parametrize("shaker", [True, False])
+def test_tip_maxima_are_the_maxima_of_a_dense_scan_around_them(shaker):
+    """The tip's largest |y1| and |y1 - u_b1|, refined at the root of their rate, against a
+    dense scan of exact samples: 4001 across the two grid spacings around the largest grid
+    sample, then 4001 across the two around the largest of those (spacing 1e-11 s: the scan's
+    error, |y''| (spacing / 2)^2 / 2 ~ 2e-22 m, is below the values' rounding); without
+    beam 2, y2 is 0; with the clamp at rest, the relative amplitude is the absolute one."""
+    drive = ({"shaker": "beam1", "base_amplitude": 1e-4, "force_amplitude": 0.0} if shaker
+             else {"force_amplitude": 3e-2})
+    p = Params.from_mapping({"l1": 0.2, "width1": 0.02, "thickness1": 0.001,
+                             "counterpart": "stop", "clearance": 5e-4, "damping_ratio": 0.01,
+                             "contact_stiffness": 1e4, "omega": 150.0, **drive})
+    period_map = PeriodMap(p, n_modes=8)
+    z = period_map.rest_state()
+    for _ in range(60):
+        z = period_map(z, measures=False).state
+    result = period_map(z)
+    assert result.contacts >= 1 and result.max_tip2 == 0.0
+    grid = period_map._grid()
+
+    def size(times, relative):
+        """|y1| or |y1 - u_b1| at ``times`` (m)."""
+        tip = period_map.tip_motions(result, times)[:, 0]
+        return np.abs(tip - (p.base_amplitude * np.sin(p.omega * times) if relative else 0.0))
+
+    for value, relative in ((result.max_tip1, False), (result.max_relative_tip1, True)):
+        times = grid
+        for _ in range(2):
+            i = int(np.argmax(size(times, relative)))
+            times = np.linspace(times[i - 1], times[i + 1], 4001)
+        dense = size(times, relative).max()
+        assert value == pytest.approx(dense, rel=4 * np.finfo(float).eps, abs=0.0)
+    if not shaker:
+        assert result.max_relative_tip1 == result.max_tip1

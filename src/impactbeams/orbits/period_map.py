@@ -19,7 +19,6 @@ import copy
 import dataclasses
 import functools
 import math
-from collections.abc import Callable
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
@@ -36,6 +35,8 @@ from impactbeams.kernels.layout import (
     SCALAR_COSINE,
     SCALAR_SINE,
     SPRING_DRIVE_ROWS,
+    TIP_V1,
+    TIP_V2,
     TIP_Y1,
     TIP_Y2,
 )
@@ -393,25 +394,60 @@ class PeriodMap:
         """The largest |y1|, |y2| and |y1 - u_b1| (m): the run sampled on the grid, then refined.
 
         ``grid_states``: the run's (phase, q, q') on the grid, as `approach` sampled them.
+        Without beam 2 (a stop) y2 is 0 throughout; with beam 1's clamp at rest y1 - u_b1 is y1.
         """
         times = self._grid()
         phase, q, v = grid_states
         tips = tips_of(self.packed, phase, times, q, v)
-
-        def size(column: int, clamp: bool) -> Callable[[np.ndarray], np.ndarray]:
-            """|tip ``column``| at times (relative to beam 1's clamp if ``clamp``)."""
-            return lambda t: np.abs(self._tips(trajectory, t)[:, column]
-                                    - (self._clamp1(t) if clamp else 0.0))
-
-        return tuple(
-            self._largest(times, np.abs(tips[:, column] - (self._clamp1(times) if clamp
-                                                           else 0.0)), size(column, clamp))
-            for column, clamp in ((TIP_Y1, False), (TIP_Y2, False), (TIP_Y1, True)))
-
-    def _clamp1(self, times: np.ndarray) -> np.ndarray:
-        """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0."""
+        relative = self._largest(trajectory, times, tips, TIP_Y1, True)
         moves1, _ = moving_clamps(self.params.shaker)
-        return moves1 * self.params.base_amplitude * np.sin(self.params.omega * times)
+        absolute = (self._largest(trajectory, times, tips, TIP_Y1, False)
+                    if moves1 * self.params.base_amplitude else relative)
+        beam2 = (self._largest(trajectory, times, tips, TIP_Y2, False)
+                 if self.params.partner.has_beam2 else 0.0)
+        return absolute, beam2, relative
+
+    def _clamp1(self, times: np.ndarray, rate: bool = False) -> np.ndarray:
+        """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0.
+
+        Its velocity (m/s) if ``rate``.
+        """
+        moves1, _ = moving_clamps(self.params.shaker)
+        omega_t = self.params.omega * times
+        if rate:
+            return moves1 * self.params.base_amplitude * self.params.omega * np.cos(omega_t)
+        return moves1 * self.params.base_amplitude * np.sin(omega_t)
+
+    def _largest(self, trajectory: Trajectory, times: np.ndarray, tips: np.ndarray,
+                 column: int, clamp: bool) -> float:
+        """The largest |tip ``column``| (minus beam 1's clamp if ``clamp``) over the run (m).
+
+        From its samples ``tips`` at ``times``: the largest refined at the root of its rate
+        between the sample's neighbours (Brent's method: some 10 samples of the run, against
+        some 18 to minimise it), or by minimising its negative where the rate does not change
+        sign that way there.
+        """
+        velocity = TIP_V1 if column == TIP_Y1 else TIP_V2
+
+        def size(t: float) -> float:
+            at = np.array([t])
+            return float(abs(self._tips(trajectory, at)[0, column]
+                             - (self._clamp1(at)[0] if clamp else 0.0)))
+
+        def rate(t: float) -> float:
+            at = np.array([t])
+            motion = self._tips(trajectory, at)[0]
+            offset = motion[column] - (self._clamp1(at)[0] if clamp else 0.0)
+            return math.copysign(1.0, offset) * float(
+                motion[velocity] - (self._clamp1(at, rate=True)[0] if clamp else 0.0))
+
+        sampled = np.abs(tips[:, column] - (self._clamp1(times) if clamp else 0.0))
+        i = int(np.argmax(sampled))
+        lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
+        if rate(lo) > 0.0 > rate(hi):
+            return max(size(brentq(rate, lo, hi, xtol=1e-14 * max(hi, 1.0))), float(sampled[i]))
+        value, _ = self._refined(lambda t: -size(t), lo, hi, -sampled[i], times[i])
+        return -value
 
     def _grid(self) -> np.ndarray:
         return np.linspace(0.0, self.horizon, SAMPLES_PER_PERIOD * self.periods + 1)
@@ -464,19 +500,6 @@ class PeriodMap:
 
     def _tips(self, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
         return tips_at(self.packed, trajectory, times)
-
-    def _largest(self, times: np.ndarray, sampled: np.ndarray,
-                 size: Callable[[np.ndarray], np.ndarray]) -> float:
-        """The largest of ``size`` (a function of times) from its samples at ``times``.
-
-        ``sampled``: its values there; refined by Brent's method between the neighbours of the
-        largest sample.
-        """
-        i = int(np.argmax(sampled))
-        lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
-        value, _ = self._refined(lambda t: -float(size(np.array([t]))[0]), lo, hi,
-                                 -sampled[i], times[i])
-        return -value
 
     @staticmethod
     def _refined(function, lo: float, hi: float, best: float, best_t: float,
