@@ -28,7 +28,7 @@ MARKERS = {"end": ("s", "E"), "turning_point": ("v", "T"), "cusp": ("D", "CP"),
            "grazing": ("^", "G")}
 KIND_NAMES = {"grazing": "grazing", "fold": "fold", "period_doubling": "period doubling",
               "neimark_sacker": "Neimark-Sacker"}
-# one colour per curve; over a map's colours the first is black
+# one colour per kind of curve; over a map's colours the first is black
 COLOURS = ("C0", "C3", "C2", "C1", "C4")
 OVER_MAP_COLOURS = ("k", "C3", "C1", "C6", "C4")
 
@@ -58,6 +58,9 @@ def draw_curves(axes: Axes, curves: Sequence[xr.Dataset],
                 contours: int | Sequence[float] | None = None) -> list[str]:
     """Draw ``curves`` in their (common) parameters' plane, over the map ``over`` if given.
 
+    One colour per kind of curve (fold, grazing, ...), one legend entry each: curves of one
+    kind followed from the same start up and down join as one line.
+
     ``over``: a Dataset over the same two parameters (a first-impact map of `run_sweep`, or
     a long-time sweep), whose ``variable`` is drawn as a colour map under the curves
     (default first_impact_time, else its first variable; ``values``, ``indices``,
@@ -82,8 +85,12 @@ def draw_curves(axes: Axes, curves: Sequence[xr.Dataset],
         limits = axes.get_xlim(), axes.get_ylim()
     labelled: Labelled = []
     palette = COLOURS if plane is None else OVER_MAP_COLOURS
+    kinds = list(dict.fromkeys(curve.attrs["curve_kind"] for curve in curves))
     for number, curve in enumerate(curves):
-        labelled += _draw(axes, curve, palette[number % len(palette)], units)
+        kind = kinds.index(curve.attrs["curve_kind"])
+        first_of_kind = all(other.attrs["curve_kind"] != curve.attrs["curve_kind"]
+                            for other in curves[:number])
+        labelled += _draw(axes, curve, palette[kind % len(palette)], units, first_of_kind)
     if plane is not None:  # the map's edges, or the curves' ends past them
         for set_limits, (low, high), parameter, (factor, _) in zip(
                 (axes.set_xlim, axes.set_ylim), limits, (first, second), units, strict=True):
@@ -93,15 +100,19 @@ def draw_curves(axes: Axes, curves: Sequence[xr.Dataset],
     return notes
 
 
-def _draw(axes: Axes, dataset: xr.Dataset, colour: str,
-          units: tuple[Units, Units]) -> Labelled:
-    """One curve's line, start and marked codimension-two points; returns their labels."""
+def _draw(axes: Axes, dataset: xr.Dataset, colour: str, units: tuple[Units, Units],
+          in_legend: bool = True) -> Labelled:
+    """One curve's line, start and marked codimension-two points; returns their labels.
+
+    ``in_legend``: whether its line has a legend entry (the first curve of its kind).
+    """
     first, second = dataset.attrs["curve_parameters"].split()
     (x_factor, x_units), (y_factor, y_units) = units
     x, y = x_factor * dataset[first].values, y_factor * dataset[second].values
     # one line in the parameters' plane: drawn as a period-1 branch is (full width)
     _draw_branch(axes, x, y[:, None], dataset.curve_stable.values, np.ones(x.size, dtype=bool),
-                 colour, f"{KIND_NAMES[dataset.attrs['curve_kind']]} curve", period=1)
+                 colour, f"{KIND_NAMES[dataset.attrs['curve_kind']]} curve" if in_legend
+                 else "_nolegend_", period=1)
     axes.plot(x[:1], y[:1], "o", color=colour, markerfacecolor="none", markersize=7)
     codes = dataset.curve_event.values
     labelled = []
