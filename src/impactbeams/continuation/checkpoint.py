@@ -48,6 +48,7 @@ from impactbeams.sweep.store import partial_folder
 if TYPE_CHECKING:
     from impactbeams.continuation.problem import Problem
     from impactbeams.continuation.run import Continuation
+    from impactbeams.continuation.twoparameter import BifurcationCurve
 
 RECORD = "run.json"  # what the log belongs to
 SEGMENT = "course_{:04d}.log"
@@ -56,8 +57,8 @@ _FRAME = struct.Struct("<QI")  # a record's length and CRC-32
 CONTINUATION_CODE = (*NUMERIC_CODE, "continuation/*.py", "orbits/*.py", "trajectory/*.py")
 
 
-def fingerprint(continuation: Continuation) -> str:
-    """Hash of everything ``continuation`` sets and of the package version."""
+def fingerprint(continuation: Continuation | BifurcationCurve) -> str:
+    """Hash of everything ``continuation`` (or a two-parameter curve) sets and the version."""
     fields = {field.name: getattr(continuation, field.name)
               for field in dataclasses.fields(continuation)}
     fields["params"] = continuation.params.as_dict()
@@ -72,10 +73,12 @@ class CourseLog:
     """The checkpoints of one continuation into ``output``, appended under ``OUT.nc.partial/``.
 
     Call it with a `Course` to save it; `restore` gives the last one saved by an earlier run
-    (after checking that it was of the same continuation and code).
+    (after checking that it was of the same continuation and code). A curve in two
+    parameters (`impactbeams.continuation.twoparameter`) is saved as a `Course` of one
+    branch: its points, and the step it is at.
     """
 
-    def __init__(self, output: Path, continuation: Continuation) -> None:
+    def __init__(self, output: Path, continuation: Continuation | BifurcationCurve) -> None:
         self.directory = partial_folder(output)
         self.identity = {"continuation": fingerprint(continuation),
                          "code": code_digest(patterns=CONTINUATION_CODE)}
