@@ -14,37 +14,19 @@ import warnings
 
 import pytest
 
-import impactbeams as ib
 from impactbeams.cli import main
 from impactbeams.continuation import Continuation, ContinuationInterrupted, continue_orbits
 from impactbeams.continuation.checkpoint import saved_points
 from impactbeams.continuation.twoparameter import BifurcationCurve, continue_curve
 from impactbeams.params import ParameterError
+from test_continuation_resume import _stop_after
 from test_resume import _interrupt, assert_same_map
+from test_two_parameter import STOP, STOP_CURVE_FILE
 
-STOP = ib.Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
-                 force_amplitude=1e-4)
 POINTS = 105  # uninterrupted
-FILE = """n_modes = 3
-[params]
-counterpart = "stop"
-contact_stiffness = 100.0
-damping_ratio = 0.02
-force_amplitude = 1e-4
-[continuation]
-parameter = "omega"
-min = 195.0
-max = 330.0
-subspace = 4
-max_branches = 1
-[curve]
-kind = "fold"
-second = "force_amplitude"
-min = 1e-6
-max = 2e-4
-direction = "down"
-max_points = 400
-"""
+# test_two_parameter's command file, the curve followed as `curve` below
+FILE = STOP_CURVE_FILE.replace("min = 1e-4\nmax = 1.2e-4\n", "min = 1e-6\nmax = 2e-4\n"
+                               'direction = "down"\nmax_points = 400\n')
 # the command line with every checkpoint of the curve 50 ms longer: the signal finds it going
 SLOW_CLI = ("import sys, time\n"
             "from impactbeams.continuation import checkpoint\n"
@@ -74,17 +56,6 @@ def uninterrupted(curve, tmp_path_factory):
     dataset = continue_curve(curve, None, out)
     assert dataset.branch_point.size == POINTS and dataset.attrs["curve_ending"] == "bound"
     return out
-
-
-def _stop_after(count):
-    seen = []
-
-    def progress(branch, point):
-        seen.append(point)
-        if len(seen) == count:
-            raise KeyboardInterrupt
-
-    return progress
 
 
 def test_an_interrupted_curve_resumes_to_the_uninterrupted_file(curve, uninterrupted,

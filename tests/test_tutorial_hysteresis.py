@@ -3,8 +3,9 @@
 The model is the shipped sweeps/continuation-stop-fold.toml (beam 1 against a soft stop, 5 modes,
 zeta = 0.02, F0 = 0.1 mN). Three independent computations meet: the continuation's folds and
 grazings (Newton on the exact period map), stepped-sine sweeps (time stepping from cell to
-cell) and the closed-form grazing curve of the linear response; and the basin map's
-attractors (run on from its initial states) against the sweeps' end states.
+cell) and the closed-form grazing curve of the linear response; the fold and grazing curves
+in (Omega, F0) by continuation against one-parameter branches' folds and the closed form; and
+the basin map's attractors (run on from its initial states) against the sweeps' end states.
 """
 
 import dataclasses

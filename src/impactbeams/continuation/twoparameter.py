@@ -51,7 +51,7 @@ from impactbeams.continuation.branch import (
     Position,
     Steps,
 )
-from impactbeams.continuation.checkpoint import CourseLog, reporting_kept_points
+from impactbeams.continuation.checkpoint import CourseLog, checkpointed
 from impactbeams.continuation.curves import CONDITIONS, KINDS, CurveProblem
 from impactbeams.continuation.events import Located, grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
@@ -62,8 +62,6 @@ from impactbeams.continuation.run import (
     Continuation,
     mode_count,
 )
-from impactbeams.io import write_netcdf
-from impactbeams.lock import output_lock
 from impactbeams.params import (
     MAX_MODES,
     ParameterError,
@@ -257,19 +255,8 @@ def continue_curve(curve: BifurcationCurve, progress: Progress | None = None,
                            curve.period, CONDITIONS[curve.kind]())
     if output is None:
         return _interrupted_with_dataset(curve, lambda: follow(problem, curve, progress))
-    output = Path(output)
-    with reporting_kept_points(output), output_lock(output):
-        log = CourseLog(output, curve)
-        try:
-            followed = _interrupted_with_dataset(curve, lambda: follow(problem, curve,
-                                                                       progress, log))
-        except ContinuationInterrupted as interrupted:
-            log.close()  # what was computed, to look at: the log resumes from its last step
-            write_netcdf(interrupted.dataset, log.directory / output.name)
-            raise
-        write_netcdf(followed, output)
-        log.remove()
-    return followed
+    return checkpointed(Path(output), curve, lambda log: _interrupted_with_dataset(
+        curve, lambda: follow(problem, curve, progress, log)))
 
 
 def _interrupted_with_dataset(curve: BifurcationCurve,
