@@ -1028,11 +1028,8 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--dpi", type=_positive_float, default=150,
                       help="resolution of raster formats (default 150)")
     plot.add_argument("--over", metavar="DIAGRAM.nc",
-                      help="a continuation's branches over this bifurcation diagram (a "
-                           "long-time sweep along the continued parameter); a bifurcation "
-                           "curve over this map of its parameters' plane (a first-impact map "
-                           "or a long-time sweep: --var, --slice, --log, --contours choose "
-                           "what it shows)")
+                      help="draw a continuation's branches over this long-time sweep of its "
+                           "parameter, or a bifurcation curve over this map of its plane")
     plot.add_argument("--hz", action="store_true",
                       help="a continuation's frequency axis in Hz (Omega / 2 pi), not rad/s")
     plot.add_argument("--events", metavar="KINDS",
