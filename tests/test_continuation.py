@@ -358,3 +358,48 @@ def test_plot_draws_next_to_its_input_by_default(tmp_path, capsys):
     assert (tmp_path / "cont.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["plot", str(tmp_path / "cont.nc"), "--var", "amplitude", "--quiet"]) == 0
     assert capsys.readouterr().err == ""
+
+
+EPS = np.finfo(float).eps
+
+
+class _Counted(toys.Map):
+    """A toy map that counts its runs: evaluations at another (z, p) than the one before.
+
+    As the beams' period map, which keeps its last run (a Jacobian there costs no new run).
+    """
+
+    runs, last = 0, None
+
+    def evaluate(self, z, p, jacobian=True, grazing=True):
+        key = (z.tobytes(), p)
+        type(self).runs += key != type(self).last
+        type(self).last = key
+        return super().evaluate(z, p, jacobian, grazing)
+
+
+@pytest.mark.parametrize("chord_check", [1e-6, 0.0])
+def test_the_chord_check_finds_newtons_point_with_a_run_less(chord_check, monkeypatch):
+    # the fold toy's branch z1^2 + 0.04 z1 = p, z2 = 0.4 z1: from a step of 0.05 Newton's
+    # third correction is below the tolerance. With the chord check the second one's run
+    # confirms it (a chord step with the second Jacobian), dr/dz is taken there, and the point
+    # is as exact (round-off of values near 1: a few eps)
+    toy = toys.fold()
+    problem = _Counted(toy.step, toy.jac)
+    from impactbeams.continuation import arclength
+
+    monkeypatch.setattr(arclength, "CHORD_CHECK", chord_check)
+    follower = arclength.Follower(problem, Scaling(np.ones(2), 1.0), SETTINGS)
+    start = follower.at_parameter(np.array([1.0, 0.4, 1.04]), np.array([0.0, 0.0, 1.0])).point
+    _Counted.runs = 0
+    point = follower.at_arclength(start, 0.05).point
+    z1, z2, p = point.x
+    assert abs(z1 ** 2 + 0.04 * z1 - p) <= 4 * EPS and abs(z2 - 0.4 * z1) <= 4 * EPS
+    # the multipliers are the point's own (those of dP/dz at its z1), not an iterate's
+    exact = np.sort(np.linalg.eigvals(np.eye(2) + np.array([[2 * z1, 0.1], [0.2, -0.5]])))
+    assert np.sort(point.evaluation.multipliers) == pytest.approx(exact, abs=1e-13)
+    # Newton: 3 iterates with dr/dp each (a run more), and the point's run: 7 runs. With the
+    # check: 2 iterates with dr/dp, and the check's run, where dr/dz is taken and which is the
+    # point's too (the chord is round-off here): 5
+    assert point.iterations == 3
+    assert _Counted.runs == (5 if chord_check else 7)

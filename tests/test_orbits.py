@@ -392,6 +392,43 @@ def test_a_branch_reuses_the_geometry_bit_for_bit():
         module._GEOMETRY_CACHE.clear()
         fresh = PeriodMap(params, n_modes=N_MODES)
         assert fresh.packed.dynamics.spring is not reused.packed.dynamics.spring
-        a, b = reused(z, directions="all"), fresh(z, directions="all")
-        assert np.array_equal(a.state, b.state) and np.array_equal(a.jacobian, b.jacobian)
-        assert a.peak_force == b.peak_force and a.max_tip1 == b.max_tip1
+        at = PeriodMap(first, n_modes=N_MODES).at(params)  # a continuation's way to it
+        assert at.params is params and at.horizon == fresh.horizon
+        for a in (reused(z, directions="all"), at(z, directions="all")):
+            b = fresh(z, directions="all")
+            assert np.array_equal(a.state, b.state) and np.array_equal(a.jacobian, b.jacobian)
+            assert a.peak_force == b.peak_force and a.max_tip1 == b.max_tip1
+
+
+def test_segment_samples_and_the_interval_value_against_exact_samples():
+    """A shaken beam hitting its stop 7 times per period (Hertz contact, 16 modes). The
+    stepped samples of each segment are `sample`'s closed-form ones at the same times to
+    round-off (a step's roundings, 4 eps of the motion per step); the interval
+    value (the gap's local maximum nearest 0 between or within contacts) is the one a dense
+    exact scan of every segment finds (20001 samples: its grid error, the gap's curvature
+    times (spacing / 2)^2 / 2, measured 8e-14 of the clearance here)."""
+    from impactbeams.orbits.period_map import INTERVAL_SAMPLES
+    from impactbeams.trajectory.phases import sample, sample_segments
+
+    params = Params.from_mapping({
+        "l1": 0.2, "width1": 0.02, "thickness1": 0.001, "counterpart": "stop",
+        "clearance": 5e-4, "shaker": "beam1", "base_amplitude": 1e-4, "damping_ratio": 0.01,
+        "omega": 160.0})
+    period_map = PeriodMap(params, n_modes=16)
+    trajectory = period_map(settled(period_map), measures=False).trajectory
+    contact = trajectory.phase == CONTACT
+    assert contact.sum() == 7
+    times = np.linspace(trajectory.time, trajectory.segment_end, INTERVAL_SAMPLES, axis=1)
+    _, q_exact, v_exact = sample(period_map.packed, trajectory, times.ravel())
+    q, v = sample_segments(period_map.packed, trajectory, INTERVAL_SAMPLES)
+    steps = INTERVAL_SAMPLES - 1
+    assert np.max(np.abs(q - q_exact)) <= 4 * steps * np.finfo(float).eps * np.max(np.abs(q))
+    assert np.max(np.abs(v - v_exact)) <= 4 * steps * np.finfo(float).eps * np.max(np.abs(v))
+    dense = np.linspace(trajectory.time, trajectory.segment_end, 20001, axis=1)
+    gap = period_map._gap(trajectory, dense.ravel())[0].reshape(dense.shape)
+    maxima = [gap[k, i] for k in range(gap.shape[0]) for i in range(1, gap.shape[1] - 1)
+              if gap[k, i] > gap[k, i - 1] and gap[k, i] >= gap[k, i + 1]
+              and (contact[k] or (contact[k - 1] and contact[(k + 1) % contact.size]))]
+    nearest = min(maxima, key=abs)
+    assert period_map._interval_gap(trajectory) == pytest.approx(nearest,
+                                                                 abs=1e-12 * params.clearance)

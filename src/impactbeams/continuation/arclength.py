@@ -30,6 +30,11 @@ GRADIENT_STEP = 1e-7  # x~ units
 # this short (x~ units: 1e-4 of the range): the kink is then the branch's, not a jump of the
 # corrector onto another part of the branch (which a longer step can reach)
 KINK_STEP = 1e-4
+# a Newton correction at most this large (x~ units) is checked by a chord step before another
+# linearisation: quadratic convergence then puts the next one near 1e-12 or below
+CHORD_CHECK = 1e-6
+# a correction this small (x~ units, of order 1) moves x~ by its round-off only
+ROUND_OFF_STEP = 1e-15
 # what to do with a change of the contacts within an episode (Settings.micro_contacts)
 LOCATE, SUMMARISE = "locate", "summarise"
 MICRO_CONTACTS = (LOCATE, SUMMARISE)
@@ -178,28 +183,55 @@ class Follower:
             iterates.append(x.copy())
             contacts.add(evaluation.contacts)
             system = np.vstack([jacobian, direction])
-            rhs = np.append(evaluation.residual * self.scaling.state,
-                            direction @ (x - predicted))
-            if not np.all(np.isfinite(system)) or not np.all(np.isfinite(rhs)):
-                break
-            try:
-                delta = np.linalg.solve(system, -rhs)
-            except np.linalg.LinAlgError:
+            delta = _newton_step(system, evaluation.residual * self.scaling.state, direction,
+                                 x - predicted)
+            if delta is None:
                 break
             size = float(np.max(np.abs(delta)))
-            if size <= self.settings.tolerance:
-                tangent = tangent_of(jacobian, orientation)
+            found, iterations = x + delta, iteration
+            if size > self.settings.tolerance and not frozen and size <= CHORD_CHECK:
+                # Newton is quadratic here: the next correction is read from a run at x~ +
+                # delta with this Jacobian (a chord step: the next Newton correction to ~ size
+                # relative), not from a new linearisation. Where it is below the tolerance,
+                # dr/dz (the multipliers, the tangent) is taken at x~ + delta from its run,
+                # which the problem keeps, as Newton's last iterate would be; the point is x~ +
+                # delta + chord (x~ + delta where the chord is round-off: its run is then the
+                # measures' too). dr/dp, a run more by forward differences, stays this
+                # iterate's: it tilts the tangent by ~ size, and not where its parameter part
+                # vanishes (a fold). Else Newton goes on from x~ + delta
                 try:
-                    measured = self._measured(x + delta, evaluation.with_multipliers())
+                    chord = self._chord(found, system, direction, predicted, contacts)
+                    if chord is not None and np.max(np.abs(chord)) <= self.settings.tolerance:
+                        evaluation, jacobian, _ = self.linearised(found, rate)
+                        size, iterations = 0.0, iteration + 1
+                        if np.max(np.abs(chord)) > ROUND_OFF_STEP:
+                            found = found + chord
+                except (ParameterError, RuntimeError):
+                    break
+            if size <= self.settings.tolerance:
+                try:
+                    measured = self._measured(found, evaluation.with_multipliers())
                 except (ParameterError, RuntimeError):  # the point found is out of reach
                     break
-                point = Point(x + delta, tangent, measured, iteration,
+                point = Point(found, tangent_of(jacobian, orientation), measured, iterations,
                               crossed=bool(contacts - {measured.contacts}))
                 return Correction(point, tuple(iterates))
             if iteration > 2 and size > previous:  # not contracting: a smaller step will do
                 break
-            x, previous = x + delta, size
+            x, previous = found, size
         return Correction(None, tuple(iterates))
+
+    def _chord(self, x: np.ndarray, system: np.ndarray, direction: np.ndarray,
+               predicted: np.ndarray, contacts: set[int]) -> np.ndarray | None:
+        """The chord step at x~ with an earlier iterate's ``system``; None if not finite.
+
+        The contacts of x~'s run join ``contacts`` (those Newton's iterates met).
+        """
+        z, p = self.scaling.unscaled(x)
+        evaluation = self.problem.evaluate(z, p, jacobian=False, grazing=False)
+        contacts.add(evaluation.contacts)
+        return _newton_step(system, evaluation.residual * self.scaling.state, direction,
+                            x - predicted)
 
     def _measured(self, x: np.ndarray, evaluation: Evaluation) -> Evaluation:
         """``evaluation`` with the contacts, the grazing and interval values read at x~.
@@ -304,6 +336,22 @@ def tangent_of(jacobian: np.ndarray, orientation: np.ndarray) -> np.ndarray:
     rhs[-1] = 1.0
     tangent = np.linalg.solve(system, rhs)
     return tangent / np.linalg.norm(tangent)
+
+
+def _newton_step(system: np.ndarray, residual: np.ndarray, direction: np.ndarray,
+                 offset: np.ndarray) -> np.ndarray | None:
+    """The correction solving ``system`` delta = -(residual, direction . offset).
+
+    ``residual``: the scaled r; ``offset``: x~ minus the predicted point. None where the
+    system or the right-hand side is not finite, or the system is singular.
+    """
+    rhs = np.append(residual, direction @ offset)
+    if not np.all(np.isfinite(system)) or not np.all(np.isfinite(rhs)):
+        return None
+    try:
+        return np.linalg.solve(system, -rhs)
+    except np.linalg.LinAlgError:
+        return None
 
 
 def _turn(start: Point, point: Point) -> float:

@@ -19,6 +19,7 @@ import numpy as np
 from impactbeams.continuation.problem import Evaluation
 from impactbeams.kernels.layout import FREE, ROW_FREQUENCY, TIP_Y1
 from impactbeams.orbits import PeriodMap, PeriodMapResult
+from impactbeams.orbits.period_map import CELL_ONLY
 from impactbeams.orbits.shooting import (
     DEFAULT_SUBSPACE,
     GUARD,
@@ -53,7 +54,9 @@ class BeamOrbits:
             params, parameter, n_modes, period)
         self._maps: dict[float, PeriodMap] = {}
         self._last: tuple[float, bytes, PeriodMapResult] | None = None
-        dimension = self.period_map(getattr(params, parameter)).dimension
+        # the other maps of a cell's parameter are built on its geometry (`PeriodMap.at`)
+        self._origin = PeriodMap(params, n_modes=n_modes, periods=period)
+        dimension = self._origin.dimension
         self.method = checked_method(method, dimension)
         self.subspace = require_integer("subspace", subspace, GUARD + 1, dimension)
         self.basis: np.ndarray | None = None  # V: orthonormal in the energy coordinates
@@ -74,8 +77,9 @@ class BeamOrbits:
         if p not in self._maps:
             if len(self._maps) >= CACHED_MAPS:
                 self._maps.pop(next(iter(self._maps)))
-            self._maps[p] = PeriodMap(self.params.replace(**{self.parameter: p}),
-                                      n_modes=self.n_modes, periods=self.period)
+            params = self.params.replace(**{self.parameter: p})
+            self._maps[p] = (self._origin.at(params) if self.parameter in CELL_ONLY
+                             else PeriodMap(params, n_modes=self.n_modes, periods=self.period))
         return self._maps[p]
 
     def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,

@@ -439,22 +439,66 @@ def sample_grid(tables, forces, spring, drives, settings, recorded, times, q_out
 
 
 @kernel
+def sample_segments(tables, forces, spring, drives, settings, recorded, ends, count, q_out,
+                    v_out):
+    """``count`` equally spaced states over each recorded segment, a step at a time.
+
+    Segment k's samples, rows ``k * count`` to ``(k + 1) * count - 1`` of the outputs, are at
+    ``time[k] + i h_k``, h_k = (``ends[k]`` - time[k]) / (count - 1): the first is the
+    segment's start, each next one step (`propagation.step_factors`, computed once per
+    segment) from the one before; observed as `sample_states`' are. As `sample_grid`'s, a
+    state i steps in carries about i roundings more than `sample_states`' would: where to
+    look closer, not a result.
+    """
+    n_coords = recorded.q.shape[1]
+    y, y_rate = np.empty(n_coords), np.empty(n_coords)
+    factors = np.empty((tables.shape[0], 5, tables.shape[2]))
+    integrals = np.zeros((tables.shape[0], 2, tables.shape[2]), dtype=np.complex128)
+    omega_forcing = settings.forcing_frequency
+    for k in range(recorded.time.size):
+        phase, start = recorded.phase[k], recorded.time[k]
+        h = (ends[k] - start) / (count - 1)
+        _phase_step_factors(tables, forces, settings, h, phase, factors, integrals)
+        y[:], y_rate[:] = recorded.q[k], recorded.v[k]
+        frequencies, force = tables[phase, ROW_FREQUENCY], forces[phase]
+        for i in range(count):
+            t = start + i * h
+            if i > 0:
+                t_before = start + (i - 1) * h
+                phase_plus = complex(math.cos(omega_forcing * t_before),
+                                     math.sin(omega_forcing * t_before))
+                for j in range(frequencies.size):
+                    f, g = factors[phase, :, j], integrals[phase, :, j]
+                    y[j], y_rate[j] = stepped_mode(y[j], y_rate[j], frequencies[j], force[j],
+                                                   f[0], f[1], f[2], f[3], f[4], g[0], g[1],
+                                                   phase_plus)
+            contact.observed_state(phase, y, y_rate, t, spring, drives, settings,
+                                   q_out[k * count + i], v_out[k * count + i])
+
+
+@kernel
 def _step_factors(tables, forces, settings, h):
     """Each phase's modes' `step_factors` for a step of ``h`` (s): real and complex parts."""
     n_phases, n_modes = tables.shape[0], tables.shape[2]
     factors = np.empty((n_phases, 5, n_modes))
     integrals = np.zeros((n_phases, 2, n_modes), dtype=np.complex128)
+    for phase in range(n_phases):
+        _phase_step_factors(tables, forces, settings, h, phase, factors, integrals)
+    return factors, integrals
+
+
+@kernel
+def _phase_step_factors(tables, forces, settings, h, phase, factors, integrals):
+    """``phase``'s modes' `step_factors` for a step of ``h`` (s) into its rows of the outputs."""
     omega_forcing = settings.forcing_frequency
     step_plus = complex(math.cos(omega_forcing * h), math.sin(omega_forcing * h))
-    for phase in range(n_phases):
-        frequencies, zeta = tables[phase, ROW_FREQUENCY], tables[phase, ROW_ZETA]
-        for j in range(n_modes):
-            sigma, wd, decay, c, s, e_plus, e_minus = step_factors(
-                h, frequencies[j], zeta[j], omega_forcing, step_plus, forces[phase, j] != 0.0)
-            factors[phase, 0, j], factors[phase, 1, j], factors[phase, 2, j] = sigma, wd, decay
-            factors[phase, 3, j], factors[phase, 4, j] = c, s
-            integrals[phase, 0, j], integrals[phase, 1, j] = e_plus, e_minus
-    return factors, integrals
+    frequencies, zeta = tables[phase, ROW_FREQUENCY], tables[phase, ROW_ZETA]
+    for j in range(frequencies.size):
+        sigma, wd, decay, c, s, e_plus, e_minus = step_factors(
+            h, frequencies[j], zeta[j], omega_forcing, step_plus, forces[phase, j] != 0.0)
+        factors[phase, 0, j], factors[phase, 1, j], factors[phase, 2, j] = sigma, wd, decay
+        factors[phase, 3, j], factors[phase, 4, j] = c, s
+        integrals[phase, 0, j], integrals[phase, 1, j] = e_plus, e_minus
 
 
 @kernel

@@ -15,6 +15,7 @@ for Lyapunov exponents. SI units throughout.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import math
@@ -52,7 +53,14 @@ from impactbeams.params import (
 )
 from impactbeams.trajectory.episodes import default_separation, episode_labels
 from impactbeams.trajectory.impacts import impact_table
-from impactbeams.trajectory.phases import Trajectory, run, sample, tips_at, tips_of
+from impactbeams.trajectory.phases import (
+    Trajectory,
+    run,
+    sample,
+    sample_segments,
+    tips_at,
+    tips_of,
+)
 from impactbeams.trajectory.start import checked_state, final_state, phase_state
 
 # Samples per forcing period of the gap and the tips, before each extremum is refined by
@@ -137,6 +145,23 @@ class PeriodMap:
         self.horizon = self.periods * self.forcing_period
         self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
                                        geometry_arrays(params, self.n_modes))
+
+    def at(self, params: Params) -> PeriodMap:
+        """The map of ``params``: this one's but for the cell's parameters (``CELL_ONLY``).
+
+        The same map as ``PeriodMap(params, self.n_modes, self.periods, self.max_events)``,
+        bit for bit, built on this one's geometry (a continuation in Omega, F0, U0 or the
+        clearance asks for a map at every corrector iterate and parameter difference).
+        """
+        require("omega", params.omega, params.omega > 0,
+                "a period map needs a forcing period: omega > 0", "rad/s")
+        changed = copy.copy(self)
+        changed.params = params
+        changed.forcing_period = 2.0 * math.pi / params.omega
+        changed.horizon = self.periods * changed.forcing_period
+        changed.packed = pack_run(params, self.n_modes, changed.horizon, changed.horizon,
+                                  dataclasses.replace(self.packed.dynamics, params=params))
+        return changed
 
     @property
     def dimension(self) -> int:
@@ -261,18 +286,23 @@ class PeriodMap:
             return math.nan
         lasting = ends > starts  # (a contact of zero duration has no interior)
         times = np.linspace(starts, ends, INTERVAL_SAMPLES, axis=1)
-        gap = self._gap_of(times.ravel(), sample(self.packed, trajectory, times.ravel())[1])
+        # stepped samples choose the candidate; its value is then sampled exactly
+        gap = self._gap_of(times.ravel(), sample_segments(self.packed, trajectory,
+                                                          INTERVAL_SAMPLES)[0])
         gap = gap.reshape(times.shape)
-        candidates = [(gap[k, i], k, i) for k in np.flatnonzero(contact & lasting)
-                      for i in _interior_maxima(gap[k])]
+        # each lasting contact's interior maxima (in segment, then time order), then each
+        # free interval's highest sample if inside a segment: the first nearest 0 is refined
+        k, i = _interior_maxima(gap, contact & lasting)
+        candidates = [(int(k[j]), int(i[j])) for j in range(k.size)]
         for interval in _between_contacts(contact):
-            k = max(interval, key=lambda segment: np.max(gap[segment]))
-            i = int(np.argmax(gap[k]))
-            if 0 < i < INTERVAL_SAMPLES - 1:
-                candidates.append((gap[k, i], k, i))
+            highest = max(interval, key=lambda segment: np.max(gap[segment]))
+            at = int(np.argmax(gap[highest]))
+            if 0 < at < INTERVAL_SAMPLES - 1:
+                candidates.append((highest, at))
         if not candidates:
             return math.nan
-        value, k, i = min(candidates, key=lambda candidate: abs(candidate[0]))
+        k, i = min(candidates, key=lambda candidate: abs(gap[candidate]))
+        value = self._gap(trajectory, times[k, i:i + 1])[0][0]
         stationary = self._stationary(trajectory, times[k, i - 1], times[k, i + 1], False)
         return float(value if stationary is None else max(value, stationary[1]))
 
@@ -460,7 +490,7 @@ class PeriodMap:
 
 # the cell's parameters (`packing.cell_rows`) that the geometry's arrays do not depend on; the
 # damping ratio is one too, but the spring law's contact modes are solved for it
-_CELL_ONLY = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "base_amplitude")
+CELL_ONLY = ("clearance", "force_amplitude", "omega", "uplift1", "uplift2", "base_amplitude")
 GEOMETRIES = 4  # geometries whose arrays are kept
 
 
@@ -474,7 +504,7 @@ def geometry_arrays(params: Params, n_modes: int) -> Dynamics:
     `Params` copy per look-up cost more than the run at 16 modes).
     """
     key = (n_modes, *(value for name, value in params.as_dict().items()
-                      if name not in _CELL_ONLY))
+                      if name not in CELL_ONLY))
     dynamics = _GEOMETRY_CACHE.pop(key, None)
     if dynamics is None:
         dynamics = dynamics_arrays(params.replace(**_cell_defaults()), n_modes)
@@ -489,15 +519,20 @@ _GEOMETRY_CACHE: dict[tuple, Dynamics] = {}
 
 @functools.cache
 def _cell_defaults() -> dict[str, float]:
-    """The default values of the cell's parameters (``_CELL_ONLY``)."""
+    """The default values of the cell's parameters (``CELL_ONLY``)."""
     defaults = Params()
-    return {name: getattr(defaults, name) for name in _CELL_ONLY}
+    return {name: getattr(defaults, name) for name in CELL_ONLY}
 
 
-def _interior_maxima(values: np.ndarray) -> np.ndarray:
-    """Indices of the samples above the one before and not below the one after (not the ends)."""
-    middle = values[1:-1]
-    return 1 + np.flatnonzero((middle > values[:-2]) & (middle >= values[2:]))
+def _interior_maxima(values: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(row, column) of the samples above the one before and not below the one after.
+
+    In the ``rows`` (a mask) of ``values``, the ends of a row excluded; row by row, in order.
+    """
+    middle = values[:, 1:-1]
+    found = rows[:, None] & (middle > values[:, :-2]) & (middle >= values[:, 2:])
+    k, i = np.nonzero(found)
+    return k, i + 1
 
 
 def _between_contacts(contact: np.ndarray) -> list[list[int]]:

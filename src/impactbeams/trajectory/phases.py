@@ -132,6 +132,23 @@ def sample(packed: Packed, trajectory: Trajectory, times: np.ndarray, grid: bool
     return phase, q, v
 
 
+def sample_segments(packed: Packed, trajectory: Trajectory, count: int,
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """(q, q') at ``count`` equally spaced times over each segment, from its start to its end.
+
+    Rows ``k * count`` to ``(k + 1) * count - 1`` are segment k's, as `sample` gives them at
+    ``np.linspace(time[k], segment_end[k], count)`` to a few ulps of the motion's size a
+    step (`kernels.dynamics.sample_segments`): where to look closer, not results.
+    """
+    n_coords = trajectory.q.shape[1]
+    q = np.empty((trajectory.time.size * count, n_coords))
+    v = np.empty_like(q)
+    dyn.sample_segments(packed.tables, packed.forces, packed.dynamics.spring_arrays,
+                        packed.drives, packed.settings, trajectory.segments,
+                        trajectory.segment_end, count, q, v)
+    return q, v
+
+
 def tips_of(packed: Packed, phase: np.ndarray, times: np.ndarray, q: np.ndarray,
             v: np.ndarray) -> np.ndarray:
     """The tips' motion (``kernels.layout`` TIP_* columns) of sampled states at ``times``."""
