@@ -393,6 +393,22 @@ def test_period_map_is_categorical_with_none(figure):
     assert len({matplotlib.colors.to_hex(mesh.cmap(mesh.norm(c))) for c in range(4)}) == 4
 
 
+def test_cf_flags_are_categories_with_nan_where_none_applies(figure):
+    """A float variable with CF flag_values (NaN where no flag applies, e.g. cells where no
+    sweep impacts) is drawn as its named categories, NaN cells grey: not as a colour scale."""
+    omega = _axis("omega", np.linspace(10.0, 100.0, 4))
+    force = _axis("force_amplitude", np.linspace(1e-4, 1e-3, 3))
+    codes = np.array([[0.0, 1.0, np.nan], [2.0, 1.0, 0.0], [np.nan, 2.0, 1.0], [0.0, 0.0, 2.0]])
+    dataset = _sweep(codes, [omega, force], "which")
+    dataset["which"].attrs.update(flag_values=[0.0, 1.0, 2.0],
+                                  flag_meanings="both up_only down_only")
+    draw(figure.subplots(), dataset, "which")
+    _, labels = _colour_bar(figure)
+    assert labels == ["both", "up only", "down only"]
+    drawn = _mesh(figure).get_array()
+    assert np.array_equal(drawn.filled(np.nan), codes.T, equal_nan=True)
+
+
 def test_period_over_one_axis_is_a_step_line(figure):
     axes = figure.subplots()
     draw(axes, poincare_sweep(), "response_period")

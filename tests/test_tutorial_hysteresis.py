@@ -3,8 +3,9 @@
 The model is the shipped sweeps/continuation-stop-fold.toml (beam 1 against a soft stop, 5 modes,
 zeta = 0.02, F0 = 0.1 mN). Three independent computations meet: the continuation's folds and
 grazings (Newton on the exact period map), stepped-sine sweeps (time stepping from cell to
-cell) and the closed-form grazing curve of the linear response; and the basin map's
-attractors (run on from its initial states) against the sweeps' end states.
+cell) and the closed-form grazing curve of the linear response; the fold and grazing curves
+in (Omega, F0) by continuation against one-parameter branches' folds and the closed form; and
+the basin map's attractors (run on from its initial states) against the sweeps' end states.
 """
 
 import dataclasses
@@ -172,3 +173,46 @@ def test_the_up_sweeps_last_impact_within_a_step_below_the_upper_fold(example, p
     assert float(up.force_amplitude) == pytest.approx(force, rel=1e-12)
     omega = plane.omega.values
     assert 0.0 < upper - omega[up.values].max() < omega[1] - omega[0]
+
+
+def _curve(example, branch, kind, low, high, direction):
+    from impactbeams.continuation import BifurcationCurve, continue_curve
+
+    return continue_curve(BifurcationCurve.from_branch(
+        example, branch, kind, "force_amplitude", low, high, direction=direction,
+        max_points=400))
+
+
+@pytest.mark.parametrize("direction", ["up", "down"])
+def test_the_continued_grazing_curves_are_the_closed_form(example, branch, direction):
+    """The page's grazing curves in F0, from the branch's first grazing up to the map's top
+    level and down (round the resonance), against the closed form at every point."""
+    curve = _curve(example, branch, "grazing", 1e-6, PLANE["force_amplitude"]["max"],
+                   direction)
+    closed = ib.grazing_curve(example.params, N_MODES, "force_amplitude", curve.omega.values)
+    np.testing.assert_allclose(curve.force_amplitude.values, closed.force_amplitude.values,
+                               rtol=LOCATED, atol=0.0)
+
+
+@pytest.mark.parametrize(("force", "fold"), [(4e-5, "upper"), (7e-5, "upper"),
+                                             (1.3e-4, "upper"), (1e-4, "lower")])
+def test_the_fold_curve_ended_on_a_level_is_that_levels_fold(example, branch, force, fold):
+    """The upper fold's curve, ended on a drive level (the box's edge), is at the fold that
+    level's own one-parameter branch locates; followed down past the cusp and back up to the
+    example's level, at the branch's lower fold."""
+    start = example.params.force_amplitude
+    low, high, direction = ((1e-6, start, "down") if fold == "lower" else
+                            (force, start, "down") if force < start else (start, force, "up"))
+    curve = _curve(example, branch, "fold", low, high, direction)
+    end = curve.isel(branch_point=-1)
+    assert curve.attrs["curve_ending"] == "bound" and float(end.force_amplitude) == force
+    level = continue_orbits(dataclasses.replace(
+        example, params=example.params.replace(force_amplitude=force), max_branches=1))
+    lower, upper = located(level, "fold")
+    expected = upper if fold == "upper" else lower
+    assert float(end.omega) == pytest.approx(expected, rel=LOCATED, abs=0.0)
+    if fold == "lower":  # reached past the cusp, where the band closes
+        from impactbeams.variables import CURVE_EVENTS
+
+        codes = curve.curve_event.values
+        assert [CURVE_EVENTS[code] for code in codes[codes > 0]] == ["cusp", "end"]

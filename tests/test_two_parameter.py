@@ -52,10 +52,17 @@ def stop_branch():
     return continuation, continue_orbits(continuation)
 
 
-def test_grazing_curve_is_the_closed_form_at_every_point(small_branch):
-    curve = continue_curve(BifurcationCurve.from_branch(*small_branch, "grazing",
-                                                        "force_amplitude", 2e-5, 4e-5,
-                                                        max_step=0.02))
+@pytest.fixture(scope="module")
+def small_grazing(small_branch):
+    """The small model's grazing curve in F0 from 3e-5 up to 4e-5 N (Omega from 234.73 down
+    to 230.15 rad/s)."""
+    return continue_curve(BifurcationCurve.from_branch(*small_branch, "grazing",
+                                                       "force_amplitude", 2e-5, 4e-5,
+                                                       max_step=0.02))
+
+
+def test_grazing_curve_is_the_closed_form_at_every_point(small_grazing):
+    curve = small_grazing
     validate(curve)
     assert curve.branch_point.size >= 20 and curve.attrs["curve_ending"] == "bound"
     closed = ib.grazing_curve(SMALL, 3, "force_amplitude", curve.omega.values)
@@ -329,8 +336,9 @@ def test_the_command_writes_the_curve_and_plot_draws_it(stop_branch, tmp_path, c
     assert main(["plot", str(out), "-o", str(tmp_path / "fold.png")]) == 0
     assert (tmp_path / "fold.png").stat().st_size > 0
     assert main(["plot", str(out), "--var", "omega"]) == 2
-    assert "variable (--var) is not allowed: a bifurcation curve is drawn in its parameters' " \
-        "plane" in capsys.readouterr().err
+    assert "variable (--var) = 'omega' is not allowed: a bifurcation curve is drawn in its " \
+        "parameters' plane; --var chooses what a map under it (--over) shows" \
+        in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(("change", "message"), [
@@ -350,3 +358,145 @@ def test_a_bad_curve_table_is_one_line_before_any_compute(tmp_path, capsys, chan
     (line,) = capsys.readouterr().err.splitlines()
     assert message in line and line.startswith("impactbeams: error: ")
     assert not out.exists()
+
+
+# the curves over a map of their plane (issue 34, item 1: `impactbeams plot CURVE --over MAP`)
+
+@pytest.fixture(scope="module")
+def steady_map():
+    """A first-impact map of the small model over (Omega, F0) started on the non-impacting
+    steady response (``start = "steady"``): a cell impacts within its first period iff that
+    response reaches the gap, i.e. above the grazing curve. Cells of 0.5 rad/s and 1 uN."""
+    from impactbeams.sweep import sweep_from_mapping
+
+    fixed = {key: SMALL.as_dict()[key] for key in ("contact_stiffness", "damping_ratio",
+                                                   "clearance")}
+    return ib.run_sweep(sweep_from_mapping({
+        "n_modes": 3, "t_max": 0.1, "params": {**fixed, "start": "steady"},
+        "axes": {"omega": {"min": 225.0, "max": 236.0, "num": 23},
+                 "force_amplitude": {"min": 2e-5, "max": 4e-5, "num": 21}}}))
+
+
+def test_the_closed_form_grazing_curve_bounds_the_first_impact_map(steady_map):
+    """The independent check of what the figure shows: in every column of the map, the cells
+    above the closed-form grazing force impact and those below do not (the map's event
+    search on the linear response against the modal sums' closed form)."""
+    closed = ib.grazing_curve(SMALL, 3, "force_amplitude", steady_map.omega.values)
+    forces = steady_map.force_amplitude.values
+    impacts = steady_map.impacted.transpose("omega", "force_amplitude").values == 1
+    inside = 0
+    for column, force in zip(impacts, closed.force_amplitude.values, strict=True):
+        np.testing.assert_array_equal(column, forces > force)
+        inside += forces[0] < force < forces[-1]
+    assert inside >= 10  # the curve crosses the map in 10 of its 23 columns at least
+
+
+def _drawn(axes):
+    """The map's image (its extent in data coordinates) and the curves' lines, by label."""
+    from matplotlib.image import BboxImage
+
+    (image,) = [a for a in axes.get_children() if isinstance(a, BboxImage)]
+    (x0, y0), (x1, y1) = axes.transData.inverted().transform(image.get_window_extent())
+    lines = {line.get_label(): line for line in axes.get_lines()}
+    return (x0, x1, y0, y1), lines
+
+
+def test_the_curve_is_drawn_over_the_map_in_the_same_units(small_grazing, steady_map):
+    from matplotlib.figure import Figure
+
+    from impactbeams.plotting.curves import draw_curves
+
+    figure = Figure(layout="constrained")
+    axes = figure.subplots()
+    draw_curves(axes, [small_grazing], steady_map)
+    extent, lines = _drawn(axes)
+    # the map's cells from edge to edge, in the curve's units (F0 in uN: both below 1e-4 N)
+    np.testing.assert_allclose(extent, (224.75, 236.25, 19.5, 40.5), rtol=1e-12)
+    curve = lines["grazing curve"]
+    np.testing.assert_array_equal(curve.get_xdata(), small_grazing.omega.values)
+    np.testing.assert_array_equal(curve.get_ydata(), 1e6 * small_grazing.force_amplitude.values)
+    assert axes.get_xlim() == pytest.approx((224.75, 236.25), rel=1e-12)
+    assert axes.get_ylim() == pytest.approx((19.5, 40.5), rel=1e-12)
+    assert axes.get_ylabel() == "$F_0$ (µN)" and len(figure.axes) == 2  # and its colour bar
+    # a map that covers part of the curve: the limits reach the curve's end, the map stays
+    figure = Figure(layout="constrained")
+    axes = figure.subplots()
+    draw_curves(axes, [small_grazing], steady_map.isel(force_amplitude=slice(0, 11)))
+    extent, _ = _drawn(axes)
+    np.testing.assert_allclose(extent, (224.75, 236.25, 19.5, 30.5), rtol=1e-12)
+    assert axes.get_ylim() == pytest.approx((19.5, 40.0), rel=1e-12)
+
+
+def test_a_stepped_sweeps_direction_is_sliced(small_grazing, steady_map):
+    """A long-time sweep of the plane has more dimensions (a stepped sweep's directions):
+    sliced to the curve's plane, or refused in one line."""
+    from matplotlib.figure import Figure
+
+    from impactbeams.plotting.curves import draw_curves
+
+    stepped = xr.concat([steady_map, steady_map.fillna(1.0)], dim=xr.DataArray(
+        ["up", "down"], dims="sweep_direction", name="sweep_direction"))
+    axes = Figure().subplots()
+    notes = draw_curves(axes, [small_grazing], stepped, "first_impact_time",
+                        values={"sweep_direction": "down"})
+    assert notes == ["slice sweep_direction = down: nearest grid value sweep_direction = down "
+                     "(index 1 of 0..1)"]
+    with pytest.raises(ParameterError) as error:
+        draw_curves(Figure().subplots(), [small_grazing], stepped)
+    assert str(error.value) == (
+        "the map's (--over) first_impact_time is also over sweep_direction: slice it (--slice "
+        "NAME=VALUE or --slice-index NAME=I) to a map of the curve's parameters (omega, "
+        "force_amplitude)")
+
+
+def _over_clearance(plane):
+    """``plane`` as though its second axis were the clearance (its attributes too)."""
+    from impactbeams.variables import parameter_attributes
+
+    plane = plane.rename(force_amplitude="clearance")
+    return plane.assign_coords(clearance=plane.clearance.assign_attrs(
+        parameter_attributes("clearance")))
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (_over_clearance,
+     "the map (--over) is not over the curve's parameters (omega, force_amplitude): its "
+     "first_impact_time is over (omega, clearance), without force_amplitude"),
+    (lambda m: m.assign_coords(force_amplitude=m.force_amplitude.assign_attrs(units="mN")),
+     "the map's (--over) force_amplitude is in 'mN', the curve's in 'N': draw a map of the "
+     "same units"),
+])
+def test_a_map_of_another_plane_is_refused(small_grazing, steady_map, change, message):
+    from matplotlib.figure import Figure
+
+    from impactbeams.plotting.curves import draw_curves
+
+    axes = Figure().subplots()
+    with pytest.raises(ParameterError) as error:
+        draw_curves(axes, [small_grazing], change(steady_map))
+    assert str(error.value) == message
+    assert not axes.artists and not axes.lines  # refused before anything is drawn
+
+
+def test_plot_draws_a_curve_over_a_map_from_the_command_line(small_grazing, steady_map,
+                                                               tmp_path, capsys):
+    from impactbeams.cli import main
+    from impactbeams.io import write_netcdf
+
+    curve, plane, other = tmp_path / "curve.nc", tmp_path / "map.nc", tmp_path / "other.nc"
+    write_netcdf(small_grazing, curve)
+    write_netcdf(steady_map, plane)
+    write_netcdf(_over_clearance(steady_map), other)
+    assert main(["plot", str(curve), "--over", str(plane), "-o", str(tmp_path / "a.png"),
+                 "--contours", "3"]) == 0
+    assert (tmp_path / "a.png").stat().st_size > 0
+    capsys.readouterr()
+    assert main(["plot", str(curve), "--over", str(other), "-o", str(tmp_path / "b.png")]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line == ("impactbeams: error: the map (--over) is not over the curve's parameters "
+                    "(omega, force_amplitude): its first_impact_time is over (omega, "
+                    "clearance), without force_amplitude")
+    assert not (tmp_path / "b.png").exists()
+    assert main(["plot", str(curve), "--slice", "omega=230", "-o", str(tmp_path / "c.png")]) == 2
+    assert "values (--slice) = {'omega': '230'} is not allowed: a bifurcation curve without a " \
+        "map under it (--over)" in capsys.readouterr().err

@@ -408,24 +408,42 @@ def _continue(args: argparse.Namespace) -> int:
 
 
 def _continue_curve(args: argparse.Namespace, plan: CurvePlan, output: Path) -> int:
-    """``continue`` with a ``[curve]``: the branch, then its event in two parameters."""
-    from impactbeams.continuation import continue_orbits
+    """``continue`` with a ``[curve]``: the branch, then its event in two parameters.
+
+    Both checkpointed under ``OUT.nc.partial/``: the branch (as ``continue`` without a
+    curve) into a file named by its continuation and code, read again by the same command,
+    then the curve's steps; interrupted, the same command resumes where it stopped.
+    """
+    from impactbeams.continuation import ContinuationInterrupted
+    from impactbeams.continuation.checkpoint import (
+        CourseLog,
+        reporting_kept_points,
+        saved_points,
+    )
     from impactbeams.continuation.twoparameter import continue_curve
     from impactbeams.lock import output_lock
+    from impactbeams.sweep.store import partial_folder
     from impactbeams.variables import CURVE_EVENTS
 
     c = plan.continuation
-    with output_lock(output):
+    folder = partial_folder(output)
+    with reporting_kept_points(output), output_lock(output):
         _say(args, f"{args.file}: the {plan.kind} of the branch along {c.parameter} from "
              f"{c.low:g} to {c.high:g} (event {plan.which}), followed in {plan.second} from "
              f"{plan.low:g} to {plan.high:g} -> {output}")
-        progress = None if args.quiet else _BranchProgress(c.low, c.high)
         with _running_kernels("orbits", args):
-            branch = continue_orbits(c, progress)
-            _say(args, f"branch: {_branch_summary(branch)}")
-            curve = plan.from_branch(branch)
+            curve = plan.from_branch(_curve_branch(args, c, folder))
+            kept = saved_points(output) if CourseLog(output, curve).check() else 0
+            if kept:
+                _say(args, f"resuming the curve from the {kept} points saved in {folder}/")
             progress = None if args.quiet else _BranchProgress(plan.low, plan.high)
-            dataset = continue_curve(curve, progress, output)
+            try:
+                dataset = continue_curve(curve, progress, output)
+            except ContinuationInterrupted as interrupted:
+                print(f"\nimpactbeams: the {interrupted.dataset.branch_point.size} curve points "
+                      f"computed are in {folder / output.name}; the curve's steps are kept in "
+                      f"{folder}/ and the same command resumes from them", file=sys.stderr)
+                raise
     first, second = dataset.attrs["curve_parameters"].split()
     located = "; ".join(f"{CURVE_EVENTS[code]} at {first} = {float(dataset[first][i]):.9g}, "
                         f"{second} = {float(dataset[second][i]):.9g}"
@@ -433,6 +451,35 @@ def _continue_curve(args: argparse.Namespace, plan: CurvePlan, output: Path) -> 
     _say(args, f"wrote {output}: {dataset.branch_point.size} points of the {plan.kind} curve "
                f"(ended: {dataset.attrs['curve_ending']}); {located}")
     return 0
+
+
+def _curve_branch(args: argparse.Namespace, c: Continuation, folder: Path) -> xr.Dataset:
+    """The branch a curve starts from: computed into ``folder`` (checkpointed), or read there.
+
+    Its file is named by the continuation's fingerprint and the code's digest, so that
+    another continuation's or other code's branch is never read for it.
+    """
+    from impactbeams.continuation import ContinuationInterrupted, continue_orbits
+    from impactbeams.continuation.checkpoint import CONTINUATION_CODE, fingerprint
+    from impactbeams.preflight import read_netcdf
+    from impactbeams.sweep.plan import code_digest
+    from impactbeams.sweep.store import partial_folder
+
+    path = folder / f"branch_{fingerprint(c)}_{code_digest(patterns=CONTINUATION_CODE)}.nc"
+    if path.exists():
+        branch = read_netcdf(path, "the saved branch")
+        _say(args, f"branch: read from {path}: {_branch_summary(branch)}")
+        return branch
+    progress = None if args.quiet else _BranchProgress(c.low, c.high)
+    try:
+        branch = continue_orbits(c, progress, path)
+    except ContinuationInterrupted as interrupted:
+        print(f"\nimpactbeams: the branch's {interrupted.dataset.branch_point.size} points are "
+              f"kept in {partial_folder(path)}/ and the same command resumes from them",
+              file=sys.stderr)
+        raise
+    _say(args, f"branch: {_branch_summary(branch)}")
+    return branch
 
 
 def _grazing(args: argparse.Namespace) -> int:
@@ -981,8 +1028,8 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--dpi", type=_positive_float, default=150,
                       help="resolution of raster formats (default 150)")
     plot.add_argument("--over", metavar="DIAGRAM.nc",
-                      help="a continuation's branches over this bifurcation diagram (a "
-                           "long-time sweep along the continued parameter)")
+                      help="draw a continuation's branches over this long-time sweep of its "
+                           "parameter, or a bifurcation curve over this map of its plane")
     plot.add_argument("--hz", action="store_true",
                       help="a continuation's frequency axis in Hz (Omega / 2 pi), not rad/s")
     plot.add_argument("--events", metavar="KINDS",

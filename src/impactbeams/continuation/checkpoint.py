@@ -31,7 +31,7 @@ import shutil
 import struct
 import warnings
 import zlib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, BinaryIO
 
@@ -39,15 +39,19 @@ import numpy as np
 
 from impactbeams import __version__
 from impactbeams.continuation.arclength import Follower, Settings
-from impactbeams.continuation.branch import Branch, Course, Position
-from impactbeams.io import WriteError, write_text, writing
+from impactbeams.continuation.branch import Branch, ContinuationInterrupted, Course, Position
+from impactbeams.io import WriteError, write_netcdf, write_text, writing
+from impactbeams.lock import output_lock
 from impactbeams.params import ParameterError
 from impactbeams.sweep.plan import NUMERIC_CODE, code_digest
 from impactbeams.sweep.store import partial_folder
 
 if TYPE_CHECKING:
+    import xarray as xr
+
     from impactbeams.continuation.problem import Problem
     from impactbeams.continuation.run import Continuation
+    from impactbeams.continuation.twoparameter import BifurcationCurve
 
 RECORD = "run.json"  # what the log belongs to
 SEGMENT = "course_{:04d}.log"
@@ -56,8 +60,8 @@ _FRAME = struct.Struct("<QI")  # a record's length and CRC-32
 CONTINUATION_CODE = (*NUMERIC_CODE, "continuation/*.py", "orbits/*.py", "trajectory/*.py")
 
 
-def fingerprint(continuation: Continuation) -> str:
-    """Hash of everything ``continuation`` sets and of the package version."""
+def fingerprint(continuation: Continuation | BifurcationCurve) -> str:
+    """Hash of everything ``continuation`` (or a two-parameter curve) sets and the version."""
     fields = {field.name: getattr(continuation, field.name)
               for field in dataclasses.fields(continuation)}
     fields["params"] = continuation.params.as_dict()
@@ -72,10 +76,12 @@ class CourseLog:
     """The checkpoints of one continuation into ``output``, appended under ``OUT.nc.partial/``.
 
     Call it with a `Course` to save it; `restore` gives the last one saved by an earlier run
-    (after checking that it was of the same continuation and code).
+    (after checking that it was of the same continuation and code). A curve in two
+    parameters (`impactbeams.continuation.twoparameter`) is saved as a `Course` of one
+    branch: its points, and the step it is at.
     """
 
-    def __init__(self, output: Path, continuation: Continuation) -> None:
+    def __init__(self, output: Path, continuation: Continuation | BifurcationCurve) -> None:
         self.directory = partial_folder(output)
         self.identity = {"continuation": fingerprint(continuation),
                          "code": code_digest(patterns=CONTINUATION_CODE)}
@@ -256,6 +262,28 @@ def _last_record(path: Path) -> dict[str, Any] | None:
     for last in _records(path):  # noqa: B007
         pass
     return last
+
+
+def checkpointed(output: Path, subject: Continuation | BifurcationCurve,
+                 compute: Callable[[CourseLog], xr.Dataset]) -> xr.Dataset:
+    """``compute(log)``'s Dataset, written to ``output``, checkpointed into ``log``.
+
+    ``subject``: the continuation or curve the log is of. One writer per output (the lock of
+    `impactbeams.lock`); the log is removed once the output is written. On Ctrl-C
+    (`ContinuationInterrupted`, its ``dataset`` what was computed) that dataset is written to
+    ``OUTPUT.partial/OUTPUT``, to look at, and the log kept to resume from.
+    """
+    with reporting_kept_points(output), output_lock(output):
+        log = CourseLog(output, subject)
+        try:
+            dataset = compute(log)
+        except ContinuationInterrupted as interrupted:
+            log.close()  # what was computed, to look at: the log resumes from its last step
+            write_netcdf(interrupted.dataset, log.directory / output.name)
+            raise
+        write_netcdf(dataset, output)
+        log.remove()
+    return dataset
 
 
 @contextlib.contextmanager

@@ -35,10 +35,8 @@ from impactbeams.continuation.branch import (
     Span,
     continue_branches,
 )
-from impactbeams.continuation.checkpoint import CourseLog, reporting_kept_points
+from impactbeams.continuation.checkpoint import CourseLog, checkpointed
 from impactbeams.continuation.output import branches_dataset
-from impactbeams.io import write_netcdf
-from impactbeams.lock import output_lock
 from impactbeams.orbits.period_map import check_law
 from impactbeams.orbits.shooting import DEFAULT_SUBSPACE, GUARD, METHODS
 from impactbeams.params import (
@@ -205,18 +203,7 @@ def continue_orbits(continuation: Continuation, progress: Progress | None = None
         warnings.warn(c.params.moving_stop(), UserWarning, stacklevel=2)
     if output is None:
         return _continued(c, progress)
-    output = Path(output)
-    with reporting_kept_points(output), output_lock(output):
-        log = CourseLog(output, c)
-        try:
-            dataset = _continued(c, progress, log)
-        except ContinuationInterrupted as interrupted:
-            log.close()  # what was computed, to look at: the log resumes from its last step
-            write_netcdf(interrupted.dataset, log.directory / output.name)
-            raise
-        write_netcdf(dataset, output)
-        log.remove()
-    return dataset
+    return checkpointed(Path(output), c, lambda log: _continued(c, progress, log))
 
 
 def _continued(c: Continuation, progress: Progress | None,

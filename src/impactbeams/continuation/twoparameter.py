@@ -42,7 +42,16 @@ from impactbeams.continuation.arclength import (
     crosses,
     oriented,
 )
-from impactbeams.continuation.branch import ZERO_DEPTH, Branch
+from impactbeams.continuation.branch import (
+    INTERRUPTED,
+    ZERO_DEPTH,
+    Branch,
+    ContinuationInterrupted,
+    Course,
+    Position,
+    Steps,
+)
+from impactbeams.continuation.checkpoint import CourseLog, checkpointed
 from impactbeams.continuation.curves import CONDITIONS, KINDS, CurveProblem
 from impactbeams.continuation.events import Located, grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
@@ -53,7 +62,6 @@ from impactbeams.continuation.run import (
     Continuation,
     mode_count,
 )
-from impactbeams.io import write_netcdf
 from impactbeams.params import (
     MAX_MODES,
     ParameterError,
@@ -230,8 +238,14 @@ def continue_curve(curve: BifurcationCurve, progress: Progress | None = None,
                    output: str | Path | None = None) -> xr.Dataset:
     """Follow ``curve`` and return its Dataset (written to netCDF ``output`` if given).
 
-    ParameterError if the start does not converge on the augmented system (the state is not
-    at such a bifurcation). ``progress(branch, point)`` is called with each point kept.
+    With ``output`` the curve checkpoints every step under ``OUTPUT.partial/``, as
+    `continue_orbits` does (`impactbeams.continuation.checkpoint`): killed or interrupted,
+    the same call resumes from its last step and writes the same file, bit for bit; the
+    partial run of another curve or other code is refused. On Ctrl-C raises
+    `ContinuationInterrupted` whose ``dataset`` holds the points computed (with ``output``,
+    also written to ``OUTPUT.partial/OUTPUT``). ParameterError if the start does not
+    converge on the augmented system (the state is not at such a bifurcation).
+    ``progress(branch, point)`` is called with each point kept.
     """
     require_type("curve", curve, isinstance(curve, BifurcationCurve),
                  "an impactbeams.continuation.BifurcationCurve")
@@ -239,19 +253,55 @@ def continue_curve(curve: BifurcationCurve, progress: Progress | None = None,
                  "None or the path of a netCDF file (str or pathlib.Path)")
     problem = CurveProblem(curve.params, curve.parameter, curve.second, curve.n_modes,
                            curve.period, CONDITIONS[curve.kind]())
-    followed = follow(problem, curve, progress)
-    dataset = curve_dataset(followed, curve)
-    if output is not None:
-        write_netcdf(dataset, Path(output))
-    return dataset
+    if output is None:
+        return _interrupted_with_dataset(curve, lambda: follow(problem, curve, progress))
+    return checkpointed(Path(output), curve, lambda log: _interrupted_with_dataset(
+        curve, lambda: follow(problem, curve, progress, log)))
 
 
-def follow(problem: CurveProblem, curve: BifurcationCurve,
-           progress: Progress | None = None) -> Branch:
-    """The curve's points from its start to its end, events located and labelled."""
+def _interrupted_with_dataset(curve: BifurcationCurve,
+                              followed: Callable[[], Branch]) -> xr.Dataset:
+    """The Dataset of ``followed()``; a `ContinuationInterrupted` from it gets the points'."""
+    try:
+        return curve_dataset(followed(), curve)
+    except ContinuationInterrupted as interrupted:
+        interrupted.dataset = curve_dataset(interrupted.branches[0], curve)
+        raise
+
+
+def follow(problem: CurveProblem, curve: BifurcationCurve, progress: Progress | None = None,
+           log: CourseLog | None = None) -> Branch:
+    """The curve's points from its start to its end, events located and labelled.
+
+    ``log``: the checkpoints, saved at the top of every step and resumed from if it holds
+    some. `ContinuationInterrupted` (with the points so far) on Ctrl-C past the start.
+    """
+    settings = curve.settings()
+    resume = None if log is None else log.restore(problem, settings)
+    if resume is None:
+        follower, followed = _started(problem, curve, settings, progress)
+        at = Position(followed.points[-1], settings.step, Steps())
+    else:  # the condition as it was at that step: bordered at the last point kept
+        follower, followed, at = resume.follower, resume.branches[0], resume.position
+        last = followed.points[-1]
+        problem.border(*follower.scaling.unscaled(last.x), last.evaluation)
+    save = None if log is None else (lambda position: log(Course(
+        [followed], follower, 0, position, [])))
+    try:
+        _steps(follower, followed, _box(curve, follower.scaling), progress, at, save)
+    except KeyboardInterrupt:
+        followed.ending = INTERRUPTED
+        raise ContinuationInterrupted([followed]) from None
+    end = followed.points[-1]
+    followed.points[-1] = dataclasses.replace(end, label=end.label or "end")
+    return followed
+
+
+def _started(problem: CurveProblem, curve: BifurcationCurve, settings: Settings,
+             progress: Progress | None) -> tuple[Follower, Branch]:
+    """The engine on ``problem`` and the curve of its first point, corrected at the start."""
     p2 = getattr(curve.params, curve.second)
     scaling = _scaling(problem, curve, p2)
-    settings = curve.settings()
     follower = Follower(problem, scaling, settings)
     orientation = np.zeros(scaling.state.size + 1)
     orientation[-1] = 1.0 if curve.direction == "up" else -1.0
@@ -263,10 +313,7 @@ def follow(problem: CurveProblem, curve: BifurcationCurve,
                              "give the state and value of a located one (from_branch)")
     followed = Branch([], curve.period, scaling)
     _keep(follower, followed, [first], progress)
-    _steps(follower, followed, _box(curve, scaling), progress)
-    end = followed.points[-1]
-    followed.points[-1] = dataclasses.replace(end, label=end.label or "end")
-    return followed
+    return follower, followed
 
 
 def _scaling(problem: CurveProblem, curve: BifurcationCurve, p2: float) -> Scaling:
@@ -290,12 +337,18 @@ def _box(curve: BifurcationCurve, scaling: Scaling) -> np.ndarray:
         [[scaling.state[-1]], [scaling.parameter]])
 
 
-def _steps(follower: Follower, curve: Branch, box: np.ndarray,
-           progress: Progress | None) -> None:
-    """Step ``curve`` from its last point to its end (``curve.ending``)."""
+def _steps(follower: Follower, curve: Branch, box: np.ndarray, progress: Progress | None,
+           at: Position, save: Callable[[Position], None] | None = None) -> None:
+    """Step ``curve`` from ``at`` to its end (``curve.ending``).
+
+    ``save`` is called with the `Position` at the top of every step (the step's start and
+    length: all the loop carries from step to step).
+    """
     settings = follower.settings
-    current, ds = curve.points[-1], settings.step
+    current, ds = at.current, at.ds
     while len(curve.points) < settings.max_points:
+        if save is not None:
+            save(Position(current, ds, Steps([current])))
         point, taken, grazing = follower.step(current, ds)
         if point is None:
             if crosses(current.evaluation.grazing, grazing):

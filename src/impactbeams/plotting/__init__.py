@@ -144,11 +144,17 @@ def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
     return []
 
 
-def _plot_curve(dataset: xr.Dataset, path: str | Path, title: str | None,
-                dpi: float) -> list[str]:
-    """A bifurcation curve in its parameters' plane into ``path``."""
-    from impactbeams.plotting.curves import draw_curve
+def _plot_curve(dataset: xr.Dataset, path: str | Path, title: str | None, dpi: float,
+                diagram: xr.Dataset | None, variable: str | None,
+                slices: Mapping[str, object]) -> list[str]:
+    """A bifurcation curve in its parameters' plane into ``path``, over the map ``diagram``.
 
+    ``variable``: the map's; ``slices``: `draw_curves`' values, indices, scale, contours.
+    """
+    from impactbeams.plotting.curves import draw_curves
+
+    if diagram is not None:
+        registered(diagram, "diagram")
     figure = Figure(figsize=(7, 5), layout="constrained")
     axes = figure.subplots()
     axes.set_title(case_title(dataset, dataset.attrs["curve_parameters"].split()[1],
@@ -156,10 +162,11 @@ def _plot_curve(dataset: xr.Dataset, path: str | Path, title: str | None,
                    loc="left", fontsize="medium", wrap=True)
     axes.plot([], [], "k-", label="stable")
     axes.plot([], [], "k--", label="unstable")
-    draw_curve(axes, dataset)  # last: it places labels laid out
+    notes = draw_curves(axes, [dataset], diagram, variable,
+                        **slices)  # type: ignore[arg-type]  # last: it places labels laid out
     axes.legend(fontsize="small", loc="best")
     save_figure(figure, path, dpi)
-    return []
+    return notes
 
 
 def _plot_basins(dataset: xr.Dataset, path: str | Path, title: str | None,
@@ -214,8 +221,11 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
     attractors' legend (`impactbeams.plotting.basins`); a
     continuation's branches their frequency-response curve (over the bifurcation diagram
     ``diagram`` if given; its frequency axis in Hz if ``hz``; the events drawn and labelled as
-    ``events`` says, `impactbeams.plotting.branches.draw_branches`); anything else is drawn by
-    [`draw`][], whose options these are.
+    ``events`` says, `impactbeams.plotting.branches.draw_branches`); a bifurcation curve its
+    parameters' plane (over the map ``diagram`` of the same plane if given, its
+    ``variable`` sliced as ``values`` and ``indices`` say,
+    `impactbeams.plotting.curves.draw_curves`); anything else is drawn by [`draw`][], whose
+    options these are.
     ``dataset``: an xarray Dataset, or for a sweep's map a
     [`PlainDataset`][impactbeams.plotting.arrays.PlainDataset] (a file read without xarray).
     Returns its notes.
@@ -223,15 +233,20 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
     _check_arguments(dataset, path, variable, values, indices, title, dpi, events)
     if "curve_kind" in dataset.attrs:
         _require_xarray(dataset, "a bifurcation curve")
-        _refuse_options("a bifurcation curve, drawn whole in its parameters' plane,",
-                        values=values, indices=indices, scale=scale, contours=contours)
-        given = [name for name, value in (("variable (--var)", variable), ("diagram (--over)",
-                 diagram), ("events (--events)", events)) if value is not None] + (
-            ["--hz"] if hz else [])
+        slices = {"values": values, "indices": indices, "scale": scale, "contours": contours}
+        if diagram is None:
+            _refuse_options("a bifurcation curve without a map under it (--over), drawn "
+                            "whole in its parameters' plane,", **slices)
+        given = [name for name, value in (("events (--events)", events is not None),
+                                          ("--hz", hz)) if value]
         if given:
             raise ParameterError(f"{given[0]} is not allowed: a bifurcation curve is drawn in "
                                  "its parameters' plane with its codimension-two points")
-        return _plot_curve(dataset, path, title, dpi)
+        if diagram is None and variable is not None:
+            raise ParameterError(f"variable (--var) = {variable!r} is not allowed: a "
+                                 "bifurcation curve is drawn in its parameters' plane; --var "
+                                 "chooses what a map under it (--over) shows")
+        return _plot_curve(dataset, path, title, dpi, diagram, variable, slices)
     if "branch_point" in dataset.dims:
         _require_xarray(dataset, "a continuation's branches")
         _refuse_options("a continuation's branches, drawn whole along their parameter,",

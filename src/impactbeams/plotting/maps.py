@@ -13,6 +13,7 @@ from matplotlib.colorbar import Colorbar
 from matplotlib.contour import ContourSet
 from matplotlib.image import BboxImage
 from matplotlib.path import Path
+from matplotlib.transforms import Bbox, TransformedBbox
 
 from impactbeams.params import ParameterError
 from impactbeams.plotting.labels import axis_label, display_units, format_number
@@ -37,7 +38,8 @@ UNIFORM = 1e-6
 
 
 def draw_map(axes: Axes, dataset: PlainDataset, variable: str, scale: str | None = None,
-             contours: int | Sequence[float] | None = None) -> Colorbar | None:
+             contours: int | Sequence[float] | None = None, *,
+             fill: bool = True) -> Colorbar | None:
     """Colour map of the 2-D ``variable`` on ``axes``, with its colour bar; returns the bar.
 
     The variable's first dimension is the x axis, its second the y axis; log grid axes stay
@@ -46,7 +48,8 @@ def draw_map(axes: Axes, dataset: PlainDataset, variable: str, scale: str | None
     (in the variable's units). Lengths, forces and times are drawn in the prefix of their
     size (`display_units`: a first-impact time in ms), the bar labelled so.
     A variable without any value (no cell impacts) is drawn all grey, without a colour bar
-    (None is returned).
+    (None is returned). ``fill``: as `draw_cells` (False for a map under layers that may
+    reach past its edges).
     """
     field, factor = _in_display_units(dataset[variable])
     if contours is not None and not isinstance(contours, int):
@@ -59,12 +62,12 @@ def draw_map(axes: Axes, dataset: PlainDataset, variable: str, scale: str | None
     if not np.isfinite(values).any():
         if contours is not None:
             raise ParameterError(f"contour lines need values: {variable} has none (all NaN)")
-        draw_cells(axes, cells, (x_log, y_log), np.zeros_like(values),
+        draw_cells(axes, cells, (x_log, y_log), np.zeros_like(values), fill=fill,
                    cmap=matplotlib.colors.ListedColormap([MISSING_COLOUR]))
         return None
     colours = colour_scale(field, scale)
     values = colours.encode(values)
-    mesh = draw_cells(axes, cells, (x_log, y_log), np.ma.masked_invalid(values),
+    mesh = draw_cells(axes, cells, (x_log, y_log), np.ma.masked_invalid(values), fill=fill,
                       norm=colours.norm, cmap=colours.cmap)
     bar = axes.get_figure().colorbar(mesh, ax=axes, shrink=0.9, anchor=(0.0, 1.0))
     bar.set_ticks(colours.ticks)
@@ -90,23 +93,32 @@ def _in_display_units(field: PlainArray) -> tuple[PlainArray, float]:
 
 
 def draw_cells(axes: Axes, cells: tuple[np.ndarray, np.ndarray], logs: tuple[bool, bool],
-               values: np.ndarray, **colours: object) -> ScalarMappable:
+               values: np.ndarray, fill: bool = True, **colours: object) -> ScalarMappable:
     """Every cell of ``values`` (y, x) between its ``cells`` edges (x, y) in its colour.
 
     ``logs``: whether the x and y axes are log. On a regular grid (cells equal on the axes,
     in log on a log axis: linspace and geomspace axes, named choices) an image, each screen
     pixel the colour of the cell under its centre: the picture of a mesh of quadrilaterals,
     which is drawn otherwise, at a small part of its cost (10^6 cells: 10 ms, not 0.3 s).
-    The axes' limits are the outer edges. ``colours``: norm and cmap.
+    The axes' limits are the outer edges. ``fill``: the image is the axes' own box (the
+    limits stay the edges: the cheapest); False: it is its cells' box in data coordinates, so
+    that a caller may widen the limits (the image then covers its cells only).
+    ``colours``: norm and cmap.
     """
     if not all(_uniform(e, log) for e, log in zip(cells, logs, strict=True)):
         return axes.pcolormesh(*cells, values, rasterized=True, **colours)
+    extent = []
     for axis, (which, e) in enumerate(zip("xy", cells, strict=True)):
         if e[-1] < e[0]:  # a descending grid: the axis ascends, as a mesh's would
             values, e = np.flip(values, axis=1 - axis), e[::-1]
         (axes.set_xlim if which == "x" else axes.set_ylim)(e[0], e[-1])
-    # the limits are the outer edges: the image fills the axes
-    image = BboxImage(axes.bbox, origin="lower", interpolation="nearest",
+        extent.append((e[0], e[-1]))
+    # the limits are the outer edges: the image fills the axes, or its cells' box wherever
+    # the limits go (on a log axis too: its cells are equal in log, as the screen's pixels)
+    (x0, x1), (y0, y1) = extent
+    box = axes.bbox if fill else TransformedBbox(Bbox.from_extents(x0, y0, x1, y1),
+                                                 axes.transData)
+    image = BboxImage(box, origin="lower", interpolation="nearest",
                       interpolation_stage="data", **colours)
     image.set_data(values)
     axes.add_artist(image)

@@ -146,8 +146,12 @@ def colour_scale(field: PlainArray, scale: str | None) -> ColourScale:
 
 
 def find_categories(field: PlainArray, finite: np.ndarray) -> np.ndarray | None:
-    """The distinct values of integer data with few of them (a period, a flag), else None."""
-    integral = field.dtype.kind in "iub" or field.name in CATEGORY_NAMES
+    """The distinct values of integer data with few of them (a period, a flag), else None.
+
+    CF flags (``flag_values``) are categories whatever their type: NaN where none applies.
+    """
+    integral = (field.dtype.kind in "iub" or field.name in CATEGORY_NAMES
+                or "flag_values" in field.attrs)
     if not integral or not np.all(finite == np.round(finite)):
         return None
     distinct = np.unique(finite)
