@@ -403,3 +403,26 @@ def test_the_chord_check_finds_newtons_point_with_a_run_less(chord_check, monkey
     # point's too (the chord is round-off here): 5
     assert point.iterations == 3
     assert _Counted.runs == (5 if chord_check else 7)
+
+
+def test_a_step_that_turned_too_far_reads_its_points_grazing_value_not_its_iterates():
+    # on the fold toy a step of 0.5 from z1 = 0.2 turns the tangent by more than max_angle
+    # (0.25 rad) round the fold at z1 = -0.02: the step is halved, and whether a grazing lies
+    # ahead is read from the turned point's own grazing value (no iterate is run again)
+    from impactbeams.continuation import arclength
+
+    toy = toys.fold()
+    problem = toys.Map(toy.step, toy.jac, gap=lambda z, p: z[0] + 1.0)  # no grazing near
+    follower = arclength.Follower(problem, Scaling(np.ones(2), 1.0), SETTINGS)
+    start = follower.at_parameter(np.array([0.2, 0.08, 0.048]),
+                                  np.array([0.0, 0.0, -1.0])).point
+    turned = follower.at_arclength(start, 0.5).point
+    assert turned is not None and arclength._turn(start, turned) > SETTINGS.max_angle
+
+    def refused(correction):
+        raise AssertionError("a converged point's iterates were run again")
+
+    follower.grazing_values = refused
+    point, taken, grazing = follower.step(start, 0.5)
+    assert point is not None and taken < 0.5 and grazing == ()
+    assert arclength._turn(start, point) <= SETTINGS.max_angle

@@ -293,9 +293,9 @@ class Follower:
     def step(self, start: Point, ds: float) -> tuple[Point | None, float, tuple[float, ...]]:
         """The next point from ``start`` with a step ``ds`` (halved as needed).
 
-        Returns the point (None below ``min_step``), the step taken, and the grazing values of
-        the iterates of the last attempt when it failed (they tell whether a grazing lies
-        ahead; empty when a point was found).
+        Returns the point (None below ``min_step``), the step taken, and the grazing values
+        that tell whether a grazing lies ahead when the last attempt failed (its point's, if
+        it turned too far, else its iterates'; empty when a point was found).
         """
         while True:
             correction = self.at_arclength(start, ds)
@@ -308,7 +308,10 @@ class Follower:
                 # a kink of more than 90 degrees the tangent oriented like the previous one
                 # would point back: forward is away from the start
                 return oriented(point, point.x - start.x), ds, ()
-            grazing = self.grazing_values(correction)
+            # a point that turned too far tells by its own grazing value whether a grazing
+            # lies ahead; a failed correction by its iterates' (run again for it)
+            grazing = ((point.evaluation.grazing,) if point is not None
+                       else self.grazing_values(correction))
             if crosses(start.evaluation.grazing, grazing):
                 return None, ds, grazing
             ds /= 2.0
