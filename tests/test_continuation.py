@@ -426,3 +426,17 @@ def test_a_step_that_turned_too_far_reads_its_points_grazing_value_not_its_itera
     point, taken, grazing = follower.step(start, 0.5)
     assert point is not None and taken < 0.5 and grazing == ()
     assert arclength._turn(start, point) <= SETTINGS.max_angle
+
+
+def test_the_chord_check_keeps_to_the_iterations_allowed():
+    # the step of 0.05 on the fold toy takes Newton 3 iterations: with 2 allowed it fails, the
+    # chord check (Newton's third correction in effect) included
+    from impactbeams.continuation import arclength
+
+    toy = toys.fold()
+    settings = dataclasses.replace(SETTINGS, max_iterations=2)
+    follower = arclength.Follower(toy, Scaling(np.ones(2), 1.0), settings)
+    start = follower.at_parameter(np.array([1.0, 0.4, 1.04]), np.array([0.0, 0.0, 1.0])).point
+    assert arclength.Follower(toy, Scaling(np.ones(2), 1.0), SETTINGS).at_arclength(
+        start, 0.05).point.iterations == 3
+    assert follower.at_arclength(start, 0.05).point is None

@@ -188,14 +188,18 @@ class Follower:
             if delta is None:
                 break
             size = float(np.max(np.abs(delta)))
+            if size > self.settings.tolerance and iteration > 2 and size > previous:
+                break  # not contracting: a smaller step will do
             found, iterations = x + delta, iteration
-            if size > self.settings.tolerance and not frozen and size <= CHORD_CHECK:
-                # Newton is quadratic here: the next correction is read from a run at x~ +
-                # delta with this Jacobian (a chord step: the next Newton correction to ~ size
-                # relative), not from a new linearisation. Where it is below the tolerance,
-                # dr/dz (the multipliers, the tangent) is taken at x~ + delta from its run,
-                # which the problem keeps, as Newton's last iterate would be; the point is x~ +
-                # delta + chord (x~ + delta where the chord is round-off: its run is then the
+            if (self.settings.tolerance < size <= CHORD_CHECK and not frozen
+                    and iteration < self.settings.max_iterations):
+                # Newton is quadratic here: its next correction (within the iterations
+                # allowed, as Newton's own) is read from a run at x~ + delta with this
+                # Jacobian (a chord step: the next Newton correction to ~ size relative), not
+                # from a new linearisation. Where it is below the tolerance, dr/dz (the
+                # multipliers, the tangent) is taken at x~ + delta from its run, which the
+                # problem keeps, as Newton's last iterate would be; the point is x~ + delta +
+                # chord (x~ + delta where the chord is round-off: its run is then the
                 # measures' too). dr/dp, a run more by forward differences, stays this
                 # iterate's: it tilts the tangent by ~ size, and not where its parameter part
                 # vanishes (a fold). Else Newton goes on from x~ + delta
@@ -216,8 +220,6 @@ class Follower:
                 point = Point(found, tangent_of(jacobian, orientation), measured, iterations,
                               crossed=bool(contacts - {measured.contacts}))
                 return Correction(point, tuple(iterates))
-            if iteration > 2 and size > previous:  # not contracting: a smaller step will do
-                break
             x, previous = found, size
         return Correction(None, tuple(iterates))
 
