@@ -237,6 +237,50 @@ def _name_branches(tree: ast.AST, names: set[str]) -> list[int]:
     return sorted(set(lines))
 
 
+# The variants' objects (``SPRING_LAW``, ``STOP``, ``BOTH``, ...): compared with, or one of their
+# attributes compared with (``mount.clamps == BOTH.clamps``, ``side != BELOW.name``), they are a
+# branch on a variant as much as its name is: the object's own attribute says it.
+VARIANT_OBJECTS = {name for name, value in vars(configuration).items() if isinstance(
+    value, configuration.ContactLaw | configuration.Counterpart | configuration.Side
+    | configuration.Mount)}
+
+
+def _is_variant(node: ast.AST, imported: set[str]) -> bool:
+    """Whether ``node`` is a variant's object, read from one (``BELOW.name``, ``BOTH.clamps[1]``)
+    or a tuple, list or set holding one. ``imported``: the names a module imports them as."""
+    if isinstance(node, ast.Name):
+        return node.id in imported
+    if isinstance(node, ast.Attribute):
+        return ((isinstance(node.value, ast.Name) and node.value.id == "configuration"
+                 and node.attr in VARIANT_OBJECTS) or _is_variant(node.value, imported))
+    if isinstance(node, ast.Subscript):
+        return _is_variant(node.value, imported)
+    if isinstance(node, ast.Tuple | ast.List | ast.Set):
+        return any(_is_variant(element, imported) for element in node.elts)
+    return False
+
+
+def _variant_branches(tree: ast.AST) -> list[int]:
+    """Lines that compare with a variant's object or its attribute, match one, or key a dict
+    by one."""
+    imported = {alias.asname or alias.name for node in ast.walk(tree)
+                if isinstance(node, ast.ImportFrom) and node.module == "impactbeams.configuration"
+                for alias in node.names if alias.name in VARIANT_OBJECTS}
+    lines = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            operands = [node.left, *node.comparators]
+        elif isinstance(node, ast.Dict):
+            operands = [key for key in node.keys if key is not None]
+        elif isinstance(node, ast.MatchValue):
+            operands = [node.value]
+        else:
+            continue
+        if any(_is_variant(operand, imported) for operand in operands):
+            lines.append(node.lineno)
+    return sorted(set(lines))
+
+
 @pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_configuration_branches_only_in_its_seam(path):
     """A law, counterpart or shaker is asked through its object, never by its name (issue 33)."""
@@ -244,7 +288,8 @@ def test_configuration_branches_only_in_its_seam(path):
     if where in CONFIGURATION_SEAM:
         return
     names = CONFIGURATION_NAMES - {name for module, name in OTHER_MEANING if module == where}
-    lines = _name_branches(ast.parse(path.read_text(), str(path)), names)
+    tree = ast.parse(path.read_text(), str(path))
+    lines = sorted(_name_branches(tree, names) + _variant_branches(tree))
     assert not lines, (f"{where}:{lines[0]} branches on a contact law's, counterpart's or "
                        "shaker's name: ask its object (impactbeams.configuration) instead")
 
@@ -263,6 +308,23 @@ def test_the_configuration_check_sees_the_old_branches():
             'message = "with contact_law = \'tied\' the shaker must carry both clamps"\n'
             'COSTS = {"tied": 1.0}\n')
     assert _name_branches(ast.parse(code), CONFIGURATION_NAMES) == [1, 3, 4, 5, 6, 7, 8, 10, 13]
+
+
+def test_the_configuration_check_sees_a_variant_object_compared():
+    """Comparing with a variant's object or its attribute is seen (the forms issue 33 found left
+    in params.py), as is matching one or keying a dict by one; a default argument, a default
+    field and a word read from one are not branches."""
+    code = ("from impactbeams.configuration import BOTH, BELOW as DOWN, STOP, Mount\n"
+            "from impactbeams import configuration\n"
+            "ok = mount.clamps == BOTH.clamps\n"
+            "given = side not in (None, (), configuration.BELOW.name)\n"
+            "if params.partner is STOP:\n    pass\n"
+            "first = mount.clamps[0] == BOTH.clamps[0]\n"
+            "WORDS = {DOWN: 'below'}\n"
+            "match params.mount:\n    case configuration.BEAM1:\n        pass\n"
+            "def place(mount: Mount = BOTH, side: str = DOWN.name):\n    return STOP.words\n"
+            "moves = params.mount.carries_both_clamps\n")
+    assert _variant_branches(ast.parse(code)) == [3, 4, 5, 7, 8, 10]
 
 
 def _settings_records(tree: ast.AST) -> list[int]:

@@ -99,6 +99,11 @@ class Mount:
     words: str
     words_at_stop: str
 
+    @property
+    def carries_both_clamps(self) -> bool:
+        """Whether both clamps move (beam 1's and beam 2's, or a stop's mount)."""
+        return all(moves > 0.0 for moves in self.clamps)
+
     def place(self, partner: Counterpart) -> str:
         """Where the shaker sits against ``partner``, e.g. ``"on both clamps"``."""
         return self.words if partner.has_beam2 else self.words_at_stop
