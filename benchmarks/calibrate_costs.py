@@ -7,7 +7,8 @@ discarded), per cell (first-impact maps) or per cycle of an impacting cell (full
 fitted as a n^p over n modes per beam, per kind of run and contact law); the 2-thread speed-up;
 the start-up of a command and the cold compile of each kind of run (subprocesses with an empty
 NUMBA_CACHE_DIR, minus the same run with the cache filled). Writes the JSON (with the load
-average before and after) and rewrites the constants block of src/impactbeams/costs.py.
+average before and after) and rewrites the constants blocks of src/impactbeams/costs.py and
+configuration.py (each contact law's costs per impacting cycle).
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+
+from impactbeams.configuration import LAWS
 
 ROOT = Path(__file__).resolve().parents[1]
 MODES = (5, 12, 32)
@@ -323,8 +326,13 @@ def round_constants(constants):
     return float(f"{constants:.2g}")
 
 
-def write_module(constants):
-    """Rewrite the constants block of src/impactbeams/costs.py from ``constants``."""
+def module_blocks(constants):
+    """The text of each constants block, by the module that holds it.
+
+    src/impactbeams/costs.py holds every constant but the costs per impacting cycle
+    (``IMPACT_CYCLE``: by kind of run, then by contact law), which each law holds
+    (`ContactLaw.impact_cycle`): ``<LAW>_CYCLE``, by kind, in src/impactbeams/configuration.py.
+    """
     def text(value):
         if isinstance(value, dict):
             return "{" + ", ".join(f"{text(key)}: {text(v)}" for key, v in value.items()) + "}"
@@ -332,18 +340,35 @@ def write_module(constants):
             return "(" + ", ".join(text(v) for v in value) + ")"
         return json.dumps(value) if isinstance(value, str) else repr(value)
 
-    lines = []
-    for name, value in constants.items():
-        line = f"{name} = {text(value)}"
-        if len(line) > 99 and isinstance(value, dict):  # one entry per line
-            line = "\n".join([f"{name} = {{", *(f"    {text(key)}: {text(v)}," for key, v in
-                                                 value.items()), "}"])
-        lines.append(line)
-    path = ROOT / "src" / "impactbeams" / "costs.py"
-    source = path.read_text()
-    block = re.compile(r"(# --- constants from .*?\n)(.*?)(# ---+\n)", re.S)
-    path.write_text(block.sub(lambda m: m.group(1) + "\n".join(lines) + "\n" + m.group(3),
-                              source, count=1))
+    def block(named):
+        lines = []
+        for name, value in named.items():
+            line = f"{name} = {text(value)}"
+            if len(line) > 99 and isinstance(value, dict):  # one entry per line
+                line = "\n".join([f"{name} = {{", *(f"    {text(key)}: {text(v)}," for key, v
+                                                     in value.items()), "}"])
+            lines.append(line)
+        return "\n".join(lines) + "\n"
+
+    cycle = constants["IMPACT_CYCLE"]
+    rest = {name: value for name, value in constants.items() if name != "IMPACT_CYCLE"}
+    rest["THREAD_SPEEDUP"] = {int(k): v for k, v in rest["THREAD_SPEEDUP"].items()}
+    laws = {f"{law.upper()}_CYCLE": {kind: by_law[law] for kind, by_law in cycle.items()
+                                     if law in by_law} for law in LAWS}
+    source = ROOT / "src" / "impactbeams"
+    return {source / "costs.py": block(rest), source / "configuration.py": block(laws)}
+
+
+# a constants block: its header line, its lines, its closing rule
+CONSTANTS_BLOCK = re.compile(
+    r"(# --- [^\n]* from docs/benchmarks/costs\.json[^\n]*\n)(.*?)(# ---+\n)", re.S)
+
+
+def write_module(constants):
+    """Rewrite the constants blocks (`module_blocks`) from ``constants``."""
+    for path, lines in module_blocks(constants).items():
+        path.write_text(CONSTANTS_BLOCK.sub(lambda m, lines=lines: m.group(1) + lines
+                                            + m.group(3), path.read_text(), count=1))
 
 
 def main() -> None:
@@ -366,11 +391,12 @@ def main() -> None:
     constants["FIRST_IMPACT_CELL"], constants["FIRST_IMPACT_MODE"] = cell, mode
     constants["FIRST_IMPACT_ALONE"], constants["FIRST_IMPACT_WALK"] = cell_search_costs(log)
     cycle = {}
-    for kind, laws in (("dynamics", ("tied", "spring")), ("lyapunov", ("spring",)),
-                       ("long_time", ("tied", "spring")), ("simulate", ("tied", "spring"))):
+    for kind in ("dynamics", "lyapunov", "long_time", "simulate"):
         cycle[kind] = {}
-        for law in laws:
-            measured[f"{kind}_{law}"], cycle[kind][law] = dynamics_costs(kind, law, log)
+        # Lyapunov exponents need a flow with tangent dynamics (`ContactLaw.tangent_flow`)
+        for law in (law for law in LAWS.values() if kind != "lyapunov" or law.tangent_flow):
+            measured[f"{kind}_{law.name}"], cycle[kind][law.name] = dynamics_costs(
+                kind, law.name, log)
     constants["IMPACT_CYCLE"] = cycle
     constants["FREE_CYCLE"] = free_cost(log)
     constants["LYAPUNOV_FREE_CYCLE"] = free_cost(log, "lyapunov_exponent")
@@ -394,7 +420,6 @@ def main() -> None:
                                  else load_after[0])
     constants["COMPILE_CORES"] = os.cpu_count()
     constants = round_constants(constants)
-    constants["THREAD_SPEEDUP"] = {int(k): v for k, v in constants["THREAD_SPEEDUP"].items()}
     constants["COMPILE_CORES"] = int(constants["COMPILE_CORES"])
     result = {"constants": constants, "measured": measured,
               "load_average_before": list(load_before), "load_average_after":
@@ -403,7 +428,7 @@ def main() -> None:
               "seconds": round(time.time() - started, 1)}
     args.output.write_text(json.dumps(result, indent=1) + "\n")
     write_module(constants)
-    log(f"wrote {args.output} and the constants of src/impactbeams/costs.py")
+    log(f"wrote {args.output} and the constants of costs.py and configuration.py")
 
 
 def continuation_only(output):
@@ -412,7 +437,6 @@ def continuation_only(output):
     measured, fitted = continuation_costs(lambda text: print(text, flush=True))
     constants = result["constants"]
     constants["CONTINUATION_POINT"] = round_constants(fitted)
-    constants["THREAD_SPEEDUP"] = {int(k): v for k, v in constants["THREAD_SPEEDUP"].items()}
     result["measured"]["continuation"] = measured
     result["continuation_measured_utc"] = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
     result["continuation_load_average"] = list(os.getloadavg())

@@ -199,9 +199,6 @@ CONFIGURATION_NAMES = (set(configuration.LAWS) | set(configuration.COUNTERPARTS)
                        | set(configuration.MOUNTS) | set(configuration.SIDES))
 # a name that means something else in a module: a stepped sweep's rows (up, down or "both")
 OTHER_MEANING = {("longtime.py", "both")}
-# data keyed by a law's name: the calibrated constants, written by benchmarks/calibrate_costs.py
-# from docs/benchmarks/costs.json (keyed so), looked up by `ContactLaw.name`
-KEYED_DATA = {("costs.py", "IMPACT_CYCLE")}
 CHOICE_KEYWORDS = {"contact_law", "counterpart", "shaker", "contact_side"}
 
 
@@ -214,17 +211,12 @@ def _names_in(node: ast.AST | None, names: set[str]) -> bool:
     return False
 
 
-def _name_branches(tree: ast.AST, names: set[str], keyed_data: set[str] = frozenset()) -> list[int]:
+def _name_branches(tree: ast.AST, names: set[str]) -> list[int]:
     """Lines that branch on a variant's name: compared (``==``, ``in``), matched, a dict's key,
     a subscript, ``.get``/``.index`` of one, or passed as ``contact_law=``/``counterpart=``/
-    ``shaker=``. ``keyed_data``: the names of assignments whose dict literals are data."""
-    skipped = {id(node) for assign in ast.walk(tree) if isinstance(assign, ast.Assign)
-               and any(isinstance(t, ast.Name) and t.id in keyed_data for t in assign.targets)
-               for node in ast.walk(assign.value)}
+    ``shaker=``."""
     lines = []
     for node in ast.walk(tree):
-        if id(node) in skipped:
-            continue
         if isinstance(node, ast.Compare):
             hit = any(_names_in(side, names) for side in (node.left, *node.comparators))
         elif isinstance(node, ast.Dict):
@@ -245,6 +237,50 @@ def _name_branches(tree: ast.AST, names: set[str], keyed_data: set[str] = frozen
     return sorted(set(lines))
 
 
+# The variants' objects (``SPRING_LAW``, ``STOP``, ``BOTH``, ...): compared with, or one of their
+# attributes compared with (``mount.clamps == BOTH.clamps``, ``side != BELOW.name``), they are a
+# branch on a variant as much as its name is: the object's own attribute says it.
+VARIANT_OBJECTS = {name for name, value in vars(configuration).items() if isinstance(
+    value, configuration.ContactLaw | configuration.Counterpart | configuration.Side
+    | configuration.Mount)}
+
+
+def _is_variant(node: ast.AST, imported: set[str]) -> bool:
+    """Whether ``node`` is a variant's object, read from one (``BELOW.name``, ``BOTH.clamps[1]``)
+    or a tuple, list or set holding one. ``imported``: the names a module imports them as."""
+    if isinstance(node, ast.Name):
+        return node.id in imported
+    if isinstance(node, ast.Attribute):
+        return ((isinstance(node.value, ast.Name) and node.value.id == "configuration"
+                 and node.attr in VARIANT_OBJECTS) or _is_variant(node.value, imported))
+    if isinstance(node, ast.Subscript):
+        return _is_variant(node.value, imported)
+    if isinstance(node, ast.Tuple | ast.List | ast.Set):
+        return any(_is_variant(element, imported) for element in node.elts)
+    return False
+
+
+def _variant_branches(tree: ast.AST) -> list[int]:
+    """Lines that compare with a variant's object or its attribute, match one, or key a dict
+    by one."""
+    imported = {alias.asname or alias.name for node in ast.walk(tree)
+                if isinstance(node, ast.ImportFrom) and node.module == "impactbeams.configuration"
+                for alias in node.names if alias.name in VARIANT_OBJECTS}
+    lines = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            operands = [node.left, *node.comparators]
+        elif isinstance(node, ast.Dict):
+            operands = [key for key in node.keys if key is not None]
+        elif isinstance(node, ast.MatchValue):
+            operands = [node.value]
+        else:
+            continue
+        if any(_is_variant(operand, imported) for operand in operands):
+            lines.append(node.lineno)
+    return sorted(set(lines))
+
+
 @pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_configuration_branches_only_in_its_seam(path):
     """A law, counterpart or shaker is asked through its object, never by its name (issue 33)."""
@@ -252,14 +288,15 @@ def test_configuration_branches_only_in_its_seam(path):
     if where in CONFIGURATION_SEAM:
         return
     names = CONFIGURATION_NAMES - {name for module, name in OTHER_MEANING if module == where}
-    keyed = {data for module, data in KEYED_DATA if module == where}
-    lines = _name_branches(ast.parse(path.read_text(), str(path)), names, keyed)
+    tree = ast.parse(path.read_text(), str(path))
+    lines = sorted(_name_branches(tree, names) + _variant_branches(tree))
     assert not lines, (f"{where}:{lines[0]} branches on a contact law's, counterpart's or "
                        "shaker's name: ask its object (impactbeams.configuration) instead")
 
 
 def test_the_configuration_check_sees_the_old_branches():
-    """Each form of branch the package had before issue 33 is seen; names in text are not."""
+    """Each form of branch the package had before issue 33 is seen, a table of costs keyed by a
+    law's name too (a law holds its own, `ContactLaw.impact_cycle`); names in text are not."""
     code = ('if p.contact_law == "tied":\n    pass\n'
             'beams = 1 if p.counterpart == "stop" else 2\n'
             'WORDS = {("both", "beam"): "on both clamps"}\n'
@@ -270,8 +307,24 @@ def test_the_configuration_check_sees_the_old_branches():
             'match p.shaker:\n    case "beam2":\n        pass\n'
             'message = "with contact_law = \'tied\' the shaker must carry both clamps"\n'
             'COSTS = {"tied": 1.0}\n')
-    assert _name_branches(ast.parse(code), CONFIGURATION_NAMES, {"COSTS"}) == [1, 3, 4, 5, 6, 7,
-                                                                              8, 10]
+    assert _name_branches(ast.parse(code), CONFIGURATION_NAMES) == [1, 3, 4, 5, 6, 7, 8, 10, 13]
+
+
+def test_the_configuration_check_sees_a_variant_object_compared():
+    """Comparing with a variant's object or its attribute is seen (the forms issue 33 found left
+    in params.py), as is matching one or keying a dict by one; a default argument, a default
+    field and a word read from one are not branches."""
+    code = ("from impactbeams.configuration import BOTH, BELOW as DOWN, STOP, Mount\n"
+            "from impactbeams import configuration\n"
+            "ok = mount.clamps == BOTH.clamps\n"
+            "given = side not in (None, (), configuration.BELOW.name)\n"
+            "if params.partner is STOP:\n    pass\n"
+            "first = mount.clamps[0] == BOTH.clamps[0]\n"
+            "WORDS = {DOWN: 'below'}\n"
+            "match params.mount:\n    case configuration.BEAM1:\n        pass\n"
+            "def place(mount: Mount = BOTH, side: str = DOWN.name):\n    return STOP.words\n"
+            "moves = params.mount.carries_both_clamps\n")
+    assert _variant_branches(ast.parse(code)) == [3, 4, 5, 7, 8, 10]
 
 
 def _settings_records(tree: ast.AST) -> list[int]:

@@ -46,9 +46,24 @@ def _as_json(value):
 
 
 def test_the_constants_are_those_of_the_calibration_file():
+    """costs.py's constants, and each contact law's costs per impacting cycle (issue 33)."""
     constants = json.loads(CALIBRATION.read_text())["constants"]
+    cycle = constants.pop("IMPACT_CYCLE")
     for name, value in constants.items():
         assert _as_json(getattr(costs, name)) == value, name
+    assert cycle == _as_json({kind: {law.name: law.impact_cycle[kind] for law in LAWS.values()
+                                     if kind in law.impact_cycle} for kind in cycle})
+    assert all(set(law.impact_cycle) <= set(cycle) for law in LAWS.values())
+
+
+def test_the_calibration_writes_the_constants_blocks_as_they_are():
+    """The calibration's writer, fed the calibration file, gives the modules' blocks unchanged:
+    the constants are written there by it (a law's costs in configuration.py), not by hand."""
+    calibrate = _load_benchmark("calibrate_costs")
+    constants = json.loads(CALIBRATION.read_text())["constants"]
+    for path, block in calibrate.module_blocks(constants).items():
+        found = calibrate.CONSTANTS_BLOCK.search(path.read_text())
+        assert found and found.group(2) == block, path.name
 
 
 def test_the_calibration_records_its_load():
@@ -108,10 +123,15 @@ def test_the_impact_prediction_follows_the_static_deflection():
     assert not costs.impacts({**values, "force_amplitude": 0.99 * threshold}, 20, 1e4)
 
 
-@pytest.mark.parametrize("kind", list(costs.IMPACT_CYCLE))
-def test_the_cost_per_cycle_grows_with_the_modes(kind):
-    for scale, power in costs.IMPACT_CYCLE[kind].values():
+@pytest.mark.parametrize("law", list(LAWS.values()), ids=list(LAWS))
+def test_the_cost_per_cycle_grows_with_the_modes(law):
+    for scale, power in law.impact_cycle.values():
         assert scale > 0 and power > 0
+
+
+def test_a_law_without_a_tangent_flow_has_no_lyapunov_cost():
+    """Lyapunov exponents need a tangent flow: only such a law is calibrated for them."""
+    assert all(("lyapunov" in law.impact_cycle) == law.tangent_flow for law in LAWS.values())
 
 
 def test_first_impact_cost_grows_with_cells_and_modes():
@@ -332,7 +352,7 @@ def test_a_stop_costs_beam_one_coordinates_only():
     The calibrated cost per cycle grows like n^p (p from the calibration): the stop's estimate is
     that of two beams with half the modes each, 2^-p of the two-beam estimate at the same n_modes.
     """
-    from impactbeams.costs import IMPACT_CYCLE
+    from impactbeams.configuration import SPRING_LAW
     from impactbeams.sweep.definition import sweep_from_mapping
     from impactbeams.sweep.estimate import expected_seconds
 
@@ -346,7 +366,7 @@ def test_a_stop_costs_beam_one_coordinates_only():
     mapping["params"]["counterpart"] = "beam"
     mapping["n_modes"] = 14
     halved = expected_seconds(sweep_from_mapping(mapping))
-    power = IMPACT_CYCLE["long_time"]["spring"][1]  # the calibrated n^p per impacting cycle
+    power = SPRING_LAW.impact_cycle["long_time"][1]  # the calibrated n^p per impacting cycle
     assert stop < 1.05 * 2.0 ** -power * beams  # n modes in all, not 2 n: 2^-p of the work
     assert abs(stop - halved) < 0.2 * halved  # the same work, bar the impacting share's rule
 

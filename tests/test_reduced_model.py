@@ -51,7 +51,8 @@ def test_reduced_model_holds_the_static_correction() -> None:
 
 
 @pytest.mark.parametrize("change", [{"contact_law": "tied"}, {"contact_damping": 0.1},
-                                    {"base_amplitude": 1e-6}])
+                                    {"base_amplitude": 1e-6}, {"contact_side": "above"},
+                                    {"contact_position1": 0.1}, {"contact_position2": 0.1}])
 def test_reduced_model_refuses_what_it_cannot_express(change: dict) -> None:
     name = next(iter(change))
     with pytest.raises(ParameterError, match=f"reduced_model: {name} = "):

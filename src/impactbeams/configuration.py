@@ -12,6 +12,7 @@ the only kernels that dispatch on a law's index or a clamp's motion.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 
 from impactbeams.kernels import layout
 
@@ -26,13 +27,17 @@ class ContactLaw:
     ``projects``: a contact phase of its own modes, entered and left by projections at the
     switches; otherwise the free coordinates are kept through contact, a flow with tangent
     dynamics (Lyapunov exponents, periodic orbits), which a single moving clamp may drive.
-    ``note``: the Datasets' ``contact_law_note``.
+    ``note``: the Datasets' ``contact_law_note``. ``impact_cycle``: what a cycle of an impacting
+    cell costs, by kind of run (``"dynamics"``, ``"lyapunov"``: a tangent flow's only,
+    ``"long_time"``, ``"simulate"``): (a, p) of ``a n^p`` s per cycle at n modes per beam
+    (`impactbeams.costs.dynamics_seconds`), measured by ``benchmarks/calibrate_costs.py``.
     """
 
     name: str
     compliant: bool
     projects: bool
     note: str
+    impact_cycle: Mapping[str, tuple[float, float]] = dataclasses.field(compare=False)
 
     @property
     def index(self) -> int:
@@ -94,6 +99,11 @@ class Mount:
     words: str
     words_at_stop: str
 
+    @property
+    def carries_both_clamps(self) -> bool:
+        """Whether both clamps move (beam 1's and beam 2's, or a stop's mount)."""
+        return all(moves > 0.0 for moves in self.clamps)
+
     def place(self, partner: Counterpart) -> str:
         """Where the shaker sits against ``partner``, e.g. ``"on both clamps"``."""
         return self.words if partner.has_beam2 else self.words_at_stop
@@ -112,16 +122,26 @@ class Mount:
         return tuple(i for i, moves in zip("12", self.clamps, strict=True) if moves)
 
 
+# --- impact-cycle costs from docs/benchmarks/costs.json (benchmarks/calibrate_costs.py) ------
+SPRING_CYCLE = {
+    "dynamics": (1.9e-05, 1.4),
+    "lyapunov": (2.7e-05, 0.81),
+    "long_time": (1.8e-05, 0.72),
+    "simulate": (9.1e-05, 1.2),
+}
+TIED_CYCLE = {"dynamics": (5.2e-06, 1.8), "long_time": (3.3e-06, 1.1), "simulate": (3.9e-05, 1.4)}
+# ----------------------------------------------------------------------------------------------
+
 SPRING_LAW = ContactLaw(
     "spring", compliant=True, projects=False,
     note="compliant tip contact R = -k g - c g' while positive, free coordinates kept in both "
          "phases, static correction of the missed modes; the first contacts and episodes' "
          "totals converge in n_modes, the chaotic trace after the first rattle does not "
-         "(docs/model.md, Compliant contact)")
+         "(docs/model.md, Compliant contact)", impact_cycle=SPRING_CYCLE)
 TIED_LAW = ContactLaw(
     "tied", compliant=False, projects=True,
     note="the paper's tied tips with projections at the switches; results after the first "
-         "impact do not converge in n_modes (docs/model.md)")
+         "impact do not converge in n_modes (docs/model.md)", impact_cycle=TIED_CYCLE)
 BEAM = Counterpart("beam", 2, "", r"$y_2(l_2) - \Delta$", "per beam")
 STOP = Counterpart("stop", 1, "against a stop", r"stop, $-\Delta$", "of beam 1")
 BELOW = Side("below", 1.0, "below beam 1")

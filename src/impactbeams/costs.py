@@ -11,12 +11,13 @@ Numba's disk cache, `impactbeams.compilation`) and the compute, per cell of a sw
   per cycle (below) and mode;
 * the full dynamics: per *cycle*, the horizon over the period of the forcing or of the
   slowest free mode, whichever is shorter (a beam that is not forced fast still rings at its
-  own first mode). A cell that impacts costs ``a n^p`` per cycle (``IMPACT_CYCLE[kind][law]``:
-  the events' searches, the switches and the chatter within an impact grow with the modes, the
-  spring law's switches as n^2, and so do the dynamics observables' peak-force searches); one
-  that never impacts ``FREE_CYCLE n`` (one walk of the free search). Whether a cell impacts is
-  told by `impacts`, from the linear response of beam 1's tip (a Lyapunov run without
-  impact still carries its tangent vectors through every cycle: ``LYAPUNOV_FREE_CYCLE n``).
+  own first mode). A cell that impacts costs ``a n^p`` per cycle, its contact law's
+  (``ContactLaw.impact_cycle[kind]``, `impactbeams.configuration`): the events' searches, the
+  switches and the chatter within an impact grow with the modes, the spring law's switches as
+  n^2, and so do the dynamics observables' peak-force searches; one that never impacts
+  ``FREE_CYCLE n`` (one walk of the free search). Whether a cell impacts is told by
+  `impacts`, from the linear response of beam 1's tip (a Lyapunov run without impact still
+  carries its tangent vectors through every cycle: ``LYAPUNOV_FREE_CYCLE n``).
   The kinds: ``dynamics``
   (a map's run over t_max with its observables), ``lyapunov`` (its windowed run with the
   tangent vectors), ``long_time`` (transient + sampled forcing periods, stroboscopic samples)
@@ -27,9 +28,10 @@ Numba's disk cache, `impactbeams.compilation`) and the compute, per cell of a sw
 Time on T threads: the compute divided by ``THREAD_SPEEDUP[T]`` (measured on 2 cores).
 
 The constants are measured by ``python benchmarks/calibrate_costs.py``, which writes
-docs/benchmarks/costs.json (its ``constants``: ``tests/test_costs.py`` checks that these are
-the same); the measured load average is stored with them. Estimates against the actual times
-of the shipped sweeps and of random runs: docs/limits.md, "Time".
+docs/benchmarks/costs.json (its ``constants``: ``tests/test_costs.py`` checks that these and
+the laws' ``impact_cycle`` are the same); the measured load average is stored with them.
+Estimates against the actual times of the shipped sweeps and of random runs: docs/limits.md,
+"Time".
 """
 
 from __future__ import annotations
@@ -53,12 +55,6 @@ FIRST_IMPACT_CELL = 2.1e-07
 FIRST_IMPACT_MODE = 2.5e-08
 FIRST_IMPACT_ALONE = 4.2e-06
 FIRST_IMPACT_WALK = 5.2e-08
-IMPACT_CYCLE = {
-    "dynamics": {"tied": (5.2e-06, 1.8), "spring": (1.9e-05, 1.4)},
-    "lyapunov": {"spring": (2.7e-05, 0.81)},
-    "long_time": {"tied": (3.3e-06, 1.1), "spring": (1.8e-05, 0.72)},
-    "simulate": {"tied": (3.9e-05, 1.4), "spring": (9.1e-05, 1.2)},
-}
 FREE_CYCLE = 1.7e-07
 LYAPUNOV_FREE_CYCLE = 6.2e-07
 SAMPLING = 1.2e-07
@@ -279,12 +275,12 @@ def dynamics_seconds(values: Mapping[str, Any], law: ContactLaw, n_modes: int, h
                      kind: str, partner: Counterpart = BEAM) -> np.ndarray:
     """Seconds on one core of full-dynamics runs over ``horizon`` (s), per point of ``values``.
 
-    ``kind``: of ``IMPACT_CYCLE`` (dynamics, lyapunov, long_time, simulate); ``law``: the
-    contact law of every point. The constants are per mode of each of two beams: against a
+    ``kind``: of the law's ``impact_cycle`` (dynamics, lyapunov, long_time, simulate); ``law``:
+    the contact law of every point. The constants are per mode of each of two beams: against a
     stop (``partner`` of one beam), beam 1's ``n_modes`` coordinates cost as half as many per
     beam.
     """
-    scale, power = IMPACT_CYCLE[kind][law.name]
+    scale, power = law.impact_cycle[kind]
     free = LYAPUNOV_FREE_CYCLE if kind == "lyapunov" else FREE_CYCLE
     share = impacting_fraction(values, n_modes, horizon)
     per_beam = n_modes * partner.beams / 2

@@ -300,13 +300,18 @@ def reduced_model(params: Params, n_modes: int) -> ReducedModel:
     from impactbeams.contact import build_free_phase, spring_contact
     from impactbeams.params import ParameterError
 
-    for name, value, allowed in (("contact_law", params.contact_law, SPRING_LAW.name),
-                                 ("contact_damping", params.contact_damping, 0.0),
-                                 ("base_amplitude", params.base_amplitude, 0.0),
-                                 ("contact_position1", params.contact_position1, None),
-                                 ("contact_position2", params.contact_position2, None),
-                                 ("contact_side", params.contact_side, BELOW.name)):
-        if value != allowed:
+    law = params.law  # a spring gap element: a compliant law that keeps the free coordinates
+    for name, value, supported, allowed in (
+            ("contact_law", params.contact_law, law.compliant and law.tangent_flow,
+             SPRING_LAW.name),
+            ("contact_damping", params.contact_damping, params.contact_damping == 0.0, 0.0),
+            ("base_amplitude", params.base_amplitude, params.base_amplitude == 0.0, 0.0),
+            ("contact_position1", params.contact_position1, params.contact_position1 is None,
+             None),
+            ("contact_position2", params.contact_position2, params.contact_position2 is None,
+             None),
+            ("contact_side", params.contact_side, params.side.sign > 0.0, BELOW.name)):
+        if not supported:
             raise ParameterError(f"reduced_model: {name} = {value!r}; it supports {allowed!r}"
                                  " only (a linear modal model with a spring gap element)")
     free = build_free_phase(params, n_modes)

@@ -608,7 +608,7 @@ class Params:
         # clearance: not built
         require("base_amplitude", self.base_amplitude,
                 self.base_amplitude == 0.0 or self.law.tangent_flow
-                or self.mount.clamps == BOTH.clamps,
+                or self.mount.carries_both_clamps,
                 "with contact_law = 'tied' the shaker must carry both clamps (shaker = 'both', "
                 f"not {self.shaker!r}), or use contact_law = 'spring'")
 
@@ -817,8 +817,8 @@ class Params:
         # floats, names and frozen parts only: no deep copy needed (dataclasses.asdict's cost)
         user = self.structure1 is not None
         return {field.name: getattr(self, field.name) for field in _FIELDS()
-                if (field.name not in _ONLY_IF_GIVEN or getattr(self, field.name)
-                    not in (None, (), configuration.BELOW.name))
+                if (field.name not in _ONLY_IF_GIVEN
+                    or getattr(self, field.name) != field.default)
                 and not (user and field.name in _EQUIVALENT_BEAM1)}
 
     def replace(self, **changes: Any) -> Params:
@@ -938,8 +938,9 @@ def fold_contacts(values: Mapping[str, Any], source: str) -> dict[str, Any]:
             "must be a tuple of impactbeams.Contact (in a TOML file: an array of tables, "
             "[[params.contacts]])")
     contacts = tuple(as_contact(f"{CONTACTS}[{i}]", c) for i, c in enumerate(contacts))
+    defaults = {field.name: field.default for field in _FIELDS()}
     for key in _CONTACT_PLACE:  # a copy (dataclasses.replace) passes the default side whole
-        if contacts and values.get(key) not in (None, configuration.BELOW.name):
+        if contacts and values.get(key) not in (None, defaults[key]):
             raise ParameterError(
                 f"{key} = {values[key]!r} in {source} is not allowed with {CONTACTS}: give each "
                 f"contact's point and side in its Contact, or one contact by the flat keys")
