@@ -12,7 +12,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from impactbeams.configuration import MOUNTS
 from impactbeams.modes import beam, participation
 from impactbeams.params import require
 
@@ -34,11 +33,6 @@ def drive_summary(params: Params) -> str:
             " (the stop moves with the shaker: shaker = 'beam1' keeps it fixed)" if moving_stop
             else ""))
     return (f"drives: {'; '.join(drives) or 'none'}; Omega = {params.omega:g} rad/s")
-
-
-def moving_clamps(shaker: str) -> tuple[float, float]:
-    """(1.0 if beam 1's clamp moves else 0.0, likewise beam 2's) for a ``shaker`` value."""
-    return MOUNTS[shaker].clamps
 
 
 def check_steady(params: Params, free: FreePhase) -> None:

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike
 from scipy.optimize import brentq
 
 from impactbeams.contact import build_free_phase
-from impactbeams.drive import base_participation, moving_clamps
+from impactbeams.drive import base_participation
 from impactbeams.params import (
     GRAZING_BRACKETS,
     MAX_MODES,
@@ -102,7 +102,7 @@ class LinearGap:
         require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
         require_integer("n_modes", n_modes, 1, MAX_MODES)
         free = build_free_phase(params, n_modes)
-        moves1, moves2 = moving_clamps(params.shaker)
+        moves1, moves2 = params.mount.clamps
         self.params = params
         self.frequencies = free.frequencies
         self.weights = free.gap_weights        # the gap's weight of each free coordinate

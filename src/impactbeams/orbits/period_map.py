@@ -25,7 +25,6 @@ from scipy.optimize import brentq, minimize_scalar
 
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact.spring import recommended_modes
-from impactbeams.drive import moving_clamps
 from impactbeams.kernels import contact
 from impactbeams.kernels.layout import (
     CONTACT,
@@ -400,7 +399,7 @@ class PeriodMap:
         phase, q, v = grid_states
         tips = tips_of(self.packed, phase, times, q, v)
         relative = self._largest(trajectory, times, tips, TIP_Y1, True)
-        moves1, _ = moving_clamps(self.params.shaker)
+        moves1, _ = self.params.mount.clamps
         absolute = (self._largest(trajectory, times, tips, TIP_Y1, False)
                     if moves1 * self.params.base_amplitude else relative)
         beam2 = (self._largest(trajectory, times, tips, TIP_Y2, False)
@@ -412,7 +411,7 @@ class PeriodMap:
 
         Its velocity (m/s) if ``rate``.
         """
-        moves1, _ = moving_clamps(self.params.shaker)
+        moves1, _ = self.params.mount.clamps
         omega_t = self.params.omega * times
         if rate:
             return moves1 * self.params.base_amplitude * self.params.omega * np.cos(omega_t)
