@@ -38,6 +38,7 @@ from impactbeams.continuation.events import (
     GRAZING,
     PERIOD_DOUBLING,
     Located,
+    continuous_root,
     detected,
     grazing_test,
     interval_test,
@@ -423,10 +424,14 @@ def _between(follower: Follower, a: Point, b: Point,
     for label, test in found:
         if not _brackets(test, a, b):
             continue
-        s, before, _, _ = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
-                                 follower.settings.locate_tolerance)
+        root = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
+                      follower.settings.locate_tolerance)
+        if not continuous_root(test, a, b, root):
+            # the test jumps there (the multiplier it follows changed kind: a pair turned
+            # real), no bifurcation; a crossing may lie on either side of the jump
+            return _beside_jump(follower, a, b, root, depth)
         # (``a`` itself when the root is there: it replaces ``a`` on the branch, `_append`)
-        located.append((s, dataclasses.replace(before, label=label)))
+        located.append((root.s, dataclasses.replace(root.before, label=label)))
     if depth < MAX_SUBDIVISIONS and not all(same_piece(a, point) for _, point in located):
         # the contacts changed and changed back within the step: two nonsmooth events hide
         middle = point_at(0.5 * float(normal @ (b.x - origin)))
@@ -434,6 +439,21 @@ def _between(follower: Follower, a: Point, b: Point,
             return (_advance(follower, a, middle, depth + 1)
                     + _advance(follower, middle, b, depth + 1))
     return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
+
+
+def _beside_jump(follower: Follower, a: Point, b: Point, jump: Located,
+                 depth: int) -> list[Point]:
+    """The bifurcations from ``a`` to ``b`` on both sides of a test's ``jump``, then ``b``.
+
+    Each side is searched on its own (``MAX_SUBDIVISIONS`` deep at most); the jump's bracket
+    only served the search: the branch keeps what was located, and b.
+    """
+    if depth >= MAX_SUBDIVISIONS:
+        return [b]
+    sides = [(a, jump.before)] + ([(jump.beyond, b)] if jump.beyond is not None else [])
+    found = [point for start, end in sides if end is not start
+             for point in _advance(follower, start, end, depth + 1)]
+    return [point for point in found if point.label] + [b]
 
 
 def _may_hide_crossings(a: Point, b: Point, crossings: int) -> bool:

@@ -246,6 +246,32 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
                    _pinned(low, high, start, test) if may_jump or high[2] is None else True)
 
 
+def continuous_root(test: Callable[[Point], float], start: Point, end: Point,
+                    located: Located) -> bool:
+    """Whether the root of a smooth bifurcation's ``test`` that `locate` bracketed is one.
+
+    ``start`` and ``end``: the step searched (``test`` changes sign between them). A
+    multiplier that crosses the unit circle, or a tangent's parameter part through 0, makes
+    a test continuous across its root: as the bracket narrows, the test's values at its ends
+    go to 0 with it. The jump between them must then be within ``ROOT_MARGIN`` times the
+    step's mean slope times the bracket's width (both in x~ norms), which also puts the
+    located point's multiplier on the circle to the parameter's tolerance times the slope.
+    Where the multiplier the test follows changes kind instead (a complex pair outside the
+    circle meets on the real axis: the largest pair's |mu| - 1 jumps from that pair's to the
+    next's), the jump stays as the bracket narrows: no bifurcation. Without a corrected point
+    beyond, the near end's value alone must be that small.
+    """
+    before, beyond = located.before, located.beyond
+    step = float(np.linalg.norm(end.x - start.x))
+    slope = abs(test(end) - test(start)) / step if step > 0.0 else math.inf
+    if beyond is None:
+        width, jump = step - float(np.linalg.norm(before.x - start.x)), abs(test(before))
+    else:
+        width = float(np.linalg.norm(beyond.x - before.x))
+        jump = abs(test(beyond) - test(before))
+    return bool(jump <= ROOT_MARGIN * slope * width)  # False for a NaN (no value)
+
+
 def _pinned(low: Bracket, high: Bracket, start: Point, test: Callable[[Point], float]) -> bool:
     """Whether the test's value at an end of the bracket is small enough for a root in it.
 
