@@ -461,15 +461,20 @@ def _may_hide_crossings(a: Point, b: Point, crossings: int) -> bool:
 
     A crossing hidden at the step's ends (a pair that leaves and returns, a second pair
     that leaves with it) needs a multiplier other than the detected ones near the circle at
-    either end: within ``NEAR_CIRCLE`` times the most any modulus changed over the step.
-    Elsewhere (a stiff contact's branch: every multiplier but the crossing one far inside)
-    the step is searched without sampling it.
+    either end: within ``NEAR_CIRCLE`` times the most any modulus changed over the step. A
+    complex pair is one multiplier here, as it is one crossing (a Neimark-Sacker point):
+    counted twice, every step over a Neimark-Sacker point was sampled (most of the samples
+    of the stiff stop's branch, a sixth of its time). Elsewhere (a stiff contact's branch:
+    every multiplier but the crossing one far inside) the step is searched without sampling.
     """
-    moduli = [np.sort(np.abs(point.evaluation.multipliers)) for point in (a, b)]
+    multipliers = [point.evaluation.multipliers for point in (a, b)]
+    moduli = [np.sort(np.abs(mu)) for mu in multipliers]
     if moduli[0].size != moduli[1].size:
         return True
     near = NEAR_CIRCLE * float(np.max(np.abs(moduli[1] - moduli[0]), initial=0.0))
-    return max(int(np.count_nonzero(np.abs(m - 1.0) <= near)) for m in moduli) > crossings
+    # of each conjugate pair only the member above the real axis (eigvals gives exact pairs)
+    return max(int(np.count_nonzero((np.abs(np.abs(mu) - 1.0) <= near) & (mu.imag >= 0.0)))
+               for mu in multipliers) > crossings
 
 
 def _brackets(test: Callable[[Point], float], a: Point, b: Point) -> bool:
