@@ -21,7 +21,9 @@ symmetric orbit, docs/continuation.md).
 
 The root is sought on the secant plane of the first point (`Follower.at_arclength`), by the
 Illinois variant of regula falsi, until the parameter is known to ``locate_tolerance``: the
-arclength bracket times the largest parameter rate |t_p| at its ends.
+arclength bracket times the largest parameter rate |t_p| at its ends. It is a bifurcation only
+if the test is continuous across it (`continuous_root`): a test whose multiplier changes kind
+in the step (a pair turned real) jumps there instead.
 """
 
 from __future__ import annotations
