@@ -348,9 +348,10 @@ def _zoom(axes: Axes, x: np.ndarray, y: np.ndarray, dataset: xr.Dataset, narrow:
           kinds: list[_Kind], clear: list[Bbox]) -> list[Bbox]:
     """The ``narrow`` points' branches drawn again, zoomed, in an inset where it fits.
 
-    The inset (``INSET_SIZE``, with room for its tick labels) goes at the first place tried
-    as the legend's that covers no line, marker, legend or box of ``clear``; a frame marks its
-    window on the axes. Returns its box (axes fractions) to keep clear, none if no room.
+    The inset (``INSET_SIZE``, with room for its tick labels) goes at the place nearest its
+    window, of those tried for the legend, that covers no line, marker, legend or box of
+    ``clear``; a frame marks its window on the axes, joined to the inset. Returns its box
+    (axes fractions) to keep clear, none if no room.
     """
     figure = axes.get_figure(root=True)
     to_pixels = figure.dpi / 72.0
@@ -365,7 +366,9 @@ def _zoom(axes: Axes, x: np.ndarray, y: np.ndarray, dataset: xr.Dataset, narrow:
     free = Room(np.vstack(taken), _segments(axes.lines))
     margin = LEGEND_MARGIN * to_pixels
     shrunk = Bbox([[inside.x0 + room[0], inside.y0 + room[1]], [inside.x1, inside.y1]])
-    for corner in _legend_corners(shrunk, size, margin):
+    window = axes.transData.transform([np.mean(x[narrow]), np.nanmean(y[narrow])])
+    for corner in sorted(_legend_corners(shrunk, size, margin),
+                         key=lambda corner: float(np.hypot(*(corner + size / 2 - window)))):
         box = np.concatenate([corner - room - margin, corner + size + margin])
         if free.is_free(box, None, 0):
             break
