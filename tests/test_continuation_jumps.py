@@ -11,6 +11,7 @@ Here synthetic multipliers along a line s in [0, 1] (x~ = (0, s), the parameter 
 exactly by a stand-in follower, are searched by the branch's own `_between`.
 """
 
+import math
 import types
 
 import numpy as np
@@ -18,7 +19,13 @@ import pytest
 
 from impactbeams.continuation.arclength import Point, Settings
 from impactbeams.continuation.branch import _between
-from impactbeams.continuation.events import NEIMARK_SACKER, continuous_root, detected, locate
+from impactbeams.continuation.events import (
+    NEIMARK_SACKER,
+    PERIOD_DOUBLING,
+    continuous_root,
+    detected,
+    locate,
+)
 from impactbeams.continuation.problem import Evaluation
 
 TURNS_REAL = 0.5  # where the pair outside the circle meets the real axis
@@ -38,22 +45,26 @@ def outside_pair_turning_real(s):
     return [2.35 + 0.1 * s + split, 2.35 + 0.1 * s - split, *pair(1.5e-3, 1.5)]
 
 
-def line(multipliers):
-    """A stand-in follower whose point at s carries ``multipliers(s)``, its points, the ends."""
+def line(multipliers, rate=1.0):
+    """A stand-in follower whose point at s carries ``multipliers(s)``, its points, the ends.
+
+    The line x~ = s (sqrt(1 - rate^2), rate): the parameter (x~'s last) changes at ``rate``.
+    """
+    tangent = np.array([math.sqrt(1.0 - rate ** 2), rate])
 
     def point_at(s):
         evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)),
                                 np.array(multipliers(s), complex))
-        return Point(np.array([0.0, s]), np.array([0.0, 1.0]), evaluation, 1)
+        return Point(s * tangent, tangent, evaluation, 1)
 
     follower = types.SimpleNamespace(
         settings=Settings(),
-        correct=lambda x, normal, _: types.SimpleNamespace(point=point_at(float(x[1]))))
+        correct=lambda x, normal, _: types.SimpleNamespace(point=point_at(float(x @ tangent))))
     return follower, point_at, point_at(0.0), point_at(1.0)
 
 
 def labelled(points):
-    return [(point.label, float(point.x[1]), point.evaluation.multipliers)
+    return [(point.label, float(np.linalg.norm(point.x)), point.evaluation.multipliers)
             for point in points if point.label]
 
 
@@ -66,7 +77,7 @@ def test_a_pair_outside_turning_real_is_no_neimark_sacker():
     assert label == NEIMARK_SACKER and test(a) > 1.3 and test(b) < -0.99
     jump = locate(point_at, a, 1.0, b, test, 1e-11)
     assert jump.s < TURNS_REAL <= float(jump.beyond.x[1])  # pinned at the jump
-    assert not continuous_root(test, a, b, jump)
+    assert not continuous_root(test, a, b, jump, 1e-11)
     assert labelled(_between(follower, a, b)) == []
 
 
@@ -95,3 +106,16 @@ def test_a_true_neimark_sacker_is_located_on_the_circle(rate):
     ((label, s, mu),) = labelled(_between(follower, a, b))
     assert label == NEIMARK_SACKER and s == pytest.approx(0.3, abs=1e-11)
     assert np.abs(np.abs(mu[mu.imag != 0]) - 1.0).max() <= 1e-9
+
+
+def test_a_period_doubling_where_the_branch_is_vertical_is_located_on_the_circle():
+    """The parameter changes at 1e-13 of the arclength (a branch vertical in it, as the stiff
+    stop's period-2 branch going down at 160.40 rad/s): the step's ends already pin the
+    parameter to 1e-11, and main labelled the step's start, |mu| 0.97 (on the beams, 0.456).
+    The bracket is now narrowed until the multiplier is on the circle: to 1e3 times its mean
+    slope (0.1) times the arclength tolerance 1e-11. (The other multipliers far from the circle:
+    the step is not sampled.)"""
+    follower, _, a, b = line(lambda s: [-(0.97 + 0.1 * s), 0.3, 0.2], rate=1e-13)
+    ((label, s, mu),) = labelled(_between(follower, a, b))
+    assert label == PERIOD_DOUBLING and s == pytest.approx(0.3, abs=1e-8)
+    assert abs(abs(mu[0]) - 1.0) <= 1e-9

@@ -43,6 +43,7 @@ from impactbeams.continuation.events import (
     grazing_test,
     interval_test,
     locate,
+    near_zero,
 )
 from impactbeams.continuation.problem import Problem
 from impactbeams.params import ParameterError
@@ -424,9 +425,10 @@ def _between(follower: Follower, a: Point, b: Point,
     for label, test in found:
         if not _brackets(test, a, b):
             continue
-        root = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
-                      follower.settings.locate_tolerance)
-        if not continuous_root(test, a, b, root):
+        tolerance = follower.settings.locate_tolerance
+        root = locate(point_at, a, float(normal @ (b.x - origin)), b, test, tolerance,
+                      near_zero(test, a, b, tolerance))
+        if not continuous_root(test, a, b, root, tolerance):
             # the test jumps there (the multiplier it follows changed kind: a pair turned
             # real), no bifurcation; a crossing may lie on either side of the jump
             return _beside_jump(follower, a, b, root, depth)
