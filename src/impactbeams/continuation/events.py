@@ -263,6 +263,7 @@ def near_zero(test: Callable[[Point], float], start: Point, end: Point,
 
 
 def _mean_slope(test: Callable[[Point], float], start: Point, end: Point) -> float:
+    """|test(end) - test(start)| over the distance between them in x~."""
     step = float(np.linalg.norm(end.x - start.x))
     return abs(test(end) - test(start)) / step if step > 0.0 else math.inf
 
@@ -278,7 +279,7 @@ def continuous_root(test: Callable[[Point], float], start: Point, end: Point,
     step's mean slope times the bracket's width (both in x~ norms), and the near end's value
     within `near_zero` (``tolerance``: the arclength's, x~). Where the multiplier the test
     follows changes kind instead (a complex pair outside the circle meets on the real axis:
-    the largest pair's |mu| - 1 jumps from that pair's to the next's), the jump stays as the
+    the test jumps from that pair's |mu| - 1 to another pair's), the jump stays as the
     bracket narrows: no bifurcation. Without a corrected point beyond, the near end's value
     alone must be that small.
     """
