@@ -324,6 +324,25 @@ def test_a_step_is_sampled_for_hidden_crossings_where_another_multiplier_is_near
     assert _may_hide_crossings(a, b, crossings=1) == sampled
 
 
+@pytest.mark.parametrize(("second", "sampled"), [(None, False), (0.95, True)])
+def test_a_complex_pair_is_one_multiplier_near_the_circle(second, sampled):
+    """A pair crossing the circle (a Neimark-Sacker point, moduli 1.02 to 0.98) is one
+    crossing: its conjugate is not another multiplier that could hide a crossing (main
+    counted it, and sampled every step over a Neimark-Sacker point in 16 pieces); a second
+    pair within 4 x 0.04 of the circle is."""
+    from impactbeams.continuation.branch import _may_hide_crossings
+
+    def point(modulus):
+        pairs = [modulus] + ([] if second is None else [second])
+        angles = (0.7, 2.1)[:len(pairs)]
+        mu = [r * np.exp(s * 1j * angle) for r, angle in zip(pairs, angles, strict=True)
+              for s in (1, -1)]
+        evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)), np.array([*mu, 0.3], complex))
+        return Point(np.zeros(2), np.array([0.0, 1.0]), evaluation, 1)
+
+    assert _may_hide_crossings(point(1.02), point(0.98), crossings=1) == sampled
+
+
 @pytest.mark.parametrize(("options", "refused"), [
     (["--slice", "omega=200"], "values (--slice) = {'omega': '200'} is not allowed"),
     (["--slice", "bogus=1"], "values (--slice) = {'bogus': '1'} is not allowed"),

@@ -10,6 +10,9 @@ marker, no event label covers a branch, the period-2 branch shows over the perio
 its markers while the period-1 one shows beside it.
 """
 
+import itertools
+import re
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -19,7 +22,7 @@ from matplotlib.text import Annotation, Text
 from matplotlib.transforms import Bbox
 
 from impactbeams.plotting import plot_dataset
-from impactbeams.plotting.branches import place_legend
+from impactbeams.plotting.branches import MARKERS, place_legend
 from impactbeams.variables import BIFURCATIONS, attributes, parameter_attributes
 
 SHAKER = {"l1": 0.2, "width1": 0.02, "thickness1": 0.001, "counterpart": "stop",
@@ -37,24 +40,27 @@ EVENTS = ("period_doubling", "neimark_sacker", "grazing", "fold", "contact_merge
           "contact_split")
 
 
-def stiff_shaped_branches():
-    """The period-1 branch along KNOTS, an event every 5th point of its impacting part, and
-    a stable period-2 branch from a doubling at 130 rad/s to 150 rad/s, 0.4 % above it."""
+def stiff_shaped_branches(every=5, period_two=(130.0, 150.0), upper=True):
+    """The period-1 branch along KNOTS, an event every ``every``-th point of its impacting
+    part, and a stable period-2 branch from a doubling at ``period_two[0]`` rad/s to
+    ``period_two[1]``, 0.4 % above the upper part (or the unstable part, not ``upper``)."""
     t = np.linspace(0.0, len(KNOTS) - 1, PER_KNOT * (len(KNOTS) - 1) + 1)
     knots = np.array(KNOTS)
     omega = np.interp(t, np.arange(len(KNOTS)), knots[:, 0])
     amplitude = np.interp(t, np.arange(len(KNOTS)), knots[:, 1])
     stable = ((t <= TOP) | (t >= FOLD)).astype(np.int8)
     codes = np.zeros(t.size, np.int8)
-    impacting = np.flatnonzero((t >= 2) & (t <= FOLD))[::5]
+    impacting = np.flatnonzero((t >= 2) & (t <= FOLD))[::every]
     codes[impacting] = [BIFURCATIONS.index(EVENTS[i % len(EVENTS)])
                         for i in range(impacting.size)]
-    on_top = (omega >= 130.0) & (omega <= 150.0) & (t < TOP)
-    doubling = np.flatnonzero(on_top)[0]
+    part = (t < TOP) if upper else (t > TOP) & (t < FOLD)
+    on_part = (omega >= period_two[0]) & (omega <= period_two[1]) & part
+    doubling = np.flatnonzero(on_part)[0]
     codes[doubling] = BIFURCATIONS.index("period_doubling")
-    period_two = np.linspace(130.0, 150.0, 120)
-    upper = t < TOP
-    period_two_amplitude = 1.004 * np.interp(period_two, omega[upper], amplitude[upper])
+    order = np.argsort(omega[part])
+    period_two_amplitude = 1.004 * np.interp(np.linspace(*period_two, 120),
+                                             omega[part][order], amplitude[part][order])
+    period_two = np.linspace(*period_two, 120)
     variables = {
         "omega": np.concatenate([omega, period_two]),
         "tip_amplitude_1": np.concatenate([amplitude, period_two_amplitude]),
@@ -203,3 +209,80 @@ def test_the_stiff_cases_figure_says_its_drive_in_millimetres(figure):
     styles = {line.get_label(): line.get_linestyle() for line in axes.lines
               if line.get_label() in ("stable", "unstable")}
     assert styles == {"stable": "-", "unstable": "--"}
+
+
+NARROW_PERIOD_TWO = (160.16, 160.60)  # rad/s: the stiff case's period-2 branch going down
+
+
+def crowded_with_a_narrow_period_two_branch():
+    """An event at every point of the impacting part (205 along 0.66 of the axes' width: as
+    crowded as the stiff case at its default contact), and the period-2 branch 0.44 of 197
+    rad/s wide on the unstable part, as the stiff case's going down."""
+    return stiff_shaped_branches(every=1, period_two=NARROW_PERIOD_TWO, upper=False)
+
+
+@pytest.fixture
+def crowded(captured, tmp_path):
+    plot_dataset(crowded_with_a_narrow_period_two_branch(), tmp_path / "crowded.png")
+    (drawn,) = captured
+    return drawn
+
+
+def _event_lines(axes):
+    return [line for line in axes.lines if re.match(r"^[A-Z]+: ", line.get_label())]
+
+
+def test_a_crowded_curves_markers_stand_apart_and_every_event_is_a_tick(crowded):
+    """Main drew a marker at each of the 206 events, one over the other; now no two markers
+    on the curve meet, and each event is a tick in the strip under the curves, a row per
+    kind, at its parameter."""
+    axes = crowded.axes[0]
+    boxes = [box for line in _event_lines(axes) for box in _markers(line)]
+    assert not any(a.overlaps(b) for a, b in itertools.combinations(boxes, 2))
+    dataset = crowded_with_a_narrow_period_two_branch()
+    codes, omega = dataset.bifurcation.values, dataset.omega.values
+    rows = {line.get_label().removeprefix("_strip "): np.asarray(line.get_xdata())[::3]
+            for line in axes.lines if line.get_label().startswith("_strip ")}
+    assert sum(ticks.size for ticks in rows.values()) == np.count_nonzero(codes)
+    for kind in EVENTS:
+        short = MARKERS[kind][1]
+        assert np.array_equal(np.sort(rows[short]),
+                              np.sort(omega[codes == BIFURCATIONS.index(kind)]))
+
+
+def test_a_narrow_period_two_branch_is_zoomed_in_an_inset_drawn_above(crowded):
+    """0.44 of 197 rad/s: on main a line 2 pixels long among the markers, not to be found.
+    Now an inset shows its window, its line over the period-1 branch's and the markers, its
+    colour at each of its points in the rendered pixels; the inset covers no line or marker
+    of the axes, nor the legend, and the legend says where the branch is drawn."""
+    axes = crowded.axes[0]
+    (inset,) = axes.child_axes
+    low, high = inset.get_xlim()
+    width = NARROW_PERIOD_TWO[1] - NARROW_PERIOD_TWO[0]
+    assert low < NARROW_PERIOD_TWO[0] and NARROW_PERIOD_TWO[1] < high and high - low < 2 * width
+    (two,) = [line for line in inset.lines if line.get_color() == "C1"]
+    assert all(two.get_zorder() > line.get_zorder() for line in inset.lines if line is not two)
+    image = _rendered(crowded)
+    points = inset.transData.transform(np.column_stack([two.get_xdata(), two.get_ydata()]))
+    assert max(_colour_near(image, crowded, xy, "C1") for xy in points) < 0.3
+    renderer = crowded.canvas.get_renderer()
+    box = inset.get_tightbbox(renderer)
+    for line, path in _paths(axes):
+        if line.get_linestyle() not in ("None", ""):
+            assert not path.intersects_bbox(box, filled=False), line.get_label()
+        assert not any(marker.overlaps(box) for marker in _markers(line)), line.get_label()
+    assert not axes.get_legend().get_window_extent(renderer).overlaps(box)
+    assert "branch 1 (period 2; inset)" in [t.get_text() for t in axes.get_legend().get_texts()]
+
+
+def test_a_narrow_branch_without_room_for_an_inset_says_its_range(captured, tmp_path):
+    """A curve that sweeps the whole axes leaves no room: the legend gives the range."""
+    dataset = crowded_with_a_narrow_period_two_branch()
+    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, dataset.omega.size))) * 8e-4
+    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
+                                                 dataset.tip_amplitude_1.attrs)),
+                 tmp_path / "full.png")
+    axes = captured[0].axes[0]
+    assert axes.child_axes == []
+    assert ("branch 1 (period 2; 160.16 to 160.60 rad/s)"
+            in [t.get_text() for t in axes.get_legend().get_texts()])

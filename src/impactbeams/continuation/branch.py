@@ -38,10 +38,12 @@ from impactbeams.continuation.events import (
     GRAZING,
     PERIOD_DOUBLING,
     Located,
+    continuous_root,
     detected,
     grazing_test,
     interval_test,
     locate,
+    near_zero,
 )
 from impactbeams.continuation.problem import Problem
 from impactbeams.params import ParameterError
@@ -423,10 +425,15 @@ def _between(follower: Follower, a: Point, b: Point,
     for label, test in found:
         if not _brackets(test, a, b):
             continue
-        s, before, _, _ = locate(point_at, a, float(normal @ (b.x - origin)), b, test,
-                                 follower.settings.locate_tolerance)
+        tolerance = follower.settings.locate_tolerance
+        root = locate(point_at, a, float(normal @ (b.x - origin)), b, test, tolerance,
+                      near_zero(test, a, b, tolerance))
+        if not continuous_root(test, a, b, root, tolerance):
+            # the test jumps there (the multiplier it follows changed kind: a pair turned
+            # real), no bifurcation; a crossing may lie on either side of the jump
+            return _beside_jump(follower, a, b, root, depth)
         # (``a`` itself when the root is there: it replaces ``a`` on the branch, `_append`)
-        located.append((s, dataclasses.replace(before, label=label)))
+        located.append((root.s, dataclasses.replace(root.before, label=label)))
     if depth < MAX_SUBDIVISIONS and not all(same_piece(a, point) for _, point in located):
         # the contacts changed and changed back within the step: two nonsmooth events hide
         middle = point_at(0.5 * float(normal @ (b.x - origin)))
@@ -436,20 +443,40 @@ def _between(follower: Follower, a: Point, b: Point,
     return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
 
 
+def _beside_jump(follower: Follower, a: Point, b: Point, jump: Located,
+                 depth: int) -> list[Point]:
+    """The bifurcations from ``a`` to ``b`` on both sides of a test's ``jump``, then ``b``.
+
+    Each side is searched on its own (``MAX_SUBDIVISIONS`` deep at most); the jump's bracket
+    only served the search: the branch keeps what was located, and b.
+    """
+    if depth >= MAX_SUBDIVISIONS:
+        return [b]
+    sides = [(a, jump.before)] + ([(jump.beyond, b)] if jump.beyond is not None else [])
+    found = [point for start, end in sides if end is not start
+             for point in _advance(follower, start, end, depth + 1)]
+    return [point for point in found if point.label] + [b]
+
+
 def _may_hide_crossings(a: Point, b: Point, crossings: int) -> bool:
     """Whether more multipliers than the ``crossings`` detected could cross within the step.
 
     A crossing hidden at the step's ends (a pair that leaves and returns, a second pair
     that leaves with it) needs a multiplier other than the detected ones near the circle at
-    either end: within ``NEAR_CIRCLE`` times the most any modulus changed over the step.
-    Elsewhere (a stiff contact's branch: every multiplier but the crossing one far inside)
-    the step is searched without sampling it.
+    either end: within ``NEAR_CIRCLE`` times the most any modulus changed over the step. A
+    complex pair is one multiplier here, as it is one crossing (a Neimark-Sacker point):
+    counted twice, every step over a Neimark-Sacker point was sampled (most of the samples
+    of the stiff stop's branch, a sixth of its time). Elsewhere (a stiff contact's branch:
+    every multiplier but the crossing one far inside) the step is searched without sampling.
     """
-    moduli = [np.sort(np.abs(point.evaluation.multipliers)) for point in (a, b)]
+    multipliers = [point.evaluation.multipliers for point in (a, b)]
+    moduli = [np.sort(np.abs(mu)) for mu in multipliers]
     if moduli[0].size != moduli[1].size:
         return True
     near = NEAR_CIRCLE * float(np.max(np.abs(moduli[1] - moduli[0]), initial=0.0))
-    return max(int(np.count_nonzero(np.abs(m - 1.0) <= near)) for m in moduli) > crossings
+    # of each conjugate pair only the member above the real axis (eigvals gives exact pairs)
+    return max(int(np.count_nonzero((np.abs(np.abs(mu) - 1.0) <= near) & (mu.imag >= 0.0)))
+               for mu in multipliers) > crossings
 
 
 def _brackets(test: Callable[[Point], float], a: Point, b: Point) -> bool:

@@ -21,7 +21,9 @@ symmetric orbit, docs/continuation.md).
 
 The root is sought on the secant plane of the first point (`Follower.at_arclength`), by the
 Illinois variant of regula falsi, until the parameter is known to ``locate_tolerance``: the
-arclength bracket times the largest parameter rate |t_p| at its ends.
+arclength bracket times the largest parameter rate |t_p| at its ends. It is a bifurcation only
+if the test is continuous across it (`continuous_root`): a test whose multiplier changes kind
+in the step (a pair turned real) jumps there instead.
 """
 
 from __future__ import annotations
@@ -244,6 +246,54 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
             side = 1
     return Located(low[0], low[2], high[2],
                    _pinned(low, high, start, test) if may_jump or high[2] is None else True)
+
+
+def near_zero(test: Callable[[Point], float], start: Point, end: Point,
+              tolerance: float) -> float:
+    """How near 0 a smooth bifurcation's ``test`` must be where it is located.
+
+    ``ROOT_MARGIN`` times the test's mean slope over the step from ``start`` to ``end`` times
+    ``tolerance`` (x~): the multiplier on the circle, or the tangent's parameter part at 0, as
+    a bracket of that arclength puts it. (Where the branch is nearly vertical in the parameter,
+    a bracket far wider already pins the parameter, and its near end's multiplier may be far
+    from the circle: e.g. |mu| 0.456 for a period doubling on the stiff stop's period-2 branch
+    going down at 160.40 rad/s, the step's other end at 1.26.)
+    """
+    return ROOT_MARGIN * _mean_slope(test, start, end) * tolerance
+
+
+def _mean_slope(test: Callable[[Point], float], start: Point, end: Point) -> float:
+    """|test(end) - test(start)| over the distance between them in x~."""
+    step = float(np.linalg.norm(end.x - start.x))
+    return abs(test(end) - test(start)) / step if step > 0.0 else math.inf
+
+
+def continuous_root(test: Callable[[Point], float], start: Point, end: Point,
+                    located: Located, tolerance: float) -> bool:
+    """Whether the root of a smooth bifurcation's ``test`` that `locate` bracketed is one.
+
+    ``start`` and ``end``: the step searched (``test`` changes sign between them). A
+    multiplier that crosses the unit circle, or a tangent's parameter part through 0, makes
+    a test continuous across its root: as the bracket narrows, the test's values at its ends
+    go to 0 with it. The jump between them must then be within ``ROOT_MARGIN`` times the
+    step's mean slope times the bracket's width (both in x~ norms), and the near end's value
+    within `near_zero` (``tolerance``: the arclength's, x~). Where the multiplier the test
+    follows changes kind instead (a complex pair outside the circle meets on the real axis:
+    the test jumps from that pair's |mu| - 1 to another pair's), the jump stays as the
+    bracket narrows: no bifurcation. Without a corrected point beyond, the near end's value
+    alone must be that small.
+    """
+    before, beyond = located.before, located.beyond
+    slope = _mean_slope(test, start, end)
+    if beyond is None:
+        width = float(np.linalg.norm(end.x - start.x) - np.linalg.norm(before.x - start.x))
+        jump = abs(test(before))
+    else:
+        width = float(np.linalg.norm(beyond.x - before.x))
+        jump = abs(test(beyond) - test(before))
+    # (False for a NaN: no value)
+    return bool(jump <= ROOT_MARGIN * slope * width
+                and abs(test(before)) <= near_zero(test, start, end, tolerance))
 
 
 def _pinned(low: Bracket, high: Bracket, start: Point, test: Callable[[Point], float]) -> bool:

@@ -1,11 +1,12 @@
 """Frequency-response curves: a continuation's branches against the continued parameter.
 
 Stable orbits solid, unstable dashed, one colour per branch, events marked and labelled (the
-labels placed apart, `place_labels`; which kinds, `impactbeams.plotting.events`); optionally
-over a brute-force bifurcation diagram (its stroboscopic samples as grey dots, against the
-branches' own samples ``section_deflection_1``: p curves for a period-p branch, one per section
-t = k T). Lengths and forces are drawn in the prefixed units of their size (µm, mm, mN), never
-in metres with an offset; Omega in rad/s, or in Hz if asked.
+labels placed apart, `place_labels`; which kinds, `impactbeams.plotting.events`; a crowded
+curve's events as ticks in a strip under it; a narrow period-p branch zoomed in an inset);
+optionally over a brute-force bifurcation diagram (its stroboscopic samples as grey dots,
+against the branches' own samples ``section_deflection_1``: p curves for a period-p branch, one
+per section t = k T). Lengths and forces are drawn in the prefixed units of their size (µm,
+mm, mN), never in metres with an offset; Omega in rad/s, or in Hz if asked.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.text import Annotation, Text
+from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import Bbox
 
 from impactbeams.params import ParameterError
@@ -45,6 +47,19 @@ MARKER_SIZE, SMALL_MARKER_SIZE = 6.0, 3.5  # points: a labelled kind's markers, 
 # other (each branch keeps its own colour; stable solid, unstable dashed, whatever its period)
 LINE_WIDTH, LONGER_PERIOD_LINE_WIDTH = 1.4, 0.8  # points
 PERIOD_ONE_ZORDER, EVENT_ZORDER, LONGER_PERIOD_ZORDER = 2.0, 2.5, 3.0
+# a curve is crowded when more than this many drawn events, and more than this share of them,
+# have markers that meet another's (on the stiff stop-and-shaker branch going down 420 of 422
+# do): then only the events whose markers stand apart are marked on the curve, and every event
+# is a tick in a strip under the curves, a row per kind (`_draw_strip`)
+CROWDED, CROWDED_SHARE = 10, 0.5
+APART = 2.0  # points: kept free between markers that stand apart
+STRIP_ROW, STRIP_TICK = 8.0, 5.5  # points: a row of the strip, and its ticks' height
+STRIP_GAP = 6.0  # points: between the strip and the lowest point of the curves
+# a period-p branch narrower than this fraction of the axes' parameter range is drawn again in
+# an inset, zoomed (the stiff stop's period-2 branch going down spans 0.44 of 197 rad/s)
+NARROW = 0.02
+INSET_SIZE = (0.3, 0.3)  # axes fractions
+INSET_TICK_ROOM = (34.0, 14.0)  # points left of and below an inset for its tick labels
 LEGEND_CANDIDATES = 11  # legend positions tried along each axis, corners and edges first
 LEGEND_MARGIN = 3.0  # points: kept free between the legend and anything drawn
 # where an event's label may go, in points from its marker, tried in this order: beside it,
@@ -74,6 +89,13 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
     labels every kind where it fits, "none" draws none, a list of kinds draws and labels those.
     Nothing is left out unsaid: each kind's legend entry counts its events and those without a
     label (no room, or out of view), and one entry counts the kinds not drawn.
+
+    A crowded curve (``CROWDED``: 420 of the 422 markers of the stiff case going down met
+    another) gets a strip of ticks under it instead, every drawn event a tick in its kind's
+    row; on the curve only the labelled kinds' events whose markers stand apart are marked,
+    and their entries count the labelled ones. A period-p branch narrower than ``NARROW`` of
+    the range is drawn again, zoomed, in an inset where one fits (its entry says "inset"),
+    else its entry gives its range.
     """
     choice = chosen_events(events)
     parameter = dataset.attrs["continued_parameter"]
@@ -87,13 +109,17 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
         _draw_diagram(axes, diagram, parameter, x_factor, y_factor)
     x = x_factor * dataset[parameter].values
     y = y_factor * dataset[name].values.reshape(dataset.branch_point.size, -1)
-    curves = []
+    curves, narrow = [], []
     for branch in np.unique(dataset.branch.values):
         mask = dataset.branch.values == branch
         period = int(dataset.orbit_period.values[mask][0])
-        curves += _draw_branch(axes, x, y, dataset.stable.values, mask, f"C{int(branch)}",
-                               f"branch {int(branch)} (period {period})", period)
+        drawn = _draw_branch(axes, x, y, dataset.stable.values, mask, f"C{int(branch)}",
+                             f"branch {int(branch)} (period {period})", period)
+        if period > 1 and np.ptp(x[mask]) < NARROW * np.ptp(x):
+            narrow.append((mask, drawn[0], f"{_span(x[mask])} {x_units}"))
+        curves += drawn
     kinds = _event_kinds(x, y[:, 0], dataset.bifurcation.values, choice)
+    strip = _draw_strip(axes, kinds) if _crowded(axes, kinds) else None
     lines = _mark_events(axes, kinds)
     axes.set_xlabel(r"$\Omega / 2\pi$ (Hz)" if x_units == "Hz"
                     else axis_label(dataset[parameter], x_units))
@@ -101,12 +127,19 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
     axes.ticklabel_format(useOffset=False)  # values as read, never "+2.523e2" beside an axis
     axes.plot([], [], "k-", label="stable")
     axes.plot([], [], "k--", label="unstable")
-    place_legend(axes)
+    clear = [] if strip is None else [strip]
+    if narrow:  # too narrow to see: drawn again in an inset, else its range said
+        inset = _zoom(axes, x, y, dataset, np.any([mask for mask, *_ in narrow], axis=0),
+                      kinds, clear)
+        clear += inset
+        for _, line, span in narrow:
+            line.set_label(line.get_label()[:-1] + ("; inset)" if inset else f"; {span})"))
+    place_legend(axes, clear)
     labelled = [(x, y, _marker(kind.name)[1]) for kind in kinds if kind.labelled
-                for x, y in sorted(kind.points)]
+                for x, y in sorted(kind.marked)]
     marked = [point for kind in kinds if kind.drawn and not kind.labelled
-              for point in kind.points]
-    _count_unlabelled(axes, kinds, lines, place_labels(axes, labelled, marked, curves))
+              for point in kind.marked]
+    _count_unlabelled(axes, kinds, lines, place_labels(axes, labelled, marked, curves, clear))
 
 
 def branch_units(dataset: xr.Dataset, name: str, hz: bool = False,
@@ -155,17 +188,36 @@ def _marker(kind: str) -> tuple[str, str]:
 
 @dataclasses.dataclass
 class _Kind:
-    """The events of one kind on the branches, drawn or not."""
+    """The events of one kind on the branches, drawn or not.
+
+    ``apart``: on a crowded curve (a strip of ticks under it), whether each event's marker
+    stands apart from the others (only those are marked on the curve); None otherwise.
+    """
 
     name: str
     points: list[tuple[float, float]]  # (x, y) of each, drawn units
     drawn: bool
     labelled: bool
+    apart: list[bool] | None = None
+
+    @property
+    def marked(self) -> list[tuple[float, float]]:
+        """The events marked on the curve."""
+        if self.apart is None:
+            return self.points
+        return [point for point, apart in zip(self.points, self.apart, strict=True) if apart]
 
     def legend_text(self, unlabelled: int) -> str:
-        """Its legend entry: short label, name, count, and how many of them are unlabelled."""
+        """Its legend entry: short label, name, count, and how many are unlabelled.
+
+        (No room, or out of view.) On a crowded curve, where each is a tick in the strip under
+        it, how many are labelled on the curve instead.
+        """
         count = len(self.points)
-        if not self.labelled:
+        if self.apart is not None:  # each is a tick in the strip; some marked on the curve
+            labelled = len(self.marked) - unlabelled
+            tally = f"{count}; {labelled} labelled" if labelled > 0 else f"{count}"
+        elif not self.labelled:
             tally = f"{count}, unlabelled"
         else:
             tally = f"{count}; {unlabelled} unlabelled" if unlabelled else f"{count}"
@@ -193,7 +245,7 @@ def _mark_events(axes: Axes, kinds: list[_Kind]) -> dict[str, Line2D]:
     lines = {}
     for kind in kinds:
         if kind.drawn:
-            x, y = np.array(kind.points).T
+            x, y = np.array(kind.marked).reshape(-1, 2).T
             lines[kind.name] = axes.plot(
                 x, y, _marker(kind.name)[0], color="k", markerfacecolor="none",
                 markersize=MARKER_SIZE if kind.labelled else SMALL_MARKER_SIZE,
@@ -204,6 +256,150 @@ def _mark_events(axes: Axes, kinds: list[_Kind]) -> dict[str, Line2D]:
         rows = [", ".join(names[i:i + 2]) for i in range(0, len(names), 2)]
         axes.plot([], [], linestyle="none", label="not drawn: " + ",\n".join(rows))
     return lines
+
+
+def _span(x: np.ndarray) -> str:
+    """``x``'s range as "low to high", with the decimals that tell its ends apart."""
+    decimals = max(0, 1 - math.floor(math.log10(np.ptp(x)))) if np.ptp(x) > 0 else 2
+    return f"{x.min():.{decimals}f} to {x.max():.{decimals}f}"
+
+
+def _marker_boxes(axes: Axes, kinds: Sequence[_Kind]) -> np.ndarray:
+    """The display boxes (x0, y0, x1, y1) of the markers ``kinds`` would draw, in order.
+
+    Each with ``APART`` / 2 around it: two boxes that meet are markers closer than that.
+    """
+    to_pixels = axes.get_figure(root=True).dpi / 72.0
+    boxes = [np.empty((0, 4))]
+    for kind in kinds:
+        if kind.points:
+            half = 0.5 * (to_pixels * (MARKER_SIZE if kind.labelled else SMALL_MARKER_SIZE)
+                          + to_pixels * APART)
+            xy = axes.transData.transform(np.array(kind.points, dtype=float))
+            boxes.append(np.hstack([xy - half, xy + half]))
+    return np.vstack(boxes)
+
+
+def _meeting(boxes: np.ndarray) -> np.ndarray:
+    """Whether each box meets another of ``boxes``."""
+    meets = ((boxes[:, None, 0] <= boxes[None, :, 2]) & (boxes[None, :, 0] <= boxes[:, None, 2])
+             & (boxes[:, None, 1] <= boxes[None, :, 3])
+             & (boxes[None, :, 1] <= boxes[:, None, 3]))
+    np.fill_diagonal(meets, False)
+    return meets.any(axis=1)
+
+
+def _crowded(axes: Axes, kinds: list[_Kind]) -> bool:
+    """Whether more than ``CROWDED`` drawn events (and ``CROWDED_SHARE``) meet another.
+
+    Meet: their markers are closer than ``APART``.
+    """
+    axes.get_figure(root=True).draw_without_rendering()  # the layout: the markers' places
+    meeting = _meeting(_marker_boxes(axes, [kind for kind in kinds if kind.drawn]))
+    crowded = int(np.count_nonzero(meeting))
+    return crowded > CROWDED and crowded > CROWDED_SHARE * meeting.size
+
+
+def _draw_strip(axes: Axes, kinds: list[_Kind]) -> Bbox:
+    """Every drawn event as a tick in a strip under the curves, a row per kind; its box.
+
+    The y axis is extended down for the strip (``STRIP_GAP`` under the lowest point drawn),
+    and its ticks there left out: the strip's height means nothing. On the curves, only the
+    labelled kinds' events whose markers stand apart (``APART``) are marked (``apart``).
+    """
+    figure = axes.get_figure(root=True)
+    to_pixels = figure.dpi / 72.0
+    rows = [kind for kind in kinds if kind.drawn]
+    height = axes.get_window_extent().height
+    row, tick = (STRIP_ROW * to_pixels / height, STRIP_TICK * to_pixels / height)
+    top = row * len(rows)
+    low, high = axes.get_ylim()
+    lowest = axes.dataLim.y0
+    floor = top + STRIP_GAP * to_pixels / height  # axes fraction the curves stay above
+    low = min(low, (lowest - floor * high) / (1.0 - floor))
+    axes.set_yticks([value for value in axes.get_yticks()
+                     if low + floor * (high - low) <= value <= high])
+    axes.set_ylim(low, high)
+    for number, kind in enumerate(rows):
+        centre = top - (number + 0.5) * row
+        x = np.array([point[0] for point in kind.points])
+        axes.plot(np.repeat(x, 3), np.tile([centre - tick / 2, centre + tick / 2, np.nan],
+                                           x.size),
+                  color="k", linewidth=0.6, zorder=EVENT_ZORDER,
+                  transform=axes.get_xaxis_transform(), label=f"_strip {_marker(kind.name)[1]}")
+        axes.text(-0.01, centre, _marker(kind.name)[1], transform=axes.transAxes,
+                  ha="right", va="center", fontsize="xx-small")
+    axes.plot([0.0, 1.0], [top, top], color="0.6", linewidth=0.6, transform=axes.transAxes,
+              label="_strip")
+    figure.draw_without_rendering()
+    labelled = [kind for kind in kinds if kind.drawn and kind.labelled]
+    apart = ~_meeting(_marker_boxes(axes, labelled))
+    start = 0
+    for kind in kinds:
+        if kind.drawn and kind.labelled:
+            kind.apart = [bool(flag) for flag in apart[start:start + len(kind.points)]]
+            start += len(kind.points)
+        elif kind.drawn:
+            kind.apart = [False] * len(kind.points)
+    return Bbox([[0.0, 0.0], [1.0, top]])
+
+
+def _zoom(axes: Axes, x: np.ndarray, y: np.ndarray, dataset: xr.Dataset, narrow: np.ndarray,
+          kinds: list[_Kind], clear: list[Bbox]) -> list[Bbox]:
+    """The ``narrow`` points' branches drawn again, zoomed, in an inset where it fits.
+
+    The inset (``INSET_SIZE``, with room for its tick labels) goes at the place nearest its
+    window, of those tried for the legend, that covers no line, marker, legend or box of
+    ``clear``; a frame marks its window on the axes, joined to the inset. Returns its box
+    (axes fractions) to keep clear, none if no room.
+    """
+    figure = axes.get_figure(root=True)
+    to_pixels = figure.dpi / 72.0
+    figure.draw_without_rendering()
+    inside = axes.get_window_extent()
+    room = (np.array(INSET_TICK_ROOM) * to_pixels)
+    size = np.array(INSET_SIZE) * [inside.width, inside.height]
+    taken = [_marker_extents(axes.lines, to_pixels), *_display(axes, clear)]
+    legend = axes.get_legend()
+    if legend is not None:
+        taken.append(legend.get_window_extent().extents)
+    free = Room(np.vstack(taken), _segments(axes.lines))
+    margin = LEGEND_MARGIN * to_pixels
+    shrunk = Bbox([[inside.x0 + room[0], inside.y0 + room[1]], [inside.x1, inside.y1]])
+    window = axes.transData.transform([np.mean(x[narrow]), np.nanmean(y[narrow])])
+    for corner in sorted(_legend_corners(shrunk, size, margin),
+                         key=lambda corner: float(np.hypot(*(corner + size / 2 - window)))):
+        box = np.concatenate([corner - room - margin, corner + size + margin])
+        if free.is_free(box, None, 0):
+            break
+    else:
+        return []
+    bounds = [*axes.transAxes.inverted().transform(corner), *INSET_SIZE]
+    inset = axes.inset_axes(bounds)
+    for branch in np.unique(dataset.branch.values):
+        mask = dataset.branch.values == branch
+        _draw_branch(inset, x, y, dataset.stable.values, mask, f"C{int(branch)}", "",
+                     int(dataset.orbit_period.values[mask][0]))
+    for kind in kinds:
+        if kind.drawn:
+            points = np.array(kind.points).reshape(-1, 2)
+            inset.plot(*points.T, _marker(kind.name)[0], color="k", markerfacecolor="none",
+                       markersize=SMALL_MARKER_SIZE, zorder=EVENT_ZORDER)
+    x_window, y_window = x[narrow], y[narrow][np.isfinite(y[narrow])]
+    for window, limits in ((x_window, inset.set_xlim), (y_window, inset.set_ylim)):
+        pad = 0.3 * np.ptp(window) if np.ptp(window) > 0 else 1e-3 * abs(window.max())
+        limits(window.min() - pad, window.max() + pad)
+    inset.tick_params(labelsize="xx-small")
+    inset.ticklabel_format(useOffset=False)
+    for axis in (inset.xaxis, inset.yaxis):
+        axis.set_major_locator(MaxNLocator(3))
+    axes.indicate_inset_zoom(inset, edgecolor="0.4")
+    return [axes.transAxes.inverted().transform_bbox(Bbox([corner - room, corner + size]))]
+
+
+def _display(axes: Axes, boxes: Sequence[Bbox]) -> list[np.ndarray]:
+    """The extents (x0, y0, x1, y1), display units, of ``boxes`` given in axes fractions."""
+    return [axes.transAxes.transform_bbox(box).extents for box in boxes]
 
 
 def _count_unlabelled(axes: Axes, kinds: list[_Kind], lines: dict[str, Line2D],
@@ -219,14 +415,15 @@ def _count_unlabelled(axes: Axes, kinds: list[_Kind], lines: dict[str, Line2D],
             lines[kind.name].set_label(text)
 
 
-def place_legend(axes: Axes) -> None:
+def place_legend(axes: Axes, clear: Sequence[Bbox] = ()) -> None:
     """The axes' legend where it covers nothing drawn, else beside the axes (on the right).
 
     matplotlib's "best" only keeps the legend's cover of the data least: on a crowded curve it
     covers some (the top of the stiff stop-and-shaker branch of issue 31, 165-172 rad/s).
     Here the legend's places in the axes are tried, corners and edges first, and the first
-    whose box (and ``LEGEND_MARGIN``) meets no segment of a drawn line and no marker is
-    taken. Measured on the laid-out figure; the labels, placed after, keep clear of it.
+    whose box (and ``LEGEND_MARGIN``) meets no segment of a drawn line, no marker and no box
+    of ``clear`` (axes fractions) is taken. Measured on the laid-out figure; the labels, placed
+    after, keep clear of it.
     """
     legend = axes.legend(fontsize="small", loc=(0.0, 0.0))
     figure = axes.get_figure(root=True)
@@ -235,7 +432,8 @@ def place_legend(axes: Axes) -> None:
     inside = axes.get_window_extent(renderer)
     size = legend.get_window_extent(renderer).size
     margin = LEGEND_MARGIN * figure.dpi / 72.0
-    room = Room(_marker_extents(axes.lines, figure.dpi / 72.0), _segments(axes.lines))
+    room = Room(np.vstack([_marker_extents(axes.lines, figure.dpi / 72.0),
+                           *_display(axes, clear)]), _segments(axes.lines))
     for corner in _legend_corners(inside, size, margin):
         if room.is_free(np.concatenate([corner - margin, corner + size + margin]), None, 0):
             legend.set_loc(tuple(axes.transAxes.inverted().transform(corner)))
@@ -295,7 +493,8 @@ def _marker_extents(lines: Sequence[Line2D], points_to_pixels: float) -> np.ndar
 
 def place_labels(axes: Axes, events: list[tuple[float, float, str]],
                  marked: Sequence[tuple[float, float]] = (),
-                 curves: Sequence[Line2D] = ()) -> list[tuple[float, float, str]]:
+                 curves: Sequence[Line2D] = (),
+                 clear: Sequence[Bbox] = ()) -> list[tuple[float, float, str]]:
     """Label each event (x, y, text) near its point, clear of the labels, legend and markers.
 
     Greedy, in the order given (the first get the room): each label takes the first of
@@ -303,7 +502,8 @@ def place_labels(axes: Axes, events: list[tuple[float, float, str]],
     line, which crosses no other line, label, marker or the legend. If none is free the label
     is left out. The markers of ``events`` and of ``marked`` (points drawn without a label)
     are kept free, and no label covers a line of ``curves`` (its leader line may cross them:
-    it starts on one). Positions are measured on the laid-out figure; events out of the axes'
+    it starts on one), nor a box of ``clear`` (axes fractions: a strip of ticks, an inset).
+    Positions are measured on the laid-out figure; events out of the axes'
     view are not labelled. Returns the events left without a label (on a branch with
     hundreds of events, the caller says how many).
     """
@@ -317,6 +517,7 @@ def place_labels(axes: Axes, events: list[tuple[float, float, str]],
     legend = axes.get_legend()
     if legend is not None:  # placed (`place_legend`): it stays where it is
         taken.append(legend.get_window_extent(renderer))
+    taken += [Bbox(box.reshape(2, 2)) for box in _display(axes, clear)]
     room = Room(np.array([box.extents for box in taken]), _segments(curves))
     left_out = []
     for own, (x, y, text) in enumerate(events):
