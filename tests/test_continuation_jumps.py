@@ -119,3 +119,30 @@ def test_a_period_doubling_where_the_branch_is_vertical_is_located_on_the_circle
     ((label, s, mu),) = labelled(_between(follower, a, b))
     assert label == PERIOD_DOUBLING and s == pytest.approx(0.3, abs=1e-8)
     assert abs(abs(mu[0]) - 1.0) <= 1e-9
+
+
+def test_a_bracket_narrowed_to_round_off_is_continuous_and_a_jump_there_is_not():
+    # a period doubling on the small model (245.43 rad/s at 0.8 of the drive, Newton-Picard):
+    # the bracket's ends 4e-17 apart in x~, the test -5.2e-14 and +4.9e-15 there (the
+    # multiplier's round-off), the step's mean slope 0.077: a crossing. A jump of the test at
+    # the same ends (to another multiplier, 0.5 away) stays one
+    from impactbeams.continuation.events import Located
+
+    tangent = np.array([0.0, 1.0])
+    values = {}
+
+    def point(s, value):
+        evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)), np.zeros(0, complex))
+        made = Point(s * tangent, tangent, evaluation, 1)
+        values[id(made)] = value
+        return made
+
+    def test(p):
+        return values[id(p)]
+
+    start, end = point(0.0, -0.0387), point(1.0, 0.0387)
+    before, beyond = point(0.5, -5.2e-14), point(0.5 + 4e-17, 4.9e-15)
+    tolerance = Settings().locate_tolerance
+    assert continuous_root(test, start, end, Located(0.5, before, beyond, True), tolerance)
+    jumped = point(0.5 + 4e-17, 0.5)
+    assert not continuous_root(test, start, end, Located(0.5, before, jumped, True), tolerance)

@@ -277,7 +277,8 @@ def continuous_root(test: Callable[[Point], float], start: Point, end: Point,
     a test continuous across its root: as the bracket narrows, the test's values at its ends
     go to 0 with it. The jump between them must then be within ``ROOT_MARGIN`` times the
     step's mean slope times the bracket's width (both in x~ norms), and the near end's value
-    within `near_zero` (``tolerance``: the arclength's, x~). Where the multiplier the test
+    within `near_zero` (``tolerance``: the arclength's, x~), as is a jump within it (a
+    bracket narrowed to round-off: the test's own rounding). Where the multiplier the test
     follows changes kind instead (a complex pair outside the circle meets on the real axis:
     the test jumps from that pair's |mu| - 1 to another pair's), the jump stays as the
     bracket narrows: no bifurcation. Without a corrected point beyond, the near end's value
@@ -291,9 +292,11 @@ def continuous_root(test: Callable[[Point], float], start: Point, end: Point,
     else:
         width = float(np.linalg.norm(beyond.x - before.x))
         jump = abs(test(beyond) - test(before))
-    # (False for a NaN: no value)
-    return bool(jump <= ROOT_MARGIN * slope * width
-                and abs(test(before)) <= near_zero(test, start, end, tolerance))
+    # both ends within near_zero of 0 is continuous too: a bracket narrowed to round-off
+    # leaves the test's own round-off (1e-14 of a multiplier) as its jump (False for a NaN)
+    close = near_zero(test, start, end, tolerance)
+    return bool(jump <= max(ROOT_MARGIN * slope * width, close)
+                and abs(test(before)) <= close)
 
 
 def _pinned(low: Bracket, high: Bracket, start: Point, test: Callable[[Point], float]) -> bool:
