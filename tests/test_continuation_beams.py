@@ -277,3 +277,34 @@ def test_equal_beams_on_one_shaker_impact_only_in_their_unforced_difference():
     assert float(abs(in_phase[0] - in_phase[1]).max()) < 1e-12 * scale
     difference = (runs[0].tip_deflection_1 - runs[0].tip_deflection_2).values
     assert abs(difference[-500:]).max() < 0.5 * abs(difference[:500]).max()
+
+
+def test_progress_gives_no_time_left_for_a_branch_switched_at_a_doubling(capsys):
+    """A period-2 branch ends where it rejoins its origin, which the range does not tell: its
+    progress lines say where it was switched, not a share of the range and a time left (on
+    the stiff stop going down: 1673 s announced, the whole run 74 s); the started branch keeps
+    both."""
+    import types
+
+    from impactbeams import cli
+    from impactbeams.continuation.arclength import Scaling
+
+    progress = cli._BranchProgress(65.6, 262.5)
+    scaling = Scaling(np.ones(1), 1.0)
+
+    def point(p):
+        evaluation = types.SimpleNamespace(multipliers=np.array([0.5]), contacts=2)
+        return types.SimpleNamespace(parameter=lambda s: p, evaluation=evaluation, label="")
+
+    started = types.SimpleNamespace(points=[None] * 20, scaling=scaling, origin=None, period=1)
+    switched = types.SimpleNamespace(points=[None] * 20, scaling=scaling, origin=(0, 7),
+                                     period=2)
+    for branch, first in ((started, 100.0), (switched, 160.16)):
+        branch.points = [None] * 19
+        progress(branch, point(first))
+        branch.points = [None] * 20
+        progress(branch, point(first + 0.2))
+    lines = capsys.readouterr().err.splitlines()
+    assert "% of the way to 262.5" in lines[0]
+    assert "switched at 160.16: where it ends is not known in advance" in lines[1]
+    assert "s left" not in lines[1] and "% of the way" not in lines[1]
