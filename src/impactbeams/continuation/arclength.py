@@ -205,10 +205,11 @@ class Follower:
                 # vanishes (a fold). Else Newton goes on from x~ + delta
                 try:
                     chord = self._chord(found, system, direction, predicted, contacts)
-                    if chord is not None and np.max(np.abs(chord)) <= self.settings.tolerance:
+                    chord_size = math.inf if chord is None else float(np.max(np.abs(chord)))
+                    if chord_size <= self.settings.tolerance:
                         evaluation, jacobian, _ = self.linearised(found, rate)
                         size, iterations = 0.0, iteration + 1
-                        if np.max(np.abs(chord)) > ROUND_OFF_STEP:
+                        if chord_size > ROUND_OFF_STEP:
                             found = found + chord
                 except (ParameterError, RuntimeError):
                     break

@@ -19,6 +19,7 @@ import copy
 import dataclasses
 import functools
 import math
+from collections.abc import Callable
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
@@ -134,18 +135,12 @@ class PeriodMap:
                  max_events: int = MAX_EVENTS) -> None:
         require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
         check_law(params)
-        require("omega", params.omega, params.omega > 0,
-                "a period map needs a forcing period: omega > 0", "rad/s")
         self.periods = require_integer("periods", periods, 1)
         if n_modes is None:
             n_modes = recommended_modes(params)
         self.n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
         self.max_events = require_integer("max_events", max_events, 1)
-        self.params = params
-        self.forcing_period = 2.0 * math.pi / params.omega
-        self.horizon = self.periods * self.forcing_period
-        self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
-                                       geometry_arrays(params, self.n_modes))
+        self._pack(params, geometry_arrays)
 
     def at(self, params: Params) -> PeriodMap:
         """The map of ``params``: this one's but for the cell's parameters (``CELL_ONLY``).
@@ -154,15 +149,21 @@ class PeriodMap:
         bit for bit, built on this one's geometry (a continuation in Omega, F0, U0 or the
         clearance asks for a map at every corrector iterate and parameter difference).
         """
+        changed = copy.copy(self)
+        changed._pack(params, lambda _, __: dataclasses.replace(self.packed.dynamics,
+                                                                 params=params))
+        return changed
+
+    def _pack(self, params: Params,
+              geometry: Callable[[Params, int], Dynamics]) -> None:
+        """Set ``params``, the horizon and the packed run, on ``geometry(params, n_modes)``."""
         require("omega", params.omega, params.omega > 0,
                 "a period map needs a forcing period: omega > 0", "rad/s")
-        changed = copy.copy(self)
-        changed.params = params
-        changed.forcing_period = 2.0 * math.pi / params.omega
-        changed.horizon = self.periods * changed.forcing_period
-        changed.packed = pack_run(params, self.n_modes, changed.horizon, changed.horizon,
-                                  dataclasses.replace(self.packed.dynamics, params=params))
-        return changed
+        self.params = params
+        self.forcing_period = 2.0 * math.pi / params.omega
+        self.horizon = self.periods * self.forcing_period
+        self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
+                                       geometry(params, self.n_modes))
 
     @property
     def dimension(self) -> int:
