@@ -27,6 +27,7 @@ from scipy.optimize import brentq, minimize_scalar
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact.spring import recommended_modes
 from impactbeams.kernels import contact
+from impactbeams.kernels.extrema import gap_extremum
 from impactbeams.kernels.layout import (
     CONTACT,
     FREE,
@@ -315,12 +316,12 @@ class PeriodMap:
         Brent's method on the gap's rate: a simple root, found to round-off in some 10
         samples of the run. None if the rate does not change sign that way between the ends.
         """
-        rate = functools.partial(self._gap_rate, trajectory)
-        sign = 1.0 if minimum else -1.0
-        if not sign * rate(lo) < 0.0 < sign * rate(hi):
-            return None
-        t = brentq(rate, lo, hi, xtol=1e-14 * max(hi, 1.0))
-        return t, float(self._gap(trajectory, np.array([t]))[0][0])
+        packed = self.packed
+        t, value = gap_extremum(packed.tables, packed.forces, packed.phase_scalars[FREE],
+                                packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                                trajectory.segments, self.params.omega, lo, hi,
+                                1.0 if minimum else -1.0, 1e-14 * max(hi, 1.0))
+        return None if math.isnan(t) else (t, value)
 
     @staticmethod
     def _onsets(trajectory: Trajectory) -> np.ndarray:
@@ -484,15 +485,6 @@ class PeriodMap:
             return (value, t) if value < gap[i] else (float(gap[i]), float(times[i]))
         return self._refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
                              lo, hi, gap[i], times[i])
-
-    def _gap_rate(self, trajectory: Trajectory, t: float) -> float:
-        """dg/dt (m/s) at ``t`` of the gap read from the free coordinates (their rates: q')."""
-        _, _, v = sample(self.packed, trajectory, np.array([t]))
-        scalars = self.packed.phase_scalars[FREE]
-        omega = self.params.omega
-        return float(omega * (scalars[SCALAR_SINE] * math.cos(omega * t)
-                              - scalars[SCALAR_COSINE] * math.sin(omega * t))
-                     + v[0] @ self.packed.tables[FREE, ROW_EVENT])
 
     def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
         """The tips' motion (``kernels.layout`` TIP_* columns) of ``result``'s run at ``times``."""
