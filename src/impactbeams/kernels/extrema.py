@@ -17,9 +17,16 @@ import numpy as np
 
 from impactbeams.brent import MAX_ITERATIONS, iteration
 from impactbeams.kernels import contact
-from impactbeams.kernels.dynamics import propagate, segment_index
+from impactbeams.kernels.dynamics import propagate, sample_grid, sample_segments, segment_index
 from impactbeams.kernels.jit import inlined_kernel, kernel
-from impactbeams.kernels.layout import FREE, ROW_EVENT, SCALAR_CONST, SCALAR_COSINE, SCALAR_SINE
+from impactbeams.kernels.layout import (
+    CONTACT,
+    FREE,
+    ROW_EVENT,
+    SCALAR_CONST,
+    SCALAR_COSINE,
+    SCALAR_SINE,
+)
 
 _brent_iteration = inlined_kernel(iteration)
 RTOL = 4.0 * np.finfo(np.float64).eps  # SciPy's brentq default, as `impactbeams.brent`'s
@@ -55,6 +62,101 @@ def gap_extremum(tables, forces, scalars, spring, drives, settings, recorded, om
             return x_cur, _gap(scalars, weights, omega, x_cur, q)
         f_cur = sign * _rate(scalars, weights, omega, x_cur, v)
     return math.nan, math.nan
+
+
+@kernel
+def smallest_free_minimum(tables, forces, scalars, spring, drives, settings, recorded, omega,
+                          times):
+    """The gap's smallest interior minimum in free flight, sampled on ``times`` and refined.
+
+    ``times``: an equally spaced grid over the run (s), sampled a step at a time
+    (`dynamics.sample_grid`). The sample: the smallest gap of a free sample between two free
+    samples not below it (the first if several). Refined by `gap_extremum` between the
+    sample's neighbours. Returns (t, g) refined (NaN, NaN where the rate does not change sign
+    there: the caller minimises the gap itself), then the sample's (t, g) and its neighbours'
+    times (all NaN without such a sample).
+    """
+    n_coords, m = recorded.q.shape[1], times.size
+    q, v = np.empty((m, n_coords)), np.empty((m, n_coords))
+    phase = np.empty(m, dtype=np.int64)
+    sample_grid(tables, forces, spring, drives, settings, recorded, times, q, v, phase)
+    weights = tables[FREE, ROW_EVENT]
+    gap = np.empty(m)
+    for i in range(m):
+        gap[i] = _gap(scalars, weights, omega, times[i], q[i])
+    best = -1
+    for i in range(1, m - 1):
+        if (phase[i - 1] == FREE and phase[i] == FREE and phase[i + 1] == FREE
+                and gap[i] <= gap[i - 1] and gap[i] <= gap[i + 1]
+                and (best < 0 or gap[i] < gap[best])):
+            best = i
+    if best < 0:
+        return math.nan, math.nan, math.nan, math.nan, math.nan, math.nan
+    lo, hi = times[best - 1], times[best + 1]
+    t, value = gap_extremum(tables, forces, scalars, spring, drives, settings, recorded, omega,
+                            lo, hi, 1.0, 1e-14 * max(hi, 1.0))
+    return t, value, times[best], gap[best], lo, hi
+
+
+@kernel
+def interval_gap(tables, forces, scalars, spring, drives, settings, recorded, ends, omega,
+                 count):
+    """The gap's local maximum nearest 0 between contacts (m); NaN if there is none.
+
+    Each segment (ending at ``ends``, s) sampled ``count`` times a step at a time
+    (`dynamics.sample_segments`). The candidates, in order: each lasting contact's interior
+    sample maxima (above the sample before, not below the one after), then each free interval
+    between two contacts' highest sample (the period's ends joined: a free interval across
+    them is its last and first segments) if inside its segment. The first nearest 0 is
+    sampled exactly and refined by `gap_extremum` between its neighbours.
+    """
+    segments, n_coords = recorded.time.size, recorded.q.shape[1]
+    contact = recorded.phase == CONTACT
+    if not contact.any():
+        return math.nan
+    q, v = np.empty((segments * count, n_coords)), np.empty((segments * count, n_coords))
+    sample_segments(tables, forces, spring, drives, settings, recorded, ends, count, q, v)
+    weights = tables[FREE, ROW_EVENT]
+    times, gap = np.empty((segments, count)), np.empty((segments, count))
+    for k in range(segments):
+        step = (ends[k] - recorded.time[k]) / (count - 1)
+        for i in range(count):  # as np.linspace: the last sample at the segment's end
+            times[k, i] = ends[k] if i == count - 1 else i * step + recorded.time[k]
+            gap[k, i] = _gap(scalars, weights, omega, times[k, i], q[k * count + i])
+    best_k, best_i = -1, -1
+    for k in range(segments):
+        if contact[k] and ends[k] > recorded.time[k]:  # a contact of zero duration: no interior
+            for i in range(1, count - 1):
+                if gap[k, i] > gap[k, i - 1] and gap[k, i] >= gap[k, i + 1]:
+                    best_k, best_i = _nearer_zero(gap, best_k, best_i, k, i)
+    for k in range(segments):
+        if contact[k] or (segments > 1 and k == segments - 1 and not contact[0]):
+            continue  # (the period's first segment goes on from its last: taken with it)
+        last = segments - 1 if k == 0 and segments > 1 and not contact[segments - 1] else k
+        if contact[(last - 1) % segments] and contact[(k + 1) % segments]:
+            highest = last if np.max(gap[last]) > np.max(gap[k]) else k
+            at = int(np.argmax(gap[highest]))
+            if 0 < at < count - 1:
+                best_k, best_i = _nearer_zero(gap, best_k, best_i, highest, at)
+    if best_k < 0:
+        return math.nan
+    y, y_rate, q_t, v_t = (np.empty(n_coords), np.empty(n_coords), np.empty(n_coords),
+                           np.empty(n_coords))
+    t = times[best_k, best_i]
+    _state(tables, forces, spring, drives, settings, recorded, t, y, y_rate, q_t, v_t)
+    value = _gap(scalars, weights, omega, t, q_t)
+    lo, hi = times[best_k, best_i - 1], times[best_k, best_i + 1]
+    _, rise = gap_extremum(tables, forces, scalars, spring, drives, settings, recorded, omega,
+                           lo, hi, -1.0, 1e-14 * max(hi, 1.0))
+    return value if math.isnan(rise) else max(value, rise)
+
+
+@kernel
+def _nearer_zero(gap, best_k, best_i, k, i):
+    """(k, i) if its sample is nearer 0 than the best's so far (or there is none), else the best."""
+    if best_k < 0 or abs(gap[k, i]) < abs(gap[best_k, best_i]):
+        return k, i
+    return best_k, best_i
 
 
 @kernel
