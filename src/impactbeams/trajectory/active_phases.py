@@ -23,8 +23,9 @@ import numpy as np
 from impactbeams.contact.active_sets import SeveralContacts, possible_sets, several_contacts
 from impactbeams.contact.spring import polar
 from impactbeams.kernels import several_contacts as kernel
-from impactbeams.kernels.contact_spring import contact_states, spring_drives
+from impactbeams.kernels.contact_spring import contact_states, spring_drives, to_contact
 from impactbeams.kernels.dynamics import STATUS_NAMES
+from impactbeams.kernels.events import phase_event
 from impactbeams.kernels.layout import (
     DRIVE_EQUILIBRIUM,
     FREE,
@@ -179,6 +180,19 @@ def sample(packed: PackedContacts, run: ContactRun, times: np.ndarray,
                            run.time, run.mask, run.q, run.v, times, q, v)
     phase = np.searchsorted(run.time, times, side="right") - 1
     return q, v, run.mask[phase]
+
+
+def gap_rate(packed: PackedContacts, mask: int, contact: int, q: np.ndarray, v: np.ndarray,
+             t: float) -> float:
+    """The rate (m/s) of open ``contact``'s physical gap in the phase of ``mask`` at (q, v, t)."""
+    a = packed.set_of_mask[mask]
+    m = q.size
+    y, y_rate = np.empty(m), np.empty(m)
+    to_contact(q, v, t, packed.lefts[a], packed.modes[a, contact], packed.drives[a, contact],
+               packed.settings["forcing_frequency"], y, y_rate)
+    _, rate = phase_event(packed.tables[a, contact], packed.scalars[a, contact], y, y_rate, t,
+                          packed.settings["forcing_frequency"])
+    return float(rate)
 
 
 def contact_quantities(packed: PackedContacts, t: np.ndarray, q: np.ndarray, v: np.ndarray,

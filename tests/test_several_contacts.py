@@ -1,0 +1,124 @@
+"""Several contacts closed at once (issue 33, item 3): the run of the active sets' phases.
+
+`impactbeams.kernels.several_contacts` through `contact_sequence` and `simulate`, against the
+finite-element reference with several contacts (tests/fe_spring.py, `fe_several_contacts`:
+FE modes per active set, the first root among all gaps and forces), against energy
+conservation, and the static correction's convergence in the modes with two contacts closed.
+"""
+
+import numpy as np
+import pytest
+
+from impactbeams import Contact, Params, contact_sequence, simulate, two_sided_stop
+from impactbeams.contact.active_sets import active_set, several_contacts
+from impactbeams.params import ParameterError
+
+STOP = Params(counterpart="stop", contact_stiffness=1e4)
+MID = 0.5 * STOP.l1  # m
+FORCED = STOP.replace(force_amplitude=1e-3, omega=400.0)
+# a stop at mid-span and one at the tip, both below: closed together in 4 of 15 phases
+TOGETHER = FORCED.replace(contacts=(Contact(MID, clearance=1e-6), Contact(clearance=2e-6)))
+KEYS = (("onset", "impact_onset_time"), ("duration", "impact_duration"),
+        ("impulse", "impact_impulse"), ("peak", "impact_peak_force"))
+
+
+def _against_fe(params: Params, t_max: float, n_events: int) -> dict[str, tuple]:
+    """Each released episode's deviation from the 40-element FE model and that model's own
+    error |f_40 - f_20| (onsets and durations relative to the shortest duration, impulses and
+    peaks to their own size), at 20 modes; the contacts' order must agree."""
+    from fe_spring import fe_several_contacts
+
+    got = contact_sequence(params, t_max, n_modes=20)
+    coarse, fine = (fe_several_contacts(params.each_contact(), t_max, (n, n),
+                                        n_events=n_events) for n in (20, 40))
+    k = next((i for i, e in enumerate(fine) if np.isnan(e["release"])), len(fine))
+    fine, coarse = fine[:k], coarse[:k]
+    assert list(got.impact_contact.values[:k]) == [e["contact"] for e in fine] == [
+        e["contact"] for e in coarse]
+    shortest = min(e["release"] - e["onset"] for e in fine)
+    out = {}
+    for key, name in KEYS:
+        def of(episodes, key=key):
+            return np.array([e["release"] - e["onset"] if key == "duration" else e[key]
+                             for e in episodes])
+        norm = shortest if key in ("onset", "duration") else np.abs(of(fine))
+        out[key] = (np.abs(got[name].values[:k] - of(fine)) / norm,
+                    np.abs(of(fine) - of(coarse)) / norm)
+    return out
+
+
+def test_a_mid_span_and_a_tip_stop_closed_together_against_the_fe_model():
+    """Five contacts (tip, mid, tip, tip, mid), the mid-span stop closing while the tip's is
+    closed: onsets, durations, impulses and peaks within the FE model's own error (the largest
+    of the episodes' |f_40 - f_20|; one episode's may vanish by chance). Measured: at most
+    8.3e-5 (onsets; FE 2.2e-3), 1.2e-4 (durations; 1.4e-3), 1.0e-4 (impulses; 1.4e-3),
+    2.5e-4 (peaks; 6.4e-4)."""
+    for key, (deviation, fe_error) in _against_fe(TOGETHER, 0.03, 6).items():
+        assert deviation.size == 5
+        assert deviation.max() <= fe_error.max() + 1e-6, (key, deviation, fe_error)
+        assert deviation.max() < 3e-4, key
+    ds = simulate(TOGETHER, 0.03, n_modes=20, dt_output=1e-5)
+    both = np.all(ds.contact_forces.values > 0.0, axis=1)
+    assert np.count_nonzero(both) > 100  # closed together for over 1 ms
+
+
+@pytest.mark.slow  # 34 s (the FE model's eight contacts at 40 elements)
+def test_a_two_sided_stop_over_several_rebounds_against_the_fe_model():
+    """A stop below and one above mid-span, 3 um each (forced): eight contacts, both sides,
+    each quantity within the FE's own error plus 1e-6 episode by episode. Measured: at most
+    3.1e-5 (onsets; FE 4.1e-4), 2.9e-5 (durations), 1.8e-6 (impulses), 3.5e-5 (peaks)."""
+    params = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6))
+    for key, (deviation, fe_error) in _against_fe(params, 0.03, 8).items():
+        assert deviation.size >= 7
+        assert np.all(deviation <= fe_error + 1e-6), (key, deviation, fe_error)
+        assert deviation.max() < 5e-5, key
+
+
+@pytest.mark.parametrize(("contacts", "uplift"), [
+    ((Contact(MID, clearance=1e-6), Contact(clearance=2e-6)), 20e-6),
+    (two_sided_stop(MID, 1e-6, 1e-6), 3.15e-6),
+])
+def test_energy_is_conserved_to_round_off_over_many_contacts(contacts, uplift):
+    """zeta = 0, c = 0, F0 = 0, released from an uplift: E = kinetic + strain + the closed
+    contacts' g_S^T K_eff g_S / 2 (the springs and the flexibility the modes miss in series)
+    stays within 1e-13 of itself over 0.3 s and dozens of contacts (measured 4.7e-14 with 76
+    contacts, 858 samples with both stops closed; 2.2e-14 over 33 on both sides)."""
+    params = STOP.replace(force_amplitude=0.0, uplift1=uplift, contacts=contacts)
+    ds = simulate(params, 0.3, n_modes=12, dt_output=1e-5)
+    energy = ds.energy.values
+    assert ds.attrs["status"] == "complete" and ds.sizes["impact"] > 30
+    assert set(ds.impact_contact.values) == {0, 1}
+    assert np.max(np.abs(energy - energy[0])) < 1e-13 * energy[0]
+
+
+def test_static_correction_converges_like_n_to_the_minus_5_with_two_contacts_closed():
+    """The three lowest frequencies of the phase with both stops closed, against 160 modes:
+    with the matrix static correction each doubling of the modes divides the error by more than
+    2^5 (measured 9.2e-6, 9.8e-8, 7.4e-10 at 10, 20, 40 modes: 94x and 132x); without it
+    (K_eff = K) by about 2^3 (2.4e-3, 3.5e-4, 4.3e-5: 6.8x and 8.2x)."""
+    params = STOP.replace(contacts=TOGETHER.contacts)
+    reference = several_contacts(params, 160).sets[(0, 1)].frequencies[:3]
+    corrected, uncorrected = [], []
+    for n in (10, 20, 40):
+        contacts = several_contacts(params, n)
+        plain = active_set((contacts.frees, contacts.stiffness, contacts.damping,
+                            np.zeros_like(contacts.residual)), (0, 1), 0.0)
+        for errors, phase in ((corrected, contacts.sets[(0, 1)]), (uncorrected, plain)):
+            errors.append(np.max(np.abs(phase.frequencies[:3] / reference - 1.0)))
+    assert corrected[0] / corrected[1] > 2**5 and corrected[1] / corrected[2] > 2**5
+    assert all(5.0 < a / b < 12.0 for a, b in zip(uncorrected, uncorrected[1:], strict=False))
+    assert corrected[2] < 1e-9
+
+
+def test_contact_sequence_event_limit_and_what_is_refused():
+    """max_contacts cuts the episodes; dashpots and simulate's other options are refused in
+    one line before any compute."""
+    limited = contact_sequence(TOGETHER, 0.03, n_modes=12, max_contacts=3)
+    assert limited.sizes["impact"] == 3 and limited.attrs["status"] == "event_limit"
+    assert list(limited.impact_contact.values) == [1, 0, 1]
+    damped = FORCED.replace(contacts=(Contact(MID, clearance=1e-6), Contact(damping=0.1)))
+    with pytest.raises(ParameterError, match=r"^contacts\[1\]\.damping = 0\.1 is not allowed "
+                                             "with several contacts"):
+        contact_sequence(damped, 0.03)
+    with pytest.raises(ParameterError, match="^fields = True is not allowed with 2 contacts"):
+        simulate(TOGETHER, 0.03, fields=True)
