@@ -1,4 +1,4 @@
-"""Several contacts (``Params.contacts``): the first contact among them, and two-sided stops.
+"""Several contacts (``Params.contacts``): the first contact among them, and their dynamics.
 
 Until a contact closes the beams move freely, and the free motion does not depend on the
 contacts (their points, sides, clearances and laws act only in contact): each contact's gap is
@@ -7,17 +7,12 @@ earliest of each contact's own first onset, each located and certified by the ev
 that contact's own packed run (`Params.each_contact`: the run with that contact alone, at one
 common n_modes), all started from the same free state.
 
-The contact phase that follows is that contact's own (its own eigen-decomposition and static
-correction, `impactbeams.contact.spring_contact`) as long as no other gap closes during it.
-That is certain for the two contacts of a two-sided stop (one point, one below and one above,
-against a stop or one point of beam 2) without a dashpot: their gaps add up to the two
-clearances, so while one is closed (g <= 0, R = -k g > 0) the other is open by more than its
-own clearance. Its whole dynamics is then a chain of such runs, each restarted at a release
-from the free state the kernel recorded there (where the kernel itself resumes its windows bit
-for bit, `impactbeams.trajectory.phases.run`): `contact_sequence`. Contacts that can be closed
-together (e.g. a stop at mid-span and one at the tip) need the contact phase of both at once
-(docs/model.md, "Several contacts"), not built: their first onset is found, their contact
-phase is not (docs/limits.md, "Several contacts").
+The contacts that follow are the phases of the active sets (`impactbeams.contact.active_sets`,
+packed by `impactbeams.trajectory.active_phases`, run by `impactbeams.kernels.several_contacts`):
+`contact_sequence` and `simulate_contacts` (`impactbeams.simulate` of several contacts),
+contacts closed together included. One contact's sequence is `simulate`'s own run, restarted
+at each release from the free state the kernel recorded there (where the kernel itself resumes
+its windows bit for bit, `impactbeams.trajectory.phases.run`).
 """
 
 from __future__ import annotations
