@@ -205,3 +205,23 @@ def test_a_mid_span_and_a_tip_stop_closed_together_against_dop853():
     assert any(mask == 3 for mask in run.mask[:13])  # both closed in some phase
     np.testing.assert_allclose([t for _, t, _ in got[:12]], [t for _, t, _ in expected],
                                rtol=0, atol=1e-12)
+
+
+def test_simulate_of_several_contacts_gaps_forces_and_episodes():
+    """Each closed contact's physical gap is -R_j / k_j (its own stiffness: 1e4 and 3e4 N/m) to
+    round-off (measured 4e-22 m of gaps ~1e-6), each open one's > 0; the episodes are
+    contact_sequence's bit for bit (one kernel); the tips include the closed forces' shifts."""
+    params = FORCED.replace(contacts=(Contact(MID, clearance=1e-6),
+                                      Contact(clearance=2e-6, stiffness=3e4)))
+    ds = simulate(params, 0.03, n_modes=12, dt_output=1e-5)
+    gaps, forces = ds.contact_gaps.values, ds.contact_forces.values
+    closed = forces > 0.0
+    assert np.all(closed.sum(axis=0) > 100)
+    assert np.max(np.abs(gaps + forces / np.array([1e4, 3e4]))[closed]) < 1e-20
+    assert np.all(gaps[~closed] > -1e-20)
+    # the tip stop's gap is the tip's: clearance + y1(l1)
+    np.testing.assert_allclose(gaps[:, 1], 2e-6 + ds.tip_deflection_1.values, rtol=0,
+                               atol=1e-18)
+    sequence = contact_sequence(params, 0.03, n_modes=12)
+    for name in sequence.data_vars:
+        np.testing.assert_array_equal(ds[name].values, sequence[name].values)
