@@ -52,7 +52,7 @@ from impactbeams.trajectory.active_phases import (
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory
-from impactbeams.variables import attributes
+from impactbeams.variables import attributes, validate
 
 # a free flight, a contact and the free flight after it: one contact episode of one run
 _EPISODE = 3
@@ -327,16 +327,14 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int | None, times: 
                    - tip_force * (forces @ shift1)),
     }
     data = {name: ("time", values, attributes(name)) for name, values in series.items()}
-    data["contact_gaps"] = (("time", "contact"), contact["gap"],
-                            {"units": "m", "long_name": "each contact's gap"})
-    data["contact_forces"] = (("time", "contact"), forces,
-                              {"units": "N", "long_name": "each contact's force"})
-    rows = episodes(packed, run)
-    for name, values in rows.items():
+    data["contact_gaps"] = (("time", "contact"), contact["gap"], attributes("contact_gaps"))
+    data["contact_forces"] = (("time", "contact"), forces, attributes("contact_forces"))
+    for name, values in episodes(packed, run).items():
         data[name] = ("impact", np.array(values, dtype=np.int64 if name == "impact_contact"
-                                         else float))
+                                         else float), attributes(name))
     dataset = xr.Dataset(data, coords={"time": ("time", times, attributes("time"))})
     dataset.attrs.update({"status": run.status, "t_end": run.t_end, "n_modes": n,
                           "t_max": t_max, "n_phases": run.time.size,
                           "n_active_sets": len(packed.members)})
+    validate(dataset)  # as registered, or a bug of the package
     return dataset
