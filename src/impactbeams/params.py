@@ -922,8 +922,8 @@ def require_one_contact(params: Params, what: str) -> None:
     if params.several_contacts:
         raise ParameterError(
             f"{CONTACTS}: {len(params.contacts)} contacts are not allowed in {what}, which takes "
-            "one contact so far; the first contact among several is "
-            "impactbeams.first_contact (docs/limits.md, 'Several contacts')")
+            "one contact so far; several run in impactbeams.first_contact, "
+            "contact_sequence and simulate (docs/limits.md, 'Several contacts')")
 
 
 def fold_contacts(values: Mapping[str, Any], source: str) -> dict[str, Any]:
