@@ -194,13 +194,18 @@ def cell_rows(columns: Mapping[str, np.ndarray | float], shape: int | tuple[int,
     ``shape`` (a swept axis's values along its dimension).
     """
     box = (shape,) if isinstance(shape, int) else shape
-    names = layout.CELL_COLUMNS
-    if np.ndim(columns["base_amplitude"]) == 0 and columns["base_amplitude"] == 0.0:
-        names = names[:layout.CELL_U0]  # no shaker: a row without U0 reads 0, and is smaller
+    names = _cell_columns(columns)
     cells = np.empty((*box, len(names)))
     for index, name in enumerate(names):
         cells[..., index] = columns[name]
     return cells.reshape(-1, len(names))
+
+
+def _cell_columns(columns: Mapping[str, np.ndarray | float]) -> tuple[str, ...]:
+    """The cell columns (``layout.CELL_COLUMNS``) that rows of ``columns`` carry."""
+    if np.ndim(columns["base_amplitude"]) == 0 and columns["base_amplitude"] == 0.0:
+        return layout.CELL_COLUMNS[:layout.CELL_U0]  # no shaker: a row without U0 reads 0
+    return layout.CELL_COLUMNS
 
 
 @dataclasses.dataclass(frozen=True)
@@ -253,7 +258,9 @@ def pack_run(params: Params, n_modes: int, t_max: float, search_span: float,
 
     dynamics = dynamics_arrays(params, n_modes) if dynamics is None else dynamics
     check_steady(params, dynamics.free)
-    cell = cell_rows({**params.as_dict(), "geometry": 0.0}, 1)[0]
+    # one cell: its row straight from the values (`cell_rows`' for a box of one)
+    values = {**params.as_dict(), "geometry": 0.0}
+    cell = np.array([values[name] for name in _cell_columns(values)], dtype=float)
     damped, forces, scalars, settings, q0, v0, drives = run_inputs(
         cell, dynamics.tables, dynamics.geometry, dynamics.spring_arrays, t_max, search_span)
     return Packed(dynamics, damped, forces, scalars, drives, settings[0], q0, v0)

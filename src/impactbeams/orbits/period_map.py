@@ -55,7 +55,7 @@ from impactbeams.params import (
     require_type,
 )
 from impactbeams.trajectory.episodes import default_separation, episode_labels
-from impactbeams.trajectory.impacts import impact_table
+from impactbeams.trajectory.impacts import contact_measures
 from impactbeams.trajectory.phases import (
     Trajectory,
     run,
@@ -138,6 +138,8 @@ class PeriodMap:
         self.n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
         self.max_events = require_integer("max_events", max_events, 1)
         self._pack(params, geometry_arrays)
+        # the episodes' separation (s): the geometry's, which `at` keeps
+        self._separation = default_separation(self.packed)
 
     def at(self, params: Params) -> PeriodMap:
         """The map of ``params``: this one's but for the cell's parameters (``CELL_ONLY``).
@@ -159,6 +161,7 @@ class PeriodMap:
         self.params = params
         self.forcing_period = 2.0 * math.pi / params.omega
         self.horizon = self.periods * self.forcing_period
+        self._times = np.linspace(0.0, self.horizon, SAMPLES_PER_PERIOD * self.periods + 1)
         self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
                                        geometry(params, self.n_modes))
 
@@ -207,14 +210,12 @@ class PeriodMap:
         if math.isfinite(result.max_tip1):
             return result
         result = self.approach(result)
-        impacts = impact_table(self.packed, result.trajectory)
+        peaks, impulses, velocities = contact_measures(self.packed, result.trajectory)
         max_tip1, max_tip2, relative = self._tip_maxima(result.trajectory)
         return dataclasses.replace(
-            result, peak_force=float(np.max(impacts["impact_peak_force"], initial=0.0)),
-            peak_forces=impacts["impact_peak_force"],
-            impulse=float(np.sum(impacts["impact_impulse"])), max_tip1=max_tip1,
-            max_tip2=max_tip2,
-            impact_velocities=impacts["impact_velocity"][self._onsets(result.trajectory)],
+            result, peak_force=float(np.max(peaks, initial=0.0)), peak_forces=peaks,
+            impulse=float(np.sum(impulses)), max_tip1=max_tip1, max_tip2=max_tip2,
+            impact_velocities=velocities[self._onsets(result.trajectory)],
             max_relative_tip1=relative)
 
     def approach(self, result: PeriodMapResult) -> PeriodMapResult:
@@ -358,7 +359,7 @@ class PeriodMap:
     def _episodes(self, trajectory: Trajectory) -> int:
         k = np.flatnonzero((trajectory.phase == CONTACT) & (trajectory.time < self.horizon))
         release = np.append(trajectory.time[1:], np.nan)[k]
-        labels = episode_labels(trajectory.time[k], release, default_separation(self.packed))
+        labels = episode_labels(trajectory.time[k], release, self._separation)
         return int(labels[-1]) + 1 if labels.size else 0
 
     def _tip_maxima(self, trajectory: Trajectory) -> tuple[float, float, float]:
@@ -420,7 +421,8 @@ class PeriodMap:
         return -value
 
     def _grid(self) -> np.ndarray:
-        return np.linspace(0.0, self.horizon, SAMPLES_PER_PERIOD * self.periods + 1)
+        """``SAMPLES_PER_PERIOD`` equally spaced times a period over the run (s), read only."""
+        return self._times
 
     def _gap(self, trajectory: Trajectory, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The gap (m) at ``times`` and whether each lies in a free phase."""

@@ -93,6 +93,19 @@ def peak_forces(packed: Packed, trajectory: Trajectory,
     return peaks
 
 
+def contact_measures(packed: Packed, trajectory: Trajectory,
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each contact phase's peak force (N), impulse (N s) and impact velocity (m/s), in order.
+
+    `impact_table`'s ``impact_peak_force``, ``impact_impulse`` and ``impact_velocity`` alone
+    (a periodic orbit's measures, read at every point a continuation keeps).
+    """
+    k = np.flatnonzero(trajectory.phase == CONTACT)
+    before = _segment_observables(packed, trajectory, k - 1, end=True)
+    return (peak_forces(packed, trajectory), _impulses(packed, trajectory, k),
+            gap_rate(before, packed.dynamics.free.side))
+
+
 def impact_table(packed: Packed, trajectory: Trajectory,
                  report: Callable[[int], None] | None = None) -> dict[str, np.ndarray]:
     """Per-impact quantities: one entry per contact phase (zero-duration ones included).
