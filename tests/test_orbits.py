@@ -444,3 +444,22 @@ def test_segment_samples_and_the_interval_value_against_exact_samples():
     nearest = min(maxima, key=abs)
     assert period_map._interval_gap(trajectory) == pytest.approx(nearest,
                                                                  abs=1e-12 * params.clearance)
+
+
+def test_episode_count_is_the_labels_count():
+    # the period map counts a run's episodes on lists (`episode_count`); the rule is
+    # `episode_labels`': random contacts, with free intervals below, at and above the separation
+    from impactbeams.trajectory.episodes import episode_count, episode_labels
+
+    rng = np.random.default_rng(7)
+    separation = 1e-3
+    for size in [0, 1, 2, 5, 40] * 20:
+        durations = rng.uniform(0.0, 2e-3, size)
+        intervals = rng.choice([0.0, 0.5e-3, separation, 2e-3], size)
+        onset = np.cumsum(durations + intervals)
+        release = onset + durations
+        if size and rng.random() < 0.3:
+            release[-1] = np.nan  # open at the run's end
+        labels = episode_labels(onset, release, separation)
+        expected = int(labels[-1]) + 1 if labels.size else 0
+        assert episode_count(onset.tolist(), release.tolist(), separation) == expected

@@ -54,7 +54,7 @@ from impactbeams.params import (
     require_one_contact,
     require_type,
 )
-from impactbeams.trajectory.episodes import default_separation, episode_labels
+from impactbeams.trajectory.episodes import default_separation, episode_count
 from impactbeams.trajectory.impacts import contact_measures
 from impactbeams.trajectory.phases import (
     Trajectory,
@@ -161,7 +161,7 @@ class PeriodMap:
         self.params = params
         self.forcing_period = 2.0 * math.pi / params.omega
         self.horizon = self.periods * self.forcing_period
-        self._times = np.linspace(0.0, self.horizon, SAMPLES_PER_PERIOD * self.periods + 1)
+        self._times: np.ndarray | None = None  # the sample grid, built when first asked
         self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
                                        geometry(params, self.n_modes))
 
@@ -357,10 +357,13 @@ class PeriodMap:
         return out_q, out_v
 
     def _episodes(self, trajectory: Trajectory) -> int:
-        k = np.flatnonzero((trajectory.phase == CONTACT) & (trajectory.time < self.horizon))
-        release = np.append(trajectory.time[1:], np.nan)[k]
-        labels = episode_labels(trajectory.time[k], release, self._separation)
-        return int(labels[-1]) + 1 if labels.size else 0
+        """The impact episodes that start in [0, pT): `episode_labels`' count."""
+        # on the segments' lists: a run has a few dozen, where each NumPy call costs more
+        times, phases = trajectory.time.tolist(), trajectory.phase.tolist()
+        onsets = [k for k, phase in enumerate(phases) if phase == CONTACT
+                  and times[k] < self.horizon]
+        releases = [times[k + 1] if k + 1 < len(times) else math.nan for k in onsets]
+        return episode_count([times[k] for k in onsets], releases, self._separation)
 
     def _tip_maxima(self, trajectory: Trajectory) -> tuple[float, float, float]:
         """The largest |y1|, |y2| and |y1 - u_b1| (m): the run sampled on the grid, then refined.
@@ -422,6 +425,8 @@ class PeriodMap:
 
     def _grid(self) -> np.ndarray:
         """``SAMPLES_PER_PERIOD`` equally spaced times a period over the run (s), read only."""
+        if self._times is None:
+            self._times = np.linspace(0.0, self.horizon, SAMPLES_PER_PERIOD * self.periods + 1)
         return self._times
 
     def _gap(self, trajectory: Trajectory, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

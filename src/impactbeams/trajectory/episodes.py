@@ -11,7 +11,7 @@ beams' own motion takes to turn around.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.polynomial.legendre import leggauss
@@ -32,11 +32,24 @@ def default_separation(packed: Packed) -> float:
 
 
 def episode_labels(onset: np.ndarray, release: np.ndarray, separation: float) -> np.ndarray:
-    """Episode number of each contact (onset, release times in s; release NaN if open)."""
+    """Episode number of each contact (onset, release times in s; release NaN if open).
+
+    A contact opens a new episode unless it follows the release before it by less than
+    ``separation`` (s).
+    """
     if onset.size == 0:
         return np.zeros(0, dtype=int)
     free_interval = onset[1:] - release[:-1]
     return np.concatenate([[0], np.cumsum(~(free_interval < separation))]).astype(int)
+
+
+def episode_count(onset: Sequence[float], release: Sequence[float], separation: float) -> int:
+    """How many episodes the contacts make (`episode_labels`' last label + 1; 0 without any).
+
+    On plain sequences, for a few contacts at a time (a periodic orbit's, at every run).
+    """
+    return sum(1 for k in range(len(onset)) if k == 0 or not onset[k] - release[k - 1]
+               < separation)
 
 
 def _contact_work(packed: Packed, trajectory: Trajectory, k: int) -> tuple[float, float]:
