@@ -17,6 +17,7 @@ import numpy as np
 
 from impactbeams.brent import MAX_ITERATIONS, iteration
 from impactbeams.kernels import contact
+from impactbeams.kernels.drive import clamp_motion
 from impactbeams.kernels.dynamics import propagate, sample_grid, sample_segments, segment_index
 from impactbeams.kernels.jit import inlined_kernel, kernel
 from impactbeams.kernels.layout import (
@@ -26,47 +27,94 @@ from impactbeams.kernels.layout import (
     SCALAR_CONST,
     SCALAR_COSINE,
     SCALAR_SINE,
+    TIP_V1,
+    TIP_V2,
+    TIP_Y1,
 )
+from impactbeams.kernels.stroboscope import tip_motion
 
 _brent_iteration = inlined_kernel(iteration)
 RTOL = 4.0 * np.finfo(np.float64).eps  # SciPy's brentq default, as `impactbeams.brent`'s
 
 
+GAP, TIP = 0, 1  # the quantities whose extrema are sought: the gap, a tip's |deflection|
+
+
 @kernel
-def gap_extremum(tables, forces, scalars, spring, drives, settings, recorded, omega, lo, hi,
-                 sign, xtol):
+def gap_extremum(tables, forces, phase_scalars, spring, drives, settings, recorded, omega, lo,
+                 hi, sign, xtol):
     """The gap's minimum (``sign`` 1) or maximum (-1) in (lo, hi): its time (s) and value (m).
 
     Brent's method on ``sign`` times the gap's rate from (lo, hi), as SciPy's ``brentq`` with
     ``xtol`` (s) steps: a simple root, found to round-off. (NaN, NaN) unless that rate is < 0
-    at lo and > 0 at hi (no such extremum between them). ``scalars``: the free phase's
-    (``phase_scalars[FREE]``); ``omega``: the forcing frequency (rad/s).
+    at lo and > 0 at hi (no such extremum between them). ``omega``: the forcing frequency
+    (rad/s).
     """
+    return _extremum(GAP, sign, 0, 0.0, tables, forces, phase_scalars, spring, drives,
+                     settings, recorded, omega, lo, hi, xtol)
+
+
+@kernel
+def tip_maximum(tables, forces, phase_scalars, spring, drives, settings, recorded, column,
+                clamp, lo, hi, xtol):
+    """The largest |tip ``column``| (``layout.TIP_Y1`` or ``TIP_Y2``) in (lo, hi): time, value.
+
+    ``clamp`` 1: beam 1's deflection relative to its clamp (the clamp's motion subtracted), 0:
+    absolute. As `gap_extremum`, on the rate of |tip|: (NaN, NaN) unless it is > 0 at lo and
+    < 0 at hi.
+    """
+    return _extremum(TIP, -1.0, column, clamp, tables, forces, phase_scalars, spring, drives,
+                     settings, recorded, settings.forcing_frequency, lo, hi, xtol)
+
+
+@kernel
+def _extremum(what, sign, column, clamp, tables, forces, phase_scalars, spring, drives,
+              settings, recorded, omega, lo, hi, xtol):
+    """Brent's method on ``sign`` times the rate of ``what`` (of its size for a tip)."""
     n_coords = recorded.q.shape[1]
-    y, y_rate = np.empty(n_coords), np.empty(n_coords)
-    q, v = np.empty(n_coords), np.empty(n_coords)
-    weights = tables[FREE, ROW_EVENT]
+    work = (np.empty(n_coords), np.empty(n_coords), np.empty(n_coords), np.empty(n_coords),
+            np.empty(4))
     x_pre, x_cur = lo, hi
-    _state(tables, forces, spring, drives, settings, recorded, x_pre, y, y_rate, q, v)
-    f_pre = sign * _rate(scalars, weights, omega, x_pre, v)
-    _state(tables, forces, spring, drives, settings, recorded, x_cur, y, y_rate, q, v)
-    f_cur = sign * _rate(scalars, weights, omega, x_cur, v)
+    _, f_pre = _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, spring,
+                           drives, settings, recorded, omega, x_pre, work)
+    _, f_cur = _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, spring,
+                           drives, settings, recorded, omega, x_cur, work)
     if not f_pre < 0.0 < f_cur:
         return math.nan, math.nan
     x_blk = f_blk = s_pre = s_cur = 0.0
     for _ in range(MAX_ITERATIONS):
         done, x_pre, x_cur, x_blk, f_pre, f_blk, s_pre, s_cur = _brent_iteration(
             x_pre, x_cur, x_blk, f_pre, f_cur, f_blk, s_pre, s_cur, xtol, RTOL)
-        _state(tables, forces, spring, drives, settings, recorded, x_cur, y, y_rate, q, v)
+        value, f_cur = _value_rate(what, sign, column, clamp, tables, forces, phase_scalars,
+                                   spring, drives, settings, recorded, omega, x_cur, work)
         if done:
-            return x_cur, _gap(scalars, weights, omega, x_cur, q)
-        f_cur = sign * _rate(scalars, weights, omega, x_cur, v)
+            return x_cur, value
     return math.nan, math.nan
 
 
 @kernel
-def smallest_free_minimum(tables, forces, scalars, spring, drives, settings, recorded, omega,
-                          times):
+def _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, spring, drives,
+                settings, recorded, omega, t, work):
+    """``what``'s value at t (s), and ``sign`` times its rate (of |tip| for a tip).
+
+    ``work``: (y, y', q, q', tips) arrays to sample into.
+    """
+    y, y_rate, q, v, tips = work
+    phase = _state(tables, forces, spring, drives, settings, recorded, t, y, y_rate, q, v)
+    if what == GAP:
+        scalars, weights = phase_scalars[FREE], tables[FREE, ROW_EVENT]
+        return _gap(scalars, weights, omega, t, q), sign * _rate(scalars, weights, omega, t, v)
+    tip_motion(tables, forces, phase_scalars, settings, contact.residual_flexibility2(
+        tables[FREE], settings), phase, t, q, v, tips)
+    moved, moved_rate, _ = clamp_motion(settings, t)
+    value = tips[column] - clamp * settings.shaker1 * moved
+    rate = tips[TIP_V1 if column == TIP_Y1 else TIP_V2] - clamp * settings.shaker1 * moved_rate
+    return abs(value), sign * math.copysign(1.0, value) * rate
+
+
+@kernel
+def smallest_free_minimum(tables, forces, phase_scalars, spring, drives, settings, recorded,
+                          omega, times):
     """The gap's smallest interior minimum in free flight, sampled on ``times`` and refined.
 
     ``times``: an equally spaced grid over the run (s), sampled a step at a time
@@ -80,7 +128,7 @@ def smallest_free_minimum(tables, forces, scalars, spring, drives, settings, rec
     q, v = np.empty((m, n_coords)), np.empty((m, n_coords))
     phase = np.empty(m, dtype=np.int64)
     sample_grid(tables, forces, spring, drives, settings, recorded, times, q, v, phase)
-    weights = tables[FREE, ROW_EVENT]
+    scalars, weights = phase_scalars[FREE], tables[FREE, ROW_EVENT]
     gap = np.empty(m)
     for i in range(m):
         gap[i] = _gap(scalars, weights, omega, times[i], q[i])
@@ -93,13 +141,13 @@ def smallest_free_minimum(tables, forces, scalars, spring, drives, settings, rec
     if best < 0:
         return math.nan, math.nan, math.nan, math.nan, math.nan, math.nan
     lo, hi = times[best - 1], times[best + 1]
-    t, value = gap_extremum(tables, forces, scalars, spring, drives, settings, recorded, omega,
-                            lo, hi, 1.0, 1e-14 * max(hi, 1.0))
+    t, value = gap_extremum(tables, forces, phase_scalars, spring, drives, settings, recorded,
+                            omega, lo, hi, 1.0, 1e-14 * max(hi, 1.0))
     return t, value, times[best], gap[best], lo, hi
 
 
 @kernel
-def interval_gap(tables, forces, scalars, spring, drives, settings, recorded, ends, omega,
+def interval_gap(tables, forces, phase_scalars, spring, drives, settings, recorded, ends, omega,
                  count):
     """The gap's local maximum nearest 0 between contacts (m); NaN if there is none.
 
@@ -116,7 +164,7 @@ def interval_gap(tables, forces, scalars, spring, drives, settings, recorded, en
         return math.nan
     q, v = np.empty((segments * count, n_coords)), np.empty((segments * count, n_coords))
     sample_segments(tables, forces, spring, drives, settings, recorded, ends, count, q, v)
-    weights = tables[FREE, ROW_EVENT]
+    scalars, weights = phase_scalars[FREE], tables[FREE, ROW_EVENT]
     times, gap = np.empty((segments, count)), np.empty((segments, count))
     for k in range(segments):
         step = (ends[k] - recorded.time[k]) / (count - 1)
@@ -146,8 +194,8 @@ def interval_gap(tables, forces, scalars, spring, drives, settings, recorded, en
     _state(tables, forces, spring, drives, settings, recorded, t, y, y_rate, q_t, v_t)
     value = _gap(scalars, weights, omega, t, q_t)
     lo, hi = times[best_k, best_i - 1], times[best_k, best_i + 1]
-    _, rise = gap_extremum(tables, forces, scalars, spring, drives, settings, recorded, omega,
-                           lo, hi, -1.0, 1e-14 * max(hi, 1.0))
+    _, rise = gap_extremum(tables, forces, phase_scalars, spring, drives, settings, recorded,
+                           omega, lo, hi, -1.0, 1e-14 * max(hi, 1.0))
     return value if math.isnan(rise) else max(value, rise)
 
 
@@ -161,17 +209,18 @@ def _nearer_zero(gap, best_k, best_i, k, i):
 
 @kernel
 def _state(tables, forces, spring, drives, settings, recorded, t, y, y_rate, q, v):
-    """The run's state at t (s), observed in the free coordinates, into (q, v)."""
+    """The run's state at t (s), observed in the free coordinates, into (q, v); its phase."""
     k = segment_index(recorded.time, recorded.time.size, t, 0)
     phase = recorded.phase[k]
     propagate(tables[phase], forces[phase], recorded.q[k], recorded.v[k], recorded.time[k], t,
               settings, y, y_rate)
     contact.observed_state(phase, y, y_rate, t, spring, drives, settings, q, v)
+    return phase
 
 
 @kernel
 def _gap(scalars, weights, omega, t, q):
-    """G (m) at t from the free coordinates q."""
+    """The gap g (m) at t from the free coordinates q."""
     return (scalars[SCALAR_CONST] + scalars[SCALAR_SINE] * math.sin(omega * t)
             + scalars[SCALAR_COSINE] * math.cos(omega * t) + _dot(q, weights))
 
@@ -185,7 +234,7 @@ def _rate(scalars, weights, omega, t, v):
 
 @kernel
 def _dot(a, b):
-    """A . b: a loop, not np.dot, whose BLAS call costs a cold compile 0.2 s."""
+    """The sum of a_j b_j: a loop, not np.dot, whose BLAS call costs a cold compile 0.2 s."""
     total = 0.0
     for j in range(a.size):
         total += a[j] * b[j]

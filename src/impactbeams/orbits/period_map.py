@@ -22,12 +22,17 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import minimize_scalar
 
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact.spring import recommended_modes
 from impactbeams.kernels import contact
-from impactbeams.kernels.extrema import gap_extremum, interval_gap, smallest_free_minimum
+from impactbeams.kernels.extrema import (
+    gap_extremum,
+    interval_gap,
+    smallest_free_minimum,
+    tip_maximum,
+)
 from impactbeams.kernels.layout import (
     CONTACT,
     FREE,
@@ -36,8 +41,6 @@ from impactbeams.kernels.layout import (
     SCALAR_COSINE,
     SCALAR_SINE,
     SPRING_DRIVE_ROWS,
-    TIP_V1,
-    TIP_V2,
     TIP_Y1,
     TIP_Y2,
 )
@@ -277,7 +280,7 @@ class PeriodMap:
         value nearest 0 refined at the root of the gap's rate.
         """
         packed = self.packed
-        return interval_gap(packed.tables, packed.forces, packed.phase_scalars[FREE],
+        return interval_gap(packed.tables, packed.forces, packed.phase_scalars,
                             packed.dynamics.spring_arrays, packed.drives, packed.settings,
                             trajectory.segments, trajectory.segment_end, self.params.omega,
                             INTERVAL_SAMPLES)
@@ -290,7 +293,7 @@ class PeriodMap:
         samples of the run. None if the rate does not change sign that way between the ends.
         """
         packed = self.packed
-        t, value = gap_extremum(packed.tables, packed.forces, packed.phase_scalars[FREE],
+        t, value = gap_extremum(packed.tables, packed.forces, packed.phase_scalars,
                                 packed.dynamics.spring_arrays, packed.drives, packed.settings,
                                 trajectory.segments, self.params.omega, lo, hi,
                                 1.0 if minimum else -1.0, 1e-14 * max(hi, 1.0))
@@ -381,45 +384,35 @@ class PeriodMap:
                  if self.params.partner.has_beam2 else 0.0)
         return absolute, beam2, relative
 
-    def _clamp1(self, times: np.ndarray, rate: bool = False) -> np.ndarray:
-        """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0.
-
-        Its velocity (m/s) if ``rate``.
-        """
+    def _clamp1(self, times: np.ndarray) -> np.ndarray:
+        """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0."""
         moves1, _ = self.params.mount.clamps
-        omega_t = self.params.omega * times
-        if rate:
-            return moves1 * self.params.base_amplitude * self.params.omega * np.cos(omega_t)
-        return moves1 * self.params.base_amplitude * np.sin(omega_t)
+        return moves1 * self.params.base_amplitude * np.sin(self.params.omega * times)
 
     def _largest(self, trajectory: Trajectory, times: np.ndarray, tips: np.ndarray,
                  column: int, clamp: bool) -> float:
         """The largest |tip ``column``| (minus beam 1's clamp if ``clamp``) over the run (m).
 
         From its samples ``tips`` at ``times``: the largest refined at the root of its rate
-        between the sample's neighbours (Brent's method: some 10 samples of the run, against
-        some 18 to minimise it), or by minimising its negative where the rate does not change
-        sign that way there.
+        between the sample's neighbours (`kernels.extrema.tip_maximum`, Brent's method in one
+        call), or by minimising its negative where the rate does not change sign that way there.
         """
-        velocity = TIP_V1 if column == TIP_Y1 else TIP_V2
 
         def size(t: float) -> float:
             at = np.array([t])
             return float(abs(self._tips(trajectory, at)[0, column]
                              - (self._clamp1(at)[0] if clamp else 0.0)))
 
-        def rate(t: float) -> float:
-            at = np.array([t])
-            motion = self._tips(trajectory, at)[0]
-            offset = motion[column] - (self._clamp1(at)[0] if clamp else 0.0)
-            return math.copysign(1.0, offset) * float(
-                motion[velocity] - (self._clamp1(at, rate=True)[0] if clamp else 0.0))
-
         sampled = np.abs(tips[:, column] - (self._clamp1(times) if clamp else 0.0))
         i = int(np.argmax(sampled))
         lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
-        if rate(lo) > 0.0 > rate(hi):
-            return max(size(brentq(rate, lo, hi, xtol=1e-14 * max(hi, 1.0))), float(sampled[i]))
+        packed = self.packed
+        t, value = tip_maximum(packed.tables, packed.forces, packed.phase_scalars,
+                               packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                               trajectory.segments, column, float(clamp), lo, hi,
+                               1e-14 * max(hi, 1.0))
+        if not math.isnan(t):
+            return max(value, float(sampled[i]))
         value, _ = self._refined(lambda t: -size(t), lo, hi, -sampled[i], times[i])
         return -value
 
@@ -451,7 +444,7 @@ class PeriodMap:
         """
         packed = self.packed
         t, value, sample_t, sample_value, lo, hi = smallest_free_minimum(
-            packed.tables, packed.forces, packed.phase_scalars[FREE],
+            packed.tables, packed.forces, packed.phase_scalars,
             packed.dynamics.spring_arrays, packed.drives, packed.settings, trajectory.segments,
             self.params.omega, self._grid())
         if math.isnan(sample_t):
