@@ -79,6 +79,71 @@ def test_contacts_refused_in_one_line(values, message):
     assert message in str(error.value) and "\n" not in str(error.value)
 
 
+_UNUSED = ("is not allowed: each of the 2 contacts gives its own {field}, so it would be used "
+           "by none (it is the default of a contact that leaves its {field} out): leave {key} "
+           "out, or {field} out of a contact")
+
+
+@pytest.mark.parametrize(("key", "field", "value", "contacts"), [
+    ("clearance", "clearance", 2e-6, two_sided_stop(MID, 3e-6, 4e-6)),
+    ("contact_stiffness", "stiffness", 1e5, two_sided_stop(MID, stiffness=1e4)),
+    ("contact_damping", "damping", 0.1, (Contact(MID, damping=0.0), Contact(damping=0.2))),
+])
+def test_a_flat_law_key_every_contact_gives_its_own_of_is_refused(tmp_path, capsys, key, field,
+                                                                  value, contacts):
+    """Given beside contacts that all give their own, clearance, contact_stiffness or
+    contact_damping would be used by none: refused in one line from Params(), a TOML file,
+    replace(), a sweep file and the command line (before, it went unused without a word)."""
+    from impactbeams.cli import main
+    from impactbeams.sweep import sweep_from_mapping
+
+    rule = _UNUSED.format(field=field, key=key)
+    tables = [{name: getattr(c, name) for name in ("position1", "side", field)
+               if getattr(c, name) is not None} for c in contacts]
+    calls = {f"{key} = {value!r} in Params() ": lambda: Params(
+                 counterpart="stop", contacts=contacts, **{key: value}),
+             f"{key} = {value!r} in Params.replace() ": lambda: STOP.replace(
+                 contacts=contacts).replace(**{key: value}),
+             f"{key} = {value!r} in [params] of sweep ": lambda: sweep_from_mapping({
+                 "params": {"counterpart": "stop", key: value, "contacts": tables},
+                 "axes": {"omega": {"min": 10.0, "max": 20.0, "num": 2}}})}
+    for start, call in calls.items():
+        with pytest.raises(ParameterError) as error:
+            call()
+        assert str(error.value) == start + rule
+    path = tmp_path / "p.toml"
+    lines = "".join("[[params.contacts]]\n" + "".join(f"{name} = {item!r}\n".replace("'", '"')
+                                                       for name, item in table.items())
+                    for table in tables)
+    path.write_text(f'[params]\ncounterpart = "stop"\n{lines}')
+    assert Params.from_toml(path).contacts == contacts
+    flag = "--" + key.replace("_", "-")
+    assert main(["modes", "--params", str(path), flag, str(value)]) == 2
+    assert capsys.readouterr().err == (
+        f"impactbeams: error: {key} = {value!r} in the command line (beside the contacts of "
+        f"{path}) {rule}\n")
+    path.write_text(f'[params]\ncounterpart = "stop"\n{key} = {value!r}\n{lines}')
+    with pytest.raises(ParameterError, match=rf"^{key} = {value!r} in \[params\] of {path} "):
+        Params.from_toml(path)
+
+
+def test_a_flat_law_key_is_the_default_of_the_contacts_that_leave_theirs_out():
+    """Where one contact leaves its clearance (stiffness, damping) out, the flat key is its
+    value there, as documented, and taken; one contact giving its own refuses it too."""
+    params = Params(counterpart="stop", clearance=2e-6, contact_stiffness=1e5,
+                    contacts=two_sided_stop(MID, clearance_above=3e-6))
+    below, above = params.each_contact()
+    assert (below.clearance, above.clearance) == (2e-6, 3e-6)
+    assert below.contact_stiffness == above.contact_stiffness == 1e5
+    assert params.replace(clearance=1e-6).each_contact()[0].clearance == 1e-6
+    with pytest.raises(ParameterError, match=r"^clearance = 2e-06 in Params\(\) is not allowed: "
+                                             "the contact gives its own clearance"):
+        Params(counterpart="stop", clearance=2e-6, contacts=(Contact(MID, clearance=3e-6),))
+    # a copy given new contacts that give their own leaves the old flat value out
+    again = params.replace(contacts=two_sided_stop(MID, 1e-6, 1e-6))
+    assert [p.clearance for p in again.each_contact()] == [1e-6, 1e-6]
+
+
 @pytest.mark.parametrize(("field", "value"), [("side", "left"), ("clearance", 0.0),
                                               ("stiffness", -1.0), ("damping", np.nan),
                                               ("position1", "tip")])

@@ -41,6 +41,7 @@ from impactbeams.params import (
     modes_per_beam,
     nearest,
     refuse_beam2,
+    refuse_unused_law_keys,
 )
 from impactbeams.variables import GRAZING_PARAMETERS, PARAMETERS
 
@@ -95,6 +96,8 @@ def params_from_args(args: argparse.Namespace) -> Params:
                  if getattr(args, n, None) is not None}
     if not counterpart_named(overrides.get("counterpart", params.counterpart)).has_beam2:
         refuse_beam2([f"--{n.replace('_', '-')}" for n in overrides], "the command line")
+    refuse_unused_law_keys(overrides, params.contacts,
+                           f"the command line (beside the contacts of {args.params})")
     return params.replace(**overrides) if overrides else params
 
 
