@@ -460,3 +460,119 @@ def test_two_beams_with_backlash_at_offset_points_against_dop853():
     expected = _dop853_two_sided(faces, 0.04, 6)
     assert [j for j, *_ in expected] == [0, 0, 0, 1, 1, 1]
     _assert_like(contact_sequence(params, 0.04, n_modes=n), expected)
+
+
+# --- sweep axes on a contact's field ----------------------------------------------------------
+
+_ALONG_CONTACTS = {"omega": {"min": 100.0, "max": 400.0, "num": 3},
+                   "contacts.1.clearance": {"min": 4e-6, "max": 8e-6, "num": 2},
+                   "contacts.0.clearance": {"min": 0.3e-6, "max": 3e-6, "num": 4}}
+_FORCED_STOP = {"counterpart": "stop", "force_amplitude": 1e-3, "contact_stiffness": 1e4}
+
+
+def _contact_sweep(axes: dict = _ALONG_CONTACTS, **params):
+    from impactbeams.sweep import sweep_from_mapping
+
+    return sweep_from_mapping({"params": {**_FORCED_STOP, "contacts": [
+        {"position1": MID}, {}], **params}, "axes": axes, "t_max": 0.05, "n_modes": 8})
+
+
+def test_a_map_over_contacts_clearances_is_each_cells_first_contact(tmp_path):
+    """A map over omega and each contact's clearance (contact 0's last: by columns in its own
+    map) is, cell by cell, `first_contact` of that cell's contacts: which contact the same,
+    the onset to 1e-15 s (the map's column kernel and the event kernel locate the same root by
+    different paths: a few ulps of a 5 ms onset, 8.7e-19 s each). Written to a file in chunks of
+    3 or 4 cells (columns cut, contact 1's run shared along contact 0's axis) bit for bit."""
+    from impactbeams.sweep import run_sweep
+
+    sweep = _contact_sweep()
+    ds = run_sweep(sweep, parallel=False)
+    assert ds.first_impact_time.dims == ("omega", "contacts.1.clearance", "contacts.0.clearance")
+    assert ds["contacts.0.clearance"].attrs["units"] == "m"
+    assert ds["contacts.0.clearance"].attrs["long_name"].endswith(" of contacts[0]")
+    first = ds.first_contact.values
+    assert 0 < first.sum() < first.size  # both contacts close first somewhere
+    for (i, j, k), time in np.ndenumerate(ds.first_impact_time.values):
+        params = Params(**_FORCED_STOP, omega=float(ds.omega[i]), contacts=(
+            Contact(MID, clearance=float(ds["contacts.0.clearance"][k])),
+            Contact(clearance=float(ds["contacts.1.clearance"][j]))))
+        expected = first_contact(params, 0.05, n_modes=8)
+        assert expected.contact == first[i, j, k]
+        assert abs(expected.onset - time) <= 1e-15, (i, j, k)
+    for cells in (3, 4):
+        path = tmp_path / f"{cells}.nc"
+        written = run_sweep(sweep, path, parallel=False, chunk_cells=cells)
+        for name in ("first_impact_time", "first_contact"):
+            np.testing.assert_array_equal(written[name].values, ds[name].values)
+
+
+def test_axes_on_contacts_fields_only_and_a_contact_not_left_out_is_its_own_map():
+    """A grid over one contact's field alone is, bit for bit, the earliest of that contact's own
+    map over its clearance and the other's one-cell map; the unquoted TOML form
+    [axes.contacts.0.clearance] (nested tables) is the same sweep."""
+    import tomllib
+
+    from impactbeams.sweep import run_sweep, sweep_from_mapping
+
+    axes = {"contacts.0.clearance": {"min": 0.3e-6, "max": 3e-6, "num": 3}}
+    ds = run_sweep(_contact_sweep(axes, clearance=6e-6), parallel=False)
+    alone = _map({"force_amplitude": 1e-3, "contact_stiffness": 1e4, "contact_position1": MID},
+                 axes={"clearance": axes["contacts.0.clearance"]})
+    tip = _map({"force_amplitude": 1e-3, "contact_stiffness": 1e4},
+               axes={"clearance": {"min": 6e-6, "max": 6e-6, "num": 1}})
+    np.testing.assert_array_equal(ds.first_impact_time.values, np.fmin(alone, tip))
+    text = ('t_max = 0.05\nn_modes = 8\n[params]\ncounterpart = "stop"\nforce_amplitude = 1e-3\n'
+            'contact_stiffness = 1e4\nclearance = 6e-6\n[[params.contacts]]\nposition1 = 0.05\n'
+            '[[params.contacts]]\n[axes.contacts.0.clearance]\nmin = 0.3e-6\nmax = 3e-6\n'
+            'num = 3\n')
+    nested = run_sweep(sweep_from_mapping(tomllib.loads(text)), parallel=False)
+    np.testing.assert_array_equal(nested.first_impact_time.values, ds.first_impact_time.values)
+
+
+_AXIS = {"min": 1e-6, "max": 2e-6, "num": 2}
+
+
+@pytest.mark.parametrize(("axes", "params", "message"), [
+    ({"contacts.2.clearance": _AXIS}, {},
+     '[axes."contacts.2.clearance"] of sweep = \'contacts.2.clearance\' is not allowed: there '
+     "are 2 contacts in [params] (indices 0 to 1)"),
+    ({"contacts.0.position1": {"min": 0.02, "max": 0.05, "num": 2}}, {},
+     "a contact's position1 is not sweepable (give it in the contact: one sweep per contact "
+     "point and side); sweepable: clearance, stiffness, damping"),
+    ({"contacts.0.clearence": _AXIS}, {},
+     "unknown contact field 'clearence' in [axes.\"contacts.0.clearence\"] of sweep (did you "
+     "mean 'clearance'?)"),
+    ({"contacts.01.clearance": _AXIS}, {},
+     "an axis on a contact's field is named contacts.INDEX.FIELD, e.g. 'contacts.0.clearance'"),
+    ({"contacts.0.stiffness": {"min": 0.0, "max": 1e4, "num": 2}}, {},
+     "axis 'contacts.0.stiffness' of sweep reaches a non-physical point: contact_stiffness = 0.0"),
+    ({"contacts.1.clearance": _AXIS}, {"contacts": [{"position1": MID}, {"clearance": 3e-6}]},
+     "is given both in [params] (contacts[1].clearance = 3e-06) and as an axis"),
+    ({"contacts.0.clearance": _AXIS}, {"contacts": [{"position1": MID}]},
+     "[params] has fewer than two ([[params.contacts]]): one contact is the flat keys, sweep "
+     "[axes.clearance]"),
+    ({"contacts.0.clearance": _AXIS}, {"clearance": 5e-6, "contacts": [
+        {"position1": MID}, {"clearance": 3e-6}]},
+     "clearance = 5e-06 in [params] of sweep is not allowed: each of the 2 contacts gives its "
+     "own clearance"),
+    ({"clearance": _AXIS}, {},
+     "clearance is not sweepable with contacts: each contact has its own; sweep one contact's "
+     'as [axes."contacts.INDEX.FIELD"]'),
+])
+def test_bad_axes_on_contacts_fields_are_refused_in_one_line(axes, params, message):
+    with pytest.raises(ParameterError) as error:
+        _contact_sweep({"omega": {"min": 10.0, "max": 20.0, "num": 2}, **axes}, **params)
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_a_bad_contact_axis_exits_2_from_the_command_line(tmp_path, capsys):
+    from impactbeams.cli import main
+
+    path = tmp_path / "bad.toml"
+    path.write_text('t_max = 0.05\n[params]\ncounterpart = "stop"\n[[params.contacts]]\n'
+                    '[[params.contacts]]\nside = "above"\n[axes."contacts.2.clearance"]\n'
+                    'min = 1e-6\nmax = 2e-6\nnum = 2\n')
+    assert main(["run", str(path), "-o", str(tmp_path / "out.nc"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("impactbeams: error: [axes.\"contacts.2.clearance\"] of ")
+    assert err.count("\n") == 1 and not (tmp_path / "out.nc").exists()
