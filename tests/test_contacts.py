@@ -576,3 +576,91 @@ def test_a_bad_contact_axis_exits_2_from_the_command_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("impactbeams: error: [axes.\"contacts.2.clearance\"] of ")
     assert err.count("\n") == 1 and not (tmp_path / "out.nc").exists()
+
+
+# --- the command line: impactbeams contacts ---------------------------------------------------
+
+_TWO_SIDED = ('[params]\ncounterpart = "stop"\nforce_amplitude = 1e-3\nomega = 400.0\n'
+              'contact_stiffness = 1e4\n[[params.contacts]]\nposition1 = 0.05\nclearance = 3e-6\n'
+              '[[params.contacts]]\nposition1 = 0.05\nside = "above"\nclearance = 2e-6\n')
+_TWO_SIDED_PARAMS = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 2e-6))
+
+
+def _contacts_command(tmp_path, capsys, text, *options):
+    from impactbeams.cli import main
+
+    path = tmp_path / "p.toml"
+    path.write_text(text)
+    code = main(["contacts", "--params", str(path), "--t-max", "0.03", *options])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_the_contacts_command_prints_the_librarys_first_contact_and_sequence(tmp_path, capsys):
+    """--json is first_contact's and contact_sequence's values bit for bit (JSON floats
+    round-trip); the table prints the same contacts; -o writes the sequence with CF attributes."""
+    import json
+
+    import xarray as xr
+
+    code, out, _ = _contacts_command(tmp_path, capsys, _TWO_SIDED, "--n-modes", "8", "--json")
+    assert code == 0
+    data = json.loads(out)
+    first = first_contact(_TWO_SIDED_PARAMS, 0.03, n_modes=8)
+    assert data["first_contact"] == {key: (None if value != value else value)
+                                     for key, value in vars(first).items()}
+    sequence = contact_sequence(_TWO_SIDED_PARAMS, 0.03, n_modes=8)
+    assert data["sequence"]["status"] == "complete" and data["sequence_refused"] is None
+    for name in sequence.data_vars:
+        np.testing.assert_array_equal(np.array(data["sequence"][name], dtype=float),
+                                      sequence[name].values)
+    assert set(sequence.impact_contact.values) == {0, 1}  # both sides close
+    output = tmp_path / "s.nc"
+    code, out, err = _contacts_command(tmp_path, capsys, _TWO_SIDED, "--n-modes", "8", "-o",
+                                       str(output))
+    assert code == 0
+    assert err == f"wrote {output}: {sequence.impact.size} contacts, status complete\n"
+    lines = out.splitlines()
+    assert lines[:3] == ["2 contacts, 8 modes of beam 1, t_max = 0.03 s",
+                         "  contacts[0] (below, x1 = 0.05 m)",
+                         "  contacts[1] (above, x1 = 0.05 m)"]
+    assert lines[3] == (f"first contact: contacts[{first.contact}] (below, x1 = 0.05 m) at t = "
+                        f"{first.onset!r} s, gap rate {first.impact_velocity:.6g} m/s")
+    rows = [line.split() for line in lines[6:]]
+    assert [int(row[1]) for row in rows] == sequence.impact_contact.values.tolist()
+    assert [float(row[2]) for row in rows] == [float(f"{t:.10f}") for t in
+                                               sequence.impact_onset_time.values]
+    with xr.open_dataset(output) as written:
+        np.testing.assert_array_equal(written.impact_onset_time.values,
+                                      sequence.impact_onset_time.values)
+        assert written.impact_onset_time.attrs["units"] == "s"
+        assert written.attrs["status"] == "complete" and "position1=0.05" in written.contacts
+
+
+def test_the_contacts_command_of_contacts_that_close_together_and_bad_input(tmp_path, capsys):
+    """Contacts that can be closed together: the first contact and why there is no sequence
+    (exit 0); with -o an error before any compute. Bad input: one line, exit 2, nothing written."""
+    text = ('[params]\ncounterpart = "stop"\nforce_amplitude = 1e-3\nomega = 400.0\n'
+            'contact_stiffness = 1e4\n[[params.contacts]]\nposition1 = 0.05\nclearance = 0.5e-6\n'
+            '[[params.contacts]]\nclearance = 6e-6\n')
+    code, out, _ = _contacts_command(tmp_path, capsys, text, "--n-modes", "8")
+    first = first_contact(FORCED.replace(contacts=(Contact(MID, clearance=0.5e-6),
+                                                   Contact(clearance=6e-6))), 0.03, n_modes=8)
+    assert code == 0 and f"at t = {first.onset!r} s" in out
+    assert out.splitlines()[-1].startswith("contact sequence: not built for these contacts "
+                                           "(contacts: 2 contacts that can be closed together")
+    output = tmp_path / "x.nc"
+    for options, message in [
+            (("-o", str(output)), "-o/--output: contacts: 2 contacts that can be closed together"),
+            (("--clearance", "1e-6"), "clearance = 1e-06 in the command line (beside the "
+                                      "contacts of"),
+            (("--t-max", "-1"), "t_max = -1.0 is not allowed: must be > 0 (s)"),
+            (("--n-modes", "0"), "argument --n-modes: 0 is not allowed"),
+            (("-o", str(tmp_path / "x.png")), "-o/--output")]:
+        code, out, err = _contacts_command(tmp_path, capsys, text, *options)
+        assert code == 2 and not output.exists(), options
+        last = err.splitlines()[-1]
+        assert last.startswith("impactbeams: error: ") and message in last, (options, err)
+    code, _, err = _contacts_command(tmp_path, capsys, _TWO_SIDED, "--n-modes", "8",
+                                     "--max-contacts", "2")
+    assert code == 3 and "stopped after --max-contacts 2 contacts" in err
