@@ -490,6 +490,11 @@ def test_a_map_over_contacts_clearances_is_each_cells_first_contact(tmp_path):
     assert ds.first_impact_time.dims == ("omega", "contacts.1.clearance", "contacts.0.clearance")
     assert ds["contacts.0.clearance"].attrs["units"] == "m"
     assert ds["contacts.0.clearance"].attrs["long_name"].endswith(" of contacts[0]")
+    # the contacts as given: a swept field's values are its coordinate's, not the first one
+    assert ds.attrs["contacts"].startswith("Contact(position1=0.05, position2=None, "
+                                           "side='below', clearance=None")
+    assert "clearance" not in ds.attrs  # every contact's own: the flat one is used by none
+    assert ds.attrs["contact_stiffness"] == 1e4  # the contacts' stiffness
     first = ds.first_contact.values
     assert 0 < first.sum() < first.size  # both contacts close first somewhere
     for (i, j, k), time in np.ndenumerate(ds.first_impact_time.values):
@@ -635,6 +640,7 @@ def test_the_contacts_command_prints_the_librarys_first_contact_and_sequence(tmp
                                       sequence.impact_onset_time.values)
         assert written.impact_onset_time.attrs["units"] == "s"
         assert written.attrs["status"] == "complete" and "position1=0.05" in written.contacts
+        assert "clearance" not in written.attrs and written.contact_stiffness == 1e4
 
 
 def test_the_contacts_command_of_contacts_that_close_together_and_bad_input(tmp_path, capsys):

@@ -43,6 +43,7 @@ from impactbeams.params import (
     nearest,
     refuse_beam2,
     refuse_unused_law_keys,
+    without_unused_law_keys,
 )
 from impactbeams.variables import GRAZING_PARAMETERS, PARAMETERS
 
@@ -899,8 +900,8 @@ def _described_sequence(sequence: xr.Dataset, params: Params,
                                   "description": "its index in the parameters' contacts"}
                                  if name == "impact_contact" else attributes(name))
     described.attrs = global_attributes(
-        "impactbeams contact sequence", f"contacts --t-max {args.t_max!r}", params.as_dict(),
-        **sequence.attrs)
+        "impactbeams contact sequence", f"contacts --t-max {args.t_max!r}",
+        without_unused_law_keys(params.as_dict()), **sequence.attrs)
     return described
 
 

@@ -979,6 +979,16 @@ def set_by_every_contact(contacts: Any) -> tuple[str, ...]:
                  if checked and all(key in contact.flat() for contact in checked))
 
 
+def without_unused_law_keys(values: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` (a run's parameters by name) without the law keys no contact takes.
+
+    What a Dataset records: a flat ``clearance`` beside contacts that each give their own
+    would read as a value of the run.
+    """
+    unused = set_by_every_contact(values.get(CONTACTS, ()))
+    return {name: value for name, value in values.items() if name not in unused}
+
+
 def refuse_unused_law_keys(given: Collection[str], contacts: Any, source: str) -> None:
     """Raise ParameterError if a key of ``given`` is a law key every contact gives its own of.
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from impactbeams.io import Layout, build_netcdf, writing_netcdf
-from impactbeams.params import MATERIAL_KEYS
+from impactbeams.params import CONTACTS, MATERIAL_KEYS, without_unused_law_keys
 from impactbeams.sweep.definition import (
     FIRST_IMPACT,
     LONG_TIME_KEYS,
@@ -150,9 +150,15 @@ def map_file(sweep: Sweep, path: Path, building: Path,
 
 
 def _fixed_parameters(sweep: Sweep) -> dict[str, float]:
-    """The parameters no axis changes (a swept material key makes EI_i and rhoA_i vary)."""
+    """The parameters no axis changes (a swept material key makes EI_i and rhoA_i vary).
+
+    Beside several contacts, not the law keys every contact gives its own of (or sweeps).
+    """
     swept = {axis.name for axis in sweep.axes}
     for i in ("1", "2"):
         if any(k + i in swept for k in MATERIAL_KEYS):
             swept |= {"EI" + i, "rhoA" + i}
-    return {name: value for name, value in sweep.base.as_dict().items() if name not in swept}
+    fixed = without_unused_law_keys(sweep.base.as_dict())
+    if any(contact_field(name) is not None for name in swept):  # as given: the swept fields'
+        fixed[CONTACTS] = sweep.fixed[CONTACTS]  # values are the coordinates, left None here
+    return {name: value for name, value in fixed.items() if name not in swept}
