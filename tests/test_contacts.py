@@ -511,6 +511,27 @@ def test_a_map_over_contacts_clearances_is_each_cells_first_contact(tmp_path):
             np.testing.assert_array_equal(written[name].values, ds[name].values)
 
 
+def test_a_map_over_a_contacts_point_is_each_cells_first_contact():
+    """A stop 1 um below a point swept along beam 1 (a geometry axis: its gap weights) and one
+    6 um below the tip: cell by cell `first_contact` of that cell's contacts, which contact the
+    same (each closes first somewhere), onsets to 1e-15 s (measured 2.9e-17 s)."""
+    from impactbeams.sweep import run_sweep
+
+    axes = {"omega": {"min": 100.0, "max": 400.0, "num": 3},
+            "contacts.0.position1": {"min": 0.02, "max": 0.1, "num": 5}}
+    ds = run_sweep(_contact_sweep(axes, contacts=[{"clearance": 1e-6}, {"clearance": 6e-6}]),
+                   parallel=False)
+    first = ds.first_contact.values
+    assert 0 < first.sum() < first.size
+    for (i, k), time in np.ndenumerate(ds.first_impact_time.values):
+        params = Params(**_FORCED_STOP, omega=float(ds.omega[i]), contacts=(
+            Contact(float(ds["contacts.0.position1"][k]), clearance=1e-6),
+            Contact(clearance=6e-6)))
+        expected = first_contact(params, 0.05, n_modes=8)
+        assert expected.contact == first[i, k]
+        assert abs(expected.onset - time) <= 1e-15, (i, k)
+
+
 def test_axes_on_contacts_fields_only_and_a_contact_not_left_out_is_its_own_map():
     """A grid over one contact's field alone is, bit for bit, the earliest of that contact's own
     map over its clearance and the other's one-cell map; the unquoted TOML form
@@ -541,9 +562,19 @@ _AXIS = {"min": 1e-6, "max": 2e-6, "num": 2}
     ({"contacts.2.clearance": _AXIS}, {},
      '[axes."contacts.2.clearance"] of sweep = \'contacts.2.clearance\' is not allowed: there '
      "are 2 contacts in [params] (indices 0 to 1)"),
-    ({"contacts.0.position1": {"min": 0.02, "max": 0.05, "num": 2}}, {},
-     "a contact's position1 is not sweepable (give it in the contact: one sweep per contact "
-     "point and side); sweepable: clearance, stiffness, damping"),
+    ({"contacts.0.side": {"min": 0.02, "max": 0.05, "num": 2}}, {},
+     "a contact's side is not sweepable (give it in the contact: one sweep per side); "
+     "sweepable: position1, position2, clearance, stiffness, damping"),
+    ({"contacts.1.position1": {"min": 0.02, "max": 0.2, "num": 2}}, {},
+     "at the grid point omega = 10.0, contacts.1.position1 = 0.2 of sweep: contacts[1]: "
+     "contact_position1 = 0.2 is not allowed: must be > 0 and <= l1 = 0.1"),
+    ({"contacts.1.position1": {"min": 0.02, "max": 0.1, "num": 2},
+      "l1": {"min": 0.08, "max": 0.1, "num": 2}}, {},
+     "at the grid point omega = 10.0, contacts.1.position1 = 0.1, l1 = 0.08 of sweep: "
+     "contacts[1]: contact_position1 = 0.1 is not allowed: must be > 0 and <= l1 = 0.08"),
+    ({"contacts.1.position1": {"min": -0.02, "max": 0.1, "num": 2}}, {},
+     "axis 'contacts.1.position1' of sweep reaches a non-physical point: contact_position1 = "
+     "-0.02 is not allowed: must be > 0"),
     ({"contacts.0.clearence": _AXIS}, {},
      "unknown contact field 'clearence' in [axes.\"contacts.0.clearence\"] of sweep (did you "
      "mean 'clearance'?)"),

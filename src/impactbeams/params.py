@@ -250,6 +250,9 @@ RANGES: dict[str, Range] = {
                                rule=f"must be > 0 and <= {MAX_CONTACT_STIFFNESS:g}"),
     "contact_damping": Range(">= 0"),
     "base_amplitude": Range(">= 0"),
+    # a point of each beam, from its clamp (how far along it: `Params._check_contact_point`)
+    "contact_position1": Range("> 0"),
+    "contact_position2": Range("> 0"),
 }
 
 # names a grid point for a message: "" for one set of parameters, or the swept values at an

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import itertools
 import json
 import math
 import os
@@ -115,10 +116,10 @@ EXACT_VALUES = 2**20  # the longest axis whose values Axis.value builds
 # an axis on one field of one of several contacts: "contacts.0.clearance" (in a sweep file
 # [axes."contacts.0.clearance"]); its values are that contact's field's, in the flat key's unit
 CONTACT_AXIS = CONTACTS + ".{index}.{field}"
-# the contact fields an axis may sweep: the law's (a contact's point is one sweep per point,
-# as the one contact's `contact_position1`; its side is a name)
+# the contact fields an axis may sweep: its point on each beam and its law's (its side is a
+# name); a point moves the contact's gap weights: a geometry axis
 SWEPT_CONTACT_FIELDS = tuple(field for field, key in FLAT_KEYS.items()
-                             if key in CONTACT_LAW_KEYS)
+                             if key in (*CONTACT_LAW_KEYS, *CONTACT_POSITIONS))
 
 
 def contact_field(name: str) -> tuple[int, str] | None:
@@ -398,7 +399,7 @@ def _contact_axis(name: str, where: str) -> str:
     if name_of_field in FLAT_KEYS:
         raise ParameterError(
             f"{where} = {name!r} is not allowed: a contact's {name_of_field} is not sweepable "
-            f"(give it in the contact: one sweep per contact point and side); sweepable: "
+            f"(give it in the contact: one sweep per side); sweepable: "
             f"{', '.join(SWEPT_CONTACT_FIELDS)}")
     raise unknown_key("contact field", name_of_field, where, SWEPT_CONTACT_FIELDS)
 
@@ -676,8 +677,29 @@ def _check_several(sweep: Sweep) -> None:
                 axis.name not in CONTACT_FIELDS,
                 f"{axis.name} is not sweepable with {CONTACTS}: each contact has its own; "
                 f"sweep one contact's as [axes.\"{CONTACTS}.INDEX.FIELD\"] (INDEX from 0; "
-                f"FIELD one of {', '.join(SWEPT_CONTACT_FIELDS)}), its point and side one "
-                "sweep each")
+                f"FIELD one of {', '.join(SWEPT_CONTACT_FIELDS)}), its side one sweep each")
+
+
+def _check_contact_points(sweep: Sweep) -> None:
+    """With an axis on a contact's point, every corner of the grid as parameters (checked).
+
+    Where a point may lie (0 < x <= l) and the initial gap there (its unit tip-load shape is
+    monotone in x and in l) hold on the whole grid if they hold at its corners; the corner
+    grid's joint check (`_corners`) sees one point per contact, not the axis.
+    """
+    if not any(contact_field(axis.name) is not None and swept_parameter(axis.name)
+               in CONTACT_POSITIONS for axis in sweep.axes):
+        return
+    ends = [(axis.first,) if axis.choices or axis.num == 1 else (axis.min, axis.max)
+            for axis in sweep.axes]
+    for corner in itertools.product(*ends):
+        changes = {axis.name: value for axis, value in zip(sweep.axes, corner, strict=True)}
+        try:
+            sweep.params_at(changes)
+        except ParameterError as error:
+            named = ", ".join(f"{name} = {value!r}" for name, value in changes.items())
+            raise ParameterError(f"at the grid point {named} of {sweep.source}: {error}"
+                                 ) from None
 
 
 def _check_grid(sweep: Sweep) -> None:
@@ -688,6 +710,7 @@ def _check_grid(sweep: Sweep) -> None:
     """
     if sweep.params_at({}).several_contacts:
         _check_several(sweep)
+        _check_contact_points(sweep)
         for each in contact_sweeps(sweep):
             _check_grid(each)
         return
