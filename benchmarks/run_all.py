@@ -10,7 +10,8 @@ work-precision studies (``work_precision.py``: first-impact map, grazing cells, 
 ``spring_precision.py``: full dynamics of the spring law against solve_ivp), the scaling
 series (``scaling.py``), ``bench_distributed.py`` (Dask overhead, if installed),
 ``bench_continuation.py`` (the time per branch point of a continuation),
-``bench_two_parameter.py`` (the time per point of a bifurcation curve), then the speed
+``bench_two_parameter.py`` (the time per point of a bifurcation curve),
+``bench_contacts.py`` (several contacts against one, by contacts and modes), then the speed
 targets' benchmarks: ``bench_columns.py`` (every benchmark map by columns), ``bench_longtime.py``
 (the long-time bifurcation diagram, run whole on 2 threads), ``bench_compile.py`` (the first
 run's compile, cold and warm), ``bench_startup.py`` (each command's start-up) and
@@ -22,7 +23,8 @@ compared cell by cell), the first run and the start-up. Results go to
 ``work_precision.json``, ``dynamics.json``, ``spring.json``, ``scaling.json`` (plus
 ``sweep.json``/``sweep.md`` from bench_sweep, ``cube.json``/``cube.md`` from bench_cube,
 ``distributed.json``/``.md``, ``columns.json``/``.md``, ``longtime.json``/``.md``,
-``continuation.json``/``.md``, ``two_parameter.json``/``.md``, ``compile.json``/``.md``,
+``continuation.json``/``.md``, ``two_parameter.json``/``.md``, ``contacts.json``,
+``compile.json``/``.md``,
 ``startup.json``,
 ``numba_paths.json``); the plots are drawn
 from those JSON files only; ``README.md`` holds the headline tables, the speed targets' first.
@@ -47,6 +49,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
+import bench_contacts as contacts  # noqa: E402
 import bench_harmonic_balance as harmonic_balance  # noqa: E402
 import bench_longtime as longtime  # noqa: E402
 import scaling  # noqa: E402
@@ -170,6 +173,11 @@ def run_bench_two_parameter() -> None:
     """The time per point of a bifurcation curve in two parameters (its JSON and markdown)."""
     subprocess.run([sys.executable, str(HERE / "bench_two_parameter.py")], check=True,
                    stdout=subprocess.DEVNULL)
+
+
+def run_bench_contacts(quick: bool) -> None:
+    """Several contacts against one, by contacts and modes (contacts.json)."""
+    _script("bench_contacts.py", "--repeats", "1" if quick else "7")
 
 
 def run_bench_first_run(quick: bool, baseline: Path | None) -> None:
@@ -485,6 +493,8 @@ def suite(args: argparse.Namespace, out: Path) -> None:
         run_bench_continuation(args.quick)
         log("bench_two_parameter.py")
         run_bench_two_parameter()
+    log("bench_contacts.py")
+    run_bench_contacts(args.quick)
     about = {"quick": args.quick, **machine()}
     for name, data in (("work_precision", first), ("dynamics", dynamics), ("scaling", scale),
                        ("spring", springs)):
@@ -542,6 +552,8 @@ def page(out: Path) -> str:
         readme += "\n" + numba_paths_section(_load(out, "numba_paths"))
     if (out / "harmonic_balance.json").exists():  # the harmonic-balance peer (pyHarm)
         readme += "\n" + harmonic_balance.section(_load(out, "harmonic_balance"))
+    if (out / "contacts.json").exists():  # several contacts against one
+        readme += "\n" + contacts.section(_load(out, "contacts"))
     readme += "\n" + headline(first, dynamics, scale, first["run"]["quick"])
     return readme + "\n" + results_files(out)
 

@@ -315,6 +315,26 @@ def map_threads() -> str:
                + _run_all().maps_table(report) if "maps" in report else ""))
 
 
+def several_contacts() -> str:
+    """What several contacts cost against one, per evaluation and map cell (contacts.json)."""
+    report = _results("contacts")
+    rows = {(row["contacts"], row["n_modes"]): row for row in report["rows"]}
+    modes = sorted({n for _, n in rows})
+    counts = sorted(count for count in {count for count, _ in rows} if count > 1)
+
+    def ratios(key: str) -> str:
+        return ", ".join(" / ".join(f"{rows[count, n][key]:.1f}" for count in counts)
+                         + f" at {n} modes" for n in modes)
+
+    return (f"Several contacts (`benchmarks/bench_contacts.py`, beam 1 against "
+            f"{' / '.join(map(str, counts))} stops): a first-impact map cell costs "
+            f"{ratios('map_cell_over_one_contact')} times one contact's (each contact's own "
+            f"map, the earliest kept), a `first_contact` call "
+            f"{ratios('evaluation_over_one_contact')} times ([benchmarks]"
+            f"(docs/benchmarks/README.md#several-contacts); date and machine: "
+            f"{recorded(report)}, load average {report['load_average']:.1f}).\n")
+
+
 def lyapunov_fig4() -> dict[int, dict]:
     """n_modes -> the long window's exponent, from scripts/lyapunov_fig4.py's results file."""
     report = json.loads((FIGURES / "lyapunov_fig4.json").read_text())
@@ -426,6 +446,7 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "longtime-profile": longtime_profile,
     "spring-precision": spring_precision,
     "map-threads": map_threads,
+    "several-contacts": several_contacts,
     "fig4": fig4,
     "spring-limits": spring_limits,
     "docs-build": docs_build,

@@ -47,6 +47,7 @@ CONTINUATION = ('[params]\ncounterpart = "stop"\n[continuation]\nparameter = "om
 USAGE = {"modes": "[--n N] [--json] [PARAMETER OPTIONS]",
          "simulate": "--t-max SECONDS -o RUN.nc [OPTIONS] [PARAMETER OPTIONS]",
          "run": "SWEEP.toml [-o OUT.nc] [OPTIONS]",
+         "contacts": "--t-max SECONDS [OPTIONS] [PARAMETER OPTIONS]",
          "continue": "CONTINUATION.toml [-o OUT.nc] [--quiet]",
          "plot": "IN.nc [-o OUT.png] [OPTIONS]"}
 
@@ -109,6 +110,18 @@ CASES = {
     "modes-unknown-option": (["modes", "--bogus", "1"], {}, ["unrecognized arguments: --bogus"]),
     "no-command": ([], {}, ["required: command"]),
     # --- simulate: values, the run's size, the output path
+    # --- contacts: the horizon, modes, the output, flat keys beside contacts
+    "contacts-t-max-1e9": (["contacts", "--t-max", "1e9"], {}, ["t_max = 1000000000.0",
+                                                               "t_max <= "]),
+    "contacts-t-max-0": (["contacts", "--t-max", "0"], {}, ["t_max = 0.0"]),
+    "contacts-no-t-max": (["contacts"], {}, ["the following arguments are required: --t-max"]),
+    "contacts-output-png": (["contacts", "--t-max", "0.01", "-o", "r.png"], {},
+                            ["-o/--output 'r.png'", ".nc"]),
+    "contacts-clearance-unused": (
+        ["contacts", "--t-max", "0.01", "--params", "p.toml", "--clearance", "1e-6"],
+        {"p.toml": '[params]\ncounterpart = "stop"\n[[params.contacts]]\nclearance = 2e-6\n'
+                   '[[params.contacts]]\nside = "above"\nclearance = 3e-6\n'},
+        ["clearance = 1e-06 in the command line", "each of the 2 contacts gives its own"]),
     "simulate-t-max-1e9": (["simulate", "--t-max", "1e9", "-o", "r.nc"], {},
                            ["t_max = 1000000000.0", "t_max <= "]),
     "simulate-dt-output-1e-12": (["simulate", "--t-max", "0.6", "--dt-output", "1e-12", "-o",
@@ -459,8 +472,8 @@ def test_bad_input_is_refused_with_one_line_and_nothing_written(scratch, capsys,
     usage = lines[:-1]
     command = argv[0] if argv and argv[0] in USAGE else None
     assert usage in ([], [f"usage: impactbeams {command} {USAGE[command]}" if command else
-                          "usage: impactbeams [-h] [--version] {modes,simulate,run,continue,"
-                          "grazing,basins,plot} ..."]), err
+                          "usage: impactbeams [-h] [--version] {modes,simulate,contacts,run,"
+                          "continue,grazing,basins,plot} ..."]), err
     assert lines[-1].startswith("impactbeams: error: "), err
     for fragment in fragments:
         assert fragment in lines[-1]

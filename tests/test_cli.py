@@ -201,8 +201,8 @@ def test_every_argument_has_a_one_line_help_and_every_command_is_quiet():
     """Help text for every argument (SWEEP.toml, IN.nc, simulate -o had none), none a formula
     (--damping-ratio's was five lines), and --quiet on every command."""
     parser, commands = every_command()
-    assert sorted(commands) == ["basins", "continue", "grazing", "modes", "plot", "run",
-                                "simulate"]
+    assert sorted(commands) == ["basins", "contacts", "continue", "grazing", "modes", "plot",
+                                "run", "simulate"]
     assert all(action.help for action in parser._actions)
     for name, command in commands.items():
         for action in command._actions:

@@ -79,6 +79,71 @@ def test_contacts_refused_in_one_line(values, message):
     assert message in str(error.value) and "\n" not in str(error.value)
 
 
+_UNUSED = ("is not allowed: each of the 2 contacts gives its own {field}, so it would be used "
+           "by none (it is the default of a contact that leaves its {field} out): leave {key} "
+           "out, or {field} out of a contact")
+
+
+@pytest.mark.parametrize(("key", "field", "value", "contacts"), [
+    ("clearance", "clearance", 2e-6, two_sided_stop(MID, 3e-6, 4e-6)),
+    ("contact_stiffness", "stiffness", 1e5, two_sided_stop(MID, stiffness=1e4)),
+    ("contact_damping", "damping", 0.1, (Contact(MID, damping=0.0), Contact(damping=0.2))),
+])
+def test_a_flat_law_key_every_contact_gives_its_own_of_is_refused(tmp_path, capsys, key, field,
+                                                                  value, contacts):
+    """Given beside contacts that all give their own, clearance, contact_stiffness or
+    contact_damping would be used by none: refused in one line from Params(), a TOML file,
+    replace(), a sweep file and the command line (before, it went unused without a word)."""
+    from impactbeams.cli import main
+    from impactbeams.sweep import sweep_from_mapping
+
+    rule = _UNUSED.format(field=field, key=key)
+    tables = [{name: getattr(c, name) for name in ("position1", "side", field)
+               if getattr(c, name) is not None} for c in contacts]
+    calls = {f"{key} = {value!r} in Params() ": lambda: Params(
+                 counterpart="stop", contacts=contacts, **{key: value}),
+             f"{key} = {value!r} in Params.replace() ": lambda: STOP.replace(
+                 contacts=contacts).replace(**{key: value}),
+             f"{key} = {value!r} in [params] of sweep ": lambda: sweep_from_mapping({
+                 "params": {"counterpart": "stop", key: value, "contacts": tables},
+                 "axes": {"omega": {"min": 10.0, "max": 20.0, "num": 2}}})}
+    for start, call in calls.items():
+        with pytest.raises(ParameterError) as error:
+            call()
+        assert str(error.value) == start + rule
+    path = tmp_path / "p.toml"
+    lines = "".join("[[params.contacts]]\n" + "".join(f"{name} = {item!r}\n".replace("'", '"')
+                                                       for name, item in table.items())
+                    for table in tables)
+    path.write_text(f'[params]\ncounterpart = "stop"\n{lines}')
+    assert Params.from_toml(path).contacts == contacts
+    flag = "--" + key.replace("_", "-")
+    assert main(["modes", "--params", str(path), flag, str(value)]) == 2
+    assert capsys.readouterr().err == (
+        f"impactbeams: error: {key} = {value!r} in the command line (beside the contacts of "
+        f"{path}) {rule}\n")
+    path.write_text(f'[params]\ncounterpart = "stop"\n{key} = {value!r}\n{lines}')
+    with pytest.raises(ParameterError, match=rf"^{key} = {value!r} in \[params\] of {path} "):
+        Params.from_toml(path)
+
+
+def test_a_flat_law_key_is_the_default_of_the_contacts_that_leave_theirs_out():
+    """Where one contact leaves its clearance (stiffness, damping) out, the flat key is its
+    value there, as documented, and taken; one contact giving its own refuses it too."""
+    params = Params(counterpart="stop", clearance=2e-6, contact_stiffness=1e5,
+                    contacts=two_sided_stop(MID, clearance_above=3e-6))
+    below, above = params.each_contact()
+    assert (below.clearance, above.clearance) == (2e-6, 3e-6)
+    assert below.contact_stiffness == above.contact_stiffness == 1e5
+    assert params.replace(clearance=1e-6).each_contact()[0].clearance == 1e-6
+    with pytest.raises(ParameterError, match=r"^clearance = 2e-06 in Params\(\) is not allowed: "
+                                             "the contact gives its own clearance"):
+        Params(counterpart="stop", clearance=2e-6, contacts=(Contact(MID, clearance=3e-6),))
+    # a copy given new contacts that give their own leaves the old flat value out
+    again = params.replace(contacts=two_sided_stop(MID, 1e-6, 1e-6))
+    assert [p.clearance for p in again.each_contact()] == [1e-6, 1e-6]
+
+
 @pytest.mark.parametrize(("field", "value"), [("side", "left"), ("clearance", 0.0),
                                               ("stiffness", -1.0), ("damping", np.nan),
                                               ("position1", "tip")])
@@ -391,3 +456,244 @@ def test_two_beams_with_backlash_at_offset_points_against_dop853():
     expected = _dop853_two_sided(faces, 0.04, 6)
     assert [j for j, *_ in expected] == [0, 0, 0, 1, 1, 1]
     _assert_like(contact_sequence(params, 0.04, n_modes=n), expected)
+
+
+# --- sweep axes on a contact's field ----------------------------------------------------------
+
+_ALONG_CONTACTS = {"omega": {"min": 100.0, "max": 400.0, "num": 3},
+                   "contacts.1.clearance": {"min": 4e-6, "max": 8e-6, "num": 2},
+                   "contacts.0.clearance": {"min": 0.3e-6, "max": 3e-6, "num": 4}}
+_FORCED_STOP = {"counterpart": "stop", "force_amplitude": 1e-3, "contact_stiffness": 1e4}
+
+
+def _contact_sweep(axes: dict = _ALONG_CONTACTS, **params):
+    from impactbeams.sweep import sweep_from_mapping
+
+    return sweep_from_mapping({"params": {**_FORCED_STOP, "contacts": [
+        {"position1": MID}, {}], **params}, "axes": axes, "t_max": 0.05, "n_modes": 8})
+
+
+def test_a_map_over_contacts_clearances_is_each_cells_first_contact(tmp_path):
+    """A map over omega and each contact's clearance (contact 0's last: by columns in its own
+    map) is, cell by cell, `first_contact` of that cell's contacts: which contact the same,
+    the onset to 1e-15 s (the map's column kernel and the event kernel locate the same root by
+    different paths: a few ulps of a 5 ms onset, 8.7e-19 s each). Written to a file in chunks of
+    3 or 4 cells (columns cut, contact 1's run shared along contact 0's axis) bit for bit."""
+    from impactbeams.sweep import run_sweep
+
+    sweep = _contact_sweep()
+    ds = run_sweep(sweep, parallel=False)
+    assert ds.first_impact_time.dims == ("omega", "contacts.1.clearance", "contacts.0.clearance")
+    assert ds["contacts.0.clearance"].attrs["units"] == "m"
+    assert ds["contacts.0.clearance"].attrs["long_name"].endswith(" of contacts[0]")
+    # the contacts as given: a swept field's values are its coordinate's, not the first one
+    assert ds.attrs["contacts"].startswith("Contact(position1=0.05, position2=None, "
+                                           "side='below', clearance=None")
+    assert "clearance" not in ds.attrs  # every contact's own: the flat one is used by none
+    assert ds.attrs["contact_stiffness"] == 1e4  # the contacts' stiffness
+    first = ds.first_contact.values
+    assert 0 < first.sum() < first.size  # both contacts close first somewhere
+    for (i, j, k), time in np.ndenumerate(ds.first_impact_time.values):
+        params = Params(**_FORCED_STOP, omega=float(ds.omega[i]), contacts=(
+            Contact(MID, clearance=float(ds["contacts.0.clearance"][k])),
+            Contact(clearance=float(ds["contacts.1.clearance"][j]))))
+        expected = first_contact(params, 0.05, n_modes=8)
+        assert expected.contact == first[i, j, k]
+        assert abs(expected.onset - time) <= 1e-15, (i, j, k)
+    for cells in (3, 4):
+        path = tmp_path / f"{cells}.nc"
+        written = run_sweep(sweep, path, parallel=False, chunk_cells=cells)
+        for name in ("first_impact_time", "first_contact"):
+            np.testing.assert_array_equal(written[name].values, ds[name].values)
+
+
+def test_a_map_over_a_contacts_point_is_each_cells_first_contact():
+    """A stop 1 um below a point swept along beam 1 (a geometry axis: its gap weights) and one
+    6 um below the tip: cell by cell `first_contact` of that cell's contacts, which contact the
+    same (each closes first somewhere), onsets to 1e-15 s (measured 2.9e-17 s)."""
+    from impactbeams.sweep import run_sweep
+
+    axes = {"omega": {"min": 100.0, "max": 400.0, "num": 3},
+            "contacts.0.position1": {"min": 0.02, "max": 0.1, "num": 5}}
+    ds = run_sweep(_contact_sweep(axes, contacts=[{"clearance": 1e-6}, {"clearance": 6e-6}]),
+                   parallel=False)
+    first = ds.first_contact.values
+    assert 0 < first.sum() < first.size
+    for (i, k), time in np.ndenumerate(ds.first_impact_time.values):
+        params = Params(**_FORCED_STOP, omega=float(ds.omega[i]), contacts=(
+            Contact(float(ds["contacts.0.position1"][k]), clearance=1e-6),
+            Contact(clearance=6e-6)))
+        expected = first_contact(params, 0.05, n_modes=8)
+        assert expected.contact == first[i, k]
+        assert abs(expected.onset - time) <= 1e-15, (i, k)
+
+
+def test_axes_on_contacts_fields_only_and_a_contact_not_left_out_is_its_own_map():
+    """A grid over one contact's field alone is, bit for bit, the earliest of that contact's own
+    map over its clearance and the other's one-cell map; the unquoted TOML form
+    [axes.contacts.0.clearance] (nested tables) is the same sweep."""
+    import tomllib
+
+    from impactbeams.sweep import run_sweep, sweep_from_mapping
+
+    axes = {"contacts.0.clearance": {"min": 0.3e-6, "max": 3e-6, "num": 3}}
+    ds = run_sweep(_contact_sweep(axes, clearance=6e-6), parallel=False)
+    alone = _map({"force_amplitude": 1e-3, "contact_stiffness": 1e4, "contact_position1": MID},
+                 axes={"clearance": axes["contacts.0.clearance"]})
+    tip = _map({"force_amplitude": 1e-3, "contact_stiffness": 1e4},
+               axes={"clearance": {"min": 6e-6, "max": 6e-6, "num": 1}})
+    np.testing.assert_array_equal(ds.first_impact_time.values, np.fmin(alone, tip))
+    text = ('t_max = 0.05\nn_modes = 8\n[params]\ncounterpart = "stop"\nforce_amplitude = 1e-3\n'
+            'contact_stiffness = 1e4\nclearance = 6e-6\n[[params.contacts]]\nposition1 = 0.05\n'
+            '[[params.contacts]]\n[axes.contacts.0.clearance]\nmin = 0.3e-6\nmax = 3e-6\n'
+            'num = 3\n')
+    nested = run_sweep(sweep_from_mapping(tomllib.loads(text)), parallel=False)
+    np.testing.assert_array_equal(nested.first_impact_time.values, ds.first_impact_time.values)
+
+
+_AXIS = {"min": 1e-6, "max": 2e-6, "num": 2}
+
+
+@pytest.mark.parametrize(("axes", "params", "message"), [
+    ({"contacts.2.clearance": _AXIS}, {},
+     '[axes."contacts.2.clearance"] of sweep = \'contacts.2.clearance\' is not allowed: there '
+     "are 2 contacts in [params] (indices 0 to 1)"),
+    ({"contacts.0.side": {"min": 0.02, "max": 0.05, "num": 2}}, {},
+     "a contact's side is not sweepable (give it in the contact: one sweep per side); "
+     "sweepable: position1, position2, clearance, stiffness, damping"),
+    ({"contacts.1.position1": {"min": 0.02, "max": 0.2, "num": 2}}, {},
+     "at the grid point omega = 10.0, contacts.1.position1 = 0.2 of sweep: contacts[1]: "
+     "contact_position1 = 0.2 is not allowed: must be > 0 and <= l1 = 0.1"),
+    ({"contacts.1.position1": {"min": 0.02, "max": 0.1, "num": 2},
+      "l1": {"min": 0.08, "max": 0.1, "num": 2}}, {},
+     "at the grid point omega = 10.0, contacts.1.position1 = 0.1, l1 = 0.08 of sweep: "
+     "contacts[1]: contact_position1 = 0.1 is not allowed: must be > 0 and <= l1 = 0.08"),
+    ({"contacts.1.position1": {"min": -0.02, "max": 0.1, "num": 2}}, {},
+     "axis 'contacts.1.position1' of sweep reaches a non-physical point: contact_position1 = "
+     "-0.02 is not allowed: must be > 0"),
+    ({"contacts.0.clearence": _AXIS}, {},
+     "unknown contact field 'clearence' in [axes.\"contacts.0.clearence\"] of sweep (did you "
+     "mean 'clearance'?)"),
+    ({"contacts.01.clearance": _AXIS}, {},
+     "an axis on a contact's field is named contacts.INDEX.FIELD, e.g. 'contacts.0.clearance'"),
+    ({"contacts.0.stiffness": {"min": 0.0, "max": 1e4, "num": 2}}, {},
+     "axis 'contacts.0.stiffness' of sweep reaches a non-physical point: contact_stiffness = 0.0"),
+    ({"contacts.1.clearance": _AXIS}, {"contacts": [{"position1": MID}, {"clearance": 3e-6}]},
+     "is given both in [params] (contacts[1].clearance = 3e-06) and as an axis"),
+    ({"contacts.0.clearance": _AXIS}, {"contacts": [{"position1": MID}]},
+     "[params] has fewer than two ([[params.contacts]]): one contact is the flat keys, sweep "
+     "[axes.clearance]"),
+    ({"contacts.0.clearance": _AXIS}, {"clearance": 5e-6, "contacts": [
+        {"position1": MID}, {"clearance": 3e-6}]},
+     "clearance = 5e-06 in [params] of sweep is not allowed: each of the 2 contacts gives its "
+     "own clearance"),
+    ({"clearance": _AXIS}, {},
+     "clearance is not sweepable with contacts: each contact has its own; sweep one contact's "
+     'as [axes."contacts.INDEX.FIELD"]'),
+])
+def test_bad_axes_on_contacts_fields_are_refused_in_one_line(axes, params, message):
+    with pytest.raises(ParameterError) as error:
+        _contact_sweep({"omega": {"min": 10.0, "max": 20.0, "num": 2}, **axes}, **params)
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_a_bad_contact_axis_exits_2_from_the_command_line(tmp_path, capsys):
+    from impactbeams.cli import main
+
+    path = tmp_path / "bad.toml"
+    path.write_text('t_max = 0.05\n[params]\ncounterpart = "stop"\n[[params.contacts]]\n'
+                    '[[params.contacts]]\nside = "above"\n[axes."contacts.2.clearance"]\n'
+                    'min = 1e-6\nmax = 2e-6\nnum = 2\n')
+    assert main(["run", str(path), "-o", str(tmp_path / "out.nc"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("impactbeams: error: [axes.\"contacts.2.clearance\"] of ")
+    assert err.count("\n") == 1 and not (tmp_path / "out.nc").exists()
+
+
+# --- the command line: impactbeams contacts ---------------------------------------------------
+
+_TWO_SIDED = ('[params]\ncounterpart = "stop"\nforce_amplitude = 1e-3\nomega = 400.0\n'
+              'contact_stiffness = 1e4\n[[params.contacts]]\nposition1 = 0.05\nclearance = 3e-6\n'
+              '[[params.contacts]]\nposition1 = 0.05\nside = "above"\nclearance = 2e-6\n')
+_TWO_SIDED_PARAMS = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 2e-6))
+
+
+def _contacts_command(tmp_path, capsys, text, *options):
+    from impactbeams.cli import main
+
+    path = tmp_path / "p.toml"
+    path.write_text(text)
+    code = main(["contacts", "--params", str(path), "--t-max", "0.03", *options])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_the_contacts_command_prints_the_librarys_first_contact_and_sequence(tmp_path, capsys):
+    """--json is first_contact's and contact_sequence's values bit for bit (JSON floats
+    round-trip); the table prints the same contacts; -o writes the sequence with CF attributes."""
+    import json
+
+    import xarray as xr
+
+    code, out, _ = _contacts_command(tmp_path, capsys, _TWO_SIDED, "--n-modes", "8", "--json")
+    assert code == 0
+    data = json.loads(out)
+    first = first_contact(_TWO_SIDED_PARAMS, 0.03, n_modes=8)
+    assert data["first_contact"] == {key: (None if value != value else value)
+                                     for key, value in vars(first).items()}
+    sequence = contact_sequence(_TWO_SIDED_PARAMS, 0.03, n_modes=8)
+    assert data["sequence"]["status"] == "complete" and data["sequence_refused"] is None
+    for name in sequence.data_vars:
+        np.testing.assert_array_equal(np.array(data["sequence"][name], dtype=float),
+                                      sequence[name].values)
+    assert set(sequence.impact_contact.values) == {0, 1}  # both sides close
+    output = tmp_path / "s.nc"
+    code, out, err = _contacts_command(tmp_path, capsys, _TWO_SIDED, "--n-modes", "8", "-o",
+                                       str(output))
+    assert code == 0
+    assert err == f"wrote {output}: {sequence.impact.size} contacts, status complete\n"
+    lines = out.splitlines()
+    assert lines[:3] == ["2 contacts, 8 modes of beam 1, t_max = 0.03 s",
+                         "  contacts[0] (below, x1 = 0.05 m)",
+                         "  contacts[1] (above, x1 = 0.05 m)"]
+    assert lines[3] == (f"first contact: contacts[{first.contact}] (below, x1 = 0.05 m) at t = "
+                        f"{first.onset!r} s, gap rate {first.impact_velocity:.6g} m/s")
+    rows = [line.split() for line in lines[6:]]
+    assert [int(row[1]) for row in rows] == sequence.impact_contact.values.tolist()
+    assert [float(row[2]) for row in rows] == [float(f"{t:.10f}") for t in
+                                               sequence.impact_onset_time.values]
+    with xr.open_dataset(output) as written:
+        np.testing.assert_array_equal(written.impact_onset_time.values,
+                                      sequence.impact_onset_time.values)
+        assert written.impact_onset_time.attrs["units"] == "s"
+        assert written.attrs["status"] == "complete" and "position1=0.05" in written.contacts
+        assert "clearance" not in written.attrs and written.contact_stiffness == 1e4
+
+
+def test_the_contacts_command_of_contacts_that_close_together_and_bad_input(tmp_path, capsys):
+    """Contacts that can be closed together: the first contact and why there is no sequence
+    (exit 0); with -o an error before any compute. Bad input: one line, exit 2, nothing written."""
+    text = ('[params]\ncounterpart = "stop"\nforce_amplitude = 1e-3\nomega = 400.0\n'
+            'contact_stiffness = 1e4\n[[params.contacts]]\nposition1 = 0.05\nclearance = 0.5e-6\n'
+            '[[params.contacts]]\nclearance = 6e-6\n')
+    code, out, _ = _contacts_command(tmp_path, capsys, text, "--n-modes", "8")
+    first = first_contact(FORCED.replace(contacts=(Contact(MID, clearance=0.5e-6),
+                                                   Contact(clearance=6e-6))), 0.03, n_modes=8)
+    assert code == 0 and f"at t = {first.onset!r} s" in out
+    assert out.splitlines()[-1].startswith("contact sequence: not built for these contacts "
+                                           "(contacts: 2 contacts that can be closed together")
+    output = tmp_path / "x.nc"
+    for options, message in [
+            (("-o", str(output)), "-o/--output: contacts: 2 contacts that can be closed together"),
+            (("--clearance", "1e-6"), "clearance = 1e-06 in the command line (beside the "
+                                      "contacts of"),
+            (("--t-max", "-1"), "t_max = -1.0 is not allowed: must be > 0 (s)"),
+            (("--n-modes", "0"), "argument --n-modes: 0 is not allowed"),
+            (("-o", str(tmp_path / "x.png")), "-o/--output")]:
+        code, out, err = _contacts_command(tmp_path, capsys, text, *options)
+        assert code == 2 and not output.exists(), options
+        last = err.splitlines()[-1]
+        assert last.startswith("impactbeams: error: ") and message in last, (options, err)
+    code, _, err = _contacts_command(tmp_path, capsys, _TWO_SIDED, "--n-modes", "8",
+                                     "--max-contacts", "2")
+    assert code == 3 and "stopped after --max-contacts 2 contacts" in err

@@ -103,6 +103,23 @@ def test_distributed_map_is_bitwise_equal_to_local(client, threads_per_task, tmp
     assert default_threads_per_task(client) == max(1, os.cpu_count() // 2)
 
 
+def test_a_map_over_a_contacts_field_on_the_cluster_is_the_local_map(client, tmp_path):
+    """Several contacts, an axis on one contact's clearance (each contact's map over its own
+    axes, shared along the other's): in chunks of 12 cells on the cluster, the local bits."""
+    sweep = sweep_from_mapping({
+        "t_max": 0.05, "n_modes": 4,
+        "params": {"counterpart": "stop", "contacts": [{"position1": 0.05}, {"clearance": 6e-6}]},
+        "axes": {"omega": {"min": 100.0, "max": 400.0, "num": 5},
+                 "contacts.0.clearance": {"min": 0.3e-6, "max": 3e-6, "num": 6}}},
+        source="contacts")
+    local = run_sweep(sweep, progress=False)
+    remote = run_sweep(sweep, output=tmp_path / "contacts.nc", progress=False, chunk_cells=12,
+                       runner=dask_runner(client))
+    assert_same_map(remote, local)
+    assert np.array_equal(remote.first_contact, local.first_contact)
+    assert 0 < int(local.first_contact.sum()) < local.first_contact.size
+
+
 def test_interrupted_client_resumes_from_saved_chunks(client, tmp_path):
     sweep = sweep_from_mapping(GRID, source="grid")
     out = tmp_path / "map.nc"

@@ -5,7 +5,8 @@ description `impactbeams --help` opens with. Subcommands: ``modes`` (natural fre
 ``run`` (a sweep from a TOML file), ``simulate`` (one full trajectory), ``continue`` (periodic
 orbits along a parameter, from a TOML file), ``grazing`` (where the non-impacting orbit first
 touches, in closed form), ``basins`` (basins of attraction over a plane of initial states),
-``plot`` (draw a saved Dataset). Every model
+``plot`` (draw a saved Dataset), ``contacts`` (which of several contacts closes first and
+when, and the contact sequence). Every model
 parameter is an option named like the parameter, with dashes
 (``--force-amplitude``, ``--EI1``, ``--thickness2``).
 
@@ -41,6 +42,8 @@ from impactbeams.params import (
     modes_per_beam,
     nearest,
     refuse_beam2,
+    refuse_unused_law_keys,
+    without_unused_law_keys,
 )
 from impactbeams.variables import GRAZING_PARAMETERS, PARAMETERS
 
@@ -95,6 +98,8 @@ def params_from_args(args: argparse.Namespace) -> Params:
                  if getattr(args, n, None) is not None}
     if not counterpart_named(overrides.get("counterpart", params.counterpart)).has_beam2:
         refuse_beam2([f"--{n.replace('_', '-')}" for n in overrides], "the command line")
+    refuse_unused_law_keys(overrides, params.contacts,
+                           f"the command line (beside the contacts of {args.params})")
     return params.replace(**overrides) if overrides else params
 
 
@@ -753,6 +758,153 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0 if status == "complete" else EXIT_INCOMPLETE  # simulate() warned already
 
 
+# the contact sequence's columns as the command prints them: name, heading, format
+_SEQUENCE_COLUMNS = (("impact_onset_time", "onset (s)", "{:.10f}"),
+                     ("impact_duration", "duration (s)", "{:.4e}"),
+                     ("impact_impulse", "impulse (N s)", "{:.4e}"),
+                     ("impact_peak_force", "peak force (N)", "{:.4e}"),
+                     ("impact_velocity", "gap rate in (m/s)", "{:.4e}"),
+                     ("separation_velocity", "gap rate out (m/s)", "{:.4e}"))
+
+
+def _contacts(args: argparse.Namespace) -> int:
+    """``contacts``: which contact closes first and when, and every contact of a sequence.
+
+    The sequence (`impactbeams.contact_sequence`) where it is built (one contact, a two-sided
+    stop); for contacts that can be closed together its refusal is said, and with -o it is
+    an error (before any compute).
+    """
+    import dataclasses
+
+    from impactbeams.lock import output_lock
+    from impactbeams.preflight import require_output_file
+    from impactbeams.trajectory.several import contact_sequence, first_contact
+
+    output = (require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
+              if args.output else None)
+    params = params_from_args(args)
+    _check_contact_runs(params, args.t_max, args.n_modes)
+    with output_lock(output) if output else contextlib.nullcontext():
+        with _running_kernels("simulate", args):
+            try:  # refused before any compute: a file must hold it
+                sequence = contact_sequence(params, args.t_max, args.n_modes, args.max_contacts)
+                why = None
+            except ParameterError as refusal:
+                if output is not None and params.several_contacts:
+                    raise ParameterError(f"-o/--output: {refusal}") from None
+                if output is not None or not params.several_contacts:
+                    raise
+                sequence, why = None, str(refusal)
+            first = first_contact(params, args.t_max, args.n_modes)
+        if output is not None:
+            from impactbeams.io import write_netcdf
+
+            write_netcdf(_described_sequence(sequence, params, args), output)
+    if args.json:
+        data = {"first_contact": _json_numbers(dataclasses.asdict(first)),
+                "sequence": None if sequence is None else {
+                    "status": sequence.attrs["status"], **{
+                        name: _json_numbers(sequence[name].values.tolist())
+                        for name in sequence.data_vars}},
+                "sequence_refused": why}
+        print(json.dumps(data))
+    else:
+        _print_contacts(params, args.t_max, first, sequence, why)
+    if output is not None:
+        _say(args, f"wrote {output}: {sequence.impact.size} contacts, status "
+                   f"{sequence.attrs['status']}")
+    if sequence is not None and sequence.attrs["status"] != "complete":
+        _warn(f"the sequence stopped after --max-contacts {args.max_contacts} contacts, before "
+              f"t_max = {args.t_max!r} s (status {sequence.attrs['status']})")
+        return EXIT_INCOMPLETE
+    return 0
+
+
+def _check_contact_runs(params: Params, t_max: float, n_modes: int | None) -> None:
+    """Refuse, before any compute, a horizon or modes beyond any contact's run's range.
+
+    As `simulate` does (`preflight.check_run`), for each contact's run at the modes they
+    share (default: the most any of them recommends, as `first_contact` takes).
+    """
+    import math
+
+    from impactbeams.contact import recommended_modes
+    from impactbeams.preflight import check_run
+
+    if not (isinstance(t_max, float) and math.isfinite(t_max) and t_max > 0):
+        return  # the library names t_max's own rule
+    runs = params.each_contact()
+    n = n_modes or max(recommended_modes(run) for run in runs)
+    for run in runs:
+        check_run(run.numeric(), t_max, n, springs=run.grounded_springs,
+                  structure1=run.structure1)
+
+
+def _json_numbers(value: object) -> object:
+    """``value`` (a number, list or dict of them) with NaN as None (JSON has no NaN)."""
+    if isinstance(value, dict):
+        return {key: _json_numbers(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_json_numbers(item) for item in value]
+    return None if isinstance(value, float) and value != value else value
+
+
+def _contact_words(params: Params, index: int) -> str:
+    """Which contact ``index`` is: ``contacts[1] (above, x1 = 0.05 m)``, or ``the contact``."""
+    run = params.each_contact()[index]
+    x1, x2 = run.contact_point
+    where = f"{run.contact_side}, x1 = {x1:g} m" + (f", x2 = {x2:g} m"
+                                                      if run.partner.has_beam2 else "")
+    name = f"contacts[{index}]" if params.several_contacts else "the contact"
+    return f"{name} ({where})"
+
+
+def _print_contacts(params: Params, t_max: float, first: object, sequence: xr.Dataset | None,
+                    why: str | None) -> None:
+    """The first contact, then the sequence's table (or why there is none), on stdout."""
+    count = len(params.each_contact())
+    print(f"{count} contact{'s' * (count > 1)}, "
+          f"{modes_per_beam(first.n_modes, params.partner)}, t_max = {t_max!r} s")
+    for index in range(count if count > 1 else 0):
+        print(f"  {_contact_words(params, index)}")
+    if first.contact < 0:
+        print("first contact: none closes by t_max")
+    else:
+        print(f"first contact: {_contact_words(params, first.contact)} at t = {first.onset!r} s,"
+              f" gap rate {first.impact_velocity:.6g} m/s")
+    if sequence is None:
+        print(f"contact sequence: not built for these contacts ({why})")
+        return
+    print(f"contact sequence: {sequence.impact.size} contacts, status "
+          f"{sequence.attrs['status']}")
+    if not sequence.impact.size:
+        return
+    widths = [max(len(heading), 17) for _, heading, _ in _SEQUENCE_COLUMNS]
+    print(f"{'n':>5} {'contact':>8} " + " ".join(
+        f"{heading:>{width}}" for (_, heading, _), width in zip(_SEQUENCE_COLUMNS, widths,
+                                                                strict=True)))
+    for row in range(sequence.impact.size):
+        cells = [fmt.format(float(sequence[name][row])) for name, _, fmt in _SEQUENCE_COLUMNS]
+        print(f"{row + 1:>5} {int(sequence.impact_contact[row]):>8} " + " ".join(
+            f"{cell:>{width}}" for cell, width in zip(cells, widths, strict=True)))
+
+
+def _described_sequence(sequence: xr.Dataset, params: Params,
+                        args: argparse.Namespace) -> xr.Dataset:
+    """The sequence as written: CF attributes of each column and of the run's parameters."""
+    from impactbeams.variables import attributes, global_attributes
+
+    described = sequence.copy()
+    for name in described.data_vars:
+        described[name].attrs = ({"units": "1", "long_name": "contact that closes",
+                                  "description": "its index in the parameters' contacts"}
+                                 if name == "impact_contact" else attributes(name))
+    described.attrs = global_attributes(
+        "impactbeams contact sequence", f"contacts --t-max {args.t_max!r}",
+        without_unused_law_keys(params.as_dict()), **sequence.attrs)
+    return described
+
+
 def _say(args: argparse.Namespace, line: str) -> None:
     """An informative line on stderr, unless --quiet (warnings and errors are always shown)."""
     if not args.quiet:
@@ -912,6 +1064,22 @@ def build_parser() -> argparse.ArgumentParser:
                           help="netCDF file to write (replaced if it exists)")
     add_parameter_options(simulate)
     simulate.set_defaults(handler=_simulate)
+
+    contacts = command("contacts", "--t-max SECONDS [OPTIONS] [PARAMETER OPTIONS]",
+                       help="which contact closes first and when, and the contact sequence")
+    contacts.add_argument("--t-max", type=_number, required=True, metavar="SECONDS",
+                          help="end time (s)")
+    contacts.add_argument("--n-modes", type=_MODE_COUNT, default=None, metavar="N",
+                          help="free modes per beam (default: the most any contact's run needs)")
+    contacts.add_argument("--max-contacts", type=_POSITIVE_INTEGER, default=MAX_EVENTS // 2,
+                          metavar="N", help=f"stop the sequence after N contacts (default "
+                                            f"{MAX_EVENTS // 2}), with status event_limit")
+    contacts.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    contacts.add_argument("-o", "--output", metavar="OUT.nc",
+                          help="also write the sequence to this netCDF file (one contact or a "
+                               "two-sided stop)")
+    add_parameter_options(contacts)
+    contacts.set_defaults(handler=_contacts)
 
     run = command("run", "SWEEP.toml [-o OUT.nc] [OPTIONS]",
                   help="run a sweep defined in a TOML file (see sweeps/)")

@@ -40,7 +40,9 @@ name               unit    meaning
                            is below it, it moves down onto it) or "above" (it moves up onto it)
 ``contacts``       -       two or more contacts (`impactbeams.Contact`: each its point, side,
                            clearance and law; a TOML array of tables [[params.contacts]]); one
-                           contact given so is the keys above (`fold_contacts`)
+                           contact given so is the keys above (`fold_contacts`); clearance,
+                           contact_stiffness, contact_damping are the defaults of the contacts
+                           leaving theirs out (refused where every contact gives its own)
 ``shaker``         -       which clamps the shaker carries: "both" (default: both beams'
                            clamps, or beam 1's and the stop's mount, which then moves with it),
                            "beam1" (a stop stays fixed) or "beam2" (beam 2's clamp, or a stop's
@@ -248,6 +250,9 @@ RANGES: dict[str, Range] = {
                                rule=f"must be > 0 and <= {MAX_CONTACT_STIFFNESS:g}"),
     "contact_damping": Range(">= 0"),
     "base_amplitude": Range(">= 0"),
+    # a point of each beam, from its clamp (how far along it: `Params._check_contact_point`)
+    "contact_position1": Range("> 0"),
+    "contact_position2": Range("> 0"),
 }
 
 # names a grid point for a message: "" for one set of parameters, or the swept values at an
@@ -423,6 +428,8 @@ BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS), "atta
 CONTACTS = "contacts"
 # the run's keys a Contact stands for (with several contacts, each contact's own)
 CONTACT_FIELDS = tuple(FLAT_KEYS.values())
+# those of them that are the defaults of contacts leaving theirs out (the point and side are not)
+CONTACT_LAW_KEYS = ("clearance", "contact_stiffness", "contact_damping")
 # the flat keys that say where and from which side the one contact acts: given with
 # ``contacts``, they would say it twice
 _CONTACT_PLACE = (*CONTACT_POSITIONS, "contact_side")
@@ -828,8 +835,12 @@ class Params:
         """Return a copy with some parameters changed (material keys allowed).
 
         A drive left to its default stays a default: ``Params().replace(base_amplitude=U0)``
-        is ``Params(base_amplitude=U0)``, a shaker study without tip force.
+        is ``Params(base_amplitude=U0)``, a shaker study without tip force. A law key that
+        every contact gives its own of is refused among the changes (`refuse_unused_law_keys`)
+        and left out of the copy's other values.
         """
+        contacts = changes.get(CONTACTS, self.contacts)
+        refuse_unused_law_keys(changes, contacts, "Params.replace()")
         if changes.keys() <= set(self.numeric_names()) - set(DRIVES) and not (
                 not self.partner.has_beam2 and changes.keys() & set(BEAM2_KEYS)) and not (
                 self.structure1 is not None and changes.keys() & set(BEAM1_KEYS)):
@@ -841,8 +852,10 @@ class Params:
             if not changes.keys() <= set(UNJOINED):
                 changed._check_together()
             return changed
+        unused = set_by_every_contact(contacts)
         base = {name: value for name, value in self.as_dict().items()
-                if name not in DRIVES or name in getattr(self, "_given_drives", DRIVES)}
+                if (name not in DRIVES or name in getattr(self, "_given_drives", DRIVES))
+                and name not in unused}
         if not self.shaker_named:
             del base["shaker"]
         for i in ("1", "2"):
@@ -861,6 +874,7 @@ class Params:
         """
         require_type("mapping", mapping, isinstance(mapping, Mapping),
                      "a mapping of parameter names to values")
+        refuse_unused_law_keys(mapping, mapping.get(CONTACTS, ()), source)
         return cls(**_field_values(mapping, source, given_fields=True))
 
     @classmethod
@@ -926,14 +940,17 @@ def require_one_contact(params: Params, what: str) -> None:
             "contact_sequence and simulate (docs/limits.md, 'Several contacts')")
 
 
-def fold_contacts(values: Mapping[str, Any], source: str) -> dict[str, Any]:
+def fold_contacts(values: Mapping[str, Any], source: str,
+                  given: Collection[str] | None = None) -> dict[str, Any]:
     """``values`` with ``contacts`` checked: one contact becomes the flat keys it stands for.
 
     A contact's point and side given twice (``contacts`` with ``contact_position1``,
     ``contact_position2`` or ``contact_side``) raise ParameterError; the run's ``clearance``,
     ``contact_stiffness`` and ``contact_damping`` are the defaults of a contact's fields left
-    None. One contact is the simple form: its fields replace the flat keys, so that it gives
-    today's run bit for bit; two or more stay ``contacts``.
+    None, and one of them ``given`` (default: every key of ``values``) where every contact
+    gives its own raises ParameterError (`refuse_unused_law_keys`). One contact is the simple
+    form: its fields replace the flat keys, so that it gives today's run bit for bit; two or
+    more stay ``contacts``.
     """
     if CONTACTS not in values:
         return dict(values)
@@ -942,6 +959,7 @@ def fold_contacts(values: Mapping[str, Any], source: str) -> dict[str, Any]:
             "must be a tuple of impactbeams.Contact (in a TOML file: an array of tables, "
             "[[params.contacts]])")
     contacts = tuple(as_contact(f"{CONTACTS}[{i}]", c) for i, c in enumerate(contacts))
+    refuse_unused_law_keys(values if given is None else given, contacts, source)
     defaults = {field.name: field.default for field in _FIELDS()}
     for key in _CONTACT_PLACE:  # a copy (dataclasses.replace) passes the default side whole
         if contacts and values.get(key) not in (None, defaults[key]):
@@ -952,6 +970,49 @@ def fold_contacts(values: Mapping[str, Any], source: str) -> dict[str, Any]:
     if len(contacts) == 1:
         return {**rest, **contacts[0].flat()}
     return {**rest, CONTACTS: contacts} if contacts else rest
+
+
+def set_by_every_contact(contacts: Any) -> tuple[str, ...]:
+    """The run's law keys (``clearance``, ...) that every one of ``contacts`` gives its own of.
+
+    Those a run's flat value would be the default of for no contact. ``contacts``: Contact
+    objects or their tables; () if there are none or one is not a contact (refused elsewhere).
+    """
+    try:
+        checked = [as_contact(CONTACTS, contact) for contact in contacts]
+    except (ParameterError, TypeError):
+        return ()
+    return tuple(key for key in CONTACT_LAW_KEYS
+                 if checked and all(key in contact.flat() for contact in checked))
+
+
+def without_unused_law_keys(values: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` (a run's parameters by name) without the law keys no contact takes.
+
+    What a Dataset records: a flat ``clearance`` beside contacts that each give their own
+    would read as a value of the run.
+    """
+    unused = set_by_every_contact(values.get(CONTACTS, ()))
+    return {name: value for name, value in values.items() if name not in unused}
+
+
+def refuse_unused_law_keys(given: Collection[str], contacts: Any, source: str) -> None:
+    """Raise ParameterError if a key of ``given`` is a law key every contact gives its own of.
+
+    ``clearance``, ``contact_stiffness`` and ``contact_damping`` beside ``contacts`` are the
+    defaults of the contacts that leave theirs out: given where none does, the value would
+    go unused without a word.
+    """
+    for key in set_by_every_contact(contacts):
+        if key in given:
+            field = next(name for name, flat in FLAT_KEYS.items() if flat == key)
+            value = f" = {given[key]!r}" if isinstance(given, Mapping) else ""
+            every = "the contact gives" if len(contacts) == 1 else f"each of the {len(contacts)} "\
+                "contacts gives"
+            raise ParameterError(
+                f"{key}{value} in {source} is not allowed: {every} its own {field}, so it would "
+                f"be used by none (it is the default of a contact that leaves its {field} out): "
+                f"leave {key} out, or {field} out of a contact")
 
 
 def refuse_beam2(given: Any, source: str) -> None:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import itertools
 import json
 import math
 import os
@@ -41,6 +42,7 @@ from impactbeams.params import (
     BEAM1_KEYS,
     CHOICES,
     CONTACT_FIELDS,
+    CONTACT_LAW_KEYS,
     CONTACT_LAWS,
     CONTACT_POSITIONS,
     CONTACTS,
@@ -58,6 +60,7 @@ from impactbeams.params import (
     is_real,
     read_toml,
     refuse_beam2,
+    refuse_unused_law_keys,
     require,
     require_all,
     require_table,
@@ -72,6 +75,7 @@ from impactbeams.preflight import (
     highest_frequency,
     require_memory,
 )
+from impactbeams.structure.contacts import FLAT_KEYS, Contact
 from impactbeams.variables import (
     LONG_TIME_VARIABLES,
     PARAMETERS,
@@ -109,6 +113,35 @@ LONG_RUN_CAPACITY = 2048
 
 
 EXACT_VALUES = 2**20  # the longest axis whose values Axis.value builds
+# an axis on one field of one of several contacts: "contacts.0.clearance" (in a sweep file
+# [axes."contacts.0.clearance"]); its values are that contact's field's, in the flat key's unit
+CONTACT_AXIS = CONTACTS + ".{index}.{field}"
+# the contact fields an axis may sweep: its point on each beam and its law's (its side is a
+# name); a point moves the contact's gap weights: a geometry axis
+SWEPT_CONTACT_FIELDS = tuple(field for field, key in FLAT_KEYS.items()
+                             if key in (*CONTACT_LAW_KEYS, *CONTACT_POSITIONS))
+
+
+def contact_field(name: str) -> tuple[int, str] | None:
+    """(index, field) of an axis ``contacts.INDEX.FIELD``; None for any other axis name.
+
+    Only the form is read here (an index of digits, a field of `Contact`); `_contact_axis`
+    checks it against the contacts.
+    """
+    parts = name.split(".")
+    if len(parts) != 3 or parts[0] != CONTACTS or not parts[1].isdigit() or not (
+            parts[1] == "0" or not parts[1].startswith("0")):
+        return None
+    return int(parts[1]), parts[2]
+
+
+def swept_parameter(name: str) -> str:
+    """The parameter an axis named ``name`` sets in a cell's run (its own contact's, if any).
+
+    ``contacts.0.clearance`` sets contact 0's run's ``clearance``; any other axis, its own name.
+    """
+    field = contact_field(name)
+    return name if field is None else FLAT_KEYS[field[1]]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -251,13 +284,26 @@ class Sweep:
         the rest.
         """
         first = {axis.name: axis.first for axis in self.axes}
-        return Params.from_mapping({**self.fixed, **first, **changes},
+        return Params.from_mapping(with_contact_fields({**self.fixed, **first, **changes}),
                                    source=f"[params] of {self.source}")
 
     def fingerprint(self) -> str:
         """Hash of the definition and package version: a resumed run must match it."""
         text = json.dumps({"sweep": self.definition(), "version": __version__}, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def with_contact_fields(values: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` with each ``contacts.INDEX.FIELD`` value set in that contact of ``contacts``."""
+    contacts = list(values.get(CONTACTS, ()))
+    plain = {}
+    for name, value in values.items():
+        field = contact_field(name)
+        if field is None:
+            plain[name] = value
+        else:
+            contacts[field[0]] = dataclasses.replace(contacts[field[0]], **{field[1]: value})
+    return {**plain, CONTACTS: tuple(contacts)} if contacts else plain
 
 
 def load_sweep(path: str | os.PathLike[str]) -> Sweep:
@@ -299,11 +345,12 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
     given = require_table(data, "params", source)
     fixed = fold_contacts({name: _plain(value) for name, value in given.items()},
                           f"[params] of {source}")
-    axes_table = require_table(data, "axes", source)
+    axes_table = _flat_axes(require_table(data, "axes", source), source)
     require(f"[axes] of {source}", axes_table, bool(axes_table),
             "a sweep needs at least one [axes.NAME] table")
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
     _check_conflicts(fixed, axes, source)
+    _check_contact_axes(fixed, axes, source)
     if not counterpart_named(fixed.get("counterpart")).has_beam2:  # its keys are mistakes
         refuse_beam2(fixed, f"[params] of {source}")
         refuse_beam2([axis.name for axis in axes], f"[axes] of {source}")
@@ -314,6 +361,77 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
     _check_lyapunov(sweep)
     _check_cost(sweep)
     return sweep
+
+
+def _flat_axes(table: dict[str, Any], source: str) -> dict[str, Any]:
+    """``table`` with the unquoted TOML form of contact axes read as their names.
+
+    ``[axes.contacts.0.clearance]`` is nested tables (contacts, an index, a field): the axis
+    ``contacts.0.clearance``. A contact's axes so written take the place of the first of them.
+    """
+    nested = table.get(CONTACTS)
+    if not (isinstance(nested, dict) and nested and all(
+            isinstance(index, str) and index.isdigit() and isinstance(fields, dict)
+            for index, fields in nested.items())):
+        return table
+    flat: dict[str, Any] = {}
+    for name, spec in table.items():
+        named = ({name: spec} if name != CONTACTS else
+                 {CONTACT_AXIS.format(index=index, field=field): axis
+                  for index, fields in spec.items() for field, axis in fields.items()})
+        for key, axis in named.items():
+            require(f"[axes] of {source}", key, key not in flat,
+                    f"names the axis {key!r} twice (quoted and as nested tables): give it once")
+            flat[key] = axis
+    return flat
+
+
+def _contact_axis(name: str, where: str) -> str:
+    """The flat key whose range a ``contacts.INDEX.FIELD`` axis takes (its form checked)."""
+    field = contact_field(name)
+    example = CONTACT_AXIS.format(index=0, field="clearance")
+    require(where, name, field is not None,
+            f"an axis on a contact's field is named contacts.INDEX.FIELD, e.g. {example!r} "
+            "(INDEX: the contact's place in [[params.contacts]], from 0)")
+    index, name_of_field = field
+    if name_of_field in SWEPT_CONTACT_FIELDS:
+        return FLAT_KEYS[name_of_field]
+    if name_of_field in FLAT_KEYS:
+        raise ParameterError(
+            f"{where} = {name!r} is not allowed: a contact's {name_of_field} is not sweepable "
+            f"(give it in the contact: one sweep per side); sweepable: "
+            f"{', '.join(SWEPT_CONTACT_FIELDS)}")
+    raise unknown_key("contact field", name_of_field, where, SWEPT_CONTACT_FIELDS)
+
+
+def _check_contact_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: str) -> None:
+    """Refuse an axis on a contact's field without several contacts, or the index, or given twice.
+
+    The field must be left out of the contact (else it would be given twice), and no flat law
+    key may be left to no contact once the axes set theirs (`refuse_unused_law_keys`).
+    """
+    contacts = fixed.get(CONTACTS, ())
+    for axis in axes:
+        field = contact_field(axis.name)
+        if field is None:
+            continue
+        index, name = field
+        where = f"{axis_table(axis.name)} of {source}"
+        require(where, axis.name, len(contacts) >= 2,
+                "sweeps a field of one of several contacts, and [params] has fewer than two "
+                f"([[params.contacts]]): one contact is the flat keys, sweep [axes."
+                f"{FLAT_KEYS[name]}]")
+        require(where, axis.name, index < len(contacts),
+                f"there are {len(contacts)} contacts in [params] (indices 0 to "
+                f"{len(contacts) - 1})")
+        given = getattr(contacts[index], name)
+        require(where, axis.name, given is None,
+                f"is given both in [params] ({CONTACTS}[{index}].{name} = {given!r}) and as an "
+                "axis: remove one of them")
+    swept = [axis.name for axis in axes if contact_field(axis.name) is not None]
+    if swept:  # a flat law key used by no contact once the axes set theirs
+        refuse_unused_law_keys(fixed, with_contact_fields(
+            {**fixed, **dict.fromkeys(swept, 1.0)})[CONTACTS], f"[params] of {source}")
 
 
 def _transient_periods(data: Mapping[str, Any], observables: tuple[str, ...], source: str) -> int:
@@ -400,12 +518,20 @@ def _law_axis(spec: Any, where: str) -> Axis:
     return Axis("contact_law", math.nan, math.nan, len(laws), "categorical", tuple(laws))
 
 
+def axis_table(name: str) -> str:
+    """The sweep file's table of the axis ``name``: ``[axes.omega]``, ``[axes."contacts.0.x"]``."""
+    return f'[axes."{name}"]' if "." in name else f"[axes.{name}]"
+
+
 def _axis(name: str, spec: Any, source: str) -> Axis:
-    where = f"[axes.{name}] of {source}"
+    where = f"{axis_table(name)} of {source}"
     require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: a beam's "
             "attachments are fixed for a sweep (give them in [params], from Python)")
     require(where, name, name != CONTACTS, f"{name} is not sweepable: give the contacts in "
-            "[params] (one sweep per set of contacts)")
+            "[params] (one sweep per set of contacts), and sweep a contact's field as "
+            f"[axes.\"{CONTACT_AXIS.format(index=0, field='clearance')}\"]")
+    if name.startswith(CONTACTS + "."):
+        return _numeric_axis(name, _contact_axis(name, where), spec, where, source)
     require(where, name, name != USER_STRUCTURE, f"{name} is not sweepable: give the "
             "structure in [params] (one sweep per structure)")
     require(where, name, name not in CONTACT_POSITIONS, f"{name} is not sweepable: give it in "
@@ -416,6 +542,11 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
         return _law_axis(spec, where)
     require(where, name, name not in CHOICES,  # a name, not a number: only the law is swept
             f"{name} is not sweepable: give it in [params] (one sweep per {name})")
+    return _numeric_axis(name, name, spec, where, source)
+
+
+def _numeric_axis(name: str, parameter: str, spec: Any, where: str, source: str) -> Axis:
+    """Axis ``name`` over values of ``parameter`` (its allowed range) from its table ``spec``."""
     require(where, spec, isinstance(spec, dict), "must be a table with min, max, num, scale")
     for key in spec:
         if key not in _AXIS_KEYS:
@@ -434,7 +565,7 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
     if scale == "log":
         require(f"min in {where}", lo, lo > 0, "a log axis needs min > 0")
     # the values run monotonically from min to max (both exact): checking the ends suffices
-    check_range(name, np.array([lo, hi]),
+    check_range(parameter, np.array([lo, hi]),
                 lambda index: f"axis {name!r} of {source} reaches a non-physical point: ")
     return Axis(name, lo, hi, int(num), scale)
 
@@ -498,18 +629,43 @@ def contact_sweeps(sweep: Sweep) -> tuple[Sweep, ...]:
 
     The first contact among several is, cell by cell, the earliest of these sweeps' first
     impacts (`impactbeams.trajectory.several`): the free phase does not depend on the contacts.
+    A contact's sweep has the axes that change its run (`contact_axes`): the axes on its own
+    fields as their flat keys (``contacts.1.clearance`` is its ``clearance``), not those on
+    another contact's; with none left, one axis of one value, its clearance.
     """
-    fixed = {name: value for name, value in sweep.fixed.items() if name != CONTACTS}
-    return tuple(dataclasses.replace(sweep, fixed={**fixed, **contact.flat()},
-                                     source=f"{sweep.source}, {CONTACTS}[{index}]")
-                 for index, contact in enumerate(sweep.base.contacts))
+    return tuple(_contact_sweep(sweep, index, contact)
+                 for index, contact in enumerate(sweep.fixed[CONTACTS]))
+
+
+def contact_axes(sweep: Sweep, index: int) -> tuple[int, ...]:
+    """Positions of ``sweep``'s axes that change contact ``index``'s run.
+
+    All but the axes on the other contacts' fields.
+    """
+    fields = [contact_field(axis.name) for axis in sweep.axes]
+    return tuple(k for k, field in enumerate(fields) if field is None or field[0] == index)
+
+
+def _contact_sweep(sweep: Sweep, index: int, contact: Contact) -> Sweep:
+    axes = tuple(dataclasses.replace(sweep.axes[k], name=swept_parameter(sweep.axes[k].name))
+                 for k in contact_axes(sweep, index))
+    swept = {axis.name for axis in axes}
+    fixed = {name: value for name, value in {**sweep.fixed, **contact.flat()}.items()
+             if name != CONTACTS and name not in swept}
+    if not axes:  # its run is the same in every cell: a grid of one cell
+        clearance = sweep.base.each_contact()[index].clearance
+        axes = (Axis("clearance", clearance, clearance, 1, "linear"),)
+        fixed.pop("clearance", None)
+    return dataclasses.replace(sweep, fixed=fixed, axes=axes,
+                               source=f"{sweep.source}, {CONTACTS}[{index}]")
 
 
 def _check_several(sweep: Sweep) -> None:
     """Refuse what a sweep of several contacts cannot do yet: one line, before any work.
 
-    It maps the first contact among them (``first_impact_time``) and sweeps no contact field
-    (each contact has its own: which one an axis would change is not said).
+    It maps the first contact among them (``first_impact_time``) and sweeps no flat contact
+    key (each contact has its own: which one an axis would change is not said; an axis
+    ``contacts.INDEX.FIELD`` says it).
     """
     require(f"observables in {sweep.source}", list(sweep.observables),
             not sweep.needs_dynamics and sweep.long_time is None,
@@ -519,8 +675,31 @@ def _check_several(sweep: Sweep) -> None:
     for axis in sweep.axes:
         require(f"[axes.{axis.name}] of {sweep.source}", axis.name,
                 axis.name not in CONTACT_FIELDS,
-                f"{axis.name} is not sweepable with {CONTACTS}: each contact has its own (one "
-                "sweep per set of contacts)")
+                f"{axis.name} is not sweepable with {CONTACTS}: each contact has its own; "
+                f"sweep one contact's as [axes.\"{CONTACTS}.INDEX.FIELD\"] (INDEX from 0; "
+                f"FIELD one of {', '.join(SWEPT_CONTACT_FIELDS)}), its side one sweep each")
+
+
+def _check_contact_points(sweep: Sweep) -> None:
+    """With an axis on a contact's point, every corner of the grid as parameters (checked).
+
+    Where a point may lie (0 < x <= l) and the initial gap there (its unit tip-load shape is
+    monotone in x and in l) hold on the whole grid if they hold at its corners; the corner
+    grid's joint check (`_corners`) sees one point per contact, not the axis.
+    """
+    if not any(contact_field(axis.name) is not None and swept_parameter(axis.name)
+               in CONTACT_POSITIONS for axis in sweep.axes):
+        return
+    ends = [(axis.first,) if axis.choices or axis.num == 1 else (axis.min, axis.max)
+            for axis in sweep.axes]
+    for corner in itertools.product(*ends):
+        changes = {axis.name: value for axis, value in zip(sweep.axes, corner, strict=True)}
+        try:
+            sweep.params_at(changes)
+        except ParameterError as error:
+            named = ", ".join(f"{name} = {value!r}" for name, value in changes.items())
+            raise ParameterError(f"at the grid point {named} of {sweep.source}: {error}"
+                                 ) from None
 
 
 def _check_grid(sweep: Sweep) -> None:
@@ -531,6 +710,7 @@ def _check_grid(sweep: Sweep) -> None:
     """
     if sweep.params_at({}).several_contacts:
         _check_several(sweep)
+        _check_contact_points(sweep)
         for each in contact_sweeps(sweep):
             _check_grid(each)
         return
@@ -599,7 +779,7 @@ def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
     per_cell = set(CELL_PARAMETERS)
     if sweep.needs_dynamics and any(law.compliant for law in contact_laws(sweep)):
         per_cell.discard("damping_ratio")
-    return tuple(k for k, a in enumerate(sweep.axes) if a.name not in per_cell)
+    return tuple(k for k, a in enumerate(sweep.axes) if swept_parameter(a.name) not in per_cell)
 
 
 def contact_laws(sweep: Sweep) -> list[ContactLaw]:

@@ -17,8 +17,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from impactbeams.io import Layout, build_netcdf, writing_netcdf
-from impactbeams.params import MATERIAL_KEYS
-from impactbeams.sweep.definition import FIRST_IMPACT, LONG_TIME_KEYS, Sweep
+from impactbeams.params import CONTACTS, MATERIAL_KEYS, without_unused_law_keys
+from impactbeams.sweep.definition import (
+    FIRST_IMPACT,
+    LONG_TIME_KEYS,
+    Sweep,
+    contact_field,
+    swept_parameter,
+)
 from impactbeams.sweep.plan import Chunking, code_digest, contact_resolution, flat_boxes
 from impactbeams.variables import (
     VARIABLES,
@@ -38,7 +44,7 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
     """The map's coordinates, variables and attributes; ``chunks``: its blocks on disk."""
     coords = {} if sweep.stepping is None else {
         "sweep_direction": (np.array(sweep.stepping.directions), attributes("sweep_direction"))}
-    coords.update({axis.name: (axis.values, {**parameter_attributes(axis.name),
+    coords.update({axis.name: (axis.values, {**axis_attributes(axis.name),
                                              "scale": axis.scale}) for axis in sweep.axes})
     grid = tuple(coords)
     variables = {name: (dtype, attributes(name), grid + VARIABLES[name].dims[1:])
@@ -70,6 +76,19 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
     layout = Layout(coords, variables, attrs, chunks or sweep.shape)
     check_variables(layout.described())  # the map in memory and its file: as registered
     return layout
+
+
+def axis_attributes(name: str) -> dict[str, str]:
+    """CF attributes (units, long_name) of the axis ``name``: its parameter's.
+
+    An axis on a contact's field (``contacts.0.clearance``) has its flat key's, naming the
+    contact.
+    """
+    attributes = parameter_attributes(swept_parameter(name))
+    field = contact_field(name)
+    if field is not None:
+        attributes["long_name"] += f" of contacts[{field[0]}]"
+    return attributes
 
 
 def cell_values(sweep: Sweep) -> dict[str, tuple[np.dtype, tuple[int, ...]]]:
@@ -131,9 +150,15 @@ def map_file(sweep: Sweep, path: Path, building: Path,
 
 
 def _fixed_parameters(sweep: Sweep) -> dict[str, float]:
-    """The parameters no axis changes (a swept material key makes EI_i and rhoA_i vary)."""
+    """The parameters no axis changes (a swept material key makes EI_i and rhoA_i vary).
+
+    Beside several contacts, not the law keys every contact gives its own of (or sweeps).
+    """
     swept = {axis.name for axis in sweep.axes}
     for i in ("1", "2"):
         if any(k + i in swept for k in MATERIAL_KEYS):
             swept |= {"EI" + i, "rhoA" + i}
-    return {name: value for name, value in sweep.base.as_dict().items() if name not in swept}
+    fixed = without_unused_law_keys(sweep.base.as_dict())
+    if any(contact_field(name) is not None for name in swept):  # as given: the swept fields'
+        fixed[CONTACTS] = sweep.fixed[CONTACTS]  # values are the coordinates, left None here
+    return {name: value for name, value in fixed.items() if name not in swept}

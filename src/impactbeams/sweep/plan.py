@@ -34,6 +34,7 @@ from impactbeams.sweep.definition import (
     STEPPED_END_STATE,
     Axis,
     Sweep,
+    contact_axes,
     contact_laws,
     contact_sweeps,
     geometry_axes,
@@ -103,13 +104,31 @@ def _first_contact(sweep: Sweep, start: int, stop: int, parallel: bool, plan: Pl
 
     ``first_contact``: which (the lowest index of equal times; -1 where none closes).
     """
-    times = np.array([compute_chunk(each, start, stop, parallel, each_plan)[FIRST_IMPACT]
-                      for each, each_plan in zip(contact_sweeps(sweep), plan.per_contact,
-                                                 strict=True)])
+    times = np.array([_contact_times(sweep, index, each, start, stop, parallel, each_plan)
+                      for index, (each, each_plan) in enumerate(zip(
+                          contact_sweeps(sweep), plan.per_contact, strict=True))])
     closed = np.isfinite(times)
     first = np.argmin(np.where(closed, times, np.inf), axis=0)
     return {FIRST_IMPACT: np.ascontiguousarray(np.fmin.reduce(times, axis=0)),
             FIRST_CONTACT: np.where(closed.any(axis=0), first, -1)}
+
+
+def _contact_times(sweep: Sweep, index: int, each: Sweep, start: int, stop: int,
+                   parallel: bool, plan: Plan) -> np.ndarray:
+    """Contact ``index``'s first impacts on flat cells start..stop of ``sweep``.
+
+    From its own sweep ``each`` (`contact_sweeps`), over the axes that change its run
+    (`contact_axes`): along the others (other contacts' fields) each cell is the same run,
+    computed once (a chunk's box of the grid is a box of its grid too).
+    """
+    kept = contact_axes(sweep, index)
+    if len(kept) == len(sweep.axes):
+        return compute_chunk(each, start, stop, parallel, plan)[FIRST_IMPACT]
+    cells = np.unravel_index(np.arange(start, stop), sweep.shape)
+    own = (np.ravel_multi_index(tuple(cells[k] for k in kept), each.shape) if kept
+           else np.zeros(stop - start, dtype=np.intp))
+    low = int(own.min())
+    return compute_chunk(each, low, int(own.max()) + 1, parallel, plan)[FIRST_IMPACT][own - low]
 
 
 def _geometries(sweep: Sweep) -> Iterator[Params]:
