@@ -671,20 +671,28 @@ def test_the_contacts_command_prints_the_librarys_first_contact_and_sequence(tmp
 
 
 def test_the_contacts_command_of_contacts_that_close_together_and_bad_input(tmp_path, capsys):
-    """Contacts that can be closed together: the first contact and why there is no sequence
-    (exit 0); with -o an error before any compute. Bad input: one line, exit 2, nothing written."""
+    """Contacts that can be closed together: the first contact and their sequence (exit 0);
+    with a dashpot among them the sequence is refused: why (exit 0), and with -o an error
+    before any compute. Bad input: one line, exit 2, nothing written."""
     text = ('[params]\ncounterpart = "stop"\nforce_amplitude = 1e-3\nomega = 400.0\n'
             'contact_stiffness = 1e4\n[[params.contacts]]\nposition1 = 0.05\nclearance = 0.5e-6\n'
             '[[params.contacts]]\nclearance = 6e-6\n')
     code, out, _ = _contacts_command(tmp_path, capsys, text, "--n-modes", "8")
-    first = first_contact(FORCED.replace(contacts=(Contact(MID, clearance=0.5e-6),
-                                                   Contact(clearance=6e-6))), 0.03, n_modes=8)
+    together = FORCED.replace(contacts=(Contact(MID, clearance=0.5e-6), Contact(clearance=6e-6)))
+    first = first_contact(together, 0.03, n_modes=8)
+    sequence = contact_sequence(together, 0.03, n_modes=8)
     assert code == 0 and f"at t = {first.onset!r} s" in out
-    assert out.splitlines()[-1].startswith("contact sequence: not built for these contacts "
-                                           "(contacts: 2 contacts that can be closed together")
+    assert f"contact sequence: {sequence.impact.size} contacts, status complete" in out
+    damped = text.replace("clearance = 0.5e-6\n", "clearance = 0.5e-6\ndamping = 0.1\n")
+    code, out, _ = _contacts_command(tmp_path, capsys, damped, "--n-modes", "8")
+    assert code == 0 and out.splitlines()[-1].startswith(
+        "contact sequence: not built for these contacts (contacts[0].damping = 0.1 is not "
+        "allowed with several contacts")
     output = tmp_path / "x.nc"
+    code, _, err = _contacts_command(tmp_path, capsys, damped, "-o", str(output))
+    assert code == 2 and not output.exists()
+    assert "-o/--output: contacts[0].damping = 0.1 is not allowed" in err.splitlines()[-1]
     for options, message in [
-            (("-o", str(output)), "-o/--output: contacts: 2 contacts that can be closed together"),
             (("--clearance", "1e-6"), "clearance = 1e-06 in the command line (beside the "
                                       "contacts of"),
             (("--t-max", "-1"), "t_max = -1.0 is not allowed: must be > 0 (s)"),

@@ -771,7 +771,8 @@ def _contacts(args: argparse.Namespace) -> int:
     """``contacts``: which contact closes first and when, and every contact of a sequence.
 
     The sequence (`impactbeams.contact_sequence`) where it is built (one contact, a two-sided
-    stop); for contacts that can be closed together its refusal is said, and with -o it is
+    stop, contacts closing together); where it is refused (a dashpot among several contacts)
+    its refusal is said, and with -o it is
     an error (before any compute).
     """
     import dataclasses

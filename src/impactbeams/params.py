@@ -849,8 +849,8 @@ class Params:
             changed = copy.copy(self)
             for name, value in changes.items():
                 changed._set_checked(name, value)
-            if not changes.keys() <= set(UNJOINED):
-                changed._check_together()
+            if changed.contacts or not changes.keys() <= set(UNJOINED):
+                changed._check_together()  # (with several contacts it builds each one's run)
             return changed
         unused = set_by_every_contact(contacts)
         base = {name: value for name, value in self.as_dict().items()
