@@ -286,3 +286,32 @@ def test_a_narrow_branch_without_room_for_an_inset_says_its_range(captured, tmp_
     assert axes.child_axes == []
     assert ("branch 1 (period 2; 160.16 to 160.60 rad/s)"
             in [t.get_text() for t in axes.get_legend().get_texts()])
+
+
+def test_the_legend_counts_the_events_the_summary_counts(captured, tmp_path):
+    """An event stored on two neighbouring points (a grazing on its near side's last point and
+    its far side's first, 1e-12 rad/s apart, as main stored one on the stiff stop going down
+    at 163.3051438 rad/s): main's summary counted it once and the legend twice ("G: grazing
+    (95)" beside "94 grazing"). Both count each event once now, whatever the kind."""
+    from impactbeams.cli import _branch_summary
+
+    dataset = stiff_shaped_branches()
+    codes = dataset.bifurcation.values
+    twins = [np.flatnonzero(codes == BIFURCATIONS.index(kind))[0]
+             for kind in ("grazing", "contact_merge")]
+    order = np.sort(np.r_[np.arange(codes.size), twins])
+    doubled = dataset.isel(branch_point=order)
+    omega = doubled.omega.values.copy()
+    omega[np.flatnonzero(np.diff(order) == 0) + 1] += 1e-12
+    doubled = doubled.assign_coords(
+        branch_point=("branch_point", np.arange(order.size), attributes("branch_point")),
+        omega=("branch_point", omega, doubled.omega.attrs)).assign_attrs(
+        branch_covered="65.6:262.5 130.0:150.0", branch_endings="bound bound")
+    plot_dataset(doubled, tmp_path / "twins.png")
+    legend = [text.get_text() for text in captured[0].axes[0].get_legend().get_texts()]
+    summary = _branch_summary(doubled)
+    for kind in EVENTS:
+        (entry,) = [text for text in legend if text.startswith(f"{MARKERS[kind][1]}: ")]
+        counted = int(re.search(r"\((\d+)", entry).group(1))
+        assert f"{counted} {kind}" in summary
+        assert counted == np.count_nonzero(codes == BIFURCATIONS.index(kind))

@@ -26,6 +26,7 @@ from matplotlib.text import Annotation, Text
 from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import Bbox
 
+from impactbeams.continuation.output import located_events
 from impactbeams.params import ParameterError
 from impactbeams.plotting.events import EventChoice, chosen_events, priority
 from impactbeams.plotting.labels import axis_label, display_units
@@ -118,7 +119,8 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
         if period > 1 and np.ptp(x[mask]) < NARROW * np.ptp(x):
             narrow.append((mask, drawn[0], f"{_span(x[mask])} {x_units}"))
         curves += drawn
-    kinds = _event_kinds(x, y[:, 0], dataset.bifurcation.values, choice)
+    kinds = _event_kinds(x, y[:, 0], dataset.bifurcation.values, located_events(dataset),
+                         choice)
     strip = _draw_strip(axes, kinds) if _crowded(axes, kinds) else None
     lines = _mark_events(axes, kinds)
     axes.set_xlabel(r"$\Omega / 2\pi$ (Hz)" if x_units == "Hz"
@@ -224,13 +226,17 @@ class _Kind:
         return f"{_marker(self.name)[1]}: {self.name.replace('_', ' ')} ({tally})"
 
 
-def _event_kinds(x: np.ndarray, y: np.ndarray, codes: np.ndarray,
+def _event_kinds(x: np.ndarray, y: np.ndarray, codes: np.ndarray, events: np.ndarray,
                  choice: EventChoice) -> list[_Kind]:
-    """The events of each kind the branches carry, in the order their labels are placed."""
+    """The events of each kind the branches carry, in the order their labels are placed.
+
+    ``events``: the indices of the labelled points to draw, each event once (the run's
+    summary counts the same, `located_events`).
+    """
     kinds = []
-    for code in np.unique(codes[codes > 0]):
+    for code in np.unique(codes[events]):
         name = BIFURCATIONS[code] if code < len(BIFURCATIONS) else f"event_{code}"
-        where = np.flatnonzero(codes == code)
+        where = events[codes[events] == code]
         kinds.append(_Kind(name, [(float(x[i]), float(y[i])) for i in where],
                            choice.is_drawn(name), choice.is_labelled(name)))
     return sorted(kinds, key=lambda kind: priority(kind.name))

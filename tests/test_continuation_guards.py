@@ -1,0 +1,114 @@
+"""Guards of the continuation (issue 31's defects): each located event stored once, a step
+that lands on another strand refused, smooth bifurcations located inside a step that turns
+back in the parameter, a floor under `near_zero`.
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+import continuation_toys as toys
+from impactbeams.continuation.arclength import Follower, Point, Scaling, Settings
+from impactbeams.continuation.branch import Branch, _append
+from impactbeams.continuation.problem import Evaluation
+
+SETTINGS = Settings(step=0.05, max_step=0.1)
+
+
+def point(p, state, contacts, label=""):
+    """A point at x~ = (state, p), measured (so that `_append` keeps it as it is)."""
+    x = np.array([state, p])
+    evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)), np.array([0.5]), grazing=0.0,
+                            contacts=contacts, measures={"amplitude": abs(state)})
+    return Point(x, np.array([0.0, 1.0]), evaluation, 2, label=label)
+
+
+def twin_branch():
+    """A branch whose last point is a grazing labelled on its near side (7 contacts)."""
+    follower = Follower(toys.grazing(), Scaling(np.ones(1), 1.0), SETTINGS)
+    near = point(0.5, 1.0, 7, "grazing")
+    return follower, Branch([point(0.4, 0.8, 7), near], 1, follower.scaling)
+
+
+def test_the_far_side_of_a_located_event_does_not_label_it_again():
+    # the far side's first point, 1e-13 away in the parameter (5e-15 of the stiff stop's
+    # range, as 1e-12 rad/s there) but 1e-6 away in the state (a branch steep in the
+    # parameter): the same grazing, stored once, on the point that carried it first
+    follower, branch = twin_branch()
+    far = point(0.5 + 1e-13, 1.0 + 1e-6, 8, "grazing")
+    _append(follower, branch, [far], None)
+    assert [p.label for p in branch.points] == ["", "grazing"]
+    assert branch.points[-1].evaluation.contacts == 7
+
+
+def test_the_far_side_relabelled_keeps_no_second_label():
+    # the far side's first point appended unlabelled, then relabelled (`_cross_grazing`
+    # where the grazing located ahead of it is that point itself)
+    follower, branch = twin_branch()
+    far = point(0.5 + 1e-13, 1.0 + 1e-6, 8)
+    _append(follower, branch, [far], None)
+    _append(follower, branch, [dataclasses.replace(far, label="grazing")], None)
+    assert [p.label for p in branch.points] == ["", "grazing", ""]
+    assert branch.points[-1].evaluation.measures == far.evaluation.measures
+
+
+def test_two_events_of_a_kind_apart_are_both_stored():
+    # beyond the location tolerance (1e-11 of the range), or not neighbours: two events
+    follower, branch = twin_branch()
+    _append(follower, branch, [point(0.5 + 1e-9, 1.0 + 1e-6, 8, "grazing")], None)
+    _append(follower, branch, [point(0.6, 1.2, 8), point(0.6 + 1e-13, 1.2 + 1e-6, 9,
+                                                         "grazing")], None)
+    assert [p.label for p in branch.points] == ["", "grazing", "grazing", "", "grazing"]
+    assert not math.isnan(branch.points[-1].x[0])
+
+
+class Staircase:
+    """z -> (z + p) / 2, the branch z = p; a contact per orbit for each 0.1 of z (no grazing
+    or interval value: each change is located by bisection on the contacts)."""
+
+    period = 1
+
+    def evaluate(self, z, p, jacobian=True, grazing=True):
+        contacts = int(np.floor(10.0 * z[0]))
+        return Evaluation(0.5 * (z + p) - z, -0.5 * np.eye(1) if jacobian else np.empty((0, 0)),
+                          np.array([0.5]) if jacobian else np.empty(0), contacts=contacts)
+
+    def measures(self, z, p):
+        return {"amplitude": float(abs(z[0]))}
+
+    def iterated(self, times):
+        raise NotImplementedError
+
+
+def test_a_step_onto_another_strand_is_refused_and_retried_shorter(monkeypatch):
+    # the corrector of the step from z = 0.23 "converges" 0.35 further along (3 contacts
+    # more, as main's from 149.57 to 151.37 rad/s on the stiff stop, 5 to 2 contacts): that
+    # step is refused, a shorter one taken from the same point; the branch then crosses each
+    # change of the contacts in a step of its own, each located
+    from impactbeams.continuation import branch as branch_module
+
+    jumps, steps = [], []
+
+    class Jumping(Follower):
+        def step(self, start, ds):
+            steps.append((start.x[-1], ds))
+            if 0.22 < start.x[-1] < 0.24 and not jumps:
+                far = self.at_parameter(start.x + 0.35, start.tangent).point
+                jumps.append(len(steps))
+                return far, ds, ()
+            return super().step(start, ds)
+
+    monkeypatch.setattr(branch_module, "Follower", Jumping)
+    (branch,) = branch_module.continue_branches(
+        Staircase(), np.array([0.05]), 0.05, branch_module.Span(0.0, 1.0),
+        Scaling(np.ones(1), 1.0), Settings(step=0.01, max_step=0.01, max_branches=1))
+    assert len(jumps) == 1 and branch.ending == "bound"
+    (start, ds), retried = steps[jumps[0] - 1], steps[jumps[0]]
+    assert retried == (start, ds / 2.0)
+    contacts = np.array([p.evaluation.contacts for p in branch.points])
+    assert np.all(np.abs(np.diff(contacts)) <= 1)
+    assert contacts[0] == 0 and contacts[-1] == 10
+    changes = [p.x[-1] for p in branch.points if p.label == "contact_split"]
+    assert changes == pytest.approx(np.arange(1, 11) / 10.0, abs=2e-11)
