@@ -112,3 +112,33 @@ def test_a_step_onto_another_strand_is_refused_and_retried_shorter(monkeypatch):
     assert contacts[0] == 0 and contacts[-1] == 10
     changes = [p.x[-1] for p in branch.points if p.label == "contact_split"]
     assert changes == pytest.approx(np.arange(1, 11) / 10.0, abs=2e-11)
+
+
+def test_near_zero_has_the_test_functions_round_off_as_its_floor():
+    # a multiplier that crosses -1 slowly (|mu| - 1 = 1e-6 (s - 0.3) over a step of 1 in
+    # x~), its modulus off by 5e-14 of round-off that does not shrink with the bracket (as
+    # the monodromy's eigenvalues are: -5.2e-14 and +4.9e-15 at ends 4e-17 apart on the
+    # small model): main asked the root's test to be within 1e3 x 1e-6 x 1e-11 = 1e-14 of 0,
+    # below that round-off, which no bracket meets: the doubling was not labelled. Now
+    # within the round-off floor: located, on the circle to it
+    from test_continuation_jumps import labelled, line
+
+    from impactbeams.continuation.branch import _between
+    from impactbeams.continuation.events import TEST_ROUND_OFF, near_zero
+
+    def multipliers(s):
+        noise = math.copysign(5e-14, s - 0.3)
+        return [-(1.0 + 1e-6 * (s - 0.3) + noise), 0.3, 0.2]
+
+    follower, _, a, b = line(multipliers)
+    test = lambda p: float(abs(p.evaluation.multipliers[0].real)) - 1.0  # noqa: E731
+    floor = near_zero(test, a, b, follower.settings.locate_tolerance)
+    assert floor == pytest.approx(TEST_ROUND_OFF * (1.0 + 7e-7), rel=1e-6)
+    assert 5e-14 < floor < 1e-12
+    ((label, s, mu),) = labelled(_between(follower, a, b))
+    assert label == "period_doubling"
+    assert abs(abs(mu[0]) - 1.0) <= floor
+    assert s == pytest.approx(0.3, abs=(floor + 5e-14) / 1e-6)
+    # a test that changes fast keeps its slope's bound, far above the floor
+    follower, _, a, b = line(lambda s: [-(1.0 + 0.1 * (s - 0.3)), 0.3, 0.2])
+    assert near_zero(test, a, b, 1e-11) == pytest.approx(1e3 * 0.1 * 1e-11, rel=1e-9)

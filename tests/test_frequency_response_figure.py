@@ -315,3 +315,22 @@ def test_the_legend_counts_the_events_the_summary_counts(captured, tmp_path):
         counted = int(re.search(r"\((\d+)", entry).group(1))
         assert f"{counted} {kind}" in summary
         assert counted == np.count_nonzero(codes == BIFURCATIONS.index(kind))
+
+
+def test_a_crowded_curves_markers_stand_apart_with_the_legend_beside_the_axes(captured,
+                                                                                tmp_path):
+    """A curve that leaves the legend no room inside: beside the axes, it shrinks them. Main
+    chose the markers that stand apart before, on the wider axes, and some met on the figure
+    as drawn; now they are chosen after, and none meet."""
+    dataset = crowded_with_a_narrow_period_two_branch()
+    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, dataset.omega.size))) * 8e-4
+    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
+                                                 dataset.tip_amplitude_1.attrs)),
+                 tmp_path / "full.png")
+    figure = captured[0]
+    axes = figure.axes[0]
+    legend = axes.get_legend().get_window_extent(figure.canvas.get_renderer())
+    assert legend.x0 > axes.get_window_extent().x1  # beside the axes
+    boxes = [box for line in _event_lines(axes) for box in _markers(line)]
+    assert len(boxes) > 3
+    assert not any(a.overlaps(b) for a, b in itertools.combinations(boxes, 2))

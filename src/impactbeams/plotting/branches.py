@@ -137,6 +137,8 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
         for _, line, span in narrow:
             line.set_label(line.get_label()[:-1] + ("; inset)" if inset else f"; {span})"))
     place_legend(axes, clear)
+    if strip is not None:  # beside the axes, the legend shrank them: markers nearer
+        _mark_apart(axes, kinds, lines)
     labelled = [(x, y, _marker(kind.name)[1]) for kind in kinds if kind.labelled
                 for x, y in sorted(kind.marked)]
     marked = [point for kind in kinds if kind.drawn and not kind.labelled
@@ -337,7 +339,21 @@ def _draw_strip(axes: Axes, kinds: list[_Kind]) -> Bbox:
                   ha="right", va="center", fontsize="xx-small")
     axes.plot([0.0, 1.0], [top, top], color="0.6", linewidth=0.6, transform=axes.transAxes,
               label="_strip")
-    figure.draw_without_rendering()
+    _mark_apart(axes, kinds)
+    return Bbox([[0.0, 0.0], [1.0, top]])
+
+
+def _mark_apart(axes: Axes, kinds: list[_Kind], lines: dict[str, Line2D] | None = None,
+                ) -> None:
+    """Choose the events marked on a crowded curve: the labelled kinds' that stand apart.
+
+    On the laid-out axes (``APART`` between markers, in display units): chosen when the strip
+    is drawn, for the legend and an inset to keep clear of, and again once the legend is
+    placed (beside the axes it shrinks them, and markers that stood apart may meet; fewer
+    stand apart then, none that the legend or an inset covers), with the kinds' ``lines``
+    drawn again at the events chosen.
+    """
+    axes.get_figure(root=True).draw_without_rendering()
     labelled = [kind for kind in kinds if kind.drawn and kind.labelled]
     apart = ~_meeting(_marker_boxes(axes, labelled))
     start = 0
@@ -347,7 +363,8 @@ def _draw_strip(axes: Axes, kinds: list[_Kind]) -> Bbox:
             start += len(kind.points)
         elif kind.drawn:
             kind.apart = [False] * len(kind.points)
-    return Bbox([[0.0, 0.0], [1.0, top]])
+        if lines is not None and kind.name in lines:
+            lines[kind.name].set_data(*np.array(kind.marked).reshape(-1, 2).T)
 
 
 def _zoom(axes: Axes, x: np.ndarray, y: np.ndarray, dataset: xr.Dataset, narrow: np.ndarray,
