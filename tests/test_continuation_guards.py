@@ -142,3 +142,56 @@ def test_near_zero_has_the_test_functions_round_off_as_its_floor():
     # a test that changes fast keeps its slope's bound, far above the floor
     follower, _, a, b = line(lambda s: [-(1.0 + 0.1 * (s - 0.3)), 0.3, 0.2])
     assert near_zero(test, a, b, 1e-11) == pytest.approx(1e3 * 0.1 * 1e-11, rel=1e-9)
+
+
+def arc_follower(multipliers):
+    """A stand-in follower on the unit circle x~ = (cos theta, sin theta), the parameter
+    sin theta: it turns back in the parameter at theta = pi / 2. A point on a plane is the
+    circle's crossing nearest the plane's point (as Newton from it); ``multipliers(theta)``."""
+    import types
+
+    from scipy.optimize import brentq
+
+    def point_at(theta):
+        evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)),
+                                np.array(multipliers(theta), complex))
+        return Point(np.array([math.cos(theta), math.sin(theta)]),
+                     np.array([-math.sin(theta), math.cos(theta)]), evaluation, 2)
+
+    def correct(x, normal, _):
+        def across(theta):
+            return float(normal @ (np.array([math.cos(theta), math.sin(theta)]) - x))
+
+        guess = math.atan2(x[1], x[0])
+        grid = np.linspace(-math.pi, math.pi, 4001)
+        roots = [brentq(across, t0, t1, xtol=1e-15) for t0, t1 in zip(grid[:-1], grid[1:])
+                 if across(t0) * across(t1) < 0]
+        theta = min(roots, key=lambda root: abs(root - guess))
+        return types.SimpleNamespace(point=point_at(theta))
+
+    return types.SimpleNamespace(settings=Settings(), correct=correct), point_at
+
+
+def test_smooth_bifurcations_inside_a_step_that_turns_back_are_located():
+    # from theta = 0.2 to 2.4 the branch turns by 126 degrees, back in the parameter at a
+    # fold (theta = pi / 2, a multiplier through +1) and through a period doubling on the
+    # way back (theta = 2, a multiplier through -1); planes along the start's tangent reach
+    # no farther than theta = 1.14 (main labelled neither: the tests jumped at their reach)
+    from test_continuation_jumps import labelled
+
+    from impactbeams.continuation.branch import _between
+    from impactbeams.continuation.events import detected
+
+    def multipliers(theta):
+        # slow, as the beams' near their crossings: the step is not sampled (no other
+        # multiplier near the circle), its ends only are searched between
+        return [1.0 + 0.01 * (theta - math.pi / 2), -(1.0 + 0.01 * (theta - 2.0)), 0.2]
+
+    follower, point_at = arc_follower(multipliers)
+    a, b = point_at(0.2), point_at(2.4)
+    assert sorted(label for label, _ in detected(a, b)) == ["fold", "period_doubling"]
+    found = labelled(_between(follower, a, b))
+    assert [label for label, *_ in found] == ["fold", "period_doubling"]
+    (_, _, fold), (_, _, doubling) = found
+    assert fold[0].real == pytest.approx(1.0, abs=1e-9)
+    assert doubling[1].real == pytest.approx(-1.0, abs=1e-9)

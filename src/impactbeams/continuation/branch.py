@@ -437,11 +437,12 @@ def _between(follower: Follower, a: Point, b: Point,
     """The smooth bifurcations located between ``a`` and ``b`` (in order), then ``b``.
 
     ``a`` and ``b`` lie on one smooth piece of the branch. Points between are corrected on
-    planes s along ``a``'s tangent from ``a``, or along ``plane`` = (origin, unit normal) when
-    given. A kind whose signature changed but whose test function has the same sign at both
-    ends is sought in both halves of the step (at most ``MAX_SUBDIVISIONS`` times).
+    planes s along ``a``'s tangent from ``a`` (across the chord from ``a`` to ``b`` where the
+    branch turns back within the step, `_along`), or along ``plane`` = (origin, unit normal)
+    when given. A kind whose signature changed but whose test function has the same sign at
+    both ends is sought in both halves of the step (at most ``MAX_SUBDIVISIONS`` times).
     """
-    origin, normal = plane if plane is not None else (a.x, a.tangent)
+    origin, normal = plane if plane is not None else (a.x, _along(a, b))
 
     def point_at(s: float) -> Point | None:
         return follower.correct(origin + s * normal, normal, normal).point
@@ -484,6 +485,23 @@ def _between(follower: Follower, a: Point, b: Point,
             return (_advance(follower, a, middle, depth + 1)
                     + _advance(follower, middle, b, depth + 1))
     return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
+
+
+def _along(a: Point, b: Point) -> np.ndarray:
+    """The normal of the planes a step from ``a`` to ``b`` on one smooth piece is searched on.
+
+    ``a``'s tangent, whose planes cut the branch once each while it turns by less than 90
+    degrees from it. Where it has turned back further by ``b`` (``b``'s tangent has a part
+    against ``a``'s, or ``b`` lies behind ``a``'s plane: a piece between two located changes
+    of the contacts is not bound by the step's largest angle), those planes reach no farther
+    than where the branch is orthogonal to ``a``'s tangent, and a fold or period doubling
+    beyond was not located: planes across the chord, which the branch crosses once each as it
+    turns by up to 180 degrees, reach all of it.
+    """
+    chord = b.x - a.x
+    if a.tangent @ b.tangent > 0.0 and a.tangent @ chord > 0.0:
+        return a.tangent
+    return chord / np.linalg.norm(chord)
 
 
 def _beside_jump(follower: Follower, a: Point, b: Point, jump: Located,
