@@ -499,7 +499,7 @@ def _along(a: Point, b: Point) -> np.ndarray:
     turns by up to 180 degrees, reach all of it.
     """
     chord = b.x - a.x
-    if a.tangent @ b.tangent > 0.0 and a.tangent @ chord > 0.0:
+    if not np.any(chord) or (a.tangent @ b.tangent > 0.0 and a.tangent @ chord > 0.0):
         return a.tangent
     return chord / np.linalg.norm(chord)
 
