@@ -114,15 +114,17 @@ def test_the_legend_covers_no_line_and_no_marker(figure):
     _assert_legend_covers_nothing(figure.axes[0])
 
 
+def plot_filling_the_axes(dataset, path):
+    """Plot ``dataset`` with its curve swept over the whole axes (no room for a legend)."""
+    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, dataset.omega.size))) * 8e-4
+    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
+                                                 dataset.tip_amplitude_1.attrs)), path)
+
+
 def test_a_legend_with_no_room_inside_goes_beside_the_axes(captured, tmp_path):
     """A curve that sweeps the whole axes leaves no free place: the legend goes beside them,
     within the figure."""
-    dataset = stiff_shaped_branches()
-    omega = dataset.omega.values
-    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, omega.size))) * 8e-4
-    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
-                                                 dataset.tip_amplitude_1.attrs)),
-                 tmp_path / "full.png")
+    plot_filling_the_axes(stiff_shaped_branches(), tmp_path / "full.png")
     figure = captured[0]
     axes = figure.axes[0]
     legend = axes.get_legend().get_window_extent(figure.canvas.get_renderer())
@@ -277,11 +279,7 @@ def test_a_narrow_period_two_branch_is_zoomed_in_an_inset_drawn_above(crowded):
 
 def test_a_narrow_branch_without_room_for_an_inset_says_its_range(captured, tmp_path):
     """A curve that sweeps the whole axes leaves no room: the legend gives the range."""
-    dataset = crowded_with_a_narrow_period_two_branch()
-    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, dataset.omega.size))) * 8e-4
-    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
-                                                 dataset.tip_amplitude_1.attrs)),
-                 tmp_path / "full.png")
+    plot_filling_the_axes(crowded_with_a_narrow_period_two_branch(), tmp_path / "full.png")
     axes = captured[0].axes[0]
     assert axes.child_axes == []
     assert ("branch 1 (period 2; 160.16 to 160.60 rad/s)"
@@ -322,11 +320,7 @@ def test_a_crowded_curves_markers_stand_apart_with_the_legend_beside_the_axes(ca
     """A curve that leaves the legend no room inside: beside the axes, it shrinks them. Main
     chose the markers that stand apart before, on the wider axes, and some met on the figure
     as drawn; now they are chosen after, and none meet."""
-    dataset = crowded_with_a_narrow_period_two_branch()
-    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, dataset.omega.size))) * 8e-4
-    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
-                                                 dataset.tip_amplitude_1.attrs)),
-                 tmp_path / "full.png")
+    plot_filling_the_axes(crowded_with_a_narrow_period_two_branch(), tmp_path / "full.png")
     figure = captured[0]
     axes = figure.axes[0]
     legend = axes.get_legend().get_window_extent(figure.canvas.get_renderer())
