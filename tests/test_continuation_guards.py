@@ -195,3 +195,39 @@ def test_smooth_bifurcations_inside_a_step_that_turns_back_are_located():
     (_, _, fold), (_, _, doubling) = found
     assert fold[0].real == pytest.approx(1.0, abs=1e-9)
     assert doubling[1].real == pytest.approx(-1.0, abs=1e-9)
+
+
+def test_the_stiff_stops_grazing_at_163_3051438_is_stored_once(captured, tmp_path):
+    # issue 31's stiff stop going down at its default Hertz contact and modes, to its 160th
+    # point (4 s of CPU): main labelled the grazing at 163.3051438 rad/s on the near side's
+    # last point (7 contacts per orbit) and again on the far side's first (8), 1.1e-12 rad/s
+    # apart; its summary counted 14 grazings, the plot's legend 15. Now one label, on the near
+    # side, and both count the same
+    import re
+
+    import impactbeams as ib
+    from impactbeams.cli import _branch_summary
+    from impactbeams.continuation import Continuation, continue_orbits
+    from impactbeams.plotting import plot_dataset
+    from impactbeams.variables import BIFURCATIONS
+
+    keys = {"l1": 0.2, "width1": 0.02, "thickness1": 0.001, "counterpart": "stop",
+            "clearance": 5e-4, "shaker": "beam1", "base_amplitude": 1e-4,
+            "force_amplitude": 0.0, "damping_ratio": 0.01}
+    dataset = continue_orbits(Continuation(ib.Params.from_mapping(keys), "omega", 65.6, 262.5,
+                                           direction="down", max_points=160, max_branches=1))
+    omega, codes = dataset.omega.values, dataset.bifurcation.values
+    at = np.flatnonzero(np.abs(omega - 163.3051438) < 1e-6)
+    assert at.size == 2 and list(dataset.contacts_per_orbit.values[at]) == [7, 8]
+    assert [BIFURCATIONS[code] for code in codes[at]] == ["grazing", "none"]
+    tolerance = 1e-11 * (262.5 - 65.6)  # locate_tolerance of the range
+    neighbours = (codes[:-1] > 0) & (codes[:-1] == codes[1:])
+    assert not np.any(neighbours & (np.abs(np.diff(omega)) <= tolerance))
+    plot_dataset(dataset, tmp_path / "down.png")
+    legend = [text.get_text() for text in captured[0].axes[0].get_legend().get_texts()]
+    summary = _branch_summary(dataset)
+    for entry in legend:
+        kind = re.match(r"^[A-Z]+: ([a-z ]+) \((\d+)", entry)
+        if kind:
+            assert f"{kind.group(2)} {kind.group(1).replace(' ', '_')}" in summary
+    assert "14 grazing" in summary
