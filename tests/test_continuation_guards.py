@@ -1,6 +1,6 @@
 """Guards of the continuation (issue 31's defects): each located event stored once, a step
-that lands on another strand refused, smooth bifurcations located inside a step that turns
-back in the parameter, a floor under `near_zero`.
+that lands on another strand refused, smooth bifurcations located inside a step that turned
+back by more than 90 degrees, a floor under `near_zero`.
 """
 
 import dataclasses
@@ -11,8 +11,10 @@ import pytest
 
 import continuation_toys as toys
 from impactbeams.continuation.arclength import Follower, Point, Scaling, Settings
-from impactbeams.continuation.branch import Branch, _append
+from impactbeams.continuation.branch import Branch, _append, _between
+from impactbeams.continuation.events import TEST_ROUND_OFF, detected, near_zero
 from impactbeams.continuation.problem import Evaluation
+from test_continuation_jumps import labelled, line
 
 SETTINGS = Settings(step=0.05, max_step=0.1)
 
@@ -121,11 +123,6 @@ def test_near_zero_has_the_test_functions_round_off_as_its_floor():
     # small model): main asked the root's test to be within 1e3 x 1e-6 x 1e-11 = 1e-14 of 0,
     # below that round-off, which no bracket meets: the doubling was not labelled. Now
     # within the round-off floor: located, on the circle to it
-    from test_continuation_jumps import labelled, line
-
-    from impactbeams.continuation.branch import _between
-    from impactbeams.continuation.events import TEST_ROUND_OFF, near_zero
-
     def multipliers(s):
         noise = math.copysign(5e-14, s - 0.3)
         return [-(1.0 + 1e-6 * (s - 0.3) + noise), 0.3, 0.2]
@@ -164,7 +161,8 @@ def arc_follower(multipliers):
 
         guess = math.atan2(x[1], x[0])
         grid = np.linspace(-math.pi, math.pi, 4001)
-        roots = [brentq(across, t0, t1, xtol=1e-15) for t0, t1 in zip(grid[:-1], grid[1:])
+        roots = [brentq(across, t0, t1, xtol=1e-15)
+                 for t0, t1 in zip(grid[:-1], grid[1:], strict=True)
                  if across(t0) * across(t1) < 0]
         theta = min(roots, key=lambda root: abs(root - guess))
         return types.SimpleNamespace(point=point_at(theta))
@@ -177,11 +175,6 @@ def test_smooth_bifurcations_inside_a_step_that_turns_back_are_located():
     # fold (theta = pi / 2, a multiplier through +1) and through a period doubling on the
     # way back (theta = 2, a multiplier through -1); planes along the start's tangent reach
     # no farther than theta = 1.14 (main labelled neither: the tests jumped at their reach)
-    from test_continuation_jumps import labelled
-
-    from impactbeams.continuation.branch import _between
-    from impactbeams.continuation.events import detected
-
     def multipliers(theta):
         # slow, as the beams' near their crossings: the step is not sampled (no other
         # multiplier near the circle), its ends only are searched between

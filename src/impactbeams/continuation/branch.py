@@ -292,11 +292,11 @@ def _another_strand(start: Point, point: Point, micro_contacts: str) -> bool:
     contact appears or vanishes, two merge or one splits: the contacts per orbit change by
     one; a step that crosses two is refused and retried shorter until the changes lie in two
     steps): more is a jump of the corrector to a part of the branch the steps never
-    reached (on the stiff stop going up, from 149.57 to 151.37 rad/s and from 5 to 2 contacts
-    per orbit in one step of 1e-4 of the range, where the branch was not followed and nothing
-    between was located). With ``micro_contacts = "summarise"`` the contacts within an episode
-    may change many times within a step (chatter, not located): the impact episodes per orbit
-    are counted instead.
+    reached (issue 31's stiff stop: from 149.57 to 151.37 rad/s and from 5 to 2 contacts per
+    orbit, nothing between located; going down at its default modes, from 158.8315 to
+    158.7376 rad/s and from 9 to 7). With ``micro_contacts = "summarise"`` the contacts
+    within an episode may change many times within a step (chatter, not located): the impact
+    episodes per orbit are counted instead.
     """
     count = ((lambda p: p.evaluation.episodes) if micro_contacts == SUMMARISE
              else (lambda p: p.evaluation.contacts))
