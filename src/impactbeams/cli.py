@@ -651,8 +651,7 @@ def _branch_summary(dataset: xr.Dataset) -> str:
     """Points, branches, what each covered and how it ended, events found (each once)."""
     import numpy as np
 
-    from impactbeams.continuation.output import located_events
-    from impactbeams.variables import BIFURCATIONS
+    from impactbeams.variables import BIFURCATIONS, located_events
 
     codes = dataset["bifurcation"].values
     events = codes[located_events(dataset)]

@@ -26,12 +26,11 @@ from matplotlib.text import Annotation, Text
 from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import Bbox
 
-from impactbeams.continuation.output import located_events
 from impactbeams.params import ParameterError
 from impactbeams.plotting.events import EventChoice, chosen_events, priority
 from impactbeams.plotting.labels import axis_label, display_units
 from impactbeams.plotting.room import Room
-from impactbeams.variables import BIFURCATIONS
+from impactbeams.variables import BIFURCATIONS, located_events
 
 DEFAULT_MEASURE = "tip_amplitude_1"
 OVERLAY_MEASURE = "section_deflection_1"  # what a diagram's poincare_deflection1 shows
