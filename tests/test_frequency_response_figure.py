@@ -114,15 +114,17 @@ def test_the_legend_covers_no_line_and_no_marker(figure):
     _assert_legend_covers_nothing(figure.axes[0])
 
 
+def plot_filling_the_axes(dataset, path):
+    """Plot ``dataset`` with its curve swept over the whole axes (no room for a legend)."""
+    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, dataset.omega.size))) * 8e-4
+    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
+                                                 dataset.tip_amplitude_1.attrs)), path)
+
+
 def test_a_legend_with_no_room_inside_goes_beside_the_axes(captured, tmp_path):
     """A curve that sweeps the whole axes leaves no free place: the legend goes beside them,
     within the figure."""
-    dataset = stiff_shaped_branches()
-    omega = dataset.omega.values
-    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, omega.size))) * 8e-4
-    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
-                                                 dataset.tip_amplitude_1.attrs)),
-                 tmp_path / "full.png")
+    plot_filling_the_axes(stiff_shaped_branches(), tmp_path / "full.png")
     figure = captured[0]
     axes = figure.axes[0]
     legend = axes.get_legend().get_window_extent(figure.canvas.get_renderer())
@@ -277,12 +279,52 @@ def test_a_narrow_period_two_branch_is_zoomed_in_an_inset_drawn_above(crowded):
 
 def test_a_narrow_branch_without_room_for_an_inset_says_its_range(captured, tmp_path):
     """A curve that sweeps the whole axes leaves no room: the legend gives the range."""
-    dataset = crowded_with_a_narrow_period_two_branch()
-    wiggle = (1.0 + np.sin(np.linspace(0.0, 400.0, dataset.omega.size))) * 8e-4
-    plot_dataset(dataset.assign(tip_amplitude_1=("branch_point", wiggle,
-                                                 dataset.tip_amplitude_1.attrs)),
-                 tmp_path / "full.png")
+    plot_filling_the_axes(crowded_with_a_narrow_period_two_branch(), tmp_path / "full.png")
     axes = captured[0].axes[0]
     assert axes.child_axes == []
     assert ("branch 1 (period 2; 160.16 to 160.60 rad/s)"
             in [t.get_text() for t in axes.get_legend().get_texts()])
+
+
+def test_the_legend_counts_the_events_the_summary_counts(captured, tmp_path):
+    """An event stored on two neighbouring points (a grazing on its near side's last point and
+    its far side's first, 1e-12 rad/s apart, as main stored one on the stiff stop going down
+    at 163.3051438 rad/s): main's summary counted it once and the legend twice ("G: grazing
+    (95)" beside "94 grazing"). Both count each event once now, whatever the kind."""
+    from impactbeams.cli import _branch_summary
+
+    dataset = stiff_shaped_branches()
+    codes = dataset.bifurcation.values
+    twins = [np.flatnonzero(codes == BIFURCATIONS.index(kind))[0]
+             for kind in ("grazing", "contact_merge")]
+    order = np.sort(np.r_[np.arange(codes.size), twins])
+    doubled = dataset.isel(branch_point=order)
+    omega = doubled.omega.values.copy()
+    omega[np.flatnonzero(np.diff(order) == 0) + 1] += 1e-12
+    doubled = doubled.assign_coords(
+        branch_point=("branch_point", np.arange(order.size), attributes("branch_point")),
+        omega=("branch_point", omega, doubled.omega.attrs)).assign_attrs(
+        branch_covered="65.6:262.5 130.0:150.0", branch_endings="bound bound")
+    plot_dataset(doubled, tmp_path / "twins.png")
+    legend = [text.get_text() for text in captured[0].axes[0].get_legend().get_texts()]
+    summary = _branch_summary(doubled)
+    for kind in EVENTS:
+        (entry,) = [text for text in legend if text.startswith(f"{MARKERS[kind][1]}: ")]
+        counted = int(re.search(r"\((\d+)", entry).group(1))
+        assert f"{counted} {kind}" in summary
+        assert counted == np.count_nonzero(codes == BIFURCATIONS.index(kind))
+
+
+def test_a_crowded_curves_markers_stand_apart_with_the_legend_beside_the_axes(captured,
+                                                                                tmp_path):
+    """A curve that leaves the legend no room inside: beside the axes, it shrinks them. Main
+    chose the markers that stand apart before, on the wider axes, and some met on the figure
+    as drawn; now they are chosen after, and none meet."""
+    plot_filling_the_axes(crowded_with_a_narrow_period_two_branch(), tmp_path / "full.png")
+    figure = captured[0]
+    axes = figure.axes[0]
+    legend = axes.get_legend().get_window_extent(figure.canvas.get_renderer())
+    assert legend.x0 > axes.get_window_extent().x1  # beside the axes
+    boxes = [box for line in _event_lines(axes) for box in _markers(line)]
+    assert len(boxes) > 3
+    assert not any(a.overlaps(b) for a, b in itertools.combinations(boxes, 2))

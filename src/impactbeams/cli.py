@@ -654,12 +654,14 @@ class _BranchProgress:
 
 def _branch_summary(dataset: xr.Dataset) -> str:
     """Points, branches, what each covered and how it ended, events found (each once)."""
-    from impactbeams.variables import BIFURCATIONS
+    import numpy as np
 
-    events = {(int(code), f"{value:.9g}") for code, value in zip(
-        dataset["bifurcation"].values, dataset[dataset.attrs["continued_parameter"]].values,
-        strict=True) if code}
-    counts = [(sum(code == c for c, _ in events), name) for code, name in enumerate(BIFURCATIONS)]
+    from impactbeams.variables import BIFURCATIONS, located_events
+
+    codes = dataset["bifurcation"].values
+    events = codes[located_events(dataset)]
+    counts = [(int(np.count_nonzero(events == code)), name)
+              for code, name in enumerate(BIFURCATIONS)]
     found = ", ".join(f"{count} {name}" for count, name in counts if count)
     covered = "; ".join(
         f"branch {number}: {low} to {high} ({ending})" for number, ((low, high), ending)

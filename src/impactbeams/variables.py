@@ -787,3 +787,34 @@ def _dims_match(dims: tuple[str, ...], registered: tuple[str, ...]) -> bool:
     rest = registered[1:]
     split = len(dims) - len(rest)
     return split >= 0 and dims[split:] == rest and not set(dims[:split]) & set(rest)
+
+
+# a labelled point of the same kind as an earlier one whose parameter equals its to this many
+# significant digits, and its tip amplitude to AMPLITUDE_DIGITS, is that event again (the
+# two sides of one event; a dataset joined from runs that share a part); the amplitude tells
+# apart two events of a kind at one parameter on two parts of a folded branch
+EVENT_DIGITS, AMPLITUDE_DIGITS = 9, 6
+
+
+def located_events(dataset: xr.Dataset) -> np.ndarray:
+    """The indices of the dataset's labelled points, each located event once.
+
+    Of the points with one kind, one value of the continued parameter to ``EVENT_DIGITS``
+    significant digits and one ``tip_amplitude_1`` (if the dataset has it) to
+    ``AMPLITUDE_DIGITS``, the first. What the run's summary counts and what `impactbeams
+    plot` marks and counts in its legend, so that the two agree (a run stores each located
+    event on one point: `impactbeams.continuation.branch`).
+    """
+    codes = dataset["bifurcation"].values
+    parameter = dataset[dataset.attrs["continued_parameter"]].values
+    amplitude = (dataset["tip_amplitude_1"].values if "tip_amplitude_1" in dataset
+                 else np.zeros(codes.size))
+    seen: set[tuple[int, str, str]] = set()
+    kept = []
+    for index in np.flatnonzero(codes):
+        key = (int(codes[index]), f"{parameter[index]:.{EVENT_DIGITS}g}",
+               f"{amplitude[index]:.{AMPLITUDE_DIGITS}g}")
+        if key not in seen:
+            seen.add(key)
+            kept.append(index)
+    return np.array(kept, dtype=np.int64)

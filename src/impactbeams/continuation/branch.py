@@ -228,6 +228,12 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
             branch.ending = ending
             break
         point, taken, grazing = follower.step(current, ds)
+        if point is not None and _another_strand(current, point, settings.micro_contacts):
+            if taken / 2.0 < settings.min_step:
+                branch.ending = MIN_STEP
+                break
+            ds = taken / 2.0  # refused: a shorter step stays on this strand
+            continue
         if point is not None and not low <= point.x[-1] <= high:
             end = _at_bound(follower, current, point, low if point.x[-1] < low else high)
             if end is None and taken / 2.0 >= settings.min_step:
@@ -277,6 +283,24 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
     else:
         branch.ending = MAX_POINTS
     return [i for i, point in enumerate(branch.points) if point.label == PERIOD_DOUBLING]
+
+
+def _another_strand(start: Point, point: Point, micro_contacts: str) -> bool:
+    """Whether a step from ``start`` converged on another strand of the branch, not its own.
+
+    One step crosses one change of the contacts at most where it stays on its strand (a
+    contact appears or vanishes, two merge or one splits: the contacts per orbit change by
+    one; a step that crosses two is refused and retried shorter until the changes lie in two
+    steps): more is a jump of the corrector to a part of the branch the steps never
+    reached (issue 31's stiff stop: from 149.57 to 151.37 rad/s and from 5 to 2 contacts per
+    orbit, nothing between located; going down at its default modes, from 158.8315 to
+    158.7376 rad/s and from 9 to 7). With ``micro_contacts = "summarise"`` the contacts
+    within an episode may change many times within a step (chatter, not located): the impact
+    episodes per orbit are counted instead.
+    """
+    count = ((lambda p: p.evaluation.episodes) if micro_contacts == SUMMARISE
+             else (lambda p: p.evaluation.contacts))
+    return abs(count(point) - count(start)) > 1
 
 
 # a section sample spread this small against the tip amplitude: the orbit repeats after half
@@ -348,24 +372,43 @@ def _repeats_early(point: Point) -> bool:
 REPEATED = 1e-9
 
 
-def _repeats(branch: Branch, point: Point) -> bool:
-    last = next((p for p in reversed(branch.points) if p.label == point.label), None)
-    return last is not None and float(np.linalg.norm(last.x - point.x)) <= REPEATED
+def _repeats(points: list[Point], point: Point, tolerance: float) -> bool:
+    """Whether ``point``'s label is an event ``points`` (a branch's, in order) already carry.
+
+    The last of them with that label is the same event when it lies within ``REPEATED`` of
+    ``point`` (found from both sides of a step searched twice), or when it is the last of
+    ``points`` and its parameter is ``point``'s to ``tolerance`` (x~): the two sides of one
+    located event, each at it to the location tolerance (a grazing labelled on the near side's
+    last point, then on the far side's first, which lies on it to round-off: 7 and 8 contacts
+    per orbit 1e-12 rad/s apart on the stiff stop going down at 163.3051438 rad/s, where the
+    state moved by more than ``REPEATED``).
+    """
+    last = next((p for p in reversed(points) if p.label == point.label), None)
+    if last is None:
+        return False
+    return bool(np.linalg.norm(last.x - point.x) <= REPEATED
+                or (last is points[-1] and abs(last.x[-1] - point.x[-1]) <= tolerance))
 
 
 def _append(follower: Follower, branch: Branch, points: list[Point],
             progress: Progress | None) -> None:
     """Append ``points`` with their measures; one that is the last point relabelled replaces it.
 
-    An event located again (the same label within ``REPEATED`` of the branch's last one of
-    that kind: found from both sides of a step searched twice) is not repeated.
+    An event is stored once, on the point that carried it first (`_repeats`): a point
+    labelled with an event the branch already carries is not appended, and the last point
+    relabelled with one that its predecessor carries keeps its own label.
     """
+    tolerance = follower.settings.locate_tolerance
     for point in points:
-        if point.x is branch.points[-1].x:
+        last = point.x is branch.points[-1].x
+        if point.label and _repeats(branch.points[:-1] if last else branch.points, point,
+                                    tolerance):
+            if not last:
+                continue
+            point = dataclasses.replace(point, label=branch.points[-1].label)
+        if last:
             point = branch.points[-1] = dataclasses.replace(
                 point, evaluation=branch.points[-1].evaluation)
-        elif point.label and _repeats(branch, point):
-            continue
         else:
             point = follower.kept(point)
             branch.points.append(point)
@@ -394,11 +437,12 @@ def _between(follower: Follower, a: Point, b: Point,
     """The smooth bifurcations located between ``a`` and ``b`` (in order), then ``b``.
 
     ``a`` and ``b`` lie on one smooth piece of the branch. Points between are corrected on
-    planes s along ``a``'s tangent from ``a``, or along ``plane`` = (origin, unit normal) when
-    given. A kind whose signature changed but whose test function has the same sign at both
-    ends is sought in both halves of the step (at most ``MAX_SUBDIVISIONS`` times).
+    planes s along ``a``'s tangent from ``a`` (across the chord from ``a`` to ``b`` where the
+    branch turns back within the step, `_along`), or along ``plane`` = (origin, unit normal)
+    when given. A kind whose signature changed but whose test function has the same sign at
+    both ends is sought in both halves of the step (at most ``MAX_SUBDIVISIONS`` times).
     """
-    origin, normal = plane if plane is not None else (a.x, a.tangent)
+    origin, normal = plane if plane is not None else (a.x, _along(a, b))
 
     def point_at(s: float) -> Point | None:
         return follower.correct(origin + s * normal, normal, normal).point
@@ -441,6 +485,23 @@ def _between(follower: Follower, a: Point, b: Point,
             return (_advance(follower, a, middle, depth + 1)
                     + _advance(follower, middle, b, depth + 1))
     return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
+
+
+def _along(a: Point, b: Point) -> np.ndarray:
+    """The normal of the planes a step from ``a`` to ``b`` on one smooth piece is searched on.
+
+    ``a``'s tangent, whose planes cut the branch once each while it turns by less than 90
+    degrees from it. Where it has turned back further by ``b`` (``b``'s tangent has a part
+    against ``a``'s, or ``b`` lies behind ``a``'s plane: a piece between two located changes
+    of the contacts is not bound by the step's largest angle), those planes reach no farther
+    than where the branch is orthogonal to ``a``'s tangent, and a fold or period doubling
+    beyond was not located: planes across the chord, which the branch crosses once each as it
+    turns by up to 180 degrees, reach all of it.
+    """
+    chord = b.x - a.x
+    if not np.any(chord) or (a.tangent @ b.tangent > 0.0 and a.tangent @ chord > 0.0):
+        return a.tangent
+    return chord / np.linalg.norm(chord)
 
 
 def _beside_jump(follower: Follower, a: Point, b: Point, jump: Located,
@@ -685,7 +746,7 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     if found is None:
         return None
     if grazing is current:  # within the tolerance of the grazing already
-        branch.points[-1] = dataclasses.replace(current, label=GRAZING)
+        _append(follower, branch, [dataclasses.replace(current, label=GRAZING)], progress)
     else:
         _append(follower, branch, [*_advance_or_end(follower, current, grazing)[:-1],
                          dataclasses.replace(grazing, label=GRAZING)], progress)

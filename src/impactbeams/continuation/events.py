@@ -248,6 +248,14 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
                    _pinned(low, high, start, test) if may_jump or high[2] is None else True)
 
 
+# the round-off of a test function, relative to the quantity it is the distance of from its
+# root (|mu| for |mu| - 1; 1 for a unit tangent's parameter part): the eigenvalues of the
+# monodromy are backward stable, their moduli carry a few hundred epsilon (5.2e-14 = 234 eps
+# at a bracket narrowed to 4e-17 of x~ on the small model,
+# tests/test_continuation_jumps.py); four times that
+TEST_ROUND_OFF = 1024 * float(np.finfo(float).eps)
+
+
 def near_zero(test: Callable[[Point], float], start: Point, end: Point,
               tolerance: float) -> float:
     """How near 0 a smooth bifurcation's ``test`` must be where it is located.
@@ -257,9 +265,14 @@ def near_zero(test: Callable[[Point], float], start: Point, end: Point,
     a bracket of that arclength puts it. (Where the branch is nearly vertical in the parameter,
     a bracket far wider already pins the parameter, and its near end's multiplier may be far
     from the circle: e.g. |mu| 0.456 for a period doubling on the stiff stop's period-2 branch
-    going down at 160.40 rad/s, the step's other end at 1.26.)
+    going down at 160.40 rad/s, the step's other end at 1.26.) Not below the test's own
+    round-off (``TEST_ROUND_OFF`` of 1 + its larger end's magnitude): where it changes slowly
+    over the step (a multiplier that grazes the circle), a value asked for below its
+    round-off is met by no bracket, and the root was not labelled.
     """
-    return ROOT_MARGIN * _mean_slope(test, start, end) * tolerance
+    scale = 1.0 + max(abs(test(start)), abs(test(end)))
+    return max(ROOT_MARGIN * _mean_slope(test, start, end) * tolerance,
+               TEST_ROUND_OFF * scale)
 
 
 def _mean_slope(test: Callable[[Point], float], start: Point, end: Point) -> float:

@@ -30,7 +30,7 @@ from impactbeams.params import ParameterError
 from impactbeams.plotting.events import EventChoice, chosen_events, priority
 from impactbeams.plotting.labels import axis_label, display_units
 from impactbeams.plotting.room import Room
-from impactbeams.variables import BIFURCATIONS
+from impactbeams.variables import BIFURCATIONS, located_events
 
 DEFAULT_MEASURE = "tip_amplitude_1"
 OVERLAY_MEASURE = "section_deflection_1"  # what a diagram's poincare_deflection1 shows
@@ -118,7 +118,8 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
         if period > 1 and np.ptp(x[mask]) < NARROW * np.ptp(x):
             narrow.append((mask, drawn[0], f"{_span(x[mask])} {x_units}"))
         curves += drawn
-    kinds = _event_kinds(x, y[:, 0], dataset.bifurcation.values, choice)
+    kinds = _event_kinds(x, y[:, 0], dataset.bifurcation.values, located_events(dataset),
+                         choice)
     strip = _draw_strip(axes, kinds) if _crowded(axes, kinds) else None
     lines = _mark_events(axes, kinds)
     axes.set_xlabel(r"$\Omega / 2\pi$ (Hz)" if x_units == "Hz"
@@ -135,6 +136,8 @@ def draw_branches(axes: Axes, dataset: xr.Dataset, variable: str | None = None,
         for _, line, span in narrow:
             line.set_label(line.get_label()[:-1] + ("; inset)" if inset else f"; {span})"))
     place_legend(axes, clear)
+    if strip is not None:  # beside the axes, the legend shrank them: markers nearer
+        _mark_apart(axes, kinds, lines)
     labelled = [(x, y, _marker(kind.name)[1]) for kind in kinds if kind.labelled
                 for x, y in sorted(kind.marked)]
     marked = [point for kind in kinds if kind.drawn and not kind.labelled
@@ -224,13 +227,17 @@ class _Kind:
         return f"{_marker(self.name)[1]}: {self.name.replace('_', ' ')} ({tally})"
 
 
-def _event_kinds(x: np.ndarray, y: np.ndarray, codes: np.ndarray,
+def _event_kinds(x: np.ndarray, y: np.ndarray, codes: np.ndarray, events: np.ndarray,
                  choice: EventChoice) -> list[_Kind]:
-    """The events of each kind the branches carry, in the order their labels are placed."""
+    """The events of each kind the branches carry, in the order their labels are placed.
+
+    ``events``: the indices of the labelled points to draw, each event once (the run's
+    summary counts the same, `located_events`).
+    """
     kinds = []
-    for code in np.unique(codes[codes > 0]):
+    for code in np.unique(codes[events]):
         name = BIFURCATIONS[code] if code < len(BIFURCATIONS) else f"event_{code}"
-        where = np.flatnonzero(codes == code)
+        where = events[codes[events] == code]
         kinds.append(_Kind(name, [(float(x[i]), float(y[i])) for i in where],
                            choice.is_drawn(name), choice.is_labelled(name)))
     return sorted(kinds, key=lambda kind: priority(kind.name))
@@ -331,7 +338,21 @@ def _draw_strip(axes: Axes, kinds: list[_Kind]) -> Bbox:
                   ha="right", va="center", fontsize="xx-small")
     axes.plot([0.0, 1.0], [top, top], color="0.6", linewidth=0.6, transform=axes.transAxes,
               label="_strip")
-    figure.draw_without_rendering()
+    _mark_apart(axes, kinds)
+    return Bbox([[0.0, 0.0], [1.0, top]])
+
+
+def _mark_apart(axes: Axes, kinds: list[_Kind], lines: dict[str, Line2D] | None = None,
+                ) -> None:
+    """Choose the events marked on a crowded curve: the labelled kinds' that stand apart.
+
+    On the laid-out axes (``APART`` between markers, in display units): chosen when the strip
+    is drawn, for the legend and an inset to keep clear of, and again once the legend is
+    placed (beside the axes it shrinks them, and markers that stood apart may meet; fewer
+    stand apart then, none that the legend or an inset covers), with the kinds' ``lines``
+    drawn again at the events chosen.
+    """
+    axes.get_figure(root=True).draw_without_rendering()
     labelled = [kind for kind in kinds if kind.drawn and kind.labelled]
     apart = ~_meeting(_marker_boxes(axes, labelled))
     start = 0
@@ -341,7 +362,8 @@ def _draw_strip(axes: Axes, kinds: list[_Kind]) -> Bbox:
             start += len(kind.points)
         elif kind.drawn:
             kind.apart = [False] * len(kind.points)
-    return Bbox([[0.0, 0.0], [1.0, top]])
+        if lines is not None and kind.name in lines:
+            lines[kind.name].set_data(*np.array(kind.marked).reshape(-1, 2).T)
 
 
 def _zoom(axes: Axes, x: np.ndarray, y: np.ndarray, dataset: xr.Dataset, narrow: np.ndarray,
