@@ -504,7 +504,8 @@ VARIABLES.update({
 
 # bifurcation curves in two parameters (impactbeams.continuation.twoparameter), along
 # "branch_point" like a branch: the codimension-two points met on the way
-CURVE_EVENTS = ("none", "end", "turning_point", "cusp", "grazing")
+CURVE_EVENTS = ("none", "end", "turning_point", "cusp", "grazing", "contact_merge",
+                "contact_split")
 VARIABLES.update({
     "curve_condition": Variable(
         ("branch_point",), "1", "bifurcation test function",
@@ -534,8 +535,10 @@ VARIABLES.update({
         "turning_point (the second parameter turns back: the tangent's part along it changes "
         "sign); 3 cusp (a turning point of a fold curve where the tangent's part along the "
         "first parameter is below 1e-3 as well); 4 grazing (the orbit's grazing value changes "
-        "sign along a fold or period-doubling curve), each located to the attribute "
-        "locate_tolerance", dtype="int8", flags=CURVE_EVENTS),
+        "sign along a fold, period-doubling or Neimark-Sacker curve: the curve ends there); 5 "
+        "contact_merge, 6 contact_split (the orbit's contacts per orbit fall or rise there "
+        "without a contact at zero depth: a multiplier's curve ends there), each located to "
+        "the attribute locate_tolerance", dtype="int8", flags=CURVE_EVENTS),
 })
 
 # basins of attraction (impactbeams.orbits.basin_map): one label per initial state ("*": the plane's

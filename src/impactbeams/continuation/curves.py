@@ -49,6 +49,8 @@ class Grazing:
 
     label = "grazing"
     needs_monodromy = False
+    # the curve is where the contacts change: it goes on across them
+    smooth_across_contacts = True
 
     def value(self, period_map: PeriodMap, result: PeriodMapResult,
               drz: np.ndarray | None = None) -> float:
@@ -85,6 +87,8 @@ class Multiplier:
     """
 
     needs_monodromy = True
+    # the monodromy jumps where the orbit's contacts change: the curve ends there
+    smooth_across_contacts = False
 
     def __init__(self, sigma: float) -> None:
         self.sigma = sigma

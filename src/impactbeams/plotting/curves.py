@@ -25,7 +25,7 @@ from impactbeams.plotting.selection import choose_variable, select
 from impactbeams.variables import CURVE_EVENTS
 
 MARKERS = {"end": ("s", "E"), "turning_point": ("v", "T"), "cusp": ("D", "CP"),
-           "grazing": ("^", "G")}
+           "grazing": ("^", "G"), "contact_merge": ("<", "M"), "contact_split": (">", "S")}
 KIND_NAMES = {"grazing": "grazing", "fold": "fold", "period_doubling": "period doubling",
               "neimark_sacker": "Neimark-Sacker"}
 # one colour per kind of curve; over a map's colours the first is black
