@@ -58,7 +58,15 @@ from impactbeams.continuation.branch import (
     merge_or_split,
 )
 from impactbeams.continuation.checkpoint import CourseLog, checkpointed
-from impactbeams.continuation.curves import CONDITIONS, KINDS, CurveProblem
+from impactbeams.continuation.curves import (
+    CONDITIONS,
+    KINDS,
+    PAIR_TURNS_REAL,
+    RESONANCES,
+    CurveProblem,
+    other_multipliers,
+    pair_cosine,
+)
 from impactbeams.continuation.events import Located, grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
 from impactbeams.continuation.run import (
@@ -95,6 +103,8 @@ if TYPE_CHECKING:
 # found no point (the orbit ends), too long
 BOUND, GRAZED, CONTACT_CHANGE, MIN_STEP, MAX_POINTS = (
     "bound", "grazing", "contact_change", "min_step", "max_points")
+# ... and a Neimark-Sacker curve at a strong resonance 1:1 or 1:2, where its pair turns real
+PAIR_REAL = "pair_real"
 # a p2 turning point is a cusp where the unit tangent's p1 part (scaled) is also this small:
 # the curve's tangent then lies in the state space (the parameter plane's curve has a cusp)
 CUSP_TANGENT = 1e-3
@@ -388,6 +398,11 @@ def _steps(follower: Follower, curve: Branch, box: np.ndarray, progress: Progres
                 or same_piece(current, point)):
             _end_at_contact_change(follower, curve, current, point, points, progress)
             return
+        turns_real = [i for i, p in enumerate(points) if p.label in PAIR_TURNS_REAL]
+        if turns_real:  # the Neimark-Sacker curve ends where its pair meets on the real axis
+            _keep(follower, curve, points[:turns_real[0] + 1], progress)
+            curve.ending = PAIR_REAL
+            return
         _keep(follower, curve, points, progress)
         if point.crossed and _at_zero_depth(point, *curve.points):
             # Newton's iterates met another contact sequence at a point whose orbit touches:
@@ -447,8 +462,51 @@ def _events(follower: Follower, a: Point, b: Point) -> list[Point]:
         located = _located(follower, a, b, grazing_test, may_jump=True)
         if located.root and _at_zero_depth(located.before, a, b):
             found.append(dataclasses.replace(located.before, label="grazing"))
+    if follower.problem.condition.label == "neimark_sacker":
+        found += _pair_events(follower, a, b)
     found.sort(key=lambda point: float(a.tangent @ (point.x - a.x)))
     return [*found, b]
+
+
+def _pair_events(follower: Follower, a: Point, b: Point) -> list[Point]:
+    """A Neimark-Sacker curve's strong resonances and fold- or flip-Neimark-Sacker points.
+
+    A resonance where the pair's cosine (`pair_cosine`) passes its value (`RESONANCES`); a
+    fold (flip) where a real multiplier but the pair passes +1 (-1): the parity of those
+    beyond it changes (a complex pair meeting on the real axis changes their number by 2),
+    located at the root of that multiplier minus +1 (-1).
+    """
+    found = []
+    cosines = [pair_cosine(point.evaluation.multipliers) for point in (a, b)]
+    for label, cosine in RESONANCES.items():
+        if (cosines[0] > cosine) != (cosines[1] > cosine):
+            located = _located(follower, a, b, lambda point, c=cosine: pair_cosine(
+                point.evaluation.multipliers) - c)
+            found.append(dataclasses.replace(located.before, label=label))
+    for sigma, label in ((1.0, "fold_neimark_sacker"), (-1.0, "flip_neimark_sacker")):
+        outside = [int(np.count_nonzero(_real_beyond(point, sigma) > 1.0)) for point in (a, b)]
+        if (outside[0] - outside[1]) % 2:
+            rank = min(outside)
+            located = _located(follower, a, b, lambda point, s=sigma, r=rank: _crossing(
+                point, s, r))
+            found.append(dataclasses.replace(located.before, label=label))
+    return found
+
+
+def _real_beyond(point: Point, sigma: float) -> np.ndarray:
+    """|mu| of the real multipliers of ``sigma``'s sign but the pair, largest first.
+
+    (Those beyond ``sigma`` are outside the unit circle.)
+    """
+    mu = other_multipliers(np.asarray(point.evaluation.multipliers))
+    mu = mu[(mu.imag == 0.0) & (np.sign(mu.real) == sigma)]
+    return np.sort(np.abs(mu))[::-1]
+
+
+def _crossing(point: Point, sigma: float, rank: int) -> float:
+    """|mu| - 1 of the ``rank``-th largest real multiplier of ``sigma``'s sign but the pair."""
+    moduli = _real_beyond(point, sigma)
+    return float(moduli[rank]) - 1.0 if rank < moduli.size else -1.0
 
 
 def _turning(follower: Follower, a: Point, b: Point) -> Point:
@@ -565,8 +623,13 @@ def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
                                                    for point in curve.points]))
     dataset["curve_event"] = ("branch_point", np.array(
         [CURVE_EVENTS.index(point.label or "none") for point in curve.points], dtype=np.int8))
-    for name in ("curve_condition", "curve_tangent_1", "curve_tangent_2", "curve_event",
-                 "curve_stable"):
+    names = ["curve_condition", "curve_tangent_1", "curve_tangent_2", "curve_event",
+             "curve_stable"]
+    if spec.kind == "neimark_sacker":
+        dataset["curve_pair_cosine"] = ("branch_point", np.array(
+            [pair_cosine(np.asarray(point.evaluation.multipliers)) for point in curve.points]))
+        names.append("curve_pair_cosine")
+    for name in names:
         dataset[name].attrs.update(attributes(name))
     dataset.attrs.pop("branch_endings")
     dataset.attrs.pop("branch_origins")
