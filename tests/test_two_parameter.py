@@ -189,12 +189,17 @@ def test_neimark_sacker_curve_ends_where_its_orbits_contacts_change(torus_branch
     assert np.all(curve.contacts_per_orbit.values == 1)
     gaps = np.abs(curve.grazing_gap.values)
     assert gaps[-1] <= 1e-3 * gaps.max()  # the gap's minimum at zero depth (ZERO_DEPTH)
-    end = curve.isel(branch_point=-1)
-    omega, stiffness = float(end.omega), float(end.contact_stiffness)
-    found = _branch_events(SMALL.replace(contact_stiffness=stiffness), omega,
-                           end.section_state.values, start=omega + 0.3, direction="down")
+    found = _coming_down_to(curve.isel(branch_point=-1), "contact_stiffness")
     assert found[0][0] == "neimark_sacker"
-    assert found[0][1] == pytest.approx(omega, rel=AGREE, abs=0.0)
+    assert found[0][1] == pytest.approx(float(curve.omega[-1]), rel=AGREE, abs=0.0)
+
+
+def _coming_down_to(end, second, factor=1.0):
+    """The events of the small model's branch in Omega at ``factor`` times the curve end's
+    ``second`` parameter, coming down from 0.3 rad/s above the end from its orbit."""
+    omega = float(end.omega)
+    return _branch_events(SMALL.replace(**{second: factor * float(end[second])}), omega,
+                          end.section_state.values, start=omega + 0.3, direction="down")
 
 
 @pytest.fixture(scope="module")
@@ -233,14 +238,12 @@ def test_past_the_neimark_sacker_grazing_point_the_one_contact_torus_is_gone(
     there have two contacts and the Neimark-Sacker points nearest the end's frequency are the
     two-contact orbit's own, 0.02 rad/s away: the curve does not go on across."""
     end = torus_clearance.isel(branch_point=-1)
-    omega, clearance = float(end.omega), float(end.clearance)
-    found = _branch_events(SMALL.replace(clearance=clearance), omega,
-                           end.section_state.values, start=omega + 0.3, direction="down")
+    omega = float(end.omega)
+    found = _coming_down_to(end, "clearance")
     assert found[0][0] == "neimark_sacker"
     assert found[0][1] == pytest.approx(omega, rel=AGREE, abs=0.0)
     assert found[1][0] == "grazing" and 0.0 < omega - found[1][1] < 1e-8 * omega
-    past = _branch_events(SMALL.replace(clearance=(1 - 1e-4) * clearance), omega,
-                          end.section_state.values, start=omega + 0.3, direction="down")
+    past = _coming_down_to(end, "clearance", 1 - 1e-4)
     torus = [value for label, value in past if label == "neimark_sacker"]
     assert torus and min(abs(value - omega) for value in torus) > 1e-2
 

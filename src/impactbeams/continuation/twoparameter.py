@@ -67,7 +67,7 @@ from impactbeams.continuation.curves import (
     other_multipliers,
     pair_cosine,
 )
-from impactbeams.continuation.events import Located, grazing_test, locate
+from impactbeams.continuation.events import Located, continuous_root, grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
 from impactbeams.continuation.run import (
     CONTINUABLE,
@@ -476,19 +476,22 @@ def _pair_events(follower: Follower, a: Point, b: Point) -> list[Point]:
     beyond it changes (a complex pair meeting on the real axis changes their number by 2),
     located at the root of that multiplier minus +1 (-1).
     """
-    found = []
+    tests = []
     cosines = [pair_cosine(point.evaluation.multipliers) for point in (a, b)]
     for label, cosine in RESONANCES.items():
         if (cosines[0] > cosine) != (cosines[1] > cosine):
-            located = _located(follower, a, b, lambda point, c=cosine: pair_cosine(
-                point.evaluation.multipliers) - c)
-            found.append(dataclasses.replace(located.before, label=label))
+            tests.append((label, lambda point, c=cosine: pair_cosine(
+                point.evaluation.multipliers) - c))
     for sigma, label in ((1.0, "fold_neimark_sacker"), (-1.0, "flip_neimark_sacker")):
         outside = [int(np.count_nonzero(_real_beyond(point, sigma) > 1.0)) for point in (a, b)]
         if (outside[0] - outside[1]) % 2:
             rank = min(outside)
-            located = _located(follower, a, b, lambda point, s=sigma, r=rank: _crossing(
-                point, s, r))
+            tests.append((label, lambda point, s=sigma, r=rank: _crossing(point, s, r)))
+    found = []
+    for label, test in tests:
+        # (a test that jumps, where the pair or multiplier it follows changed, is none)
+        located = _located(follower, a, b, test)
+        if continuous_root(test, a, b, located, follower.settings.locate_tolerance):
             found.append(dataclasses.replace(located.before, label=label))
     return found
 
