@@ -175,3 +175,20 @@ def test_the_small_models_fold_neimark_sacker_points(torus_in_force):
         for label in ("fold", "neimark_sacker"):
             located = branch.omega.values[branch.bifurcation.values == BIFURCATIONS.index(label)]
             assert np.min(np.abs(located - omega)) <= 1e-9 * omega
+
+
+def test_the_curves_codimension_two_points_are_drawn_and_labelled(torus_in_force):
+    """`draw_curve` marks the resonance and the fold-Neimark-Sacker points, labelled R4 and
+    LPNS, at their points."""
+    from matplotlib.figure import Figure
+
+    from impactbeams.plotting.curves import draw_curve
+
+    axes = Figure().subplots()
+    draw_curve(axes, torus_in_force)
+    texts = sorted(text.get_text() for text in axes.texts)
+    assert texts == ["G", "LPNS", "LPNS", "R4", "T"]
+    (i,) = np.flatnonzero(torus_in_force.curve_event.values == CURVE_EVENTS.index(
+        "resonance_1_4"))
+    stars = [line for line in axes.lines if line.get_marker() == "*"]
+    assert len(stars) == 1 and stars[0].get_xdata()[0] == float(torus_in_force.omega[i])
