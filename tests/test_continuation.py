@@ -417,11 +417,36 @@ def test_the_chord_check_finds_newtons_point_with_a_run_less(chord_check, monkey
     # the multipliers are the point's own (those of dP/dz at its z1), not an iterate's
     exact = np.sort(np.linalg.eigvals(np.eye(2) + np.array([[2 * z1, 0.1], [0.2, -0.5]])))
     assert np.sort(point.evaluation.multipliers) == pytest.approx(exact, abs=1e-13)
-    # Newton: 3 iterates with dr/dp each (a run more), and the point's run: 7 runs. With the
-    # check: 2 iterates with dr/dp, and the check's run, where dr/dz is taken and which is the
-    # point's too (the chord is round-off here): 5
+    # Newton: 3 iterates, dr/dp differenced at the first only (a run more; the first
+    # correction is below `RATE_KEPT`), and the point's run: 5 runs. With the check: 2
+    # iterates, and the check's run, where dr/dz is taken and which is the point's too (the
+    # chord is round-off here): 4
     assert point.iterations == 3
-    assert _Counted.runs == (5 if chord_check else 7)
+    assert _Counted.runs == (4 if chord_check else 5)
+
+
+def test_dr_dp_is_differenced_again_where_newton_contracts_slowly_with_a_kept_one(monkeypatch):
+    # r = (p - z) e^(K z): dr/dp = e^(K z) changes by K dz, so a kept dr/dp slows Newton where
+    # K is large; from (0, 1e-3) on the plane (1, 0.2).(x - x0) = 0 the corrections contract
+    # by less than RATE_CONTRACTION with it, and the corrector differences dr/dp again from
+    # there on: the point z = p is found. Kept throughout, it is not (8 iterations)
+    from impactbeams.continuation import arclength
+
+    k = 1e3
+    problem = toys.Map(lambda z, p: z + (p - z) * np.exp(k * z),
+                       lambda z, p: np.array([[1.0 + (k * (p - z[0]) - 1.0) * np.exp(k * z[0])]]))
+    direction = np.array([1.0, 0.2]) / math.hypot(1.0, 0.2)
+
+    def corrected():
+        follower = arclength.Follower(problem, Scaling(np.ones(1), 1.0), SETTINGS)
+        return follower.correct(np.array([0.0, 1e-3]), direction, direction).point
+
+    point = corrected()
+    assert point is not None
+    z, p = point.x
+    assert abs(z - p) <= 1e-13 and abs(direction @ (point.x - [0.0, 1e-3])) <= 1e-15
+    monkeypatch.setattr(arclength, "RATE_CONTRACTION", math.inf)
+    assert corrected() is None
 
 
 def test_a_step_that_turned_too_far_reads_its_points_grazing_value_not_its_iterates():

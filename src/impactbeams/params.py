@@ -447,6 +447,9 @@ DEFAULT_FORCE_AMPLITUDE = 1e-3
 MOVING_STOP = ("shaker = 'both' (the default) moves the stop with beam 1's clamp, as on one "
                "shaker table: set shaker = 'beam1' for a fixed stop, or shaker = 'both' to say "
                "so")
+# no joint rule (`check_joint`, `Params._check_together`) reads these: a change of them alone
+# is checked on its own (a continuation in Omega asks for Params at every corrector iterate)
+UNJOINED = ("omega",)
 DRIVES = ("force_amplitude", "base_amplitude")  # their defaults depend on which are given
 
 
@@ -835,7 +838,8 @@ class Params:
             changed = copy.copy(self)
             for name, value in changes.items():
                 changed._set_checked(name, value)
-            changed._check_together()
+            if not changes.keys() <= set(UNJOINED):
+                changed._check_together()
             return changed
         base = {name: value for name, value in self.as_dict().items()
                 if name not in DRIVES or name in getattr(self, "_given_drives", DRIVES)}
@@ -918,8 +922,8 @@ def require_one_contact(params: Params, what: str) -> None:
     if params.several_contacts:
         raise ParameterError(
             f"{CONTACTS}: {len(params.contacts)} contacts are not allowed in {what}, which takes "
-            "one contact so far; the first contact among several is "
-            "impactbeams.first_contact (docs/limits.md, 'Several contacts')")
+            "one contact so far; several run in impactbeams.first_contact, "
+            "contact_sequence and simulate (docs/limits.md, 'Several contacts')")
 
 
 def fold_contacts(values: Mapping[str, Any], source: str) -> dict[str, Any]:

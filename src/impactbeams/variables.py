@@ -182,6 +182,16 @@ VARIABLES.update({
         ("time",), "N", "contact force",
         "R(t) = EI2 d3y2/dx3 (l2, t) (against a stop -EI1 d3y1/dx3 (l1, t)) in contact, 0 out "
         "of contact", "$R$"),
+    "contact_gaps": Variable(
+        ("time", "contact"), "m", "gap of each contact",
+        "g_j = Delta_j + s_j (y1(x1j) - y2(x2j)) of each of several contacts (Params.contacts), "
+        "-R_j / k_j while closed (docs/model.md, Several contacts)"),
+    "contact_forces": Variable(
+        ("time", "contact"), "N", "force of each contact",
+        "R_j of each of several contacts (Params.contacts), 0 while open"),
+    "impact_contact": Variable(
+        ("impact",), "1", "contact of the impact",
+        "which of Params.contacts closes (its index)", dtype="int64"),
     "in_contact": Variable(
         ("time",), "1", "contact flag", "1 in the contact phase, 0 in the free phase"),
     "energy": Variable(

@@ -230,7 +230,12 @@ def _secular_root(i: int, d: np.ndarray, z: np.ndarray) -> tuple[float, np.ndarr
 def _undamped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Undamped: lambda = i omega, right = (V; i V Omega), left = (V^T, -i V^T / omega) / 2."""
-    frequencies, vectors = rank_one_modes(omega, stiffness, weights)
+    return real_modes(*rank_one_modes(omega, stiffness, weights))
+
+
+def real_modes(frequencies: np.ndarray, vectors: np.ndarray,
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``_undamped_modes``' first-order form of modes ``vectors`` at ``frequencies`` (rad/s)."""
     right = np.vstack([vectors, 1j * vectors * frequencies]).astype(complex)
     left = 0.5 * np.hstack([vectors.T, -1j * vectors.T / frequencies[:, None]])
     return 1j * frequencies, right, left
@@ -245,7 +250,12 @@ def _damped_modes(omega: np.ndarray, stiffness: float, weights: np.ndarray,
     Solved in the undamped modes p = V^T q with the scaled state s = (Omega p, p'), where the
     first-order matrix [[0, Omega], [-Omega, -V^T C V]] has entries of one size.
     """
-    omega, vectors = rank_one_modes(omega, stiffness, weights)
+    return complex_modes(*rank_one_modes(omega, stiffness, weights), damping_matrix)
+
+
+def complex_modes(omega: np.ndarray, vectors: np.ndarray, damping_matrix: np.ndarray,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """``_damped_modes`` given the undamped modes ``vectors`` at ``omega`` (rad/s)."""
     m = omega.size
     with np.errstate(over="ignore", invalid="ignore"):
         block = np.block([[np.zeros((m, m)), np.diag(omega)],
@@ -295,15 +305,20 @@ def spring_contact(free: FreePhase, compliance: tuple[float, float], damping_rat
         eigenvalues, right, left = damped
     m = w.size
     # R_modal = -k_e w.q - c_e w.q' = sum_j 2 Re(r_j z_j)
-    force_weight = -(k_e * w @ right[:m] + c_e * w @ right[m:])
-    magnitude = np.abs(force_weight)
-    # a subnormal weight (a vanishing k) would overflow the division: its phase from its angle
-    normal = magnitude >= np.finfo(float).tiny
-    phase = np.where(normal, force_weight / np.where(normal, magnitude, 1.0),
-                     np.exp(1j * np.angle(force_weight)))
+    phase, magnitude = polar(-(k_e * w @ right[:m] + c_e * w @ right[m:]))
     return SpringContact(float(stiffness), float(damping), float(k_e), float(c_e), residual,
                          residual1, residual2, *tip_shifts(free), eigenvalues, right, left,
                          phase, magnitude)
+
+
+def polar(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Complex mode weights as (phase rho_j, |r_j|): the oscillators' phases and weights."""
+    magnitude = np.abs(weights)
+    # a subnormal weight (a vanishing k) would overflow the division: its phase from its angle
+    normal = magnitude >= np.finfo(float).tiny
+    phase = np.where(normal, weights / np.where(normal, magnitude, 1.0),
+                     np.exp(1j * np.angle(weights)))
+    return phase, magnitude
 
 
 def _overdamped(modes: Callable[[float], object], damping: float, damping_ratio: float,

@@ -33,6 +33,13 @@ KINK_STEP = 1e-4
 # a Newton correction at most this large (x~ units) is checked by a chord step before another
 # linearisation: quadratic convergence then puts the next one near 1e-12 or below
 CHORD_CHECK = 1e-6
+# after a Newton correction at most this large (x~ units) onto the same contacts, the next
+# iterate keeps the last dr/dp (a forward difference costs a run): its error, ~ the
+# correction, leaves Newton quadratic where the system is well conditioned. A correction so
+# made that contracts by less than RATE_CONTRACTION (near a branch point, e.g. a period-2
+# branch's start) has the corrector difference dr/dp again at every iterate
+RATE_KEPT = 1e-3
+RATE_CONTRACTION = 0.01
 # a correction this small (x~ units, of order 1) moves x~ by its round-off only
 ROUND_OFF_STEP = 1e-15
 # what to do with a change of the contacts within an episode (Settings.micro_contacts)
@@ -145,15 +152,16 @@ class Follower:
         self.problem, self.scaling, self.settings = problem, scaling, settings
 
     def linearised(self, x: np.ndarray, rate: np.ndarray | None = None,
-                   ) -> tuple[Evaluation, np.ndarray, np.ndarray]:
+                   contacts: int | None = None) -> tuple[Evaluation, np.ndarray, np.ndarray]:
         """The evaluation at x~ (no measures), its scaled Jacobian in x~ and dr/dp.
 
-        The Jacobian of the scaled residual is n x n+1; dr/dp is ``rate`` if given, else
-        taken by differences at x~.
+        The Jacobian of the scaled residual is n x n+1; dr/dp is ``rate`` if given and the
+        run at x~ has ``contacts`` per orbit (whatever it has if None), else taken by
+        differences at x~.
         """
         z, p = self.scaling.unscaled(x)
         evaluation = self.problem.evaluate(z, p, grazing=False)
-        if rate is None:
+        if rate is None or contacts not in (None, evaluation.contacts):
             # a problem may difference its own parameter (a curve's: on a grazing curve every
             # point is at a change of the contacts, where the narrowed step is round-off)
             derivative = getattr(self.problem, "parameter_derivative", parameter_derivative)
@@ -173,13 +181,18 @@ class Follower:
         whole corrector: its iteration is a chord one anyway, and the tangent's parameter
         part still vanishes exactly where dr/dz is singular (a fold), whatever dr/dp.
         """
-        x, iterates, previous, rate = predicted.copy(), [], math.inf, None
+        x, iterates, previous, rate, rate_contacts = predicted.copy(), [], math.inf, None, None
         frozen, contacts = getattr(self.problem, "approximate", False), set()
+        keep = True  # dr/dp while Newton contracts with it
         for iteration in range(1, self.settings.max_iterations + 1):
+            kept = rate if frozen or (keep and previous <= RATE_KEPT) else None
             try:
-                evaluation, jacobian, rate = self.linearised(x, rate if frozen else None)
+                evaluation, jacobian, rate = self.linearised(
+                    x, kept, None if frozen else rate_contacts)
             except (ParameterError, RuntimeError):  # out of the allowed values, or a run stopped
                 break
+            if rate is not kept:  # differenced here
+                rate_contacts = evaluation.contacts
             iterates.append(x.copy())
             contacts.add(evaluation.contacts)
             system = np.vstack([jacobian, direction])
@@ -190,6 +203,7 @@ class Follower:
             size = float(np.max(np.abs(delta)))
             if size > self.settings.tolerance and iteration > 2 and size > previous:
                 break  # not contracting: a smaller step will do
+            keep = keep and (rate is not kept or size <= RATE_CONTRACTION * previous)
             found, iterations = x + delta, iteration
             if (self.settings.tolerance < size <= CHORD_CHECK and not frozen
                     and iteration < self.settings.max_iterations):

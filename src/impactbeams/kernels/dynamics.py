@@ -372,7 +372,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
 
 
 @kernel
-def _segment_index(seg_time, count, t, start):
+def segment_index(seg_time, count, t, start):
     """Index of the last segment (from ``start``) that begins at or before time t."""
     k = start
     while k + 1 < count and seg_time[k + 1] <= t:
@@ -393,7 +393,7 @@ def sample_states(tables, forces, spring, drives, settings, recorded, times, q_o
     n_coords = recorded.q.shape[1]
     y, y_rate = np.empty(n_coords), np.empty(n_coords)
     for i in range(times.size):
-        k = _segment_index(recorded.time, recorded.time.size, times[i], k)
+        k = segment_index(recorded.time, recorded.time.size, times[i], k)
         phase = recorded.phase[k]
         phase_out[i] = phase
         propagate(tables[phase], forces[phase], recorded.q[k], recorded.v[k], recorded.time[k],
@@ -419,7 +419,7 @@ def sample_grid(tables, forces, spring, drives, settings, recorded, times, q_out
     omega_forcing = settings.forcing_frequency
     k, last = 0, -1
     for i in range(times.size):
-        k = _segment_index(recorded.time, recorded.time.size, times[i], k)
+        k = segment_index(recorded.time, recorded.time.size, times[i], k)
         phase = recorded.phase[k]
         phase_out[i] = phase
         if k != last:

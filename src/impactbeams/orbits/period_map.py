@@ -27,6 +27,7 @@ from scipy.optimize import brentq, minimize_scalar
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact.spring import recommended_modes
 from impactbeams.kernels import contact
+from impactbeams.kernels.extrema import gap_extremum, interval_gap, smallest_free_minimum
 from impactbeams.kernels.layout import (
     CONTACT,
     FREE,
@@ -59,7 +60,6 @@ from impactbeams.trajectory.phases import (
     Trajectory,
     run,
     sample,
-    sample_segments,
     tips_at,
     tips_of,
 )
@@ -118,9 +118,6 @@ class PeriodMapResult:
     impact_velocities: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
     max_relative_tip1: float = math.nan
     interval_gap: float = math.nan
-    # the run sampled on the grid (phase, q, q'), kept by `approach` for the tips' maxima
-    grid_states: tuple[np.ndarray, np.ndarray, np.ndarray] | None = dataclasses.field(
-        default=None, repr=False, compare=False)
 
 
 class PeriodMap:
@@ -211,7 +208,7 @@ class PeriodMap:
             return result
         result = self.approach(result)
         impacts = impact_table(self.packed, result.trajectory)
-        max_tip1, max_tip2, relative = self._tip_maxima(result.trajectory, result.grid_states)
+        max_tip1, max_tip2, relative = self._tip_maxima(result.trajectory)
         return dataclasses.replace(
             result, peak_force=float(np.max(impacts["impact_peak_force"], initial=0.0)),
             peak_forces=impacts["impact_peak_force"],
@@ -229,15 +226,11 @@ class PeriodMap:
         """
         if result.approached:
             return result
-        times = self._grid()
-        phase, q, v = sample(self.packed, result.trajectory, times, grid=True)
-        min_gap, min_gap_time = self._min_gap(result.trajectory, times, self._gap_of(times, q),
-                                              phase == FREE)
+        min_gap, min_gap_time = self._min_gap(result.trajectory)
         return dataclasses.replace(result, min_gap=min_gap, min_gap_time=min_gap_time,
                                    least_peak_force=self._least_peak_force(result.trajectory),
                                    approached=True,
-                                   interval_gap=self._interval_gap(result.trajectory),
-                                   grid_states=(phase, q, v))
+                                   interval_gap=self._interval_gap(result.trajectory))
 
     def least_gap(self, result: PeriodMapResult) -> float:
         """The smallest value over the run of the gap read from the free coordinates (m).
@@ -282,31 +275,11 @@ class PeriodMap:
         zero where the overlap is. Each segment is sampled ``INTERVAL_SAMPLES`` times and the
         value nearest 0 refined at the root of the gap's rate.
         """
-        phase, starts, ends = trajectory.phase, trajectory.time, trajectory.segment_end
-        contact = phase == CONTACT
-        if not contact.any():
-            return math.nan
-        lasting = ends > starts  # (a contact of zero duration has no interior)
-        times = np.linspace(starts, ends, INTERVAL_SAMPLES, axis=1)
-        # stepped samples choose the candidate; its value is then sampled exactly
-        gap = self._gap_of(times.ravel(), sample_segments(self.packed, trajectory,
-                                                          INTERVAL_SAMPLES)[0])
-        gap = gap.reshape(times.shape)
-        # each lasting contact's interior maxima (in segment, then time order), then each
-        # free interval's highest sample if inside a segment: the first nearest 0 is refined
-        k, i = _interior_maxima(gap, contact & lasting)
-        candidates = [(int(k[j]), int(i[j])) for j in range(k.size)]
-        for interval in _between_contacts(contact):
-            highest = max(interval, key=lambda segment: np.max(gap[segment]))
-            at = int(np.argmax(gap[highest]))
-            if 0 < at < INTERVAL_SAMPLES - 1:
-                candidates.append((highest, at))
-        if not candidates:
-            return math.nan
-        k, i = min(candidates, key=lambda candidate: abs(gap[candidate]))
-        value = self._gap(trajectory, times[k, i:i + 1])[0][0]
-        stationary = self._stationary(trajectory, times[k, i - 1], times[k, i + 1], False)
-        return float(value if stationary is None else max(value, stationary[1]))
+        packed = self.packed
+        return interval_gap(packed.tables, packed.forces, packed.phase_scalars[FREE],
+                            packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                            trajectory.segments, trajectory.segment_end, self.params.omega,
+                            INTERVAL_SAMPLES)
 
     def _stationary(self, trajectory: Trajectory, lo: float, hi: float, minimum: bool,
                     ) -> tuple[float, float] | None:
@@ -315,12 +288,12 @@ class PeriodMap:
         Brent's method on the gap's rate: a simple root, found to round-off in some 10
         samples of the run. None if the rate does not change sign that way between the ends.
         """
-        rate = functools.partial(self._gap_rate, trajectory)
-        sign = 1.0 if minimum else -1.0
-        if not sign * rate(lo) < 0.0 < sign * rate(hi):
-            return None
-        t = brentq(rate, lo, hi, xtol=1e-14 * max(hi, 1.0))
-        return t, float(self._gap(trajectory, np.array([t]))[0][0])
+        packed = self.packed
+        t, value = gap_extremum(packed.tables, packed.forces, packed.phase_scalars[FREE],
+                                packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                                trajectory.segments, self.params.omega, lo, hi,
+                                1.0 if minimum else -1.0, 1e-14 * max(hi, 1.0))
+        return None if math.isnan(t) else (t, value)
 
     @staticmethod
     def _onsets(trajectory: Trajectory) -> np.ndarray:
@@ -388,16 +361,13 @@ class PeriodMap:
         labels = episode_labels(trajectory.time[k], release, default_separation(self.packed))
         return int(labels[-1]) + 1 if labels.size else 0
 
-    def _tip_maxima(self, trajectory: Trajectory,
-                    grid_states: tuple[np.ndarray, np.ndarray, np.ndarray],
-                    ) -> tuple[float, float, float]:
+    def _tip_maxima(self, trajectory: Trajectory) -> tuple[float, float, float]:
         """The largest |y1|, |y2| and |y1 - u_b1| (m): the run sampled on the grid, then refined.
 
-        ``grid_states``: the run's (phase, q, q') on the grid, as `approach` sampled them.
         Without beam 2 (a stop) y2 is 0 throughout; with beam 1's clamp at rest y1 - u_b1 is y1.
         """
         times = self._grid()
-        phase, q, v = grid_states
+        phase, q, v = sample(self.packed, trajectory, times, grid=True)
         tips = tips_of(self.packed, phase, times, q, v)
         relative = self._largest(trajectory, times, tips, TIP_Y1, True)
         moves1, _ = self.params.mount.clamps
@@ -465,34 +435,24 @@ class PeriodMap:
                 + scalars[SCALAR_COSINE] * np.cos(omega_t)
                 + q @ self.packed.tables[FREE, ROW_EVENT])
 
-    def _min_gap(self, trajectory: Trajectory, times: np.ndarray, gap: np.ndarray,
-                 free: np.ndarray) -> tuple[float, float]:
-        """The smallest interior minimum of the sampled ``gap`` in free flight, and its time.
+    def _min_gap(self, trajectory: Trajectory) -> tuple[float, float]:
+        """The smallest interior minimum of the gap in free flight, and its time (m, s).
 
-        Refined at the root of the gap's rate between the sample's neighbours
-        (`_stationary`), or by minimising the gap where the rate does not change sign there.
+        Sampled on the grid, refined at the root of the gap's rate between the sample's
+        neighbours (`kernels.extrema.smallest_free_minimum`), or by minimising the gap where
+        the rate does not change sign there. (NaN, NaN) without such a minimum.
         """
-        interior = free[1:-1] & free[:-2] & free[2:] & (gap[1:-1] <= gap[:-2]) & (
-            gap[1:-1] <= gap[2:])
-        if not np.any(interior):
+        packed = self.packed
+        t, value, sample_t, sample_value, lo, hi = smallest_free_minimum(
+            packed.tables, packed.forces, packed.phase_scalars[FREE],
+            packed.dynamics.spring_arrays, packed.drives, packed.settings, trajectory.segments,
+            self.params.omega, self._grid())
+        if math.isnan(sample_t):
             return math.nan, math.nan
-        i = 1 + int(np.argmin(np.where(interior, gap[1:-1], np.inf)))
-        lo, hi = times[i - 1], times[i + 1]
-        stationary = self._stationary(trajectory, lo, hi, True)
-        if stationary is not None:
-            t, value = stationary
-            return (value, t) if value < gap[i] else (float(gap[i]), float(times[i]))
+        if not math.isnan(t):
+            return (value, t) if value < sample_value else (sample_value, sample_t)
         return self._refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
-                             lo, hi, gap[i], times[i])
-
-    def _gap_rate(self, trajectory: Trajectory, t: float) -> float:
-        """dg/dt (m/s) at ``t`` of the gap read from the free coordinates (their rates: q')."""
-        _, _, v = sample(self.packed, trajectory, np.array([t]))
-        scalars = self.packed.phase_scalars[FREE]
-        omega = self.params.omega
-        return float(omega * (scalars[SCALAR_SINE] * math.cos(omega * t)
-                              - scalars[SCALAR_COSINE] * math.sin(omega * t))
-                     + v[0] @ self.packed.tables[FREE, ROW_EVENT])
+                             lo, hi, sample_value, sample_t)
 
     def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
         """The tips' motion (``kernels.layout`` TIP_* columns) of ``result``'s run at ``times``."""

@@ -1,4 +1,4 @@
-"""Several contacts (``Params.contacts``): the first contact among them, and two-sided stops.
+"""Several contacts (``Params.contacts``): the first contact among them, and their dynamics.
 
 Until a contact closes the beams move freely, and the free motion does not depend on the
 contacts (their points, sides, clearances and laws act only in contact): each contact's gap is
@@ -7,23 +7,19 @@ earliest of each contact's own first onset, each located and certified by the ev
 that contact's own packed run (`Params.each_contact`: the run with that contact alone, at one
 common n_modes), all started from the same free state.
 
-The contact phase that follows is that contact's own (its own eigen-decomposition and static
-correction, `impactbeams.contact.spring_contact`) as long as no other gap closes during it.
-That is certain for the two contacts of a two-sided stop (one point, one below and one above,
-against a stop or one point of beam 2) without a dashpot: their gaps add up to the two
-clearances, so while one is closed (g <= 0, R = -k g > 0) the other is open by more than its
-own clearance. Its whole dynamics is then a chain of such runs, each restarted at a release
-from the free state the kernel recorded there (where the kernel itself resumes its windows bit
-for bit, `impactbeams.trajectory.phases.run`): `contact_sequence`. Contacts that can be closed
-together (e.g. a stop at mid-span and one at the tip) need the contact phase of both at once
-(docs/model.md, "Several contacts"), not built: their first onset is found, their contact
-phase is not (docs/limits.md, "Several contacts").
+The contacts that follow are the phases of the active sets (`impactbeams.contact.active_sets`,
+packed by `impactbeams.trajectory.active_phases`, run by `impactbeams.kernels.several_contacts`):
+`contact_sequence` and `simulate_contacts` (`impactbeams.simulate` of several contacts),
+contacts closed together included. One contact's sequence is `simulate`'s own run, restarted
+at each release from the free state the kernel recorded there (where the kernel itself resumes
+its windows bit for bit, `impactbeams.trajectory.phases.run`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 
 import numpy as np
 import xarray as xr
@@ -44,8 +40,19 @@ from impactbeams.params import (
     require_integer,
     require_type,
 )
+from impactbeams.trajectory.active_phases import (
+    ContactRun,
+    PackedContacts,
+    contact_quantities,
+    gap_rate,
+    pack_contacts,
+    run_contacts,
+    sample,
+)
 from impactbeams.trajectory.impacts import impact_table
+from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory
+from impactbeams.variables import attributes, validate
 
 # a free flight, a contact and the free flight after it: one contact episode of one run
 _EPISODE = 3
@@ -162,39 +169,172 @@ def first_contact(params: Params, t_max: float, n_modes: int | None = None) -> F
 @one_blas_thread
 def contact_sequence(params: Params, t_max: float, n_modes: int | None = None,
                      max_contacts: int = MAX_EVENTS // 2) -> xr.Dataset:
-    """Every contact of a two-sided stop (or of one contact) up to ``t_max`` (s), exactly.
+    """Every contact of ``params``' contacts up to ``t_max`` (s), exactly.
 
     Returns a Dataset along ``impact``: ``impact_contact`` (which of ``params.contacts``),
     the onset time, duration, impulse, peak force, impact and separation velocities (as
     `impactbeams.simulate`'s impact table), and ``attrs["status"]`` ("complete", or
-    "event_limit" after ``max_contacts``). Contacts that can be closed together are refused.
+    "event_limit" after ``max_contacts``). One contact: `impactbeams.simulate`'s own run, to
+    its bits; several: the phases of every set of contacts closed at once
+    (`impactbeams.trajectory.active_phases`), contacts closing together included (no dashpots
+    yet).
     """
     _check_run(params, t_max)
-    if not exclusive(params):
-        raise ParameterError(
-            f"contacts: {len(params.contacts)} contacts that can be closed together are not "
-            "allowed in contact_sequence, which takes one contact or a two-sided stop (two "
-            "contacts at one point, below and above, no dashpot); their first contact is "
-            "impactbeams.first_contact (docs/limits.md, 'Several contacts')")
     max_contacts = require_integer("max_contacts", max_contacts, 1)
+    if params.several_contacts:
+        return _several_sequence(params, t_max, n_modes, max_contacts)
     packs, n = _packs(params, t_max, n_modes)
     q, v, t = packs[0].q0, packs[0].v0, 0.0
     rows: dict[str, list[float]] = {name: [] for name in ("impact_contact", *_IMPACT_COLUMNS)}
     status = "complete"
     while True:
-        first, episode = _earliest(packs, q, v, t)
+        _, episode = _earliest(packs, q, v, t)
         if episode is None:
             break
         if len(rows["impact_contact"]) == max_contacts:
             status = "event_limit"
             break
-        table = impact_table(packs[first], episode)
-        rows["impact_contact"].append(first)
+        table = impact_table(packs[0], episode)
+        rows["impact_contact"].append(0)
         for name in _IMPACT_COLUMNS:
             rows[name].append(float(table[name][0]))
         if episode.time.size < _EPISODE:  # still in contact at t_max
             break
         q, v, t = episode.q[2], episode.v[2], float(episode.time[2])
+    return _sequence_dataset(rows, status, n, t_max)
+
+
+def _sequence_dataset(rows: dict[str, list[float]], status: str, n_modes: int, t_max: float,
+                      ) -> xr.Dataset:
+    """``contact_sequence``'s Dataset of its rows."""
     data = {name: ("impact", np.array(values, dtype=np.int64 if name == "impact_contact"
                                       else float)) for name, values in rows.items()}
-    return xr.Dataset(data, attrs={"status": status, "n_modes": n, "t_max": t_max})
+    return xr.Dataset(data, attrs={"status": status, "n_modes": n_modes, "t_max": t_max})
+
+
+def _several_sequence(params: Params, t_max: float, n_modes: int | None, max_contacts: int,
+                      ) -> xr.Dataset:
+    """``contact_sequence`` of several contacts: one run of the active sets' phases."""
+    packed, n = _packed_contacts(params, t_max, n_modes, t_max)
+    # a contact's onset and release are two phases: the run stops once max_contacts onsets
+    # are recorded and one more is found
+    run = run_contacts(packed, 2 * max_contacts + 2)
+    rows = episodes(packed, run)
+    if len(rows["impact_contact"]) > max_contacts:  # (always so when the arrays are full)
+        rows = {name: values[:max_contacts] for name, values in rows.items()}
+        return _sequence_dataset(rows, "event_limit", n, t_max)
+    if run.status != "complete":
+        raise RuntimeError(f"the event search stopped at t = {run.t_end!r} s: status "
+                           f"{run.status!r}")
+    return _sequence_dataset(rows, "complete", n, t_max)
+
+
+def _packed_contacts(params: Params, t_max: float, n_modes: int | None, search_span: float,
+                     ) -> tuple[PackedContacts, int]:
+    """The packed phases of several contacts (spring law, no dashpots), n_modes per beam."""
+    runs = params.each_contact()
+    damped = [index for index, run in enumerate(runs) if run.contact_damping > 0.0]
+    if damped:
+        raise ParameterError(
+            f"contacts[{damped[0]}].damping = {runs[damped[0]].contact_damping!r} is not allowed "
+            "with several contacts: their contact phases take springs without dashpots so far "
+            "(docs/limits.md, 'Several contacts')")
+    n = (max(recommended_modes(run) for run in runs) if n_modes is None
+         else require_integer("n_modes", n_modes, 1, MAX_MODES))
+    return pack_contacts(params, n, t_max, search_span), n
+
+
+def episodes(packed: PackedContacts, run: ContactRun) -> dict[str, list[float]]:
+    """Each contact episode of ``run`` (onset to release of one contact), in order of onset.
+
+    One still closed at the run's end has a NaN duration and separation velocity.
+
+    ``impact_contact`` and the columns of ``_IMPACT_COLUMNS``: the impulse and peak force over
+    the phases it spans, the gap's rates at its onset and after its release (m/s).
+    """
+    rows: dict[str, list[float]] = {name: [] for name in ("impact_contact", *_IMPACT_COLUMNS)}
+    open_rows: dict[int, int] = {}
+    for k in range(1, run.time.size):
+        f = int(run.switched[k])
+        if (run.mask[k] >> f) & 1:  # an onset: the gap's rate in the phase before
+            open_rows[f] = len(rows["impact_contact"])
+            rate = gap_rate(packed, run.mask[k - 1], f, run.q[k], run.v[k], run.time[k])
+            for name, value in zip(("impact_contact", *_IMPACT_COLUMNS),
+                                   (f, run.time[k], math.nan, 0.0, 0.0, rate, math.nan),
+                                   strict=True):
+                rows[name].append(value)
+        else:
+            row = open_rows.pop(f)
+            rows["impact_duration"][row] = run.time[k] - rows["impact_onset_time"][row]
+            rows["separation_velocity"][row] = gap_rate(packed, run.mask[k], f, run.q[k],
+                                                        run.v[k], run.time[k])
+    for k in range(run.time.size):  # each phase's share of its closed contacts' episodes
+        for f in range(len(packed.runs)):
+            if (run.mask[k] >> f) & 1:
+                row = _episode_row(rows, f, run.time[k])
+                rows["impact_impulse"][row] += run.impulses[k, f]
+                rows["impact_peak_force"][row] = max(rows["impact_peak_force"][row],
+                                                     run.peaks[k, f])
+    return rows
+
+
+def _episode_row(rows: dict[str, list[float]], contact: int, t: float) -> int:
+    """The row of ``contact``'s episode that is closed at time t (its last onset <= t)."""
+    return max(i for i, (f, onset) in enumerate(zip(rows["impact_contact"],
+                                                    rows["impact_onset_time"], strict=True))
+               if f == contact and onset <= t)
+
+
+# simulate's options that a run of several contacts takes at their defaults only, so far
+_NOT_YET = ("fields", "energy_balance", "lyapunov", "long_time", "initial_state", "progress",
+            "transient_periods", "episode_separation")
+
+
+@one_blas_thread
+def simulate_contacts(params: Params, t_max: float, n_modes: int | None, times: np.ndarray,
+                      search_span: float, max_events: int) -> xr.Dataset:
+    """`impactbeams.simulate` of several contacts (its arguments checked): a Dataset.
+
+    Along ``time``: ``energy``, ``kinetic_energy``, the tips (m), and each contact's physical
+    gap ``contact_gaps`` (m) and force ``contact_forces`` (N) along ``contact``; along
+    ``impact``: each contact episode (`episodes`, the columns of `contact_sequence`).
+    The energy is the beams' (`impactbeams.trajectory.observables`) plus the closed contacts'
+    g_S^T K_eff g_S / 2 and the work of F through beam 1's tip shifts under them.
+    """
+    packed, n = _packed_contacts(params, t_max, n_modes, search_span)
+    run = run_contacts(packed, max_events)
+    if run.status != "complete":
+        warnings.warn(f"simulation stopped at t = {run.t_end!r} s before t_max = {t_max!r} s: "
+                      f"status {run.status!r}", RuntimeWarning, stacklevel=3)
+    times = times[times <= run.t_end]
+    q, v, mask = sample(packed, run, times)
+    free = observables(packed.runs[0], np.full(times.size, FREE, dtype=np.int64), times, q, v)
+    contact = contact_quantities(packed, times, q, v, mask)
+    springs = [run_.dynamics.spring for run_ in packed.runs]
+    shift1 = np.array([spring.tip_shift1 for spring in springs])
+    shift2 = np.array([spring.tip_shift2 for spring in springs])
+    forces = contact["contact_force"]
+    tip_force = params.force_amplitude * np.sin(params.omega * times)
+    # the observables of contact 0's run count its own spring where its modal gap is < 0
+    # (`observables._spring_contact`): the closed contacts' energy replaces it
+    own_gap = contact["modal_gap"][:, 0]
+    own_spring = np.where(own_gap < 0.0, 0.5 * springs[0].effective_stiffness * own_gap**2, 0.0)
+    series = {
+        "tip_deflection_1": free["tip_deflection_1"] + forces @ shift1,
+        "tip_deflection_2": free["tip_deflection_2"] - forces @ shift2,
+        "kinetic_energy": free["kinetic_energy"],
+        "energy": (free["energy"] - own_spring + contact["contact_energy"]
+                   - tip_force * (forces @ shift1)),
+    }
+    data = {name: ("time", values, attributes(name)) for name, values in series.items()}
+    data["contact_gaps"] = (("time", "contact"), contact["gap"], attributes("contact_gaps"))
+    data["contact_forces"] = (("time", "contact"), forces, attributes("contact_forces"))
+    for name, values in episodes(packed, run).items():
+        data[name] = ("impact", np.array(values, dtype=np.int64 if name == "impact_contact"
+                                         else float), attributes(name))
+    dataset = xr.Dataset(data, coords={"time": ("time", times, attributes("time"))})
+    dataset.attrs.update({"status": run.status, "t_end": run.t_end, "n_modes": n,
+                          "t_max": t_max, "n_phases": run.time.size,
+                          "n_active_sets": len(packed.members)})
+    validate(dataset)  # as registered, or a bug of the package
+    return dataset

@@ -21,6 +21,7 @@ from impactbeams.packing import Packed, pack_run
 from impactbeams.params import (
     MAX_EVENTS,
     MAX_MODES,
+    ParameterError,
     Params,
     is_integer,
     modes_per_beam,
@@ -179,6 +180,13 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     it, its value and what is allowed (docs/limits.md, "Allowed values").
     """
     _check_options(fields, energy_balance, lyapunov, transient_periods, long_time, progress)
+    if isinstance(params, Params) and params.several_contacts:
+        options = {"fields": fields, "energy_balance": energy_balance, "lyapunov": lyapunov,
+                   "transient_periods": transient_periods, "long_time": long_time,
+                   "initial_state": initial_state, "progress": progress,
+                   "episode_separation": episode_separation}
+        return _simulate_several(params, t_max, n_modes, dt_output, times, max_events,
+                                 search_span, options)
     run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
                                  search_span, episode_separation, fields, energy_balance)
     t_max, n_modes, resolution = run_inputs.t_max, run_inputs.n_modes, run_inputs.resolution
@@ -232,6 +240,32 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
     validate(dataset)  # as registered, or a bug of the package
     return dataset
+
+
+def _simulate_several(params: Params, t_max: float, n_modes: int | None, dt_output: float,
+                      times: np.ndarray | None, max_events: int, search_span: float | None,
+                      options: dict[str, object]) -> xr.Dataset:
+    """[`simulate`][] of several contacts (`impactbeams.trajectory.several.simulate_contacts`).
+
+    The options it cannot take yet (``options``, given other than their defaults) are refused
+    in one line; the others are checked as for one contact, at the most modes any contact's
+    run recommends.
+    """
+    from impactbeams.trajectory.several import simulate_contacts
+
+    given = [name for name, value in options.items() if value is not None and value is not False
+             and (isinstance(value, bool) or not isinstance(value, int) or value != 0)]
+    if given:
+        raise ParameterError(
+            f"{given[0]} = {options[given[0]]!r} is not allowed with {len(params.contacts)} "
+            "contacts: simulate of several contacts gives the time series, energy and "
+            "contacts so far (docs/limits.md, 'Several contacts')")
+    if n_modes is None:
+        n_modes = max(recommended_modes(run) for run in params.each_contact())
+    inputs = _checked_inputs(params.each_contact()[0], t_max, n_modes, dt_output, times, 2,
+                             max_events, search_span, None, False, False)
+    return simulate_contacts(params, inputs.t_max, inputs.n_modes, inputs.times,
+                             inputs.search_span, inputs.max_events)
 
 
 class _EventPace:

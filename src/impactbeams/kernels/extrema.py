@@ -1,0 +1,192 @@
+"""The gap's extrema within a recorded run: Brent's method on the gap's rate, in one call.
+
+A continuation reads a grazing value at every corrected point: the gap's smallest minimum in
+free flight, and its highest rise between contacts, each refined at the root of the gap's rate
+between two samples. Brent's method there takes some ten evaluations of the rate, each a
+closed-form state of the run; from Python each was a kernel call of its own (some 120 us a
+refinement on the stiff stop, 6 % of its continuation). Here the whole search is one call.
+
+The gap is the one read from the free coordinates, as `impactbeams.orbits.PeriodMap` reads it:
+g = const + S sin(Omega t) + C cos(Omega t) + w . q (``phase_scalars[FREE]``, w the free
+phase's event row), in a contact phase too (its state observed in the free coordinates).
+"""
+
+import math
+
+import numpy as np
+
+from impactbeams.brent import MAX_ITERATIONS, iteration
+from impactbeams.kernels import contact
+from impactbeams.kernels.dynamics import propagate, sample_grid, sample_segments, segment_index
+from impactbeams.kernels.jit import inlined_kernel, kernel
+from impactbeams.kernels.layout import (
+    CONTACT,
+    FREE,
+    ROW_EVENT,
+    SCALAR_CONST,
+    SCALAR_COSINE,
+    SCALAR_SINE,
+)
+
+_brent_iteration = inlined_kernel(iteration)
+RTOL = 4.0 * np.finfo(np.float64).eps  # SciPy's brentq default, as `impactbeams.brent`'s
+
+
+@kernel
+def gap_extremum(tables, forces, scalars, spring, drives, settings, recorded, omega, lo, hi,
+                 sign, xtol):
+    """The gap's minimum (``sign`` 1) or maximum (-1) in (lo, hi): its time (s) and value (m).
+
+    Brent's method on ``sign`` times the gap's rate from (lo, hi), as SciPy's ``brentq`` with
+    ``xtol`` (s) steps: a simple root, found to round-off. (NaN, NaN) unless that rate is < 0
+    at lo and > 0 at hi (no such extremum between them). ``scalars``: the free phase's
+    (``phase_scalars[FREE]``); ``omega``: the forcing frequency (rad/s).
+    """
+    n_coords = recorded.q.shape[1]
+    y, y_rate = np.empty(n_coords), np.empty(n_coords)
+    q, v = np.empty(n_coords), np.empty(n_coords)
+    weights = tables[FREE, ROW_EVENT]
+    x_pre, x_cur = lo, hi
+    _state(tables, forces, spring, drives, settings, recorded, x_pre, y, y_rate, q, v)
+    f_pre = sign * _rate(scalars, weights, omega, x_pre, v)
+    _state(tables, forces, spring, drives, settings, recorded, x_cur, y, y_rate, q, v)
+    f_cur = sign * _rate(scalars, weights, omega, x_cur, v)
+    if not f_pre < 0.0 < f_cur:
+        return math.nan, math.nan
+    x_blk = f_blk = s_pre = s_cur = 0.0
+    for _ in range(MAX_ITERATIONS):
+        done, x_pre, x_cur, x_blk, f_pre, f_blk, s_pre, s_cur = _brent_iteration(
+            x_pre, x_cur, x_blk, f_pre, f_cur, f_blk, s_pre, s_cur, xtol, RTOL)
+        _state(tables, forces, spring, drives, settings, recorded, x_cur, y, y_rate, q, v)
+        if done:
+            return x_cur, _gap(scalars, weights, omega, x_cur, q)
+        f_cur = sign * _rate(scalars, weights, omega, x_cur, v)
+    return math.nan, math.nan
+
+
+@kernel
+def smallest_free_minimum(tables, forces, scalars, spring, drives, settings, recorded, omega,
+                          times):
+    """The gap's smallest interior minimum in free flight, sampled on ``times`` and refined.
+
+    ``times``: an equally spaced grid over the run (s), sampled a step at a time
+    (`dynamics.sample_grid`). The sample: the smallest gap of a free sample between two free
+    samples not below it (the first if several). Refined by `gap_extremum` between the
+    sample's neighbours. Returns (t, g) refined (NaN, NaN where the rate does not change sign
+    there: the caller minimises the gap itself), then the sample's (t, g) and its neighbours'
+    times (all NaN without such a sample).
+    """
+    n_coords, m = recorded.q.shape[1], times.size
+    q, v = np.empty((m, n_coords)), np.empty((m, n_coords))
+    phase = np.empty(m, dtype=np.int64)
+    sample_grid(tables, forces, spring, drives, settings, recorded, times, q, v, phase)
+    weights = tables[FREE, ROW_EVENT]
+    gap = np.empty(m)
+    for i in range(m):
+        gap[i] = _gap(scalars, weights, omega, times[i], q[i])
+    best = -1
+    for i in range(1, m - 1):
+        if (phase[i - 1] == FREE and phase[i] == FREE and phase[i + 1] == FREE
+                and gap[i] <= gap[i - 1] and gap[i] <= gap[i + 1]
+                and (best < 0 or gap[i] < gap[best])):
+            best = i
+    if best < 0:
+        return math.nan, math.nan, math.nan, math.nan, math.nan, math.nan
+    lo, hi = times[best - 1], times[best + 1]
+    t, value = gap_extremum(tables, forces, scalars, spring, drives, settings, recorded, omega,
+                            lo, hi, 1.0, 1e-14 * max(hi, 1.0))
+    return t, value, times[best], gap[best], lo, hi
+
+
+@kernel
+def interval_gap(tables, forces, scalars, spring, drives, settings, recorded, ends, omega,
+                 count):
+    """The gap's local maximum nearest 0 between contacts (m); NaN if there is none.
+
+    Each segment (ending at ``ends``, s) sampled ``count`` times a step at a time
+    (`dynamics.sample_segments`). The candidates, in order: each lasting contact's interior
+    sample maxima (above the sample before, not below the one after), then each free interval
+    between two contacts' highest sample (the period's ends joined: a free interval across
+    them is its last and first segments) if inside its segment. The first nearest 0 is
+    sampled exactly and refined by `gap_extremum` between its neighbours.
+    """
+    segments, n_coords = recorded.time.size, recorded.q.shape[1]
+    contact = recorded.phase == CONTACT
+    if not contact.any():
+        return math.nan
+    q, v = np.empty((segments * count, n_coords)), np.empty((segments * count, n_coords))
+    sample_segments(tables, forces, spring, drives, settings, recorded, ends, count, q, v)
+    weights = tables[FREE, ROW_EVENT]
+    times, gap = np.empty((segments, count)), np.empty((segments, count))
+    for k in range(segments):
+        step = (ends[k] - recorded.time[k]) / (count - 1)
+        for i in range(count):  # as np.linspace: the last sample at the segment's end
+            times[k, i] = ends[k] if i == count - 1 else i * step + recorded.time[k]
+            gap[k, i] = _gap(scalars, weights, omega, times[k, i], q[k * count + i])
+    best_k, best_i = -1, -1
+    for k in range(segments):
+        if contact[k] and ends[k] > recorded.time[k]:  # a contact of zero duration: no interior
+            for i in range(1, count - 1):
+                if gap[k, i] > gap[k, i - 1] and gap[k, i] >= gap[k, i + 1]:
+                    best_k, best_i = _nearer_zero(gap, best_k, best_i, k, i)
+    for k in range(segments):
+        if contact[k] or (segments > 1 and k == segments - 1 and not contact[0]):
+            continue  # (the period's first segment goes on from its last: taken with it)
+        last = segments - 1 if k == 0 and segments > 1 and not contact[segments - 1] else k
+        if contact[(last - 1) % segments] and contact[(k + 1) % segments]:
+            highest = last if np.max(gap[last]) > np.max(gap[k]) else k
+            at = int(np.argmax(gap[highest]))
+            if 0 < at < count - 1:
+                best_k, best_i = _nearer_zero(gap, best_k, best_i, highest, at)
+    if best_k < 0:
+        return math.nan
+    y, y_rate, q_t, v_t = (np.empty(n_coords), np.empty(n_coords), np.empty(n_coords),
+                           np.empty(n_coords))
+    t = times[best_k, best_i]
+    _state(tables, forces, spring, drives, settings, recorded, t, y, y_rate, q_t, v_t)
+    value = _gap(scalars, weights, omega, t, q_t)
+    lo, hi = times[best_k, best_i - 1], times[best_k, best_i + 1]
+    _, rise = gap_extremum(tables, forces, scalars, spring, drives, settings, recorded, omega,
+                           lo, hi, -1.0, 1e-14 * max(hi, 1.0))
+    return value if math.isnan(rise) else max(value, rise)
+
+
+@kernel
+def _nearer_zero(gap, best_k, best_i, k, i):
+    """(k, i) if its sample is nearer 0 than the best's so far (or there is none), else the best."""
+    if best_k < 0 or abs(gap[k, i]) < abs(gap[best_k, best_i]):
+        return k, i
+    return best_k, best_i
+
+
+@kernel
+def _state(tables, forces, spring, drives, settings, recorded, t, y, y_rate, q, v):
+    """The run's state at t (s), observed in the free coordinates, into (q, v)."""
+    k = segment_index(recorded.time, recorded.time.size, t, 0)
+    phase = recorded.phase[k]
+    propagate(tables[phase], forces[phase], recorded.q[k], recorded.v[k], recorded.time[k], t,
+              settings, y, y_rate)
+    contact.observed_state(phase, y, y_rate, t, spring, drives, settings, q, v)
+
+
+@kernel
+def _gap(scalars, weights, omega, t, q):
+    """G (m) at t from the free coordinates q."""
+    return (scalars[SCALAR_CONST] + scalars[SCALAR_SINE] * math.sin(omega * t)
+            + scalars[SCALAR_COSINE] * math.cos(omega * t) + _dot(q, weights))
+
+
+@kernel
+def _rate(scalars, weights, omega, t, v):
+    """dg/dt (m/s) at t from the free coordinates' rates v."""
+    return (omega * (scalars[SCALAR_SINE] * math.cos(omega * t)
+                     - scalars[SCALAR_COSINE] * math.sin(omega * t)) + _dot(v, weights))
+
+
+@kernel
+def _dot(a, b):
+    """A . b: a loop, not np.dot, whose BLAS call costs a cold compile 0.2 s."""
+    total = 0.0
+    for j in range(a.size):
+        total += a[j] * b[j]
+    return total

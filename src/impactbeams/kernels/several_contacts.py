@@ -1,0 +1,174 @@
+"""Several spring contacts closed at once: exact phases, the first event among all contacts.
+
+Plain arrays, packed by `impactbeams.trajectory.several` from
+`impactbeams.contact.active_sets`. A phase is one active set a (the contacts closed, a bit mask
+``mask`` read through ``set_of_mask``); its state is kept in the free coordinates (q, q')
+(every switch is the identity on them). Each contact f has one event function in each phase:
+its contact force R_f if it is closed, its physical gap (the modal gap plus what the active
+forces deflect it through the flexibility the modes miss) if it is open. Both are
+
+    e_f(t) = const + Im(H e^(i Omega t)) + sum_j 2 Re(c_j z_j(t))
+
+in the phase's complex modes z, which is `impactbeams.kernels.contact_spring`'s contact force
+with its own phases rho_j = c_j / |c_j|: oscillators y_j = 2 Re(rho_j z_j) - y_eq_j of one
+phase's table per function (``tables[a, f]``, ``forces[a, f]``, ``scalars[a, f]``,
+``modes[a, f]``, ``drives[a, f]`` in the layout of the single contact's contact phase;
+``lefts[a]``, ``rights[a]`` the set's change of coordinates in the kernels' layout). So each
+function's next switch is the single contact's own certified search
+(`impactbeams.kernels.dynamics.find_switch`: a function that starts at 0 and rising, the
+contact that has just closed or opened, waits for its rise) and the phase ends at the earliest
+of them. Its closed contacts' impulses follow in closed form from the oscillators' ends, their
+peak forces from the certified branch and bound of `impactbeams.kernels.peaks`.
+"""
+
+import math
+
+import numpy as np
+
+from impactbeams.kernels.contact_spring import to_contact, to_free
+from impactbeams.kernels.dynamics import (
+    COMPLETE,
+    EVENT_LIMIT,
+    SEARCH_LIMIT,
+    STUCK,
+    ZENO_LIMIT,
+    find_switch,
+    instantaneous,
+    propagate,
+)
+from impactbeams.kernels.events import GAVE_UP
+from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.layout import (
+    ROW_EVENT,
+    ROW_FREQUENCY,
+    ROW_ZETA,
+    SCALAR_CONST,
+    SCALAR_COSINE,
+    SCALAR_SINE,
+)
+from impactbeams.kernels.peaks import peak_force
+from impactbeams.kernels.rotor import rotor_arrays
+
+# a run that reached an active set that cannot occur (both sides of a two-sided stop)
+IMPOSSIBLE_SET = 4
+
+
+@kernel
+def _sine_cosine_integrals(forcing_frequency, t0, t1):
+    """Integrals of sin(Omega t) and cos(Omega t) over [t0, t1] (s), without cancellation."""
+    if forcing_frequency == 0.0:
+        return 0.0, t1 - t0
+    middle = 0.5 * forcing_frequency * (t0 + t1)
+    half_width = math.sin(0.5 * forcing_frequency * (t1 - t0))
+    return (2.0 * math.sin(middle) * half_width / forcing_frequency,
+            2.0 * math.cos(middle) * half_width / forcing_frequency)
+
+
+@kernel
+def impulse(table, force, scalars, forcing_frequency, y0, y_rate0, t0, y1, y_rate1, t1):
+    """Integral of the event function over [t0, t1] (N s for a force), in closed form.
+
+    From y'' + 2 zeta omega y' + omega^2 y = Im(A e^(i Omega t)): omega^2 int y =
+    Re A int sin + Im A int cos - [y' + 2 zeta omega y].
+    """
+    sine, cosine = _sine_cosine_integrals(forcing_frequency, t0, t1)
+    total = (scalars[SCALAR_CONST] * (t1 - t0) + scalars[SCALAR_SINE] * sine
+             + scalars[SCALAR_COSINE] * cosine)
+    for j in range(y0.size):
+        omega, zeta = table[ROW_FREQUENCY, j], table[ROW_ZETA, j]
+        jump = y_rate1[j] - y_rate0[j] + 2.0 * zeta * omega * (y1[j] - y0[j])
+        modal = (force[j].real * sine + force[j].imag * cosine - jump) / (omega * omega)
+        total += table[ROW_EVENT, j] * modal
+    return total
+
+
+@kernel
+def run_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_mask, settings,
+                 q0, v0, t_start, mask_start, recorded):
+    """Integrate from the free state (q0, v0) with contacts ``mask_start`` closed at t_start.
+
+    ``recorded`` = (time, mask, switched, q, v, impulses, peaks): phase k starts at
+    ``time[k]`` (s) with the contacts of bit mask ``mask[k]`` closed, in state (q[k], v[k]),
+    after contact ``switched[k]`` closed or opened (-1 at the start); ``impulses[k, f]`` (N s)
+    and ``peaks[k, f]`` (N) are closed contact f's integral and largest force over the phase
+    (0 for an open one). It ends where phase k + 1 starts, or at the returned end time.
+
+    Returns (number of phases, status, end time in s): ``COMPLETE`` (t_max reached),
+    ``EVENT_LIMIT`` (arrays full), ``STUCK`` (more than ``ZENO_LIMIT`` zero-length phases in
+    a row), ``SEARCH_LIMIT`` (an event search reached its step cap) or ``IMPOSSIBLE_SET``
+    (a switch into a set that cannot occur).
+    """
+    seg_time, seg_mask, seg_switched, seg_q, seg_v, seg_impulse, seg_peak = recorded
+    n_contacts, m = tables.shape[1], q0.size
+    forcing_frequency = settings.forcing_frequency
+    q, v = q0.copy(), v0.copy()
+    y, y_rate = np.empty((n_contacts, m)), np.empty((n_contacts, m))
+    y_end, y_rate_end = np.empty(m), np.empty(m)
+    q_work, v_work = np.empty(m), np.empty(m)
+    rotor = rotor_arrays(m)
+    t, mask, switched, zero_run = t_start, mask_start, -1, 0
+    for k in range(seg_time.size):
+        a = set_of_mask[mask]
+        seg_time[k], seg_mask[k], seg_switched[k] = t, mask, switched
+        for n in range(m):
+            seg_q[k, n], seg_v[k, n] = q[n], v[n]
+        first, t_event = -1, math.inf
+        for f in range(n_contacts):
+            to_contact(q, v, t, lefts[a], modes[a, f], drives[a, f], forcing_frequency, y[f],
+                       y_rate[f])
+            t_f = find_switch(tables[a, f], forces[a, f], scalars[a, f], y[f], y_rate[f], t,
+                              True, False, settings, q_work, v_work, rotor)
+            if t_f == GAVE_UP:
+                return k + 1, SEARCH_LIMIT, t
+            if not math.isnan(t_f) and t_f < t_event:
+                first, t_event = f, t_f
+        t_stop = settings.t_max if first < 0 else t_event
+        for f in range(n_contacts):
+            seg_impulse[k, f] = seg_peak[k, f] = 0.0
+            if not (mask >> f) & 1:
+                continue
+            table, force, scalar = tables[a, f], forces[a, f], scalars[a, f]
+            propagate(table, force, y[f], y_rate[f], t, t_stop, settings, y_end, y_rate_end)
+            seg_impulse[k, f] = impulse(table, force, scalar, forcing_frequency, y[f],
+                                        y_rate[f], t, y_end, y_rate_end, t_stop)
+            seg_peak[k, f] = peak_force(table, force, scalar, settings, y[f], y_rate[f], t,
+                                        t_stop)[0]
+        # the new state from the oscillators of the function whose root ends the phase
+        f = max(first, 0)
+        propagate(tables[a, f], forces[a, f], y[f], y_rate[f], t, t_stop, settings, y_end,
+                  y_rate_end)
+        to_free(y_end, y_rate_end, t_stop, rights[a], modes[a, f], drives[a, f],
+                forcing_frequency, q, v)
+        if first < 0:
+            return k + 1, COMPLETE, t_stop
+        zero_run = zero_run + 1 if instantaneous(t, t_event) else 0
+        if zero_run > ZENO_LIMIT:
+            return k + 1, STUCK, t_stop
+        mask ^= 1 << first
+        switched, t = first, t_event
+        if set_of_mask[mask] < 0:
+            return k + 1, IMPOSSIBLE_SET, t
+    return seg_time.size, EVENT_LIMIT, t
+
+
+@kernel
+def sample_contacts(tables, forces, modes, drives, lefts, rights, set_of_mask, settings,
+                    seg_time, seg_mask, seg_q, seg_v, times, q_out, v_out):
+    """Free states (q, q') at the ascending ``times`` (s) of a recorded run, in closed form.
+
+    At an event time the state of the phase that starts there.
+    """
+    m = seg_q.shape[1]
+    y, y_rate = np.empty(m), np.empty(m)
+    y_end, y_rate_end = np.empty(m), np.empty(m)
+    k = 0
+    for i in range(times.size):
+        while k + 1 < seg_time.size and seg_time[k + 1] <= times[i]:
+            k += 1
+        a = set_of_mask[seg_mask[k]]
+        to_contact(seg_q[k], seg_v[k], seg_time[k], lefts[a], modes[a, 0], drives[a, 0],
+                   settings.forcing_frequency, y, y_rate)
+        propagate(tables[a, 0], forces[a, 0], y, y_rate, seg_time[k], times[i], settings,
+                  y_end, y_rate_end)
+        to_free(y_end, y_rate_end, times[i], rights[a], modes[a, 0], drives[a, 0],
+                settings.forcing_frequency, q_out[i], v_out[i])

@@ -1,0 +1,225 @@
+"""Several contacts closed at once: the run's packed phases, the run, and its samples.
+
+`pack_contacts` packs one run of ``Params.contacts`` for `impactbeams.kernels.several_contacts`:
+every active set's contact phase (`impactbeams.contact.active_sets`), and in each one event
+function per contact (its force if closed, its physical gap if open) as oscillators of the
+single contact's contact-phase layout. The free drive, the gaps' clearances and harmonic
+parts come from each contact's own packed run (`Params.each_contact`), which share the free
+phase.
+
+In active set S, with each contact's modal gap g_j = Delta_j + Im(S_j e^(i Omega t)) + b_j . q,
+the active forces are R_S = -K_eff g_S - C_eff g_S', that is const_S = -K_eff Delta_S,
+harmonic H_S = -(K_eff + i Omega C_eff) S_S and modal weights ``force_weights``; the modes'
+drive is the free one plus B_S (H_S harmonic, const_S constant); an open contact i's physical
+gap is g_i + R_N[i, S] R_S.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from impactbeams.contact.active_sets import SeveralContacts, possible_sets, several_contacts
+from impactbeams.contact.spring import polar
+from impactbeams.kernels import several_contacts as kernel
+from impactbeams.kernels.contact_spring import contact_states, spring_drives, to_contact
+from impactbeams.kernels.dynamics import STATUS_NAMES
+from impactbeams.kernels.events import phase_event
+from impactbeams.kernels.layout import (
+    DRIVE_EQUILIBRIUM,
+    FREE,
+    PHASE_SCALARS,
+    SCALAR_CONST,
+    SCALAR_COSINE,
+    SCALAR_SINE,
+    TABLE_ROWS,
+)
+from impactbeams.packing import Packed, pack_run
+
+# the statuses of `kernels.several_contacts.run_contacts`
+CONTACT_STATUS_NAMES = (*STATUS_NAMES, "impossible_set")
+
+
+@dataclasses.dataclass(frozen=True)
+class PackedContacts:
+    """One run of several contacts, packed (layout: `impactbeams.kernels.several_contacts`).
+
+    ``runs``: each contact's own packed run (the free phase, settings, start); ``contacts``:
+    the active sets' phases; ``members``: each set's contacts, by the kernels' set index.
+    """
+
+    runs: tuple[Packed, ...]
+    contacts: SeveralContacts
+    members: tuple[tuple[int, ...], ...]
+    set_of_mask: np.ndarray
+    tables: np.ndarray
+    forces: np.ndarray
+    scalars: np.ndarray
+    modes: np.ndarray
+    drives: np.ndarray
+    lefts: np.ndarray
+    rights: np.ndarray
+
+    @property
+    def settings(self) -> np.void:
+        """The run's settings record (t_max, search span, forcing frequency)."""
+        return self.runs[0].settings
+
+    def kernel_arrays(self) -> tuple:
+        """The phases' arrays as `run_contacts` and `sample_contacts` take them."""
+        return (self.tables, self.forces, self.scalars, self.modes, self.drives, self.lefts,
+                self.rights, self.set_of_mask, self.settings)
+
+
+def _gap_terms(runs: tuple[Packed, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Each contact's clearance Delta_j (m) and gap harmonic S_j (m, sine + i cosine)."""
+    scalars = np.array([run.phase_scalars[FREE] for run in runs])
+    return scalars[:, SCALAR_CONST], scalars[:, SCALAR_SINE] + 1j * scalars[:, SCALAR_COSINE]
+
+
+def _functions(contacts: SeveralContacts, members: tuple[int, ...], runs: tuple[Packed, ...],
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each contact's event function in set ``members``: weights c (n, M), const, harmonic H."""
+    phase = contacts.sets[members]
+    clearance, harmonic = _gap_terms(runs)
+    omega = runs[0].params.omega
+    index = list(members)
+    const_s = -phase.effective_stiffness @ clearance[index]
+    harmonic_s = -(phase.effective_stiffness + 1j * omega * phase.effective_damping
+                   ) @ harmonic[index]
+    m = phase.eigenvalues.size
+    coupling = contacts.residual[:, index]
+    weights = contacts.gap_weights @ phase.right[:m] + coupling @ phase.force_weights
+    const = clearance + coupling @ const_s
+    harmonics = harmonic + coupling @ harmonic_s
+    weights[index], const[index], harmonics[index] = phase.force_weights, const_s, harmonic_s
+    return weights, const, harmonics
+
+
+def pack_contacts(params, n_modes: int, t_max: float, search_span: float) -> PackedContacts:
+    """Pack a run of ``params``' contacts with ``n_modes`` per beam (t_max, search_span in s)."""
+    runs = tuple(pack_run(run, n_modes, t_max, search_span) for run in params.each_contact())
+    contacts = several_contacts(params, n_modes)
+    members = tuple(possible_sets(params))
+    n, m = len(runs), runs[0].q0.size
+    set_of_mask = np.full(2**n, -1, dtype=np.int64)
+    tables = np.zeros((len(members), n, len(TABLE_ROWS), m))
+    forces = np.empty((len(members), n, m), dtype=complex)
+    scalars = np.empty((len(members), n, len(PHASE_SCALARS)))
+    modes = np.empty((len(members), n, 2, m), dtype=complex)
+    drives = np.empty((len(members), n, 4, m), dtype=complex)
+    lefts = np.empty((len(members), 2 * m, m), dtype=complex)
+    rights = np.empty((len(members), m, 2 * m), dtype=complex)
+    free_drive, omega = runs[0].forces[FREE], runs[0].params.omega
+    weights_b = contacts.gap_weights
+    for a, active in enumerate(members):
+        set_of_mask[sum(1 << j for j in active)] = a
+        phase = contacts.sets[active]
+        lefts[a], rights[a] = phase.left.T, phase.right.T
+        weights, const, harmonic = _functions(contacts, active, runs)
+        index = list(active)
+        set_harmonic = free_drive + weights_b[index].T @ harmonic[index]
+        set_constant = weights_b[index].T @ const[index]
+        for f in range(n):
+            rho, magnitude = polar(weights[f])
+            modes[a, f] = phase.eigenvalues, rho
+            drives[a, f] = spring_drives(lefts[a], modes[a, f], set_harmonic, set_constant,
+                                         omega, forces[a, f])
+            tables[a, f, TABLE_ROWS.index("frequency")] = phase.frequencies
+            tables[a, f, TABLE_ROWS.index("zeta")] = (-phase.eigenvalues.real
+                                                      / phase.frequencies)
+            tables[a, f, TABLE_ROWS.index("event")] = magnitude
+            scalars[a, f] = (const[f] + magnitude @ drives[a, f, DRIVE_EQUILIBRIUM].real,
+                             harmonic[f].real, harmonic[f].imag, 1.0)
+    return PackedContacts(runs, contacts, members, set_of_mask, tables, forces, scalars, modes,
+                          drives, lefts, rights)
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactRun:
+    """A recorded run of several contacts (`kernels.several_contacts.run_contacts`).
+
+    Phase k starts at ``time[k]`` (s) with the contacts of bit mask ``mask[k]`` closed, in
+    the free state (q[k], v[k]), after contact ``switched[k]`` switched (-1: the start);
+    ``impulses[k, f]`` (N s), ``peaks[k, f]`` (N): closed contact f's over the phase.
+    """
+
+    time: np.ndarray
+    mask: np.ndarray
+    switched: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    impulses: np.ndarray
+    peaks: np.ndarray
+    status: str
+    t_end: float
+
+
+def run_contacts(packed: PackedContacts, max_phases: int) -> ContactRun:
+    """Run ``packed`` from its start (rest or uplifts, all contacts open) to t_max."""
+    n, m = len(packed.runs), packed.runs[0].q0.size
+    recorded = (np.empty(max_phases), np.empty(max_phases, dtype=np.int64),
+                np.empty(max_phases, dtype=np.int64), np.empty((max_phases, m)),
+                np.empty((max_phases, m)), np.empty((max_phases, n)), np.empty((max_phases, n)))
+    start = packed.runs[0]
+    count, status, t_end = kernel.run_contacts(*packed.kernel_arrays(), start.q0, start.v0,
+                                               0.0, 0, recorded)
+    return ContactRun(*(array[:count] for array in recorded), CONTACT_STATUS_NAMES[status],
+                      float(t_end))
+
+
+def sample(packed: PackedContacts, run: ContactRun, times: np.ndarray,
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Free states (q, v) at ``times`` (s, ascending, <= the run's end) and each one's mask."""
+    times = np.ascontiguousarray(times, dtype=float)
+    q, v = np.empty((times.size, run.q.shape[1])), np.empty((times.size, run.q.shape[1]))
+    tables, forces, _, modes, drives, lefts, rights, set_of_mask, settings = (
+        packed.kernel_arrays())
+    kernel.sample_contacts(tables, forces, modes, drives, lefts, rights, set_of_mask, settings,
+                           run.time, run.mask, run.q, run.v, times, q, v)
+    phase = np.searchsorted(run.time, times, side="right") - 1
+    return q, v, run.mask[phase]
+
+
+def gap_rate(packed: PackedContacts, mask: int, contact: int, q: np.ndarray, v: np.ndarray,
+             t: float) -> float:
+    """The rate (m/s) of open ``contact``'s physical gap in the phase of ``mask`` at (q, v, t)."""
+    a = packed.set_of_mask[mask]
+    m = q.size
+    y, y_rate = np.empty(m), np.empty(m)
+    to_contact(q, v, t, packed.lefts[a], packed.modes[a, contact], packed.drives[a, contact],
+               packed.settings["forcing_frequency"], y, y_rate)
+    _, rate = phase_event(packed.tables[a, contact], packed.scalars[a, contact], y, y_rate, t,
+                          packed.settings["forcing_frequency"])
+    return float(rate)
+
+
+def contact_quantities(packed: PackedContacts, t: np.ndarray, q: np.ndarray, v: np.ndarray,
+                       mask: np.ndarray) -> dict[str, np.ndarray]:
+    """Each contact's modal gap, force (N) and physical gap (m), and the contacts' energy (J).
+
+    Without dashpots (R_S = -K_eff g_S), which a run of several contacts takes so far.
+
+    Shapes (k, n) and (k,): the energy is ``g_S^T K_eff g_S / 2`` of the closed contacts'
+    modal gaps g_S (the springs' and the flexibility the modes miss, in series).
+    """
+    n, k = len(packed.runs), t.size
+    modal = np.empty((k, n))
+    states = np.empty((k, 3))
+    phases = np.full(k, FREE, dtype=np.int64)
+    for j, run in enumerate(packed.runs):
+        contact_states(run.tables, run.forces, run.phase_scalars, run.settings, phases, t, q, v,
+                       states)
+        modal[:, j] = states[:, 0]
+    force, gap, energy = np.zeros((k, n)), modal.copy(), np.zeros(k)
+    for a, active in enumerate(packed.members):
+        rows = np.flatnonzero(packed.set_of_mask[mask] == a)
+        if not active or not rows.size:
+            continue
+        phase, index = packed.contacts.sets[active], list(active)
+        force[np.ix_(rows, index)] = -modal[np.ix_(rows, index)] @ phase.effective_stiffness
+        gap[rows] += force[rows][:, index] @ packed.contacts.residual[:, index].T
+        energy[rows] = 0.5 * np.einsum("ki,ij,kj->k", modal[np.ix_(rows, index)],
+                                       phase.effective_stiffness, modal[np.ix_(rows, index)])
+    return {"modal_gap": modal, "contact_force": force, "gap": gap, "contact_energy": energy}
