@@ -27,6 +27,7 @@ from impactbeams.continuation.twoparameter import (
     _steps,
     continue_curve,
 )
+from impactbeams.params import ParameterError
 from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
 
 # the toy's curve points solve the system to Newton's 1e-10 (x~ = the unknowns themselves),
@@ -159,19 +160,30 @@ def test_the_small_models_curve_meets_a_1_4_resonance(torus_in_force):
     assert np.min(np.abs(orbit.multipliers - 1j)) < 1e-6
 
 
+def _branch_to_fold(force, omega, state):
+    """The branch in Omega at ``force`` towards ``omega`` from 0.05 rad/s on the side of it
+    where the orbits (folding at ``omega``) exist: started from the fold's ``state``."""
+    for start in (omega - 0.05, omega + 0.05):
+        try:
+            return continue_orbits(Continuation(
+                SMALL.replace(force_amplitude=force), "omega", omega - 0.3, omega + 0.3,
+                start=start, direction="up" if start < omega else "down", state=state,
+                transient_periods=0, n_modes=3, max_branches=1))
+        except ParameterError:  # no orbit there: the fold's other side
+            continue
+    raise AssertionError(f"no orbit 0.05 rad/s on either side of {omega}")
+
+
 def test_the_small_models_fold_neimark_sacker_points(torus_in_force):
     """At each fold-Neimark-Sacker point's force, the one-parameter branch in Omega (started
-    from the curve's previous point's orbit) locates a fold and a Neimark-Sacker, both at the
-    point's frequency."""
+    0.05 rad/s from it on the side where its orbits exist) locates a fold and a
+    Neimark-Sacker, both at the point's frequency."""
     curve = torus_in_force
     for i in np.flatnonzero(curve.curve_event.values == CURVE_EVENTS.index(
             "fold_neimark_sacker")):
-        omega, before = float(curve.omega[i]), float(curve.omega[i - 1])
-        branch = continue_orbits(Continuation(
-            SMALL.replace(force_amplitude=float(curve.force_amplitude[i])), "omega",
-            omega - 0.3, omega + 0.3, start=before, direction="up" if before < omega else "down",
-            state=curve.section_state.values[i - 1], transient_periods=0, n_modes=3,
-            max_branches=1))
+        omega = float(curve.omega[i])
+        branch = _branch_to_fold(float(curve.force_amplitude[i]), omega,
+                                 curve.section_state.values[i])
         for label in ("fold", "neimark_sacker"):
             located = branch.omega.values[branch.bifurcation.values == BIFURCATIONS.index(label)]
             assert np.min(np.abs(located - omega)) <= 1e-9 * omega
