@@ -2,11 +2,11 @@
 
 The beam models within reach have Neimark-Sacker curves whose pair's argument stays away from
 0 and pi (the small model's, followed in Omega and the force, clearance, damping or contact
-stiffness, have cos theta between -0.07 and 0.9 before their orbits graze): the 1:1 and 1:2
-resonances, the fold- and flip-Neimark-Sacker points are checked on a constructed map
+stiffness, have cos theta between -0.07 and 0.9 before their orbits graze): the 1:1, 1:2 and
+1:3 resonances, where the curve ends, are checked on a constructed map
 (`continuation_toys.resonant_torus`) whose curve and points are known exactly, followed by
-the curves' own step loop; the 1:4 resonance that the small model's curve in (Omega, F0)
-meets is checked against the one-parameter branch at its force.
+the curves' own step loop; the 1:4 resonance and the fold- and flip-Neimark-Sacker points
+that the small model's curves meet are checked against one-parameter branches.
 """
 
 import math
@@ -204,3 +204,27 @@ def test_the_curves_codimension_two_points_are_drawn_and_labelled(torus_in_force
         "resonance_1_4"))
     stars = [line for line in axes.lines if line.get_marker() == "*"]
     assert len(stars) == 1 and stars[0].get_xdata()[0] == float(torus_in_force.omega[i])
+
+
+def test_the_small_models_flip_neimark_sacker_points(torus_branch_down):
+    """The same curve followed down in the contact stiffness meets two flip-Neimark-Sacker
+    points (a real multiplier through -1) before its orbit grazes: at each one's stiffness
+    the one-parameter branch in Omega locates a Neimark-Sacker and a period doubling at its
+    frequency."""
+    curve = continue_curve(BifurcationCurve.from_branch(
+        *torus_branch_down, "neimark_sacker", "contact_stiffness", 1e2, 1e7,
+        direction="down", box=(150.0, 400.0), max_points=300))
+    flips = np.flatnonzero(curve.curve_event.values == CURVE_EVENTS.index(
+        "flip_neimark_sacker"))
+    assert flips.size == 2
+    for i in flips:
+        omega = float(curve.omega[i])
+        mu = curve.multiplier_modulus.values[i] * np.exp(1j * curve.multiplier_argument.values[i])
+        assert np.min(np.abs(mu + 1.0)) < 1e-6
+        branch = continue_orbits(Continuation(
+            SMALL.replace(contact_stiffness=float(curve.contact_stiffness[i])), "omega",
+            omega - 0.3, omega + 0.3, state=curve.section_state.values[i],
+            transient_periods=0, n_modes=3, max_branches=1, start=omega - 0.3))
+        for label in ("neimark_sacker", "period_doubling"):
+            located = branch.omega.values[branch.bifurcation.values == BIFURCATIONS.index(label)]
+            assert np.min(np.abs(located - omega)) <= 1e-9 * omega
