@@ -23,6 +23,11 @@ Codimension-two points met on the way, each located to ``locate_tolerance`` and 
 - ``contact_merge``, ``contact_split``: a multiplier's orbit loses or gains a contact with
   no contact at zero depth (bisected on its contacts): the curve ends there as well
   (``curve_ending`` "contact_change");
+- on a Neimark-Sacker curve, ``resonance_1_1``, ``resonance_1_2``, ``resonance_1_3``,
+  ``resonance_1_4``: the pair's cosine (`curves.pair_cosine`) passes 1, -1, -1/2, 0; at 1:1
+  and 1:2 the pair turns real and the curve ends (``curve_ending`` "pair_real");
+  ``fold_neimark_sacker``, ``flip_neimark_sacker``: a real multiplier but the pair passes
+  +1 or -1 (the curve goes on);
 - ``end``: the curve's last point otherwise: at the edge of the box (``curve_ending``
   "bound", corrected onto it) or where the corrector finds no point (the orbit stops
   existing, or turns within less than ``min_step``: "min_step").
