@@ -113,3 +113,65 @@ def colliding_pair(k=5.0):
         return np.array([[-0.5, 1.0], [k * k * p, -0.5]])
 
     return Map(lambda z, p: matrix(p) @ z, lambda z, p: matrix(p))
+
+
+class CurveMap:
+    """A Neimark-Sacker curve of a map family z -> P(z; p1, p2), as `curves.CurveProblem` is:
+    a family in p2 whose state is y = (z, p1), the residual (P - z, the condition's test
+    function of ``condition.matrix(M)``). Its Jacobian in y by central differences (a toy's:
+    exact to ~1e-10, which steers Newton only)."""
+
+    period = 1
+
+    def __init__(self, step, jacobian, condition):
+        self.step, self.jac, self.condition = step, jacobian, condition
+
+    def _residual(self, y, p):
+        z, p1 = y[:-1], y[-1]
+        return np.append(self.step(z, p1, p) - z,
+                         self.condition.of(self.condition.matrix(self.jac(z, p1, p))))
+
+    def evaluate(self, y, p, jacobian=True, grazing=True):
+        residual = self._residual(y, p)
+        monodromy = self.jac(y[:-1], y[-1], p)
+        full = np.empty((0, 0))
+        if jacobian:
+            full = np.empty((y.size, y.size))
+            for j in range(y.size):
+                h = np.zeros(y.size)
+                h[j] = 1e-6
+                full[:, j] = (self._residual(y + h, p) - self._residual(y - h, p)) / 2e-6
+        return Evaluation(residual, full, multipliers_of(monodromy - np.eye(len(monodromy))))
+
+    def multipliers(self, y, p):
+        monodromy = self.jac(y[:-1], y[-1], p)
+        return multipliers_of(monodromy - np.eye(len(monodromy)))
+
+    def measures(self, y, p):
+        return {"amplitude": float(np.max(np.abs(y[:-1])))}
+
+    def border(self, y, p, evaluation):
+        monodromy = self.jac(y[:-1], y[-1], p)
+        self.condition.border(monodromy - np.eye(len(monodromy)), np.ones(len(monodromy)))
+
+
+def resonant_torus(fold_at):
+    """(u, v) -> (1 + p1) A (u, v) with A = [[p2, 1], [p2^2 - 1, p2]] (det 1, trace 2 p2: the
+    pair p2 +- sqrt(p2^2 - 1), on the unit circle with cos theta = p2 for |p2| < 1, real
+    beyond), and x -> x + (p2 - ``fold_at``) - x^2 (fixed points x = +-sqrt(p2 - fold_at),
+    multiplier 1 - 2 x, a fold at p2 = ``fold_at``). The Neimark-Sacker curve is p1 = 0:
+    strong resonances 1:1, 1:2, 1:3, 1:4 at p2 = 1, -1, -1/2, 0, a fold-Neimark-Sacker point
+    (the curve turning back in p2) at p2 = ``fold_at``."""
+
+    def step(z, p1, p2):
+        u, v, x = z
+        s = 1.0 + p1
+        return np.array([s * (p2 * u + v), s * ((p2 ** 2 - 1.0) * u + p2 * v),
+                         x + (p2 - fold_at) - x ** 2])
+
+    def jacobian(z, p1, p2):
+        s = 1.0 + p1
+        return np.array([[s * p2, s, 0.0], [s * (p2 ** 2 - 1.0), s * p2, 0.0],
+                         [0.0, 0.0, 1.0 - 2.0 * z[2]]])
+
+    return step, jacobian

@@ -175,6 +175,78 @@ def test_neimark_sacker_curve_passes_through_the_one_parameter_ones(torus_branch
     assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
 
 
+def test_neimark_sacker_curve_ends_where_its_orbits_contacts_change(torus_branch):
+    """Followed down in the contact stiffness, the Neimark-Sacker curve turns, then its orbit
+    gains a contact (a free-flight minimum of the gap reaches 0): the monodromy jumps there,
+    so the curve ends, labelled (the old code stepped across and went on to 1e7 N/m on the
+    orbits of two contacts). Its end is the one-parameter branch's Neimark-Sacker at the
+    end's stiffness (started 0.3 rad/s above from the end's orbit)."""
+    curve = continue_curve(BifurcationCurve.from_branch(
+        *torus_branch, "neimark_sacker", "contact_stiffness", 1e2, 1e7, direction="down",
+        box=(150.0, 400.0), max_points=300))
+    assert curve.attrs["curve_ending"] == "grazing"
+    assert list(event(curve, "grazing")) == [curve.branch_point.size - 1]
+    assert np.all(curve.contacts_per_orbit.values == 1)
+    gaps = np.abs(curve.grazing_gap.values)
+    assert gaps[-1] <= 1e-3 * gaps.max()  # the gap's minimum at zero depth (ZERO_DEPTH)
+    found = _coming_down_to(curve.isel(branch_point=-1), "contact_stiffness")
+    assert found[0][0] == "neimark_sacker"
+    assert found[0][1] == pytest.approx(float(curve.omega[-1]), rel=AGREE, abs=0.0)
+
+
+def _coming_down_to(end, second, factor=1.0):
+    """The events of the small model's branch in Omega at ``factor`` times the curve end's
+    ``second`` parameter, coming down from 0.3 rad/s above the end from its orbit."""
+    omega = float(end.omega)
+    return _branch_events(SMALL.replace(**{second: factor * float(end[second])}), omega,
+                          end.section_state.values, start=omega + 0.3, direction="down")
+
+
+@pytest.fixture(scope="module")
+def torus_clearance(torus_branch):
+    """The Neimark-Sacker curve followed down in the clearance: it turns twice, then ends
+    where its orbit grazes (234.858 rad/s, 3.732 um), a second contact beyond."""
+    return continue_curve(BifurcationCurve.from_branch(
+        *torus_branch, "neimark_sacker", "clearance", 1e-6, 1.1e-5, direction="down",
+        box=(200.0, 300.0), max_points=300))
+
+
+def test_neimark_sacker_curve_ends_at_its_grazing_from_any_start(torus_clearance):
+    """Started on the curve 1 um above its grazing with long steps, the steps creep up to
+    the grazing (no point past it): the end is labelled a grazing where its gap is at zero
+    depth (the old code ended it 'min_step', unlabelled), at the curve's own end."""
+    whole = torus_clearance
+    assert whole.attrs["curve_ending"] == "grazing"
+    i = int(np.argmax(whole.clearance.values < whole.clearance.values[-1] + 1e-6))
+    start = whole.isel(branch_point=i)
+    clearance = float(start.clearance)
+    curve = continue_curve(BifurcationCurve(
+        SMALL.replace(clearance=clearance), "neimark_sacker", "omega", float(start.omega),
+        start.section_state.values, "clearance", 1e-6, clearance, 200.0, 300.0, 3,
+        direction="down", step=0.05, max_step=0.05, max_points=60))
+    assert curve.attrs["curve_ending"] == "grazing"
+    assert list(event(curve, "grazing")) == [curve.branch_point.size - 1]
+    for name in ("omega", "clearance"):
+        assert float(curve[name][-1]) == pytest.approx(float(whole[name][-1]), rel=1e-8)
+
+
+def test_past_the_neimark_sacker_grazing_point_the_one_contact_torus_is_gone(
+        torus_clearance):
+    """At the end's clearance the branch in Omega coming down locates the Neimark-Sacker at
+    the end's frequency and its grazing 2e-9 below it (a pair outside on the two-contact
+    side: the multipliers jump there); 1e-4 below that clearance, past the end, the orbits
+    there have two contacts and the Neimark-Sacker points nearest the end's frequency are the
+    two-contact orbit's own, 0.02 rad/s away: the curve does not go on across."""
+    end = torus_clearance.isel(branch_point=-1)
+    omega = float(end.omega)
+    found = _coming_down_to(end, "clearance")
+    assert found[0][0] == "neimark_sacker"
+    assert found[0][1] == pytest.approx(omega, rel=AGREE, abs=0.0)
+    assert found[1][0] == "grazing" and 0.0 < omega - found[1][1] < 1e-8 * omega
+    past = _coming_down_to(end, "clearance", 1 - 1e-4)
+    torus = [value for label, value in past if label == "neimark_sacker"]
+    assert torus and min(abs(value - omega) for value in torus) > 1e-2
+
 @pytest.mark.slow
 def test_two_fold_curves_meet_at_a_cusp(stop_branch):
     """Both folds' curves, followed down in the drive, reach the same cusp, and go on as the

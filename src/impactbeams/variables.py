@@ -514,7 +514,9 @@ VARIABLES.update({
 
 # bifurcation curves in two parameters (impactbeams.continuation.twoparameter), along
 # "branch_point" like a branch: the codimension-two points met on the way
-CURVE_EVENTS = ("none", "end", "turning_point", "cusp", "grazing")
+CURVE_EVENTS = ("none", "end", "turning_point", "cusp", "grazing", "contact_merge",
+                "contact_split", "resonance_1_1", "resonance_1_2", "resonance_1_3",
+                "resonance_1_4", "fold_neimark_sacker", "flip_neimark_sacker")
 VARIABLES.update({
     "curve_condition": Variable(
         ("branch_point",), "1", "bifurcation test function",
@@ -538,14 +540,27 @@ VARIABLES.update({
         "curve the one nearest +1 or -1, on a Neimark-Sacker curve the complex pair nearest "
         "the unit circle (on the curve, at it to round-off), else 0: whether the orbit is "
         "stable on one side of the bifurcation", dtype="int8", flags=STABILITY),
+    "curve_pair_cosine": Variable(
+        ("branch_point",), "1", "cosine of the Neimark-Sacker pair's argument",
+        "(mu + mu') / 2 of the two Floquet multipliers whose product is nearest 1 (on a "
+        "Neimark-Sacker curve the pair e^(+-i theta) on the unit circle: cos theta; beyond +1 "
+        "or -1 the pair is real, a neutral saddle): 1 at a 1:1 resonance, -1 at 1:2, -1/2 at "
+        "1:3, 0 at 1:4"),
     "curve_event": Variable(
         ("branch_point",), "1", "codimension-two point located at the curve point",
         "0 none; 1 end (the curve's last point: the attribute curve_ending says why); 2 "
         "turning_point (the second parameter turns back: the tangent's part along it changes "
         "sign); 3 cusp (a turning point of a fold curve where the tangent's part along the "
         "first parameter is below 1e-3 as well); 4 grazing (the orbit's grazing value changes "
-        "sign along a fold or period-doubling curve), each located to the attribute "
-        "locate_tolerance", dtype="int8", flags=CURVE_EVENTS),
+        "sign along a fold, period-doubling or Neimark-Sacker curve: the curve ends there); 5 "
+        "contact_merge, 6 contact_split (the orbit's contacts per orbit fall or rise there "
+        "without a contact at zero depth: a multiplier's curve ends there); on a "
+        "Neimark-Sacker curve, where the cosine of its pair's argument (curve_pair_cosine) "
+        "passes 7 resonance_1_1 (+1), 8 resonance_1_2 (-1), 9 resonance_1_3 (-1/2), 10 "
+        "resonance_1_4 (0) (at 1:1 and 1:2 the pair turns real: the curve ends there), and "
+        "where a real multiplier but the pair passes +1, 11 fold_neimark_sacker, or -1, 12 "
+        "flip_neimark_sacker; each located to the attribute locate_tolerance",
+        dtype="int8", flags=CURVE_EVENTS),
 })
 
 # basins of attraction (impactbeams.orbits.basin_map): one label per initial state ("*": the plane's

@@ -575,7 +575,7 @@ def _advance(follower: Follower, a: Point, b: Point, depth: int = 0) -> list[Poi
         return [b]
     if np.linalg.norm(past.x - before.x) > JUMP * np.linalg.norm(b.x - a.x):
         raise _Jumped  # the map is continuous: the two sides of an event of one branch meet
-    label = GRAZING if _at_zero_depth(a, b, before, past) else _merge_or_split(a, b)
+    label = GRAZING if _at_zero_depth(a, b, before, past) else merge_or_split(a, b)
     # forward on the far side is toward b (the kink may exceed 90 degrees); where b is past
     # itself but for Newton's error, away from a
     far = b.x - past.x
@@ -679,8 +679,8 @@ def _nonsmooth(a: Point, b: Point, micro_contacts: str,
     if crosses(a.evaluation.grazing, (b.evaluation.grazing,)):
         return GRAZING, grazing_test
     if crosses(a.evaluation.interval, (b.evaluation.interval,)):
-        return _merge_or_split(a, b), interval_test
-    return _merge_or_split(a, b), _contacts_of(a)
+        return merge_or_split(a, b), interval_test
+    return merge_or_split(a, b), _contacts_of(a)
 
 
 def _contacts_of(a: Point) -> Callable[[Point], float]:
@@ -705,7 +705,8 @@ def _at_zero_depth(a: Point, b: Point, *points: Point) -> bool:
     return min(abs(point.evaluation.grazing) for point in points) <= ZERO_DEPTH * scale
 
 
-def _merge_or_split(a: Point, b: Point) -> str:
+def merge_or_split(a: Point, b: Point) -> str:
+    """A change of the contacts from ``a`` to ``b`` that is no grazing: fewer is a merge."""
     return CONTACT_MERGE if b.evaluation.contacts < a.evaluation.contacts else CONTACT_SPLIT
 
 

@@ -49,6 +49,8 @@ class Grazing:
 
     label = "grazing"
     needs_monodromy = False
+    # the curve is where the contacts change: it goes on across them
+    smooth_across_contacts = True
 
     def value(self, period_map: PeriodMap, result: PeriodMapResult,
               drz: np.ndarray | None = None) -> float:
@@ -85,6 +87,8 @@ class Multiplier:
     """
 
     needs_monodromy = True
+    # the monodromy jumps where the orbit's contacts change: the curve ends there
+    smooth_across_contacts = False
 
     def __init__(self, sigma: float) -> None:
         self.sigma = sigma
@@ -100,7 +104,10 @@ class Multiplier:
     def value(self, period_map: PeriodMap, result: PeriodMapResult,
               drz: np.ndarray | None = None) -> float:
         """The test function s at an orbit's run whose monodromy minus the identity is ``drz``."""
-        a = self._matrix_at(period_map, result, drz)
+        return self.of(self._matrix_at(period_map, result, drz))
+
+    def of(self, a: np.ndarray) -> float:
+        """The test function s of A (bordered at A itself if no border is set yet)."""
         if self.b is None:
             self._set_borders(a)
         n = len(a)
@@ -159,6 +166,37 @@ class UnitPair(Multiplier):
         product = (monodromy[p][:, p] * monodromy[q][:, q]
                    - monodromy[p][:, q] * monodromy[q][:, p])
         return product - np.eye(p.size)
+
+
+# the strong resonances of a Neimark-Sacker pair e^(+-i theta), at cos theta = 1 (1:1), -1 (1:2),
+# -1/2 (1:3) and 0 (1:4) (Kuznetsov, sec. 9.5 and 10.3); at 1:1 and 1:2 the pair meets on the
+# real axis, at +1 (the fold curve) or -1 (the period-doubling curve): the Neimark-Sacker curve
+# ends there (past them M (.) M - I stays singular on a neutral saddle, mu and 1 / mu real)
+RESONANCES = {"resonance_1_1": 1.0, "resonance_1_2": -1.0, "resonance_1_3": -0.5,
+              "resonance_1_4": 0.0}
+PAIR_TURNS_REAL = ("resonance_1_1", "resonance_1_2")
+
+
+def critical_pair(multipliers: np.ndarray) -> tuple[int, int]:
+    """The indices of the two multipliers whose product is nearest 1 (a Neimark-Sacker's pair)."""
+    i, j = np.triu_indices(multipliers.size, 1)
+    k = int(np.argmin(np.abs(multipliers[i] * multipliers[j] - 1.0)))
+    return int(i[k]), int(j[k])
+
+
+def pair_cosine(multipliers: np.ndarray) -> float:
+    """(mu + mu') / 2 of the critical pair: cos theta on the circle, beyond +-1 where real.
+
+    Continuous through a strong resonance 1:1 or 1:2, where the pair meets on the real axis
+    (the pair's own argument has a square-root branch there).
+    """
+    i, j = critical_pair(multipliers)
+    return float(0.5 * (multipliers[i] + multipliers[j]).real)
+
+
+def other_multipliers(multipliers: np.ndarray) -> np.ndarray:
+    """The multipliers but the critical pair."""
+    return np.delete(multipliers, critical_pair(multipliers))
 
 
 CONDITIONS = {"grazing": Grazing, "fold": lambda: Multiplier(1.0),

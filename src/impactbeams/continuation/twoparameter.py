@@ -13,12 +13,21 @@ Codimension-two points met on the way, each located to ``locate_tolerance`` and 
 - ``turning_point``: p2 turns back along the curve (the tangent's p2 part changes sign; on a
   fold curve the cusp is such a point, where the tangent's p1 part vanishes as well:
   ``cusp`` when it is below ``CUSP_TANGENT`` there);
-- ``grazing``: the curve's orbit touches: its grazing value passes through 0 along a fold or
-  period-doubling curve (a sign change by a jump, where another contact or gap minimum
-  becomes the nearest to 0, is not one: `_at_zero_depth`). Where no point is found beyond
-  it, or Newton's iterates at a point whose orbit touches meet another contact sequence (the
-  monodromy jumps there: the far side's has the new contact's saltation), the curve ends
-  there (``curve_ending`` "grazing"; the last point carries the label);
+- ``grazing``: the curve's orbit touches: its grazing value passes through 0 along a fold,
+  period-doubling or Neimark-Sacker curve (a sign change by a jump, where another contact or
+  gap minimum becomes the nearest to 0, is not one: `_at_zero_depth`). The monodromy jumps
+  there (the far side's has the new contact's saltation), so the curve ends there
+  (``curve_ending`` "grazing"; the last point carries the label): where no point is found
+  beyond it, where Newton's iterates at a point whose orbit touches meet another contact
+  sequence, or where a step lands on an orbit of other contacts;
+- ``contact_merge``, ``contact_split``: a multiplier's orbit loses or gains a contact with
+  no contact at zero depth (bisected on its contacts): the curve ends there as well
+  (``curve_ending`` "contact_change");
+- on a Neimark-Sacker curve, ``resonance_1_1``, ``resonance_1_2``, ``resonance_1_3``,
+  ``resonance_1_4``: the pair's cosine (`curves.pair_cosine`) passes 1, -1, -1/2, 0; at 1:1
+  and 1:2 the pair turns real and the curve ends (``curve_ending`` "pair_real");
+  ``fold_neimark_sacker``, ``flip_neimark_sacker``: a real multiplier but the pair passes
+  +1 or -1 (the curve goes on);
 - ``end``: the curve's last point otherwise: at the edge of the box (``curve_ending``
   "bound", corrected onto it) or where the corrector finds no point (the orbit stops
   existing, or turns within less than ``min_step``: "min_step").
@@ -41,6 +50,7 @@ from impactbeams.continuation.arclength import (
     Settings,
     crosses,
     oriented,
+    same_piece,
 )
 from impactbeams.continuation.branch import (
     INTERRUPTED,
@@ -50,10 +60,19 @@ from impactbeams.continuation.branch import (
     Course,
     Position,
     Steps,
+    merge_or_split,
 )
 from impactbeams.continuation.checkpoint import CourseLog, checkpointed
-from impactbeams.continuation.curves import CONDITIONS, KINDS, CurveProblem
-from impactbeams.continuation.events import Located, grazing_test, locate
+from impactbeams.continuation.curves import (
+    CONDITIONS,
+    KINDS,
+    PAIR_TURNS_REAL,
+    RESONANCES,
+    CurveProblem,
+    other_multipliers,
+    pair_cosine,
+)
+from impactbeams.continuation.events import Located, continuous_root, grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
 from impactbeams.continuation.run import (
     CONTINUABLE,
@@ -84,9 +103,13 @@ from impactbeams.variables import (
 if TYPE_CHECKING:
     import xarray as xr
 
-# how a curve ended (`curve_ending`): at the box's edge, at a change of the orbit's contacts
-# past which no point was found, no point found by the corrector (the orbit ends), too long
-BOUND, GRAZED, MIN_STEP, MAX_POINTS = "bound", "grazing", "min_step", "max_points"
+# how a curve ended (`curve_ending`): at the box's edge, at its orbit's grazing (a multiplier's
+# curve), at another change of its orbit's contacts (a merge or split), where the corrector
+# found no point (the orbit ends), too long
+BOUND, GRAZED, CONTACT_CHANGE, MIN_STEP, MAX_POINTS = (
+    "bound", "grazing", "contact_change", "min_step", "max_points")
+# ... and a Neimark-Sacker curve at a strong resonance 1:1 or 1:2, where its pair turns real
+PAIR_REAL = "pair_real"
 # a p2 turning point is a cusp where the unit tangent's p1 part (scaled) is also this small:
 # the curve's tangent then lies in the state space (the parameter plane's curve has a cusp)
 CUSP_TANGENT = 1e-3
@@ -376,6 +399,15 @@ def _steps(follower: Follower, curve: Branch, box: np.ndarray, progress: Progres
             curve.ending = BOUND
             return
         points = _events(follower, current, point)
+        if not (follower.problem.condition.smooth_across_contacts
+                or same_piece(current, point)):
+            _end_at_contact_change(follower, curve, current, point, points, progress)
+            return
+        turns_real = [i for i, p in enumerate(points) if p.label in PAIR_TURNS_REAL]
+        if turns_real:  # the Neimark-Sacker curve ends where its pair meets on the real axis
+            _keep(follower, curve, points[:turns_real[0] + 1], progress)
+            curve.ending = PAIR_REAL
+            return
         _keep(follower, curve, points, progress)
         if point.crossed and _at_zero_depth(point, *curve.points):
             # Newton's iterates met another contact sequence at a point whose orbit touches:
@@ -435,8 +467,54 @@ def _events(follower: Follower, a: Point, b: Point) -> list[Point]:
         located = _located(follower, a, b, grazing_test, may_jump=True)
         if located.root and _at_zero_depth(located.before, a, b):
             found.append(dataclasses.replace(located.before, label="grazing"))
+    if follower.problem.condition.label == "neimark_sacker":
+        found += _pair_events(follower, a, b)
     found.sort(key=lambda point: float(a.tangent @ (point.x - a.x)))
     return [*found, b]
+
+
+def _pair_events(follower: Follower, a: Point, b: Point) -> list[Point]:
+    """A Neimark-Sacker curve's strong resonances and fold- or flip-Neimark-Sacker points.
+
+    A resonance where the pair's cosine (`pair_cosine`) passes its value (`RESONANCES`); a
+    fold (flip) where a real multiplier but the pair passes +1 (-1): the parity of those
+    beyond it changes (a complex pair meeting on the real axis changes their number by 2),
+    located at the root of that multiplier minus +1 (-1).
+    """
+    tests = []
+    cosines = [pair_cosine(point.evaluation.multipliers) for point in (a, b)]
+    for label, cosine in RESONANCES.items():
+        if (cosines[0] > cosine) != (cosines[1] > cosine):
+            tests.append((label, lambda point, c=cosine: pair_cosine(
+                point.evaluation.multipliers) - c))
+    for sigma, label in ((1.0, "fold_neimark_sacker"), (-1.0, "flip_neimark_sacker")):
+        outside = [int(np.count_nonzero(_real_beyond(point, sigma) > 1.0)) for point in (a, b)]
+        if (outside[0] - outside[1]) % 2:
+            rank = min(outside)
+            tests.append((label, lambda point, s=sigma, r=rank: _crossing(point, s, r)))
+    found = []
+    for label, test in tests:
+        # (a test that jumps, where the pair or multiplier it follows changed, is none)
+        located = _located(follower, a, b, test)
+        if continuous_root(test, a, b, located, follower.settings.locate_tolerance):
+            found.append(dataclasses.replace(located.before, label=label))
+    return found
+
+
+def _real_beyond(point: Point, sigma: float) -> np.ndarray:
+    """|mu| of the real multipliers of ``sigma``'s sign but the pair, largest first.
+
+    (Those beyond ``sigma`` are outside the unit circle.)
+    """
+    mu = other_multipliers(np.asarray(point.evaluation.multipliers))
+    mu = mu[(mu.imag == 0.0) & (np.sign(mu.real) == sigma)]
+    return np.sort(np.abs(mu))[::-1]
+
+
+def _crossing(point: Point, sigma: float, rank: int) -> float:
+    """|mu| - 1 of the ``rank``-th largest real multiplier of ``sigma``'s sign but the pair."""
+    moduli = _real_beyond(point, sigma)
+    return float(moduli[rank]) - 1.0 if rank < moduli.size else -1.0
 
 
 def _turning(follower: Follower, a: Point, b: Point) -> Point:
@@ -466,18 +544,53 @@ def _at_zero_depth(point: Point, *ends: Point) -> bool:
     return abs(point.evaluation.grazing) <= ZERO_DEPTH * scale
 
 
+def _end_at_contact_change(follower: Follower, curve: Branch, current: Point, point: Point,
+                           located: list[Point], progress: Progress | None) -> None:
+    """End a multiplier's curve where its orbit's contacts change from ``current`` to ``point``.
+
+    ``located``: the events `_events` found between them, then ``point``. There the
+    monodromy jumps (the far side's has the new contact's saltation: its dashpot's force
+    starts with it), so the bifurcation of one side does not continue into the other's: a
+    curve stepped across would go on as the far side's own bifurcation (or as points that
+    solve neither side's condition to the tolerance). The end is the located grazing, or
+    else the last point of ``current``'s contacts, bisected on them (a merge or split, or a
+    contact that comes in where the grazing value jumps).
+    """
+    grazings = [p for p in located if p.label == "grazing"]
+    if grazings:
+        end = grazings[0]
+    else:
+        before = _located(follower, current, point,
+                          lambda q: 1.0 if same_piece(current, q) else -1.0).before
+        label = "grazing" if _at_zero_depth(before, current, point) else merge_or_split(
+            current, point)
+        end = dataclasses.replace(before, label=label)
+    along = float(current.tangent @ (end.x - current.x))
+    if along <= 0.0:  # no point of current's contacts past it: current is the end
+        curve.points[-1] = dataclasses.replace(current, label=end.label)
+    else:
+        _keep(follower, curve, [p for p in located if p.label and p.label != "grazing"
+                                and float(current.tangent @ (p.x - current.x)) < along]
+              + [end], progress)
+    curve.ending = GRAZED if end.label == "grazing" else CONTACT_CHANGE
+
+
 def _end_at_grazing(follower: Follower, curve: Branch, current: Point, taken: float,
                     progress: Progress | None) -> None:
     """End the curve at the grazing ahead of ``current``, located (no point found past it)."""
     located = locate(lambda s: follower.at_arclength(current, s).point, current, taken, None,
                      grazing_test, follower.settings.locate_tolerance, may_jump=True)
-    if located.root and located.before is not current and _at_zero_depth(located.before,
-                                                                          current):
-        _keep(follower, curve, [dataclasses.replace(located.before, label="grazing")],
-              progress)
-        curve.ending = GRAZED
-    else:
+    end = located.before if located.root else current
+    # (against the whole curve's values: the steps may have crept up to the grazing, the
+    # last point's gap already at zero depth, none nearer found)
+    if not _at_zero_depth(end, *curve.points):
         curve.ending = MIN_STEP
+        return
+    if end is current:
+        curve.points[-1] = dataclasses.replace(current, label="grazing")
+    else:
+        _keep(follower, curve, [dataclasses.replace(end, label="grazing")], progress)
+    curve.ending = GRAZED
 
 
 def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
@@ -518,8 +631,13 @@ def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
                                                    for point in curve.points]))
     dataset["curve_event"] = ("branch_point", np.array(
         [CURVE_EVENTS.index(point.label or "none") for point in curve.points], dtype=np.int8))
-    for name in ("curve_condition", "curve_tangent_1", "curve_tangent_2", "curve_event",
-                 "curve_stable"):
+    names = ["curve_condition", "curve_tangent_1", "curve_tangent_2", "curve_event",
+             "curve_stable"]
+    if spec.kind == "neimark_sacker":
+        dataset["curve_pair_cosine"] = ("branch_point", np.array(
+            [pair_cosine(np.asarray(point.evaluation.multipliers)) for point in curve.points]))
+        names.append("curve_pair_cosine")
+    for name in names:
         dataset[name].attrs.update(attributes(name))
     dataset.attrs.pop("branch_endings")
     dataset.attrs.pop("branch_origins")

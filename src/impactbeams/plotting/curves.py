@@ -25,7 +25,10 @@ from impactbeams.plotting.selection import choose_variable, select
 from impactbeams.variables import CURVE_EVENTS
 
 MARKERS = {"end": ("s", "E"), "turning_point": ("v", "T"), "cusp": ("D", "CP"),
-           "grazing": ("^", "G")}
+           "grazing": ("^", "G"), "contact_merge": ("<", "M"), "contact_split": (">", "S"),
+           "resonance_1_1": ("*", "R1"), "resonance_1_2": ("*", "R2"),
+           "resonance_1_3": ("*", "R3"), "resonance_1_4": ("*", "R4"),
+           "fold_neimark_sacker": ("P", "LPNS"), "flip_neimark_sacker": ("X", "PDNS")}
 KIND_NAMES = {"grazing": "grazing", "fold": "fold", "period_doubling": "period doubling",
               "neimark_sacker": "Neimark-Sacker"}
 # one colour per kind of curve; over a map's colours the first is black
