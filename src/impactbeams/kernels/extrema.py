@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
-from impactbeams.brent import MAX_ITERATIONS, iteration
 from impactbeams.kernels import contact
+from impactbeams.kernels.bracketing import MAX_ITERATIONS, iteration
 from impactbeams.kernels.drive import clamp_motion
 from impactbeams.kernels.dynamics import propagate, sample_grid, sample_segments, segment_index
 from impactbeams.kernels.jit import inlined_kernel, kernel
