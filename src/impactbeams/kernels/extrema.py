@@ -1,14 +1,16 @@
-"""The gap's extrema within a recorded run: Brent's method on the gap's rate, in one call.
+"""Extrema within a recorded run, each refined by Brent's method on its rate in one call.
 
 A continuation reads a grazing value at every corrected point: the gap's smallest minimum in
 free flight, and its highest rise between contacts, each refined at the root of the gap's rate
-between two samples. Brent's method there takes some ten evaluations of the rate, each a
-closed-form state of the run; from Python each was a kernel call of its own (some 120 us a
-refinement on the stiff stop, 6 % of its continuation). Here the whole search is one call.
+between two samples; at the points it keeps, the tips' largest deflections too. Brent's method
+there takes some ten evaluations of the rate, each a closed-form state of the run; from Python
+each was a kernel call of its own (some 120 us a refinement on the stiff stop, 6 % of its
+continuation). Here the samples, the choice and the search are one call.
 
 The gap is the one read from the free coordinates, as `impactbeams.orbits.PeriodMap` reads it:
 g = const + S sin(Omega t) + C cos(Omega t) + w . q (``phase_scalars[FREE]``, w the free
-phase's event row), in a contact phase too (its state observed in the free coordinates).
+phase's event row), in a contact phase too (its state observed in the free coordinates). The
+tips are `stroboscope.tip_motion`'s.
 """
 
 import math
