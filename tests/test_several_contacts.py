@@ -9,7 +9,14 @@ conservation, and the static correction's convergence in the modes with two cont
 import numpy as np
 import pytest
 
-from impactbeams import Contact, Params, contact_sequence, simulate, two_sided_stop
+from impactbeams import (
+    Contact,
+    Params,
+    contact_sequence,
+    first_contact,
+    simulate,
+    two_sided_stop,
+)
 from impactbeams.contact.active_sets import active_set, several_contacts
 from impactbeams.params import ParameterError
 
@@ -122,6 +129,20 @@ def test_contact_sequence_event_limit_and_what_is_refused():
         contact_sequence(damped, 0.03)
     with pytest.raises(ParameterError, match="^fields = True is not allowed with 2 contacts"):
         simulate(TOGETHER, 0.03, fields=True)
+
+
+@pytest.mark.parametrize("params", [STOP, TOGETHER])
+@pytest.mark.parametrize("call", [first_contact, contact_sequence])
+def test_a_horizon_beyond_the_runs_range_is_refused_before_any_compute(params, call):
+    """first_contact and contact_sequence check each contact's run as simulate does
+    (`preflight.check_run`): t_max = 1e9 s would turn the highest mode through ~1e16 rad (the
+    kernel would search for hours); refused in one line within 5 s (cold compiles included)."""
+    import time
+
+    start = time.perf_counter()
+    with pytest.raises(ParameterError, match=r"^t_max = 1000000000\.0 .*t_max <= "):
+        call(params, 1e9)
+    assert time.perf_counter() - start < 5.0
 
 
 # --- contacts closed together against DOP853 at equal modes ------------------------------------

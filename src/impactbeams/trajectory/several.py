@@ -40,6 +40,7 @@ from impactbeams.params import (
     require_integer,
     require_type,
 )
+from impactbeams.preflight import check_run
 from impactbeams.trajectory.active_phases import (
     ContactRun,
     PackedContacts,
@@ -102,20 +103,29 @@ def exclusive(params: Params) -> bool:
             and a.contact_damping == 0.0 and b.contact_damping == 0.0)
 
 
-def _packs(params: Params, t_max: float, n_modes: int | None) -> tuple[list[Packed], int]:
-    """Each contact's packed run at one n_modes (default: the most any of them recommends)."""
-    _check_run(params, t_max)
-    runs = params.each_contact()
-    n = (max(recommended_modes(run) for run in runs) if n_modes is None
-         else require_integer("n_modes", n_modes, 1, MAX_MODES))
-    return [pack_run(run, n, t_max, t_max) for run in runs], n
+def _packs(params: Params, t_max: float, n_modes: int) -> list[Packed]:
+    """Each contact's packed run at ``n_modes`` (checked: `check_contact_runs`)."""
+    return [pack_run(run, n_modes, t_max, t_max) for run in params.each_contact()]
 
 
-def _check_run(params: Params, t_max: float) -> None:
-    """Raise ParameterError (an ArgumentTypeError for a type) unless both are allowed."""
+def check_contact_runs(params: Params, t_max: float, n_modes: int | None) -> int:
+    """The modes per beam of ``params``' contacts' runs, once their horizon and modes are allowed.
+
+    Refuses before any compute (ParameterError; an ArgumentTypeError for a type) a ``t_max``
+    (s) or ``n_modes`` beyond any contact's run's range, as `impactbeams.simulate` does
+    (`preflight.check_run`), at the modes they share (default: the most any of them
+    recommends).
+    """
     require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
     t_max = require_finite("t_max", t_max, "s")
     require("t_max", t_max, t_max > 0, "must be > 0", "s")
+    runs = params.each_contact()
+    n = (max(recommended_modes(run) for run in runs) if n_modes is None
+         else require_integer("n_modes", n_modes, 1, MAX_MODES))
+    for run in runs:
+        check_run(run.numeric(), t_max, n, springs=run.grounded_springs,
+                  structure1=run.structure1)
+    return n
 
 
 def _episode(packed: Packed, q: np.ndarray, v: np.ndarray, t: float) -> Trajectory:
@@ -153,7 +163,8 @@ def first_contact(params: Params, t_max: float, n_modes: int | None = None) -> F
     ``n_modes``: free modes per beam (default: the most any one contact's run recommends,
     `impactbeams.contact.recommended_modes`). The spring law only (several contacts need it).
     """
-    packs, n = _packs(params, t_max, n_modes)
+    n = check_contact_runs(params, t_max, n_modes)
+    packs = _packs(params, t_max, n)
     certain = exclusive(params)
     first, episode = _earliest(packs, packs[0].q0, packs[0].v0, 0.0)
     if episode is None:
@@ -179,11 +190,11 @@ def contact_sequence(params: Params, t_max: float, n_modes: int | None = None,
     (`impactbeams.trajectory.active_phases`), contacts closing together included (no dashpots
     yet).
     """
-    _check_run(params, t_max)
+    n = check_contact_runs(params, t_max, n_modes)
     max_contacts = require_integer("max_contacts", max_contacts, 1)
     if params.several_contacts:
-        return _several_sequence(params, t_max, n_modes, max_contacts)
-    packs, n = _packs(params, t_max, n_modes)
+        return _several_sequence(params, t_max, n, max_contacts)
+    packs = _packs(params, t_max, n)
     q, v, t = packs[0].q0, packs[0].v0, 0.0
     rows: dict[str, list[float]] = {name: [] for name in ("impact_contact", *_IMPACT_COLUMNS)}
     status = "complete"
@@ -212,10 +223,9 @@ def _sequence_dataset(rows: dict[str, list[float]], status: str, n_modes: int, t
     return xr.Dataset(data, attrs={"status": status, "n_modes": n_modes, "t_max": t_max})
 
 
-def _several_sequence(params: Params, t_max: float, n_modes: int | None, max_contacts: int,
-                      ) -> xr.Dataset:
-    """``contact_sequence`` of several contacts: one run of the active sets' phases."""
-    packed, n = _packed_contacts(params, t_max, n_modes, t_max)
+def _several_sequence(params: Params, t_max: float, n: int, max_contacts: int) -> xr.Dataset:
+    """``contact_sequence`` of several contacts (n modes per beam): the active sets' phases."""
+    packed = _packed_contacts(params, n, t_max, t_max)
     # a contact's onset and release are two phases: the run stops once max_contacts onsets
     # are recorded and one more is found
     run = run_contacts(packed, 2 * max_contacts + 2)
@@ -229,8 +239,8 @@ def _several_sequence(params: Params, t_max: float, n_modes: int | None, max_con
     return _sequence_dataset(rows, "complete", n, t_max)
 
 
-def _packed_contacts(params: Params, t_max: float, n_modes: int | None, search_span: float,
-                     ) -> tuple[PackedContacts, int]:
+def _packed_contacts(params: Params, n_modes: int, t_max: float, search_span: float,
+                     ) -> PackedContacts:
     """The packed phases of several contacts (spring law, no dashpots), n_modes per beam."""
     runs = params.each_contact()
     damped = [index for index, run in enumerate(runs) if run.contact_damping > 0.0]
@@ -239,9 +249,7 @@ def _packed_contacts(params: Params, t_max: float, n_modes: int | None, search_s
             f"contacts[{damped[0]}].damping = {runs[damped[0]].contact_damping!r} is not allowed "
             "with several contacts: their contact phases take springs without dashpots so far "
             "(docs/limits.md, 'Several contacts')")
-    n = (max(recommended_modes(run) for run in runs) if n_modes is None
-         else require_integer("n_modes", n_modes, 1, MAX_MODES))
-    return pack_contacts(params, n, t_max, search_span), n
+    return pack_contacts(params, n_modes, t_max, search_span)
 
 
 def episodes(packed: PackedContacts, run: ContactRun) -> dict[str, list[float]]:
@@ -301,7 +309,8 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int | None, times: 
     The energy is the beams' (`impactbeams.trajectory.observables`) plus the closed contacts'
     g_S^T K_eff g_S / 2 and the work of F through beam 1's tip shifts under them.
     """
-    packed, n = _packed_contacts(params, t_max, n_modes, search_span)
+    n = check_contact_runs(params, t_max, n_modes)
+    packed = _packed_contacts(params, n, t_max, search_span)
     run = run_contacts(packed, max_events)
     if run.status != "complete":
         warnings.warn(f"simulation stopped at t = {run.t_end!r} s before t_max = {t_max!r} s: "
