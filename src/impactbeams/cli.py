@@ -771,9 +771,9 @@ def _contacts(args: argparse.Namespace) -> int:
     """``contacts``: which contact closes first and when, and every contact of a sequence.
 
     The sequence (`impactbeams.contact_sequence`) where it is built (one contact, a two-sided
-    stop, contacts closing together); where it is refused (a dashpot among several contacts)
-    its refusal is said, and with -o it is
-    an error (before any compute).
+    stop, contacts closing together, dashpots); where it is refused (contacts closed together
+    whose phase is overdamped) its refusal is said, and with -o it is an error (before any
+    compute).
     """
     import dataclasses
 

@@ -33,7 +33,6 @@ from impactbeams.packing import Packed, pack_run
 from impactbeams.params import (
     MAX_EVENTS,
     MAX_MODES,
-    ParameterError,
     Params,
     require,
     require_finite,
@@ -187,8 +186,8 @@ def contact_sequence(params: Params, t_max: float, n_modes: int | None = None,
     `impactbeams.simulate`'s impact table), and ``attrs["status"]`` ("complete", or
     "event_limit" after ``max_contacts``). One contact: `impactbeams.simulate`'s own run, to
     its bits; several: the phases of every set of contacts closed at once
-    (`impactbeams.trajectory.active_phases`), contacts closing together included (no dashpots
-    yet).
+    (`impactbeams.trajectory.active_phases`), contacts closing together and dashpots
+    included.
     """
     n = check_contact_runs(params, t_max, n_modes)
     max_contacts = require_integer("max_contacts", max_contacts, 1)
@@ -226,9 +225,9 @@ def _sequence_dataset(rows: dict[str, list[float]], status: str, n_modes: int, t
 def _several_sequence(params: Params, t_max: float, n: int, max_contacts: int) -> xr.Dataset:
     """``contact_sequence`` of several contacts (n modes per beam): the active sets' phases."""
     packed = _packed_contacts(params, n, t_max, t_max)
-    # a contact's onset and release are two phases: the run stops once max_contacts onsets
-    # are recorded and one more is found
-    run = run_contacts(packed, 2 * max_contacts + 2)
+    # a contact's onset, release and (a dashpot's early release) its gap's opening are three
+    # phases: the run stops once max_contacts onsets are recorded and one more is found
+    run = run_contacts(packed, 3 * max_contacts + 3)
     rows = episodes(packed, run)
     if len(rows["impact_contact"]) > max_contacts:  # (always so when the arrays are full)
         rows = {name: values[:max_contacts] for name, values in rows.items()}
@@ -241,14 +240,7 @@ def _several_sequence(params: Params, t_max: float, n: int, max_contacts: int) -
 
 def _packed_contacts(params: Params, n_modes: int, t_max: float, search_span: float,
                      ) -> PackedContacts:
-    """The packed phases of several contacts (spring law, no dashpots), n_modes per beam."""
-    runs = params.each_contact()
-    damped = [index for index, run in enumerate(runs) if run.contact_damping > 0.0]
-    if damped:
-        raise ParameterError(
-            f"contacts[{damped[0]}].damping = {runs[damped[0]].contact_damping!r} is not allowed "
-            "with several contacts: their contact phases take springs without dashpots so far "
-            "(docs/limits.md, 'Several contacts')")
+    """The packed phases of several contacts (the spring law), n_modes per beam."""
     return pack_contacts(params, n_modes, t_max, search_span)
 
 
@@ -264,6 +256,8 @@ def episodes(packed: PackedContacts, run: ContactRun) -> dict[str, list[float]]:
     open_rows: dict[int, int] = {}
     for k in range(1, run.time.size):
         f = int(run.switched[k])
+        if f >= len(packed.runs):  # a gap opened after an early release: no switch
+            continue
         if (run.mask[k] >> f) & 1:  # an onset: the gap's rate in the phase before
             open_rows[f] = len(rows["impact_contact"])
             rate = gap_rate(packed, run.mask[k - 1], f, run.q[k], run.v[k], run.time[k])
