@@ -299,6 +299,22 @@ def test_the_contacts_of_a_two_sided_stop_against_the_fe_model():
         assert deviation.max() < 5e-5, key
 
 
+def test_the_sequence_of_one_contact_with_a_dashpot_is_simulates():
+    """After a dashpot's early release the free flight is two segments (until the gap opens,
+    then on): contact_sequence follows them to every contact of simulate's run (5 by 0.03 s;
+    it stopped after the first), onsets, durations, peaks and rates bit for bit, impulses to
+    1e-13 (measured 1 ulp: the run is cut into episodes)."""
+    single = FORCED.replace(contact_damping=0.5, clearance=2e-6)
+    alone = simulate(single, 0.03, n_modes=12, dt_output=1e-3)
+    sequence = contact_sequence(single, 0.03, n_modes=12)
+    assert sequence.sizes["impact"] == alone.sizes["impact"] == 5
+    for name in ("impact_onset_time", "impact_duration", "impact_peak_force", "impact_velocity",
+                 "separation_velocity"):
+        np.testing.assert_array_equal(sequence[name].values, alone[name].values)
+    np.testing.assert_allclose(sequence.impact_impulse.values, alone.impact_impulse.values,
+                               rtol=1e-13)
+
+
 def test_the_contacts_of_a_two_sided_stop_with_dashpots_never_overlap():
     """With dashpots (tests/test_several_contacts.py checks them against DOP853) a two-sided
     stop's sides close one at a time: each contact is released before the next one's onset

@@ -54,8 +54,9 @@ from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory
 from impactbeams.variables import attributes, validate
 
-# a free flight, a contact and the free flight after it: one contact episode of one run
-_EPISODE = 3
+# a free flight (two segments after a dashpot's early release: until the gap opens, then on), a
+# contact and the free flight after it: one contact episode of one run
+_EPISODE = 4
 # the per-impact quantities a sequence reports, from `impact_table`
 _IMPACT_COLUMNS = ("impact_onset_time", "impact_duration", "impact_impulse",
                    "impact_peak_force", "impact_velocity", "separation_velocity")
@@ -146,13 +147,19 @@ def _earliest(packs: list[Packed], q: np.ndarray, v: np.ndarray, t: float,
 
     (-1, None) if none closes by t_max.
     """
-    first, best = -1, None
+    first, best, onset = -1, None, math.inf
     for index, packed in enumerate(packs):
         episode = _episode(packed, q, v, t)
-        closes = episode.time.size > 1 and episode.phase[1] == CONTACT
-        if closes and (best is None or episode.time[1] < best.time[1]):
-            first, best = index, episode
+        k = _contact_segment(episode)
+        if k > 0 and episode.time[k] < onset:
+            first, best, onset = index, episode, episode.time[k]
     return first, best
+
+
+def _contact_segment(episode: Trajectory) -> int:
+    """The index of an episode's contact segment, -1 if it has none."""
+    closed = np.flatnonzero(episode.phase == CONTACT)
+    return int(closed[0]) if closed.size else -1
 
 
 @one_blas_thread
@@ -208,9 +215,10 @@ def contact_sequence(params: Params, t_max: float, n_modes: int | None = None,
         rows["impact_contact"].append(0)
         for name in _IMPACT_COLUMNS:
             rows[name].append(float(table[name][0]))
-        if episode.time.size < _EPISODE:  # still in contact at t_max
+        after = _contact_segment(episode) + 1
+        if after == episode.time.size:  # still in contact at t_max
             break
-        q, v, t = episode.q[2], episode.v[2], float(episode.time[2])
+        q, v, t = episode.q[after], episode.v[after], float(episode.time[after])
     return _sequence_dataset(rows, status, n, t_max)
 
 
