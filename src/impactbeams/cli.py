@@ -773,20 +773,24 @@ def _contacts(args: argparse.Namespace) -> int:
     """``contacts``: which contact closes first and when, and every contact of a sequence.
 
     The sequence (`impactbeams.contact_sequence`) where it is built (one contact, a two-sided
-    stop, contacts closing together); where it is refused (a dashpot among several contacts)
-    its refusal is said, and with -o it is
-    an error (before any compute).
+    stop, contacts closing together, dashpots); where it is refused (contacts closed together
+    whose phase is overdamped) its refusal is said, and with -o it is an error (before any
+    compute).
     """
     import dataclasses
 
     from impactbeams.lock import output_lock
     from impactbeams.preflight import require_output_file
-    from impactbeams.trajectory.several import contact_sequence, first_contact
+    from impactbeams.trajectory.several import (
+        check_contact_runs,
+        contact_sequence,
+        first_contact,
+    )
 
     output = (require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
               if args.output else None)
     params = params_from_args(args)
-    _check_contact_runs(params, args.t_max, args.n_modes)
+    check_contact_runs(params, args.t_max, args.n_modes)
     with output_lock(output) if output else contextlib.nullcontext():
         with _running_kernels("simulate", args):
             try:  # refused before any compute: a file must hold it
@@ -821,26 +825,6 @@ def _contacts(args: argparse.Namespace) -> int:
               f"t_max = {args.t_max!r} s (status {sequence.attrs['status']})")
         return EXIT_INCOMPLETE
     return 0
-
-
-def _check_contact_runs(params: Params, t_max: float, n_modes: int | None) -> None:
-    """Refuse, before any compute, a horizon or modes beyond any contact's run's range.
-
-    As `simulate` does (`preflight.check_run`), for each contact's run at the modes they
-    share (default: the most any of them recommends, as `first_contact` takes).
-    """
-    import math
-
-    from impactbeams.contact import recommended_modes
-    from impactbeams.preflight import check_run
-
-    if not (isinstance(t_max, float) and math.isfinite(t_max) and t_max > 0):
-        return  # the library names t_max's own rule
-    runs = params.each_contact()
-    n = n_modes or max(recommended_modes(run) for run in runs)
-    for run in runs:
-        check_run(run.numeric(), t_max, n, springs=run.grounded_springs,
-                  structure1=run.structure1)
 
 
 def _json_numbers(value: object) -> object:

@@ -267,11 +267,28 @@ def _reonset_after_early_release(table, force, scalars, q_s, v_s, t_s, settings,
     force_scalars[SCALAR_CONST] = stiffness * scalars[SCALAR_CONST]
     harmonic = impedance * event_sine(scalars)
     force_scalars[SCALAR_SINE], force_scalars[SCALAR_COSINE] = harmonic.real, harmonic.imag
-    t_onset = find_switch(table, impedance * force, force_scalars, y, y_rate, t_s, True, False,
-                          settings, q, v, rotor)
+    return reonset_or_opening(table, impedance * force, force_scalars, y, y_rate, table, force,
+                              scalars, q_s, v_s, t_s, settings, q, v, rotor)
+
+
+@kernel
+def reonset_or_opening(force_table, force_drive, force_scalars, y_s, y_rate_s, gap_table,
+                       gap_drive, gap_scalars, q_s, v_s, t_s, settings, q, v, rotor):
+    """After an early release at t_s (s): ``(t, opened)``, the re-onset or the gap's opening.
+
+    Two event functions of one phase, each in its own oscillators: -R, the force the released
+    contact would have if closed (``force_*``, from (y_s, y_rate_s); 0 and rising at the
+    release), and its gap g (``gap_*``, from (q_s, v_s); < 0). The re-onset is where R rises
+    through 0 again (``find_switch`` waiting for -R's rise, ``opened`` False), unless the gap
+    opens first (g rises through 0: ``opened`` True).
+    """
+    t_onset = find_switch(force_table, force_drive, force_scalars, y_s, y_rate_s, t_s, True,
+                          False, settings, q, v, rotor)
     t_open = first_root(q_s, v_s, t_s, settings.t_max,
-                        Oscillators(frequencies, zeta, force, forcing_frequency),
-                        _opposite(table, scalars, forcing_frequency), q, v, rotor)
+                        Oscillators(gap_table[ROW_FREQUENCY], gap_table[ROW_ZETA], gap_drive,
+                                    settings.forcing_frequency),
+                        _opposite(gap_table, gap_scalars, settings.forcing_frequency), q, v,
+                        rotor)
     if t_open == GAVE_UP:
         return GAVE_UP, False
     if math.isnan(t_open) or t_onset <= t_open:

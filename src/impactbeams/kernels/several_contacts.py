@@ -17,8 +17,11 @@ phase's table per function (``tables[a, f]``, ``forces[a, f]``, ``scalars[a, f]`
 function's next switch is the single contact's own certified search
 (`impactbeams.kernels.dynamics.find_switch`: a function that starts at 0 and rising, the
 contact that has just closed or opened, waits for its rise) and the phase ends at the earliest
-of them. Its closed contacts' impulses follow in closed form from the oscillators' ends, their
-peak forces from the certified branch and bound of `impactbeams.kernels.peaks`.
+of them. With dashpots a contact released early (its gap still closed) is followed instead by
+the single contact's rule (`impactbeams.kernels.dynamics.reonset_or_opening`) on its force in
+the set with it added (function n + f) and its gap, until that gap opens. Its closed
+contacts' impulses follow in closed form from the oscillators' ends, their peak forces from
+the certified branch and bound of `impactbeams.kernels.peaks`.
 """
 
 import math
@@ -35,8 +38,9 @@ from impactbeams.kernels.dynamics import (
     find_switch,
     instantaneous,
     propagate,
+    reonset_or_opening,
 )
-from impactbeams.kernels.events import GAVE_UP
+from impactbeams.kernels.events import GAVE_UP, phase_event
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.layout import (
     ROW_EVENT,
@@ -84,14 +88,20 @@ def impulse(table, force, scalars, forcing_frequency, y0, y_rate0, t0, y1, y_rat
 
 @kernel
 def run_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_mask, settings,
-                 q0, v0, t_start, mask_start, recorded):
+                 early_release, q0, v0, t_start, mask_start, recorded):
     """Integrate from the free state (q0, v0) with contacts ``mask_start`` closed at t_start.
 
     ``recorded`` = (time, mask, switched, q, v, impulses, peaks): phase k starts at
     ``time[k]`` (s) with the contacts of bit mask ``mask[k]`` closed, in state (q[k], v[k]),
-    after contact ``switched[k]`` closed or opened (-1 at the start); ``impulses[k, f]`` (N s)
-    and ``peaks[k, f]`` (N) are closed contact f's integral and largest force over the phase
+    after contact ``switched[k]`` closed or opened (-1 at the start; n + f where contact f's
+    gap opened after an early release, the set unchanged); ``impulses[k, f]`` (N s) and
+    ``peaks[k, f]`` (N) are closed contact f's integral and largest force over the phase
     (0 for an open one). It ends where phase k + 1 starts, or at the returned end time.
+
+    ``early_release`` (a dashpot among the contacts): a contact released with its gap still
+    closed (R fell to 0 with the gap < 0) closes again where the force it would have rises
+    through 0, unless its gap opens first (`dynamics.reonset_or_opening`, function n + f of
+    a phase: -R_f of the set with f added), as the single contact's run does.
 
     Returns (number of phases, status, end time in s): ``COMPLETE`` (t_max reached),
     ``EVENT_LIMIT`` (arrays full), ``STUCK`` (more than ``ZENO_LIMIT`` zero-length phases in
@@ -99,29 +109,44 @@ def run_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_m
     (a switch into a set that cannot occur).
     """
     seg_time, seg_mask, seg_switched, seg_q, seg_v, seg_impulse, seg_peak = recorded
-    n_contacts, m = tables.shape[1], q0.size
+    n_contacts, m = seg_impulse.shape[1], q0.size
     forcing_frequency = settings.forcing_frequency
     q, v = q0.copy(), v0.copy()
     y, y_rate = np.empty((n_contacts, m)), np.empty((n_contacts, m))
+    y_force, y_force_rate = np.empty(m), np.empty(m)
     y_end, y_rate_end = np.empty(m), np.empty(m)
     q_work, v_work = np.empty(m), np.empty(m)
     rotor = rotor_arrays(m)
     t, mask, switched, zero_run = t_start, mask_start, -1, 0
+    early = 0  # bit mask of the contacts released early whose gaps have not opened since
     for k in range(seg_time.size):
         a = set_of_mask[mask]
         seg_time[k], seg_mask[k], seg_switched[k] = t, mask, switched
         for n in range(m):
             seg_q[k, n], seg_v[k, n] = q[n], v[n]
-        first, t_event = -1, math.inf
+        first, t_event, opening = -1, math.inf, False
         for f in range(n_contacts):
             to_contact(q, v, t, lefts[a], modes[a, f], drives[a, f], forcing_frequency, y[f],
                        y_rate[f])
-            t_f = find_switch(tables[a, f], forces[a, f], scalars[a, f], y[f], y_rate[f], t,
-                              True, False, settings, q_work, v_work, rotor)
+            if (early >> f) & 1 and phase_event(tables[a, f], scalars[a, f], y[f], y_rate[f], t,
+                                                forcing_frequency)[0] >= 0.0:
+                early ^= 1 << f  # its gap is open: a plain open contact from here
+            opens = False
+            if (early >> f) & 1:
+                g = n_contacts + f
+                to_contact(q, v, t, lefts[a], modes[a, g], drives[a, g], forcing_frequency,
+                           y_force, y_force_rate)
+                t_f, opens = reonset_or_opening(tables[a, g], forces[a, g], scalars[a, g],
+                                                y_force, y_force_rate, tables[a, f],
+                                                forces[a, f], scalars[a, f], y[f], y_rate[f],
+                                                t, settings, q_work, v_work, rotor)
+            else:
+                t_f = find_switch(tables[a, f], forces[a, f], scalars[a, f], y[f], y_rate[f],
+                                  t, True, False, settings, q_work, v_work, rotor)
             if t_f == GAVE_UP:
                 return k + 1, SEARCH_LIMIT, t
             if not math.isnan(t_f) and t_f < t_event:
-                first, t_event = f, t_f
+                first, t_event, opening = f, t_f, opens
         t_stop = settings.t_max if first < 0 else t_event
         for f in range(n_contacts):
             seg_impulse[k, f] = seg_peak[k, f] = 0.0
@@ -144,8 +169,16 @@ def run_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_m
         zero_run = zero_run + 1 if instantaneous(t, t_event) else 0
         if zero_run > ZENO_LIMIT:
             return k + 1, STUCK, t_stop
+        t = t_event
+        if (early >> first) & 1:  # its gap opened, or it closes again
+            early ^= 1 << first
+        if opening:
+            switched = n_contacts + first
+            continue
         mask ^= 1 << first
-        switched, t = first, t_event
+        switched = first
+        if early_release and not (mask >> first) & 1:
+            early |= 1 << first
         if set_of_mask[mask] < 0:
             return k + 1, IMPOSSIBLE_SET, t
     return seg_time.size, EVENT_LIMIT, t

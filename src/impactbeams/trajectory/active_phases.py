@@ -3,9 +3,10 @@
 `pack_contacts` packs one run of ``Params.contacts`` for `impactbeams.kernels.several_contacts`:
 every active set's contact phase (`impactbeams.contact.active_sets`), and in each one event
 function per contact (its force if closed, its physical gap if open) as oscillators of the
-single contact's contact-phase layout. The free drive, the gaps' clearances and harmonic
-parts come from each contact's own packed run (`Params.each_contact`), which share the free
-phase.
+single contact's contact-phase layout, then (functions n + f) each open contact's force in the
+set with it added, negated, which a dashpot's early release follows. The free drive, the gaps'
+clearances and harmonic parts come from each contact's own packed run (`Params.each_contact`),
+which share the free phase.
 
 In active set S, with each contact's modal gap g_j = Delta_j + Im(S_j e^(i Omega t)) + b_j . q,
 the active forces are R_S = -K_eff g_S - C_eff g_S', that is const_S = -K_eff Delta_S,
@@ -46,7 +47,8 @@ class PackedContacts:
     """One run of several contacts, packed (layout: `impactbeams.kernels.several_contacts`).
 
     ``runs``: each contact's own packed run (the free phase, settings, start); ``contacts``:
-    the active sets' phases; ``members``: each set's contacts, by the kernels' set index.
+    the active sets' phases; ``members``: each set's contacts, by the kernels' set index;
+    ``early_release``: whether a contact can open with its gap still closed (a dashpot).
     """
 
     runs: tuple[Packed, ...]
@@ -60,6 +62,7 @@ class PackedContacts:
     drives: np.ndarray
     lefts: np.ndarray
     rights: np.ndarray
+    early_release: bool
 
     @property
     def settings(self) -> np.void:
@@ -97,6 +100,35 @@ def _functions(contacts: SeveralContacts, members: tuple[int, ...], runs: tuple[
     return weights, const, harmonics
 
 
+def _would_be_forces(contacts: SeveralContacts, members: tuple[int, ...],
+                     runs: tuple[Packed, ...], functions: tuple[np.ndarray, ...],
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each open contact f's -R_f in set ``members`` + f, in set ``members``' modes.
+
+    The force f would have if closed, negated (k g + c g' for one contact): after an early
+    release it rises through 0 where R does (`kernels.dynamics.reonset_or_opening`). Weights
+    c (n, M), const, harmonic H as `_functions`' (a closed contact's, or one whose set with f
+    cannot occur: its row of ``functions``, those of `_functions`, never used).
+    """
+    weights, const, harmonics = (array.copy() for array in functions)
+    clearance, harmonic = _gap_terms(runs)
+    omega = runs[0].params.omega
+    right = contacts.sets[members].right
+    m = right.shape[1]
+    for f in set(range(len(runs))) - set(members):
+        together = tuple(sorted((*members, f)))
+        if together not in contacts.sets:
+            continue
+        phase = contacts.sets[together]
+        index, row = list(together), together.index(f)
+        k_row, c_row = phase.effective_stiffness[row], phase.effective_damping[row]
+        gaps = contacts.gap_weights[index]
+        weights[f] = k_row @ gaps @ right[:m] + c_row @ gaps @ right[m:]
+        const[f] = k_row @ clearance[index]
+        harmonics[f] = (k_row + 1j * omega * c_row) @ harmonic[index]
+    return weights, const, harmonics
+
+
 def pack_contacts(params, n_modes: int, t_max: float, search_span: float) -> PackedContacts:
     """Pack a run of ``params``' contacts with ``n_modes`` per beam (t_max, search_span in s)."""
     runs = tuple(pack_run(run, n_modes, t_max, search_span) for run in params.each_contact())
@@ -104,11 +136,11 @@ def pack_contacts(params, n_modes: int, t_max: float, search_span: float) -> Pac
     members = tuple(possible_sets(params))
     n, m = len(runs), runs[0].q0.size
     set_of_mask = np.full(2**n, -1, dtype=np.int64)
-    tables = np.zeros((len(members), n, len(TABLE_ROWS), m))
-    forces = np.empty((len(members), n, m), dtype=complex)
-    scalars = np.empty((len(members), n, len(PHASE_SCALARS)))
-    modes = np.empty((len(members), n, 2, m), dtype=complex)
-    drives = np.empty((len(members), n, 4, m), dtype=complex)
+    tables = np.zeros((len(members), 2 * n, len(TABLE_ROWS), m))
+    forces = np.empty((len(members), 2 * n, m), dtype=complex)
+    scalars = np.empty((len(members), 2 * n, len(PHASE_SCALARS)))
+    modes = np.empty((len(members), 2 * n, 2, m), dtype=complex)
+    drives = np.empty((len(members), 2 * n, 4, m), dtype=complex)
     lefts = np.empty((len(members), 2 * m, m), dtype=complex)
     rights = np.empty((len(members), m, 2 * m), dtype=complex)
     free_drive, omega = runs[0].forces[FREE], runs[0].params.omega
@@ -117,11 +149,14 @@ def pack_contacts(params, n_modes: int, t_max: float, search_span: float) -> Pac
         set_of_mask[sum(1 << j for j in active)] = a
         phase = contacts.sets[active]
         lefts[a], rights[a] = phase.left.T, phase.right.T
-        weights, const, harmonic = _functions(contacts, active, runs)
+        functions = _functions(contacts, active, runs)
+        weights, const, harmonic = functions
         index = list(active)
         set_harmonic = free_drive + weights_b[index].T @ harmonic[index]
         set_constant = weights_b[index].T @ const[index]
-        for f in range(n):
+        weights, const, harmonic = (np.concatenate(pair) for pair in zip(
+            functions, _would_be_forces(contacts, active, runs, functions), strict=True))
+        for f in range(2 * n):
             rho, magnitude = polar(weights[f])
             modes[a, f] = phase.eigenvalues, rho
             drives[a, f] = spring_drives(lefts[a], modes[a, f], set_harmonic, set_constant,
@@ -133,7 +168,7 @@ def pack_contacts(params, n_modes: int, t_max: float, search_span: float) -> Pac
             scalars[a, f] = (const[f] + magnitude @ drives[a, f, DRIVE_EQUILIBRIUM].real,
                              harmonic[f].real, harmonic[f].imag, 1.0)
     return PackedContacts(runs, contacts, members, set_of_mask, tables, forces, scalars, modes,
-                          drives, lefts, rights)
+                          drives, lefts, rights, bool(np.any(contacts.damping > 0.0)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -163,8 +198,8 @@ def run_contacts(packed: PackedContacts, max_phases: int) -> ContactRun:
                 np.empty(max_phases, dtype=np.int64), np.empty((max_phases, m)),
                 np.empty((max_phases, m)), np.empty((max_phases, n)), np.empty((max_phases, n)))
     start = packed.runs[0]
-    count, status, t_end = kernel.run_contacts(*packed.kernel_arrays(), start.q0, start.v0,
-                                               0.0, 0, recorded)
+    count, status, t_end = kernel.run_contacts(*packed.kernel_arrays(), packed.early_release,
+                                               start.q0, start.v0, 0.0, 0, recorded)
     return ContactRun(*(array[:count] for array in recorded), CONTACT_STATUS_NAMES[status],
                       float(t_end))
 
@@ -195,14 +230,25 @@ def gap_rate(packed: PackedContacts, mask: int, contact: int, q: np.ndarray, v: 
     return float(rate)
 
 
+def _modal_gap_rates(packed: PackedContacts, t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Each contact's modal gap rate g_j' (m/s) at the free velocities v, shape (k, n)."""
+    omega = packed.settings["forcing_frequency"]
+    out = np.empty((t.size, len(packed.runs)))
+    for j, run in enumerate(packed.runs):
+        scalars = run.phase_scalars[FREE]
+        out[:, j] = (omega * (scalars[SCALAR_SINE] * np.cos(omega * t)
+                              - scalars[SCALAR_COSINE] * np.sin(omega * t))
+                     + v @ run.tables[FREE, TABLE_ROWS.index("event")])
+    return out
+
+
 def contact_quantities(packed: PackedContacts, t: np.ndarray, q: np.ndarray, v: np.ndarray,
                        mask: np.ndarray) -> dict[str, np.ndarray]:
     """Each contact's modal gap, force (N) and physical gap (m), and the contacts' energy (J).
 
-    Without dashpots (R_S = -K_eff g_S), which a run of several contacts takes so far.
-
-    Shapes (k, n) and (k,): the energy is ``g_S^T K_eff g_S / 2`` of the closed contacts'
-    modal gaps g_S (the springs' and the flexibility the modes miss, in series).
+    Shapes (k, n) and (k,): the closed contacts' forces are R_S = -K_eff g_S - C_eff g_S'
+    (their modal gaps g_S and rates), the energy ``g_S^T K_eff g_S / 2`` (the springs' and
+    the flexibility the modes miss, in series).
     """
     n, k = len(packed.runs), t.size
     modal = np.empty((k, n))
@@ -212,6 +258,7 @@ def contact_quantities(packed: PackedContacts, t: np.ndarray, q: np.ndarray, v: 
         contact_states(run.tables, run.forces, run.phase_scalars, run.settings, phases, t, q, v,
                        states)
         modal[:, j] = states[:, 0]
+    rates = _modal_gap_rates(packed, t, v) if packed.early_release else None
     force, gap, energy = np.zeros((k, n)), modal.copy(), np.zeros(k)
     for a, active in enumerate(packed.members):
         rows = np.flatnonzero(packed.set_of_mask[mask] == a)
@@ -219,6 +266,8 @@ def contact_quantities(packed: PackedContacts, t: np.ndarray, q: np.ndarray, v: 
             continue
         phase, index = packed.contacts.sets[active], list(active)
         force[np.ix_(rows, index)] = -modal[np.ix_(rows, index)] @ phase.effective_stiffness
+        if rates is not None:
+            force[np.ix_(rows, index)] -= rates[np.ix_(rows, index)] @ phase.effective_damping
         gap[rows] += force[rows][:, index] @ packed.contacts.residual[:, index].T
         energy[rows] = 0.5 * np.einsum("ki,ij,kj->k", modal[np.ix_(rows, index)],
                                        phase.effective_stiffness, modal[np.ix_(rows, index)])

@@ -33,13 +33,13 @@ from impactbeams.packing import Packed, pack_run
 from impactbeams.params import (
     MAX_EVENTS,
     MAX_MODES,
-    ParameterError,
     Params,
     require,
     require_finite,
     require_integer,
     require_type,
 )
+from impactbeams.preflight import check_run
 from impactbeams.trajectory.active_phases import (
     ContactRun,
     PackedContacts,
@@ -54,8 +54,9 @@ from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory
 from impactbeams.variables import attributes, validate
 
-# a free flight, a contact and the free flight after it: one contact episode of one run
-_EPISODE = 3
+# a free flight (two segments after a dashpot's early release: until the gap opens, then on), a
+# contact and the free flight after it: one contact episode of one run
+_EPISODE = 4
 # the per-impact quantities a sequence reports, from `impact_table`
 _IMPACT_COLUMNS = ("impact_onset_time", "impact_duration", "impact_impulse",
                    "impact_peak_force", "impact_velocity", "separation_velocity")
@@ -102,20 +103,29 @@ def exclusive(params: Params) -> bool:
             and a.contact_damping == 0.0 and b.contact_damping == 0.0)
 
 
-def _packs(params: Params, t_max: float, n_modes: int | None) -> tuple[list[Packed], int]:
-    """Each contact's packed run at one n_modes (default: the most any of them recommends)."""
-    _check_run(params, t_max)
-    runs = params.each_contact()
-    n = (max(recommended_modes(run) for run in runs) if n_modes is None
-         else require_integer("n_modes", n_modes, 1, MAX_MODES))
-    return [pack_run(run, n, t_max, t_max) for run in runs], n
+def _packs(params: Params, t_max: float, n_modes: int) -> list[Packed]:
+    """Each contact's packed run at ``n_modes`` (checked: `check_contact_runs`)."""
+    return [pack_run(run, n_modes, t_max, t_max) for run in params.each_contact()]
 
 
-def _check_run(params: Params, t_max: float) -> None:
-    """Raise ParameterError (an ArgumentTypeError for a type) unless both are allowed."""
+def check_contact_runs(params: Params, t_max: float, n_modes: int | None) -> int:
+    """The modes per beam of ``params``' contacts' runs, once their horizon and modes are allowed.
+
+    Refuses before any compute (ParameterError; an ArgumentTypeError for a type) a ``t_max``
+    (s) or ``n_modes`` beyond any contact's run's range, as `impactbeams.simulate` does
+    (`preflight.check_run`), at the modes they share (default: the most any of them
+    recommends).
+    """
     require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
     t_max = require_finite("t_max", t_max, "s")
     require("t_max", t_max, t_max > 0, "must be > 0", "s")
+    runs = params.each_contact()
+    n = (max(recommended_modes(run) for run in runs) if n_modes is None
+         else require_integer("n_modes", n_modes, 1, MAX_MODES))
+    for run in runs:
+        check_run(run.numeric(), t_max, n, springs=run.grounded_springs,
+                  structure1=run.structure1)
+    return n
 
 
 def _episode(packed: Packed, q: np.ndarray, v: np.ndarray, t: float) -> Trajectory:
@@ -137,13 +147,19 @@ def _earliest(packs: list[Packed], q: np.ndarray, v: np.ndarray, t: float,
 
     (-1, None) if none closes by t_max.
     """
-    first, best = -1, None
+    first, best, onset = -1, None, math.inf
     for index, packed in enumerate(packs):
         episode = _episode(packed, q, v, t)
-        closes = episode.time.size > 1 and episode.phase[1] == CONTACT
-        if closes and (best is None or episode.time[1] < best.time[1]):
-            first, best = index, episode
+        k = _contact_segment(episode)
+        if k > 0 and episode.time[k] < onset:
+            first, best, onset = index, episode, episode.time[k]
     return first, best
+
+
+def _contact_segment(episode: Trajectory) -> int:
+    """The index of an episode's contact segment, -1 if it has none."""
+    closed = np.flatnonzero(episode.phase == CONTACT)
+    return int(closed[0]) if closed.size else -1
 
 
 @one_blas_thread
@@ -153,7 +169,8 @@ def first_contact(params: Params, t_max: float, n_modes: int | None = None) -> F
     ``n_modes``: free modes per beam (default: the most any one contact's run recommends,
     `impactbeams.contact.recommended_modes`). The spring law only (several contacts need it).
     """
-    packs, n = _packs(params, t_max, n_modes)
+    n = check_contact_runs(params, t_max, n_modes)
+    packs = _packs(params, t_max, n)
     certain = exclusive(params)
     first, episode = _earliest(packs, packs[0].q0, packs[0].v0, 0.0)
     if episode is None:
@@ -176,14 +193,14 @@ def contact_sequence(params: Params, t_max: float, n_modes: int | None = None,
     `impactbeams.simulate`'s impact table), and ``attrs["status"]`` ("complete", or
     "event_limit" after ``max_contacts``). One contact: `impactbeams.simulate`'s own run, to
     its bits; several: the phases of every set of contacts closed at once
-    (`impactbeams.trajectory.active_phases`), contacts closing together included (no dashpots
-    yet).
+    (`impactbeams.trajectory.active_phases`), contacts closing together and dashpots
+    included.
     """
-    _check_run(params, t_max)
+    n = check_contact_runs(params, t_max, n_modes)
     max_contacts = require_integer("max_contacts", max_contacts, 1)
     if params.several_contacts:
-        return _several_sequence(params, t_max, n_modes, max_contacts)
-    packs, n = _packs(params, t_max, n_modes)
+        return _several_sequence(params, t_max, n, max_contacts)
+    packs = _packs(params, t_max, n)
     q, v, t = packs[0].q0, packs[0].v0, 0.0
     rows: dict[str, list[float]] = {name: [] for name in ("impact_contact", *_IMPACT_COLUMNS)}
     status = "complete"
@@ -198,9 +215,10 @@ def contact_sequence(params: Params, t_max: float, n_modes: int | None = None,
         rows["impact_contact"].append(0)
         for name in _IMPACT_COLUMNS:
             rows[name].append(float(table[name][0]))
-        if episode.time.size < _EPISODE:  # still in contact at t_max
+        after = _contact_segment(episode) + 1
+        if after == episode.time.size:  # still in contact at t_max
             break
-        q, v, t = episode.q[2], episode.v[2], float(episode.time[2])
+        q, v, t = episode.q[after], episode.v[after], float(episode.time[after])
     return _sequence_dataset(rows, status, n, t_max)
 
 
@@ -212,13 +230,12 @@ def _sequence_dataset(rows: dict[str, list[float]], status: str, n_modes: int, t
     return xr.Dataset(data, attrs={"status": status, "n_modes": n_modes, "t_max": t_max})
 
 
-def _several_sequence(params: Params, t_max: float, n_modes: int | None, max_contacts: int,
-                      ) -> xr.Dataset:
-    """``contact_sequence`` of several contacts: one run of the active sets' phases."""
-    packed, n = _packed_contacts(params, t_max, n_modes, t_max)
-    # a contact's onset and release are two phases: the run stops once max_contacts onsets
-    # are recorded and one more is found
-    run = run_contacts(packed, 2 * max_contacts + 2)
+def _several_sequence(params: Params, t_max: float, n: int, max_contacts: int) -> xr.Dataset:
+    """``contact_sequence`` of several contacts (n modes per beam): the active sets' phases."""
+    packed = _packed_contacts(params, n, t_max, t_max)
+    # a contact's onset, release and (a dashpot's early release) its gap's opening are three
+    # phases: the run stops once max_contacts onsets are recorded and one more is found
+    run = run_contacts(packed, 3 * max_contacts + 3)
     rows = episodes(packed, run)
     if len(rows["impact_contact"]) > max_contacts:  # (always so when the arrays are full)
         rows = {name: values[:max_contacts] for name, values in rows.items()}
@@ -229,19 +246,10 @@ def _several_sequence(params: Params, t_max: float, n_modes: int | None, max_con
     return _sequence_dataset(rows, "complete", n, t_max)
 
 
-def _packed_contacts(params: Params, t_max: float, n_modes: int | None, search_span: float,
-                     ) -> tuple[PackedContacts, int]:
-    """The packed phases of several contacts (spring law, no dashpots), n_modes per beam."""
-    runs = params.each_contact()
-    damped = [index for index, run in enumerate(runs) if run.contact_damping > 0.0]
-    if damped:
-        raise ParameterError(
-            f"contacts[{damped[0]}].damping = {runs[damped[0]].contact_damping!r} is not allowed "
-            "with several contacts: their contact phases take springs without dashpots so far "
-            "(docs/limits.md, 'Several contacts')")
-    n = (max(recommended_modes(run) for run in runs) if n_modes is None
-         else require_integer("n_modes", n_modes, 1, MAX_MODES))
-    return pack_contacts(params, n, t_max, search_span), n
+def _packed_contacts(params: Params, n_modes: int, t_max: float, search_span: float,
+                     ) -> PackedContacts:
+    """The packed phases of several contacts (the spring law), n_modes per beam."""
+    return pack_contacts(params, n_modes, t_max, search_span)
 
 
 def episodes(packed: PackedContacts, run: ContactRun) -> dict[str, list[float]]:
@@ -256,6 +264,8 @@ def episodes(packed: PackedContacts, run: ContactRun) -> dict[str, list[float]]:
     open_rows: dict[int, int] = {}
     for k in range(1, run.time.size):
         f = int(run.switched[k])
+        if f >= len(packed.runs):  # a gap opened after an early release: no switch
+            continue
         if (run.mask[k] >> f) & 1:  # an onset: the gap's rate in the phase before
             open_rows[f] = len(rows["impact_contact"])
             rate = gap_rate(packed, run.mask[k - 1], f, run.q[k], run.v[k], run.time[k])
@@ -301,7 +311,8 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int | None, times: 
     The energy is the beams' (`impactbeams.trajectory.observables`) plus the closed contacts'
     g_S^T K_eff g_S / 2 and the work of F through beam 1's tip shifts under them.
     """
-    packed, n = _packed_contacts(params, t_max, n_modes, search_span)
+    n = check_contact_runs(params, t_max, n_modes)
+    packed = _packed_contacts(params, n, t_max, search_span)
     run = run_contacts(packed, max_events)
     if run.status != "complete":
         warnings.warn(f"simulation stopped at t = {run.t_end!r} s before t_max = {t_max!r} s: "
