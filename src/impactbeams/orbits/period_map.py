@@ -508,34 +508,6 @@ def _cell_defaults() -> dict[str, float]:
     return {name: getattr(defaults, name) for name in CELL_ONLY}
 
 
-def _interior_maxima(values: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(row, column) of the samples above the one before and not below the one after.
-
-    In the ``rows`` (a mask) of ``values``, the ends of a row excluded; row by row, in order.
-    """
-    middle = values[:, 1:-1]
-    found = rows[:, None] & (middle > values[:, :-2]) & (middle >= values[:, 2:])
-    k, i = np.nonzero(found)
-    return k, i + 1
-
-
-def _between_contacts(contact: np.ndarray) -> list[list[int]]:
-    """The free intervals with a contact on both sides, as lists of their segments.
-
-    The period's ends joined: a free interval across them is its last and first segments.
-    """
-    n = contact.size
-    found = []
-    for k in np.flatnonzero(~contact):
-        if n > 1 and k == n - 1 and not contact[0]:
-            continue  # the period's first segment goes on from here: listed with it
-        interval = [int(k)] + ([n - 1] if k == 0 and n > 1 and not contact[n - 1] else [])
-        before, after = (interval[-1] - 1) % n, (k + 1) % n
-        if contact[before] and contact[after]:
-            found.append(interval)
-    return found
-
-
 def check_law(params: Params) -> None:
     """Raise ParameterError unless the law has tangent dynamics (the spring law)."""
     if not params.law.tangent_flow:
