@@ -294,6 +294,24 @@ VARIABLES.update({
         "episode's contacts (Stronge's energetic coefficient; quadrature, ~1e-6 relative)"),
 })
 
+# simulate() of several contacts: each contact's own episodes (its contacts clustered alone,
+# trajectory.contact_episodes), beside the episodes of all contacts together ("episode")
+VARIABLES.update({
+    "contact_episode": Variable(
+        ("contact_episode",), "1", "episode number of one contact",
+        "index of an episode of one of several contacts (its own contacts clustered alone), "
+        "in order of onset, from 0", dtype="int64"),
+    "contact_episode_contact": Variable(
+        ("contact_episode",), "1", "contact of the episode",
+        "which of Params.contacts (its index) the episode's contacts are", dtype="int64"),
+    **{"contact_" + name: dataclasses.replace(
+        VARIABLES[name], dims=("contact_episode",), long_name=f"{VARIABLES[name].long_name} "
+        "(one contact's episodes)") for name in (
+            "episode_onset_time", "episode_duration", "episode_contact_count",
+            "episode_impulse", "episode_peak_force", "episode_dissipated_energy",
+            "episode_restitution")},
+})
+
 # Lyapunov exponents (docs/model.md, "Lyapunov exponents"): of a map's cells ("*") and of a run
 _LYAPUNOV_METHOD = ("of the flow in the modal state (q, q') of both beams (4 n_modes "
                     "dimensions; the forcing phase as explicit time): tangent vectors propagated "

@@ -91,6 +91,21 @@ def run_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_m
                  early_release, q0, v0, t_start, mask_start, recorded):
     """Integrate from the free state (q0, v0) with contacts ``mask_start`` closed at t_start.
 
+    No contact released early at the start: `resume_contacts` with ``early_start`` = 0.
+    """
+    return resume_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_mask,
+                           settings, early_release, q0, v0, t_start, mask_start, 0, recorded)
+
+
+@kernel
+def resume_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_mask,
+                    settings, early_release, q0, v0, t_start, mask_start, early_start,
+                    recorded):
+    """Integrate from the free state (q0, v0) with contacts ``mask_start`` closed at t_start.
+
+    ``early_start``: the bit mask of the open contacts released early whose gaps have not
+    opened since (a run resumed at one of its recorded phases goes on as it went, bit for bit).
+
     ``recorded`` = (time, mask, switched, q, v, impulses, peaks): phase k starts at
     ``time[k]`` (s) with the contacts of bit mask ``mask[k]`` closed, in state (q[k], v[k]),
     after contact ``switched[k]`` closed or opened (-1 at the start; n + f where contact f's
@@ -118,7 +133,7 @@ def run_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_m
     q_work, v_work = np.empty(m), np.empty(m)
     rotor = rotor_arrays(m)
     t, mask, switched, zero_run = t_start, mask_start, -1, 0
-    early = 0  # bit mask of the contacts released early whose gaps have not opened since
+    early = early_start  # the contacts released early whose gaps have not opened since
     for k in range(seg_time.size):
         a = set_of_mask[mask]
         seg_time[k], seg_mask[k], seg_switched[k] = t, mask, switched

@@ -18,6 +18,7 @@ gap is g_i + R_N[i, S] R_S.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from impactbeams.contact.active_sets import SeveralContacts, possible_sets, seve
 from impactbeams.contact.spring import polar
 from impactbeams.kernels import several_contacts as kernel
 from impactbeams.kernels.contact_spring import contact_states, spring_drives, to_contact
-from impactbeams.kernels.dynamics import STATUS_NAMES
+from impactbeams.kernels.dynamics import EVENT_LIMIT, STATUS_NAMES
 from impactbeams.kernels.events import phase_event
 from impactbeams.kernels.layout import (
     DRIVE_EQUILIBRIUM,
@@ -191,17 +192,63 @@ class ContactRun:
     t_end: float
 
 
-def run_contacts(packed: PackedContacts, max_phases: int) -> ContactRun:
-    """Run ``packed`` from its start (rest or uplifts, all contacts open) to t_max."""
+# phases per kernel call of a run that reports its progress (it resumes at its last phase)
+PROGRESS_WINDOW = 512
+
+
+def run_contacts(packed: PackedContacts, max_phases: int,
+                 start: tuple[np.ndarray, np.ndarray, int] | None = None,
+                 report: Callable[[float, int], None] | None = None) -> ContactRun:
+    """Run ``packed`` from ``start`` to t_max; at most ``max_phases`` phases.
+
+    ``start``: the free state (q, q') at t = 0 and the bit mask of the contacts closed then
+    (default: rest or the uplifts, all contacts open). ``report(t, phases)``: called after each
+    window of ``PROGRESS_WINDOW`` phases with the time reached (s); the run is resumed at its
+    last recorded phase, whose search the kernel repeats: the same bits as one call.
+    """
     n, m = len(packed.runs), packed.runs[0].q0.size
     recorded = (np.empty(max_phases), np.empty(max_phases, dtype=np.int64),
                 np.empty(max_phases, dtype=np.int64), np.empty((max_phases, m)),
                 np.empty((max_phases, m)), np.empty((max_phases, n)), np.empty((max_phases, n)))
-    start = packed.runs[0]
-    count, status, t_end = kernel.run_contacts(*packed.kernel_arrays(), packed.early_release,
-                                               start.q0, start.v0, 0.0, 0, recorded)
+    q, v, mask = (packed.runs[0].q0, packed.runs[0].v0, 0) if start is None else start
+    t, early, first = 0.0, 0, 0
+    window = max_phases if report is None else PROGRESS_WINDOW
+    while True:
+        stop = min(first + window, max_phases)
+        switched = recorded[2][first]
+        count, status, t_end = kernel.resume_contacts(
+            *packed.kernel_arrays(), packed.early_release, q, v, t, mask, early,
+            tuple(array[first:stop] for array in recorded))
+        if first:  # the resumed phase's own switch, as first recorded
+            recorded[2][first] = switched
+        count += first
+        if status != EVENT_LIMIT or stop == max_phases or report is None:
+            break
+        first = count - 1
+        q, v, t, mask = recorded[3][first], recorded[4][first], recorded[0][first], int(
+            recorded[1][first])
+        early = _early_releases(packed, recorded[1][:first + 1], recorded[2][:first + 1])
+        report(float(t), first)
+    if report is not None:
+        report(float(t_end), count)
     return ContactRun(*(array[:count] for array in recorded), CONTACT_STATUS_NAMES[status],
                       float(t_end))
+
+
+def _early_releases(packed: PackedContacts, masks: np.ndarray, switched: np.ndarray) -> int:
+    """The bit mask of the contacts released early at the last of these recorded phases.
+
+    As the kernel keeps it: with dashpots, a contact whose last switch was its release (its
+    gap may still be closed; the kernel clears the bit again where it finds the gap open).
+    """
+    if not packed.early_release:
+        return 0
+    n, early = len(packed.runs), 0
+    for mask, f in zip(masks[1:], switched[1:], strict=True):
+        contact = f % n
+        released = f < n and not (mask >> f) & 1
+        early = early | (1 << contact) if released else early & ~(1 << contact)
+    return early
 
 
 def sample(packed: PackedContacts, run: ContactRun, times: np.ndarray,

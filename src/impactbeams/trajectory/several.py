@@ -9,7 +9,7 @@ common n_modes), all started from the same free state.
 
 The contacts that follow are the phases of the active sets (`impactbeams.contact.active_sets`,
 packed by `impactbeams.trajectory.active_phases`, run by `impactbeams.kernels.several_contacts`):
-`contact_sequence` and `simulate_contacts` (`impactbeams.simulate` of several contacts),
+`contact_sequence` and `impactbeams.simulate` of several contacts (`several_run`),
 contacts closed together included. One contact's sequence is `simulate`'s own run, restarted
 at each release from the free state the kernel recorded there (where the kernel itself resumes
 its windows bit for bit, `impactbeams.trajectory.phases.run`).
@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
 
 import numpy as np
 import xarray as xr
@@ -43,16 +42,12 @@ from impactbeams.preflight import check_run
 from impactbeams.trajectory.active_phases import (
     ContactRun,
     PackedContacts,
-    contact_quantities,
     gap_rate,
     pack_contacts,
     run_contacts,
-    sample,
 )
 from impactbeams.trajectory.impacts import impact_table
-from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.phases import Trajectory
-from impactbeams.variables import attributes, validate
 
 # a free flight (two segments after a dashpot's early release: until the gap opens, then on), a
 # contact and the free flight after it: one contact episode of one run
@@ -293,59 +288,3 @@ def _episode_row(rows: dict[str, list[float]], contact: int, t: float) -> int:
     return max(i for i, (f, onset) in enumerate(zip(rows["impact_contact"],
                                                     rows["impact_onset_time"], strict=True))
                if f == contact and onset <= t)
-
-
-# simulate's options that a run of several contacts takes at their defaults only, so far
-_NOT_YET = ("fields", "energy_balance", "lyapunov", "long_time", "initial_state", "progress",
-            "transient_periods", "episode_separation")
-
-
-@one_blas_thread
-def simulate_contacts(params: Params, t_max: float, n_modes: int | None, times: np.ndarray,
-                      search_span: float, max_events: int) -> xr.Dataset:
-    """`impactbeams.simulate` of several contacts (its arguments checked): a Dataset.
-
-    Along ``time``: ``energy``, ``kinetic_energy``, the tips (m), and each contact's physical
-    gap ``contact_gaps`` (m) and force ``contact_forces`` (N) along ``contact``; along
-    ``impact``: each contact episode (`episodes`, the columns of `contact_sequence`).
-    The energy is the beams' (`impactbeams.trajectory.observables`) plus the closed contacts'
-    g_S^T K_eff g_S / 2 and the work of F through beam 1's tip shifts under them.
-    """
-    n = check_contact_runs(params, t_max, n_modes)
-    packed = _packed_contacts(params, n, t_max, search_span)
-    run = run_contacts(packed, max_events)
-    if run.status != "complete":
-        warnings.warn(f"simulation stopped at t = {run.t_end!r} s before t_max = {t_max!r} s: "
-                      f"status {run.status!r}", RuntimeWarning, stacklevel=3)
-    times = times[times <= run.t_end]
-    q, v, mask = sample(packed, run, times)
-    free = observables(packed.runs[0], np.full(times.size, FREE, dtype=np.int64), times, q, v)
-    contact = contact_quantities(packed, times, q, v, mask)
-    springs = [run_.dynamics.spring for run_ in packed.runs]
-    shift1 = np.array([spring.tip_shift1 for spring in springs])
-    shift2 = np.array([spring.tip_shift2 for spring in springs])
-    forces = contact["contact_force"]
-    tip_force = params.force_amplitude * np.sin(params.omega * times)
-    # the observables of contact 0's run count its own spring where its modal gap is < 0
-    # (`observables._spring_contact`): the closed contacts' energy replaces it
-    own_gap = contact["modal_gap"][:, 0]
-    own_spring = np.where(own_gap < 0.0, 0.5 * springs[0].effective_stiffness * own_gap**2, 0.0)
-    series = {
-        "tip_deflection_1": free["tip_deflection_1"] + forces @ shift1,
-        "tip_deflection_2": free["tip_deflection_2"] - forces @ shift2,
-        "kinetic_energy": free["kinetic_energy"],
-        "energy": (free["energy"] - own_spring + contact["contact_energy"]
-                   - tip_force * (forces @ shift1)),
-    }
-    data = {name: ("time", values, attributes(name)) for name, values in series.items()}
-    data["contact_gaps"] = (("time", "contact"), contact["gap"], attributes("contact_gaps"))
-    data["contact_forces"] = (("time", "contact"), forces, attributes("contact_forces"))
-    for name, values in episodes(packed, run).items():
-        data[name] = ("impact", np.array(values, dtype=np.int64 if name == "impact_contact"
-                                         else float), attributes(name))
-    dataset = xr.Dataset(data, coords={"time": ("time", times, attributes("time"))})
-    dataset.attrs.update({"status": run.status, "t_end": run.t_end, "n_modes": n,
-                          "t_max": t_max, "n_phases": run.time.size,
-                          "n_active_sets": len(packed.members)})
-    validate(dataset)  # as registered, or a bug of the package
-    return dataset

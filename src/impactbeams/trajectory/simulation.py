@@ -181,12 +181,11 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     """
     _check_options(fields, energy_balance, lyapunov, transient_periods, long_time, progress)
     if isinstance(params, Params) and params.several_contacts:
-        options = {"fields": fields, "energy_balance": energy_balance, "lyapunov": lyapunov,
-                   "transient_periods": transient_periods, "long_time": long_time,
-                   "initial_state": initial_state, "progress": progress,
-                   "episode_separation": episode_separation}
+        refused = {"fields": fields, "lyapunov": lyapunov,
+                   "transient_periods": transient_periods, "long_time": long_time}
         return _simulate_several(params, t_max, n_modes, dt_output, times, max_events,
-                                 search_span, options)
+                                 search_span, episode_separation, energy_balance, progress,
+                                 initial_state, refused)
     run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
                                  search_span, episode_separation, fields, energy_balance)
     t_max, n_modes, resolution = run_inputs.t_max, run_inputs.n_modes, run_inputs.resolution
@@ -244,28 +243,36 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
 
 def _simulate_several(params: Params, t_max: float, n_modes: int | None, dt_output: float,
                       times: np.ndarray | None, max_events: int, search_span: float | None,
-                      options: dict[str, object]) -> xr.Dataset:
-    """[`simulate`][] of several contacts (`impactbeams.trajectory.several.simulate_contacts`).
+                      episode_separation: float | None, energy_balance: bool, progress: bool,
+                      initial_state: object, refused: dict[str, object]) -> xr.Dataset:
+    """[`simulate`][] of several contacts (`impactbeams.trajectory.several_run`).
 
-    The options it cannot take yet (``options``, given other than their defaults) are refused
-    in one line; the others are checked as for one contact, at the most modes any contact's
-    run recommends.
+    The options it cannot take (``refused``, given other than their defaults) are refused in
+    one line; the others are checked as for one contact, on each contact's run, at the most
+    modes any of them recommends.
     """
-    from impactbeams.trajectory.several import simulate_contacts
+    from impactbeams.trajectory.several import check_contact_runs
+    from impactbeams.trajectory.several_run import simulate_contacts
 
-    given = [name for name, value in options.items() if value is not None and value is not False
+    given = [name for name, value in refused.items() if value is not None and value is not False
              and (isinstance(value, bool) or not isinstance(value, int) or value != 0)]
     if given:
         raise ParameterError(
-            f"{given[0]} = {options[given[0]]!r} is not allowed with {len(params.contacts)} "
-            "contacts: simulate of several contacts gives the time series, energy and "
-            "contacts so far (docs/limits.md, 'Several contacts')")
-    if n_modes is None:
-        n_modes = max(recommended_modes(run) for run in params.each_contact())
-    inputs = _checked_inputs(params.each_contact()[0], t_max, n_modes, dt_output, times, 2,
-                             max_events, search_span, None, False, False)
+            f"{given[0]} = {refused[given[0]]!r} is not allowed with {len(params.contacts)} "
+            "contacts: simulate of several contacts gives the time series, energy balance, "
+            "contacts and episodes, not fields, Lyapunov exponents or long-time samples "
+            "(docs/limits.md, 'Several contacts')")
+    n_modes = check_contact_runs(params, t_max, n_modes)
+    runs = params.each_contact()
+    checked = [_checked_inputs(run, t_max, n_modes, dt_output, times, 2, max_events,
+                               search_span, episode_separation, False, energy_balance)
+               for run in runs]
+    inputs = checked[0]
     return simulate_contacts(params, inputs.t_max, inputs.n_modes, inputs.times,
-                             inputs.search_span, inputs.max_events)
+                             inputs.search_span, inputs.max_events,
+                             energy_balance=energy_balance, initial_state=initial_state,
+                             progress=progress, episode_separation=inputs.episode_separation,
+                             expected=sum(each.seconds for each in checked))
 
 
 class _EventPace:

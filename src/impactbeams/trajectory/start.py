@@ -226,6 +226,23 @@ def initial_phase_state(packed: Packed, initial_state: object,
     tied law starts free only (its contact phase has the contact modes' coordinates): a state
     whose tips overlap is refused.
     """
+    z = initial_free_state(packed, initial_state)
+    start = phase_state(packed, z)
+    if not packed.spring_law:
+        gap, _ = section_gap(packed, z)
+        if not gap > 0.0:
+            raise ParameterError(f"initial_state: the tips overlap (gap {gap!r} m at t = 0); "
+                                 "the tied law starts from an open gap only")
+    return start
+
+
+def initial_free_state(packed: Packed, initial_state: object) -> np.ndarray:
+    """``simulate``'s ``initial_state`` as the free state z = (q, q') at t = 0 (checked).
+
+    An array z, an earlier run's Dataset (its final state) or `InitialFields`, in the free
+    coordinates of ``packed`` (which several contacts' runs share); ``params.start`` and the
+    uplifts must be left at their defaults (ParameterError).
+    """
     p = packed.params
     if p.start != "rest" or p.uplift1 != 0.0 or p.uplift2 != 0.0:
         raise ParameterError("initial_state replaces params.start and the uplifts: leave "
@@ -237,14 +254,7 @@ def initial_phase_state(packed: Packed, initial_state: object,
         z = dataset_final_state(packed, initial_state)
     else:
         z = initial_state
-    z = checked_state(packed, z)
-    start = phase_state(packed, z)
-    if not packed.spring_law:
-        gap, _ = section_gap(packed, z)
-        if not gap > 0.0:
-            raise ParameterError(f"initial_state: the tips overlap (gap {gap!r} m at t = 0); "
-                                 "the tied law starts from an open gap only")
-    return start
+    return checked_state(packed, z)
 
 
 def section_gap(packed: Packed, z: np.ndarray, t: float = 0.0) -> tuple[float, float]:
