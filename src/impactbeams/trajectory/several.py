@@ -250,13 +250,21 @@ def _packed_contacts(params: Params, n_modes: int, t_max: float, search_span: fl
 def episodes(packed: PackedContacts, run: ContactRun) -> dict[str, list[float]]:
     """Each contact episode of ``run`` (onset to release of one contact), in order of onset.
 
-    One still closed at the run's end has a NaN duration and separation velocity.
+    One still closed at the run's end has a NaN duration and separation velocity, one closed
+    at its start (``simulate``'s ``initial_state``) its start as onset and a NaN impact velocity.
 
     ``impact_contact`` and the columns of ``_IMPACT_COLUMNS``: the impulse and peak force over
     the phases it spans, the gap's rates at its onset and after its release (m/s).
     """
     rows: dict[str, list[float]] = {name: [] for name in ("impact_contact", *_IMPACT_COLUMNS)}
     open_rows: dict[int, int] = {}
+    for f in range(len(packed.runs)):
+        if (run.mask[0] >> f) & 1:  # closed at the start
+            open_rows[f] = len(rows["impact_contact"])
+            for name, value in zip(("impact_contact", *_IMPACT_COLUMNS),
+                                   (f, run.time[0], math.nan, 0.0, 0.0, math.nan, math.nan),
+                                   strict=True):
+                rows[name].append(value)
     for k in range(1, run.time.size):
         f = int(run.switched[k])
         if f >= len(packed.runs):  # a gap opened after an early release: no switch

@@ -36,7 +36,7 @@ from numpy.polynomial.legendre import leggauss
 
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels.layout import FREE, SCALAR_LOAD_RATE, TABLE_ROWS
-from impactbeams.params import ParameterError, Params
+from impactbeams.params import ParameterError, Params, modes_per_beam, without_unused_law_keys
 from impactbeams.preflight import format_time
 from impactbeams.progress import Progress
 from impactbeams.trajectory.active_phases import (
@@ -78,7 +78,8 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
     start = (None if initial_state is None
              else contacts_start(packed, initial_free_state(packed.runs[0], initial_state)))
     if progress:
-        print(f"simulate: {len(params.contacts)} contacts, {n_modes} modes per beam, t_max = "
+        print(f"simulate: {len(params.contacts)} contacts, "
+              f"{modes_per_beam(n_modes, params.partner)}, t_max = "
               f"{t_max:g} s; expected: roughly {format_time(expected)}", file=sys.stderr)
     bar = Progress(t_max, enabled=progress, unit="s simulated")
     run = run_contacts(packed, max_events, start,
@@ -115,9 +116,10 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
     dataset = _dataset(data, impacts, joint, own, times)
     z = np.concatenate(sample(packed, run, np.array([run.t_end]))[:2], axis=1)[0]
     dataset = _with_final_state(dataset, z)
+    described = without_unused_law_keys(params.as_dict())
     dataset.attrs.update(global_attributes(
         "impact dynamics of cantilevers with several contacts (impactbeams.simulate)",
-        "simulate", params.as_dict(), t_max=t_max, t_max_units="s", n_modes=n_modes,
+        "simulate", described, t_max=t_max, t_max_units="s", n_modes=n_modes,
         status=run.status, t_end=run.t_end, n_phases=run.time.size,
         n_active_sets=len(packed.members), episode_separation=separation,
         energy_frame="relative"))

@@ -1,0 +1,214 @@
+"""`simulate` of several contacts (issue 33, item 5): energy balance, episodes, initial state,
+progress and the command line.
+
+The energy balance against its invariant (energy + dissipation - work constant to round-off:
+the energy is evaluated from the sampled states, the work and dissipation integrate the drives'
+and dampers' powers) and against the single contact's own quadrature
+(`kernels.reductions.work_of_force`) where the second contact never closes; the episodes
+against the single contact's table (`trajectory.episodes`) likewise; a restart from a run's
+final state against the whole run.
+"""
+
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from impactbeams import Contact, Params, simulate, two_sided_stop
+from impactbeams.cli import main
+from impactbeams.params import ParameterError
+
+STOP = Params(counterpart="stop", contact_stiffness=1e4)
+MID = 0.5 * STOP.l1  # m
+FORCED = STOP.replace(force_amplitude=1e-3, omega=400.0)
+EPISODE_COLUMNS = ("episode_onset_time", "episode_duration", "episode_contact_count",
+                   "episode_impulse", "episode_peak_force", "episode_restitution",
+                   "episode_dissipated_energy")
+
+
+@pytest.mark.parametrize("params", [
+    FORCED.replace(damping_ratio=0.01, contacts=(Contact(MID, clearance=1e-6),
+                                                 Contact(clearance=2e-6))),
+    FORCED.replace(damping_ratio=0.01, contacts=(Contact(MID, clearance=1e-6, damping=0.5),
+                                                 Contact(clearance=2e-6, damping=0.5))),
+    STOP.replace(base_amplitude=2e-6, omega=400.0, damping_ratio=0.01,
+                 contacts=(Contact(MID, clearance=1e-6, damping=0.5),
+                           Contact(clearance=2e-6, damping=0.5))),
+    FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6)),
+], ids=["forced", "dashpots", "shaker", "two-sided"])
+def test_energy_balance_of_several_contacts_holds_to_round_off(params):
+    """energy - unresolved kinetic energy - work + dissipation stays its initial value within
+    1e-12 of the largest energy over 0.03 s (measured 2.6e-15 to 1.3e-14; the quadratures'
+    own error is ~1e-18, the damped contact modes' eigenvalues ~1e-14), with the work and,
+    where there is damping, the dissipation both a sizeable share of it (so both are checked);
+    the dissipation never decreases by more than round-off (the springs given up at the
+    dashpots' switches included)."""
+    ds = simulate(params, 0.03, n_modes=12, dt_output=1e-5, energy_balance=True)
+    assert ds.attrs["status"] == "complete" and ds.sizes["impact"] >= 3
+    assert set(ds.impact_contact.values) == {0, 1}
+    balance = (ds.energy - ds.unresolved_kinetic_energy - ds.work_of_force
+               + ds.damping_dissipation).values
+    scale = float(np.abs(ds.energy).max())
+    assert np.max(np.abs(balance - balance[0])) < 1e-12 * scale
+    assert float(np.abs(ds.work_of_force).max()) > 0.1 * scale
+    dissipation = ds.damping_dissipation.values
+    if params.damping_ratio > 0.0:
+        assert dissipation[-1] > 0.1 * scale
+    assert np.all(np.diff(dissipation) >= -1e-14 * scale)
+
+
+def test_a_contact_that_never_closes_leaves_the_single_contacts_balance_and_episodes():
+    """A tip stop (zeta = 0.01, forced) beside a mid-span stop 1 mm away that never closes,
+    against simulate of the tip stop alone (its own kernel quadrature and episode table):
+    energy, work and dissipation to 1e-12 of the largest energy (measured 1.2e-14), the
+    episodes of all contacts and the tip stop's own episodes, column by column, to 1e-12
+    relative (measured 8.6e-14, a restitution)."""
+    params = FORCED.replace(damping_ratio=0.01)
+    alone = simulate(params.replace(clearance=2e-6), 0.06, n_modes=12, dt_output=1e-5,
+                     energy_balance=True)
+    both = simulate(params.replace(contacts=(Contact(clearance=2e-6),
+                                             Contact(MID, clearance=1e-3))),
+                    0.06, n_modes=12, dt_output=1e-5, energy_balance=True)
+    scale = float(alone.energy.max())
+    for name in ("energy", "work_of_force", "damping_dissipation"):
+        np.testing.assert_allclose(both[name].values, alone[name].values, rtol=0,
+                                   atol=1e-12 * scale)
+    assert alone.sizes["episode"] == both.sizes["episode"] == both.sizes["contact_episode"] > 2
+    assert both.attrs["episode_separation"] == alone.attrs["episode_separation"]
+    np.testing.assert_array_equal(both.contact_episode_contact.values, 0)
+    for name in EPISODE_COLUMNS:
+        for got in (both[name].values, both["contact_" + name].values):
+            np.testing.assert_allclose(got, alone[name].values, rtol=1e-12, atol=0)
+
+
+def test_episodes_of_all_contacts_and_of_each():
+    """Stops at mid-span and at the tip, closed together at times: every contact belongs to one
+    episode of all contacts and to one of its own contact's; the counts, impulses and peaks
+    add up; an episode whose contacts are of both stops has no restitution (a gap's), one of a
+    single stop's has its own."""
+    params = FORCED.replace(contacts=(Contact(MID, clearance=1e-6), Contact(clearance=2e-6)))
+    ds = simulate(params, 0.06, n_modes=12, dt_output=1e-4, episode_separation=1e-3)
+    impacts, joint = ds.sizes["impact"], ds.sizes["episode"]
+    assert ds.attrs["episode_separation"] == 1e-3 and 1 < joint < impacts
+    assert int(ds.episode_contact_count.sum()) == int(ds.contact_episode_contact_count.sum()) \
+        == impacts
+    for prefix in ("", "contact_"):
+        np.testing.assert_allclose(float(ds[prefix + "episode_impulse"].sum()),
+                                   float(ds.impact_impulse.sum()), rtol=1e-14)
+        assert float(ds[prefix + "episode_peak_force"].max()) == float(
+            ds.impact_peak_force.max())
+    for j in (0, 1):
+        own = ds.contact_episode_contact.values == j
+        assert int(ds.contact_episode_contact_count[own].sum()) == int(
+            np.count_nonzero(ds.impact_contact.values == j))
+    mixed = np.isnan(ds.episode_restitution.values)
+    assert mixed.any() and np.all(np.isfinite(ds.contact_episode_restitution.values))
+
+
+def test_a_run_restarted_from_its_final_state_continues_it():
+    """Soft stops with dashpots (zeta = 0.01, Omega = 100 rad/s): a run of 8 forcing periods
+    against one of k periods continued from its Dataset for 8 - k, with both stops closed at
+    the restart (k = 2) or one (k = 6): the series to 1e-9 of their largest values (measured
+    1.6e-11, the forces; the restart's section t = 0 against k T), the onsets after the
+    restart to 1e-12 s (measured 1.4e-13 s), and the contacts closed at the start counted
+    with their start as onset (no approach: NaN impact velocity)."""
+    omega = 100.0
+    period = 2.0 * math.pi / omega
+    params = STOP.replace(contact_stiffness=1e3, force_amplitude=3e-3, omega=omega,
+                          damping_ratio=0.01, contacts=(
+                              Contact(MID, clearance=1e-6, damping=0.05),
+                              Contact(clearance=2e-6, damping=0.05)))
+    dt = period / 200
+    whole = simulate(params, 8 * period, n_modes=10, dt_output=dt)
+    for turns, closed in ((2, [0, 1]), (6, [0])):
+        first = simulate(params, turns * period, n_modes=10, dt_output=dt)
+        assert list(np.flatnonzero(first.contact_forces.values[-1] > 0.0)) == closed
+        rest = simulate(params, (8 - turns) * period, n_modes=10, dt_output=dt,
+                        initial_state=first)
+        later = whole.sel(time=slice(turns * period * (1 + 1e-9), None))
+        tail = rest.isel(time=slice(rest.sizes["time"] - later.sizes["time"], None))
+        for name in ("tip_deflection_1", "contact_forces", "contact_gaps", "energy"):
+            np.testing.assert_allclose(tail[name].values, later[name].values, rtol=0,
+                                       atol=1e-9 * float(np.abs(later[name]).max()))
+        onsets = whole.impact_onset_time.values
+        after = onsets[onsets > turns * period]
+        np.testing.assert_allclose(rest.impact_onset_time.values[len(closed):] + turns * period,
+                                   after, rtol=0, atol=1e-12)
+        assert list(rest.impact_contact.values[:len(closed)]) == closed
+        assert np.all(rest.impact_onset_time.values[:len(closed)] == 0.0)
+        assert np.all(np.isnan(rest.impact_velocity.values[:len(closed)]))
+
+
+def test_a_start_that_no_set_of_contacts_fits_is_refused():
+    """A tip overlapping a dashpot's stop while moving away fast enough that its force would
+    pull (-k g - c g' < 0): no closed set fits; refused in one line before the run. The
+    refusals of start and uplifts are the single contact's."""
+    from impactbeams.trajectory.active_phases import pack_contacts
+
+    params = FORCED.replace(contacts=(Contact(MID, clearance=1e-6, damping=0.5),
+                                      Contact(clearance=2e-6, damping=0.5)))
+    free = pack_contacts(params, 8, 0.01, 0.01).runs[0].dynamics.free
+    z = np.zeros(16)
+    z[0] = -5e-6 / free.tip1[0]  # the tip 5 um down: both stops overlap
+    z[8] = 0.5 * free.frequencies[0] * 5e-6 / abs(free.tip1[0]) * 1e3  # moving up, fast
+    with pytest.raises(ParameterError, match="^initial_state is not allowed: no set of closed"):
+        simulate(params, 0.01, n_modes=8, initial_state=z)
+    with pytest.raises(ParameterError, match="^initial_state replaces params.start"):
+        simulate(params.replace(uplift1=1e-6), 0.01, n_modes=8, initial_state=np.zeros(16))
+
+
+def test_progress_reports_windows_of_the_same_run(capsys, monkeypatch):
+    """progress=True runs the kernel in windows of PROGRESS_WINDOW phases, each resumed at the
+    last phase of the one before (its early releases restored): with windows of 3 phases on
+    dashpots that release early and close again, every variable is the one-call run's, bit
+    for bit; the expected time and the bars are on stderr."""
+    from impactbeams.trajectory import active_phases
+
+    params = FORCED.replace(contacts=(Contact(MID, clearance=1e-6, damping=0.5),
+                                      Contact(clearance=2e-6, damping=0.5)))
+    plain = simulate(params, 0.03, n_modes=12, dt_output=1e-5)
+    monkeypatch.setattr(active_phases, "PROGRESS_WINDOW", 3)
+    shown = simulate(params, 0.03, n_modes=12, dt_output=1e-5, progress=True)
+    assert plain.attrs["n_phases"] > 12  # several windows
+    for name in plain.variables:
+        np.testing.assert_array_equal(shown[name].values, plain[name].values)
+    err = capsys.readouterr().err
+    assert "simulate: 2 contacts, 12 modes of beam 1" in err and "s simulated" in err
+
+
+def test_what_simulate_of_several_contacts_refuses(capsys):
+    """fields, Lyapunov exponents and long-time samples: one line, before any compute."""
+    from impactbeams import LongTime
+
+    params = FORCED.replace(contacts=(Contact(MID, clearance=1e-6), Contact(clearance=2e-6)))
+    for option, value in (("fields", True), ("lyapunov", True),
+                          ("long_time", LongTime(sampled_periods=4))):
+        with pytest.raises(ParameterError, match=f"^{option} = .* is not allowed with 2 "
+                                                 "contacts"):
+            simulate(params, 0.03, **{option: value})
+
+
+def test_the_command_line_simulates_several_contacts(tmp_path, capsys):
+    """``impactbeams simulate --params FILE`` with ``[[params.contacts]]``: the library's Dataset
+    (the same contacts, bit for bit) in the netCDF file, the contacts as its attributes;
+    ``--fields`` exits 2 with one line."""
+    path = tmp_path / "two.toml"
+    path.write_text('[params]\ncounterpart = "stop"\nforce_amplitude = 1e-3\nomega = 400.0\n'
+                    "contact_stiffness = 1e4\n[[params.contacts]]\nposition1 = 0.05\n"
+                    "clearance = 1e-6\n[[params.contacts]]\nclearance = 2e-6\n")
+    out = tmp_path / "run.nc"
+    assert main(["simulate", "--params", str(path), "--t-max", "0.03", "--n-modes", "12",
+                 "--energy-balance", "--quiet", "-o", str(out)]) == 0
+    params = FORCED.replace(contacts=(Contact(MID, clearance=1e-6), Contact(clearance=2e-6)))
+    expected = simulate(params, 0.03, n_modes=12, energy_balance=True)
+    with xr.open_dataset(out) as written:
+        for name in ("impact_onset_time", "impact_contact", "contact_forces", "work_of_force"):
+            np.testing.assert_array_equal(written[name].values, expected[name].values)
+        assert "clearance=2e-06" in written.attrs["contacts"]
+        assert "clearance" not in written.attrs  # each contact gives its own
+    capsys.readouterr()
+    assert main(["simulate", "--params", str(path), "--t-max", "0.03", "--fields",
+                 "-o", str(tmp_path / "fields.nc")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "fields = True is not allowed with 2 contacts" in err[0]
