@@ -242,7 +242,7 @@ def test_a_mid_span_and_a_tip_stop_closed_together_against_dop853():
     (point_reference's own modes and residuals; rtol 1e-13): measured 3.4e-16 s, asserted
     1e-12 s (DOP853's own error at rtol 1e-11 with a margin, as the two-sided stop's test in
     tests/test_contacts.py)."""
-    from impactbeams.trajectory.active_phases import pack_contacts, run_contacts
+    from impactbeams.active_phases import pack_contacts, run_contacts
     from point_reference import Beam, PointContact
 
     n = 4
@@ -308,7 +308,7 @@ def test_one_dashpot_beside_a_contact_that_never_closes_is_the_single_contacts_r
     that tip stop alone (`kernels.dynamics.run_events`, the single contact's early releases):
     the same contacts, onsets and durations to 1e-12 s (measured 8.9e-17 s), impulses, peaks
     and the gap's rates to 1e-10 relative (measured 1.2e-12 at most, an impact velocity)."""
-    from impactbeams.trajectory.active_phases import pack_contacts, run_contacts
+    from impactbeams.active_phases import pack_contacts, run_contacts
 
     single = FORCED.replace(contact_damping=0.5, clearance=2e-6)
     alone = simulate(single, 0.03, n_modes=12, dt_output=1e-3)
@@ -332,7 +332,7 @@ def test_dashpots_closed_together_against_dop853():
     on the same modal equations with R_S = -K_S g_S - C_S g_S' and the same rules
     (`_dop853_together`; rtol 1e-13): measured 2.5e-15 s, asserted 1e-12 s as without
     dashpots."""
-    from impactbeams.trajectory.active_phases import pack_contacts, run_contacts
+    from impactbeams.active_phases import pack_contacts, run_contacts
     from point_reference import Beam, PointContact
 
     n = 8
@@ -358,14 +358,14 @@ def test_dashpots_dissipate_what_the_energy_loses():
     as the single contact's dashpot absorbs the relaxing spring after an early release), stays
     E(0) to 1e-10 (measured 9.2e-14). The dissipation is 23 % of E(0), the switches' share
     0.3 % (so both are checked)."""
-    from impactbeams.kernels.layout import TABLE_ROWS
-    from impactbeams.trajectory.active_phases import (
+    from impactbeams.active_phases import (
         _modal_gap_rates,
         contact_quantities,
         pack_contacts,
         run_contacts,
         sample,
     )
+    from impactbeams.kernels.layout import TABLE_ROWS
 
     params = STOP.replace(force_amplitude=0.0, uplift1=2e-5, contacts=(
         Contact(MID, clearance=1e-6, damping=0.5, stiffness=1e5),

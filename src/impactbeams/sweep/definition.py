@@ -663,14 +663,16 @@ def _contact_sweep(sweep: Sweep, index: int, contact: Contact) -> Sweep:
 def _check_several(sweep: Sweep) -> None:
     """Refuse what a sweep of several contacts cannot do yet: one line, before any work.
 
-    It maps the first contact among them (``first_impact_time``) and sweeps no flat contact
-    key (each contact has its own: which one an axis would change is not said; an axis
-    ``contacts.INDEX.FIELD`` says it).
+    It maps the first contact among them (``first_impact_time``) and the full dynamics'
+    observables (``DYNAMICS_OBSERVABLES``), not the Lyapunov exponent or the long-time ones,
+    and sweeps no flat contact key (each contact has its own: which one an axis would change
+    is not said; an axis ``contacts.INDEX.FIELD`` says it).
     """
     require(f"observables in {sweep.source}", list(sweep.observables),
-            not sweep.needs_dynamics and sweep.long_time is None,
-            f"with {len(sweep.base.contacts)} contacts a sweep maps {FIRST_IMPACT!r} only (the "
-            "first contact among them); the dynamics after it is not built for several contacts "
+            LYAPUNOV not in sweep.observables and sweep.long_time is None,
+            f"with {len(sweep.base.contacts)} contacts a sweep maps {FIRST_IMPACT!r} and the "
+            f"full dynamics' {', '.join(map(repr, DYNAMICS_OBSERVABLES))} only; the Lyapunov "
+            "exponent and the long-time observables are not built for several contacts "
             "(docs/limits.md, 'Several contacts')")
     for axis in sweep.axes:
         require(f"[axes.{axis.name}] of {sweep.source}", axis.name,

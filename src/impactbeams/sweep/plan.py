@@ -39,6 +39,7 @@ from impactbeams.sweep.definition import (
     contact_sweeps,
     geometry_axes,
 )
+from impactbeams.variables import VARIABLES
 
 # The code that decides a sweep's numbers: every kernel and the modules that build their inputs
 # (paths in the package). Saved chunks and finished files of other code are never reused.
@@ -111,6 +112,37 @@ def _first_contact(sweep: Sweep, start: int, stop: int, parallel: bool, plan: Pl
     first = np.argmin(np.where(closed, times, np.inf), axis=0)
     return {FIRST_IMPACT: np.ascontiguousarray(np.fmin.reduce(times, axis=0)),
             FIRST_CONTACT: np.where(closed.any(axis=0), first, -1)}
+
+
+def _several_dynamics(sweep: Sweep, start: int, stop: int, parallel: bool,
+                      ) -> dict[str, np.ndarray]:
+    """Full-dynamics observables of several contacts on flat cells start..stop, cell by cell.
+
+    Each cell is the run `impactbeams.simulate` makes of its parameters (the active sets'
+    phases, `active_phases.cell_observables`); with ``parallel`` the cells run on Numba's
+    thread count of threads (the kernel releases the GIL), each alone: the same values.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    import numba
+
+    from impactbeams.active_phases import cell_observables
+
+    index = np.unravel_index(np.arange(start, stop), sweep.shape)
+    values = [axis.values for axis in sweep.axes]  # (the plan's are its first contact's)
+
+    def one(i: int) -> dict[str, float]:
+        changes = {axis.name: values[k][index[k][i]] for k, axis in enumerate(sweep.axes)}
+        return cell_observables(sweep.params_at(changes), sweep.n_modes, sweep.t_max,
+                                MAX_SEGMENTS)
+
+    if parallel and stop - start > 1:
+        with ThreadPoolExecutor(numba.get_num_threads()) as pool:
+            cells = list(pool.map(one, range(stop - start)))
+    else:
+        cells = [one(i) for i in range(stop - start)]
+    return {name: np.array([cell[name] for cell in cells], dtype=VARIABLES[name].dtype)
+            for name in sweep.stored}
 
 
 def _contact_times(sweep: Sweep, index: int, each: Sweep, start: int, stop: int,
@@ -465,7 +497,8 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
     if plan.fingerprint != sweep.fingerprint():
         raise ValueError("the plan was built for another sweep")
     if plan.per_contact:
-        return _first_contact(sweep, start, stop, parallel, plan)
+        return (_several_dynamics(sweep, start, stop, parallel) if sweep.needs_dynamics
+                else _first_contact(sweep, start, stop, parallel, plan))
     if plan.switching is None:
         columns = first_impact_columns(sweep, start, stop)
         cells = chunk_cells(sweep, plan, columns.start, columns.stop)

@@ -8,7 +8,7 @@ that contact's own packed run (`Params.each_contact`: the run with that contact 
 common n_modes), all started from the same free state.
 
 The contacts that follow are the phases of the active sets (`impactbeams.contact.active_sets`,
-packed by `impactbeams.trajectory.active_phases`, run by `impactbeams.kernels.several_contacts`):
+packed by `impactbeams.active_phases`, run by `impactbeams.kernels.several_contacts`):
 `contact_sequence` and `impactbeams.simulate` of several contacts (`several_run`),
 contacts closed together included. One contact's sequence is `simulate`'s own run, restarted
 at each release from the free state the kernel recorded there (where the kernel itself resumes
@@ -23,6 +23,15 @@ import math
 import numpy as np
 import xarray as xr
 
+from impactbeams.active_phases import (
+    IMPACT_COLUMNS as _IMPACT_COLUMNS,
+)
+from impactbeams.active_phases import (
+    PackedContacts,
+    episodes,
+    pack_contacts,
+    run_contacts,
+)
 from impactbeams.blas import one_blas_thread
 from impactbeams.contact import recommended_modes
 from impactbeams.kernels import dynamics as dyn
@@ -39,13 +48,6 @@ from impactbeams.params import (
     require_type,
 )
 from impactbeams.preflight import check_run
-from impactbeams.trajectory.active_phases import (
-    ContactRun,
-    PackedContacts,
-    gap_rate,
-    pack_contacts,
-    run_contacts,
-)
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.phases import Trajectory
 
@@ -53,8 +55,6 @@ from impactbeams.trajectory.phases import Trajectory
 # contact and the free flight after it: one contact episode of one run
 _EPISODE = 4
 # the per-impact quantities a sequence reports, from `impact_table`
-_IMPACT_COLUMNS = ("impact_onset_time", "impact_duration", "impact_impulse",
-                   "impact_peak_force", "impact_velocity", "separation_velocity")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -188,7 +188,7 @@ def contact_sequence(params: Params, t_max: float, n_modes: int | None = None,
     `impactbeams.simulate`'s impact table), and ``attrs["status"]`` ("complete", or
     "event_limit" after ``max_contacts``). One contact: `impactbeams.simulate`'s own run, to
     its bits; several: the phases of every set of contacts closed at once
-    (`impactbeams.trajectory.active_phases`), contacts closing together and dashpots
+    (`impactbeams.active_phases`), contacts closing together and dashpots
     included.
     """
     n = check_contact_runs(params, t_max, n_modes)
@@ -245,54 +245,3 @@ def _packed_contacts(params: Params, n_modes: int, t_max: float, search_span: fl
                      ) -> PackedContacts:
     """The packed phases of several contacts (the spring law), n_modes per beam."""
     return pack_contacts(params, n_modes, t_max, search_span)
-
-
-def episodes(packed: PackedContacts, run: ContactRun) -> dict[str, list[float]]:
-    """Each contact episode of ``run`` (onset to release of one contact), in order of onset.
-
-    One still closed at the run's end has a NaN duration and separation velocity, one closed
-    at its start (``simulate``'s ``initial_state``) its start as onset and a NaN impact velocity.
-
-    ``impact_contact`` and the columns of ``_IMPACT_COLUMNS``: the impulse and peak force over
-    the phases it spans, the gap's rates at its onset and after its release (m/s).
-    """
-    rows: dict[str, list[float]] = {name: [] for name in ("impact_contact", *_IMPACT_COLUMNS)}
-    open_rows: dict[int, int] = {}
-    for f in range(len(packed.runs)):
-        if (run.mask[0] >> f) & 1:  # closed at the start
-            open_rows[f] = len(rows["impact_contact"])
-            for name, value in zip(("impact_contact", *_IMPACT_COLUMNS),
-                                   (f, run.time[0], math.nan, 0.0, 0.0, math.nan, math.nan),
-                                   strict=True):
-                rows[name].append(value)
-    for k in range(1, run.time.size):
-        f = int(run.switched[k])
-        if f >= len(packed.runs):  # a gap opened after an early release: no switch
-            continue
-        if (run.mask[k] >> f) & 1:  # an onset: the gap's rate in the phase before
-            open_rows[f] = len(rows["impact_contact"])
-            rate = gap_rate(packed, run.mask[k - 1], f, run.q[k], run.v[k], run.time[k])
-            for name, value in zip(("impact_contact", *_IMPACT_COLUMNS),
-                                   (f, run.time[k], math.nan, 0.0, 0.0, rate, math.nan),
-                                   strict=True):
-                rows[name].append(value)
-        else:
-            row = open_rows.pop(f)
-            rows["impact_duration"][row] = run.time[k] - rows["impact_onset_time"][row]
-            rows["separation_velocity"][row] = gap_rate(packed, run.mask[k], f, run.q[k],
-                                                        run.v[k], run.time[k])
-    for k in range(run.time.size):  # each phase's share of its closed contacts' episodes
-        for f in range(len(packed.runs)):
-            if (run.mask[k] >> f) & 1:
-                row = _episode_row(rows, f, run.time[k])
-                rows["impact_impulse"][row] += run.impulses[k, f]
-                rows["impact_peak_force"][row] = max(rows["impact_peak_force"][row],
-                                                     run.peaks[k, f])
-    return rows
-
-
-def _episode_row(rows: dict[str, list[float]], contact: int, t: float) -> int:
-    """The row of ``contact``'s episode that is closed at time t (its last onset <= t)."""
-    return max(i for i, (f, onset) in enumerate(zip(rows["impact_contact"],
-                                                    rows["impact_onset_time"], strict=True))
-               if f == contact and onset <= t)

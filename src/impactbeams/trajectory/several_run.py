@@ -1,6 +1,6 @@
 """`impactbeams.simulate` of several contacts: the run of the active sets' phases, its Dataset.
 
-The run is `impactbeams.trajectory.active_phases`' (the kernel of several contacts); this module
+The run is `impactbeams.active_phases`' (the kernel of several contacts); this module
 turns it into `simulate`'s Dataset: the time series, each contact's gap and force, the contacts
 (`impactbeams.trajectory.several.episodes`), their impact episodes, the energy balance, the
 start from a given state and the final state.
@@ -34,23 +34,23 @@ import numpy as np
 import xarray as xr
 from numpy.polynomial.legendre import leggauss
 
+from impactbeams.active_phases import (
+    ContactRun,
+    PackedContacts,
+    _modal_gap_rates,
+    contact_quantities,
+    episodes,
+    pack_contacts,
+    run_contacts,
+    sample,
+)
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels.layout import FREE, SCALAR_LOAD_RATE, TABLE_ROWS
 from impactbeams.params import ParameterError, Params, modes_per_beam, without_unused_law_keys
 from impactbeams.preflight import format_time
 from impactbeams.progress import Progress
-from impactbeams.trajectory.active_phases import (
-    ContactRun,
-    PackedContacts,
-    _modal_gap_rates,
-    contact_quantities,
-    pack_contacts,
-    run_contacts,
-    sample,
-)
 from impactbeams.trajectory.episodes import default_separation
 from impactbeams.trajectory.observables import observables
-from impactbeams.trajectory.several import episodes
 from impactbeams.trajectory.start import initial_free_state, section_gap
 from impactbeams.variables import attributes, global_attributes, validate
 

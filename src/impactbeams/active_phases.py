@@ -18,6 +18,7 @@ gap is g_i + R_N[i, S] R_S.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -39,6 +40,9 @@ from impactbeams.kernels.layout import (
 )
 from impactbeams.packing import Packed, pack_run
 
+# the per-contact quantities of a run (`episodes`), as `impactbeams.simulate`'s impact table's
+IMPACT_COLUMNS = ("impact_onset_time", "impact_duration", "impact_impulse",
+                  "impact_peak_force", "impact_velocity", "separation_velocity")
 # the statuses of `kernels.several_contacts.run_contacts`
 CONTACT_STATUS_NAMES = (*STATUS_NAMES, "impossible_set")
 
@@ -319,3 +323,96 @@ def contact_quantities(packed: PackedContacts, t: np.ndarray, q: np.ndarray, v: 
         energy[rows] = 0.5 * np.einsum("ki,ij,kj->k", modal[np.ix_(rows, index)],
                                        phase.effective_stiffness, modal[np.ix_(rows, index)])
     return {"modal_gap": modal, "contact_force": force, "gap": gap, "contact_energy": energy}
+
+
+def episodes(packed: PackedContacts, run: ContactRun) -> dict[str, list[float]]:
+    """Each contact episode of ``run`` (onset to release of one contact), in order of onset.
+
+    One still closed at the run's end has a NaN duration and separation velocity, one closed
+    at its start (``simulate``'s ``initial_state``) its start as onset and a NaN impact velocity.
+
+    ``impact_contact`` and the columns of ``IMPACT_COLUMNS``: the impulse and peak force over
+    the phases it spans, the gap's rates at its onset and after its release (m/s).
+    """
+    rows: dict[str, list[float]] = {name: [] for name in ("impact_contact", *IMPACT_COLUMNS)}
+    open_rows: dict[int, int] = {}
+    for f in range(len(packed.runs)):
+        if (run.mask[0] >> f) & 1:  # closed at the start
+            open_rows[f] = len(rows["impact_contact"])
+            for name, value in zip(("impact_contact", *IMPACT_COLUMNS),
+                                   (f, run.time[0], math.nan, 0.0, 0.0, math.nan, math.nan),
+                                   strict=True):
+                rows[name].append(value)
+    for k in range(1, run.time.size):
+        f = int(run.switched[k])
+        if f >= len(packed.runs):  # a gap opened after an early release: no switch
+            continue
+        if (run.mask[k] >> f) & 1:  # an onset: the gap's rate in the phase before
+            open_rows[f] = len(rows["impact_contact"])
+            rate = gap_rate(packed, run.mask[k - 1], f, run.q[k], run.v[k], run.time[k])
+            for name, value in zip(("impact_contact", *IMPACT_COLUMNS),
+                                   (f, run.time[k], math.nan, 0.0, 0.0, rate, math.nan),
+                                   strict=True):
+                rows[name].append(value)
+        else:
+            row = open_rows.pop(f)
+            rows["impact_duration"][row] = run.time[k] - rows["impact_onset_time"][row]
+            rows["separation_velocity"][row] = gap_rate(packed, run.mask[k], f, run.q[k],
+                                                        run.v[k], run.time[k])
+    for k in range(run.time.size):  # each phase's share of its closed contacts' episodes
+        for f in range(len(packed.runs)):
+            if (run.mask[k] >> f) & 1:
+                row = _episode_row(rows, f, run.time[k])
+                rows["impact_impulse"][row] += run.impulses[k, f]
+                rows["impact_peak_force"][row] = max(rows["impact_peak_force"][row],
+                                                     run.peaks[k, f])
+    return rows
+
+
+def _episode_row(rows: dict[str, list[float]], contact: int, t: float) -> int:
+    """The row of ``contact``'s episode that is closed at time t (its last onset <= t)."""
+    return max(i for i, (f, onset) in enumerate(zip(rows["impact_contact"],
+                                                    rows["impact_onset_time"], strict=True))
+               if f == contact and onset <= t)
+
+
+def cell_observables(params, n_modes: int, t_max: float, max_phases: int,
+                     ) -> dict[str, float]:
+    """A map cell of several contacts: its run's full-dynamics observables (`summarize`).
+
+    The run `impactbeams.simulate` makes of ``params`` (n_modes per beam, from rest or the
+    uplifts, the search span t_max), at most ``max_phases`` phases.
+    """
+    packed = pack_contacts(params, n_modes, t_max, t_max)
+    return summarize(packed, run_contacts(packed, max_phases), t_max)
+
+
+def summarize(packed: PackedContacts, run: ContactRun, t_max: float) -> dict[str, float]:
+    """A run's map observables, as a single contact's map gives them (`kernels.reductions`).
+
+    ``first_impact_time`` (s, NaN without any) and ``first_contact`` (its contact, -1);
+    ``impact_count``: every contact's onsets; ``max_contact_force`` (N, 0 without any);
+    ``mean_restitution``: the separation speeds over the approach speeds of the contacts that
+    closed with an approach and separated (NaN if none); ``contact_fraction``: the time with
+    any contact closed over t_max (s); ``dynamics_status``: the run's status code.
+    """
+    if run.status not in STATUS_NAMES:
+        raise RuntimeError(f"the run of several contacts stopped at t = {run.t_end!r} s: "
+                           f"status {run.status!r}; please report this as a bug")
+    rows = {name: np.array(values, dtype=float) for name, values in episodes(packed, run).items()}
+    approach, separation = rows["impact_velocity"], rows["separation_velocity"]
+    counted = (approach < 0.0) & np.isfinite(separation)
+    approach_sum = -float(np.sum(approach[counted]))
+    closed = run.mask != 0
+    durations = np.append(run.time[1:], run.t_end) - run.time
+    count = rows["impact_onset_time"].size
+    return {
+        "first_impact_time": rows["impact_onset_time"][0] if count else math.nan,
+        "first_contact": int(rows["impact_contact"][0]) if count else -1,
+        "impact_count": count,
+        "max_contact_force": float(np.max(rows["impact_peak_force"])) if count else 0.0,
+        "mean_restitution": (float(np.sum(separation[counted])) / approach_sum
+                             if approach_sum > 0.0 else math.nan),
+        "contact_fraction": float(np.sum(durations[closed])) / t_max,
+        "dynamics_status": STATUS_NAMES.index(run.status),
+    }
