@@ -177,16 +177,80 @@ def test_progress_reports_windows_of_the_same_run(capsys, monkeypatch):
     assert "simulate: 2 contacts, 12 modes of beam 1" in err and "s simulated" in err
 
 
-def test_what_simulate_of_several_contacts_refuses(capsys):
-    """fields, Lyapunov exponents and long-time samples: one line, before any compute."""
+def test_what_simulate_of_several_contacts_refuses():
+    """fields and Lyapunov exponents: one line, before any compute."""
+    params = FORCED.replace(contacts=(Contact(MID, clearance=1e-6), Contact(clearance=2e-6)))
+    for option in ("fields", "lyapunov"):
+        with pytest.raises(ParameterError, match=f"^{option} = True is not allowed with 2 "
+                                                 "contacts"):
+            simulate(params, 0.03, **{option: True})
+
+
+# a tip stop with a dashpot (zeta = 0.02, Omega = 300 rad/s: a period-2 response after 100
+# forcing periods), alone and beside a mid-span stop 1 mm away that never closes
+LONG = STOP.replace(force_amplitude=1e-3, omega=300.0, damping_ratio=0.02)
+ALONE = LONG.replace(clearance=2e-6, contact_damping=0.2)
+BESIDE = LONG.replace(contacts=(Contact(clearance=2e-6, damping=0.2),
+                                Contact(MID, clearance=1e-3)))
+
+
+def test_long_time_and_tip_velocities_beside_a_contact_that_never_closes():
+    """simulate with long_time (16 periods after 100) of `BESIDE` against `ALONE` (the single
+    contact's run and sampling): the response period (2) and the steady impact and episode
+    rates equal, the stroboscopic tip deflections and velocities to 1e-11 of their largest
+    (measured 2.5e-13 and 1.7e-12), the tip velocity series, whose closed dashpot's force rate
+    -k g' - c g'' moves the tip through the flexibility the modes miss, to 1e-11 (measured
+    1.2e-12)."""
     from impactbeams import LongTime
 
-    params = FORCED.replace(contacts=(Contact(MID, clearance=1e-6), Contact(clearance=2e-6)))
-    for option, value in (("fields", True), ("lyapunov", True),
-                          ("long_time", LongTime(sampled_periods=4))):
-        with pytest.raises(ParameterError, match=f"^{option} = .* is not allowed with 2 "
-                                                 "contacts"):
-            simulate(params, 0.03, **{option: value})
+    period = 2.0 * math.pi / LONG.omega
+    long_time = LongTime(sampled_periods=16)
+    runs = [simulate(params, 116 * period, n_modes=12, dt_output=period / 8,
+                     long_time=long_time, transient_periods=100) for params in (ALONE, BESIDE)]
+    alone, beside = runs
+    assert int(beside.response_period) == int(alone.response_period) == 2
+    for name in ("steady_impact_rate", "steady_episode_rate"):
+        assert float(beside[name]) == float(alone[name]) > 0.0
+    for name in ("poincare_deflection1", "poincare_velocity1", "tip_velocity_1"):
+        np.testing.assert_allclose(beside[name].values, alone[name].values, rtol=0,
+                                   atol=1e-11 * float(np.abs(alone[name]).max()))
+    assert beside.attrs["transient_periods"] == 100
+
+
+def test_a_long_time_sweep_of_several_contacts_is_simulate_and_the_single_contacts_map():
+    """A long-time map over Omega of `BESIDE` (unstepped): each cell is simulate's long_time of
+    its parameters bit for bit, and the single contact's map of `ALONE` (its stroboscope
+    kernel) to round-off: the response periods and rates equal, the samples to 1e-11 of their
+    largest (measured 1.3e-13 and 1.5e-12)."""
+    from impactbeams import LongTime
+    from impactbeams.sweep import run_sweep, sweep_from_mapping
+
+    observables = ["poincare_deflection1", "poincare_velocity1", "response_period",
+                   "steady_impact_rate", "steady_episode_rate"]
+    mapping = {"axes": {"omega": {"min": 300.0, "max": 400.0, "num": 2}}, "t_max": 0.01,
+               "n_modes": 12, "sampled_periods": 16, "transient_periods": 100,
+               "observables": observables}
+    common = {"counterpart": "stop", "force_amplitude": 1e-3, "contact_stiffness": 1e4,
+              "damping_ratio": 0.02}
+    sweep = sweep_from_mapping({**mapping, "params": {**common, "contacts": [
+        {"clearance": 2e-6, "damping": 0.2}, {"position1": MID, "clearance": 1e-3}]}})
+    several = run_sweep(sweep)
+    single = run_sweep(sweep_from_mapping({**mapping, "params": {
+        **common, "clearance": 2e-6, "contact_damping": 0.2}}))
+    assert list(single.response_period.values) == list(several.response_period.values) == [2, 1]
+    for name in ("steady_impact_rate", "steady_episode_rate"):
+        np.testing.assert_array_equal(several[name].values, single[name].values)
+    for name in ("poincare_deflection1", "poincare_velocity1"):
+        np.testing.assert_allclose(several[name].values, single[name].values, rtol=0,
+                                   atol=1e-11 * float(np.abs(single[name]).max()))
+    for omega in several.omega.values:
+        period = 2.0 * math.pi / omega
+        run = simulate(sweep.params_at({"omega": omega}), 116 * period, n_modes=12,
+                       dt_output=period, long_time=LongTime(sampled_periods=16),
+                       transient_periods=100)
+        for name in observables:
+            np.testing.assert_array_equal(several[name].sel(omega=omega).values,
+                                          run[name].values)
 
 
 def test_the_command_line_simulates_several_contacts(tmp_path, capsys):
@@ -276,13 +340,16 @@ def test_a_dynamics_sweep_of_several_contacts_is_simulate_cell_by_cell():
                 _union_length(onset, end) / 0.03, rel=1e-12)
 
 
-def test_a_sweep_of_several_contacts_refuses_lyapunov_and_long_time_in_one_line():
+def test_a_sweep_of_several_contacts_refuses_lyapunov_and_stepping_in_one_line():
     from impactbeams.sweep import sweep_from_mapping
 
     several = {"counterpart": "stop", "contacts": [{"position1": MID}, {}]}
     omega = {"omega": {"min": 300.0, "max": 400.0, "num": 2}}
-    for extra in ({"observables": ["lyapunov_exponent"]},
-                  {"observables": ["steady_impact_rate"], "sampled_periods": 4}):
-        with pytest.raises(ParameterError, match="^observables in sweep = .* is not allowed: "
-                                                 "with 2 contacts a sweep maps"):
-            sweep_from_mapping({"params": several, "axes": omega, "t_max": 0.1, **extra})
+    with pytest.raises(ParameterError, match="^observables in sweep = .* is not allowed: "
+                                             "with 2 contacts a sweep maps"):
+        sweep_from_mapping({"params": several, "axes": omega, "t_max": 0.1,
+                            "observables": ["lyapunov_exponent"]})
+    with pytest.raises(ParameterError, match="^stepping = 'up' is not allowed: with 2 contacts"):
+        sweep_from_mapping({"params": several, "axes": omega, "t_max": 0.1,
+                            "observables": ["steady_impact_rate"], "sampled_periods": 4,
+                            "stepping": "up", "stepped_axis": "omega"})

@@ -37,7 +37,14 @@ from impactbeams.kernels.layout import (
     SCALAR_COSINE,
     SCALAR_SINE,
     TABLE_ROWS,
+    TIP_COLUMNS,
+    TIP_V1,
+    TIP_V2,
+    TIP_Y1,
+    TIP_Y2,
 )
+from impactbeams.kernels.stroboscope import tip_motions as tip_motions_kernel
+from impactbeams.longtime import LongTime, response_period, steady_rate
 from impactbeams.packing import Packed, pack_run
 
 # the per-contact quantities of a run (`episodes`), as `impactbeams.simulate`'s impact table's
@@ -376,15 +383,35 @@ def _episode_row(rows: dict[str, list[float]], contact: int, t: float) -> int:
                if f == contact and onset <= t)
 
 
-def cell_observables(params, n_modes: int, t_max: float, max_phases: int,
-                     ) -> dict[str, float]:
-    """A map cell of several contacts: its run's full-dynamics observables (`summarize`).
+def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynamics: bool = True,
+                     long_time: LongTime | None = None, transient_periods: int = 0,
+                     ) -> dict[str, object]:
+    """A map cell of several contacts: its runs' observables, as `simulate` makes the runs.
 
-    The run `impactbeams.simulate` makes of ``params`` (n_modes per beam, from rest or the
-    uplifts, the search span t_max), at most ``max_phases`` phases.
+    ``dynamics``: the run over [0, t_max] (s) summarised (`summarize`); ``long_time``: the run
+    over (transient + sampled) forcing periods and its long-time values (`long_time_values`,
+    the episode separation a quarter period of the slowest free mode, as a single contact's
+    map), ``dynamics_status`` then the worse of the two runs' (``first_contact`` the long
+    run's without the other). n_modes per beam, from rest or
+    the uplifts, the search span the run's horizon, at most ``max_phases`` phases per run.
     """
-    packed = pack_contacts(params, n_modes, t_max, t_max)
-    return summarize(packed, run_contacts(packed, max_phases), t_max)
+    out: dict[str, object] = {}
+    if dynamics:
+        packed = pack_contacts(params, n_modes, t_max, t_max)
+        out.update(summarize(packed, run_contacts(packed, max_phases), t_max))
+    if long_time is not None:
+        horizon = float(long_time.horizon(params.omega, transient_periods))
+        packed = pack_contacts(params, n_modes, horizon, horizon)
+        run = run_contacts(packed, max_phases)
+        summary = summarize(packed, run, horizon)
+        out.setdefault("first_contact", summary["first_contact"])
+        status = summary["dynamics_status"]
+        impacts = {name: np.array(values) for name, values in episodes(packed, run).items()}
+        separation = 0.5 * math.pi / float(np.min(packed.runs[0].dynamics.free.frequencies))
+        out.update(long_time_values(packed, run, impacts, long_time, transient_periods,
+                                    separation))
+        out["dynamics_status"] = max(status, out.get("dynamics_status", 0))
+    return out
 
 
 def summarize(packed: PackedContacts, run: ContactRun, t_max: float) -> dict[str, float]:
@@ -416,3 +443,92 @@ def summarize(packed: PackedContacts, run: ContactRun, t_max: float) -> dict[str
         "contact_fraction": float(np.sum(durations[closed])) / t_max,
         "dynamics_status": STATUS_NAMES.index(run.status),
     }
+
+
+def episode_labels(impacts: dict[str, np.ndarray], separation: float) -> np.ndarray:
+    """The episode of each contact (in order of onset) of several contacts' ``impacts``.
+
+    A contact opens a new episode unless its onset follows the latest release before it by
+    less than ``separation`` (s); one still closed at the end holds its episode open. For one
+    contact's contacts, `impactbeams.trajectory.episodes.episode_labels`.
+    """
+    onset = impacts["impact_onset_time"]
+    release = np.nan_to_num(onset + impacts["impact_duration"], nan=math.inf)
+    labels = np.zeros(onset.size, dtype=np.int64)
+    latest = -math.inf
+    for k in range(onset.size):
+        labels[k] = labels[k - 1] + (not onset[k] - latest < separation) if k else 0
+        latest = max(latest, release[k])
+    return labels
+
+
+def force_rates(packed: PackedContacts, t: np.ndarray, q: np.ndarray, v: np.ndarray,
+                mask: np.ndarray) -> np.ndarray:
+    """Each closed contact's force rate R_j' (N/s) at the sampled free states, shape (k, n).
+
+    The rate of its event function in the phase (its force there, `gap_rate`'s oscillators):
+    with dashpots R' = -K_e g' - C_e g'' needs the gaps' accelerations, which these hold.
+    """
+    out = np.zeros((t.size, len(packed.runs)))
+    for k in np.flatnonzero(mask != 0):
+        for f in range(len(packed.runs)):
+            if (mask[k] >> f) & 1:
+                out[k, f] = gap_rate(packed, int(mask[k]), f, q[k], v[k], float(t[k]))
+    return out
+
+
+def tip_motions(packed: PackedContacts, t: np.ndarray, q: np.ndarray, v: np.ndarray,
+                mask: np.ndarray, forces: np.ndarray) -> dict[str, np.ndarray]:
+    """The tips' deflections (m) and velocities (m/s) at the sampled states, as `simulate` gives.
+
+    The free phase's (`impactbeams.trajectory.observables`' formula, the kernels') plus what
+    the closed ``forces`` (N, shape (k, n)) move each tip through the flexibility the modes
+    miss, ``+s_1 . R`` on beam 1 and ``-s_2 . R`` on beam 2 (and their rates).
+    """
+    first = packed.runs[0]
+    tips = np.empty((t.size, len(TIP_COLUMNS)))
+    tip_motions_kernel(first.tables, first.forces, first.phase_scalars, first.settings,
+                       np.full(t.size, FREE, dtype=np.int64), np.ascontiguousarray(t),
+                       np.ascontiguousarray(q), np.ascontiguousarray(v), tips)
+    shift1 = np.array([run.dynamics.spring.tip_shift1 for run in packed.runs])
+    shift2 = np.array([run.dynamics.spring.tip_shift2 for run in packed.runs])
+    rates = force_rates(packed, t, q, v, mask)
+    return {"tip_deflection_1": tips[:, TIP_Y1] + forces @ shift1,
+            "tip_deflection_2": tips[:, TIP_Y2] - forces @ shift2,
+            "tip_velocity_1": tips[:, TIP_V1] + rates @ shift1,
+            "tip_velocity_2": tips[:, TIP_V2] - rates @ shift2}
+
+
+def long_time_values(packed: PackedContacts, run: ContactRun, impacts: dict[str, np.ndarray],
+                     long_time: LongTime, transient_periods: int, separation: float,
+                     ) -> dict[str, np.ndarray | float]:
+    """The long-time observables of a run of several contacts (`impactbeams.longtime`).
+
+    The tips at the stroboscopic samples (``poincare_deflection2`` is beam 2's tip itself, as
+    several contacts' ``tip_deflection_2``: 0 against stops), their response period, and the
+    contacts (every contact's onsets) and episodes of all contacts together (`episode_labels`
+    with ``separation``, s) per second in the sampled window.
+    """
+    omega = packed.runs[0].params.omega
+    times = long_time.sample_times(omega, transient_periods)
+    reached = times[times <= run.t_end]
+    q, v, mask = sample(packed, run, reached)
+    forces = contact_quantities(packed, reached, q, v, mask)["contact_force"]
+    motions = tip_motions(packed, reached, q, v, mask, forces)
+    tips = [np.concatenate([motions[name], np.full(times.size - reached.size, np.nan)])
+            for name in ("tip_deflection_1", "tip_deflection_2", "tip_velocity_1",
+                         "tip_velocity_2")]
+    start, end = times[0], long_time.horizon(omega, transient_periods)
+    onsets = impacts["impact_onset_time"]
+    episode_onsets = onsets[np.flatnonzero(np.diff(episode_labels(impacts, separation),
+                                                   prepend=-1))]
+
+    def rate(events: np.ndarray) -> float:
+        count = np.count_nonzero((events >= start) & (events < end))
+        return float(steady_rate(count, start, end, run.t_end))
+
+    return {"poincare_deflection1": tips[0], "poincare_deflection2": tips[1],
+            "poincare_velocity1": tips[2], "poincare_velocity2": tips[3],
+            "response_period": int(response_period(*tips, omega, long_time.period_tolerance,
+                                                   long_time.max_period)),
+            "steady_impact_rate": rate(onsets), "steady_episode_rate": rate(episode_onsets)}

@@ -116,11 +116,12 @@ def _first_contact(sweep: Sweep, start: int, stop: int, parallel: bool, plan: Pl
 
 def _several_dynamics(sweep: Sweep, start: int, stop: int, parallel: bool,
                       ) -> dict[str, np.ndarray]:
-    """Full-dynamics observables of several contacts on flat cells start..stop, cell by cell.
+    """Full-dynamics and long-time observables of several contacts on cells start..stop.
 
-    Each cell is the run `impactbeams.simulate` makes of its parameters (the active sets'
-    phases, `active_phases.cell_observables`); with ``parallel`` the cells run on Numba's
-    thread count of threads (the kernel releases the GIL), each alone: the same values.
+    Each cell is the runs `impactbeams.simulate` makes of its parameters (the active sets'
+    phases, `active_phases.cell_observables`), cell by cell; with ``parallel`` the cells run
+    on Numba's thread count of threads (the kernel releases the GIL), each alone: the same
+    values.
     """
     from concurrent.futures import ThreadPoolExecutor
 
@@ -130,11 +131,13 @@ def _several_dynamics(sweep: Sweep, start: int, stop: int, parallel: bool,
 
     index = np.unravel_index(np.arange(start, stop), sweep.shape)
     values = [axis.values for axis in sweep.axes]  # (the plan's are its first contact's)
+    dynamics = any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables)
 
     def one(i: int) -> dict[str, float]:
         changes = {axis.name: values[k][index[k][i]] for k, axis in enumerate(sweep.axes)}
         return cell_observables(sweep.params_at(changes), sweep.n_modes, sweep.t_max,
-                                MAX_SEGMENTS)
+                                MAX_SEGMENTS, dynamics, sweep.long_time,
+                                sweep.transient_periods)
 
     if parallel and stop - start > 1:
         with ThreadPoolExecutor(numba.get_num_threads()) as pool:
@@ -235,6 +238,13 @@ def check_contact_phases(sweep: Sweep) -> None:
     """
     _check_steady_start(sweep)
     if not sweep.needs_dynamics:
+        return
+    if sweep.base.several_contacts:  # every set of contacts closed together, each contact's too
+        from impactbeams.contact.active_sets import several_contacts
+
+        for params in _geometries(sweep):
+            if params.damping_ratio or any(run.contact_damping for run in params.each_contact()):
+                several_contacts(params, sweep.n_modes)
         return
     for params in _geometries(sweep):
         if params.law.compliant and (params.contact_damping or params.damping_ratio):

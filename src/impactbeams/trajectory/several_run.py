@@ -39,20 +39,24 @@ from impactbeams.active_phases import (
     PackedContacts,
     _modal_gap_rates,
     contact_quantities,
+    episode_labels,
     episodes,
+    long_time_values,
     pack_contacts,
     run_contacts,
     sample,
+    tip_motions,
 )
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels.layout import FREE, SCALAR_LOAD_RATE, TABLE_ROWS
+from impactbeams.longtime import LongTime
 from impactbeams.params import ParameterError, Params, modes_per_beam, without_unused_law_keys
 from impactbeams.preflight import format_time
 from impactbeams.progress import Progress
 from impactbeams.trajectory.episodes import default_separation
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.start import initial_free_state, section_gap
-from impactbeams.variables import attributes, global_attributes, validate
+from impactbeams.variables import VARIABLES, attributes, global_attributes, validate
 
 _NODES, _WEIGHTS = leggauss(12)
 _CHUNK_NODES = 1 << 16  # quadrature nodes evaluated at once: bounds memory at ~N * 10 MB
@@ -63,6 +67,7 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
                       search_span: float, max_events: int, *, energy_balance: bool = False,
                       initial_state: object = None, progress: bool = False,
                       episode_separation: float | None = None, expected: float = math.nan,
+                      long_time: LongTime | None = None, transient_periods: int = 0,
                       ) -> xr.Dataset:
     """`impactbeams.simulate` of several contacts (its arguments checked): a Dataset.
 
@@ -71,7 +76,8 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
     along ``contact``, and with ``energy_balance`` ``work_of_force`` and
     ``damping_dissipation`` (module doc); along ``impact``: each contact (the columns of
     `contact_sequence`); along ``episode`` the episodes of all contacts together, along
-    ``contact_episode`` each contact's own; ``final_displacement``, ``final_velocity``.
+    ``contact_episode`` each contact's own; ``final_displacement``, ``final_velocity``; with
+    ``long_time`` its variables after ``transient_periods`` (`active_phases.long_time_values`).
     ``expected``: the announced compute time (s) with ``progress``.
     """
     packed = pack_contacts(params, n_modes, t_max, search_span)
@@ -114,6 +120,10 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
             table["episode_dissipated_energy"] = at[size:2 * size] - at[:size]
             at = at[2 * size:]
     dataset = _dataset(data, impacts, joint, own, times)
+    if long_time is not None:
+        dataset = _with_long_time(dataset, long_time_values(
+            packed, run, impacts, long_time, transient_periods, separation), long_time,
+            transient_periods)
     z = np.concatenate(sample(packed, run, np.array([run.t_end]))[:2], axis=1)[0]
     dataset = _with_final_state(dataset, z)
     described = without_unused_law_keys(params.as_dict())
@@ -155,6 +165,9 @@ def contacts_start(packed: PackedContacts, z: np.ndarray) -> tuple[np.ndarray, n
 def _series(packed: PackedContacts, run: ContactRun, times: np.ndarray) -> dict[str, tuple]:
     """The time series at ``times`` (s, <= the run's end): tips, energies, gaps and forces.
 
+    The tips' velocities include the closed forces' rates through the flexibility the modes
+    miss (`active_phases.tip_motions`).
+
     The energy is the beams' (`impactbeams.trajectory.observables`) plus the closed contacts'
     g_S^T K_eff g_S / 2 and the work of F through beam 1's tip shifts under them.
     """
@@ -164,7 +177,6 @@ def _series(packed: PackedContacts, run: ContactRun, times: np.ndarray) -> dict[
     contact = contact_quantities(packed, times, q, v, mask)
     springs = [run_.dynamics.spring for run_ in packed.runs]
     shift1 = np.array([spring.tip_shift1 for spring in springs])
-    shift2 = np.array([spring.tip_shift2 for spring in springs])
     forces = contact["contact_force"]
     tip_force = params.force_amplitude * np.sin(params.omega * times)
     # the observables of contact 0's run count its own spring where its modal gap is < 0
@@ -172,8 +184,7 @@ def _series(packed: PackedContacts, run: ContactRun, times: np.ndarray) -> dict[
     own_gap = contact["modal_gap"][:, 0]
     own_spring = np.where(own_gap < 0.0, 0.5 * springs[0].effective_stiffness * own_gap**2, 0.0)
     return {
-        "tip_deflection_1": free["tip_deflection_1"] + forces @ shift1,
-        "tip_deflection_2": free["tip_deflection_2"] - forces @ shift2,
+        **tip_motions(packed, times, q, v, mask, forces),
         "kinetic_energy": free["kinetic_energy"],
         "unresolved_kinetic_energy": free["unresolved_kinetic_energy"],
         "energy": (free["energy"] - own_spring + contact["contact_energy"]
@@ -181,23 +192,6 @@ def _series(packed: PackedContacts, run: ContactRun, times: np.ndarray) -> dict[
         "contact_gaps": contact["gap"],
         "contact_forces": forces,
     }
-
-
-def episode_labels(impacts: dict[str, np.ndarray], separation: float) -> np.ndarray:
-    """The episode of each contact (in order of onset) of several contacts' ``impacts``.
-
-    A contact opens a new episode unless its onset follows the latest release before it by
-    less than ``separation`` (s); one still closed at the end holds its episode open. For one
-    contact's contacts, `impactbeams.trajectory.episodes.episode_labels`.
-    """
-    onset = impacts["impact_onset_time"]
-    release = np.nan_to_num(onset + impacts["impact_duration"], nan=math.inf)
-    labels = np.zeros(onset.size, dtype=np.int64)
-    latest = -math.inf
-    for k in range(onset.size):
-        labels[k] = labels[k - 1] + (not onset[k] - latest < separation) if k else 0
-        latest = max(latest, release[k])
-    return labels
 
 
 def _episode_table(impacts: dict[str, np.ndarray], labels: np.ndarray,
@@ -287,6 +281,20 @@ def _dataset(data: dict[str, np.ndarray], impacts: dict[str, np.ndarray],
               "contact_episode": ("contact_episode", np.arange(own["episode_onset_time"].size),
                                   attributes("contact_episode"))}
     return xr.Dataset(variables, coords=coords)
+
+
+def _with_long_time(dataset: xr.Dataset, values: dict[str, object], long_time: LongTime,
+                    transient_periods: int) -> xr.Dataset:
+    """``dataset`` with the long-time variables ``values`` (`active_phases.long_time_values`)."""
+    data = {name: (("period",) if np.ndim(value) else (), np.asarray(
+        value, dtype=VARIABLES[name].dtype), attributes(name)) for name, value in values.items()}
+    period = {"period": ("period", long_time.period_numbers(transient_periods),
+                         attributes("period"))}
+    result = dataset.assign_coords(period).assign(data)
+    result.attrs.update({key: getattr(long_time, key) for key in
+                         ("sampled_periods", "period_tolerance", "max_period")},
+                        transient_periods=transient_periods)
+    return result
 
 
 def _with_final_state(dataset: xr.Dataset, z: np.ndarray) -> xr.Dataset:

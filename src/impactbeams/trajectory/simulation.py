@@ -181,11 +181,12 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     """
     _check_options(fields, energy_balance, lyapunov, transient_periods, long_time, progress)
     if isinstance(params, Params) and params.several_contacts:
-        refused = {"fields": fields, "lyapunov": lyapunov,
-                   "transient_periods": transient_periods, "long_time": long_time}
+        refused = {"fields": fields, "lyapunov": lyapunov}
+        if long_time is not None:
+            _check_long_time(params, t_max, transient_periods, long_time)
         return _simulate_several(params, t_max, n_modes, dt_output, times, max_events,
                                  search_span, episode_separation, energy_balance, progress,
-                                 initial_state, refused)
+                                 initial_state, refused, long_time, transient_periods)
     run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
                                  search_span, episode_separation, fields, energy_balance)
     t_max, n_modes, resolution = run_inputs.t_max, run_inputs.n_modes, run_inputs.resolution
@@ -244,7 +245,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
 def _simulate_several(params: Params, t_max: float, n_modes: int | None, dt_output: float,
                       times: np.ndarray | None, max_events: int, search_span: float | None,
                       episode_separation: float | None, energy_balance: bool, progress: bool,
-                      initial_state: object, refused: dict[str, object]) -> xr.Dataset:
+                      initial_state: object, refused: dict[str, object],
+                      long_time: LongTime | None, transient_periods: int) -> xr.Dataset:
     """[`simulate`][] of several contacts (`impactbeams.trajectory.several_run`).
 
     The options it cannot take (``refused``, given other than their defaults) are refused in
@@ -260,7 +262,7 @@ def _simulate_several(params: Params, t_max: float, n_modes: int | None, dt_outp
         raise ParameterError(
             f"{given[0]} = {refused[given[0]]!r} is not allowed with {len(params.contacts)} "
             "contacts: simulate of several contacts gives the time series, energy balance, "
-            "contacts and episodes, not fields, Lyapunov exponents or long-time samples "
+            "contacts, episodes and long-time samples, not fields or Lyapunov exponents "
             "(docs/limits.md, 'Several contacts')")
     n_modes = check_contact_runs(params, t_max, n_modes)
     runs = params.each_contact()
@@ -272,7 +274,8 @@ def _simulate_several(params: Params, t_max: float, n_modes: int | None, dt_outp
                              inputs.search_span, inputs.max_events,
                              energy_balance=energy_balance, initial_state=initial_state,
                              progress=progress, episode_separation=inputs.episode_separation,
-                             expected=sum(each.seconds for each in checked))
+                             expected=sum(each.seconds for each in checked),
+                             long_time=long_time, transient_periods=transient_periods)
 
 
 class _EventPace:
