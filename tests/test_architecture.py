@@ -27,8 +27,8 @@ FLOORS = {
     "contact": 4,
     "model": 5, "compliant": 5,  # old import paths, re-exporting contact
     "drive": 5,
-    "packing": 6, "active_phases": 6, "preflight": 6, "costs": 6, "compilation": 6,
-    "cached_kernels": 6,
+    "packing": 6, "preflight": 6, "costs": 6, "compilation": 6, "cached_kernels": 6,
+    "active_phases": 6.5,  # several contacts' runs, packed on each contact's: maps and runs
     "progress": 6,
     "sweep": 7, "trajectory": 7, "plotting": 7,
     "orbits": 8,
