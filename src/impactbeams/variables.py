@@ -295,7 +295,7 @@ VARIABLES.update({
 })
 
 # simulate() of several contacts: each contact's own episodes (its contacts clustered alone,
-# trajectory.contact_episodes), beside the episodes of all contacts together ("episode")
+# trajectory.several_run), beside the episodes of all contacts together ("episode")
 VARIABLES.update({
     "contact_episode": Variable(
         ("contact_episode",), "1", "episode number of one contact",

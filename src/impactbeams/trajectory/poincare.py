@@ -33,16 +33,23 @@ def long_time_variables(packed: Packed, trajectory: Trajectory, dataset: xr.Data
         count = np.count_nonzero((onsets.values >= start) & (onsets.values < end))
         return float(steady_rate(count, start, end, trajectory.t_end))
 
-    samples = {"poincare_deflection1": tips[0], "poincare_deflection2": tips[1] - clearance,
-               "poincare_velocity1": tips[2], "poincare_velocity2": tips[3]}
-    data = {name: ("period", values, attributes(name)) for name, values in samples.items()}
-    data["response_period"] = ((), np.asarray(response_period(  # the registered int32
-        *tips, omega, long_time.period_tolerance, long_time.max_period),
-        VARIABLES["response_period"].dtype), attributes("response_period"))
-    data["steady_impact_rate"] = ((), rate(dataset.impact_onset_time),
-                                  attributes("steady_impact_rate"))
-    data["steady_episode_rate"] = ((), rate(dataset.episode_onset_time),
-                                   attributes("steady_episode_rate"))
+    values = {"poincare_deflection1": tips[0], "poincare_deflection2": tips[1] - clearance,
+              "poincare_velocity1": tips[2], "poincare_velocity2": tips[3],
+              "response_period": response_period(*tips, omega, long_time.period_tolerance,
+                                                 long_time.max_period),
+              "steady_impact_rate": rate(dataset.impact_onset_time),
+              "steady_episode_rate": rate(dataset.episode_onset_time)}
+    return with_long_time(dataset, values, long_time, transient_periods)
+
+
+def with_long_time(dataset: xr.Dataset, values: dict[str, object], long_time: LongTime,
+                   transient_periods: int) -> xr.Dataset:
+    """``dataset`` with the long-time ``values``, the ``period`` coordinate and attributes.
+
+    The samples along ``period``, the rest scalars, each as registered (its dtype).
+    """
+    data = {name: (("period",) if np.ndim(value) else (), np.asarray(
+        value, dtype=VARIABLES[name].dtype), attributes(name)) for name, value in values.items()}
     period = {"period": ("period", long_time.period_numbers(transient_periods),
                          attributes("period"))}
     result = dataset.assign_coords(period).assign(data)

@@ -55,8 +55,9 @@ from impactbeams.preflight import format_time
 from impactbeams.progress import Progress
 from impactbeams.trajectory.episodes import default_separation
 from impactbeams.trajectory.observables import observables
-from impactbeams.trajectory.start import initial_free_state, section_gap
-from impactbeams.variables import VARIABLES, attributes, global_attributes, validate
+from impactbeams.trajectory.poincare import with_long_time
+from impactbeams.trajectory.start import initial_free_state, section_gap, with_final_state
+from impactbeams.variables import attributes, global_attributes, validate
 
 _NODES, _WEIGHTS = leggauss(12)
 _CHUNK_NODES = 1 << 16  # quadrature nodes evaluated at once: bounds memory at ~N * 10 MB
@@ -121,11 +122,11 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
             at = at[2 * size:]
     dataset = _dataset(data, impacts, joint, own, times)
     if long_time is not None:
-        dataset = _with_long_time(dataset, long_time_values(
+        dataset = with_long_time(dataset, long_time_values(
             packed, run, impacts, long_time, transient_periods, separation), long_time,
             transient_periods)
     z = np.concatenate(sample(packed, run, np.array([run.t_end]))[:2], axis=1)[0]
-    dataset = _with_final_state(dataset, z)
+    dataset = with_final_state(dataset, z)
     described = without_unused_law_keys(params.as_dict())
     dataset.attrs.update(global_attributes(
         "impact dynamics of cantilevers with several contacts (impactbeams.simulate)",
@@ -281,33 +282,6 @@ def _dataset(data: dict[str, np.ndarray], impacts: dict[str, np.ndarray],
               "contact_episode": ("contact_episode", np.arange(own["episode_onset_time"].size),
                                   attributes("contact_episode"))}
     return xr.Dataset(variables, coords=coords)
-
-
-def _with_long_time(dataset: xr.Dataset, values: dict[str, object], long_time: LongTime,
-                    transient_periods: int) -> xr.Dataset:
-    """``dataset`` with the long-time variables ``values`` (`active_phases.long_time_values`)."""
-    data = {name: (("period",) if np.ndim(value) else (), np.asarray(
-        value, dtype=VARIABLES[name].dtype), attributes(name)) for name, value in values.items()}
-    period = {"period": ("period", long_time.period_numbers(transient_periods),
-                         attributes("period"))}
-    result = dataset.assign_coords(period).assign(data)
-    result.attrs.update({key: getattr(long_time, key) for key in
-                         ("sampled_periods", "period_tolerance", "max_period")},
-                        transient_periods=transient_periods)
-    return result
-
-
-def _with_final_state(dataset: xr.Dataset, z: np.ndarray) -> xr.Dataset:
-    """The run's free state at t_end (``initial_state`` of a run that continues it)."""
-    n = z.size // 2
-    dataset = dataset.assign_coords(coordinate=("coordinate", np.arange(n),
-                                                 attributes("coordinate")))
-    dataset["final_displacement"] = ("coordinate", z[:n], attributes("final_displacement"))
-    dataset["final_velocity"] = ("coordinate", z[n:], attributes("final_velocity"))
-    return dataset
-
-
-# --- the energy balance (module doc) ------------------------------------------------------------
 
 
 def energy_integrals(packed: PackedContacts, run: ContactRun, times: np.ndarray,

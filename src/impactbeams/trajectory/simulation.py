@@ -45,7 +45,12 @@ from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.lyapunov import Exponents, check_request, lyapunov_exponents
 from impactbeams.trajectory.phases import Trajectory, run
 from impactbeams.trajectory.poincare import long_time_variables
-from impactbeams.trajectory.start import InitialFields, final_state, initial_phase_state
+from impactbeams.trajectory.start import (
+    InitialFields,
+    final_state,
+    initial_phase_state,
+    with_final_state,
+)
 from impactbeams.variables import attributes, global_attributes, validate
 
 # The event search restarts at least every search_span seconds; a span below this fraction of
@@ -234,7 +239,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
         dataset = _with_exponents(dataset, exponents, transient_periods)
     if long_time is not None:
         dataset = long_time_variables(packed, trajectory, dataset, long_time, transient_periods)
-    dataset = _with_final_state(dataset, final_state(packed, trajectory))
+    dataset = with_final_state(dataset, final_state(packed, trajectory))
     dataset.attrs.update(_global_attributes(params, n_modes, t_max, trajectory))
     if params.law.compliant:
         dataset.attrs.update(_contact_attributes(packed, n_modes >= resolution, resolution))
@@ -466,16 +471,6 @@ def _with_exponents(dataset: xr.Dataset, exponents: Exponents, transient: int) -
                                         {**attributes("lyapunov_spectrum"), **averaging})
         dataset["lyapunov_spectrum_error"] = ("exponent", exponents.errors,
                                               attributes("lyapunov_spectrum_error"))
-    return dataset
-
-
-def _with_final_state(dataset: xr.Dataset, z: np.ndarray) -> xr.Dataset:
-    """The run's state at t_end (``initial_state`` of a run that continues it)."""
-    n = z.size // 2
-    dataset = dataset.assign_coords(coordinate=("coordinate", np.arange(n),
-                                                 attributes("coordinate")))
-    dataset["final_displacement"] = ("coordinate", z[:n], attributes("final_displacement"))
-    dataset["final_velocity"] = ("coordinate", z[n:], attributes("final_velocity"))
     return dataset
 
 

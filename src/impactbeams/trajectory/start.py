@@ -27,6 +27,7 @@ from impactbeams.modes import BeamShapes
 from impactbeams.packing import Packed
 from impactbeams.params import MAX_DEFLECTION, ParameterError, require_type
 from impactbeams.trajectory.phases import Trajectory, free_states
+from impactbeams.variables import attributes
 
 # a Dataset's final state restarts a run if its t_end is a whole number of forcing periods to
 # this relative tolerance (round-off of t_end = k 2 pi / Omega is ~1e-15 k)
@@ -264,3 +265,17 @@ def section_gap(packed: Packed, z: np.ndarray, t: float = 0.0) -> tuple[float, f
     gap, rate = event_value(z[:n], z[n:], t, phase_event_function(
         packed.tables[FREE], scalars, packed.settings["forcing_frequency"]))
     return float(gap), float(rate)
+
+
+def with_final_state(dataset: xr.Dataset, z: np.ndarray) -> xr.Dataset:
+    """``dataset`` with the run's free state z = (q, q') at t_end.
+
+    ``final_displacement`` and ``final_velocity``: the ``initial_state`` of a run that
+    continues it.
+    """
+    n = z.size // 2
+    dataset = dataset.assign_coords(coordinate=("coordinate", np.arange(n),
+                                                 attributes("coordinate")))
+    dataset["final_displacement"] = ("coordinate", z[:n], attributes("final_displacement"))
+    dataset["final_velocity"] = ("coordinate", z[n:], attributes("final_velocity"))
+    return dataset
