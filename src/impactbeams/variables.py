@@ -309,7 +309,7 @@ VARIABLES.update({
         "(one contact's episodes)") for name in (
             "episode_onset_time", "episode_duration", "episode_contact_count",
             "episode_impulse", "episode_peak_force", "episode_dissipated_energy",
-            "episode_restitution")},
+            "episode_restitution", "episode_energetic_restitution")},
 })
 
 # Lyapunov exponents (docs/model.md, "Lyapunov exponents"): of a map's cells ("*") and of a run
