@@ -311,7 +311,8 @@ def _union_length(onset: np.ndarray, end: np.ndarray) -> float:
 def test_a_dynamics_sweep_of_several_contacts_is_simulate_cell_by_cell():
     """A forcing frequency by the tip stop's clearance (a mid-span stop beside it, one with
     dashpots): every cell against simulate of that cell's parameters: the impact count, the
-    first contact and its onset, the largest force bit for bit, the mean restitution (the
+    first contact and its onset, the largest force, each contact's impacts and largest force
+    bit for bit, the mean restitution (the
     separation over the approach speeds of the contacts simulate lists) to 1e-14 and the
     contact fraction (the union of the contacts' intervals over t_max) to 1e-12 (measured
     0 and 0: the same numbers); parallel, serial and in chunks of one cell the same bits; the
@@ -326,7 +327,8 @@ def test_a_dynamics_sweep_of_several_contacts_is_simulate_cell_by_cell():
                         "contacts.1.clearance": {"min": 1e-6, "max": 3e-6, "num": 2}},
                "t_max": 0.03, "n_modes": 12,
                "observables": ["first_impact_time", "impact_count", "max_contact_force",
-                               "mean_restitution", "contact_fraction"]}
+                               "mean_restitution", "contact_fraction", "contact_impact_count",
+                               "contact_max_force"]}
     sweep = sweep_from_mapping(mapping)
     ds = run_sweep(sweep)
     for other in (run_sweep(sweep, parallel=False), run_sweep(sweep, chunk_cells=1)):
@@ -346,6 +348,11 @@ def test_a_dynamics_sweep_of_several_contacts_is_simulate_cell_by_cell():
             assert int(cell.first_contact) == int(run.impact_contact[0])
             assert float(cell.first_impact_time) == float(run.impact_onset_time[0])
             assert float(cell.max_contact_force) == float(run.impact_peak_force.max())
+            for j in (0, 1):  # each contact's share
+                own = run.impact_contact.values == j
+                assert int(cell.contact_impact_count[j]) == np.count_nonzero(own)
+                assert float(cell.contact_max_force[j]) == float(
+                    run.impact_peak_force.values[own].max(initial=0.0))
             approach = run.impact_velocity.values
             separated = np.isfinite(run.separation_velocity.values) & (approach < 0)
             restitution = (run.separation_velocity.values[separated].sum()
@@ -358,7 +365,8 @@ def test_a_dynamics_sweep_of_several_contacts_is_simulate_cell_by_cell():
                 _union_length(onset, end) / 0.03, rel=1e-12)
 
 
-def test_a_sweep_of_several_contacts_refuses_lyapunov_and_stepping_in_one_line():
+def test_what_sweeps_of_several_contacts_refuse_in_one_line():
+    """Lyapunov and stepped maps of several contacts; each contact's share with one."""
     from impactbeams.sweep import sweep_from_mapping
 
     several = {"counterpart": "stop", "contacts": [{"position1": MID}, {}]}
@@ -367,6 +375,10 @@ def test_a_sweep_of_several_contacts_refuses_lyapunov_and_stepping_in_one_line()
                                              "with 2 contacts a sweep maps"):
         sweep_from_mapping({"params": several, "axes": omega, "t_max": 0.1,
                             "observables": ["lyapunov_exponent"]})
+    with pytest.raises(ParameterError, match=r"^observables in sweep = \['contact_impact_count'"
+                                             r"\] is not allowed: each contact's share"):
+        sweep_from_mapping({"params": {"counterpart": "stop"}, "axes": omega, "t_max": 0.1,
+                            "observables": ["contact_impact_count"]})
     with pytest.raises(ParameterError, match="^stepping = 'up' is not allowed: with 2 contacts"):
         sweep_from_mapping({"params": several, "axes": omega, "t_max": 0.1,
                             "observables": ["steady_impact_rate"], "sampled_periods": 4,

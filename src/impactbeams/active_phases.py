@@ -421,7 +421,8 @@ def summarize(packed: PackedContacts, run: ContactRun, t_max: float) -> dict[str
     ``impact_count``: every contact's onsets; ``max_contact_force`` (N, 0 without any);
     ``mean_restitution``: the separation speeds over the approach speeds of the contacts that
     closed with an approach and separated (NaN if none); ``contact_fraction``: the time with
-    any contact closed over t_max (s); ``dynamics_status``: the run's status code.
+    any contact closed over t_max (s); ``contact_impact_count``, ``contact_max_force``: each
+    contact's onsets and largest force (N); ``dynamics_status``: the run's status code.
     """
     if run.status not in STATUS_NAMES:
         raise RuntimeError(f"the run of several contacts stopped at t = {run.t_end!r} s: "
@@ -441,6 +442,10 @@ def summarize(packed: PackedContacts, run: ContactRun, t_max: float) -> dict[str
         "mean_restitution": (float(np.sum(separation[counted])) / approach_sum
                              if approach_sum > 0.0 else math.nan),
         "contact_fraction": float(np.sum(durations[closed])) / t_max,
+        "contact_impact_count": np.bincount(rows["impact_contact"].astype(np.int64),
+                                            minlength=len(packed.runs)),
+        "contact_max_force": np.array([np.max(rows["impact_peak_force"][
+            rows["impact_contact"] == j], initial=0.0) for j in range(len(packed.runs))]),
         "dynamics_status": STATUS_NAMES.index(run.status),
     }
 

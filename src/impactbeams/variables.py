@@ -139,6 +139,14 @@ VARIABLES: dict[str, Variable] = {
     "contact_fraction": Variable(
         ("*",), "1", "fraction of time in contact",
         "time spent in the contact phase divided by t_max (full dynamics)"),
+    "contact_impact_count": Variable(
+        ("*", "contact"), "1", "number of impacts of each contact",
+        "number of each contact's onsets in [0, t_max] (several contacts, Params.contacts; "
+        "full dynamics)", dtype="int32"),
+    "contact_max_force": Variable(
+        ("*", "contact"), "N", "largest force of each contact",
+        "largest force R_j of each contact over [0, t_max]; 0 where it never closes (several "
+        "contacts, Params.contacts; full dynamics)"),
 }
 
 # simulate(): one trajectory on an output grid ("time") and its impacts ("impact")
@@ -182,6 +190,9 @@ VARIABLES.update({
         ("time",), "N", "contact force",
         "R(t) = EI2 d3y2/dx3 (l2, t) (against a stop -EI1 d3y1/dx3 (l1, t)) in contact, 0 out "
         "of contact", "$R$"),
+    "contact": Variable(("contact",), "1", "contact number",
+                        "index of the contact in Params.contacts (several contacts), from 0",
+                        dtype="int64"),
     "contact_gaps": Variable(
         ("time", "contact"), "m", "gap of each contact",
         "g_j = Delta_j + s_j (y1(x1j) - y2(x2j)) of each of several contacts (Params.contacts), "

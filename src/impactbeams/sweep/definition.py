@@ -88,11 +88,14 @@ FIRST_IMPACT = "first_impact_time"
 FIRST_CONTACT = "first_contact"  # several contacts: which one closes first
 DYNAMICS_OBSERVABLES = ("impact_count", "max_contact_force", "mean_restitution",
                         "contact_fraction")
+# several contacts: each contact's share of the full dynamics (along "contact")
+CONTACT_OBSERVABLES = ("contact_impact_count", "contact_max_force")
 LYAPUNOV = "lyapunov_exponent"  # spring law only; its own windowed run (kernels.lyapunov)
 # the long run's stroboscopic samples (along a trailing dimension "period") and what they give
 POINCARE_OBSERVABLES = POINCARE_VARIABLES
 LONG_TIME_OBSERVABLES = LONG_TIME_VARIABLES
-OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, LYAPUNOV, *LONG_TIME_OBSERVABLES)
+OBSERVABLES = (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, *CONTACT_OBSERVABLES, LYAPUNOV,
+               *LONG_TIME_OBSERVABLES)
 # parameters that change a cell but not its geometry (its modes): the packed cell columns
 CELL_PARAMETERS = tuple(name for name in CELL_COLUMNS if name != "geometry")
 LONG_TIME_KEYS = ("sampled_periods", "period_tolerance", "max_period")  # of LongTime
@@ -230,17 +233,18 @@ class Sweep:
     @property
     def needs_dynamics(self) -> bool:
         """Whether any observable needs the full dynamics (not the free phase alone)."""
-        return (any(name in (*DYNAMICS_OBSERVABLES, LYAPUNOV) for name in self.observables)
-                or self.long_time is not None)
+        return (any(name in (*DYNAMICS_OBSERVABLES, *CONTACT_OBSERVABLES, LYAPUNOV)
+                    for name in self.observables) or self.long_time is not None)
 
     def value_shape(self, name: str) -> tuple[int, ...]:
         """Shape of one cell's value of stored array ``name``, e.g. (sampled periods,) or ().
 
-        Its registered dimensions after the grid's (variables.VARIABLES), here ``period`` or
-        ``coordinate``.
+        Its registered dimensions after the grid's (variables.VARIABLES), here ``period``,
+        ``coordinate`` or ``contact`` (several contacts).
         """
         lengths = {"period": self.long_time.sampled_periods} if self.long_time else {}
         lengths["coordinate"] = self.free_coordinates
+        lengths["contact"] = len(self.fixed.get(CONTACTS, ()))
         return tuple(lengths[dim] for dim in VARIABLES[name].dims[1:])
 
     @property
@@ -649,6 +653,9 @@ def contact_axes(sweep: Sweep, index: int) -> tuple[int, ...]:
 def _contact_sweep(sweep: Sweep, index: int, contact: Contact) -> Sweep:
     axes = tuple(dataclasses.replace(sweep.axes[k], name=swept_parameter(sweep.axes[k].name))
                  for k in contact_axes(sweep, index))
+    # one contact's run has no per-contact observables (its own are impact_count, ...)
+    observables = tuple(name for name in sweep.observables
+                        if name not in CONTACT_OBSERVABLES) or (FIRST_IMPACT,)
     swept = {axis.name for axis in axes}
     fixed = {name: value for name, value in {**sweep.fixed, **contact.flat()}.items()
              if name != CONTACTS and name not in swept}
@@ -656,7 +663,7 @@ def _contact_sweep(sweep: Sweep, index: int, contact: Contact) -> Sweep:
         clearance = sweep.base.each_contact()[index].clearance
         axes = (Axis("clearance", clearance, clearance, 1, "linear"),)
         fixed.pop("clearance", None)
-    return dataclasses.replace(sweep, fixed=fixed, axes=axes,
+    return dataclasses.replace(sweep, fixed=fixed, axes=axes, observables=observables,
                                source=f"{sweep.source}, {CONTACTS}[{index}]")
 
 
@@ -671,8 +678,9 @@ def _check_several(sweep: Sweep) -> None:
     require(f"observables in {sweep.source}", list(sweep.observables),
             LYAPUNOV not in sweep.observables,
             f"with {len(sweep.base.contacts)} contacts a sweep maps {FIRST_IMPACT!r}, the "
-            f"full dynamics' {', '.join(map(repr, DYNAMICS_OBSERVABLES))} and the long-time "
-            "observables; the Lyapunov exponent is not built for several contacts "
+            f"full dynamics' {', '.join(map(repr, DYNAMICS_OBSERVABLES))}, each contact's "
+            f"{', '.join(map(repr, CONTACT_OBSERVABLES))} and the long-time observables; the "
+            "Lyapunov exponent is not built for several contacts "
             "(docs/limits.md, 'Several contacts')")
     require("stepping", sweep.stepping.direction if sweep.stepping else None,
             sweep.stepping is None, f"with {len(sweep.base.contacts)} contacts a long-time "
@@ -720,6 +728,10 @@ def _check_grid(sweep: Sweep) -> None:
         for each in contact_sweeps(sweep):
             _check_grid(each)
         return
+    given = [name for name in sweep.observables if name in CONTACT_OBSERVABLES]
+    require(f"observables in {sweep.source}", given, not given,
+            "each contact's share is a map of several contacts' ([[params.contacts]]); with "
+            "one contact map impact_count and max_contact_force")
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)

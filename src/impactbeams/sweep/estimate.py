@@ -16,6 +16,7 @@ from impactbeams import costs
 from impactbeams.params import Params
 from impactbeams.preflight import Cost
 from impactbeams.sweep.definition import (
+    CONTACT_OBSERVABLES,
     DYNAMICS_OBSERVABLES,
     FIRST_IMPACT,
     LYAPUNOV,
@@ -70,7 +71,8 @@ def cell_seconds(sweep: Sweep, points: list[Params]) -> np.ndarray:
                   for name in points[0].numeric()}
         if not sweep.needs_dynamics:
             seconds[index] += costs.cell_search_seconds(values, sweep.n_modes, sweep.t_max)
-        elif any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables):
+        elif any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, *CONTACT_OBSERVABLES)
+                 for name in sweep.observables):
             seconds[index] += costs.dynamics_seconds(values, law, sweep.n_modes, sweep.t_max,
                                                      "dynamics", sweep.base.partner)
         if LYAPUNOV in sweep.observables:

@@ -67,6 +67,9 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
         if any("coordinate" in dims for _, _, dims in variables.values()):
             coords["coordinate"] = (np.arange(sweep.free_coordinates, dtype=_dtype(
                 "coordinate")), attributes("coordinate"))
+    if any("contact" in dims for _, _, dims in variables.values()):
+        coords["contact"] = (np.arange(sweep.value_shape("contact_max_force")[0],
+                                       dtype=_dtype("contact")), attributes("contact"))
     resolution = contact_resolution(sweep)
     if resolution is not None:
         run.update(contact_resolved=int(sweep.n_modes >= resolution),

@@ -25,6 +25,7 @@ from impactbeams.longtime import LongTime
 from impactbeams.params import Params
 from impactbeams.sweep.definition import (
     CELL_PARAMETERS,
+    CONTACT_OBSERVABLES,
     DYNAMICS_OBSERVABLES,
     FIRST_CONTACT,
     FIRST_IMPACT,
@@ -131,7 +132,8 @@ def _several_dynamics(sweep: Sweep, start: int, stop: int, parallel: bool,
 
     index = np.unravel_index(np.arange(start, stop), sweep.shape)
     values = [axis.values for axis in sweep.axes]  # (the plan's are its first contact's)
-    dynamics = any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES) for name in sweep.observables)
+    dynamics = any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, *CONTACT_OBSERVABLES)
+                   for name in sweep.observables)
 
     def one(i: int) -> dict[str, float]:
         changes = {axis.name: values[k][index[k][i]] for k, axis in enumerate(sweep.axes)}

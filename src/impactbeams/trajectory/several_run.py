@@ -332,7 +332,9 @@ def _dataset(data: dict[str, np.ndarray], impacts: dict[str, np.ndarray],
               "episode": ("episode", np.arange(joint["episode_onset_time"].size),
                           attributes("episode")),
               "contact_episode": ("contact_episode", np.arange(own["episode_onset_time"].size),
-                                  attributes("contact_episode"))}
+                                  attributes("contact_episode")),
+              "contact": ("contact", np.arange(data["contact_forces"].shape[1]),
+                          attributes("contact"))}
     return xr.Dataset(variables, coords=coords)
 
 
