@@ -22,7 +22,12 @@ import xarray as xr
 from impactbeams.cli import EXIT_INTERRUPTED, main
 from impactbeams.params import ParameterError
 from impactbeams.sweep import Chunking, load_sweep, sweep_from_mapping, write_sweep
-from impactbeams.sweep.definition import LONG_TIME_OBSERVABLES, OBSERVABLES, STEPPED_END_STATE
+from impactbeams.sweep.definition import (
+    CONTACT_OBSERVABLES,
+    LONG_TIME_OBSERVABLES,
+    OBSERVABLES,
+    STEPPED_END_STATE,
+)
 from impactbeams.sweep.output import cell_values, map_dataset, map_file
 from impactbeams.sweep.store import NAMED_DAMAGED, ChunkStore
 from impactbeams.variables import MAP_VARIABLES, VARIABLES
@@ -48,7 +53,7 @@ def test_every_map_variable_is_stored_in_chunks_or_derived():
 
 def _storing(name):
     """A three-cell sweep whose chunks store ``name`` (four samples along ``period``, four
-    coordinates: 2 modes per beam)."""
+    coordinates: 2 modes per beam, four contacts)."""
     observable = "impact_count" if name == "dynamics_status" else name  # comes with dynamics
     long_time = {"sampled_periods": 4} if name in LONG_TIME_OBSERVABLES else {}
     if name in STEPPED_END_STATE:  # a stepped sweep's, with its long-time samples
@@ -58,6 +63,9 @@ def _storing(name):
     if name == "first_contact":  # a map of several contacts'
         observable = "first_impact_time"
         params = {"params": {"contacts": [{"side": "below"}, {"side": "above"}]}}
+    if name in CONTACT_OBSERVABLES:  # four contacts: four values per cell along "contact"
+        params = {"params": {"counterpart": "stop", "contacts": [
+            {"side": side, "position1": x} for x in (0.05, 0.1) for side in ("below", "above")]}}
     return sweep_from_mapping({"observables": [observable], **long_time, **params,
                                "axes": {"omega": {"min": 100.0, "max": 300.0, "num": 3}}})
 
@@ -127,6 +135,12 @@ KINDS = {
         "[[params.contacts]]\nposition1 = 0.05\nside = \"above\"\nclearance = 5e-6\n"
         '[axes.force_amplitude]\nmin = 1e-6\nmax = 1e-3\nnum = 15\nscale = "log"\n'
         "[axes.omega]\nmin = 100.0\nmax = 500.0\nnum = 40\n"),
+    "several-dynamics": (  # stops at mid-span and tip: each contact's share along "contact"
+        't_max = 0.1\nn_modes = 5\nobservables = ["contact_impact_count", "contact_max_force"]\n'
+        "[params]\ncounterpart = \"stop\"\nforce_amplitude = 1e-3\ncontact_stiffness = 1e3\n"
+        "[[params.contacts]]\nposition1 = 0.05\nclearance = 1e-6\n"
+        "[[params.contacts]]\nclearance = 2e-6\n"
+        "[axes.omega]\nmin = 100.0\nmax = 1000.0\nnum = 40\n"),
     "dynamics": (  # and a categorical axis
         't_max = 2.0\nn_modes = 5\nobservables = ["first_impact_time", "impact_count", '
         '"max_contact_force", "mean_restitution", "contact_fraction"]\n'
@@ -271,9 +285,9 @@ def _kill_and_resume(sweep_files, uninterrupted, tmp_path, capsys, kind, how, *o
 
 
 SIGNALS = {"SIGKILL": signal.SIGKILL, "SIGINT": signal.SIGINT}
-# the fast subset: each kind once, each signal twice; the rest is slow
+# the fast subset: each kind once, each signal at least twice; the rest is slow
 FAST = {("long-time", "SIGKILL"), ("lyapunov", "SIGINT"), ("dynamics", "SIGKILL"),
-        ("first-impact", "SIGINT")}
+        ("first-impact", "SIGINT"), ("several-dynamics", "SIGKILL")}
 
 
 @pytest.mark.parametrize(("kind", "how"), [
