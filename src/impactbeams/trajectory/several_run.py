@@ -2,8 +2,9 @@
 
 The run is `impactbeams.active_phases`' (the kernel of several contacts); this module
 turns it into `simulate`'s Dataset: the time series, each contact's gap and force, the contacts
-(`impactbeams.trajectory.several.episodes`), their impact episodes, the energy balance, the
-start from a given state and the final state.
+(`impactbeams.active_phases.episodes`), their impact episodes, the energy balance, the
+long-time samples (`impactbeams.active_phases.long_time_values`), the start from a given state
+and the final state.
 
 Episodes (`impactbeams.trajectory.episodes` for one contact): the contacts of all contacts
 together, in order of onset, cluster into one episode while each onset follows the latest
@@ -165,7 +166,8 @@ def contacts_start(packed: PackedContacts, z: np.ndarray) -> tuple[np.ndarray, n
         "force would pull); start from an open state or an earlier run's end")
 
 
-def _series(packed: PackedContacts, run: ContactRun, times: np.ndarray) -> dict[str, tuple]:
+def _series(packed: PackedContacts, run: ContactRun, times: np.ndarray,
+            ) -> dict[str, np.ndarray]:
     """The time series at ``times`` (s, <= the run's end): tips, energies, gaps and forces.
 
     The tips' velocities include the closed forces' rates through the flexibility the modes
