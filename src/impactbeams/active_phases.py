@@ -141,10 +141,16 @@ def _would_be_forces(contacts: SeveralContacts, members: tuple[int, ...],
     return weights, const, harmonics
 
 
-def pack_contacts(params, n_modes: int, t_max: float, search_span: float) -> PackedContacts:
-    """Pack a run of ``params``' contacts with ``n_modes`` per beam (t_max, search_span in s)."""
+def pack_contacts(params, n_modes: int, t_max: float, search_span: float,
+                  contacts: SeveralContacts | None = None) -> PackedContacts:
+    """Pack a run of ``params``' contacts with ``n_modes`` per beam (t_max, search_span in s).
+
+    ``contacts``: their active sets' phases if built already (`several_contacts` of these
+    contacts' geometry, stiffnesses, dashpots and damping ratio: a map's cells share them).
+    """
     runs = tuple(pack_run(run, n_modes, t_max, search_span) for run in params.each_contact())
-    contacts = several_contacts(params, n_modes)
+    if contacts is None:
+        contacts = several_contacts(params, n_modes)
     members = tuple(possible_sets(params))
     n, m = len(runs), runs[0].q0.size
     set_of_mask = np.full(2**n, -1, dtype=np.int64)
@@ -385,23 +391,24 @@ def _episode_row(rows: dict[str, list[float]], contact: int, t: float) -> int:
 
 def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynamics: bool = True,
                      long_time: LongTime | None = None, transient_periods: int = 0,
-                     ) -> dict[str, object]:
+                     contacts: SeveralContacts | None = None) -> dict[str, object]:
     """A map cell of several contacts: its runs' observables, as `simulate` makes the runs.
 
     ``dynamics``: the run over [0, t_max] (s) summarised (`summarize`); ``long_time``: the run
     over (transient + sampled) forcing periods and its long-time values (`long_time_values`,
     the episode separation a quarter period of the slowest free mode, as a single contact's
     map), ``dynamics_status`` then the worse of the two runs' (``first_contact`` the long
-    run's without the other). n_modes per beam, from rest or
-    the uplifts, the search span the run's horizon, at most ``max_phases`` phases per run.
+    run's without the other). n_modes per beam, from rest or the uplifts, the search span the
+    run's horizon, at most ``max_phases`` phases per run; ``contacts``: the active sets'
+    phases, if built already.
     """
     out: dict[str, object] = {}
     if dynamics:
-        packed = pack_contacts(params, n_modes, t_max, t_max)
+        packed = pack_contacts(params, n_modes, t_max, t_max, contacts)
         out.update(summarize(packed, run_contacts(packed, max_phases), t_max))
     if long_time is not None:
         horizon = float(long_time.horizon(params.omega, transient_periods))
-        packed = pack_contacts(params, n_modes, horizon, horizon)
+        packed = pack_contacts(params, n_modes, horizon, horizon, contacts)
         run = run_contacts(packed, max_phases)
         summary = summarize(packed, run, horizon)
         out.setdefault("first_contact", summary["first_contact"])

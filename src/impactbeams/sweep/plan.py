@@ -120,26 +120,33 @@ def _several_dynamics(sweep: Sweep, start: int, stop: int, parallel: bool,
     """Full-dynamics and long-time observables of several contacts on cells start..stop.
 
     Each cell is the runs `impactbeams.simulate` makes of its parameters (the active sets'
-    phases, `active_phases.cell_observables`), cell by cell; with ``parallel`` the cells run
-    on Numba's thread count of threads (the kernel releases the GIL), each alone: the same
-    values.
+    phases, `active_phases.cell_observables`), cell by cell, the active sets' phases built once
+    per geometry of the chunk (`geometry_axes`: a clearance or a drive does not change them);
+    with ``parallel`` the cells run on Numba's thread count of threads (the kernel releases
+    the GIL), each alone: the same values.
     """
     from concurrent.futures import ThreadPoolExecutor
 
     import numba
 
     from impactbeams.active_phases import cell_observables
+    from impactbeams.contact.active_sets import SeveralContacts, several_contacts
 
     index = np.unravel_index(np.arange(start, stop), sweep.shape)
     values = [axis.values for axis in sweep.axes]  # (the plan's are its first contact's)
     dynamics = any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, *CONTACT_OBSERVABLES)
                    for name in sweep.observables)
+    geometry = geometry_axes(sweep)
+    phases: dict[tuple[int, ...], SeveralContacts] = {}  # each geometry's active sets, once
 
     def one(i: int) -> dict[str, float]:
         changes = {axis.name: values[k][index[k][i]] for k, axis in enumerate(sweep.axes)}
-        return cell_observables(sweep.params_at(changes), sweep.n_modes, sweep.t_max,
-                                MAX_SEGMENTS, dynamics, sweep.long_time,
-                                sweep.transient_periods)
+        params = sweep.params_at(changes)
+        key = tuple(int(index[k][i]) for k in geometry)
+        if key not in phases:
+            phases[key] = several_contacts(params, sweep.n_modes)
+        return cell_observables(params, sweep.n_modes, sweep.t_max, MAX_SEGMENTS, dynamics,
+                                sweep.long_time, sweep.transient_periods, phases[key])
 
     if parallel and stop - start > 1:
         with ThreadPoolExecutor(numba.get_num_threads()) as pool:
