@@ -294,6 +294,21 @@ def test_a_start_off_the_bifurcation_is_refused(stop_branch):
         continue_curve(far)
 
 
+def test_an_event_the_branch_does_not_have_is_named(stop_branch):
+    """A kind the branch located none of is refused naming the kind and what it located
+    (not ``which = 0``, which the user may not have set); a ``which`` past its events names
+    how many there are."""
+    continuation, branch = stop_branch
+    with pytest.raises(ParameterError, match=r"^kind = 'period_doubling' is not allowed: the "
+                       r"branch located no period_doubling \(it located 2 fold, 2 grazing\)$"):
+        BifurcationCurve.from_branch(continuation, branch, "period_doubling",
+                                     "force_amplitude", 5e-5, 2e-4)
+    with pytest.raises(ParameterError, match=r"^which = 2 is not allowed: the branch located "
+                       r"2 fold event\(s\): must be below 2$"):
+        BifurcationCurve.from_branch(continuation, branch, "fold", "force_amplitude", 5e-5,
+                                     2e-4, which=2)
+
+
 @pytest.fixture(scope="module")
 def stiff_branch():
     """The small model's branch from 261.5 rad/s down: it folds back and forth four times,
