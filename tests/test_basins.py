@@ -245,7 +245,8 @@ def test_tied_law_start_with_overlapping_tips_is_stopped():
 
 @pytest.mark.parametrize(("change", "match"), [
     ({"params": dataclasses.replace(PARAMS, omega=0.0)}, "omega"),
-    ({"params": dataclasses.replace(PARAMS, start="steady")}, "start"),
+    ({"params": dataclasses.replace(PARAMS, start="steady")}, "^start = 'steady'"),
+    ({"params": dataclasses.replace(PARAMS, uplift1=1e-6)}, "^uplift1 = 1e-06 is not allowed"),
     ({"axes": (np.array([1e-5, 0.0]), np.array([0.0]))}, "start_tip_deflection"),
     ({"axes": (np.array([np.nan]), np.array([0.0]))}, "start_tip_deflection"),
     ({"axes": np.zeros(3)}, "axes"),
