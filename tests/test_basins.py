@@ -325,7 +325,8 @@ def test_cli_basins_writes_and_refuses(tmp_path, capsys):
     assert "9 initial states, 2 attractors" in capsys.readouterr().err
     for bad, word in ((["--axis1", "4e-5,-4e-5"], "--axis1"), (["--axis1", "1"], "--axis1"),
                       (["--coordinates", "0,x"], "--coordinates"),
-                      (["--random", "4", "--points", "3"], "--points")):
+                      (["--random", "4", "--points", "3"], "--points"),
+                      (["--seed", "3"], "--seed")):  # a grid draws nothing: not ignored
         arguments = {"--axis1": "-4e-5,4e-5", "--axis2": "0,1e-2"}
         arguments.update(dict(zip(bad[::2], bad[1::2], strict=True)))
         flat = [item for pair in arguments.items() for item in pair]

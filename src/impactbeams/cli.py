@@ -527,6 +527,9 @@ def _basins(args: argparse.Namespace) -> int:
     if args.random and args.points is not None:
         raise ParameterError("--points is not allowed with --random: the states are drawn at "
                              "random in the box")
+    if not args.random and args.seed is not None:
+        raise ParameterError(f"--seed = {args.seed} is not allowed without --random: a grid's "
+                             "states are not drawn at random")
     for name, (low, high) in (("--axis1", args.axis1), ("--axis2", args.axis2)):
         if not low < high:
             raise ParameterError(f"{name} = {low!r},{high!r} is not allowed: need LOW < HIGH")
@@ -535,7 +538,7 @@ def _basins(args: argparse.Namespace) -> int:
                   "settling": settling, "output": output, "chunk_cells": args.chunk_cells,
                   "workers": args.workers, "progress": not args.quiet, "client": client}
         if args.random:
-            dataset = basin_stability(params, args.random, box, seed=args.seed, **common)
+            dataset = basin_stability(params, args.random, box, seed=args.seed or 0, **common)
         else:
             import numpy as np
 
@@ -1140,8 +1143,8 @@ def build_parser() -> argparse.ArgumentParser:
     basin.add_argument("--random", type=_POSITIVE_INTEGER, metavar="N",
                        help="N random initial states in the box instead of a grid (basin "
                             "stability, Wilson intervals)")
-    basin.add_argument("--seed", type=_integer_from(0), default=0,
-                       help="seed of the random states (default 0)")
+    basin.add_argument("--seed", type=_integer_from(0), default=None,
+                       help="seed of the random states, with --random (default 0)")
     basin.add_argument("--max-periods", type=_POSITIVE_INTEGER, metavar="N",
                        help="forcing periods a state may run before it counts as not settled "
                             "(default 1200)")
