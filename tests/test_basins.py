@@ -18,6 +18,7 @@ import math
 
 import numpy as np
 import pytest
+import xarray as xr
 from scipy.stats import binomtest
 
 from impactbeams import LongTime, ParameterError, Params, simulate
@@ -309,8 +310,25 @@ def test_basin_map_plots_from_its_file(tmp_path, coarse):
     assert axes.get_xlabel().endswith("(µm)")  # tens of µm: no offset, no 1e-5 m
     sampled = basin_stability(PARAMS, 8, BOX, n_modes=N_MODES)
     plot_dataset(sampled, tmp_path / "sampled.png")
+    # a random sample's legend gives each fraction's confidence interval, the grid's does not
+    draw_basins(axes := Figure().subplots(), sampled)
+    texts = [text.get_text() for text in axes.get_legend().get_texts()]
+    low, high = sampled.basin_fraction_low.values, sampled.basin_fraction_high.values
+    assert [text.endswith(f"(95 % interval {low[k]:.3f} to {high[k]:.3f})")
+            for k, text in enumerate(texts)] == [True] * sampled.attractor.size
+    assert "interval" not in " ".join(t.get_text() for t in draw_and_read(dataset))
     with pytest.raises(ParameterError, match="--slice"):
         plot_dataset(dataset, tmp_path / "x.png", values={"start_tip_velocity": 0.0})
+
+
+def draw_and_read(dataset):
+    from matplotlib.figure import Figure
+
+    from impactbeams.plotting.basins import draw_basins
+
+    axes = Figure().subplots()
+    draw_basins(axes, dataset)
+    return axes.get_legend().get_texts()
 
 
 def test_cli_basins_writes_and_refuses(tmp_path, capsys):
@@ -323,6 +341,15 @@ def test_cli_basins_writes_and_refuses(tmp_path, capsys):
     assert main(["basins", *model, "--axis1", "-4e-5,4e-5", "--axis2", "-1.2e-2,1.2e-2",
                  "--points", "3", "-o", str(output)]) == 0
     assert "9 initial states, 2 attractors" in capsys.readouterr().err
+    # random states: each fraction with its confidence interval (basin stability)
+    sampled = tmp_path / "sampled.nc"
+    assert main(["basins", *model, "--axis1", "-4e-5,4e-5", "--axis2", "-1.2e-2,1.2e-2",
+                 "--random", "6", "--seed", "2", "-o", str(sampled)]) == 0
+    err = capsys.readouterr().err
+    written = xr.open_dataset(sampled)
+    for k in written.attractor.values:
+        assert (f"{float(written.basin_fraction_low[k]):.3f} to "
+                f"{float(written.basin_fraction_high[k]):.3f})") in err
     for bad, word in ((["--axis1", "4e-5,-4e-5"], "--axis1"), (["--axis1", "1"], "--axis1"),
                       (["--coordinates", "0,x"], "--coordinates"),
                       (["--random", "4", "--points", "3"], "--points"),

@@ -518,6 +518,7 @@ def _basins(args: argparse.Namespace) -> int:
     """``basins``: the basin map of a plane of initial states (or random ones), to netCDF."""
     from impactbeams.orbits import Settling, basin_stability, basins
     from impactbeams.preflight import require_output_file
+    from impactbeams.variables import basin_fraction_text
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
     params = params_from_args(args)
@@ -546,8 +547,7 @@ def _basins(args: argparse.Namespace) -> int:
             dataset = basins(params, axes, **common)
     found = ", ".join(f"{k}: period {int(dataset.attractor_period[k])}, "
                       f"{int(dataset.attractor_contacts[k])} contacts, "
-                      f"{float(dataset.basin_fraction[k]):.3g} +- "
-                      f"{float(dataset.basin_fraction_error[k]):.2g}"
+                      f"{basin_fraction_text(dataset, k, bool(args.random))}"
                       for k in dataset.attractor.values)
     _say(args, f"wrote {output}: {dataset.attrs['cells']} initial states, "
                f"{dataset.attractor.size} attractors ({found or 'none'}); not settled "
