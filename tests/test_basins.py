@@ -15,6 +15,7 @@ states agree within their sampling errors; the Wilson interval is SciPy's.
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -373,3 +374,77 @@ def test_chunks_on_a_dask_cluster_give_the_same_map(coarse):
         remote = basins(PARAMS, grid(11), n_modes=N_MODES, client=client, chunk_cells=40)
     for name in ("basin", "settle_periods", "attractor_displacement", "attractor_velocity"):
         np.testing.assert_array_equal(remote[name].values, coarse[name].values)
+
+
+BASINS_FILE = """n_modes = 5
+[params]
+counterpart = "stop"
+contact_stiffness = 100.0
+damping_ratio = 0.02
+force_amplitude = 1e-4
+omega = 300.0
+[basins]
+axis1 = [-4e-5, 4e-5]
+axis2 = [-1.2e-2, 1.2e-2]
+"""
+
+
+def test_a_basins_file_is_a_sweep_kind_of_run(tmp_path, monkeypatch, capsys, coarse):
+    """``impactbeams run`` of a file with a [basins] table: the same map as `basins`, bit
+    for bit; interrupted (Ctrl-C in the third chunk) it exits 130 keeping the finished chunks,
+    and the same command resumes to the same map; random states as `basin_stability`'s."""
+    from impactbeams.cli import main
+
+    path, output = tmp_path / "basins.toml", tmp_path / "basins.nc"
+    path.write_text(BASINS_FILE + "points = 11\n")
+    calls = []
+    original = CellRunner.run_cells
+
+    def interrupted(self, states, periods=None):
+        calls.append(states.shape[0])
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return original(self, states, periods)
+
+    monkeypatch.setattr(CellRunner, "run_cells", interrupted)
+    assert main(["run", str(path), "-o", str(output), "--threads", "1", "--quiet"]) == 130
+    assert len(list((tmp_path / "basins.nc.partial").glob("chunk_*.npz"))) == 2
+    monkeypatch.setattr(CellRunner, "run_cells", original)
+    assert main(["run", str(path), "-o", str(output), "--threads", "1"]) == 0
+    assert "121 initial states, 2 attractors" in capsys.readouterr().err
+    written = xr.open_dataset(output)
+    for name in ("basin", "settle_periods", "attractor_displacement", "basin_fraction"):
+        np.testing.assert_array_equal(written[name].values, coarse[name].values)
+    path.write_text(BASINS_FILE + "random = 8\nseed = 4\n")
+    assert main(["run", str(path), "-o", str(tmp_path / "random.nc"), "--quiet"]) == 0
+    sampled = basin_stability(PARAMS, 8, BOX, n_modes=N_MODES, seed=4)
+    np.testing.assert_array_equal(xr.open_dataset(tmp_path / "random.nc").basin.values,
+                                  sampled.basin.values)
+
+
+@pytest.mark.parametrize(("change", "options", "message"), [
+    ("points = 11\nrandom = 8\n", [], "points in [basins] of b.toml is not allowed with random"),
+    ("seed = 3\n", [], "seed in [basins] of b.toml = 3 is not allowed without random"),
+    ("pionts = 3\n", [], "unknown key 'pionts' in [basins] of b.toml (did you mean 'points'?)"),
+    ("coordinates = [0]\n", [], "coordinates in [basins] of b.toml = [0] is not allowed"),
+    ("points = 2.5\n", [], "points in [basins] of b.toml = 2.5 is not allowed: must be an int"),
+    ("", ["--discard-corrupt"], "--discard-corrupt is not allowed with a basins file"),
+    ("[axes.omega]\nmin = 1.0\nmax = 2.0\nnum = 2\n", [],
+     "unknown top-level key 'axes' in b.toml (a basins file)"),
+])
+def test_a_bad_basins_file_is_one_line_before_any_run(tmp_path, monkeypatch, capsys, change,
+                                                      options, message):
+    from impactbeams.cli import main
+
+    monkeypatch.setattr(CellRunner, "run_cells", lambda *_: pytest.fail("ran"))
+    monkeypatch.chdir(tmp_path)
+    Path("b.toml").write_text(BASINS_FILE + change)
+    assert main(["run", "b.toml", "-o", "b.nc", *options]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == [f"impactbeams: error: {err.split('error: ')[1].strip()}"]
+    assert message in err
+    Path("b.toml").write_text(BASINS_FILE.replace("axis1 = [-4e-5, 4e-5]", "axis1 = [4e-5, 0]"))
+    assert main(["run", "b.toml", "-o", "b.nc"]) == 2
+    assert "axis1 in [basins] of b.toml = 4e-05,0.0 is not allowed: need LOW < HIGH" in (
+        capsys.readouterr().err)
+

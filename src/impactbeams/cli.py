@@ -41,11 +41,12 @@ from impactbeams.params import (
     Params,
     modes_per_beam,
     nearest,
+    read_toml,
     refuse_beam2,
     refuse_unused_law_keys,
     without_unused_law_keys,
 )
-from impactbeams.variables import GRAZING_PARAMETERS, PARAMETERS
+from impactbeams.variables import BASIN_POINTS, GRAZING_PARAMETERS, PARAMETERS
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -55,6 +56,7 @@ if TYPE_CHECKING:
     from impactbeams.continuation.arclength import Point
     from impactbeams.continuation.branch import Branch
     from impactbeams.continuation.twoparameter import CurvePlan
+    from impactbeams.orbits.basin_file import BasinPlan
     from impactbeams.sweep import ChunkRunner, Sweep
 
 EXIT_SYSTEM_ERROR = 1  # a file could not be written (full disk, ...) or memory ran out
@@ -62,7 +64,6 @@ EXIT_USER_ERROR = 2  # an input was rejected: nothing was computed or written
 EXIT_INCOMPLETE = 3  # the result was written, but some runs stopped before t_max
 EXIT_INTERRUPTED = 130
 GRAZING_POINTS = 201  # frequencies of a grazing curve in a drive or the clearance
-BASIN_POINTS = 41  # initial states along each axis of a basin map
 
 _ALIASES = {"force_amplitude": ["--force"]}
 
@@ -155,7 +156,9 @@ def _run(args: argparse.Namespace) -> int:
     from impactbeams.sweep.plan import check_contact_phases, reusing_geometries
     from impactbeams.sweep.store import reporting_kept_chunks
 
-    sweep = load_sweep(require_input_file(args.sweep, "sweep"))
+    if "basins" in read_toml(require_input_file(args.sweep, "sweep")):  # the basins kind
+        return _run_basins(args)
+    sweep = load_sweep(args.sweep)
     output = _sweep_output(args, sweep)
     _check_scheduler(args.scheduler)
     _check_threads(args)
@@ -516,44 +519,48 @@ def _grazing(args: argparse.Namespace) -> int:
 
 def _basins(args: argparse.Namespace) -> int:
     """``basins``: the basin map of a plane of initial states (or random ones), to netCDF."""
-    from impactbeams.orbits import Settling, basin_stability, basins
+    from impactbeams.orbits.basin_file import BasinPlan
     from impactbeams.preflight import require_output_file
-    from impactbeams.variables import basin_fraction_text
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
-    params = params_from_args(args)
-    settling = Settling(**({"max_periods": args.max_periods} if args.max_periods else {}))
-    _check_scheduler(args.scheduler)
-    box = (args.axis1, args.axis2)
-    if args.random and args.points is not None:
-        raise ParameterError("--points is not allowed with --random: the states are drawn at "
-                             "random in the box")
-    if not args.random and args.seed is not None:
-        raise ParameterError(f"--seed = {args.seed} is not allowed without --random: a grid's "
-                             "states are not drawn at random")
-    for name, (low, high) in (("--axis1", args.axis1), ("--axis2", args.axis2)):
-        if not low < high:
-            raise ParameterError(f"{name} = {low!r},{high!r} is not allowed: need LOW < HIGH")
-    with _cluster_client(args) as client:
-        common = {"coordinates": args.coordinates, "n_modes": args.n_modes,
-                  "settling": settling, "output": output, "chunk_cells": args.chunk_cells,
-                  "workers": args.workers, "progress": not args.quiet, "client": client}
-        if args.random:
-            dataset = basin_stability(params, args.random, box, seed=args.seed or 0, **common)
-        else:
-            import numpy as np
+    plan = BasinPlan(params_from_args(args), (args.axis1, args.axis2), args.points, args.random,
+                     args.seed, args.coordinates, args.n_modes, args.max_periods)
+    plan.checked(lambda key: f"--{key}")
+    return _basin_map(args, plan, output, args.workers, args.chunk_cells)
 
-            axes = tuple(np.linspace(low, high, args.points or BASIN_POINTS) for low, high in box)
-            dataset = basins(params, axes, **common)
+
+def _basin_map(args: argparse.Namespace, plan: BasinPlan, output: Path, workers: int | None,
+               chunk_cells: int | None) -> int:
+    """The basin map of ``plan`` into ``output`` (``basins``, or ``run`` of a basins file)."""
+    from impactbeams.variables import basin_fraction_text
+
+    _check_scheduler(args.scheduler)
+    with _cluster_client(args) as client:
+        dataset = plan.run(output=output, chunk_cells=chunk_cells, workers=workers,
+                           progress=not args.quiet, client=client)
     found = ", ".join(f"{k}: period {int(dataset.attractor_period[k])}, "
                       f"{int(dataset.attractor_contacts[k])} contacts, "
-                      f"{basin_fraction_text(dataset, k, bool(args.random))}"
+                      f"{basin_fraction_text(dataset, k, plan.random is not None)}"
                       for k in dataset.attractor.values)
     _say(args, f"wrote {output}: {dataset.attrs['cells']} initial states, "
                f"{dataset.attractor.size} attractors ({found or 'none'}); not settled "
                f"{dataset.attrs['not_settled_fraction']:.3g}, stopped "
                f"{dataset.attrs['stopped_fraction']:.3g}")
     return 0
+
+
+def _run_basins(args: argparse.Namespace) -> int:
+    """``run`` of a basins file (a ``[basins]`` table): the basins sweep kind."""
+    from impactbeams.orbits.basin_file import load_basins
+    from impactbeams.preflight import require_output_file
+
+    plan = load_basins(args.sweep)
+    if args.discard_corrupt:
+        raise ParameterError("--discard-corrupt is not allowed with a basins file: its saved "
+                             "chunks are checked and refused whole (delete OUT.nc.partial/)")
+    output = require_output_file(args.output or Path("results") / (Path(args.sweep).stem + ".nc"),
+                                 "-o/--output", {".nc"}, "netCDF")
+    return _basin_map(args, plan, output, args.threads, args.chunk_cells)
 
 
 def _range(text: str) -> tuple[float, float]:
@@ -1072,7 +1079,8 @@ def build_parser() -> argparse.ArgumentParser:
     contacts.set_defaults(handler=_contacts)
 
     run = command("run", "SWEEP.toml [-o OUT.nc] [OPTIONS]",
-                  help="run a sweep defined in a TOML file (see sweeps/)")
+                  help="run a sweep defined in a TOML file (see sweeps/), or a basin map "
+                       "(a [basins] table)")
     run.add_argument("sweep", metavar="SWEEP.toml",
                      help="sweep definition, e.g. sweeps/fig5a-omega-force.toml")
     run.add_argument("-o", "--output", metavar="OUT.nc",

@@ -566,6 +566,7 @@ VARIABLES.update({
 # basins of attraction (impactbeams.orbits.basin_map): one label per initial state ("*": the plane's
 # two axes, or "cell" for a list of states), and the attractors found, along "attractor"
 BASIN_LABELS = {-1: "not_settled", -2: "stopped"}  # the labels that name no attractor
+BASIN_POINTS = 41  # initial states along each axis of a basin map's grid, by default
 VARIABLES.update({
     "start_tip_deflection": Variable(
         ("*",), "m", "initial tip deflection of beam 1",
