@@ -587,3 +587,45 @@ def test_plot_draws_a_curve_over_a_map_from_the_command_line(small_grazing, stea
     assert main(["plot", str(curve), "--slice", "omega=230", "-o", str(tmp_path / "c.png")]) == 2
     assert "values (--slice) = {'omega': '230'} is not allowed: a bifurcation curve without a " \
         "map under it (--over)" in capsys.readouterr().err
+
+
+def test_plot_draws_several_curves_of_one_plane_from_the_command_line(
+        small_branch, small_grazing, steady_map, tmp_path, capsys, monkeypatch):
+    """``--with CURVE.nc`` (repeatable) draws more curves of IN.nc's plane on the same axes,
+    over the map if given (as `draw_curves` does from Python); a file that is no curve, a
+    curve of another plane, or IN.nc not a curve: one line, exit 2, no figure."""
+    from impactbeams.cli import main
+    from impactbeams.io import write_netcdf
+    from impactbeams.plotting import curves as plotted
+
+    down = continue_curve(BifurcationCurve.from_branch(*small_branch, "grazing",
+                                                       "force_amplitude", 2e-5, 4e-5,
+                                                       direction="down", max_points=6))
+    names = {name: tmp_path / f"{name}.nc" for name in ("up", "down", "map", "other")}
+    other = _over_clearance(small_grazing).assign_attrs(curve_parameters="omega clearance")
+    for name, dataset in (("up", small_grazing), ("down", down), ("map", steady_map),
+                          ("other", other)):
+        write_netcdf(dataset, names[name])
+    drawn = []
+    original = plotted.draw_curves
+    monkeypatch.setattr(plotted, "draw_curves", lambda axes, curves, *rest, **options: (
+        drawn.append(curves), original(axes, curves, *rest, **options))[1])
+    assert main(["plot", str(names["up"]), "--with", str(names["down"]), "--over",
+                 str(names["map"]), "-o", str(tmp_path / "both.png")]) == 0
+    (curves,) = drawn
+    assert [curve.branch_point.size for curve in curves] == [small_grazing.branch_point.size,
+                                                               down.branch_point.size]
+    np.testing.assert_array_equal(curves[1].omega.values, down.omega.values)
+    assert (tmp_path / "both.png").stat().st_size > 0
+    capsys.readouterr()
+    for first, also, message in (
+            ("up", "map", "--with file '{}' is not a bifurcation curve (no curve_kind)"),
+            ("up", "other", "curve 1 is in (omega, clearance), not in the first one's plane "
+                            "(omega, force_amplitude): draw them apart"),
+            ("map", "up", "--with is not allowed: it adds bifurcation curves to a bifurcation "
+                          "curve's plot, and this Dataset is none")):
+        assert main(["plot", str(names[first]), "--with", str(names[also]), "-o",
+                     str(tmp_path / "no.png")]) == 2
+        (line,) = capsys.readouterr().err.splitlines()
+        assert line == f"impactbeams: error: {message.format(names[also])}"
+        assert not (tmp_path / "no.png").exists()

@@ -346,12 +346,17 @@ def _plot(args: argparse.Namespace) -> int:
     dataset = read_figure_data(args.dataset, "input")
     output = image_output(args.output or Path(args.dataset).with_suffix(".png"), "-o/--output")
     diagram = read_netcdf(args.over, "--over") if args.over else None
+    also = [read_netcdf(path, "--with") for path in args.also]
+    for path, curve in zip(args.also, also, strict=True):
+        if "curve_kind" not in curve.attrs:
+            raise ParameterError(f"--with file {path!r} is not a bifurcation curve (no "
+                                 "curve_kind)")
     notes = plot_dataset(dataset, output, args.var,
                          values=parse_assignments(args.slice, "--slice"),
                          indices=parse_assignments(args.slice_index, "--slice-index"),
                          scale=args.scale, contours=parse_levels(args.contours),
                          title=args.title, dpi=args.dpi, diagram=diagram, hz=args.hz,
-                         events=args.events)
+                         events=args.events, curves=also)
     for note in notes:
         _say(args, f"impactbeams: {note}")
     _say(args, f"wrote {output}")
@@ -1205,6 +1210,9 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--over", metavar="DIAGRAM.nc",
                       help="draw a continuation's branches over this long-time sweep of its "
                            "parameter, or a bifurcation curve over this map of its plane")
+    plot.add_argument("--with", dest="also", action="append", default=[], metavar="CURVE.nc",
+                      help="another bifurcation curve of IN.nc's plane drawn with it, e.g. a "
+                           "grazing curve beside a fold curve (repeatable)")
     plot.add_argument("--hz", action="store_true",
                       help="a continuation's frequency axis in Hz (Omega / 2 pi), not rad/s")
     plot.add_argument("--events", metavar="KINDS",
