@@ -522,12 +522,13 @@ def test_a_stepped_sweeps_direction_is_sliced(small_grazing, steady_map):
     from impactbeams.plotting.curves import draw_curves
 
     stepped = xr.concat([steady_map, steady_map.fillna(1.0)], dim=xr.DataArray(
-        ["up", "down"], dims="sweep_direction", name="sweep_direction"))
+        ["up", "down"], dims="sweep_direction", name="sweep_direction",
+        attrs={"units": "1"}))  # as a stepped sweep's file has it
     axes = Figure().subplots()
     notes = draw_curves(axes, [small_grazing], stepped, "first_impact_time",
                         values={"sweep_direction": "down"})
-    assert notes == ["slice sweep_direction = down: nearest grid value sweep_direction = down "
-                     "(index 1 of 0..1)"]
+    # a named choice is found, not the nearest; no unit "1" after it
+    assert notes == ["slice sweep_direction = down (index 1 of 0..1)"]
     with pytest.raises(ParameterError) as error:
         draw_curves(Figure().subplots(), [small_grazing], stepped)
     assert str(error.value) == (
