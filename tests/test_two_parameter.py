@@ -514,6 +514,23 @@ def test_the_curve_is_drawn_over_the_map_in_the_same_units(small_grazing, steady
     assert axes.get_ylim() == pytest.approx((19.5, 40.0), rel=1e-12)
 
 
+def test_the_curve_is_drawn_over_a_map_on_a_log_axis(small_grazing, steady_map):
+    """A map swept on a log scale (as sweeps/fig5a-omega-force.toml's F0): the curve is drawn
+    on its log axis, at its own values (the tick formatter is the log axis's, which has no
+    offset to switch off: this raised AttributeError)."""
+    from matplotlib.figure import Figure
+
+    from impactbeams.plotting.curves import draw_curves
+
+    force = steady_map.force_amplitude
+    logged = steady_map.assign_coords(force_amplitude=force.assign_attrs(scale="log"))
+    axes = Figure(layout="constrained").subplots()
+    draw_curves(axes, [small_grazing], logged)
+    assert axes.get_yscale() == "log" and axes.get_xscale() == "linear"
+    (line,) = [line for line in axes.get_lines() if line.get_label() == "grazing curve"]
+    np.testing.assert_array_equal(line.get_ydata(), 1e6 * small_grazing.force_amplitude.values)
+
+
 def test_a_stepped_sweeps_direction_is_sliced(small_grazing, steady_map):
     """A long-time sweep of the plane has more dimensions (a stepped sweep's directions):
     sliced to the curve's plane, or refused in one line."""
