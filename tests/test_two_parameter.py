@@ -647,3 +647,21 @@ def test_plot_draws_several_curves_of_one_plane_from_the_command_line(
         (line,) = capsys.readouterr().err.splitlines()
         assert line == f"impactbeams: error: {message.format(names[also])}"
         assert not (tmp_path / "no.png").exists()
+
+
+def test_a_curve_cut_at_max_points_exits_3_unless_allowed(tmp_path, capsys):
+    """As a branch short of its range: a curve that stops at ``max_points`` (short of its
+    box, no event ending it) warns, naming where it stopped, and exits 3; with
+    ``--allow-incomplete`` it exits 0. A curve that ends on its box exits 0."""
+    from impactbeams.cli import main
+
+    path = tmp_path / "fold.toml"
+    path.write_text(STOP_CURVE_FILE + "max_points = 3\n")
+    assert main(["continue", str(path), "-o", str(tmp_path / "a.nc"), "--quiet"]) == 3
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith("impactbeams: warning: the fold curve stopped at max_points = 3, at "
+                           "omega = ") and "raise max_points" in line
+    with xr.open_dataset(tmp_path / "a.nc") as written:
+        assert written.attrs["curve_ending"] == "max_points" and written.branch_point.size == 3
+    assert main(["continue", str(path), "-o", str(tmp_path / "b.nc"), "--quiet",
+                 "--allow-incomplete"]) == 0

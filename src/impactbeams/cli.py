@@ -428,6 +428,7 @@ def _continue_curve(args: argparse.Namespace, plan: CurvePlan, output: Path) -> 
     then the curve's steps; interrupted, the same command resumes where it stopped.
     """
     from impactbeams.continuation import ContinuationInterrupted
+    from impactbeams.continuation.branch import MAX_POINTS
     from impactbeams.continuation.checkpoint import (
         CourseLog,
         reporting_kept_points,
@@ -463,7 +464,13 @@ def _continue_curve(args: argparse.Namespace, plan: CurvePlan, output: Path) -> 
                         for i, code in enumerate(dataset.curve_event.values) if code)
     _say(args, f"wrote {output}: {dataset.branch_point.size} points of the {plan.kind} curve "
                f"(ended: {dataset.attrs['curve_ending']}); {located}")
-    return 0
+    if dataset.attrs["curve_ending"] != MAX_POINTS:  # its box, or an event, ended it
+        return 0
+    print(f"impactbeams: warning: the {plan.kind} curve stopped at max_points = "
+          f"{plan.max_points}, at {first} = {float(dataset[first][-1]):.9g}, {second} = "
+          f"{float(dataset[second][-1]):.9g}, short of its box: raise max_points, or follow it "
+          "on from there", file=sys.stderr)
+    return 0 if args.allow_incomplete else EXIT_INCOMPLETE
 
 
 def _curve_branch(args: argparse.Namespace, c: Continuation, folder: Path) -> xr.Dataset:
@@ -1115,7 +1122,8 @@ def build_parser() -> argparse.ArgumentParser:
                       help="netCDF result (default results/<file name>.nc)")
     cont.add_argument("--allow-incomplete", action="store_true",
                       help="exit 0, not 3, when a branch stops short of its range "
-                           "(stalled, max_points, min_step, retraced)")
+                           "(stalled, max_points, min_step, retraced) or a curve at "
+                           "max_points")
     cont.set_defaults(handler=_continue)
 
     grazing = command("grazing", "PARAMETER --omega-min LOW --omega-max HIGH -o OUT.nc "
