@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import xarray as xr
 
 from impactbeams.kernels.drive import harmonic
 from impactbeams.kernels.layout import CONTACT, FREE
@@ -14,6 +15,7 @@ from impactbeams.modes import beam
 from impactbeams.packing import Packed
 from impactbeams.trajectory.observables import loads, observables
 from impactbeams.trajectory.phases import Trajectory, sample
+from impactbeams.variables import attributes
 
 SAMPLE_CHUNK = 1 << 15  # output times per sampling call: bounds memory at ~N * 0.5 MB
 
@@ -81,11 +83,15 @@ def energy_integrals(packed: Packed, trajectory: Trajectory, times: np.ndarray,
     return out
 
 
-def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_points: int,
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def deflections(packed: Packed, states: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+                t_end: float, times: np.ndarray, n_points: int,
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Deflection fields y_1(x_1, t), y_2(x_2, t) (m) on uniform grids of ``n_points``.
 
-    Absolute: a moving clamp's motion is added (docs/model.md, "Base excitation").
+    ``states(t)``: the run's phase and modal state q at the times t (s) up to its end
+    ``t_end`` (a recorded `Trajectory`'s, `sample`; several contacts' in the free
+    coordinates). Absolute: a moving clamp's motion is added (docs/model.md, "Base
+    excitation").
     """
     p, free, model = packed.params, packed.dynamics.free, packed.dynamics.model
     n1, n2 = free.modes_per_beam  # n2 = 0 against a stop: y2 = 0 there
@@ -100,10 +106,10 @@ def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_poi
     static1, static2 = beam(p, 1).unit_tip_shape(x1), beam(p, 2).unit_tip_shape(x2)
     y1 = np.full((times.size, n_points), np.nan)
     y2 = np.full((times.size, n_points), np.nan)
-    reached = np.flatnonzero(times <= trajectory.t_end)
+    reached = np.flatnonzero(times <= t_end)
     for start in range(0, reached.size, SAMPLE_CHUNK):
         index = reached[start:start + SAMPLE_CHUNK]
-        phase, q, _ = sample(packed, trajectory, times[index])
+        phase, q = states(times[index])
         q1, q2, _, _ = loads(packed, phase, times[index])
         for ph in (FREE, CONTACT):
             rows = index[phase == ph]
@@ -116,3 +122,18 @@ def deflections(packed: Packed, trajectory: Trajectory, times: np.ndarray, n_poi
         y1[reached] += moves1 * clamp[:, None]
         y2[reached] += moves2 * clamp[:, None]
     return x1, x2, y1, y2
+
+
+def with_deflections(dataset: xr.Dataset, packed: Packed,
+                     states: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+                     t_end: float, times: np.ndarray, n_points: int) -> xr.Dataset:
+    """``dataset`` with the fields ``deflection_1(time, x1)``, ``deflection_2(time, x2)``.
+
+    `deflections` at ``times`` (the Dataset's, s), ``states`` and ``t_end`` as there.
+    """
+    x1, x2, y1, y2 = deflections(packed, states, t_end, times, n_points)
+    dataset = dataset.assign_coords(x1=("x1", x1, attributes("x1")),
+                                    x2=("x2", x2, attributes("x2")))
+    dataset["deflection_1"] = (("time", "x1"), y1, attributes("deflection_1"))
+    dataset["deflection_2"] = (("time", "x2"), y2, attributes("deflection_2"))
+    return dataset

@@ -21,7 +21,6 @@ from impactbeams.packing import Packed, pack_run
 from impactbeams.params import (
     MAX_EVENTS,
     MAX_MODES,
-    ParameterError,
     Params,
     is_integer,
     modes_per_beam,
@@ -40,10 +39,10 @@ from impactbeams.preflight import (
 )
 from impactbeams.progress import Progress
 from impactbeams.trajectory.episodes import default_separation, episode_table
-from impactbeams.trajectory.fields import SAMPLE_CHUNK, deflections, time_series
+from impactbeams.trajectory.fields import SAMPLE_CHUNK, time_series, with_deflections
 from impactbeams.trajectory.impacts import impact_table
 from impactbeams.trajectory.lyapunov import Exponents, check_request, lyapunov_exponents
-from impactbeams.trajectory.phases import Trajectory, run
+from impactbeams.trajectory.phases import Trajectory, run, sample
 from impactbeams.trajectory.poincare import long_time_variables
 from impactbeams.trajectory.start import (
     InitialFields,
@@ -186,12 +185,12 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
     """
     _check_options(fields, energy_balance, lyapunov, transient_periods, long_time, progress)
     if isinstance(params, Params) and params.several_contacts:
-        refused = {"fields": fields, "lyapunov": lyapunov}
         if long_time is not None:
             _check_long_time(params, t_max, transient_periods, long_time)
         return _simulate_several(params, t_max, n_modes, dt_output, times, max_events,
                                  search_span, episode_separation, energy_balance, progress,
-                                 initial_state, refused, long_time, transient_periods)
+                                 initial_state, lyapunov, long_time, transient_periods,
+                                 fields, n_points)
     run_inputs = _checked_inputs(params, t_max, n_modes, dt_output, times, n_points, max_events,
                                  search_span, episode_separation, fields, energy_balance)
     t_max, n_modes, resolution = run_inputs.t_max, run_inputs.n_modes, run_inputs.resolution
@@ -229,11 +228,9 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
                        default_separation(packed) if separation is None else separation,
                        energy_balance, progress)
     if fields:
-        x1, x2, y1, y2 = deflections(packed, trajectory, out_times, run_inputs.n_points)
-        dataset = dataset.assign_coords(x1=("x1", x1, attributes("x1")),
-                                        x2=("x2", x2, attributes("x2")))
-        dataset["deflection_1"] = (("time", "x1"), y1, attributes("deflection_1"))
-        dataset["deflection_2"] = (("time", "x2"), y2, attributes("deflection_2"))
+        dataset = with_deflections(dataset, packed,
+                                   lambda t: sample(packed, trajectory, t)[:2],
+                                   trajectory.t_end, out_times, run_inputs.n_points)
     if lyapunov:
         exponents = lyapunov_exponents(packed, trajectory, int(lyapunov), transient_periods)
         dataset = _with_exponents(dataset, exponents, transient_periods)
@@ -250,29 +247,25 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
 def _simulate_several(params: Params, t_max: float, n_modes: int | None, dt_output: float,
                       times: np.ndarray | None, max_events: int, search_span: float | None,
                       episode_separation: float | None, energy_balance: bool, progress: bool,
-                      initial_state: object, refused: dict[str, object],
-                      long_time: LongTime | None, transient_periods: int) -> xr.Dataset:
+                      initial_state: object, lyapunov: bool | int,
+                      long_time: LongTime | None, transient_periods: int, fields: bool,
+                      n_points: int) -> xr.Dataset:
     """[`simulate`][] of several contacts (`impactbeams.trajectory.several_run`).
 
-    The options it cannot take (``refused``, given other than their defaults) are refused in
-    one line; the others are checked as for one contact, on each contact's run, at the most
-    modes any of them recommends.
+    Lyapunov exponents are refused in one line; the other options are checked as for one
+    contact, on each contact's run, at the most modes any of them recommends.
     """
     from impactbeams.trajectory.several import check_contact_runs
     from impactbeams.trajectory.several_run import simulate_contacts
 
-    given = [name for name, value in refused.items() if value is not None and value is not False
-             and (isinstance(value, bool) or not isinstance(value, int) or value != 0)]
-    if given:
-        raise ParameterError(
-            f"{given[0]} = {refused[given[0]]!r} is not allowed with {len(params.contacts)} "
-            "contacts: simulate of several contacts gives the time series, energy balance, "
-            "contacts, episodes and long-time samples, not fields or Lyapunov exponents "
+    require("lyapunov", lyapunov, not lyapunov,
+            f"with {len(params.contacts)} contacts simulate gives the time series, fields, "
+            "energy balance, contacts, episodes and long-time samples, not Lyapunov exponents "
             "(docs/limits.md, 'Several contacts')")
     n_modes = check_contact_runs(params, t_max, n_modes)
     runs = params.each_contact()
-    checked = [_checked_inputs(run, t_max, n_modes, dt_output, times, 2, max_events,
-                               search_span, episode_separation, False, energy_balance)
+    checked = [_checked_inputs(run, t_max, n_modes, dt_output, times, n_points, max_events,
+                               search_span, episode_separation, fields, energy_balance)
                for run in runs]
     inputs = checked[0]
     return simulate_contacts(params, inputs.t_max, inputs.n_modes, inputs.times,
@@ -280,7 +273,8 @@ def _simulate_several(params: Params, t_max: float, n_modes: int | None, dt_outp
                              energy_balance=energy_balance, initial_state=initial_state,
                              progress=progress, episode_separation=inputs.episode_separation,
                              expected=sum(each.seconds for each in checked),
-                             long_time=long_time, transient_periods=transient_periods)
+                             long_time=long_time, transient_periods=transient_periods,
+                             fields=inputs.n_points if fields else 0)
 
 
 class _EventPace:
