@@ -48,6 +48,7 @@ from impactbeams.params import (
     require,
     require_finite,
     require_integer,
+    require_one_contact,
     require_type,
 )
 from impactbeams.variables import PARAMETERS, global_attributes
@@ -102,6 +103,7 @@ class Continuation:
         require_type("params", self.params, isinstance(self.params, Params),
                      "an impactbeams.Params")
         check_law(self.params)
+        require_one_contact(self.params, "continuation")
         require("parameter", self.parameter, self.parameter in CONTINUABLE,
                 f"must be one of {', '.join(CONTINUABLE)}")
         for name in ("low", "high"):

@@ -135,6 +135,7 @@ class PeriodMap:
                  max_events: int = MAX_EVENTS) -> None:
         require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
         check_law(params)
+        require_one_contact(params, "PeriodMap (several: orbits.contacts_map.ContactsPeriodMap)")
         self.periods = require_integer("periods", periods, 1)
         if n_modes is None:
             n_modes = recommended_modes(params)
@@ -190,7 +191,7 @@ class PeriodMap:
         event or search limit).
         """
         z0 = checked_state(self.packed, state, "state")
-        columns = self._directions(directions)
+        columns = directions_of(directions, self.dimension)
         start = phase_state(self.packed, z0)
         trajectory = run(self.packed, self.max_events, start=start)
         if trajectory.status != "complete":
@@ -317,22 +318,7 @@ class PeriodMap:
         """
         require("directions", directions, directions is not None,
                 "must be 'all' or an array of directions (2 N, k)")
-        return self._jacobian(result.trajectory, self._directions(directions))
-
-    def _directions(self, directions: np.ndarray | str | None) -> np.ndarray | None:
-        if directions is None:
-            return None
-        if isinstance(directions, str):
-            require("directions", directions, directions == "all",
-                    "must be None, 'all' or an array of directions (2 N, k)")
-            return np.eye(self.dimension)
-        array = np.asarray(directions, dtype=float)
-        if array.ndim == 1:
-            array = array[:, None]
-        require("directions", array.shape, array.ndim == 2 and array.shape[0] == self.dimension
-                and array.shape[1] >= 1 and bool(np.all(np.isfinite(array))),
-                f"must be a finite array of shape ({self.dimension}, k), k >= 1")
-        return array
+        return self._jacobian(result.trajectory, directions_of(directions, self.dimension))
 
     def _jacobian(self, trajectory: Trajectory, columns: np.ndarray) -> np.ndarray:
         """dz(pT)/dz(0) @ columns by the tangent kernel on the recorded segments."""
@@ -508,10 +494,26 @@ def _cell_defaults() -> dict[str, float]:
     return {name: getattr(defaults, name) for name in CELL_ONLY}
 
 
+def directions_of(directions: np.ndarray | str | None, dimension: int) -> np.ndarray | None:
+    """A period map's ``directions`` checked, as columns (``dimension``, k); None stays None."""
+    if directions is None:
+        return None
+    if isinstance(directions, str):
+        require("directions", directions, directions == "all",
+                "must be None, 'all' or an array of directions (2 N, k)")
+        return np.eye(dimension)
+    array = np.asarray(directions, dtype=float)
+    if array.ndim == 1:
+        array = array[:, None]
+    require("directions", array.shape, array.ndim == 2 and array.shape[0] == dimension
+            and array.shape[1] >= 1 and bool(np.all(np.isfinite(array))),
+            f"must be a finite array of shape ({dimension}, k), k >= 1")
+    return array
+
+
 def check_law(params: Params) -> None:
     """Raise ParameterError unless the law has tangent dynamics (the spring law)."""
     if not params.law.tangent_flow:
         raise ParameterError("periodic orbits need the spring contact law: the tied law's "
                              "projections, instantaneous impacts and accumulations are not a "
                              "flow whose linearisation converges in n_modes (docs/model.md)")
-    require_one_contact(params, "periodic orbits and their continuation")

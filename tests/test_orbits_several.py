@@ -1,0 +1,204 @@
+"""Periodic orbits with several contacts (issue 33, item 5): the period map of the active sets'
+phases, its exact monodromy (each phase's tangent flow, the saltation at every switch), and
+shooting on it.
+
+The runs: a stop at mid-span and one at the tip, both below (closed together), with and
+without dashpots, and a two-sided stop at mid-span (`tests/test_several_contacts.py`'s), at
+k = 1e4 N/m, zeta = 0.05 and 8 modes: stable period-1 orbits.
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from impactbeams import Contact, ParameterError, Params, simulate, two_sided_stop
+from impactbeams.continuation import Continuation
+from impactbeams.kernels.layout import FREE, ROW_EVENT, ROW_FREQUENCY
+from impactbeams.orbits import PeriodMap, periodic_orbit
+from impactbeams.orbits.contacts_map import ContactsPeriodMap
+from impactbeams.trajectory.active_phases import contact_quantities, sample
+from impactbeams.trajectory.start import phase_state
+
+sys.path.insert(0, str(Path(__file__).parent))
+from orbit_reference import central_jacobian  # noqa: E402
+
+N_MODES = 8
+STOP = Params(counterpart="stop", contact_stiffness=1e4, damping_ratio=0.05)
+MID = 0.5 * STOP.l1  # m
+FORCED = STOP.replace(force_amplitude=1e-3, omega=400.0)
+TWO_SIDED = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6))
+TOGETHER = FORCED.replace(contacts=(Contact(MID, clearance=1e-6), Contact(clearance=2e-6)))
+DASHPOTS = FORCED.replace(contacts=(Contact(MID, clearance=1e-6, damping=0.5),
+                                    Contact(clearance=2e-6, damping=0.5)))
+RUNS = {"two-sided": TWO_SIDED, "together": TOGETHER, "dashpots": DASHPOTS}
+
+
+def energy_scale(period_map):
+    """D with D z = (omega q, q'): the energy norm's coordinates."""
+    omega = period_map.packed.tables[FREE, ROW_FREQUENCY]
+    return np.concatenate([omega, np.ones(omega.size)])
+
+
+def in_energy(period_map, jacobian):
+    scale = energy_scale(period_map)
+    return scale[:, None] * jacobian / scale[None, :]
+
+
+def settled(period_map, periods=40):
+    z = period_map.rest_state()
+    for _ in range(periods):
+        z = period_map(z, measures=False).state
+    return z
+
+
+@pytest.fixture(scope="module")
+def orbits():
+    """Each run's orbit by Newton from 50 transient periods, with its map."""
+    return {name: (periodic_orbit(params, N_MODES, method="newton"),
+                   ContactsPeriodMap(params, N_MODES)) for name, params in RUNS.items()}
+
+
+@pytest.mark.parametrize("name", list(RUNS))
+def test_monodromy_of_several_contacts_matches_finite_differences(name):
+    """The carried Jacobian against central differences of the map (relative steps 1e-4 and
+    1e-5 in the energy norm), 40 periods after rest (not yet on the orbit). The difference is
+    the differences' own truncation, O(h^2): it falls 100-fold from 1e-4 to 1e-5 (measured
+    2.5e-7 -> 2.5e-9 two-sided, 1.2e-7 -> 1.2e-9 together, 1.6e-7 -> 1.6e-9 with dashpots),
+    so at 1e-5 it is below 1e-8. The runs switch sets: both sides of the two-sided stop, the
+    two stops closing together; with dashpots the forces jump at the closings (the saltation
+    matrix: without it the difference is 1.06) and two early releases' gaps open."""
+    period_map = ContactsPeriodMap(RUNS[name], N_MODES)
+    z = settled(period_map)
+    result = period_map(z, directions="all", measures=False)
+    run = result.trajectory
+    assert set(run.mask.tolist()) == ({0, 1, 2} if name == "two-sided" else {0, 2, 3})
+    if name == "dashpots":  # the early releases' openings: functions n + f
+        assert {2, 3} <= set(run.switched.tolist())
+    carried = in_energy(period_map, result.jacobian)
+    errors = []
+    for step in (1e-4, 1e-5):
+        reference = in_energy(period_map, central_jacobian(
+            lambda x: period_map(x, measures=False).state, z, energy_scale(period_map), step))
+        errors.append(np.linalg.norm(carried - reference, 2) / np.linalg.norm(reference, 2))
+    assert errors[1] < 1e-8
+    assert 50 < errors[0] / errors[1] < 200  # h^2: the tangent is exact
+
+
+@pytest.mark.parametrize("damping", [0.0, 0.5])
+def test_one_contact_beside_one_that_never_closes_is_the_single_contacts_map(damping):
+    """A tip stop (with or without a dashpot) beside a mid-span one 1 mm away: the state, the
+    monodromy, the counts and the contacts' measures of the single contact's PeriodMap, to
+    round-off (measured: states 5.1e-16, monodromies 3.6e-14 of their largest entry: the set
+    phases' complex modes against the free table's real ones)."""
+    single = STOP.replace(force_amplitude=1e-3, omega=400.0, clearance=2e-6,
+                          contact_damping=damping)
+    two = single.replace(contacts=(Contact(clearance=2e-6, damping=damping),
+                                   Contact(MID, clearance=1e-3)))
+    one_map, two_map = PeriodMap(single, N_MODES), ContactsPeriodMap(two, N_MODES)
+    z = settled(one_map)
+    one, several = one_map(z, directions="all"), two_map(z, directions="all")
+    assert several.trajectory.mask.tolist() == one.trajectory.phase.tolist()  # 0 free, 1
+    assert np.count_nonzero(several.trajectory.mask) >= 2  # it closes, twice
+    assert np.abs(several.state - one.state).max() < 2e-15 * np.abs(one.state).max()
+    assert np.abs(several.jacobian - one.jacobian).max() < 1e-13 * np.abs(one.jacobian).max()
+    assert (several.contacts, several.episodes) == (one.contacts, one.episodes)
+    assert several.peak_force == pytest.approx(one.peak_force, rel=1e-13)
+    assert several.impulse == pytest.approx(one.impulse, rel=1e-13)
+
+
+def test_a_section_state_in_contact_starts_in_its_active_set():
+    """A state pushed into the tip stop (gap < 0, force > 0): the single contact's start
+    (`phase_state`) is in contact, so is the active set found, and the maps agree to round-off
+    (measured 1.4e-16 and 2.3e-15); pushed into both stops, both are closed at the start."""
+    single = STOP.replace(force_amplitude=1e-3, omega=400.0, clearance=2e-6)
+    two = single.replace(contacts=(Contact(clearance=2e-6), Contact(MID, clearance=1e-3)))
+    one_map, two_map = PeriodMap(single, N_MODES), ContactsPeriodMap(two, N_MODES)
+    weights = one_map.packed.tables[FREE, ROW_EVENT]
+    z = np.concatenate([-3e-6 * weights / (weights @ weights), np.zeros(N_MODES)])
+    assert phase_state(one_map.packed, z)[2] == 1 and two_map.active_mask(z) == 1
+    one, several = one_map(z, directions="all"), two_map(z, directions="all")
+    assert np.abs(several.state - one.state).max() < 1e-14 * np.abs(one.state).max()
+    assert np.abs(several.jacobian - one.jacobian).max() < 1e-13 * np.abs(one.jacobian).max()
+    together = ContactsPeriodMap(TOGETHER, N_MODES)
+    b = together._weights  # the gaps' weights: both modal gaps -5 um
+    q = b.T @ np.linalg.solve(b @ b.T, np.array([-6e-6, -7e-6]))
+    pushed = np.concatenate([q, np.zeros(N_MODES)])
+    assert together.active_mask(pushed) == 3
+    assert together(pushed).trajectory.mask[0] == 3
+
+
+@pytest.mark.parametrize("name", list(RUNS))
+def test_orbits_of_several_contacts_are_where_a_long_simulate_settles(orbits, name):
+    """``simulate`` over 300 periods from rest (its own run, not restarted at the sections):
+    its last period's contact gaps and forces (257 samples) are the orbit's, from its
+    section state, to 1e-10 of their largest value (measured 3e-13..1e-12 for the gaps,
+    3e-12..7e-12 for the forces; the transient has decayed as |mu|^300 < 1e-15)."""
+    orbit, period_map = orbits[name]
+    params = RUNS[name]
+    assert orbit.residual <= 1e-11 and orbit.stable and orbit.contacts >= 2
+    period = 2 * np.pi / params.omega
+    times = np.linspace(299 * period, 300 * period, 257)
+    ds = simulate(params, 300 * period, N_MODES, times=times)
+    result = period_map(orbit.state, measures=False)
+    local = times - 299 * period
+    q, v, mask = sample(period_map.contacts, result.trajectory, local)
+    own = contact_quantities(period_map.contacts, local, q, v, mask)
+    for key, simulated in (("gap", ds.contact_gaps.values),
+                           ("contact_force", ds.contact_forces.values)):
+        assert np.abs(simulated - own[key]).max() < 1e-10 * np.abs(own[key]).max(), key
+
+
+def test_a_symmetric_two_sided_stop_has_a_symmetric_orbit(orbits):
+    """Equal clearances on both sides and F0 sin(Omega t): the equations are invariant under
+    z -> -z, t -> t + T/2, and the stable orbit with them: z(T/2) = -z(0) (measured 3e-15 in
+    the energy norm), each stop's contacts the other's half a period later."""
+    orbit, period_map = orbits["two-sided"]
+    result = period_map(orbit.state, measures=False)
+    half = np.pi / TWO_SIDED.omega
+    q, v, _ = sample(period_map.contacts, result.trajectory, np.array([half]))
+    scale = energy_scale(period_map)
+    mirrored = scale * (np.concatenate([q[0], v[0]]) + orbit.state)
+    assert np.linalg.norm(mirrored) < 1e-13 * np.linalg.norm(scale * orbit.state)
+    run = result.trajectory
+    onsets = [(int(f), t) for f, t, mask in zip(run.switched, run.time, run.mask, strict=True)
+              if f >= 0 and (mask >> f) & 1]
+    below = [t for f, t in onsets if f == 0]
+    above = [t for f, t in onsets if f == 1]
+    assert len(below) == len(above) >= 2
+    assert np.allclose(np.sort(np.mod(np.array(below) + half, 2 * half)), np.sort(above),
+                       rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", list(RUNS))
+def test_multipliers_are_the_finite_difference_monodromys_eigenvalues(orbits, name):
+    """The orbit's multipliers against the eigenvalues of the central differences' monodromy
+    at the orbit (step 1e-5, which differ from the Jacobian by < 1e-8 of its norm): the four
+    leading within 1e-7 (measured 3.4e-10 at most); Newton-Picard's the same orbit and leading
+    multipliers (measured 5e-13, 1e-11)."""
+    orbit, period_map = orbits[name]
+    reference = central_jacobian(lambda x: period_map(x, measures=False).state, orbit.state,
+                                 energy_scale(period_map), 1e-5)
+    eigenvalues = np.linalg.eigvals(reference)
+    eigenvalues = eigenvalues[np.lexsort((-eigenvalues.imag, -np.abs(eigenvalues)))]
+    assert np.abs(orbit.multipliers[:4] - eigenvalues[:4]).max() < 1e-7
+    picard = periodic_orbit(RUNS[name], N_MODES, guess=orbit.state, method="newton-picard")
+    scale = energy_scale(period_map)
+    assert (np.linalg.norm(scale * (picard.state - orbit.state))
+            < 1e-10 * np.linalg.norm(scale * orbit.state))
+    assert np.abs(picard.multipliers[:2] - orbit.multipliers[:2]).max() < 1e-9
+
+
+def test_what_orbits_of_several_contacts_refuse():
+    """Continuation (and the single contact's PeriodMap) refuse several contacts in one line;
+    the contacts' measures are there, the tips' and the gap's are NaN."""
+    with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
+                                             "continuation"):
+        Continuation(TWO_SIDED, "omega", 300.0, 400.0)
+    with pytest.raises(ParameterError, match="not allowed in PeriodMap"):
+        PeriodMap(TWO_SIDED, N_MODES)
+    result = ContactsPeriodMap(TWO_SIDED, N_MODES)(settled(ContactsPeriodMap(TWO_SIDED,
+                                                                              N_MODES)))
+    assert result.peak_force > 0 and result.impulse > 0 and result.peak_forces.size >= 2
+    assert np.isnan(result.max_tip1) and np.isnan(result.min_gap)
