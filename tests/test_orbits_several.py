@@ -7,22 +7,18 @@ without dashpots, and a two-sided stop at mid-span (`tests/test_several_contacts
 k = 1e4 N/m, zeta = 0.05 and 8 modes: stable period-1 orbits.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from impactbeams import Contact, ParameterError, Params, simulate, two_sided_stop
 from impactbeams.continuation import Continuation
-from impactbeams.kernels.layout import FREE, ROW_EVENT, ROW_FREQUENCY
+from impactbeams.kernels.layout import FREE, ROW_EVENT
 from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
 from impactbeams.trajectory.active_phases import contact_quantities, sample
 from impactbeams.trajectory.start import phase_state
-
-sys.path.insert(0, str(Path(__file__).parent))
-from orbit_reference import central_jacobian  # noqa: E402
+from orbit_reference import central_jacobian, settled
+from orbit_reference import map_energy_scale as energy_scale
 
 N_MODES = 8
 STOP = Params(counterpart="stop", contact_stiffness=1e4, damping_ratio=0.05)
@@ -35,22 +31,9 @@ DASHPOTS = FORCED.replace(contacts=(Contact(MID, clearance=1e-6, damping=0.5),
 RUNS = {"two-sided": TWO_SIDED, "together": TOGETHER, "dashpots": DASHPOTS}
 
 
-def energy_scale(period_map):
-    """D with D z = (omega q, q'): the energy norm's coordinates."""
-    omega = period_map.packed.tables[FREE, ROW_FREQUENCY]
-    return np.concatenate([omega, np.ones(omega.size)])
-
-
 def in_energy(period_map, jacobian):
     scale = energy_scale(period_map)
     return scale[:, None] * jacobian / scale[None, :]
-
-
-def settled(period_map, periods=40):
-    z = period_map.rest_state()
-    for _ in range(periods):
-        z = period_map(z, measures=False).state
-    return z
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +53,7 @@ def test_monodromy_of_several_contacts_matches_finite_differences(name):
     two stops closing together; with dashpots the forces jump at the closings (the saltation
     matrix: without it the difference is 1.06) and two early releases' gaps open."""
     period_map = ContactsPeriodMap(RUNS[name], N_MODES)
-    z = settled(period_map)
+    z = settled(period_map, 40)
     result = period_map(z, directions="all", measures=False)
     run = result.trajectory
     assert set(run.mask.tolist()) == ({0, 1, 2} if name == "two-sided" else {0, 2, 3})
@@ -97,7 +80,7 @@ def test_one_contact_beside_one_that_never_closes_is_the_single_contacts_map(dam
     two = single.replace(contacts=(Contact(clearance=2e-6, damping=damping),
                                    Contact(MID, clearance=1e-3)))
     one_map, two_map = PeriodMap(single, N_MODES), ContactsPeriodMap(two, N_MODES)
-    z = settled(one_map)
+    z = settled(one_map, 40)
     one, several = one_map(z, directions="all"), two_map(z, directions="all")
     assert several.trajectory.mask.tolist() == one.trajectory.phase.tolist()  # 0 free, 1
     assert np.count_nonzero(several.trajectory.mask) >= 2  # it closes, twice
@@ -199,6 +182,6 @@ def test_what_orbits_of_several_contacts_refuse():
     with pytest.raises(ParameterError, match="not allowed in PeriodMap"):
         PeriodMap(TWO_SIDED, N_MODES)
     result = ContactsPeriodMap(TWO_SIDED, N_MODES)(settled(ContactsPeriodMap(TWO_SIDED,
-                                                                              N_MODES)))
+                                                                              N_MODES), 40))
     assert result.peak_force > 0 and result.impulse > 0 and result.peak_forces.size >= 2
     assert np.isnan(result.max_tip1) and np.isnan(result.min_gap)

@@ -30,6 +30,7 @@ from impactbeams.orbits.period_map import (
     MAX_EVENTS,
     PeriodMap,
     PeriodMapResult,
+    SectionMap,
     check_law,
     directions_of,
 )
@@ -46,7 +47,7 @@ from impactbeams.trajectory.several import check_contact_runs
 from impactbeams.trajectory.start import checked_state
 
 
-class ContactsPeriodMap:
+class ContactsPeriodMap(SectionMap):
     """The map z(0) -> z(p T) of ``params`` with several contacts (spring law, Omega > 0).
 
     ``n_modes`` per beam: default the most any one contact's run recommends (as
@@ -74,15 +75,6 @@ class ContactsPeriodMap:
         self.packed = self.contacts.runs[0]
         self._weights = np.array([run.tables[FREE, ROW_EVENT] for run in self.contacts.runs])
         self._separation = default_separation(self.packed)
-
-    @property
-    def dimension(self) -> int:
-        """Size of a section state z = (q, q'): 2 N."""
-        return 2 * self.packed.q0.size
-
-    def rest_state(self) -> np.ndarray:
-        """The run's initial state of ``params.start`` (and uplifts) as a section state."""
-        return np.concatenate([self.packed.q0, self.packed.v0])
 
     @one_blas_thread
     def __call__(self, state: np.ndarray, directions: np.ndarray | str | None = None,

@@ -123,7 +123,22 @@ class PeriodMapResult:
     interval_gap: float = math.nan
 
 
-class PeriodMap:
+class SectionMap:
+    """What every period map has from its (first contact's) packed run ``packed``."""
+
+    packed: Packed
+
+    @property
+    def dimension(self) -> int:
+        """Size of a section state z = (q, q'): 2 N."""
+        return 2 * self.packed.q0.size
+
+    def rest_state(self) -> np.ndarray:
+        """The run's initial state of ``params.start`` (and uplifts) as a section state."""
+        return np.concatenate([self.packed.q0, self.packed.v0])
+
+
+class PeriodMap(SectionMap):
     """The map z(0) -> z(p T) of ``params`` (spring law, Omega > 0) with ``n_modes`` per beam.
 
     ``n_modes``: default the number that resolves the contact (as in `simulate`). ``periods``:
@@ -168,15 +183,6 @@ class PeriodMap:
         self._times: np.ndarray | None = None  # the sample grid, built when first asked
         self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
                                        geometry(params, self.n_modes))
-
-    @property
-    def dimension(self) -> int:
-        """Size of a section state z = (q, q'): 2 N."""
-        return 2 * self.packed.q0.size
-
-    def rest_state(self) -> np.ndarray:
-        """The run's initial state of ``params.start`` (and uplifts) as a section state."""
-        return np.concatenate([self.packed.q0, self.packed.v0])
 
     @one_blas_thread
     def __call__(self, state: np.ndarray, directions: np.ndarray | str | None = None,
