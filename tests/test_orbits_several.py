@@ -173,15 +173,28 @@ def test_multipliers_are_the_finite_difference_monodromys_eigenvalues(orbits, na
     assert np.abs(picard.multipliers[:2] - orbit.multipliers[:2]).max() < 1e-9
 
 
-def test_what_orbits_of_several_contacts_refuse():
-    """Continuation (and the single contact's PeriodMap) refuse several contacts in one line;
-    the contacts' measures are there, the tips' and the gap's are NaN."""
+def test_what_orbits_of_several_contacts_refuse(orbits):
+    """Continuation, the single contact's PeriodMap and an orbit's Dataset (simulate's
+    initial_state) refuse several contacts in one line; the contacts' measures are there, the
+    tips' and the gap's are NaN."""
     with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
                                              "continuation"):
         Continuation(TWO_SIDED, "omega", 300.0, 400.0)
     with pytest.raises(ParameterError, match="not allowed in PeriodMap"):
         PeriodMap(TWO_SIDED, N_MODES)
+    with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
+                                             r"PeriodicOrbit.to_dataset \(simulate's"):
+        orbits["two-sided"][0].to_dataset()
     result = ContactsPeriodMap(TWO_SIDED, N_MODES)(settled(ContactsPeriodMap(TWO_SIDED,
                                                                               N_MODES), 40))
     assert result.peak_force > 0 and result.impulse > 0 and result.peak_forces.size >= 2
     assert np.isnan(result.max_tip1) and np.isnan(result.min_gap)
+    # overlapping (gap -0.1 um) but opening fast enough that the dashpot's pull exceeds the
+    # spring's push (-k g - c g' < 0): inside an early release, which a run does not start in
+    period_map = ContactsPeriodMap(DASHPOTS, N_MODES)
+    weights = period_map.packed.tables[FREE, ROW_EVENT]  # the mid-span stop's gap
+    unit = weights / (weights @ weights)
+    z = np.concatenate([-1.1e-6 * unit, 5e-2 * unit])
+    assert period_map.active_mask(z) == 0
+    with pytest.raises(RuntimeError, match="lies in a dashpot's early release"):
+        period_map(z)
