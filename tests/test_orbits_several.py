@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from impactbeams import Contact, ParameterError, Params, simulate, two_sided_stop
-from impactbeams.continuation import Continuation
+from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
 from impactbeams.kernels.layout import FREE, ROW_EVENT
 from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
@@ -174,12 +174,16 @@ def test_multipliers_are_the_finite_difference_monodromys_eigenvalues(orbits, na
 
 
 def test_what_orbits_of_several_contacts_refuse(orbits):
-    """Continuation, the single contact's PeriodMap and an orbit's Dataset (simulate's
-    initial_state) refuse several contacts in one line; the contacts' measures are there, the
-    tips' and the gap's are NaN."""
+    """A continuation of a flat contact key, two-parameter curves, the single contact's
+    PeriodMap and an orbit's Dataset (simulate's initial_state) refuse several contacts in
+    one line; the contacts' measures are there, the interval value is NaN."""
+    with pytest.raises(ParameterError, match="parameter = 'clearance' is not allowed: with 2 "
+                                             "contacts each gives its own"):
+        Continuation(TWO_SIDED, "clearance", 1e-6, 4e-6)
     with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
-                                             "continuation"):
-        Continuation(TWO_SIDED, "omega", 300.0, 400.0)
+                                             "two-parameter curves"):
+        BifurcationCurve(TWO_SIDED, "grazing", "omega", 400.0, np.zeros(16),
+                         "force_amplitude", 1e-4, 2e-3, 300.0, 500.0, N_MODES)
     with pytest.raises(ParameterError, match="not allowed in PeriodMap"):
         PeriodMap(TWO_SIDED, N_MODES)
     with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
@@ -188,7 +192,7 @@ def test_what_orbits_of_several_contacts_refuse(orbits):
     result = ContactsPeriodMap(TWO_SIDED, N_MODES)(settled(ContactsPeriodMap(TWO_SIDED,
                                                                               N_MODES), 40))
     assert result.peak_force > 0 and result.impulse > 0 and result.peak_forces.size >= 2
-    assert np.isnan(result.max_tip1) and np.isnan(result.min_gap)
+    assert result.max_tip1 > 0 and np.isnan(result.interval_gap)
     # overlapping (gap -0.1 um) but opening fast enough that the dashpot's pull exceeds the
     # spring's push (-k g - c g' < 0): inside an early release, which a run does not start in
     period_map = ContactsPeriodMap(DASHPOTS, N_MODES)
@@ -198,3 +202,72 @@ def test_what_orbits_of_several_contacts_refuse(orbits):
     assert period_map.active_mask(z) == 0
     with pytest.raises(RuntimeError, match="lies in a dashpot's early release"):
         period_map(z)
+
+
+# a two-sided stop 3 um below and 6 um above mid-span: along F0 the orbit first touches the
+# stop below, then the one above (a two-sided stop's second grazing)
+BACKLASH = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 6e-6))
+
+
+def _grazings(dataset):
+    from impactbeams.variables import BIFURCATIONS
+
+    labels = dataset.bifurcation.values
+    return [i for i in np.flatnonzero(labels) if BIFURCATIONS[labels[i]] == "grazing"]
+
+
+def _located_against_the_orbits_gap(dataset, index, contact):
+    """The located F0 against the root of the orbit's smallest gap, extrapolated linearly
+    from periodic orbits 1e-5 and 2e-5 (relative) below it; that gap is ``contact``'s. The
+    continuation locates to 1e-11 of its range; the extrapolation's truncation is the gap's
+    curvature in F0 times (1e-5)^2, so 1e-8 bounds the difference."""
+    located = dataset.force_amplitude.values[index]
+    values = []
+    for below in (2e-5, 1e-5):
+        params = BACKLASH.replace(force_amplitude=located * (1 - below))
+        orbit = periodic_orbit(params, N_MODES, guess=dataset.section_state.values[index])
+        period_map = ContactsPeriodMap(params, N_MODES)
+        result = period_map.approach(period_map(orbit.state, measures=False))
+        gaps, _ = period_map._gaps(result.trajectory, np.array([result.min_gap_time]))
+        assert gaps[0, contact] == pytest.approx(result.min_gap, rel=1e-12)
+        values.append((params.force_amplitude, result.min_gap))
+    (f1, g1), (f2, g2) = values
+    return abs(f2 - g2 * (f2 - f1) / (g2 - g1) - located) / located
+
+
+def test_continuation_of_a_two_sided_stop_locates_its_first_grazing():
+    """From the non-impacting orbit at F0 = 0.3 mN: the grazing with the stop below (0 to
+    1 contact per orbit) located where the orbit's smallest gap, the lower stop's,
+    extrapolates to 0 (measured 2.2e-15 relative: without contact the orbit, and its gap, is
+    linear in F0); the tips' amplitudes are measured at every point."""
+    dataset = continue_orbits(Continuation(BACKLASH, "force_amplitude", 3e-4, 3.8e-4,
+                                           n_modes=N_MODES))
+    (index,) = _grazings(dataset)
+    assert list(dataset.contacts_per_orbit.values[index - 1:index + 2]) == [0, 0, 1]
+    error = _located_against_the_orbits_gap(dataset, index, 0)
+    print(f"first grazing located to {error:.1e}")
+    assert error < 1e-8
+    assert np.all(dataset.tip_amplitude_1.values > 0)  # the measures of several contacts
+
+
+@pytest.mark.slow  # 25 s: 55 points along a branch that touches three times
+def test_continuation_of_a_two_sided_stop_locates_the_second_stops_grazing():
+    """Up to F0 = 0.475 mN: grazings at 0.372 mN (the stop below), 0.412 mN (a second
+    contact with it) and 0.474 mN, where the stop above is touched first (its contacts
+    appear in the orbit's active sets); that one located where the orbit's smallest gap, the
+    upper stop's, extrapolates to 0 (measured 1.2e-10 relative), a fold just past it."""
+    dataset = continue_orbits(Continuation(BACKLASH, "force_amplitude", 3e-4, 4.75e-4,
+                                           n_modes=N_MODES, max_points=55))
+    indices = _grazings(dataset)
+    assert len(indices) == 3
+    counts = dataset.contacts_per_orbit.values
+    assert [list(counts[i - 1:i + 2]) for i in indices] == [[0, 0, 1], [1, 1, 2], [2, 2, 3]]
+    sets = []
+    for i in (indices[2] - 1, indices[2] + 1):
+        params = BACKLASH.replace(force_amplitude=dataset.force_amplitude.values[i])
+        run = ContactsPeriodMap(params, N_MODES)(dataset.section_state.values[i]).trajectory
+        sets.append(set(run.mask.tolist()))
+    assert sets == [{0, 1}, {0, 1, 2}]  # the stop above (bit 2) closes past the grazing
+    error = _located_against_the_orbits_gap(dataset, indices[2], 1)
+    print(f"second stop's grazing located to {error:.1e}")
+    assert error < 1e-8

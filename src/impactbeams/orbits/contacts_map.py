@@ -25,24 +25,29 @@ import numpy as np
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels import several_contacts as kernel
 from impactbeams.kernels.contacts_tangent import carry_contact_tangents, event_at
-from impactbeams.kernels.layout import FREE, ROW_EVENT
+from impactbeams.kernels.layout import FREE, ROW_EVENT, TIP_COLUMNS, TIP_Y1, TIP_Y2
 from impactbeams.orbits.period_map import (
     MAX_EVENTS,
+    SAMPLES_PER_PERIOD,
     PeriodMap,
     PeriodMapResult,
     SectionMap,
     check_law,
     directions_of,
+    refined,
 )
 from impactbeams.params import Params, require, require_integer, require_type
 from impactbeams.trajectory.active_phases import (
     CONTACT_STATUS_NAMES,
     ContactRun,
     PackedContacts,
+    contact_quantities,
+    gap_rate,
     pack_contacts,
     sample,
 )
 from impactbeams.trajectory.episodes import default_separation, episode_count
+from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.several import check_contact_runs
 from impactbeams.trajectory.start import checked_state
 
@@ -96,19 +101,145 @@ class ContactsPeriodMap(SectionMap):
                                  self._episodes(run), *(math.nan,) * 6, run.status, run)
         return self.measured(result) if measures else result
 
-    def measured(self, result: PeriodMapResult) -> PeriodMapResult:
-        """``result`` with the contacts' measures: peak force, impulse, each phase's peaks.
+    def at(self, params: Params) -> ContactsPeriodMap:
+        """The map of ``params`` with this one's modes, periods and event limit (built anew)."""
+        return ContactsPeriodMap(params, self.n_modes, self.periods, self.max_events)
 
-        ``peak_forces``: the largest force of every phase with a contact closed, in order
-        (a contact's episode spans the phases it stays closed in).
+    def measured(self, result: PeriodMapResult) -> PeriodMapResult:
+        """``result`` with its measures, read from its run (as `PeriodMap.measured`).
+
+        ``peak_forces``: each contact episode's largest force (an episode: one contact's
+        phases closed in a row, cut at the run's ends), in order of contacts then time;
+        ``impact_velocities``: the closing contact's physical gap rate at each onset in
+        (0, pT); the tips' maxima sampled `SAMPLES_PER_PERIOD` times a period and refined by
+        Brent's method; ``interval_gap`` NaN (not built for several contacts).
         """
+        if math.isfinite(result.max_tip1):
+            return result
+        result = self.approach(result)
         run = result.trajectory
-        closed = run.mask != 0
-        peaks = run.peaks[closed].max(axis=1) if closed.any() else np.empty(0)
+        peaks = self._episode_peaks(run)
+        times = self._grid()
+        tips = self.tip_motions(result, times)
+        relative = self._largest(result, times, tips, TIP_Y1, True)
+        absolute = (self._largest(result, times, tips, TIP_Y1, False)
+                    if self.params.mount.clamps[0] * self.params.base_amplitude else relative)
+        beam2 = (self._largest(result, times, tips, TIP_Y2, False)
+                 if self.params.partner.has_beam2 else 0.0)
         return dataclasses.replace(
-            result, peak_force=float(np.max(peaks, initial=0.0)), peak_forces=peaks,
-            impulse=float(np.sum(run.impulses)),
-            least_peak_force=float(np.min(peaks)) if peaks.size else math.nan)
+            result, peak_force=float(np.max(peaks[:, 1], initial=0.0)),
+            peak_forces=peaks[:, 1], impulse=float(np.sum(run.impulses)), max_tip1=absolute,
+            max_tip2=beam2, max_relative_tip1=relative,
+            impact_velocities=self._impact_velocities(run))
+
+    def approach(self, result: PeriodMapResult) -> PeriodMapResult:
+        """``result`` with what a grazing is read from (as `PeriodMap.approach`).
+
+        ``min_gap``, ``min_gap_time``: the smallest interior local minimum of any contact's
+        physical gap while it is open (sampled `SAMPLES_PER_PERIOD` times a period, refined by
+        Brent's method); ``least_peak_force``: the smallest contact episode's peak (N).
+        """
+        if result.approached:
+            return result
+        min_gap, min_gap_time = self._min_gap(result.trajectory)
+        peaks = self._episode_peaks(result.trajectory)
+        return dataclasses.replace(
+            result, min_gap=min_gap, min_gap_time=min_gap_time, approached=True,
+            least_peak_force=float(np.min(peaks[:, 1])) if peaks.size else math.nan)
+
+    def grazing_value(self, result: PeriodMapResult) -> float:
+        """The signed grazing value (m) of an `approach`-ed ``result``; NaN if it has none.
+
+        As `PeriodMap.grazing_value` over all contacts: the smallest open gap's interior
+        minimum (> 0) or minus the shallowest episode's overlap, its peak force over its
+        contact's stiffness (< 0), whichever is nearer 0.
+        """
+        candidates = [result.min_gap] if math.isfinite(result.min_gap) else []
+        peaks = self._episode_peaks(result.trajectory)
+        if peaks.size:
+            stiffness = self.contacts.contacts.stiffness[peaks[:, 0].astype(int)]
+            candidates.append(-float(np.min(peaks[:, 1] / stiffness)))
+        return min(candidates, key=abs) if candidates else math.nan
+
+    def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
+        """The tips (``kernels.layout`` TIP_* columns; velocities NaN) of ``result``'s run.
+
+        As `impactbeams.simulate` of several contacts reads them: the free coordinates' tips
+        plus each closed contact's force through the flexibility the modes miss.
+        """
+        times = np.asarray(times, dtype=float)
+        q, v, mask = sample(self.contacts, result.trajectory, times)
+        free = observables(self.packed, np.full(times.size, FREE, dtype=np.int64), times, q, v)
+        forces = contact_quantities(self.contacts, times, q, v, mask)["contact_force"]
+        springs = [run.dynamics.spring for run in self.contacts.runs]
+        out = np.full((times.size, len(TIP_COLUMNS)), math.nan)
+        out[:, TIP_Y1] = free["tip_deflection_1"] + forces @ [s.tip_shift1 for s in springs]
+        out[:, TIP_Y2] = free["tip_deflection_2"] - forces @ [s.tip_shift2 for s in springs]
+        return out
+
+    def _grid(self) -> np.ndarray:
+        """``SAMPLES_PER_PERIOD`` equally spaced times a period over the run (s)."""
+        return np.linspace(0.0, self.horizon, SAMPLES_PER_PERIOD * self.periods + 1)
+
+    def _largest(self, result: PeriodMapResult, times: np.ndarray, tips: np.ndarray,
+                 column: int, clamp: bool) -> float:
+        """The largest |tip ``column``| (minus beam 1's clamp if ``clamp``) over the run (m).
+
+        From its samples ``tips`` at ``times``, refined by Brent's method between the largest
+        sample's neighbours.
+        """
+
+        def size(t: float) -> float:
+            at = np.array([t])
+            return float(abs(self.tip_motions(result, at)[0, column]
+                             - (self.clamp1(at)[0] if clamp else 0.0)))
+
+        sampled = np.abs(tips[:, column] - (self.clamp1(times) if clamp else 0.0))
+        i = int(np.argmax(sampled))
+        lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
+        return -refined(lambda t: -size(t), lo, hi, -sampled[i], times[i])[0]
+
+    def _gaps(self, run: ContactRun, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each contact's physical gap (m) at ``times`` and whether it is open there."""
+        q, v, mask = sample(self.contacts, run, times)
+        gaps = contact_quantities(self.contacts, times, q, v, mask)["gap"]
+        bits = np.arange(gaps.shape[1])
+        return gaps, (mask[:, None] >> bits[None, :]) & 1 == 0
+
+    def _min_gap(self, run: ContactRun) -> tuple[float, float]:
+        """The smallest interior minimum of an open contact's gap, and its time (m, s)."""
+        times = self._grid()
+        gaps, opened = self._gaps(run, times)
+        best = (math.nan, math.nan)
+        for f in range(gaps.shape[1]):
+            g, free = gaps[:, f], opened[:, f]
+            inner = (free[1:-1] & free[:-2] & free[2:] & (g[1:-1] <= g[:-2])
+                     & (g[1:-1] < g[2:]))
+            for i in np.flatnonzero(inner) + 1:
+                value = refined(lambda t, f=f: float(self._gaps(run, np.array([t]))[0][0, f]),
+                                times[i - 1], times[i + 1], g[i], times[i])
+                if not value[0] >= best[0]:
+                    best = value
+        return best
+
+    def _episode_peaks(self, run: ContactRun) -> np.ndarray:
+        """(contact, peak force in N) of each contact episode of ``run``, rows (k, 2)."""
+        rows = []
+        for f in range(len(self.contacts.runs)):
+            closed = (run.mask >> f) & 1 == 1
+            starts = np.flatnonzero(closed & ~np.concatenate([[False], closed[:-1]]))
+            for start in starts:
+                end = start + int(np.argmin(np.append(closed[start:], False)))
+                rows.append((f, float(np.max(run.peaks[start:end, f]))))
+        return np.array(rows, dtype=float).reshape(-1, 2)
+
+    def _impact_velocities(self, run: ContactRun) -> np.ndarray:
+        """The closing contact's physical gap rate (m/s) at each onset in (0, pT), in order."""
+        n = len(self.contacts.runs)
+        return np.array([gap_rate(self.contacts, int(run.mask[k - 1]), int(run.switched[k]),
+                                  run.q[k], run.v[k], float(run.time[k]))
+                         for k in range(1, run.time.size)
+                         if 0 <= run.switched[k] < n and (run.mask[k] >> run.switched[k]) & 1])
 
     @one_blas_thread
     def jacobian(self, result: PeriodMapResult, directions: np.ndarray | str) -> np.ndarray:

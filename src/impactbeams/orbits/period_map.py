@@ -127,6 +127,7 @@ class SectionMap:
     """What every period map has from its (first contact's) packed run ``packed``."""
 
     packed: Packed
+    params: Params
 
     @property
     def dimension(self) -> int:
@@ -136,6 +137,11 @@ class SectionMap:
     def rest_state(self) -> np.ndarray:
         """The run's initial state of ``params.start`` (and uplifts) as a section state."""
         return np.concatenate([self.packed.q0, self.packed.v0])
+
+    def clamp1(self, times: np.ndarray) -> np.ndarray:
+        """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0."""
+        moves1, _ = self.params.mount.clamps
+        return moves1 * self.params.base_amplitude * np.sin(self.params.omega * times)
 
 
 class PeriodMap(SectionMap):
@@ -261,8 +267,20 @@ class PeriodMap(SectionMap):
         stationary = self._stationary(result.trajectory, lo, hi, True)
         if stationary is not None and stationary[1] <= gap[i]:
             return stationary[1]
-        return self._refined(lambda t: self._gap(result.trajectory, np.array([t]))[0][0],
+        return refined(lambda t: self._gap(result.trajectory, np.array([t]))[0][0],
                              lo, hi, gap[i], times[i])[0]
+
+    def grazing_value(self, result: PeriodMapResult) -> float:
+        """The signed grazing value (m) of an `approach`-ed ``result``; NaN if it has none.
+
+        The smallest local minimum of the gap in free flight (> 0) or minus the overlap of the
+        shallowest contact, its peak force over the contact stiffness (< 0), whichever is
+        nearer 0 (`impactbeams.continuation.beams`).
+        """
+        candidates = [result.min_gap] if math.isfinite(result.min_gap) else []
+        if result.contacts:
+            candidates.append(-result.least_peak_force / self.params.contact_stiffness)
+        return min(candidates, key=abs) if candidates else math.nan
 
     def _least_peak_force(self, trajectory: Trajectory) -> float:
         """The smallest contact phase's peak force (N); NaN without contact."""
@@ -376,11 +394,6 @@ class PeriodMap(SectionMap):
                  if self.params.partner.has_beam2 else 0.0)
         return absolute, beam2, relative
 
-    def _clamp1(self, times: np.ndarray) -> np.ndarray:
-        """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0."""
-        moves1, _ = self.params.mount.clamps
-        return moves1 * self.params.base_amplitude * np.sin(self.params.omega * times)
-
     def _largest(self, trajectory: Trajectory, times: np.ndarray, tips: np.ndarray,
                  column: int, clamp: bool) -> float:
         """The largest |tip ``column``| (minus beam 1's clamp if ``clamp``) over the run (m).
@@ -393,9 +406,9 @@ class PeriodMap(SectionMap):
         def size(t: float) -> float:
             at = np.array([t])
             return float(abs(self._tips(trajectory, at)[0, column]
-                             - (self._clamp1(at)[0] if clamp else 0.0)))
+                             - (self.clamp1(at)[0] if clamp else 0.0)))
 
-        sampled = np.abs(tips[:, column] - (self._clamp1(times) if clamp else 0.0))
+        sampled = np.abs(tips[:, column] - (self.clamp1(times) if clamp else 0.0))
         i = int(np.argmax(sampled))
         lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
         packed = self.packed
@@ -405,7 +418,7 @@ class PeriodMap(SectionMap):
                                1e-14 * max(hi, 1.0))
         if not math.isnan(t):
             return max(value, float(sampled[i]))
-        value, _ = self._refined(lambda t: -size(t), lo, hi, -sampled[i], times[i])
+        value, _ = refined(lambda t: -size(t), lo, hi, -sampled[i], times[i])
         return -value
 
     def _grid(self) -> np.ndarray:
@@ -443,7 +456,7 @@ class PeriodMap(SectionMap):
             return math.nan, math.nan
         if not math.isnan(t):
             return (value, t) if value < sample_value else (sample_value, sample_t)
-        return self._refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
+        return refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
                              lo, hi, sample_value, sample_t)
 
     def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
@@ -453,15 +466,14 @@ class PeriodMap(SectionMap):
     def _tips(self, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
         return tips_at(self.packed, trajectory, times)
 
-    @staticmethod
-    def _refined(function, lo: float, hi: float, best: float, best_t: float,
-                 ) -> tuple[float, float]:
-        """The minimum of ``function`` on [lo, hi] by Brent's method, or the sample if lower."""
-        result = minimize_scalar(function, bounds=(lo, hi), method="bounded",
-                                 options={"xatol": 1e-14 * max(hi, 1.0)})
-        if result.fun < best:
-            return float(result.fun), float(result.x)
-        return best, best_t
+def refined(function: Callable[[float], float], lo: float, hi: float, best: float,
+            best_t: float) -> tuple[float, float]:
+    """The minimum of ``function`` on [lo, hi] by Brent's method, or the sample if lower."""
+    result = minimize_scalar(function, bounds=(lo, hi), method="bounded",
+                             options={"xatol": 1e-14 * max(hi, 1.0)})
+    if result.fun < best:
+        return float(result.fun), float(result.x)
+    return best, best_t
 
 
 # the cell's parameters (`packing.cell_rows`) that the geometry's arrays do not depend on; the
