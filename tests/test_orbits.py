@@ -12,6 +12,7 @@ import pytest
 from impactbeams import ParameterError, Params, simulate
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, TIP_Y1
 from impactbeams.orbits import OrbitNotConverged, PeriodMap, periodic_orbit
+from impactbeams.orbits.period_map import refined
 from impactbeams.packing import pack_run
 from impactbeams.trajectory import InitialFields
 from impactbeams.trajectory.start import phase_state, projected_fields
@@ -366,9 +367,9 @@ def test_the_gaps_minimum_is_refined_at_the_root_of_its_rate():
         rate = _gap_rate(period_map, trajectory, t)
         assert rate == pytest.approx(difference, rel=1e-7, abs=1e-9 * abs(rate) + 1e-12)
     spacing = period_map.horizon / 512
-    brent = period_map._refined(lambda t: period_map._gap(trajectory, np.array([t]))[0][0],
-                                result.min_gap_time - spacing, result.min_gap_time + spacing,
-                                math.inf, math.nan)
+    brent = refined(lambda t: period_map._gap(trajectory, np.array([t]))[0][0],
+                    result.min_gap_time - spacing, result.min_gap_time + spacing, math.inf,
+                    math.nan)
     assert abs(brent[0] - result.min_gap) <= 2 * np.finfo(float).eps * params.clearance
     # the flat minimum pins Brent's time to ~sqrt(eps) of the period only; the rate's root
     # to Brent's root-finding tolerance, 1e-14 s: the rate there is within its slope times that
