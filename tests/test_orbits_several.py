@@ -12,7 +12,7 @@ import pytest
 
 from impactbeams import Contact, ParameterError, Params, simulate, two_sided_stop
 from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
-from impactbeams.kernels.layout import FREE, ROW_EVENT
+from impactbeams.kernels.layout import FREE, ROW_EVENT, TIP_Y1
 from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
 from impactbeams.trajectory.active_phases import contact_quantities, sample
@@ -117,7 +117,9 @@ def test_orbits_of_several_contacts_are_where_a_long_simulate_settles(orbits, na
     """``simulate`` over 300 periods from rest (its own run, not restarted at the sections):
     its last period's contact gaps and forces (257 samples) are the orbit's, from its
     section state, to 1e-10 of their largest value (measured 3e-13..1e-12 for the gaps,
-    3e-12..7e-12 for the forces; the transient has decayed as |mu|^300 < 1e-15)."""
+    3e-12..7e-12 for the forces; the transient has decayed as |mu|^300 < 1e-15), and so are
+    its tips (measured 3e-13..1.1e-12); the orbit's largest tip deflection bounds them, above
+    the largest sample by 1.6e-8..1.4e-4 (the samples' spacing)."""
     orbit, period_map = orbits[name]
     params = RUNS[name]
     assert orbit.residual <= 1e-11 and orbit.stable and orbit.contacts >= 2
@@ -131,6 +133,12 @@ def test_orbits_of_several_contacts_are_where_a_long_simulate_settles(orbits, na
     for key, simulated in (("gap", ds.contact_gaps.values),
                            ("contact_force", ds.contact_forces.values)):
         assert np.abs(simulated - own[key]).max() < 1e-10 * np.abs(own[key]).max(), key
+    tips = period_map.tip_motions(result, local)[:, TIP_Y1]
+    simulated = ds.tip_deflection_1.values
+    assert np.abs(simulated - tips).max() < 1e-10 * np.abs(tips).max()
+    # the orbit's refined maximum bounds the samples, 257 a period (within 1e-3 of it)
+    largest = np.abs(simulated).max()
+    assert largest <= orbit.max_tip1 * (1 + 1e-12) and orbit.max_tip1 < largest * (1 + 1e-3)
 
 
 def test_a_symmetric_two_sided_stop_has_a_symmetric_orbit(orbits):
