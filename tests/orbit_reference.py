@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from impactbeams.kernels.layout import FREE, ROW_FREQUENCY
 from spring_modal_reference import SpringModal
 
 
@@ -67,6 +68,20 @@ def reference_map(model: SpringModal, z: np.ndarray, t_end: float, rtol: float =
 
 def energy_scale(model: SpringModal) -> np.ndarray:
     return np.concatenate([model.omega, np.ones(model.omega.size)])
+
+
+def map_energy_scale(period_map) -> np.ndarray:
+    """D with D z = (omega q, q') of a period map's free modes: the energy norm's coordinates."""
+    omega = period_map.packed.tables[FREE, ROW_FREQUENCY]
+    return np.concatenate([omega, np.ones(omega.size)])
+
+
+def settled(period_map, periods: int = 60) -> np.ndarray:
+    """The section state after ``periods`` maps from the run's start."""
+    z = period_map.rest_state()
+    for _ in range(periods):
+        z = period_map(z, measures=False).state
+    return z
 
 
 def central_jacobian(function, z: np.ndarray, scale: np.ndarray, step: float) -> np.ndarray:

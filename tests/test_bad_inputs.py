@@ -816,6 +816,11 @@ def _public_calls():
                                       "or a function"),
         "PeriodMap-params": (lambda: ib.PeriodMap(None), "params = None (NoneType) is not "
                              "allowed: must be an impactbeams.Params"),
+        "ContactsPeriodMap-params": (lambda: ib.ContactsPeriodMap(None), "params = None "
+                                     "(NoneType) is not allowed: must be an impactbeams.Params"),
+        "ContactsPeriodMap-omega": (lambda: ib.ContactsPeriodMap(Params(
+            omega=0.0, counterpart="stop", contacts=ib.two_sided_stop())),
+            "omega = 0.0 is not allowed: a period map needs a forcing period"),
         "periodic_orbit-period": (lambda: ib.periodic_orbit(Params(), period=0),
                                   "period = 0 is not allowed"),
         "Continuation-params": (lambda: ib.Continuation(None, "omega", 1.0, 2.0),

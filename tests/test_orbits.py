@@ -10,32 +10,20 @@ import numpy as np
 import pytest
 
 from impactbeams import ParameterError, Params, simulate
-from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, ROW_FREQUENCY, TIP_Y1
+from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, TIP_Y1
 from impactbeams.orbits import OrbitNotConverged, PeriodMap, periodic_orbit
+from impactbeams.orbits.period_map import refined
 from impactbeams.packing import pack_run
 from impactbeams.trajectory import InitialFields
 from impactbeams.trajectory.start import phase_state, projected_fields
-from orbit_reference import central_jacobian, reference_orbit
+from orbit_reference import central_jacobian, reference_orbit, settled
 from orbit_reference import energy_scale as reference_energy_scale
+from orbit_reference import map_energy_scale as energy_scale
 from spring_modal_reference import SpringModal
 
 N_MODES = 12
 PERIODIC = {"contact_stiffness": 1e4, "damping_ratio": 0.05}
 DASHPOT = {**PERIODIC, "contact_damping": 0.5}
-
-
-def energy_scale(period_map):
-    """D with D z = (omega q, q'): the energy norm's coordinates."""
-    omega = period_map.packed.tables[FREE, ROW_FREQUENCY]
-    return np.concatenate([omega, np.ones(omega.size)])
-
-
-def settled(period_map, periods=60):
-    """The section state after ``periods`` maps from the run's start."""
-    z = period_map.rest_state()
-    for _ in range(periods):
-        z = period_map(z, measures=False).state
-    return z
 
 
 @pytest.fixture(scope="module")
@@ -379,9 +367,9 @@ def test_the_gaps_minimum_is_refined_at_the_root_of_its_rate():
         rate = _gap_rate(period_map, trajectory, t)
         assert rate == pytest.approx(difference, rel=1e-7, abs=1e-9 * abs(rate) + 1e-12)
     spacing = period_map.horizon / 512
-    brent = period_map._refined(lambda t: period_map._gap(trajectory, np.array([t]))[0][0],
-                                result.min_gap_time - spacing, result.min_gap_time + spacing,
-                                math.inf, math.nan)
+    brent = refined(lambda t: period_map._gap(trajectory, np.array([t]))[0][0],
+                    result.min_gap_time - spacing, result.min_gap_time + spacing, math.inf,
+                    math.nan)
     assert abs(brent[0] - result.min_gap) <= 2 * np.finfo(float).eps * params.clearance
     # the flat minimum pins Brent's time to ~sqrt(eps) of the period only; the rate's root
     # to Brent's root-finding tolerance, 1e-14 s: the rate there is within its slope times that

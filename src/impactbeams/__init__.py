@@ -19,6 +19,7 @@ _LAZY = {
     "simulate": "impactbeams.trajectory",
     "InitialFields": "impactbeams.trajectory",
     "PeriodMap": "impactbeams.orbits",
+    "ContactsPeriodMap": "impactbeams.orbits",
     "periodic_orbit": "impactbeams.orbits",
     "steady_gap": "impactbeams.orbits",
     "grazing_curve": "impactbeams.orbits",

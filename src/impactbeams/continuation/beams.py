@@ -18,7 +18,8 @@ import numpy as np
 
 from impactbeams.continuation.problem import Evaluation
 from impactbeams.kernels.layout import FREE, ROW_FREQUENCY, TIP_Y1
-from impactbeams.orbits import PeriodMap, PeriodMapResult
+from impactbeams.orbits import ContactsPeriodMap, PeriodMap, PeriodMapResult
+from impactbeams.orbits.contacts_map import make_period_map
 from impactbeams.orbits.period_map import CELL_ONLY
 from impactbeams.orbits.shooting import (
     by_modulus,
@@ -51,10 +52,10 @@ class BeamOrbits:
                  method: str = "auto", subspace: int | None = None) -> None:
         self.params, self.parameter, self.n_modes, self.period = (
             params, parameter, n_modes, period)
-        self._maps: dict[float, PeriodMap] = {}
+        self._maps: dict[float, PeriodMap | ContactsPeriodMap] = {}
         self._last: tuple[float, bytes, PeriodMapResult] | None = None
         # the other maps of a cell's parameter are built on its geometry (`PeriodMap.at`)
-        self._origin = PeriodMap(params, n_modes=n_modes, periods=period)
+        self._origin = make_period_map(params, n_modes=n_modes, periods=period)
         dimension = self._origin.dimension
         self.method = checked_method(method, dimension)
         self.subspace = checked_subspace(subspace, dimension)
@@ -64,21 +65,21 @@ class BeamOrbits:
     @property
     def gap_round_off(self) -> float:
         """How well a gap (the grazing or interval value) is known (m): below it, round-off."""
-        return GAP_ROUND_OFF * self.params.clearance
+        return GAP_ROUND_OFF * max(run.clearance for run in self.params.each_contact())
 
     @property
     def approximate(self) -> bool:
         """Whether dr/dz is Newton-Picard's approximation (the engine then keeps dr/dp)."""
         return self.method == "newton-picard"
 
-    def period_map(self, p: float) -> PeriodMap:
+    def period_map(self, p: float) -> PeriodMap | ContactsPeriodMap:
         """The period map at parameter value ``p`` (ParameterError if not allowed)."""
         if p not in self._maps:
             if len(self._maps) >= CACHED_MAPS:
                 self._maps.pop(next(iter(self._maps)))
             params = self.params.replace(**{self.parameter: p})
             self._maps[p] = (self._origin.at(params) if self.parameter in CELL_ONLY
-                             else PeriodMap(params, n_modes=self.n_modes, periods=self.period))
+                             else make_period_map(params, self.n_modes, self.period))
         return self._maps[p]
 
     def evaluate(self, z: np.ndarray, p: float, jacobian: bool = True,
@@ -188,12 +189,10 @@ class BeamOrbits:
         return np.concatenate([omega, np.ones(omega.size)])
 
 
-def grazing_value(period_map: PeriodMap, result: PeriodMapResult) -> float:
+def grazing_value(period_map: PeriodMap | ContactsPeriodMap, result: PeriodMapResult,
+                  ) -> float:
     """The signed grazing value (m): see the module's docstring; NaN if neither exists."""
-    candidates = [result.min_gap] if math.isfinite(result.min_gap) else []
-    if result.contacts:
-        candidates.append(-result.least_peak_force / period_map.params.contact_stiffness)
-    return min(candidates, key=abs) if candidates else math.nan
+    return period_map.grazing_value(result)
 
 
 def orbit_measures(period_map: PeriodMap, result: PeriodMapResult,

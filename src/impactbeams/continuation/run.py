@@ -50,6 +50,7 @@ from impactbeams.params import (
     require_integer,
     require_type,
 )
+from impactbeams.structure.contacts import FLAT_KEYS
 from impactbeams.variables import PARAMETERS, global_attributes
 
 if TYPE_CHECKING:
@@ -102,6 +103,10 @@ class Continuation:
         require_type("params", self.params, isinstance(self.params, Params),
                      "an impactbeams.Params")
         check_law(self.params)
+        if self.params.several_contacts:  # each contact gives its own law and point
+            require("parameter", self.parameter, self.parameter not in FLAT_KEYS.values(),
+                    f"with {len(self.params.contacts)} contacts each gives its own: continue "
+                    "another parameter (docs/limits.md, 'Several contacts')")
         require("parameter", self.parameter, self.parameter in CONTINUABLE,
                 f"must be one of {', '.join(CONTINUABLE)}")
         for name in ("low", "high"):
@@ -249,13 +254,18 @@ def fewest_points(c: Continuation) -> int:
     return math.ceil((c.high - c.low) / largest) + 1
 
 
+def least_clearance(params: Params) -> float:
+    """The smallest clearance (m) of ``params``' contacts (its own, for one)."""
+    return min(run.clearance for run in params.each_contact())
+
+
 def mode_count(c: Continuation) -> int:
     """The free modes per beam of ``c``: its ``n_modes``, or those that resolve the contact."""
     from impactbeams.contact import recommended_modes
 
     if c.n_modes is not None:
         return int(c.n_modes)
-    return recommended_modes(c.params)
+    return max(recommended_modes(run) for run in c.params.each_contact())
 
 
 def _start_state(problem: BeamOrbits, c: Continuation) -> np.ndarray:
@@ -280,7 +290,7 @@ def _scaling(problem: BeamOrbits, c: Continuation, state: np.ndarray) -> Scaling
     tip = problem.period_map(c.first)(state).max_tip1
     size = np.linalg.norm(weights * state)
     scale = c.state_scale if c.state_scale is not None else (
-        STATE_SCALE_CLEARANCES * c.params.clearance)
+        STATE_SCALE_CLEARANCES * least_clearance(c.params))
     per_metre = size / tip if tip > 0 and size > 0 else 1.0
     return Scaling(weights / (per_metre * scale), 1.0 / (c.high - c.low))
 

@@ -90,6 +90,7 @@ from impactbeams.params import (
     require,
     require_finite,
     require_integer,
+    require_one_contact,
     require_type,
 )
 from impactbeams.variables import (
@@ -151,6 +152,7 @@ class BifurcationCurve:
     def __post_init__(self) -> None:
         require_type("params", self.params, isinstance(self.params, Params),
                      "an impactbeams.Params")
+        require_one_contact(self.params, "two-parameter curves")
         require("kind", self.kind, self.kind in KINDS,
                 f"must be one of {', '.join(map(repr, KINDS))}")
         for name in ("parameter", "second"):

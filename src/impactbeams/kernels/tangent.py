@@ -137,7 +137,7 @@ def _renormalize(tangent_q, tangent_v, phase, spring, no_drive, frequencies, scr
 
 
 @kernel
-def _advance_tangents(table, tangent_q, tangent_v, t, h, no_force):
+def advance_tangents(table, tangent_q, tangent_v, t, h, no_force):
     """Advance every tangent row by h (s) with the phase's unforced closed-form propagation.
 
     `propagation.advance`'s arithmetic, with each mode's exponential, cosine and sine
@@ -197,14 +197,14 @@ def carry_tangents(tables, phase_scalars, spring, settings, recorded, t_end, sch
             t_next = renormalization_time(clock[CLOCK_RENORMALIZATIONS] + 1.0, interval, t_max)
             if t_next > seg_end:
                 break
-            _advance_tangents(tables[phase], tangent_q, tangent_v, clock[CLOCK_TIME],
+            advance_tangents(tables[phase], tangent_q, tangent_v, clock[CLOCK_TIME],
                               t_next - clock[CLOCK_TIME], no_force)
             _renormalize(tangent_q, tangent_v, phase, spring, no_drive, free_frequencies, scratch_q,
                          scratch_v, log_growth)
             clock[CLOCK_TIME] = t_next
             clock[CLOCK_RENORMALIZATIONS] += 1.0
             _record(sums, counts, log_growth, int(clock[CLOCK_RENORMALIZATIONS]), schedule)
-        _advance_tangents(tables[phase], tangent_q, tangent_v, clock[CLOCK_TIME],
+        advance_tangents(tables[phase], tangent_q, tangent_v, clock[CLOCK_TIME],
                           seg_end - clock[CLOCK_TIME], no_force)
         clock[CLOCK_TIME] = seg_end
         if k + 1 == count or seg_phase[k + 1] == phase:

@@ -123,7 +123,28 @@ class PeriodMapResult:
     interval_gap: float = math.nan
 
 
-class PeriodMap:
+class SectionMap:
+    """What every period map has from its (first contact's) packed run ``packed``."""
+
+    packed: Packed
+    params: Params
+
+    @property
+    def dimension(self) -> int:
+        """Size of a section state z = (q, q'): 2 N."""
+        return 2 * self.packed.q0.size
+
+    def rest_state(self) -> np.ndarray:
+        """The run's initial state of ``params.start`` (and uplifts) as a section state."""
+        return np.concatenate([self.packed.q0, self.packed.v0])
+
+    def clamp1(self, times: np.ndarray) -> np.ndarray:
+        """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0."""
+        moves1, _ = self.params.mount.clamps
+        return moves1 * self.params.base_amplitude * np.sin(self.params.omega * times)
+
+
+class PeriodMap(SectionMap):
     """The map z(0) -> z(p T) of ``params`` (spring law, Omega > 0) with ``n_modes`` per beam.
 
     ``n_modes``: default the number that resolves the contact (as in `simulate`). ``periods``:
@@ -135,6 +156,7 @@ class PeriodMap:
                  max_events: int = MAX_EVENTS) -> None:
         require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
         check_law(params)
+        require_one_contact(params, "PeriodMap (several: orbits.contacts_map.ContactsPeriodMap)")
         self.periods = require_integer("periods", periods, 1)
         if n_modes is None:
             n_modes = recommended_modes(params)
@@ -168,15 +190,6 @@ class PeriodMap:
         self.packed: Packed = pack_run(params, self.n_modes, self.horizon, self.horizon,
                                        geometry(params, self.n_modes))
 
-    @property
-    def dimension(self) -> int:
-        """Size of a section state z = (q, q'): 2 N."""
-        return 2 * self.packed.q0.size
-
-    def rest_state(self) -> np.ndarray:
-        """The run's initial state of ``params.start`` (and uplifts) as a section state."""
-        return np.concatenate([self.packed.q0, self.packed.v0])
-
     @one_blas_thread
     def __call__(self, state: np.ndarray, directions: np.ndarray | str | None = None,
                  measures: bool = True) -> PeriodMapResult:
@@ -190,7 +203,7 @@ class PeriodMap:
         event or search limit).
         """
         z0 = checked_state(self.packed, state, "state")
-        columns = self._directions(directions)
+        columns = directions_of(directions, self.dimension)
         start = phase_state(self.packed, z0)
         trajectory = run(self.packed, self.max_events, start=start)
         if trajectory.status != "complete":
@@ -254,8 +267,20 @@ class PeriodMap:
         stationary = self._stationary(result.trajectory, lo, hi, True)
         if stationary is not None and stationary[1] <= gap[i]:
             return stationary[1]
-        return self._refined(lambda t: self._gap(result.trajectory, np.array([t]))[0][0],
+        return refined(lambda t: self._gap(result.trajectory, np.array([t]))[0][0],
                              lo, hi, gap[i], times[i])[0]
+
+    def grazing_value(self, result: PeriodMapResult) -> float:
+        """The signed grazing value (m) of an `approach`-ed ``result``; NaN if it has none.
+
+        The smallest local minimum of the gap in free flight (> 0) or minus the overlap of the
+        shallowest contact, its peak force over the contact stiffness (< 0), whichever is
+        nearer 0 (`impactbeams.continuation.beams`).
+        """
+        candidates = [result.min_gap] if math.isfinite(result.min_gap) else []
+        if result.contacts:
+            candidates.append(-result.least_peak_force / self.params.contact_stiffness)
+        return min(candidates, key=abs) if candidates else math.nan
 
     def _least_peak_force(self, trajectory: Trajectory) -> float:
         """The smallest contact phase's peak force (N); NaN without contact."""
@@ -317,22 +342,7 @@ class PeriodMap:
         """
         require("directions", directions, directions is not None,
                 "must be 'all' or an array of directions (2 N, k)")
-        return self._jacobian(result.trajectory, self._directions(directions))
-
-    def _directions(self, directions: np.ndarray | str | None) -> np.ndarray | None:
-        if directions is None:
-            return None
-        if isinstance(directions, str):
-            require("directions", directions, directions == "all",
-                    "must be None, 'all' or an array of directions (2 N, k)")
-            return np.eye(self.dimension)
-        array = np.asarray(directions, dtype=float)
-        if array.ndim == 1:
-            array = array[:, None]
-        require("directions", array.shape, array.ndim == 2 and array.shape[0] == self.dimension
-                and array.shape[1] >= 1 and bool(np.all(np.isfinite(array))),
-                f"must be a finite array of shape ({self.dimension}, k), k >= 1")
-        return array
+        return self._jacobian(result.trajectory, directions_of(directions, self.dimension))
 
     def _jacobian(self, trajectory: Trajectory, columns: np.ndarray) -> np.ndarray:
         """dz(pT)/dz(0) @ columns by the tangent kernel on the recorded segments."""
@@ -384,11 +394,6 @@ class PeriodMap:
                  if self.params.partner.has_beam2 else 0.0)
         return absolute, beam2, relative
 
-    def _clamp1(self, times: np.ndarray) -> np.ndarray:
-        """Beam 1's clamp position u_b1 (m) at ``times``: U0 sin(Omega t) if it moves, else 0."""
-        moves1, _ = self.params.mount.clamps
-        return moves1 * self.params.base_amplitude * np.sin(self.params.omega * times)
-
     def _largest(self, trajectory: Trajectory, times: np.ndarray, tips: np.ndarray,
                  column: int, clamp: bool) -> float:
         """The largest |tip ``column``| (minus beam 1's clamp if ``clamp``) over the run (m).
@@ -401,9 +406,9 @@ class PeriodMap:
         def size(t: float) -> float:
             at = np.array([t])
             return float(abs(self._tips(trajectory, at)[0, column]
-                             - (self._clamp1(at)[0] if clamp else 0.0)))
+                             - (self.clamp1(at)[0] if clamp else 0.0)))
 
-        sampled = np.abs(tips[:, column] - (self._clamp1(times) if clamp else 0.0))
+        sampled = np.abs(tips[:, column] - (self.clamp1(times) if clamp else 0.0))
         i = int(np.argmax(sampled))
         lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
         packed = self.packed
@@ -413,7 +418,7 @@ class PeriodMap:
                                1e-14 * max(hi, 1.0))
         if not math.isnan(t):
             return max(value, float(sampled[i]))
-        value, _ = self._refined(lambda t: -size(t), lo, hi, -sampled[i], times[i])
+        value, _ = refined(lambda t: -size(t), lo, hi, -sampled[i], times[i])
         return -value
 
     def _grid(self) -> np.ndarray:
@@ -451,7 +456,7 @@ class PeriodMap:
             return math.nan, math.nan
         if not math.isnan(t):
             return (value, t) if value < sample_value else (sample_value, sample_t)
-        return self._refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
+        return refined(lambda t: self._gap(trajectory, np.array([t]))[0][0],
                              lo, hi, sample_value, sample_t)
 
     def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
@@ -461,15 +466,14 @@ class PeriodMap:
     def _tips(self, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
         return tips_at(self.packed, trajectory, times)
 
-    @staticmethod
-    def _refined(function, lo: float, hi: float, best: float, best_t: float,
-                 ) -> tuple[float, float]:
-        """The minimum of ``function`` on [lo, hi] by Brent's method, or the sample if lower."""
-        result = minimize_scalar(function, bounds=(lo, hi), method="bounded",
-                                 options={"xatol": 1e-14 * max(hi, 1.0)})
-        if result.fun < best:
-            return float(result.fun), float(result.x)
-        return best, best_t
+def refined(function: Callable[[float], float], lo: float, hi: float, best: float,
+            best_t: float) -> tuple[float, float]:
+    """The minimum of ``function`` on [lo, hi] by Brent's method, or the sample if lower."""
+    result = minimize_scalar(function, bounds=(lo, hi), method="bounded",
+                             options={"xatol": 1e-14 * max(hi, 1.0)})
+    if result.fun < best:
+        return float(result.fun), float(result.x)
+    return best, best_t
 
 
 # the cell's parameters (`packing.cell_rows`) that the geometry's arrays do not depend on; the
@@ -508,10 +512,26 @@ def _cell_defaults() -> dict[str, float]:
     return {name: getattr(defaults, name) for name in CELL_ONLY}
 
 
+def directions_of(directions: np.ndarray | str | None, dimension: int) -> np.ndarray | None:
+    """A period map's ``directions`` checked, as columns (``dimension``, k); None stays None."""
+    if directions is None:
+        return None
+    if isinstance(directions, str):
+        require("directions", directions, directions == "all",
+                "must be None, 'all' or an array of directions (2 N, k)")
+        return np.eye(dimension)
+    array = np.asarray(directions, dtype=float)
+    if array.ndim == 1:
+        array = array[:, None]
+    require("directions", array.shape, array.ndim == 2 and array.shape[0] == dimension
+            and array.shape[1] >= 1 and bool(np.all(np.isfinite(array))),
+            f"must be a finite array of shape ({dimension}, k), k >= 1")
+    return array
+
+
 def check_law(params: Params) -> None:
     """Raise ParameterError unless the law has tangent dynamics (the spring law)."""
     if not params.law.tangent_flow:
         raise ParameterError("periodic orbits need the spring contact law: the tied law's "
                              "projections, instantaneous impacts and accumulations are not a "
                              "flow whose linearisation converges in n_modes (docs/model.md)")
-    require_one_contact(params, "periodic orbits and their continuation")

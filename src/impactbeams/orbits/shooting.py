@@ -33,6 +33,7 @@ import numpy as np
 
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels.layout import FREE, ROW_FREQUENCY
+from impactbeams.orbits.contacts_map import ContactsPeriodMap, make_period_map
 from impactbeams.orbits.period_map import PeriodMap, PeriodMapResult
 from impactbeams.params import ParameterError, Params, require, require_integer, require_type
 from impactbeams.trajectory.start import checked_state
@@ -148,7 +149,7 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
     Raises ParameterError for bad arguments (the tied law included: no tangent flow) and
     `OrbitNotConverged` when the residual does not reach ``tolerance``.
     """
-    period_map = PeriodMap(params, n_modes, require_integer("period", period, 1))
+    period_map = make_period_map(params, n_modes, require_integer("period", period, 1))
     method = checked_method(method, period_map.dimension)
     tolerance = float(tolerance)
     require("tolerance", tolerance, 0 < tolerance < 1, "must be in (0, 1)")
@@ -183,7 +184,7 @@ def checked_method(method: str, dimension: int) -> str:
     return method
 
 
-def _start(period_map: PeriodMap, guess: object, transient: int,
+def _start(period_map: PeriodMap | ContactsPeriodMap, guess: object, transient: int,
            ) -> tuple[np.ndarray, np.ndarray | None]:
     if isinstance(guess, PeriodicOrbit):
         if guess.state.size != period_map.dimension:
@@ -201,8 +202,8 @@ def _start(period_map: PeriodMap, guess: object, transient: int,
 class _Shooting:
     """Newton and Newton-Picard iterations on one period map (see the module doc)."""
 
-    def __init__(self, period_map: PeriodMap, tolerance: float, max_iterations: int,
-                 measures: bool) -> None:
+    def __init__(self, period_map: PeriodMap | ContactsPeriodMap, tolerance: float,
+                 max_iterations: int, measures: bool) -> None:
         self.map = period_map
         self.measures = measures
         self.tolerance = tolerance

@@ -1,0 +1,281 @@
+"""Periodic orbits with several contacts (issue 33, item 5): the period map of the active sets'
+phases, its exact monodromy (each phase's tangent flow, the saltation at every switch), and
+shooting on it.
+
+The runs: a stop at mid-span and one at the tip, both below (closed together), with and
+without dashpots, and a two-sided stop at mid-span (`tests/test_several_contacts.py`'s), at
+k = 1e4 N/m, zeta = 0.05 and 8 modes: stable period-1 orbits.
+"""
+
+import numpy as np
+import pytest
+
+from impactbeams import Contact, ParameterError, Params, simulate, two_sided_stop
+from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
+from impactbeams.kernels.layout import FREE, ROW_EVENT, TIP_Y1
+from impactbeams.orbits import PeriodMap, periodic_orbit
+from impactbeams.orbits.contacts_map import ContactsPeriodMap
+from impactbeams.trajectory.active_phases import contact_quantities, sample
+from impactbeams.trajectory.start import phase_state
+from orbit_reference import central_jacobian, settled
+from orbit_reference import map_energy_scale as energy_scale
+
+N_MODES = 8
+STOP = Params(counterpart="stop", contact_stiffness=1e4, damping_ratio=0.05)
+MID = 0.5 * STOP.l1  # m
+FORCED = STOP.replace(force_amplitude=1e-3, omega=400.0)
+TWO_SIDED = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6))
+TOGETHER = FORCED.replace(contacts=(Contact(MID, clearance=1e-6), Contact(clearance=2e-6)))
+DASHPOTS = FORCED.replace(contacts=(Contact(MID, clearance=1e-6, damping=0.5),
+                                    Contact(clearance=2e-6, damping=0.5)))
+RUNS = {"two-sided": TWO_SIDED, "together": TOGETHER, "dashpots": DASHPOTS}
+
+
+def in_energy(period_map, jacobian):
+    scale = energy_scale(period_map)
+    return scale[:, None] * jacobian / scale[None, :]
+
+
+@pytest.fixture(scope="module")
+def orbits():
+    """Each run's orbit by Newton from 50 transient periods, with its map."""
+    return {name: (periodic_orbit(params, N_MODES, method="newton"),
+                   ContactsPeriodMap(params, N_MODES)) for name, params in RUNS.items()}
+
+
+@pytest.mark.parametrize("name", list(RUNS))
+def test_monodromy_of_several_contacts_matches_finite_differences(name):
+    """The carried Jacobian against central differences of the map (relative steps 1e-4 and
+    1e-5 in the energy norm), 40 periods after rest (not yet on the orbit). The difference is
+    the differences' own truncation, O(h^2): it falls 100-fold from 1e-4 to 1e-5 (measured
+    2.5e-7 -> 2.5e-9 two-sided, 1.2e-7 -> 1.2e-9 together, 1.6e-7 -> 1.6e-9 with dashpots),
+    so at 1e-5 it is below 1e-8. The runs switch sets: both sides of the two-sided stop, the
+    two stops closing together; with dashpots the forces jump at the closings (the saltation
+    matrix: without it the difference is 1.06) and two early releases' gaps open."""
+    period_map = ContactsPeriodMap(RUNS[name], N_MODES)
+    z = settled(period_map, 40)
+    result = period_map(z, directions="all", measures=False)
+    run = result.trajectory
+    assert set(run.mask.tolist()) == ({0, 1, 2} if name == "two-sided" else {0, 2, 3})
+    if name == "dashpots":  # the early releases' openings: functions n + f
+        assert {2, 3} <= set(run.switched.tolist())
+    carried = in_energy(period_map, result.jacobian)
+    errors = []
+    for step in (1e-4, 1e-5):
+        reference = in_energy(period_map, central_jacobian(
+            lambda x: period_map(x, measures=False).state, z, energy_scale(period_map), step))
+        errors.append(np.linalg.norm(carried - reference, 2) / np.linalg.norm(reference, 2))
+    assert errors[1] < 1e-8
+    assert 50 < errors[0] / errors[1] < 200  # h^2: the tangent is exact
+
+
+@pytest.mark.parametrize("damping", [0.0, 0.5])
+def test_one_contact_beside_one_that_never_closes_is_the_single_contacts_map(damping):
+    """A tip stop (with or without a dashpot) beside a mid-span one 1 mm away: the state, the
+    monodromy, the counts and the contacts' measures of the single contact's PeriodMap, to
+    round-off (measured: states 5.1e-16, monodromies 3.6e-14 of their largest entry: the set
+    phases' complex modes against the free table's real ones)."""
+    single = STOP.replace(force_amplitude=1e-3, omega=400.0, clearance=2e-6,
+                          contact_damping=damping)
+    two = single.replace(contacts=(Contact(clearance=2e-6, damping=damping),
+                                   Contact(MID, clearance=1e-3)))
+    one_map, two_map = PeriodMap(single, N_MODES), ContactsPeriodMap(two, N_MODES)
+    z = settled(one_map, 40)
+    one, several = one_map(z, directions="all"), two_map(z, directions="all")
+    assert several.trajectory.mask.tolist() == one.trajectory.phase.tolist()  # 0 free, 1
+    assert np.count_nonzero(several.trajectory.mask) >= 2  # it closes, twice
+    assert np.abs(several.state - one.state).max() < 2e-15 * np.abs(one.state).max()
+    assert np.abs(several.jacobian - one.jacobian).max() < 1e-13 * np.abs(one.jacobian).max()
+    assert (several.contacts, several.episodes) == (one.contacts, one.episodes)
+    assert several.peak_force == pytest.approx(one.peak_force, rel=1e-13)
+    assert several.impulse == pytest.approx(one.impulse, rel=1e-13)
+
+
+def test_a_section_state_in_contact_starts_in_its_active_set():
+    """A state pushed into the tip stop (gap < 0, force > 0): the single contact's start
+    (`phase_state`) is in contact, so is the active set found, and the maps agree to round-off
+    (measured 1.4e-16 and 2.3e-15); pushed into both stops, both are closed at the start."""
+    single = STOP.replace(force_amplitude=1e-3, omega=400.0, clearance=2e-6)
+    two = single.replace(contacts=(Contact(clearance=2e-6), Contact(MID, clearance=1e-3)))
+    one_map, two_map = PeriodMap(single, N_MODES), ContactsPeriodMap(two, N_MODES)
+    weights = one_map.packed.tables[FREE, ROW_EVENT]
+    z = np.concatenate([-3e-6 * weights / (weights @ weights), np.zeros(N_MODES)])
+    assert phase_state(one_map.packed, z)[2] == 1 and two_map.active_mask(z) == 1
+    one, several = one_map(z, directions="all"), two_map(z, directions="all")
+    assert np.abs(several.state - one.state).max() < 1e-14 * np.abs(one.state).max()
+    assert np.abs(several.jacobian - one.jacobian).max() < 1e-13 * np.abs(one.jacobian).max()
+    together = ContactsPeriodMap(TOGETHER, N_MODES)
+    b = together._weights  # the gaps' weights: both modal gaps -5 um
+    q = b.T @ np.linalg.solve(b @ b.T, np.array([-6e-6, -7e-6]))
+    pushed = np.concatenate([q, np.zeros(N_MODES)])
+    assert together.active_mask(pushed) == 3
+    assert together(pushed).trajectory.mask[0] == 3
+
+
+@pytest.mark.parametrize("name", list(RUNS))
+def test_orbits_of_several_contacts_are_where_a_long_simulate_settles(orbits, name):
+    """``simulate`` over 300 periods from rest (its own run, not restarted at the sections):
+    its last period's contact gaps and forces (257 samples) are the orbit's, from its
+    section state, to 1e-10 of their largest value (measured 3e-13..1e-12 for the gaps,
+    3e-12..7e-12 for the forces; the transient has decayed as |mu|^300 < 1e-15), and so are
+    its tips (measured 3e-13..1.1e-12); the orbit's largest tip deflection bounds them, above
+    the largest sample by 1.6e-8..1.4e-4 (the samples' spacing)."""
+    orbit, period_map = orbits[name]
+    params = RUNS[name]
+    assert orbit.residual <= 1e-11 and orbit.stable and orbit.contacts >= 2
+    period = 2 * np.pi / params.omega
+    times = np.linspace(299 * period, 300 * period, 257)
+    ds = simulate(params, 300 * period, N_MODES, times=times)
+    result = period_map(orbit.state, measures=False)
+    local = times - 299 * period
+    q, v, mask = sample(period_map.contacts, result.trajectory, local)
+    own = contact_quantities(period_map.contacts, local, q, v, mask)
+    for key, simulated in (("gap", ds.contact_gaps.values),
+                           ("contact_force", ds.contact_forces.values)):
+        assert np.abs(simulated - own[key]).max() < 1e-10 * np.abs(own[key]).max(), key
+    tips = period_map.tip_motions(result, local)[:, TIP_Y1]
+    simulated = ds.tip_deflection_1.values
+    assert np.abs(simulated - tips).max() < 1e-10 * np.abs(tips).max()
+    # the orbit's refined maximum bounds the samples, 257 a period (within 1e-3 of it)
+    largest = np.abs(simulated).max()
+    assert largest <= orbit.max_tip1 * (1 + 1e-12) and orbit.max_tip1 < largest * (1 + 1e-3)
+
+
+def test_a_symmetric_two_sided_stop_has_a_symmetric_orbit(orbits):
+    """Equal clearances on both sides and F0 sin(Omega t): the equations are invariant under
+    z -> -z, t -> t + T/2, and the stable orbit with them: z(T/2) = -z(0) (measured 3e-15 in
+    the energy norm), each stop's contacts the other's half a period later."""
+    orbit, period_map = orbits["two-sided"]
+    result = period_map(orbit.state, measures=False)
+    half = np.pi / TWO_SIDED.omega
+    q, v, _ = sample(period_map.contacts, result.trajectory, np.array([half]))
+    scale = energy_scale(period_map)
+    mirrored = scale * (np.concatenate([q[0], v[0]]) + orbit.state)
+    assert np.linalg.norm(mirrored) < 1e-13 * np.linalg.norm(scale * orbit.state)
+    run = result.trajectory
+    onsets = [(int(f), t) for f, t, mask in zip(run.switched, run.time, run.mask, strict=True)
+              if f >= 0 and (mask >> f) & 1]
+    below = [t for f, t in onsets if f == 0]
+    above = [t for f, t in onsets if f == 1]
+    assert len(below) == len(above) >= 2
+    assert np.allclose(np.sort(np.mod(np.array(below) + half, 2 * half)), np.sort(above),
+                       rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", list(RUNS))
+def test_multipliers_are_the_finite_difference_monodromys_eigenvalues(orbits, name):
+    """The orbit's multipliers against the eigenvalues of the central differences' monodromy
+    at the orbit (step 1e-5, which differ from the Jacobian by < 1e-8 of its norm): the four
+    leading within 1e-7 (measured 3.4e-10 at most); Newton-Picard's the same orbit and leading
+    multipliers (measured 5e-13, 1e-11)."""
+    orbit, period_map = orbits[name]
+    reference = central_jacobian(lambda x: period_map(x, measures=False).state, orbit.state,
+                                 energy_scale(period_map), 1e-5)
+    eigenvalues = np.linalg.eigvals(reference)
+    eigenvalues = eigenvalues[np.lexsort((-eigenvalues.imag, -np.abs(eigenvalues)))]
+    assert np.abs(orbit.multipliers[:4] - eigenvalues[:4]).max() < 1e-7
+    picard = periodic_orbit(RUNS[name], N_MODES, guess=orbit.state, method="newton-picard")
+    scale = energy_scale(period_map)
+    assert (np.linalg.norm(scale * (picard.state - orbit.state))
+            < 1e-10 * np.linalg.norm(scale * orbit.state))
+    assert np.abs(picard.multipliers[:2] - orbit.multipliers[:2]).max() < 1e-9
+
+
+def test_what_orbits_of_several_contacts_refuse(orbits):
+    """A continuation of a flat contact key, two-parameter curves, the single contact's
+    PeriodMap and an orbit's Dataset (simulate's initial_state) refuse several contacts in
+    one line; the contacts' measures are there, the interval value is NaN."""
+    with pytest.raises(ParameterError, match="parameter = 'clearance' is not allowed: with 2 "
+                                             "contacts each gives its own"):
+        Continuation(TWO_SIDED, "clearance", 1e-6, 4e-6)
+    with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
+                                             "two-parameter curves"):
+        BifurcationCurve(TWO_SIDED, "grazing", "omega", 400.0, np.zeros(16),
+                         "force_amplitude", 1e-4, 2e-3, 300.0, 500.0, N_MODES)
+    with pytest.raises(ParameterError, match="not allowed in PeriodMap"):
+        PeriodMap(TWO_SIDED, N_MODES)
+    with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
+                                             r"PeriodicOrbit.to_dataset \(simulate's"):
+        orbits["two-sided"][0].to_dataset()
+    result = ContactsPeriodMap(TWO_SIDED, N_MODES)(settled(ContactsPeriodMap(TWO_SIDED,
+                                                                              N_MODES), 40))
+    assert result.peak_force > 0 and result.impulse > 0 and result.peak_forces.size >= 2
+    assert result.max_tip1 > 0 and np.isnan(result.interval_gap)
+    # overlapping (gap -0.1 um) but opening fast enough that the dashpot's pull exceeds the
+    # spring's push (-k g - c g' < 0): inside an early release, which a run does not start in
+    period_map = ContactsPeriodMap(DASHPOTS, N_MODES)
+    weights = period_map.packed.tables[FREE, ROW_EVENT]  # the mid-span stop's gap
+    unit = weights / (weights @ weights)
+    z = np.concatenate([-1.1e-6 * unit, 5e-2 * unit])
+    assert period_map.active_mask(z) == 0
+    with pytest.raises(RuntimeError, match="lies in a dashpot's early release"):
+        period_map(z)
+
+
+# a two-sided stop 3 um below and 6 um above mid-span: along F0 the orbit first touches the
+# stop below, then the one above (a two-sided stop's second grazing)
+BACKLASH = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 6e-6))
+
+
+def _grazings(dataset):
+    from impactbeams.variables import BIFURCATIONS
+
+    labels = dataset.bifurcation.values
+    return [i for i in np.flatnonzero(labels) if BIFURCATIONS[labels[i]] == "grazing"]
+
+
+def _located_against_the_orbits_gap(dataset, index, contact):
+    """The located F0 against the root of the orbit's smallest gap, extrapolated linearly
+    from periodic orbits 1e-5 and 2e-5 (relative) below it; that gap is ``contact``'s. The
+    continuation locates to 1e-11 of its range; the extrapolation's truncation is the gap's
+    curvature in F0 times (1e-5)^2, so 1e-8 bounds the difference."""
+    located = dataset.force_amplitude.values[index]
+    values = []
+    for below in (2e-5, 1e-5):
+        params = BACKLASH.replace(force_amplitude=located * (1 - below))
+        orbit = periodic_orbit(params, N_MODES, guess=dataset.section_state.values[index])
+        period_map = ContactsPeriodMap(params, N_MODES)
+        result = period_map.approach(period_map(orbit.state, measures=False))
+        gaps, _ = period_map._gaps(result.trajectory, np.array([result.min_gap_time]))
+        assert gaps[0, contact] == pytest.approx(result.min_gap, rel=1e-12)
+        values.append((params.force_amplitude, result.min_gap))
+    (f1, g1), (f2, g2) = values
+    return abs(f2 - g2 * (f2 - f1) / (g2 - g1) - located) / located
+
+
+def test_continuation_of_a_two_sided_stop_locates_its_first_grazing():
+    """From the non-impacting orbit at F0 = 0.3 mN: the grazing with the stop below (0 to
+    1 contact per orbit) located where the orbit's smallest gap, the lower stop's,
+    extrapolates to 0 (measured 2.2e-15 relative: without contact the orbit, and its gap, is
+    linear in F0); the tips' amplitudes are measured at every point."""
+    dataset = continue_orbits(Continuation(BACKLASH, "force_amplitude", 3e-4, 3.8e-4,
+                                           n_modes=N_MODES))
+    (index,) = _grazings(dataset)
+    assert list(dataset.contacts_per_orbit.values[index - 1:index + 2]) == [0, 0, 1]
+    error = _located_against_the_orbits_gap(dataset, index, 0)
+    print(f"first grazing located to {error:.1e}")
+    assert error < 1e-8
+    assert np.all(dataset.tip_amplitude_1.values > 0)  # the measures of several contacts
+
+
+@pytest.mark.slow  # 25 s: 55 points along a branch that touches three times
+def test_continuation_of_a_two_sided_stop_locates_the_second_stops_grazing():
+    """Up to F0 = 0.475 mN: grazings at 0.372 mN (the stop below), 0.412 mN (a second
+    contact with it) and 0.474 mN, where the stop above is touched first (its contacts
+    appear in the orbit's active sets); that one located where the orbit's smallest gap, the
+    upper stop's, extrapolates to 0 (measured 1.2e-10 relative), a fold just past it."""
+    dataset = continue_orbits(Continuation(BACKLASH, "force_amplitude", 3e-4, 4.75e-4,
+                                           n_modes=N_MODES, max_points=55))
+    indices = _grazings(dataset)
+    assert len(indices) == 3
+    counts = dataset.contacts_per_orbit.values
+    assert [list(counts[i - 1:i + 2]) for i in indices] == [[0, 0, 1], [1, 1, 2], [2, 2, 3]]
+    sets = []
+    for i in (indices[2] - 1, indices[2] + 1):
+        params = BACKLASH.replace(force_amplitude=dataset.force_amplitude.values[i])
+        run = ContactsPeriodMap(params, N_MODES)(dataset.section_state.values[i]).trajectory
+        sets.append(set(run.mask.tolist()))
+    assert sets == [{0, 1}, {0, 1, 2}]  # the stop above (bit 2) closes past the grazing
+    error = _located_against_the_orbits_gap(dataset, indices[2], 1)
+    print(f"second stop's grazing located to {error:.1e}")
+    assert error < 1e-8
