@@ -27,7 +27,7 @@ FILE = ("n_modes = 3\n[params]\ncontact_stiffness = 1e4\ndamping_ratio = 0.02\n"
         "force_amplitude = 3e-5\nclearance = 1.1e-5\n[continuation]\nparameter = 'omega'\n"
         "min = 248.8\nmax = 250.5\nstart = 248.9\nmax_branches = 2\nmethod = '{method}'\n")
 METHODS = ("newton", "newton-picard")
-POINTS = 77  # on both branches, uninterrupted
+POINTS = 79  # on both branches, uninterrupted
 SAVED_BEFORE_THE_SIGNAL = 15  # of POINTS: mid-branch
 
 # the command line with every checkpoint 50 ms longer: the signal finds the run going
