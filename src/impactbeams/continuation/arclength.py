@@ -8,11 +8,12 @@ A step of length ds predicts x~ + ds t and corrects by Newton on
     r(z, p) = 0,    t . (x~ - x~_predicted) = 0     (Keller's pseudo-arclength condition).
 
 The step halves when Newton fails to converge within ``max_iterations`` (or stops
-contracting) and when the angle between consecutive tangents, or between the tangent and the
-step's secant, exceeds ``max_angle`` on one smooth piece of the branch (across a change of
-the orbit's contact sequence the tangent jumps however small the step: such a step is kept
-once below ``KINK_STEP`` and the event between located); it grows by 1.5 after a step that
-took at most 3 iterations, up to ``max_step``.
+contracting) and shrinks when the angle between consecutive tangents, or between the tangent
+and the step's secant, exceeds ``max_angle`` on one smooth piece of the branch (across a
+change of the orbit's contact sequence the tangent jumps however small the step: such a step
+is kept once below ``KINK_STEP`` and the event between located); it grows by 1.5 after a step
+that took at most 3 iterations, up to ``max_step`` (and, with ``Settings.turn_aim``, no
+further than its turn allows).
 """
 
 from __future__ import annotations
