@@ -15,9 +15,11 @@ states agree within their sampling errors; the Wilson interval is SciPy's.
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 from scipy.stats import binomtest
 
 from impactbeams import LongTime, ParameterError, Params, simulate
@@ -245,7 +247,8 @@ def test_tied_law_start_with_overlapping_tips_is_stopped():
 
 @pytest.mark.parametrize(("change", "match"), [
     ({"params": dataclasses.replace(PARAMS, omega=0.0)}, "omega"),
-    ({"params": dataclasses.replace(PARAMS, start="steady")}, "start"),
+    ({"params": dataclasses.replace(PARAMS, start="steady")}, "^start = 'steady'"),
+    ({"params": dataclasses.replace(PARAMS, uplift1=1e-6)}, "^uplift1 = 1e-06 is not allowed"),
     ({"axes": (np.array([1e-5, 0.0]), np.array([0.0]))}, "start_tip_deflection"),
     ({"axes": (np.array([np.nan]), np.array([0.0]))}, "start_tip_deflection"),
     ({"axes": np.zeros(3)}, "axes"),
@@ -308,8 +311,25 @@ def test_basin_map_plots_from_its_file(tmp_path, coarse):
     assert axes.get_xlabel().endswith("(µm)")  # tens of µm: no offset, no 1e-5 m
     sampled = basin_stability(PARAMS, 8, BOX, n_modes=N_MODES)
     plot_dataset(sampled, tmp_path / "sampled.png")
+    # a random sample's legend gives each fraction's confidence interval, the grid's does not
+    draw_basins(axes := Figure().subplots(), sampled)
+    texts = [text.get_text() for text in axes.get_legend().get_texts()]
+    low, high = sampled.basin_fraction_low.values, sampled.basin_fraction_high.values
+    assert [text.endswith(f"(95 % interval {low[k]:.3f} to {high[k]:.3f})")
+            for k, text in enumerate(texts)] == [True] * sampled.attractor.size
+    assert "interval" not in " ".join(t.get_text() for t in draw_and_read(dataset))
     with pytest.raises(ParameterError, match="--slice"):
         plot_dataset(dataset, tmp_path / "x.png", values={"start_tip_velocity": 0.0})
+
+
+def draw_and_read(dataset):
+    from matplotlib.figure import Figure
+
+    from impactbeams.plotting.basins import draw_basins
+
+    axes = Figure().subplots()
+    draw_basins(axes, dataset)
+    return axes.get_legend().get_texts()
 
 
 def test_cli_basins_writes_and_refuses(tmp_path, capsys):
@@ -322,9 +342,19 @@ def test_cli_basins_writes_and_refuses(tmp_path, capsys):
     assert main(["basins", *model, "--axis1", "-4e-5,4e-5", "--axis2", "-1.2e-2,1.2e-2",
                  "--points", "3", "-o", str(output)]) == 0
     assert "9 initial states, 2 attractors" in capsys.readouterr().err
+    # random states: each fraction with its confidence interval (basin stability)
+    sampled = tmp_path / "sampled.nc"
+    assert main(["basins", *model, "--axis1", "-4e-5,4e-5", "--axis2", "-1.2e-2,1.2e-2",
+                 "--random", "6", "--seed", "2", "-o", str(sampled)]) == 0
+    err = capsys.readouterr().err
+    written = xr.open_dataset(sampled)
+    for k in written.attractor.values:
+        assert (f"{float(written.basin_fraction_low[k]):.3f} to "
+                f"{float(written.basin_fraction_high[k]):.3f})") in err
     for bad, word in ((["--axis1", "4e-5,-4e-5"], "--axis1"), (["--axis1", "1"], "--axis1"),
                       (["--coordinates", "0,x"], "--coordinates"),
-                      (["--random", "4", "--points", "3"], "--points")):
+                      (["--random", "4", "--points", "3"], "--points"),
+                      (["--seed", "3"], "--seed")):  # a grid draws nothing: not ignored
         arguments = {"--axis1": "-4e-5,4e-5", "--axis2": "0,1e-2"}
         arguments.update(dict(zip(bad[::2], bad[1::2], strict=True)))
         flat = [item for pair in arguments.items() for item in pair]
@@ -344,3 +374,77 @@ def test_chunks_on_a_dask_cluster_give_the_same_map(coarse):
         remote = basins(PARAMS, grid(11), n_modes=N_MODES, client=client, chunk_cells=40)
     for name in ("basin", "settle_periods", "attractor_displacement", "attractor_velocity"):
         np.testing.assert_array_equal(remote[name].values, coarse[name].values)
+
+
+BASINS_FILE = """n_modes = 5
+[params]
+counterpart = "stop"
+contact_stiffness = 100.0
+damping_ratio = 0.02
+force_amplitude = 1e-4
+omega = 300.0
+[basins]
+axis1 = [-4e-5, 4e-5]
+axis2 = [-1.2e-2, 1.2e-2]
+"""
+
+
+def test_a_basins_file_is_a_sweep_kind_of_run(tmp_path, monkeypatch, capsys, coarse):
+    """``impactbeams run`` of a file with a [basins] table: the same map as `basins`, bit
+    for bit; interrupted (Ctrl-C in the third chunk) it exits 130 keeping the finished chunks,
+    and the same command resumes to the same map; random states as `basin_stability`'s."""
+    from impactbeams.cli import main
+
+    path, output = tmp_path / "basins.toml", tmp_path / "basins.nc"
+    path.write_text(BASINS_FILE + "points = 11\n")
+    calls = []
+    original = CellRunner.run_cells
+
+    def interrupted(self, states, periods=None):
+        calls.append(states.shape[0])
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return original(self, states, periods)
+
+    monkeypatch.setattr(CellRunner, "run_cells", interrupted)
+    assert main(["run", str(path), "-o", str(output), "--threads", "1", "--quiet"]) == 130
+    assert len(list((tmp_path / "basins.nc.partial").glob("chunk_*.npz"))) == 2
+    monkeypatch.setattr(CellRunner, "run_cells", original)
+    assert main(["run", str(path), "-o", str(output), "--threads", "1"]) == 0
+    assert "121 initial states, 2 attractors" in capsys.readouterr().err
+    written = xr.open_dataset(output)
+    for name in ("basin", "settle_periods", "attractor_displacement", "basin_fraction"):
+        np.testing.assert_array_equal(written[name].values, coarse[name].values)
+    path.write_text(BASINS_FILE + "random = 8\nseed = 4\n")
+    assert main(["run", str(path), "-o", str(tmp_path / "random.nc"), "--quiet"]) == 0
+    sampled = basin_stability(PARAMS, 8, BOX, n_modes=N_MODES, seed=4)
+    np.testing.assert_array_equal(xr.open_dataset(tmp_path / "random.nc").basin.values,
+                                  sampled.basin.values)
+
+
+@pytest.mark.parametrize(("change", "options", "message"), [
+    ("points = 11\nrandom = 8\n", [], "points in [basins] of b.toml is not allowed with random"),
+    ("seed = 3\n", [], "seed in [basins] of b.toml = 3 is not allowed without random"),
+    ("pionts = 3\n", [], "unknown key 'pionts' in [basins] of b.toml (did you mean 'points'?)"),
+    ("coordinates = [0]\n", [], "coordinates in [basins] of b.toml = [0] is not allowed"),
+    ("points = 2.5\n", [], "points in [basins] of b.toml = 2.5 is not allowed: must be an int"),
+    ("", ["--discard-corrupt"], "--discard-corrupt is not allowed with a basins file"),
+    ("[axes.omega]\nmin = 1.0\nmax = 2.0\nnum = 2\n", [],
+     "unknown top-level key 'axes' in b.toml (a basins file)"),
+])
+def test_a_bad_basins_file_is_one_line_before_any_run(tmp_path, monkeypatch, capsys, change,
+                                                      options, message):
+    from impactbeams.cli import main
+
+    monkeypatch.setattr(CellRunner, "run_cells", lambda *_: pytest.fail("ran"))
+    monkeypatch.chdir(tmp_path)
+    Path("b.toml").write_text(BASINS_FILE + change)
+    assert main(["run", "b.toml", "-o", "b.nc", *options]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == [f"impactbeams: error: {err.split('error: ')[1].strip()}"]
+    assert message in err
+    Path("b.toml").write_text(BASINS_FILE.replace("axis1 = [-4e-5, 4e-5]", "axis1 = [4e-5, 0]"))
+    assert main(["run", "b.toml", "-o", "b.nc"]) == 2
+    assert "axis1 in [basins] of b.toml = 4e-05,0.0 is not allowed: need LOW < HIGH" in (
+        capsys.readouterr().err)
+

@@ -18,7 +18,7 @@ import impactbeams as ib
 from continuation_toys import CurveMap, resonant_torus
 from impactbeams.continuation import Continuation, continue_orbits
 from impactbeams.continuation.arclength import Follower, Scaling, Settings
-from impactbeams.continuation.branch import Branch, Position, Steps
+from impactbeams.continuation.branch import MIN_STEP, Branch, Position, Steps
 from impactbeams.continuation.curves import UnitPair, pair_cosine
 from impactbeams.continuation.twoparameter import (
     PAIR_REAL,
@@ -35,10 +35,20 @@ from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
 LOCATED = 1e-9
 
 
-def follow_toy(fold_at, p2, direction):
+def follow_toy(fold_at, p2, direction, ends_at=math.inf):
     """The toy's Neimark-Sacker curve from (p1, p2) = (0, ``p2``), on its fixed points of
-    x > 0, followed ``direction`` (+1 up, -1 down in p2) within |p1| <= 1, |p2| <= 2."""
-    problem = CurveMap(*resonant_torus(fold_at), UnitPair())
+    x > 0, followed ``direction`` (+1 up, -1 down in p2) within |p1| <= 1, |p2| <= 2; past
+    p2 = ``ends_at`` the map has no orbit (its evaluation raises, as a beam run that stops)."""
+    step, jacobian = resonant_torus(fold_at)
+
+    def existing(function):
+        def where_it_exists(z, p1, p2):
+            if p2 > ends_at:
+                raise RuntimeError("no orbit beyond ends_at")
+            return function(z, p1, p2)
+        return where_it_exists
+
+    problem = CurveMap(existing(step), existing(jacobian), UnitPair())
     scaling = Scaling(np.ones(4), 1.0)
     settings = Settings(step=0.02, min_step=1e-9, max_step=0.05, max_points=400,
                         max_branches=1)
@@ -56,6 +66,18 @@ def follow_toy(fold_at, p2, direction):
 
 def labelled(curve):
     return [(point.label, float(point.x[-1]), point) for point in curve.points if point.label]
+
+
+def test_a_curve_whose_orbit_stops_existing_ends_there():
+    """Past p2 = 0.5 the toy has no orbit: the steps shrink against it to min_step and the
+    curve ends there ("min_step"), its last point within 100 min_step (1e-9) of p2 = 0.5 (a
+    failed step is halved, a taken one lengthened again: measured 1.5e-8 short), with no
+    event labelled on the way (cos theta = p2 runs from 0.2 to 0.5: no strong resonance)."""
+    curve = follow_toy(-1.2, 0.2, +1, ends_at=0.5)
+    assert curve.ending == MIN_STEP
+    last = float(curve.points[-1].x[-1])
+    assert 0.5 - 1e-7 < last <= 0.5
+    assert labelled(curve) == []
 
 
 def test_the_pair_turning_real_ends_the_curve_at_1_1():

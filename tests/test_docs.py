@@ -46,6 +46,9 @@ NOT_EXECUTED = {
     "impactbeams continue fold-curve.toml -o results/fold-curve.nc":
         "a continuation file with the [curve] table shown above it; "
         "tests/test_two_parameter.py runs the command and the plot on such a file",
+    "impactbeams run basins.toml -o results/basins.nc":
+        "a basins file as shown above it; tests/test_basins.py runs the command on such a file "
+        "(test_a_basins_file_is_a_sweep_kind_of_run)",
     "# once, on the machines of the cluster (same impactbeams version everywhere)":
         "needs a Dask cluster on other machines; the same path runs on a local cluster on "
         "that page",

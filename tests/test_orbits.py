@@ -463,3 +463,24 @@ def test_episode_count_is_the_labels_count():
         labels = episode_labels(onset, release, separation)
         expected = int(labels[-1]) + 1 if labels.size else 0
         assert episode_count(onset.tolist(), release.tolist(), separation) == expected
+
+
+def test_the_default_subspace_fits_a_small_model():
+    """A stop with 3 modes has 2 N = 6 coordinates, fewer than the default Newton-Picard
+    basis (8): Newton (``auto`` there) and the continuation take the defaults without a word
+    about a subspace they do not use; Newton-Picard on it carries all 6; a subspace the caller
+    gives that does not fit is still refused."""
+    from impactbeams.continuation import Continuation
+    from impactbeams.continuation.run import orbits_problem
+
+    stop = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
+                  force_amplitude=1e-4, omega=300.0)
+    newton = periodic_orbit(stop, 3, measures=False)
+    picard = periodic_orbit(stop, 3, guess=newton.state, method="newton-picard",
+                            measures=False)
+    assert newton.state.size == 6 and picard.basis.shape == (6, 6)
+    np.testing.assert_allclose(picard.state, newton.state, rtol=0, atol=1e-9 * np.abs(
+        newton.state).max())
+    assert orbits_problem(Continuation(stop, "omega", 195.0, 330.0, n_modes=3)).subspace == 6
+    with pytest.raises(ParameterError, match="subspace = 7 is not allowed"):
+        periodic_orbit(stop, 3, subspace=7)

@@ -294,6 +294,21 @@ def test_a_start_off_the_bifurcation_is_refused(stop_branch):
         continue_curve(far)
 
 
+def test_an_event_the_branch_does_not_have_is_named(stop_branch):
+    """A kind the branch located none of is refused naming the kind and what it located
+    (not ``which = 0``, which the user may not have set); a ``which`` past its events names
+    how many there are."""
+    continuation, branch = stop_branch
+    with pytest.raises(ParameterError, match=r"^kind = 'period_doubling' is not allowed: the "
+                       r"branch located no period_doubling \(it located 2 fold, 2 grazing\)$"):
+        BifurcationCurve.from_branch(continuation, branch, "period_doubling",
+                                     "force_amplitude", 5e-5, 2e-4)
+    with pytest.raises(ParameterError, match=r"^which = 2 is not allowed: the branch located "
+                       r"2 fold event\(s\): must be below 2$"):
+        BifurcationCurve.from_branch(continuation, branch, "fold", "force_amplitude", 5e-5,
+                                     2e-4, which=2)
+
+
 @pytest.fixture(scope="module")
 def stiff_branch():
     """The small model's branch from 261.5 rad/s down: it folds back and forth four times,
@@ -499,6 +514,23 @@ def test_the_curve_is_drawn_over_the_map_in_the_same_units(small_grazing, steady
     assert axes.get_ylim() == pytest.approx((19.5, 40.0), rel=1e-12)
 
 
+def test_the_curve_is_drawn_over_a_map_on_a_log_axis(small_grazing, steady_map):
+    """A map swept on a log scale (as sweeps/fig5a-omega-force.toml's F0): the curve is drawn
+    on its log axis, at its own values (the tick formatter is the log axis's, which has no
+    offset to switch off: this raised AttributeError)."""
+    from matplotlib.figure import Figure
+
+    from impactbeams.plotting.curves import draw_curves
+
+    force = steady_map.force_amplitude
+    logged = steady_map.assign_coords(force_amplitude=force.assign_attrs(scale="log"))
+    axes = Figure(layout="constrained").subplots()
+    draw_curves(axes, [small_grazing], logged)
+    assert axes.get_yscale() == "log" and axes.get_xscale() == "linear"
+    (line,) = [line for line in axes.get_lines() if line.get_label() == "grazing curve"]
+    np.testing.assert_array_equal(line.get_ydata(), 1e6 * small_grazing.force_amplitude.values)
+
+
 def test_a_stepped_sweeps_direction_is_sliced(small_grazing, steady_map):
     """A long-time sweep of the plane has more dimensions (a stepped sweep's directions):
     sliced to the curve's plane, or refused in one line."""
@@ -507,12 +539,13 @@ def test_a_stepped_sweeps_direction_is_sliced(small_grazing, steady_map):
     from impactbeams.plotting.curves import draw_curves
 
     stepped = xr.concat([steady_map, steady_map.fillna(1.0)], dim=xr.DataArray(
-        ["up", "down"], dims="sweep_direction", name="sweep_direction"))
+        ["up", "down"], dims="sweep_direction", name="sweep_direction",
+        attrs={"units": "1"}))  # as a stepped sweep's file has it
     axes = Figure().subplots()
     notes = draw_curves(axes, [small_grazing], stepped, "first_impact_time",
                         values={"sweep_direction": "down"})
-    assert notes == ["slice sweep_direction = down: nearest grid value sweep_direction = down "
-                     "(index 1 of 0..1)"]
+    # a named choice is found, not the nearest; no unit "1" after it
+    assert notes == ["slice sweep_direction = down (index 1 of 0..1)"]
     with pytest.raises(ParameterError) as error:
         draw_curves(Figure().subplots(), [small_grazing], stepped)
     assert str(error.value) == (
@@ -572,3 +605,63 @@ def test_plot_draws_a_curve_over_a_map_from_the_command_line(small_grazing, stea
     assert main(["plot", str(curve), "--slice", "omega=230", "-o", str(tmp_path / "c.png")]) == 2
     assert "values (--slice) = {'omega': '230'} is not allowed: a bifurcation curve without a " \
         "map under it (--over)" in capsys.readouterr().err
+
+
+def test_plot_draws_several_curves_of_one_plane_from_the_command_line(
+        small_branch, small_grazing, steady_map, tmp_path, capsys, monkeypatch):
+    """``--with CURVE.nc`` (repeatable) draws more curves of IN.nc's plane on the same axes,
+    over the map if given (as `draw_curves` does from Python); a file that is no curve, a
+    curve of another plane, or IN.nc not a curve: one line, exit 2, no figure."""
+    from impactbeams.cli import main
+    from impactbeams.io import write_netcdf
+    from impactbeams.plotting import curves as plotted
+
+    down = continue_curve(BifurcationCurve.from_branch(*small_branch, "grazing",
+                                                       "force_amplitude", 2e-5, 4e-5,
+                                                       direction="down", max_points=6))
+    names = {name: tmp_path / f"{name}.nc" for name in ("up", "down", "map", "other")}
+    other = _over_clearance(small_grazing).assign_attrs(curve_parameters="omega clearance")
+    for name, dataset in (("up", small_grazing), ("down", down), ("map", steady_map),
+                          ("other", other)):
+        write_netcdf(dataset, names[name])
+    drawn = []
+    original = plotted.draw_curves
+    monkeypatch.setattr(plotted, "draw_curves", lambda axes, curves, *rest, **options: (
+        drawn.append(curves), original(axes, curves, *rest, **options))[1])
+    assert main(["plot", str(names["up"]), "--with", str(names["down"]), "--over",
+                 str(names["map"]), "-o", str(tmp_path / "both.png")]) == 0
+    (curves,) = drawn
+    assert [curve.branch_point.size for curve in curves] == [small_grazing.branch_point.size,
+                                                               down.branch_point.size]
+    np.testing.assert_array_equal(curves[1].omega.values, down.omega.values)
+    assert (tmp_path / "both.png").stat().st_size > 0
+    capsys.readouterr()
+    for first, also, message in (
+            ("up", "map", "--with file '{}' is not a bifurcation curve (no curve_kind)"),
+            ("up", "other", "curve 1 is in (omega, clearance), not in the first one's plane "
+                            "(omega, force_amplitude): draw them apart"),
+            ("map", "up", "--with is not allowed: it adds bifurcation curves to a bifurcation "
+                          "curve's plot, and this Dataset is none")):
+        assert main(["plot", str(names[first]), "--with", str(names[also]), "-o",
+                     str(tmp_path / "no.png")]) == 2
+        (line,) = capsys.readouterr().err.splitlines()
+        assert line == f"impactbeams: error: {message.format(names[also])}"
+        assert not (tmp_path / "no.png").exists()
+
+
+def test_a_curve_cut_at_max_points_exits_3_unless_allowed(tmp_path, capsys):
+    """As a branch short of its range: a curve that stops at ``max_points`` (short of its
+    box, no event ending it) warns, naming where it stopped, and exits 3; with
+    ``--allow-incomplete`` it exits 0. A curve that ends on its box exits 0."""
+    from impactbeams.cli import main
+
+    path = tmp_path / "fold.toml"
+    path.write_text(STOP_CURVE_FILE + "max_points = 3\n")
+    assert main(["continue", str(path), "-o", str(tmp_path / "a.nc"), "--quiet"]) == 3
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith("impactbeams: warning: the fold curve stopped at max_points = 3, at "
+                           "omega = ") and "raise max_points" in line
+    with xr.open_dataset(tmp_path / "a.nc") as written:
+        assert written.attrs["curve_ending"] == "max_points" and written.branch_point.size == 3
+    assert main(["continue", str(path), "-o", str(tmp_path / "b.nc"), "--quiet",
+                 "--allow-incomplete"]) == 0

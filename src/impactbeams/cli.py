@@ -41,11 +41,12 @@ from impactbeams.params import (
     Params,
     modes_per_beam,
     nearest,
+    read_toml,
     refuse_beam2,
     refuse_unused_law_keys,
     without_unused_law_keys,
 )
-from impactbeams.variables import GRAZING_PARAMETERS, PARAMETERS
+from impactbeams.variables import BASIN_POINTS, GRAZING_PARAMETERS, PARAMETERS
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -55,6 +56,7 @@ if TYPE_CHECKING:
     from impactbeams.continuation.arclength import Point
     from impactbeams.continuation.branch import Branch
     from impactbeams.continuation.twoparameter import CurvePlan
+    from impactbeams.orbits.basin_file import BasinPlan
     from impactbeams.sweep import ChunkRunner, Sweep
 
 EXIT_SYSTEM_ERROR = 1  # a file could not be written (full disk, ...) or memory ran out
@@ -62,7 +64,6 @@ EXIT_USER_ERROR = 2  # an input was rejected: nothing was computed or written
 EXIT_INCOMPLETE = 3  # the result was written, but some runs stopped before t_max
 EXIT_INTERRUPTED = 130
 GRAZING_POINTS = 201  # frequencies of a grazing curve in a drive or the clearance
-BASIN_POINTS = 41  # initial states along each axis of a basin map
 
 _ALIASES = {"force_amplitude": ["--force"]}
 
@@ -155,7 +156,9 @@ def _run(args: argparse.Namespace) -> int:
     from impactbeams.sweep.plan import check_contact_phases, reusing_geometries
     from impactbeams.sweep.store import reporting_kept_chunks
 
-    sweep = load_sweep(require_input_file(args.sweep, "sweep"))
+    if "basins" in read_toml(require_input_file(args.sweep, "sweep")):  # the basins kind
+        return _run_basins(args)
+    sweep = load_sweep(args.sweep)
     output = _sweep_output(args, sweep)
     _check_scheduler(args.scheduler)
     _check_threads(args)
@@ -343,12 +346,17 @@ def _plot(args: argparse.Namespace) -> int:
     dataset = read_figure_data(args.dataset, "input")
     output = image_output(args.output or Path(args.dataset).with_suffix(".png"), "-o/--output")
     diagram = read_netcdf(args.over, "--over") if args.over else None
+    also = [read_netcdf(path, "--with") for path in args.also]
+    for path, curve in zip(args.also, also, strict=True):
+        if "curve_kind" not in curve.attrs:
+            raise ParameterError(f"--with file {path!r} is not a bifurcation curve (no "
+                                 "curve_kind)")
     notes = plot_dataset(dataset, output, args.var,
                          values=parse_assignments(args.slice, "--slice"),
                          indices=parse_assignments(args.slice_index, "--slice-index"),
                          scale=args.scale, contours=parse_levels(args.contours),
                          title=args.title, dpi=args.dpi, diagram=diagram, hz=args.hz,
-                         events=args.events)
+                         events=args.events, curves=also)
     for note in notes:
         _say(args, f"impactbeams: {note}")
     _say(args, f"wrote {output}")
@@ -420,6 +428,7 @@ def _continue_curve(args: argparse.Namespace, plan: CurvePlan, output: Path) -> 
     then the curve's steps; interrupted, the same command resumes where it stopped.
     """
     from impactbeams.continuation import ContinuationInterrupted
+    from impactbeams.continuation.branch import MAX_POINTS
     from impactbeams.continuation.checkpoint import (
         CourseLog,
         reporting_kept_points,
@@ -455,7 +464,13 @@ def _continue_curve(args: argparse.Namespace, plan: CurvePlan, output: Path) -> 
                         for i, code in enumerate(dataset.curve_event.values) if code)
     _say(args, f"wrote {output}: {dataset.branch_point.size} points of the {plan.kind} curve "
                f"(ended: {dataset.attrs['curve_ending']}); {located}")
-    return 0
+    if dataset.attrs["curve_ending"] != MAX_POINTS:  # its box, or an event, ended it
+        return 0
+    print(f"impactbeams: warning: the {plan.kind} curve stopped at max_points = "
+          f"{plan.max_points}, at {first} = {float(dataset[first][-1]):.9g}, {second} = "
+          f"{float(dataset[second][-1]):.9g}, short of its box: raise max_points, or follow it "
+          "on from there", file=sys.stderr)
+    return 0 if args.allow_incomplete else EXIT_INCOMPLETE
 
 
 def _curve_branch(args: argparse.Namespace, c: Continuation, folder: Path) -> xr.Dataset:
@@ -516,41 +531,48 @@ def _grazing(args: argparse.Namespace) -> int:
 
 def _basins(args: argparse.Namespace) -> int:
     """``basins``: the basin map of a plane of initial states (or random ones), to netCDF."""
-    from impactbeams.orbits import Settling, basin_stability, basins
+    from impactbeams.orbits.basin_file import BasinPlan
     from impactbeams.preflight import require_output_file
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
-    params = params_from_args(args)
-    settling = Settling(**({"max_periods": args.max_periods} if args.max_periods else {}))
-    _check_scheduler(args.scheduler)
-    box = (args.axis1, args.axis2)
-    if args.random and args.points is not None:
-        raise ParameterError("--points is not allowed with --random: the states are drawn at "
-                             "random in the box")
-    for name, (low, high) in (("--axis1", args.axis1), ("--axis2", args.axis2)):
-        if not low < high:
-            raise ParameterError(f"{name} = {low!r},{high!r} is not allowed: need LOW < HIGH")
-    with _cluster_client(args) as client:
-        common = {"coordinates": args.coordinates, "n_modes": args.n_modes,
-                  "settling": settling, "output": output, "chunk_cells": args.chunk_cells,
-                  "workers": args.workers, "progress": not args.quiet, "client": client}
-        if args.random:
-            dataset = basin_stability(params, args.random, box, seed=args.seed, **common)
-        else:
-            import numpy as np
+    plan = BasinPlan(params_from_args(args), (args.axis1, args.axis2), args.points, args.random,
+                     args.seed, args.coordinates, args.n_modes, args.max_periods)
+    plan.checked(lambda key: f"--{key}")
+    return _basin_map(args, plan, output, args.workers, args.chunk_cells)
 
-            axes = tuple(np.linspace(low, high, args.points or BASIN_POINTS) for low, high in box)
-            dataset = basins(params, axes, **common)
+
+def _basin_map(args: argparse.Namespace, plan: BasinPlan, output: Path, workers: int | None,
+               chunk_cells: int | None) -> int:
+    """The basin map of ``plan`` into ``output`` (``basins``, or ``run`` of a basins file)."""
+    from impactbeams.variables import basin_fraction_text
+
+    _check_scheduler(args.scheduler)
+    with _cluster_client(args) as client:
+        dataset = plan.run(output=output, chunk_cells=chunk_cells, workers=workers,
+                           progress=not args.quiet, client=client)
     found = ", ".join(f"{k}: period {int(dataset.attractor_period[k])}, "
                       f"{int(dataset.attractor_contacts[k])} contacts, "
-                      f"{float(dataset.basin_fraction[k]):.3g} +- "
-                      f"{float(dataset.basin_fraction_error[k]):.2g}"
+                      f"{basin_fraction_text(dataset, k, plan.random is not None)}"
                       for k in dataset.attractor.values)
     _say(args, f"wrote {output}: {dataset.attrs['cells']} initial states, "
                f"{dataset.attractor.size} attractors ({found or 'none'}); not settled "
                f"{dataset.attrs['not_settled_fraction']:.3g}, stopped "
                f"{dataset.attrs['stopped_fraction']:.3g}")
     return 0
+
+
+def _run_basins(args: argparse.Namespace) -> int:
+    """``run`` of a basins file (a ``[basins]`` table): the basins sweep kind."""
+    from impactbeams.orbits.basin_file import load_basins
+    from impactbeams.preflight import require_output_file
+
+    plan = load_basins(args.sweep)
+    if args.discard_corrupt:
+        raise ParameterError("--discard-corrupt is not allowed with a basins file: its saved "
+                             "chunks are checked and refused whole (delete OUT.nc.partial/)")
+    output = require_output_file(args.output or Path("results") / (Path(args.sweep).stem + ".nc"),
+                                 "-o/--output", {".nc"}, "netCDF")
+    return _basin_map(args, plan, output, args.threads, args.chunk_cells)
 
 
 def _range(text: str) -> tuple[float, float]:
@@ -1069,7 +1091,8 @@ def build_parser() -> argparse.ArgumentParser:
     contacts.set_defaults(handler=_contacts)
 
     run = command("run", "SWEEP.toml [-o OUT.nc] [OPTIONS]",
-                  help="run a sweep defined in a TOML file (see sweeps/)")
+                  help="run a sweep defined in a TOML file (see sweeps/), or a basin map "
+                       "(a [basins] table)")
     run.add_argument("sweep", metavar="SWEEP.toml",
                      help="sweep definition, e.g. sweeps/fig5a-omega-force.toml")
     run.add_argument("-o", "--output", metavar="OUT.nc",
@@ -1099,7 +1122,8 @@ def build_parser() -> argparse.ArgumentParser:
                       help="netCDF result (default results/<file name>.nc)")
     cont.add_argument("--allow-incomplete", action="store_true",
                       help="exit 0, not 3, when a branch stops short of its range "
-                           "(stalled, max_points, min_step, retraced)")
+                           "(stalled, max_points, min_step, retraced) or a curve at "
+                           "max_points")
     cont.set_defaults(handler=_continue)
 
     grazing = command("grazing", "PARAMETER --omega-min LOW --omega-max HIGH -o OUT.nc "
@@ -1140,8 +1164,8 @@ def build_parser() -> argparse.ArgumentParser:
     basin.add_argument("--random", type=_POSITIVE_INTEGER, metavar="N",
                        help="N random initial states in the box instead of a grid (basin "
                             "stability, Wilson intervals)")
-    basin.add_argument("--seed", type=_integer_from(0), default=0,
-                       help="seed of the random states (default 0)")
+    basin.add_argument("--seed", type=_integer_from(0), default=None,
+                       help="seed of the random states, with --random (default 0)")
     basin.add_argument("--max-periods", type=_POSITIVE_INTEGER, metavar="N",
                        help="forcing periods a state may run before it counts as not settled "
                             "(default 1200)")
@@ -1194,6 +1218,9 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--over", metavar="DIAGRAM.nc",
                       help="draw a continuation's branches over this long-time sweep of its "
                            "parameter, or a bifurcation curve over this map of its plane")
+    plot.add_argument("--with", dest="also", action="append", default=[], metavar="CURVE.nc",
+                      help="another bifurcation curve of IN.nc's plane drawn with it, e.g. a "
+                           "grazing curve beside a fold curve (repeatable)")
     plot.add_argument("--hz", action="store_true",
                       help="a continuation's frequency axis in Hz (Omega / 2 pi), not rad/s")
     plot.add_argument("--events", metavar="KINDS",

@@ -23,14 +23,13 @@ from impactbeams.kernels.layout import FREE, ROW_FREQUENCY, TIP_Y1
 from impactbeams.orbits import PeriodMap, PeriodMapResult
 from impactbeams.orbits.period_map import CELL_ONLY
 from impactbeams.orbits.shooting import (
-    DEFAULT_SUBSPACE,
-    GUARD,
     by_modulus,
     checked_method,
+    checked_subspace,
     leading,
     orthonormal,
 )
-from impactbeams.params import Params, require_integer
+from impactbeams.params import Params
 
 # the round-off of a gap read from a run (m, per metre of clearance): a gap is the clearance
 # less the tips' deflections, each to a few eps of itself (measured: 1e-19 m at 5e-4 m)
@@ -51,7 +50,7 @@ class BeamOrbits:
     """
 
     def __init__(self, params: Params, parameter: str, n_modes: int, period: int = 1,
-                 method: str = "auto", subspace: int = DEFAULT_SUBSPACE) -> None:
+                 method: str = "auto", subspace: int | None = None) -> None:
         self.params, self.parameter, self.n_modes, self.period = (
             params, parameter, n_modes, period)
         self._maps: dict[float, PeriodMap] = {}
@@ -60,7 +59,7 @@ class BeamOrbits:
         self._origin = PeriodMap(params, n_modes=n_modes, periods=period)
         dimension = self._origin.dimension
         self.method = checked_method(method, dimension)
-        self.subspace = require_integer("subspace", subspace, GUARD + 1, dimension)
+        self.subspace = checked_subspace(subspace, dimension)
         self.basis: np.ndarray | None = None  # V: orthonormal in the energy coordinates
         self._warned = False
 

@@ -21,7 +21,7 @@
                                # clearances; docs/continuation.md)
     method = "auto"            # the corrector: "newton", "newton-picard" or "auto" (Newton up
                                # to 48 coordinates 2 N, Newton-Picard above)
-    subspace = 8               # Newton-Picard's carried directions
+    subspace = 8               # Newton-Picard's carried directions (default 8, at most 2 N)
     micro_contacts = "locate"  # or "summarise": changes of the contacts within an episode
                                # labelled chatter, not located (stiff contacts)
     [curve]                    # optional: then the branch's event is followed in two

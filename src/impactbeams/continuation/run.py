@@ -39,7 +39,7 @@ from impactbeams.continuation.branch import (
 from impactbeams.continuation.checkpoint import CourseLog, checkpointed
 from impactbeams.continuation.output import branches_dataset
 from impactbeams.orbits.period_map import check_law
-from impactbeams.orbits.shooting import DEFAULT_SUBSPACE, GUARD, METHODS
+from impactbeams.orbits.shooting import GUARD, METHODS
 from impactbeams.params import (
     MAX_MODES,
     ParameterError,
@@ -71,12 +71,12 @@ class Continuation:
     beam (default: the number that resolves the contact). ``state``: the start's section
     state; without it, ``transient_periods`` period maps from the run's start. Steps in the
     parameter's units; ``state_scale`` in m (module docstring). ``method``: the corrector's
-    dr/dz, "newton" (full monodromy), "newton-picard" (on ``subspace`` carried directions)
-    or "auto" (`BeamOrbits`). ``micro_contacts``: "locate" every change of the orbit's
-    contact sequence, or "summarise" those within an impact episode (labelled chatter at the
-    first point after, not located; an episode's appearance and disappearance still are):
-    for stiff contacts, where micro-contacts appear and merge many times per unit of the
-    parameter.
+    dr/dz, "newton" (full monodromy), "newton-picard" (on ``subspace`` carried directions,
+    default 8 but at most the 2 N coordinates) or "auto" (`BeamOrbits`).
+    ``micro_contacts``: "locate" every change of the orbit's contact sequence, or
+    "summarise" those within an impact episode (labelled chatter at the first point after,
+    not located; an episode's appearance and disappearance still are): for stiff contacts,
+    where micro-contacts appear and merge many times per unit of the parameter.
     """
 
     params: Params
@@ -96,7 +96,7 @@ class Continuation:
     max_branches: int = 2
     state_scale: float | None = None
     method: str = "auto"
-    subspace: int = DEFAULT_SUBSPACE
+    subspace: int | None = None
     micro_contacts: str = LOCATE
 
     def __post_init__(self) -> None:
@@ -118,7 +118,8 @@ class Continuation:
         require_integer("period", self.period, 1)
         require("method", self.method, self.method in METHODS,
                 f"must be one of {', '.join(map(repr, METHODS))}")
-        require_integer("subspace", self.subspace, GUARD + 1)
+        if self.subspace is not None:  # its largest, 2 N, is checked with the model
+            require_integer("subspace", self.subspace, GUARD + 1)
         require_integer("transient_periods", self.transient_periods, 0)
         require("micro_contacts", self.micro_contacts, self.micro_contacts in MICRO_CONTACTS,
                 f"must be one of {', '.join(map(repr, MICRO_CONTACTS))}")

@@ -244,9 +244,16 @@ class CurvePlan:
 
     def from_branch(self, branch: xr.Dataset) -> BifurcationCurve:
         """The curve through the planned event of ``branch`` (ParameterError if it has none)."""
-        at = np.flatnonzero(branch.bifurcation.values == BIFURCATIONS.index(self.kind))
+        codes = branch.bifurcation.values
+        at = np.flatnonzero(codes == BIFURCATIONS.index(self.kind))
+        if not at.size:  # not the user's ``which``: the kind itself is not on the branch
+            found = np.unique(codes[codes > 0], return_counts=True)
+            located = ", ".join(f"{count} {BIFURCATIONS[code]}" for code, count in zip(
+                *found, strict=True)) or "no event"
+            raise ParameterError(f"kind = {self.kind!r} is not allowed: the branch located no "
+                                 f"{self.kind} (it located {located})")
         require("which", self.which, self.which < at.size,
-                f"the branch has {at.size} {self.kind} event(s): must be below {at.size}")
+                f"the branch located {at.size} {self.kind} event(s): must be below {at.size}")
         i = int(at[self.which])
         return self.start(float(branch[self.continuation.parameter][i]),
                           np.asarray(branch.section_state[i].values),

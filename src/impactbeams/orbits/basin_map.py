@@ -282,9 +282,11 @@ class _Setup:
         require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
         require("omega", params.omega, params.omega > 0,
                 "basins are of the forced response: omega > 0", "rad/s")
-        require("start", params.start, params.start == "rest" and params.uplift1 == 0.0
-                and params.uplift2 == 0.0, "the initial states replace params.start and the "
-                "uplifts: leave start = 'rest' and uplift1 = uplift2 = 0")
+        require("start", params.start, params.start == "rest",
+                "the initial states replace params.start: leave it 'rest'")
+        for uplift in ("uplift1", "uplift2"):
+            require(uplift, getattr(params, uplift), getattr(params, uplift) == 0.0,
+                    "the initial states replace the uplifts: leave it 0", "m")
         if n_modes is None:
             n_modes = recommended_modes(params)
         n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)

@@ -121,7 +121,7 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
                    guess: np.ndarray | PeriodicOrbit | None = None, *,
                    transient_periods: int = 50, tolerance: float = 1e-11,
                    max_iterations: int = 30, method: str = "auto",
-                   subspace: int = DEFAULT_SUBSPACE, measures: bool = True) -> PeriodicOrbit:
+                   subspace: int | None = None, measures: bool = True) -> PeriodicOrbit:
     """The periodic orbit z = P^p(z) of ``params`` (spring law, Omega > 0) near ``guess``.
 
     Args:
@@ -140,7 +140,7 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
             exactly, the rest by Picard iteration), or "auto": Newton up to
             ``AUTO_NEWTON_DIMENSION`` coordinates, Newton-Picard above.
         subspace: m, Newton-Picard's basis size; the leading m - ``GUARD`` Ritz values are
-            reported as the multipliers.
+            reported as the multipliers (default ``DEFAULT_SUBSPACE``, at most 2 N).
         measures: also the orbit's peak force, impulse, tip maxima and minimum gap (else NaN;
             the contacts' peak forces cost most, a search at the fastest contact mode's time
             scale per contact).
@@ -153,7 +153,7 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
     tolerance = float(tolerance)
     require("tolerance", tolerance, 0 < tolerance < 1, "must be in (0, 1)")
     max_iterations = require_integer("max_iterations", max_iterations, 1)
-    subspace = require_integer("subspace", subspace, GUARD + 1, period_map.dimension)
+    subspace = checked_subspace(subspace, period_map.dimension)
     z, basis = _start(period_map, guess, require_integer("transient_periods",
                                                            transient_periods, 0))
     require_type("measures", measures, isinstance(measures, bool), "True or False")
@@ -161,6 +161,17 @@ def periodic_orbit(params: Params, n_modes: int | None = None, period: int = 1,
     if method == "newton":
         return solver.newton(z)
     return solver.newton_picard(z, basis, subspace)
+
+
+def checked_subspace(subspace: int | None, dimension: int) -> int:
+    """Newton-Picard's basis size for a map of ``dimension`` coordinates.
+
+    ``subspace`` checked, or by default ``DEFAULT_SUBSPACE`` but no more than the map has (a
+    small model's Newton does not use it, and should not be refused for it).
+    """
+    if subspace is None:
+        return min(DEFAULT_SUBSPACE, dimension)
+    return require_integer("subspace", subspace, GUARD + 1, dimension)
 
 
 def checked_method(method: str, dimension: int) -> str:

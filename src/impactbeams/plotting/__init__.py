@@ -144,10 +144,10 @@ def _plot_branches(dataset: xr.Dataset, path: str | Path, variable: str | None,
     return []
 
 
-def _plot_curve(dataset: xr.Dataset, path: str | Path, title: str | None, dpi: float,
+def _plot_curve(curves: Sequence[xr.Dataset], path: str | Path, title: str | None, dpi: float,
                 diagram: xr.Dataset | None, variable: str | None,
                 slices: Mapping[str, object]) -> list[str]:
-    """A bifurcation curve in its parameters' plane into ``path``, over the map ``diagram``.
+    """Bifurcation curves in their parameters' plane into ``path``, over the map ``diagram``.
 
     ``variable``: the map's; ``slices``: `draw_curves`' values, indices, scale, contours.
     """
@@ -157,12 +157,12 @@ def _plot_curve(dataset: xr.Dataset, path: str | Path, title: str | None, dpi: f
         registered(diagram, "diagram")
     figure = Figure(figsize=(7, 5), layout="constrained")
     axes = figure.subplots()
-    axes.set_title(case_title(dataset, dataset.attrs["curve_parameters"].split()[1],
+    axes.set_title(case_title(curves[0], curves[0].attrs["curve_parameters"].split()[1],
                               ("branch_point",)) if title is None else title,
                    loc="left", fontsize="medium", wrap=True)
     axes.plot([], [], "k-", label="stable")
     axes.plot([], [], "k--", label="unstable")
-    notes = draw_curves(axes, [dataset], diagram, variable,
+    notes = draw_curves(axes, curves, diagram, variable,
                         **slices)  # type: ignore[arg-type]  # last: it places labels laid out
     axes.legend(fontsize="small", loc="best")
     save_figure(figure, path, dpi)
@@ -213,7 +213,8 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
                  indices: Mapping[str, int | str] | None = None, scale: str | None = None,
                  contours: int | Sequence[float] | None = None, title: str | None = None,
                  dpi: float = 150, diagram: xr.Dataset | None = None,
-                 hz: bool = False, events: str | Sequence[str] | None = None) -> list[str]:
+                 hz: bool = False, events: str | Sequence[str] | None = None,
+                 curves: Sequence[xr.Dataset] = ()) -> list[str]:
     """Draw ``dataset`` into the image file ``path`` (format from its extension).
 
     A simulated run without options gets its overview (tips, force, restitution, energy); a
@@ -224,13 +225,16 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
     ``events`` says, `impactbeams.plotting.branches.draw_branches`); a bifurcation curve its
     parameters' plane (over the map ``diagram`` of the same plane if given, its
     ``variable`` sliced as ``values`` and ``indices`` say,
-    `impactbeams.plotting.curves.draw_curves`); anything else is drawn by [`draw`][], whose
-    options these are.
+    `impactbeams.plotting.curves.draw_curves`), with ``curves``, more curves of its plane, on
+    the same axes; anything else is drawn by [`draw`][], whose options these are.
     ``dataset``: an xarray Dataset, or for a sweep's map a
     [`PlainDataset`][impactbeams.plotting.arrays.PlainDataset] (a file read without xarray).
     Returns its notes.
     """
     _check_arguments(dataset, path, variable, values, indices, title, dpi, events)
+    if curves and "curve_kind" not in dataset.attrs:
+        raise ParameterError("--with is not allowed: it adds bifurcation curves to a "
+                             "bifurcation curve's plot, and this Dataset is none")
     if "curve_kind" in dataset.attrs:
         _require_xarray(dataset, "a bifurcation curve")
         slices = {"values": values, "indices": indices, "scale": scale, "contours": contours}
@@ -246,7 +250,7 @@ def plot_dataset(dataset: xr.Dataset | PlainDataset, path: str | Path,
             raise ParameterError(f"variable (--var) = {variable!r} is not allowed: a "
                                  "bifurcation curve is drawn in its parameters' plane; --var "
                                  "chooses what a map under it (--over) shows")
-        return _plot_curve(dataset, path, title, dpi, diagram, variable, slices)
+        return _plot_curve([dataset, *curves], path, title, dpi, diagram, variable, slices)
     if "branch_point" in dataset.dims:
         _require_xarray(dataset, "a continuation's branches")
         _refuse_options("a continuation's branches, drawn whole along their parameter,",

@@ -4,7 +4,8 @@ Drawn from `impactbeams.orbits.basins`' Dataset: over the plane of initial state
 attractor (grey where a state did not settle, black where its run stopped), as cells of the
 grid or as points of a random sample; in the tip plane the attractors' own stroboscopic points
 (y1, v1 at forcing phase 0) are marked on it, in the same coordinates. The legend names each
-attractor by its period, contacts per orbit and basin fraction with its standard error.
+attractor by its period, contacts per orbit and basin fraction with its standard error (and,
+for random states, its confidence interval).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from matplotlib.patches import Patch
 
 from impactbeams.params import ParameterError
 from impactbeams.plotting.labels import axis_label, display_units
-from impactbeams.variables import BASIN_LABELS
+from impactbeams.variables import BASIN_LABELS, basin_fraction_text
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -63,13 +64,15 @@ def draw_basins(axes: Axes, dataset: xr.Dataset) -> None:
 
 
 def _attractor_label(dataset: xr.Dataset, k: int) -> str:
-    """``k: period p, c contacts per orbit, fraction f ± e`` (``given``: a caller's orbit)."""
+    """``k: period p, c contacts per orbit, fraction f ± e`` (``given``: a caller's orbit).
+
+    For states sampled rather than a grid, the fraction's confidence interval too.
+    """
     given = " (given)" if int(dataset.attractor_given[k]) else ""
     contacts = int(dataset.attractor_contacts[k])
     return (f"{k}{given}: period {int(dataset.attractor_period[k])}, {contacts} "
             f"contact{'' if contacts == 1 else 's'} per orbit, fraction "
-            f"{float(dataset.basin_fraction[k]):.3f} ± "
-            f"{float(dataset.basin_fraction_error[k]):.3f}")
+            f"{basin_fraction_text(dataset, k, 'cell' in dataset['basin'].dims)}")
 
 
 def _sampled_plane(dataset: xr.Dataset) -> tuple[xr.DataArray, xr.DataArray]:

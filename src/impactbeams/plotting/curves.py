@@ -16,6 +16,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
+from matplotlib.ticker import ScalarFormatter
 
 from impactbeams.params import ParameterError
 from impactbeams.plotting.arrays import PlainArray, PlainDataset, as_plain
@@ -127,7 +128,9 @@ def _draw(axes: Axes, dataset: xr.Dataset, colour: str, units: tuple[Units, Unit
         labelled += [(px, py, text) for px, py in zip(x[at], y[at], strict=True)]
     axes.set_xlabel(axis_label(dataset[first], x_units))
     axes.set_ylabel(axis_label(dataset[second], y_units))
-    axes.ticklabel_format(useOffset=False)
+    for axis in (axes.xaxis, axes.yaxis):  # a map's log axis keeps its own ticks
+        if isinstance(axis.get_major_formatter(), ScalarFormatter):
+            axis.get_major_formatter().set_useOffset(False)
     return labelled
 
 

@@ -92,10 +92,13 @@ def _index(coordinate: PlainArray, wanted: int | str) -> int:
 def _slice_note(coordinate: PlainArray, wanted: float | str, index: int,
                 by_value: bool) -> str:
     value = coordinate.values[index]
-    text = f"{value:.6g}" if coordinate.dtype.kind in "iuf" else str(value)
+    named = coordinate.dtype.kind not in "iuf"  # a choice (a direction, a law): found by name
+    text = str(value) if named else f"{value:.6g}"
     units = coordinate.attrs.get("units", "")
-    used = f"{coordinate.name} = {text} {units}".rstrip()
+    used = f"{coordinate.name} = {text} {'' if units == '1' else units}".rstrip()
     position = f"index {index} of 0..{coordinate.size - 1}"
+    if by_value and named:
+        return f"slice {used} ({position})"
     if by_value:
         return f"slice {coordinate.name} = {wanted}: nearest grid value {used} ({position})"
     return f"slice at {position}: {used}"
