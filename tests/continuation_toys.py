@@ -175,3 +175,10 @@ def resonant_torus(fold_at):
                          [0.0, 0.0, 1.0 - 2.0 * z[2]]])
 
     return step, jacobian
+
+
+def circle(radius=1.0):
+    """z1 -> z1 + z1^2 + p^2 - radius^2, z2 -> z2 / 2: the branch is the circle z1^2 + p^2 =
+    radius^2 (curvature 1 / radius in the unscaled unknowns), folds at p = +-radius."""
+    return Map(lambda z, p: np.array([z[0] + z[0] ** 2 + p ** 2 - radius ** 2, 0.5 * z[1]]),
+               lambda z, p: np.array([[1.0 + 2.0 * z[0], 0.0], [0.0, 0.5]]))

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import continuation_toys as toys
+from impactbeams.continuation import arclength
 from impactbeams.continuation.arclength import Point, Scaling, Settings
 from impactbeams.continuation.branch import (
     ContinuationInterrupted,
@@ -15,7 +16,7 @@ from impactbeams.continuation.branch import (
 )
 from impactbeams.continuation.events import grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
-from impactbeams.continuation.problem import Evaluation
+from impactbeams.continuation.problem import Evaluation, parameter_derivative
 from impactbeams.params import ParameterError
 
 SETTINGS = Settings(step=0.05, max_step=0.1)
@@ -275,6 +276,11 @@ def _located_on_a_line(test_value):
     (lambda s: 1e4 * (0.3 - s) if s < 0.3 else 0.3 - s, 58),  # steep before it: 56
     (lambda s: 1e6 if s < 0.3 else 0.3 - s, 55),  # a jump before it: 51
     (lambda s: (0.3 - s) * (1 + 3 * s), 16),  # smooth (concave): 16
+    # curved before a jump (the near secant overshoots or falls short): 19, 19 and 31; by
+    # regula falsi on the jump, 60 (the cap), the root missed by 5e-7, 2e-12 and 4e-7
+    (lambda s: (0.3 - s) * (1 + 3 * s) if s < 0.3 else -1e6, 22),
+    (lambda s: (0.3 - s) * (1 - 2 * s) if s < 0.3 else -1e6, 22),
+    (lambda s: 1.0 - math.exp(s - 0.3) if s < 0.3 else -1e3, 34),
 ])
 def test_locate_where_the_test_jumps_or_kinks_at_the_root(test_value, solves):
     """A test continuous on one side of its root and jumping, or a thousand times steeper,
@@ -459,3 +465,57 @@ def test_the_chord_check_keeps_to_the_iterations_allowed():
     assert arclength.Follower(toy, Scaling(np.ones(2), 1.0), SETTINGS).at_arclength(
         start, 0.05).point.iterations == 3
     assert follower.at_arclength(start, 0.05).point is None
+
+
+@pytest.mark.parametrize("turn_aim", [None, 0.8])
+def test_steps_that_aim_at_a_turn_are_seldom_refused(monkeypatch, turn_aim):
+    """On a circle of radius 1 a step ds turns the tangent by ds: a step grown by 1.5 after
+    each quick correction (a loose tolerance: two or three iterations) is refused for its turn
+    at every other step or so (the old control: 20 of 45); aiming at 0.8 max_angle, never,
+    with steps of 0.8 max_angle, and the same folds (p = +-1)."""
+    refused, corrections = [], []
+    turn = arclength._turn
+
+    def counted(start, point):
+        angle = turn(start, point)
+        refused.append(angle > SETTINGS.max_angle)
+        return angle
+
+    correct = arclength.Follower.correct
+    monkeypatch.setattr(arclength, "_turn", counted)
+    monkeypatch.setattr(arclength.Follower, "correct",
+                        lambda *a, **k: corrections.append(1) or correct(*a, **k))
+    settings = Settings(step=0.01, max_step=1.0, max_angle=0.25, max_branches=1,
+                        tolerance=1e-6, turn_aim=turn_aim)
+    (branch,) = follow(toys.circle(), [math.sqrt(1.0 - 0.9**2), 0.0], 0.9, -2.0, 2.0,
+                       settings=settings)
+    folds = [point.parameter(Scaling(np.ones(2), 1.0)) for point in labelled(branch, "fold")]
+    assert folds == pytest.approx([1.0, -1.0], abs=LOCATED)
+    refusals = sum(refused)
+    if turn_aim is None:
+        assert refusals >= 0.3 * len(branch.points)
+    else:
+        assert refusals == 0
+        steps = np.linalg.norm(np.diff([point.x for point in branch.points], axis=0), axis=1)
+        assert np.median(steps) == pytest.approx(0.8 * 0.25, rel=0.01)
+
+
+def test_turn_aim_is_a_fraction_of_max_angle():
+    for bad in (0.0, 1.0, -0.5, 2.0):
+        with pytest.raises(ParameterError, match=f"turn_aim = {bad!r} is not allowed"):
+            Settings(turn_aim=bad)
+
+
+def test_a_difference_narrowed_to_the_end_is_divided_by_its_own_step():
+    """dr/dp where every narrowed step still straddles a change of the contacts (a contact
+    at p itself): the last difference over its own step. The old loop narrowed the step once
+    more after its last run: dr/dp came out 1000 times too large."""
+    class Straddled:
+        def evaluate(self, z, p, jacobian=True, grazing=True):
+            return Evaluation(np.array([3.0 * p]), np.empty((0, 0)), np.empty(0),
+                              contacts=int(p > 2.0))
+
+    problem = Straddled()
+    rate = parameter_derivative(problem, np.zeros(1), 2.0, 1.0, problem.evaluate(None, 2.0))
+    # (the last step is 3e-14 of p: its difference carries eps |r| / h ~ 1 % of round-off)
+    assert rate == pytest.approx([3.0], rel=0.05)

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from impactbeams import Contact, ParameterError, Params, simulate, two_sided_stop
+from impactbeams.active_phases import contact_quantities, sample
 from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
 from impactbeams.kernels.layout import FREE, ROW_EVENT, TIP_Y1
 from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
-from impactbeams.trajectory.active_phases import contact_quantities, sample
 from impactbeams.trajectory.start import phase_state
 from orbit_reference import central_jacobian, settled
 from orbit_reference import map_energy_scale as energy_scale

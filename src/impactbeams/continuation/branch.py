@@ -254,7 +254,7 @@ def _follow(follower: Follower, branch: Branch, span: Span, progress: Progress |
                     break
                 ds = taken / 2.0
                 continue
-            current, ds, near = point, follower.next_step(taken, point), None
+            current, ds, near = point, follower.next_step(taken, current, point), None
             steps.append(current)
             continue
         crossing = crosses(current.evaluation.grazing, grazing)  # no point: a failed step

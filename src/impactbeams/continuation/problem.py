@@ -98,9 +98,10 @@ def parameter_derivative(problem: Problem, z: np.ndarray, p: float, scale: float
     contacts per orbit the step is narrowed (``NARROWING``).
     """
     h = PARAMETER_STEP * max(abs(p), scale)
-    for _ in range(NARROWINGS + 1):
-        other = problem.evaluate(z, p + h, jacobian=False, grazing=False)
+    other = problem.evaluate(z, p + h, jacobian=False, grazing=False)
+    for _ in range(NARROWINGS):
         if other.contacts == at.contacts:
             break
         h *= NARROWING  # the difference straddles a change of the contacts: nearer
+        other = problem.evaluate(z, p + h, jacobian=False, grazing=False)
     return (other.residual - at.residual) / h

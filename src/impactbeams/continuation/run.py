@@ -24,6 +24,7 @@ from impactbeams.blas import one_blas_thread
 from impactbeams.continuation.arclength import (
     LOCATE,
     MICRO_CONTACTS,
+    TURN_AIM,
     Point,
     Scaling,
     Settings,
@@ -173,7 +174,7 @@ class Continuation:
         step, low, high = self._steps()
         return Settings(step=step / width, min_step=low / width, max_step=high / width,
                         max_points=self.max_points, max_branches=self.max_branches,
-                        micro_contacts=self.micro_contacts)
+                        micro_contacts=self.micro_contacts, turn_aim=TURN_AIM)
 
 
 Progress = Callable[[Branch, Point], None]

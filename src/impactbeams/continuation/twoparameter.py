@@ -425,7 +425,7 @@ def _steps(follower: Follower, curve: Branch, box: np.ndarray, progress: Progres
             curve.points[-1] = dataclasses.replace(curve.points[-1], label="grazing")
             curve.ending = GRAZED
             return
-        current, ds = point, follower.next_step(taken, point)
+        current, ds = point, follower.next_step(taken, current, point)
     curve.ending = MAX_POINTS
 
 

@@ -2,7 +2,7 @@
 
 ``P^p``: p forcing periods of the run of the active sets' phases
 (`impactbeams.kernels.several_contacts.run_contacts`, packed by
-`impactbeams.trajectory.active_phases`) from a state z = (q, q') on the section t = 0 to the
+`impactbeams.active_phases`) from a state z = (q, q') on the section t = 0 to the
 state at t = p T. The contacts closed at the start follow from the state: the active set whose
 forces are all > 0 with every open contact's physical gap >= 0 (without a dashpot there is
 exactly one: the forces solve a linear complementarity problem of the positive definite
@@ -22,6 +22,15 @@ import math
 
 import numpy as np
 
+from impactbeams.active_phases import (
+    CONTACT_STATUS_NAMES,
+    ContactRun,
+    PackedContacts,
+    contact_quantities,
+    gap_rate,
+    pack_contacts,
+    sample,
+)
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels import several_contacts as kernel
 from impactbeams.kernels.contacts_tangent import carry_contact_tangents, event_at
@@ -37,15 +46,6 @@ from impactbeams.orbits.period_map import (
     refined,
 )
 from impactbeams.params import Params, require, require_integer, require_type
-from impactbeams.trajectory.active_phases import (
-    CONTACT_STATUS_NAMES,
-    ContactRun,
-    PackedContacts,
-    contact_quantities,
-    gap_rate,
-    pack_contacts,
-    sample,
-)
 from impactbeams.trajectory.episodes import default_separation, episode_count
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.several import check_contact_runs
@@ -59,7 +59,7 @@ class ContactsPeriodMap(SectionMap):
     `impactbeams.simulate` of several contacts). ``periods``: p, forcing periods per map.
     Called as `impactbeams.orbits.period_map.PeriodMap` is (``state``, ``directions``,
     ``measures``), with a `PeriodMapResult` whose ``trajectory`` is the run's
-    `impactbeams.trajectory.active_phases.ContactRun`.
+    `impactbeams.active_phases.ContactRun`.
     """
 
     def __init__(self, params: Params, n_modes: int | None = None, periods: int = 1,
