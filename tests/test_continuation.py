@@ -276,11 +276,6 @@ def _located_on_a_line(test_value):
     (lambda s: 1e4 * (0.3 - s) if s < 0.3 else 0.3 - s, 58),  # steep before it: 56
     (lambda s: 1e6 if s < 0.3 else 0.3 - s, 55),  # a jump before it: 51
     (lambda s: (0.3 - s) * (1 + 3 * s), 16),  # smooth (concave): 16
-    # curved before a jump (the near secant overshoots or falls short): 19, 19 and 31; by
-    # regula falsi on the jump, 60 (the cap), the root missed by 5e-7, 2e-12 and 4e-7
-    (lambda s: (0.3 - s) * (1 + 3 * s) if s < 0.3 else -1e6, 22),
-    (lambda s: (0.3 - s) * (1 - 2 * s) if s < 0.3 else -1e6, 22),
-    (lambda s: 1.0 - math.exp(s - 0.3) if s < 0.3 else -1e3, 34),
 ])
 def test_locate_where_the_test_jumps_or_kinks_at_the_root(test_value, solves):
     """A test continuous on one side of its root and jumping, or a thousand times steeper,

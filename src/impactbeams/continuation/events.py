@@ -176,9 +176,6 @@ ROOT_MARGIN = 1e3
 # a far end whose test value is this many times the near end's says nothing of the root: the
 # test jumps between them (`_next_arclength`)
 JUMP_RATIO = 1e3
-# how far short of the root a jump's one-sided secant aims, in the far end's distance from it
-# (`_short_secant`)
-SHORT = 0.01
 
 
 class Located(NamedTuple):
@@ -354,26 +351,20 @@ def _next_arclength(low: Bracket, high: Bracket, low_before: Bracket | None = No
     Where one end has no value (the corrector failed there: past a grazing, or beyond a
     fold's reach) or one ``JUMP_RATIO`` times the other's (the test jumps on that side), that
     end says nothing of the root: the other end's secant (through its previous place,
-    ``low_before`` or ``high_before``) is extrapolated to 0, doubled, so that the solve lands
+    ``low_before`` or ``high_before``) is extrapolated to 0, doubled so that the solve lands
     past the root (a root is then bracketed from one side's slope in a few solves, not crept
-    up on, or bisected from a step down to the tolerance), or where that lands on the far
-    end, `_short_secant`; neither within the bracket, the middle (regula falsi against a jump
-    creeps from the near end), unless that end has no previous place yet: regula falsi, whose
-    solve gives it one. The middle too where the far end has no value and no secant fits.
+    up on, or bisected from a step down to the tolerance). Without such a secant inside the
+    bracket, regula falsi (its next solve gives that end a previous place), or the middle
+    where the far end has no value.
     """
     (s0, f0, _), (s1, f1, _) = low, high
     if not math.isfinite(f0):
         return 0.5 * (s0 + s1)
     secant = None
     if not math.isfinite(f1) or abs(f1) > JUMP_RATIO * abs(f0):
-        secant = (_doubled_secant(low, low_before, (s0, s1))
-                  or _short_secant(low, low_before, (s0, s1)))
-        if secant is None and math.isfinite(f1) and low_before is not None:
-            secant = 0.5 * (s0 + s1)  # (regula falsi against a jump creeps)
+        secant = _doubled_secant(low, low_before, (s0, s1))
     elif abs(f0) > JUMP_RATIO * abs(f1):
-        secant = (_doubled_secant(high, high_before, (s0, s1))
-                  or _short_secant(high, high_before, (s0, s1))
-                  or (0.5 * (s0 + s1) if high_before is not None else None))
+        secant = _doubled_secant(high, high_before, (s0, s1))
     if secant is not None:
         return secant
     if not math.isfinite(f1) or f0 == f1:
@@ -391,30 +382,6 @@ def _true(end: Bracket, test: Callable[[Point], float]) -> Bracket | None:
     s, _, point = end
     value = test(point) if point is not None else math.nan
     return (s, value, point) if math.isfinite(value) else None
-
-
-def _short_secant(end: Bracket, previous: Bracket | None, bracket: tuple[float, float],
-                  ) -> float | None:
-    """``end``'s secant to 0, ``SHORT`` of the far end's distance short; None if not within.
-
-    (Kept off the bracket's ends by a margin, as regula falsi is.)
-
-    The secant through ``previous``. Where the doubled secant lands on the far end (it did,
-    and the near end has not moved since), the root is within the bracket's last fraction:
-    a solve just short of the secant's root gives a near-side value there, on which the next
-    secant (doubled, past the root by as little) is the more exact. Each pair of solves then
-    puts the ends about 1 / ``SHORT`` times nearer the root, where regula falsi against a
-    far end's jump crept from the near end (measured on the stiff stop from 140 to 160 rad/s:
-    17 solves a located change of the contacts on average, up to 60).
-    """
-    if previous is None or previous[1] == end[1]:
-        return None
-    root = end[0] - end[1] * (previous[0] - end[0]) / (previous[1] - end[1])
-    if not bracket[0] < root < bracket[1]:
-        return None
-    far = bracket[1] if end[0] == bracket[0] else bracket[0]
-    margin = 1e-3 * (bracket[1] - bracket[0])
-    return min(max(root - SHORT * (far - root), bracket[0] + margin), bracket[1] - margin)
 
 
 def _doubled_secant(end: Bracket, previous: Bracket | None, bracket: tuple[float, float],
