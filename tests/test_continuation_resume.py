@@ -9,26 +9,16 @@ points on two branches (a period doubling switched to), about 3 s; the Newton-Pi
 carries its basis from step to step, which the checkpoints must carry too.
 """
 
-import errno
 import functools
 import json
 import signal
 import warnings
-from pathlib import Path
 
 import pytest
 
 import impactbeams as ib
-from impactbeams import io
 from impactbeams.cli import main
-from impactbeams.continuation import (
-    Continuation,
-    ContinuationInterrupted,
-    arclength,
-    background,
-    checkpoint,
-    continue_orbits,
-)
+from impactbeams.continuation import Continuation, ContinuationInterrupted, continue_orbits
 from impactbeams.continuation.checkpoint import saved_points
 from impactbeams.params import ParameterError
 from test_resume import _interrupt, assert_same_map, uninterrupted_runs
@@ -187,54 +177,3 @@ def test_a_full_disk_is_refused_before_the_header(files, tmp_path, capsys, monke
     # 21 points at max_step (1.7 / 20 rad/s), 2 N = 12: each a 1.2 kB monodromy and the rest
     assert expected_log_size(load_continuation(files / "newton.toml")) == 2 * 21 * (
         8 * 144 + 64 * 12 + 2048)
-
-
-def test_a_record_that_could_not_be_written_stops_the_run_with_what_is_kept(tmp_path,
-                                                                           monkeypatch):
-    """The log's records are written on the background thread (`background`): the 10th
-    failing (a full disk), the run stops with the WriteError that names the log and says
-    what is kept, and a second run resumes from the 9 records written to the whole file."""
-    out = tmp_path / "out.nc"
-    write, written = checkpoint.CourseLog._write, []
-
-    def full_at_the_tenth(self, record, first):
-        if len(written) == 9:
-            with io.writing(Path(self._stream.name)):
-                raise OSError(errno.ENOSPC, "No space left on device")
-        written.append(record)
-        write(self, record, first)
-
-    monkeypatch.setattr(checkpoint.CourseLog, "_write", full_at_the_tenth)
-    with pytest.raises(io.WriteError, match=r"course_0000\.log: No space left on device; "
-                                            r"\d+ branch points are kept in .*out\.nc\.partial"):
-        continue_orbits(_continuation(method="newton"), None, out)
-    kept = saved_points(out)
-    assert kept == sum(len(points) for points, *_ in written[-1]["branches"])
-    monkeypatch.setattr(checkpoint.CourseLog, "_write", write)
-    assert continue_orbits(_continuation(method="newton"), None, out).branch_point.size == POINTS
-
-
-def test_measures_on_the_background_thread_are_those_computed_in_turn(monkeypatch):
-    """A kept point's measures come from the background thread (`background.Pending`, read
-    when the Dataset is built): the same Dataset, bit for bit (but its time-stamped history),
-    as measures computed at once in the corrector's thread."""
-    pending = []
-
-    class Counted(background.Pending):
-        def __init__(self, compute):
-            pending.append(1)
-            super().__init__(compute)
-
-    monkeypatch.setattr(arclength, "Pending", Counted)
-    from_the_background = continue_orbits(_continuation(method="newton"))
-    assert len(pending) == POINTS
-
-    class AtOnce(dict):
-        def __init__(self, compute):
-            super().__init__(compute())
-
-    monkeypatch.setattr(arclength, "Pending", AtOnce)
-    in_turn = continue_orbits(_continuation(method="newton"))
-    for dataset in (from_the_background, in_turn):
-        del dataset.attrs["history"]  # (time-stamped)
-    assert from_the_background.identical(in_turn)

@@ -258,10 +258,9 @@ def pack_run(params: Params, n_modes: int, t_max: float, search_span: float,
 
     dynamics = dynamics_arrays(params, n_modes) if dynamics is None else dynamics
     check_steady(params, dynamics.free)
-    # one cell: its row straight from the parameters (`cell_rows`' for a box of one)
-    columns = _cell_columns({"base_amplitude": params.base_amplitude})
-    cell = np.array([0.0 if name == "geometry" else getattr(params, name) for name in columns],
-                    dtype=float)
+    # one cell: its row straight from the values (`cell_rows`' for a box of one)
+    values = {**params.as_dict(), "geometry": 0.0}
+    cell = np.array([values[name] for name in _cell_columns(values)], dtype=float)
     damped, forces, scalars, settings, q0, v0, drives = run_inputs(
         cell, dynamics.tables, dynamics.geometry, dynamics.spring_arrays, t_max, search_span)
     return Packed(dynamics, damped, forces, scalars, drives, settings[0], q0, v0)

@@ -841,7 +841,7 @@ class Params:
         """
         contacts = changes.get(CONTACTS, self.contacts)
         refuse_unused_law_keys(changes, contacts, "Params.replace()")
-        if changes.keys() <= _undriven_numbers() and not (
+        if changes.keys() <= set(self.numeric_names()) - set(DRIVES) and not (
                 not self.partner.has_beam2 and changes.keys() & set(BEAM2_KEYS)) and not (
                 self.structure1 is not None and changes.keys() & set(BEAM1_KEYS)):
             # numbers other than the drives, on parameters already checked: only the changes
@@ -970,12 +970,6 @@ def fold_contacts(values: Mapping[str, Any], source: str,
     if len(contacts) == 1:
         return {**rest, **contacts[0].flat()}
     return {**rest, CONTACTS: contacts} if contacts else rest
-
-
-@functools.cache
-def _undriven_numbers() -> frozenset[str]:
-    """The numeric parameters but the drives (`Params.replace` changes them alone)."""
-    return frozenset(Params.numeric_names()) - frozenset(DRIVES)
 
 
 def set_by_every_contact(contacts: Any) -> tuple[str, ...]:

@@ -23,7 +23,6 @@ import math
 
 import numpy as np
 
-from impactbeams.continuation.background import Pending
 from impactbeams.continuation.problem import Evaluation, Problem, parameter_derivative
 from impactbeams.params import ParameterError
 
@@ -266,19 +265,12 @@ class Follower:
                                    episodes=measured.episodes)
 
     def kept(self, point: Point) -> Point:
-        """``point`` with its named measures: it is kept on the branch (the others are not).
-
-        Computed on the background thread where the problem gives them as a task
-        (``measuring``: `background.Pending`, read when the branch is written), else here.
-        """
-        measures = point.evaluation.measures
-        if isinstance(measures, Pending) or measures:
+        """``point`` with its named measures: it is kept on the branch (the others are not)."""
+        if point.evaluation.measures:
             return point
         z, p = self.scaling.unscaled(point.x)
-        measuring = getattr(self.problem, "measuring", None)
         return dataclasses.replace(point, evaluation=dataclasses.replace(
-            point.evaluation, measures=(self.problem.measures(z, p) if measuring is None
-                                        else Pending(measuring(z, p)))))
+            point.evaluation, measures=self.problem.measures(z, p)))
 
     def grazing_values(self, correction: Correction) -> tuple[float, ...]:
         """The grazing values of a correction's iterates (read only when a step failed)."""

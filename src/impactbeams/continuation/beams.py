@@ -11,10 +11,8 @@ overlap).
 
 from __future__ import annotations
 
-import functools
 import math
 import warnings
-from collections.abc import Callable
 
 import numpy as np
 
@@ -109,17 +107,10 @@ class BeamOrbits:
 
     def measures(self, z: np.ndarray, p: float) -> dict[str, float | np.ndarray]:
         """The orbit's named measures (`orbit_measures`) at (z, p)."""
-        return self.measuring(z, p)()
-
-    def measuring(self, z: np.ndarray, p: float) -> Callable[[], dict[str, float | np.ndarray]]:
-        """The task that reads the orbit's named measures at (z, p) from its run.
-
-        The run is the last one's (the corrector's at the point it found) or made here; the
-        task reads it without running again, in any thread (`background`).
-        """
         period_map = self.period_map(p)
-        result = self._run(period_map, z, p, True)
-        return functools.partial(_measured, period_map, result)
+        result = period_map.measured(self._run(period_map, z, p, True))
+        self._last = (p, z.tobytes(), result)
+        return orbit_measures(period_map, result)
 
     def _run(self, period_map: PeriodMap, z: np.ndarray, p: float,
              grazing: bool) -> PeriodMapResult:
@@ -196,11 +187,6 @@ class BeamOrbits:
         packed = self.period_map(getattr(self.params, self.parameter)).packed
         omega = packed.tables[FREE, ROW_FREQUENCY]
         return np.concatenate([omega, np.ones(omega.size)])
-
-
-def _measured(period_map: PeriodMap | ContactsPeriodMap, result: PeriodMapResult,
-              ) -> dict[str, float | np.ndarray]:
-    return orbit_measures(period_map, period_map.measured(result))
 
 
 def grazing_value(period_map: PeriodMap | ContactsPeriodMap, result: PeriodMapResult,

@@ -21,7 +21,6 @@ other code, is refused (one line), never resumed.
 
 from __future__ import annotations
 
-import concurrent.futures
 import contextlib
 import dataclasses
 import hashlib
@@ -39,7 +38,6 @@ from typing import TYPE_CHECKING, Any, BinaryIO
 import numpy as np
 
 from impactbeams import __version__
-from impactbeams.continuation import background
 from impactbeams.continuation.arclength import Follower, Settings
 from impactbeams.continuation.branch import Branch, ContinuationInterrupted, Course, Position
 from impactbeams.io import WriteError, write_netcdf, write_text, writing
@@ -92,7 +90,6 @@ class CourseLog:
         self._pickler: pickle.Pickler | None = None
         self._buffer = io.BytesIO()
         self._saved: tuple[int, ...] = ()
-        self._written: concurrent.futures.Future[None] | None = None  # the last record's write
 
     def restore(self, problem: Problem, settings: Settings) -> Course | None:
         """The last `Course` saved for this continuation, or None if there is none.
@@ -140,34 +137,24 @@ class CourseLog:
         return True
 
     def __call__(self, course: Course) -> None:
-        """Append ``course`` (unless it is the last one saved: a step retried shorter).
-
-        Written on the background thread (after the measures of its points, `background`):
-        a write that failed raises here, at the next record, or at `close`.
-        """
+        """Append ``course`` (unless it is the last one saved: a step retried shorter)."""
         counts = (len(course.branches), course.index, len(course.position.steps),
                   *(len(branch.points) for branch in course.branches))
         if counts == self._saved:
             return
-        if self._written is not None and self._written.done():
-            self._written.result()
-        first, self._saved = not self._saved, counts
-        self._written = background.worker().submit(self._write, _plain(course), first)
-
-    def _write(self, record: dict[str, Any], first: bool) -> None:
-        """Append ``record``, the first of this run's stream if ``first``."""
         if self._pickler is None:
             self._open()
         self._buffer.seek(0)
         self._buffer.truncate()
-        self._pickler.dump(record)
+        self._pickler.dump(_plain(course))
         payload = self._buffer.getvalue()
         assert self._stream is not None
         with writing(Path(self._stream.name)):
             self._stream.write(_FRAME.pack(len(payload), zlib.crc32(payload)) + payload)
             self._stream.flush()
-        if self.segment and first:  # the new stream holds a whole record: the older ones
-            self._remove_older()  # can go
+        if self.segment and not self._saved:  # the new stream holds a whole record: the
+            self._remove_older()  # older ones can go
+        self._saved = counts
 
     def _open(self) -> None:
         with writing(self.directory):
@@ -185,16 +172,9 @@ class CourseLog:
                 (self.directory / SEGMENT.format(number)).unlink(missing_ok=True)
 
     def close(self) -> None:
-        """Close the log's file once its records are written (it stays: `remove` deletes it).
-
-        A write that failed raises here.
-        """
-        try:
-            if self._written is not None:
-                self._written.result()
-        finally:
-            if self._stream is not None:
-                self._stream.close()
+        """Close the log's file (it stays on disk: `remove` deletes it)."""
+        if self._stream is not None:
+            self._stream.close()
 
     def remove(self) -> None:
         """Delete the partial folder once the output is written (a failure is a warning)."""
@@ -300,10 +280,6 @@ def checkpointed(output: Path, subject: Continuation | BifurcationCurve,
         except ContinuationInterrupted as interrupted:
             log.close()  # what was computed, to look at: the log resumes from its last step
             write_netcdf(interrupted.dataset, log.directory / output.name)
-            raise
-        except BaseException:
-            with contextlib.suppress(WriteError):  # (the error raised, or one it caused)
-                log.close()
             raise
         write_netcdf(dataset, output)
         log.remove()
