@@ -111,7 +111,7 @@ def markdown(report: dict) -> str:
     lines = ["# Continuation on a stiff stop driven by a shaker", "",
              f"`python benchmarks/bench_stiff_continuation.py`; {report['machine']}, impactbeams "
              f"{report['version']}, {report['date']}, load average {report['load']:.1f} on "
-             f"{report['cores']} cores (CPU time of the run's threads in brackets). "
+             f"{report['cores']} cores (CPU time in brackets: what one free core would take). "
              "The case of issue 31: a 200 x 20 x 1 mm steel cantilever, a rigid stop 0.5 mm "
              "below its tip, its clamp on a shaker (0.1 mm), zeta = 0.01, Omega from "
              f"{LOW} to {HIGH} rad/s (0.5 to 2 omega_1), default settings but max_points "
