@@ -194,9 +194,7 @@ class ContactsPeriodMap(SectionMap):
             return float(abs(self.tip_motions(result, at)[0, column]
                              - (self.clamp1(at)[0] if clamp else 0.0)))
 
-        sampled = np.abs(tips[:, column] - (self.clamp1(times) if clamp else 0.0))
-        i = int(np.argmax(sampled))
-        lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
+        sampled, i, lo, hi = self.largest_sample(tips, times, column, clamp)
         return -refined(lambda t: -size(t), lo, hi, -sampled[i], times[i])[0]
 
     def _gaps(self, run: ContactRun, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

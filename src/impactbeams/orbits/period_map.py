@@ -143,6 +143,16 @@ class SectionMap:
         moves1, _ = self.params.mount.clamps
         return moves1 * self.params.base_amplitude * np.sin(self.params.omega * times)
 
+    def largest_sample(self, tips: np.ndarray, times: np.ndarray, column: int, clamp: bool,
+                       ) -> tuple[np.ndarray, int, float, float]:
+        """The samples |tip ``column``| (m), their largest's index and neighbours' times (s).
+
+        Minus beam 1's clamp if ``clamp``; a maximum is refined between the neighbours.
+        """
+        sampled = np.abs(tips[:, column] - (self.clamp1(times) if clamp else 0.0))
+        i = int(np.argmax(sampled))
+        return sampled, i, times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
+
 
 class PeriodMap(SectionMap):
     """The map z(0) -> z(p T) of ``params`` (spring law, Omega > 0) with ``n_modes`` per beam.
@@ -408,9 +418,7 @@ class PeriodMap(SectionMap):
             return float(abs(self._tips(trajectory, at)[0, column]
                              - (self.clamp1(at)[0] if clamp else 0.0)))
 
-        sampled = np.abs(tips[:, column] - (self.clamp1(times) if clamp else 0.0))
-        i = int(np.argmax(sampled))
-        lo, hi = times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
+        sampled, i, lo, hi = self.largest_sample(tips, times, column, clamp)
         packed = self.packed
         t, value = tip_maximum(packed.tables, packed.forces, packed.phase_scalars,
                                packed.dynamics.spring_arrays, packed.drives, packed.settings,
