@@ -225,7 +225,7 @@ def test_locate_without_a_corrected_point_beyond(reach, root, located):
     its width times the slope, 1: within 0.4 / 1e3 of it, in a dozen solves, not 60)."""
     solves = []
 
-    def point_at(s):
+    def point_at(s, guess=None):
         solves.append(s)
         if s > reach:
             return None
@@ -244,7 +244,7 @@ def test_locate_stops_where_the_test_jumps():
     """A grazing value that jumps from -1 to +1 at s = 0.3 (a free-flight minimum of the gap
     vanishes, no contact at zero depth): with ``may_jump`` the search ends once the bracket's
     ends stay far from 0 as it narrows (no root); without, it pins the jump as a root."""
-    def point_at(s):
+    def point_at(s, guess=None):
         evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)), np.ones(1),
                                 grazing=(0.5 - s) if s < 0.3 else -1.0)
         return Point(np.array([0.0, s]), np.array([0.0, 1.0]), evaluation, 1)

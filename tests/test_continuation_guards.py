@@ -155,7 +155,7 @@ def arc_follower(multipliers):
         return Point(np.array([math.cos(theta), math.sin(theta)]),
                      np.array([-math.sin(theta), math.cos(theta)]), evaluation, 2)
 
-    def correct(x, normal, _):
+    def correct(x, normal, _, start=None):
         def across(theta):
             return float(normal @ (np.array([math.cos(theta), math.sin(theta)]) - x))
 

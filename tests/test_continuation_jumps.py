@@ -52,14 +52,15 @@ def line(multipliers, rate=1.0):
     """
     tangent = np.array([math.sqrt(1.0 - rate ** 2), rate])
 
-    def point_at(s):
+    def point_at(s, guess=None):
         evaluation = Evaluation(np.zeros(1), np.zeros((1, 1)),
                                 np.array(multipliers(s), complex))
         return Point(s * tangent, tangent, evaluation, 1)
 
     follower = types.SimpleNamespace(
         settings=Settings(),
-        correct=lambda x, normal, _: types.SimpleNamespace(point=point_at(float(x @ tangent))))
+        correct=lambda x, normal, _, start=None: types.SimpleNamespace(
+            point=point_at(float(x @ tangent))))
     return follower, point_at, point_at(0.0), point_at(1.0)
 
 

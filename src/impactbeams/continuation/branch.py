@@ -38,9 +38,11 @@ from impactbeams.continuation.events import (
     GRAZING,
     PERIOD_DOUBLING,
     Located,
+    PointAt,
     continuous_root,
     detected,
     grazing_test,
+    guess_at,
     interval_test,
     locate,
     near_zero,
@@ -444,16 +446,15 @@ def _between(follower: Follower, a: Point, b: Point,
     """
     origin, normal = plane if plane is not None else (a.x, _along(a, b))
 
-    def point_at(s: float) -> Point | None:
-        return follower.correct(origin + s * normal, normal, normal).point
+    def point_at(s: float, guess: np.ndarray | None = None) -> Point | None:
+        return follower.correct(origin + s * normal, normal, normal, guess).point
 
     found = detected(a, b)
     if found and depth < len(SAMPLES) and _may_hide_crossings(a, b, len(found)):
         # crossings close together (a pair that leaves and returns within the step) show at
         # the ends as one, or none: the step is sampled, and each piece searched on its own
         width, pieces = float(normal @ (b.x - origin)), SAMPLES[depth]
-        samples = [point_at(width * k / pieces) for k in range(1, pieces)]
-        ends = [a, *(point for point in samples if point is not None), b]
+        ends = _sampled(point_at, a, b, width, pieces)
         found_points = [point for start, end in zip(ends[:-1], ends[1:], strict=True)
                         for point in _advance(follower, start, end, depth + 1)]
         # the samples only served the search: the branch keeps what was located, and b
@@ -485,6 +486,22 @@ def _between(follower: Follower, a: Point, b: Point,
             return (_advance(follower, a, middle, depth + 1)
                     + _advance(follower, middle, b, depth + 1))
     return [point for _, point in sorted(located, key=lambda pair: pair[0])] + [b]
+
+
+def _sampled(point_at: PointAt, a: Point, b: Point, width: float, pieces: int) -> list[Point]:
+    """``a``, the points corrected at ``pieces - 1`` equal steps to ``width``, ``b``, in order.
+
+    Each from the branch interpolated between the last point corrected and ``b``
+    (`guess_at`); a point where Newton failed is left out.
+    """
+    points, last = [a], (0.0, 0.0, a)
+    for k in range(1, pieces):
+        s = width * k / pieces
+        point = point_at(s, guess_at(last, (width, 0.0, b), s))
+        if point is not None:
+            points.append(point)
+            last = (s, 0.0, point)
+    return [*points, b]
 
 
 def _along(a: Point, b: Point) -> np.ndarray:
@@ -597,8 +614,8 @@ def _located_change(follower: Follower, a: Point, b: Point, normal: np.ndarray,
     By ``test``'s root; where the grazing value jumps instead (its sign changed without a
     contact at zero depth), by bisection on the contacts.
     """
-    def point_at(s: float) -> Point | None:
-        return follower.correct(a.x + s * normal, normal, normal).point
+    def point_at(s: float, guess: np.ndarray | None = None) -> Point | None:
+        return follower.correct(a.x + s * normal, normal, normal, guess).point
 
     width, tolerance = float(normal @ (b.x - a.x)), follower.settings.locate_tolerance
     if test in (grazing_test, interval_test):
@@ -607,7 +624,7 @@ def _located_change(follower: Follower, a: Point, b: Point, normal: np.ndarray,
         if located.root:
             return located
         if located.beyond is not None:  # bisection within the test's last bracket
-            rest = locate(lambda s: point_at(located.s + s),
+            rest = locate(lambda s, guess: point_at(located.s + s, guess),
                           located.before, float(normal @ (located.beyond.x - a.x)) - located.s,
                           located.beyond, _contacts_of(a), tolerance)
             return rest._replace(s=located.s + rest.s)
@@ -728,7 +745,11 @@ def _cross_grazing(follower: Follower, branch: Branch, current: Point, taken: fl
     not the branch). Not bracketed, or no change of the contacts: labels nothing and resumes
     short of it (`_short_of_grazing`).
     """
-    _, grazing, past, root = locate(lambda s: follower.at_arclength(current, s).point,
+    # Newton from the tangent's point on each plane, not from a guess between the bracket's
+    # ends (`guess_at`): a grazing at a fold has the branch's other strand close beside it,
+    # which such a guess converges on (going down the stiff stop at 152.754 rad/s it then
+    # retraced the branch it came along)
+    _, grazing, past, root = locate(lambda s, _: follower.at_arclength(current, s).point,
                                     current, taken, None, grazing_test,
                                     follower.settings.locate_tolerance,
                                     _value_tolerance(follower, grazing_test, current),

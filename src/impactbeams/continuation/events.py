@@ -169,7 +169,9 @@ def interval_test(point: Point) -> float:
     return point.evaluation.interval
 
 
-PointAt = Callable[[float], "Point | None"]
+# ``point_at(s, guess)``: the corrected point on the plane at arclength s (None if Newton
+# fails), Newton started from ``guess`` (a point on that plane) if not None
+PointAt = Callable[[float, "np.ndarray | None"], "Point | None"]
 # an unbracketed end (no corrected point beyond) is a root if the test's value there is within
 # this many times the secant's slope from the start times the bracket's width (a root in it)
 ROOT_MARGIN = 1e3
@@ -197,7 +199,8 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
     """The points on both sides of the root of ``test`` between ``start`` and ``end``.
 
     ``start`` is at s = 0, ``end`` at s = ``s_end`` (None if the corrector failed there: it
-    then counts as beyond). ``point_at(s)``: the corrected point at s (None if Newton fails).
+    then counts as beyond). ``point_at(s, guess)``: the corrected point at s (None if Newton
+    fails), from the branch interpolated through the points corrected so far (`guess_at`).
     The bracket pins the parameter to ``tolerance`` in x~. A failed corrector inside the
     bracket counts as beyond the root, as at ``end``: it happens past a grazing, where the
     period map is not smooth, but also where the branch turns back across the planes (a fold
@@ -216,6 +219,7 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
     before: list[Bracket | None] = [None, None]  # each end's previous place (its secant)
     side = 0  # which end kept its place last (Illinois halves its value the second time)
     widths = (math.inf, math.inf)  # the bracket's widths before the last two solves
+    corrected = [(0.0, start)] + ([(s_end, end)] if end is not None else [])
     for _ in range(MAX_LOCATING):
         if _known(low, high, tolerance) and abs(test(low[2])) <= value_tolerance:
             break
@@ -232,7 +236,9 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
             # as in Dekker's method
             s = low[0] + 0.5 * width
         widths = (widths[1], width)
-        point = point_at(s)
+        point = point_at(s, guess_at(low, high, s, tuple(corrected)))
+        if point is not None:
+            corrected.append((s, point))
         value = test(point) if point is not None else math.nan
         if point is not None and math.isfinite(value) and (value > 0) == (low[1] > 0):
             low, before[0] = (s, value, point), _true(low, test)
@@ -331,6 +337,36 @@ def _pinned(low: Bracket, high: Bracket, start: Point, test: Callable[[Point], f
 
 
 Bracket = tuple[float, float, Point | None]
+# a third point bends the guess between a bracket's ends only this far out of the bracket at
+# least, in its widths (nearer, round-off in its weights would grow as the width over it)
+BEND_DISTANCE = 1e-3
+
+
+def guess_at(low: Bracket, high: Bracket, s: float,
+             corrected: tuple[tuple[float, Point], ...] = ()) -> np.ndarray | None:
+    """The branch at arclength ``s`` within a bracket, interpolated between its corrected ends.
+
+    Bent by the parabola through the nearest of the ``corrected`` points (s, point) at least
+    ``BEND_DISTANCE`` widths outside the bracket, if any. As the bracket narrows the guess
+    nears the branch like its width cubed (squared without a third point; like the width
+    where the branch kinks between the ends, at a change of the contacts), and Newton starts
+    within its tolerance: one or two linearisations a solve, not three. None without a
+    point at both ends (Newton then starts from the plane's point on the line of the search).
+    """
+    (s0, _, low_point), (s1, _, high_point) = low, high
+    if low_point is None or high_point is None or not s0 < s1:
+        return None
+    width = s1 - s0
+    weight = min(max((s - s0) / width, 0.0), 1.0)
+    guess = (1.0 - weight) * low_point.x + weight * high_point.x
+    outside = [(max(s0 - place, place - s1), place, point) for place, point in corrected
+               if max(s0 - place, place - s1) > max(BEND_DISTANCE * width, 0.0)]
+    if outside:
+        _, place, point = min(outside, key=lambda far: far[0])
+        # the parabola's part that vanishes at both ends, through the third point
+        line = low_point.x + (place - s0) / width * (high_point.x - low_point.x)
+        guess += (s - s0) / (place - s0) * ((s - s1) / (place - s1)) * (point.x - line)
+    return guess
 
 
 def _known(low: Bracket, high: Bracket, tolerance: float) -> bool:

@@ -537,7 +537,9 @@ def _turning(follower: Follower, a: Point, b: Point) -> Point:
 def _located(follower: Follower, a: Point, b: Point, test: Callable[[Point], float],
              may_jump: bool = False) -> Located:
     """The root of ``test`` between ``a`` and ``b`` on ``a``'s secant planes."""
-    return locate(lambda s: follower.at_arclength(a, s).point, a, float(
+    # Newton from the tangent's point on each plane: a curve's corrector is not given the
+    # bracket's guess (`events.guess_at`), with which curves ended otherwise (test_curve_resonances)
+    return locate(lambda s, _: follower.at_arclength(a, s).point, a, float(
         a.tangent @ (b.x - a.x)), b, test, follower.settings.locate_tolerance,
         may_jump=may_jump)
 
@@ -587,7 +589,7 @@ def _end_at_contact_change(follower: Follower, curve: Branch, current: Point, po
 def _end_at_grazing(follower: Follower, curve: Branch, current: Point, taken: float,
                     progress: Progress | None) -> None:
     """End the curve at the grazing ahead of ``current``, located (no point found past it)."""
-    located = locate(lambda s: follower.at_arclength(current, s).point, current, taken, None,
+    located = locate(lambda s, _: follower.at_arclength(current, s).point, current, taken, None,
                      grazing_test, follower.settings.locate_tolerance, may_jump=True)
     end = located.before if located.root else current
     # (against the whole curve's values: the steps may have crept up to the grazing, the

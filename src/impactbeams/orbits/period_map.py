@@ -74,6 +74,10 @@ from impactbeams.trajectory.start import checked_state, final_state, phase_state
 # be missed.
 SAMPLES_PER_PERIOD = 512
 MAX_EVENTS = 200_000  # phases per map evaluation
+# the first window of a map's run, in phases a period (`phases.run`): the stiff stop's orbits
+# have up to 10 contacts a period (21 phases); a longer run goes on in further windows, bit for
+# bit
+PERIOD_WINDOW = 128
 # samples of the gap per segment for its maxima between contacts (a contact's rise, a free
 # interval's height): each refined at the root of the gap's rate
 INTERVAL_SAMPLES = 16
@@ -215,7 +219,8 @@ class PeriodMap(SectionMap):
         z0 = checked_state(self.packed, state, "state")
         columns = directions_of(directions, self.dimension)
         start = phase_state(self.packed, z0)
-        trajectory = run(self.packed, self.max_events, start=start)
+        trajectory = run(self.packed, self.max_events, start=start,
+                         window=PERIOD_WINDOW * self.periods)
         if trajectory.status != "complete":
             raise RuntimeError(f"the period map's run stopped at t = {trajectory.t_end!r} s "
                                f"before {self.horizon!r} s: status {trajectory.status!r}")

@@ -14,7 +14,6 @@ from impactbeams.kernels.records import Segments, segments
 from impactbeams.kernels.stroboscope import tip_motions
 from impactbeams.packing import Packed
 
-_INITIAL_CAPACITY = 4096  # segments; doubled as needed up to max_events
 _WINDOW = 1024  # segments of the first window of a run; then about WINDOW_SECONDS each
 WINDOW_SECONDS = 0.5  # wall time per window (s): how often a run reports its progress
 _MIN_WINDOW = 256  # segments
@@ -55,11 +54,16 @@ class Trajectory:
 
 def run(packed: Packed, max_events: int,
         report: Callable[[float, int], None] | None = None,
-        start: tuple[np.ndarray, np.ndarray, int] | None = None) -> Trajectory:
+        start: tuple[np.ndarray, np.ndarray, int] | None = None,
+        window: int = _WINDOW) -> Trajectory:
     """Run the event kernel, in windows of segments, up to ``max_events`` segments.
 
     ``start``: the state ``(q, q', phase)`` at t = 0 in that phase's coordinates
     (`impactbeams.trajectory.start.phase_state`); default ``(packed.q0, packed.v0, FREE)``.
+    ``window``: the segments of the first window, and of the arrays at first: a run that
+    ends within it is one call of the kernel. A run known to be short asks for less (a
+    period map's dozen segments: arrays for a thousand cost more in fresh pages than its
+    kernel takes, 30 of 130 us on the stiff stop's map).
 
     Each window ends where the run can resume exactly (``stroboscope.resume_point``: a free
     segment after a contact of positive length, where no history carries over), so that the
@@ -69,9 +73,9 @@ def run(packed: Packed, max_events: int,
     """
     from impactbeams.kernels.stroboscope import resume_point
 
-    arrays = segments(min(_INITIAL_CAPACITY, max_events), packed.q0.size)
+    arrays = segments(min(window, max_events), packed.q0.size)
     q0, v0, phase0 = (packed.q0, packed.v0, FREE) if start is None else start
-    first, window = 0, _WINDOW
+    first = 0
     t0 = 0.0
     while True:
         stop = min(first + window, max_events)
