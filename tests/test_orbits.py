@@ -472,3 +472,22 @@ def test_the_default_subspace_fits_a_small_model():
     assert orbits_problem(Continuation(stop, "omega", 195.0, 330.0, n_modes=3)).subspace == 6
     with pytest.raises(ParameterError, match="subspace = 7 is not allowed"):
         periodic_orbit(stop, 3, subspace=7)
+
+
+def test_a_map_run_longer_than_its_first_window_is_the_same_run(dashpot_map, monkeypatch):
+    """A map's run starts in a short window (`period_map.PERIOD_WINDOW`); one of 13 phases
+    (4 contacts) in windows of 2 phases, resumed between them, is the same run bit for bit:
+    its end state, its monodromy and its contacts."""
+    from impactbeams.orbits import period_map as module
+
+    period_map, z = dashpot_map
+    whole = period_map(z, directions="all", measures=False)
+    assert whole.trajectory.time.size < module.PERIOD_WINDOW
+    monkeypatch.setattr(module, "PERIOD_WINDOW", 2)
+    windowed = period_map(z, directions="all", measures=False)
+    assert whole.trajectory.time.size > 2 * period_map.periods
+    for name in ("time", "phase", "q", "v", "end_q", "end_v"):
+        assert np.array_equal(getattr(windowed.trajectory, name), getattr(whole.trajectory, name))
+    assert np.array_equal(windowed.state, whole.state)
+    assert np.array_equal(windowed.jacobian, whole.jacobian)
+    assert windowed.contacts == whole.contacts
