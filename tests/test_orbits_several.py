@@ -105,7 +105,7 @@ def test_a_section_state_in_contact_starts_in_its_active_set():
     assert np.abs(several.state - one.state).max() < 1e-14 * np.abs(one.state).max()
     assert np.abs(several.jacobian - one.jacobian).max() < 1e-13 * np.abs(one.jacobian).max()
     together = ContactsPeriodMap(TOGETHER, N_MODES)
-    b = together._weights  # the gaps' weights: both modal gaps -5 um
+    b = together.contacts.gap_weights  # the gaps' weights: both modal gaps -5 um
     q = b.T @ np.linalg.solve(b @ b.T, np.array([-6e-6, -7e-6]))
     pushed = np.concatenate([q, np.zeros(N_MODES)])
     assert together.active_mask(pushed) == 3

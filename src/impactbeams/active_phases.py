@@ -27,12 +27,15 @@ from impactbeams.contact.active_sets import SeveralContacts, possible_sets, seve
 from impactbeams.contact.spring import polar
 from impactbeams.kernels import several_contacts as kernel
 from impactbeams.kernels.contact_spring import contact_states, spring_drives, to_contact
+from impactbeams.kernels.contacts_tangent import contacts_lyapunov_sums
 from impactbeams.kernels.dynamics import EVENT_LIMIT, STATUS_NAMES
 from impactbeams.kernels.events import phase_event
 from impactbeams.kernels.layout import (
     DRIVE_EQUILIBRIUM,
     FREE,
     PHASE_SCALARS,
+    ROW_EVENT,
+    ROW_FREQUENCY,
     SCALAR_CONST,
     SCALAR_COSINE,
     SCALAR_SINE,
@@ -85,6 +88,21 @@ class PackedContacts:
         """The phases' arrays as `run_contacts` and `sample_contacts` take them."""
         return (self.tables, self.forces, self.scalars, self.modes, self.drives, self.lefts,
                 self.rights, self.set_of_mask, self.settings)
+
+    @property
+    def gap_weights(self) -> np.ndarray:
+        """Each contact's modal gap weights b_j (rows, m per unit coordinate): its own run's."""
+        return np.array([run.tables[FREE, ROW_EVENT] for run in self.runs])
+
+    def tangent_arrays(self) -> tuple:
+        """The arrays `kernels.contacts_tangent` takes before a run's phases.
+
+        The phases', the settings, whether a dashpot releases early, the gap weights and the
+        free modes' frequencies (rad/s; the energy product a renormalisation uses).
+        """
+        return (self.tables, self.scalars, self.modes, self.drives, self.lefts, self.rights,
+                self.set_of_mask, self.settings, self.early_release, self.gap_weights,
+                self.runs[0].tables[FREE, ROW_FREQUENCY])
 
 
 def _gap_terms(runs: tuple[Packed, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -207,6 +225,10 @@ class ContactRun:
     peaks: np.ndarray
     status: str
     t_end: float
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """(time, mask, switched, q, v): the phases as `kernels.contacts_tangent` reads them."""
+        return self.time, self.mask, self.switched, self.q, self.v
 
 
 # phases per kernel call of a run that reports its progress (it resumes at its last phase)
@@ -391,21 +413,26 @@ def _episode_row(rows: dict[str, list[float]], contact: int, t: float) -> int:
 
 def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynamics: bool = True,
                      long_time: LongTime | None = None, transient_periods: int = 0,
-                     contacts: SeveralContacts | None = None) -> dict[str, object]:
+                     contacts: SeveralContacts | None = None, lyapunov: bool = False,
+                     ) -> dict[str, object]:
     """A map cell of several contacts: its runs' observables, as `simulate` makes the runs.
 
-    ``dynamics``: the run over [0, t_max] (s) summarised (`summarize`); ``long_time``: the run
-    over (transient + sampled) forcing periods and its long-time values (`long_time_values`,
-    the episode separation a quarter period of the slowest free mode, as a single contact's
-    map), ``dynamics_status`` then the worse of the two runs' (``first_contact`` the long
-    run's without the other). n_modes per beam, from rest or the uplifts, the search span the
-    run's horizon, at most ``max_phases`` phases per run; ``contacts``: the active sets'
-    phases, if built already.
+    ``dynamics``: the run over [0, t_max] (s) summarised (`summarize`); ``lyapunov``: that
+    run's largest Lyapunov exponent after ``transient_periods`` (`largest_exponent`);
+    ``long_time``: the run over (transient + sampled) forcing periods and its long-time values
+    (`long_time_values`, the episode separation a quarter period of the slowest free mode, as
+    a single contact's map), ``dynamics_status`` then the worse of the two runs'
+    (``first_contact`` the long run's without the other). n_modes per beam, from rest or the
+    uplifts, the search span the run's horizon, at most ``max_phases`` phases per run;
+    ``contacts``: the active sets' phases, if built already.
     """
     out: dict[str, object] = {}
-    if dynamics:
+    if dynamics or lyapunov:
         packed = pack_contacts(params, n_modes, t_max, t_max, contacts)
-        out.update(summarize(packed, run_contacts(packed, max_phases), t_max))
+        run = run_contacts(packed, max_phases)
+        out.update(summarize(packed, run, t_max))
+        if lyapunov:
+            out["lyapunov_exponent"] = largest_exponent(packed, run, transient_periods)
     if long_time is not None:
         horizon = float(long_time.horizon(params.omega, transient_periods))
         packed = pack_contacts(params, n_modes, horizon, horizon, contacts)
@@ -419,6 +446,18 @@ def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynami
                                     separation))
         out["dynamics_status"] = max(status, out.get("dynamics_status", 0))
     return out
+
+
+def largest_exponent(packed: PackedContacts, run: ContactRun, transient_periods: int) -> float:
+    """The largest Lyapunov exponent (1/s) of a recorded run, NaN without a complete period.
+
+    Averaged over the renormalisation intervals after ``transient_periods`` (as
+    `impactbeams.simulate`'s ``lyapunov``, `kernels.contacts_tangent.contacts_lyapunov_sums`).
+    """
+    sums, counts, interval = contacts_lyapunov_sums(*packed.tangent_arrays(), run.arrays(),
+                                                    run.t_end, 1, transient_periods, 1)
+    periods = int(counts.sum())
+    return float(sums[0, 0] / (periods * interval)) if periods else math.nan
 
 
 def summarize(packed: PackedContacts, run: ContactRun, t_max: float) -> dict[str, float]:

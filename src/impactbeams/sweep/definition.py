@@ -671,17 +671,10 @@ def _check_several(sweep: Sweep) -> None:
     """Refuse what a sweep of several contacts cannot do yet: one line, before any work.
 
     It maps the first contact among them (``first_impact_time``), the full dynamics'
-    observables (``DYNAMICS_OBSERVABLES``) and the long-time ones, unstepped, not the Lyapunov
-    exponent, and sweeps no flat contact key (each contact has its own: which one an axis
+    observables (``DYNAMICS_OBSERVABLES``), the Lyapunov exponent and the long-time ones,
+    unstepped, and sweeps no flat contact key (each contact has its own: which one an axis
     would change is not said; an axis ``contacts.INDEX.FIELD`` says it).
     """
-    require(f"observables in {sweep.source}", list(sweep.observables),
-            LYAPUNOV not in sweep.observables,
-            f"with {len(sweep.base.contacts)} contacts a sweep maps {FIRST_IMPACT!r}, the "
-            f"full dynamics' {', '.join(map(repr, DYNAMICS_OBSERVABLES))}, each contact's "
-            f"{', '.join(map(repr, CONTACT_OBSERVABLES))} and the long-time observables; the "
-            "Lyapunov exponent is not built for several contacts "
-            "(docs/limits.md, 'Several contacts')")
     require("stepping", sweep.stepping.direction if sweep.stepping else None,
             sweep.stepping is None, f"with {len(sweep.base.contacts)} contacts a long-time "
             "sweep starts each cell from rest (its end state is not carried to the next): "

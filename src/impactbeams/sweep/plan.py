@@ -146,7 +146,8 @@ def _several_dynamics(sweep: Sweep, start: int, stop: int, parallel: bool,
         if key not in phases:
             phases[key] = several_contacts(params, sweep.n_modes)
         return cell_observables(params, sweep.n_modes, sweep.t_max, MAX_SEGMENTS, dynamics,
-                                sweep.long_time, sweep.transient_periods, phases[key])
+                                sweep.long_time, sweep.transient_periods, phases[key],
+                                LYAPUNOV in sweep.observables)
 
     if parallel and stop - start > 1:
         with ThreadPoolExecutor(numba.get_num_threads()) as pool:

@@ -57,6 +57,7 @@ from impactbeams.preflight import format_time
 from impactbeams.progress import Progress
 from impactbeams.trajectory.episodes import default_separation
 from impactbeams.trajectory.fields import with_deflections
+from impactbeams.trajectory.lyapunov import contacts_exponents, with_exponents
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.poincare import with_long_time
 from impactbeams.trajectory.start import initial_free_state, section_gap, with_final_state
@@ -72,7 +73,7 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
                       initial_state: object = None, progress: bool = False,
                       episode_separation: float | None = None, expected: float = math.nan,
                       long_time: LongTime | None = None, transient_periods: int = 0,
-                      fields: int = 0) -> xr.Dataset:
+                      fields: int = 0, lyapunov: int = 0) -> xr.Dataset:
     """`impactbeams.simulate` of several contacts (its arguments checked): a Dataset.
 
     Along ``time``: ``energy``, ``kinetic_energy``, ``unresolved_kinetic_energy``, the tips
@@ -83,7 +84,9 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
     ``contact_episode`` each contact's own; ``final_displacement``, ``final_velocity``; with
     ``long_time`` its variables after ``transient_periods`` (`active_phases.long_time_values`);
     with ``fields`` (a number of points per beam) the deflection fields, as one spring
-    contact's (the modes' and the tip force's quasi-static part).
+    contact's (the modes' and the tip force's quasi-static part); with ``lyapunov`` that many
+    leading Lyapunov exponents after ``transient_periods``, as one contact's
+    (`impactbeams.trajectory.lyapunov.contacts_exponents`).
     ``expected``: the announced compute time (s) with ``progress``.
     """
     packed = pack_contacts(params, n_modes, t_max, search_span)
@@ -132,6 +135,10 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
             dataset, packed.runs[0],
             lambda t: (np.full(t.size, FREE, dtype=np.int64), sample(packed, run, t)[0]),
             run.t_end, times, fields)
+    if lyapunov:
+        dataset = with_exponents(dataset, contacts_exponents(packed, run, lyapunov,
+                                                             transient_periods),
+                                 transient_periods)
     if long_time is not None:
         dataset = with_long_time(dataset, long_time_values(
             packed, run, impacts, long_time, transient_periods, separation), long_time,
