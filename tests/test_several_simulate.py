@@ -382,16 +382,11 @@ def test_a_dynamics_sweep_of_several_contacts_is_simulate_cell_by_cell():
 
 
 def test_what_sweeps_of_several_contacts_refuse_in_one_line():
-    """Stepped maps of several contacts; each contact's share with one."""
+    """Each contact's share with one contact."""
     from impactbeams.sweep import sweep_from_mapping
 
-    several = {"counterpart": "stop", "contacts": [{"position1": MID}, {}]}
     omega = {"omega": {"min": 300.0, "max": 400.0, "num": 2}}
     with pytest.raises(ParameterError, match=r"^observables in sweep = \['contact_impact_count'"
                                              r"\] is not allowed: each contact's share"):
         sweep_from_mapping({"params": {"counterpart": "stop"}, "axes": omega, "t_max": 0.1,
                             "observables": ["contact_impact_count"]})
-    with pytest.raises(ParameterError, match="^stepping = 'up' is not allowed: with 2 contacts"):
-        sweep_from_mapping({"params": several, "axes": omega, "t_max": 0.1,
-                            "observables": ["steady_impact_rate"], "sampled_periods": 4,
-                            "stepping": "up", "stepped_axis": "omega"})

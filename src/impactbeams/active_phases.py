@@ -414,7 +414,8 @@ def _episode_row(rows: dict[str, list[float]], contact: int, t: float) -> int:
 def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynamics: bool = True,
                      long_time: LongTime | None = None, transient_periods: int = 0,
                      contacts: SeveralContacts | None = None, lyapunov: bool = False,
-                     ) -> dict[str, object]:
+                     start: Callable[[PackedContacts], tuple[np.ndarray, np.ndarray, int]]
+                     | None = None) -> dict[str, object]:
     """A map cell of several contacts: its runs' observables, as `simulate` makes the runs.
 
     ``dynamics``: the run over [0, t_max] (s) summarised (`summarize`); ``lyapunov``: that
@@ -422,9 +423,12 @@ def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynami
     ``long_time``: the run over (transient + sampled) forcing periods and its long-time values
     (`long_time_values`, the episode separation a quarter period of the slowest free mode, as
     a single contact's map), ``dynamics_status`` then the worse of the two runs'
-    (``first_contact`` the long run's without the other). n_modes per beam, from rest or the
-    uplifts, the search span the run's horizon, at most ``max_phases`` phases per run;
-    ``contacts``: the active sets' phases, if built already.
+    (``first_contact`` the long run's without the other), and its end state z = (q, q') as
+    ``final_displacement``, ``final_velocity`` (`impactbeams.simulate`'s; NaN where the run
+    stopped early). n_modes per beam, from rest or the uplifts (the long run from
+    ``start(packed)``'s state and closed contacts if given: a stepped sweep's), the search
+    span the run's horizon, at most ``max_phases`` phases per run; ``contacts``: the active
+    sets' phases, if built already.
     """
     out: dict[str, object] = {}
     if dynamics or lyapunov:
@@ -436,7 +440,7 @@ def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynami
     if long_time is not None:
         horizon = float(long_time.horizon(params.omega, transient_periods))
         packed = pack_contacts(params, n_modes, horizon, horizon, contacts)
-        run = run_contacts(packed, max_phases)
+        run = run_contacts(packed, max_phases, None if start is None else start(packed))
         summary = summarize(packed, run, horizon)
         out.setdefault("first_contact", summary["first_contact"])
         status = summary["dynamics_status"]
@@ -445,6 +449,9 @@ def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynami
         out.update(long_time_values(packed, run, impacts, long_time, transient_periods,
                                     separation))
         out["dynamics_status"] = max(status, out.get("dynamics_status", 0))
+        end = (np.concatenate(sample(packed, run, np.array([run.t_end]))[:2], axis=1)[0]
+               if run.status == "complete" else np.full(2 * run.q.shape[1], math.nan))
+        out["final_displacement"], out["final_velocity"] = np.split(end, 2)
     return out
 
 
