@@ -73,6 +73,7 @@ START_UP = 0.39
 COMPILE_LOAD = 0.98
 COMPILE_CORES = 2
 CONTINUATION_POINT = (0.0017, 0.53)
+CONTACT_CELL = 0.0019
 # ----------------------------------------------------------------------------------------------
 
 # The announced range about the load-scaled compile (`compile_estimate`): the load can rise
