@@ -25,6 +25,10 @@ Numba's disk cache, `impactbeams.compilation`) and the compute, per cell of a sw
   ``SAMPLING`` per output time and mode, and with the energy balance its two quadratures,
   `energy_seconds`).
 
+A cell of several contacts (`impactbeams.sweep.estimate.cell_seconds`) costs each contact's own
+run's events as above and ``CONTACT_CELL`` per contact and run: the packing of its run and
+of the active sets' event functions, and the reading of the run in Python.
+
 Time on T threads: the compute divided by ``THREAD_SPEEDUP[T]`` (measured on 2 cores).
 
 The constants are measured by ``python benchmarks/calibrate_costs.py``, which writes
