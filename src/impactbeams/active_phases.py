@@ -48,7 +48,8 @@ from impactbeams.kernels.layout import (
 )
 from impactbeams.kernels.stroboscope import tip_motions as tip_motions_kernel
 from impactbeams.longtime import LongTime, response_period, steady_rate
-from impactbeams.packing import Packed, pack_run
+from impactbeams.packing import Packed, pack_run, section_gap
+from impactbeams.params import ParameterError
 
 # the per-contact quantities of a run (`episodes`), as `impactbeams.simulate`'s impact table's
 IMPACT_COLUMNS = ("impact_onset_time", "impact_duration", "impact_impulse",
@@ -301,6 +302,31 @@ def sample(packed: PackedContacts, run: ContactRun, times: np.ndarray,
                            run.time, run.mask, run.q, run.v, times, q, v)
     phase = np.searchsorted(run.time, times, side="right") - 1
     return q, v, run.mask[phase]
+
+
+def contacts_start(packed: PackedContacts, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The run's start from the free state z = (q, q') at t = 0: (q, q', closed contacts' mask).
+
+    The contacts closed are the set S whose forces R_S = -K_S g_S - C_S g_S' are all > 0 while
+    every other contact's physical gap is >= 0 (as one contact starts closed iff g < 0 and
+    R > 0); the smallest such set (without dashpots there is one). A state that no set
+    fits (a contact overlapping while its force would pull) is refused (ParameterError).
+    """
+    modal = np.array([section_gap(run, z) for run in packed.runs])
+    gaps, rates = modal[:, 0], modal[:, 1]
+    for members in packed.members:
+        index = list(members)
+        phase = packed.contacts.sets[members]
+        forces = -phase.effective_stiffness @ gaps[index] - phase.effective_damping @ rates[index]
+        physical = gaps + packed.contacts.residual[:, index] @ forces
+        others = [j for j in range(len(packed.runs)) if j not in members]
+        if np.all(forces > 0.0) and np.all(physical[others] >= 0.0):
+            m = z.size // 2
+            return z[:m].copy(), z[m:].copy(), sum(1 << j for j in members)
+    raise ParameterError(
+        f"initial_state is not allowed: no set of closed contacts fits it (modal gaps "
+        f"{gaps.tolist()!r} m, rates {rates.tolist()!r} m/s: a contact overlaps while its "
+        "force would pull); start from an open state or an earlier run's end")
 
 
 def gap_rate(packed: PackedContacts, mask: int, contact: int, q: np.ndarray, v: np.ndarray,

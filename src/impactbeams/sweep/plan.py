@@ -176,23 +176,22 @@ def _several_dynamics(sweep: Sweep, start: int, stop: int, parallel: bool,
 def _carried_start(state: np.ndarray):
     """A stepped cell's start from the state z = (q, q') its predecessor ended in.
 
-    As `impactbeams.simulate` starts from that ``initial_state`` (`contacts_start`: the closed
-    contacts from the state), so that the cell is the run simulate makes. Where the
+    As `impactbeams.simulate` starts from that ``initial_state`` (`active_phases.contacts_start`:
+    the closed contacts from the state), so that the cell is the run simulate makes. Where the
     predecessor stopped early (NaN) or ended inside a dashpot's early release (no set of
     closed contacts fits the state, which simulate refuses) the cell starts from rest, as one
     contact's stepped cell after a run that stopped early; the latter with a RuntimeWarning.
     """
     import warnings
 
+    from impactbeams.active_phases import contacts_start
     from impactbeams.params import ParameterError
-    from impactbeams.trajectory.several_run import contacts_start
-    from impactbeams.trajectory.start import checked_state
 
     def start(packed):
         if not np.all(np.isfinite(state)):
             return None
         try:
-            return contacts_start(packed, checked_state(packed.runs[0], state, "initial_state"))
+            return contacts_start(packed, state)
         except ParameterError as error:
             warnings.warn(f"a stepped cell starts from rest: {error}", RuntimeWarning,
                           stacklevel=2)

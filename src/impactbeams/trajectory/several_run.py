@@ -40,6 +40,7 @@ from impactbeams.active_phases import (
     PackedContacts,
     _modal_gap_rates,
     contact_quantities,
+    contacts_start,
     episode_labels,
     episodes,
     force_rates,
@@ -52,7 +53,7 @@ from impactbeams.active_phases import (
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels.layout import FREE, SCALAR_LOAD_RATE, TABLE_ROWS
 from impactbeams.longtime import LongTime
-from impactbeams.params import ParameterError, Params, modes_per_beam, without_unused_law_keys
+from impactbeams.params import Params, modes_per_beam, without_unused_law_keys
 from impactbeams.preflight import format_time
 from impactbeams.progress import Progress
 from impactbeams.trajectory.episodes import default_separation
@@ -60,7 +61,7 @@ from impactbeams.trajectory.fields import with_deflections
 from impactbeams.trajectory.lyapunov import contacts_exponents, with_exponents
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.poincare import with_long_time
-from impactbeams.trajectory.start import initial_free_state, section_gap, with_final_state
+from impactbeams.trajectory.start import initial_free_state, with_final_state
 from impactbeams.variables import attributes, global_attributes, validate
 
 _NODES, _WEIGHTS = leggauss(12)
@@ -154,31 +155,6 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
         energy_frame="relative"))
     validate(dataset)  # as registered, or a bug of the package
     return dataset
-
-
-def contacts_start(packed: PackedContacts, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """The run's start from the free state z = (q, q') at t = 0: (q, q', closed contacts' mask).
-
-    The contacts closed are the set S whose forces R_S = -K_S g_S - C_S g_S' are all > 0 while
-    every other contact's physical gap is >= 0 (as one contact starts closed iff g < 0 and
-    R > 0); the smallest such set (without dashpots there is one). A state that no set
-    fits (a contact overlapping while its force would pull) is refused (ParameterError).
-    """
-    modal = np.array([section_gap(run, z) for run in packed.runs])
-    gaps, rates = modal[:, 0], modal[:, 1]
-    for members in packed.members:
-        index = list(members)
-        phase = packed.contacts.sets[members]
-        forces = -phase.effective_stiffness @ gaps[index] - phase.effective_damping @ rates[index]
-        physical = gaps + packed.contacts.residual[:, index] @ forces
-        others = [j for j in range(len(packed.runs)) if j not in members]
-        if np.all(forces > 0.0) and np.all(physical[others] >= 0.0):
-            m = z.size // 2
-            return z[:m].copy(), z[m:].copy(), sum(1 << j for j in members)
-    raise ParameterError(
-        f"initial_state is not allowed: no set of closed contacts fits it (modal gaps "
-        f"{gaps.tolist()!r} m, rates {rates.tolist()!r} m/s: a contact overlaps while its "
-        "force would pull); start from an open state or an earlier run's end")
 
 
 def _series(packed: PackedContacts, run: ContactRun, times: np.ndarray,
