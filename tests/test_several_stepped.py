@@ -106,3 +106,38 @@ def test_the_up_and_down_rows_differ_only_where_they_start():
     middle = stepped.poincare_deflection1.sel(sweep_direction="up").isel(omega=1)
     assert not np.array_equal(middle, unstepped.poincare_deflection1.isel(omega=1))
     assert math.isclose(float(stepped.omega[-1]), 420.0)
+
+
+def test_a_carried_state_no_set_fits_starts_the_cell_from_rest_with_a_warning():
+    """A predecessor's end inside a dashpot's early release (contact 0 overlapping 0.1 um while
+    its gap opens at 1 m/s: its force would pull; contact 1 open) fits no set of closed
+    contacts, which simulate refuses: the cell starts from rest, saying so; a predecessor that
+    stopped early (NaN) hands on nothing, silently; a state a set fits is simulate's start."""
+    from impactbeams.active_phases import contacts_start, pack_contacts
+    from impactbeams.sweep.plan import _carried_start
+    from test_orbits_several import DASHPOTS
+
+    packed = pack_contacts(DASHPOTS, N_MODES, 0.1, 0.1)
+    b = packed.gap_weights
+    gaps, rates = np.array([-1e-7, 1e-5]), np.array([1.0, 0.0])
+    rest_gaps, rest_rates = _modal_gaps_at_rest(packed)
+    state = np.concatenate([b.T @ np.linalg.solve(b @ b.T, gaps - rest_gaps),
+                            b.T @ np.linalg.solve(b @ b.T, rates - rest_rates)])
+    with pytest.raises(ParameterError, match="no set of closed contacts fits it"):
+        contacts_start(packed, state)
+    with pytest.warns(RuntimeWarning, match="a stepped cell starts from rest: initial_state is "
+                                            "not allowed: no set of closed contacts fits it"):
+        assert _carried_start(state)(packed) is None
+    assert _carried_start(np.full(state.size, np.nan))(packed) is None
+    open_state = np.zeros(state.size)
+    q, v, mask = _carried_start(open_state)(packed)
+    assert mask == 0 and np.array_equal(np.concatenate([q, v]), open_state)
+
+
+
+def _modal_gaps_at_rest(packed):
+    """Each contact's modal gap (m) and rate (m/s) at z = 0, t = 0: the clearances and drive."""
+    from impactbeams.packing import section_gap
+
+    zero = np.zeros(2 * packed.runs[0].q0.size)
+    return np.array([section_gap(run, zero) for run in packed.runs]).T
