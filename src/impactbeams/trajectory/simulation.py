@@ -154,7 +154,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
             exponents (an integer up to 4 n_modes, the state's dimension): variables
             ``lyapunov_exponent`` and ``lyapunov_exponent_error`` (1/s), and with more than one
             ``lyapunov_spectrum`` and its error along ``exponent``. Tangent propagation with
-            Benettin renormalisation every forcing period; spring law only (docs/model.md).
+            Benettin renormalisation every forcing period; spring law only (docs/model.md);
+            with several contacts through every active set's phase (docs/lyapunov.md).
         transient_periods: forcing periods at the start left out of the exponents' average,
             and before the first stroboscopic sample of ``long_time``.
         long_time: also the long-time response ([`impactbeams.longtime.LongTime`][]):
