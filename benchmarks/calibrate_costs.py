@@ -317,6 +317,69 @@ def compile_costs(log):
     return compile_seconds, warm
 
 
+# several contacts (issue 33): beam 1 against stops under its tip (one), under mid-span and the
+# tip (two), a two-sided stop at each (four), as benchmarks/bench_contacts.py's; an impacting
+# grid over Omega
+CONTACT_CASES = {
+    1: {"clearance": 6e-6},
+    2: {"contacts": [{"position1": 0.05, "clearance": 2e-6}, {"clearance": 6e-6}]},
+    4: {"contacts": [{"position1": 0.05, "clearance": 2e-6},
+                     {"position1": 0.05, "side": "above", "clearance": 3e-6},
+                     {"clearance": 6e-6}, {"side": "above", "clearance": 8e-6}]},
+}
+CONTACT_MODES = (8, 16)
+
+
+def contacts_sweep(count, n_modes):
+    from impactbeams.sweep.definition import sweep_from_mapping
+
+    return sweep_from_mapping({
+        "t_max": 0.2, "n_modes": n_modes, "observables": ["impact_count"],
+        "params": {"counterpart": "stop", "force_amplitude": 1e-3, "contact_stiffness": 1e4,
+                   "damping_ratio": 0.01, **CONTACT_CASES[count]},
+        "axes": {"omega": {"min": 300.0, "max": 500.0, "num": 24}}}, source="calibration")
+
+
+def contacts_costs(log):
+    """CONTACT_CELL, and each case's seconds per cell, measured against estimated.
+
+    A cell of several contacts costs its contacts' runs' events (the single contact's model
+    of each, `sweep.estimate.cell_seconds`) and CONTACT_CELL per contact: the mean over the
+    cases of two and four contacts of (measured - those runs) / contacts. One thread, a
+    sweep each (its set-up included), best of 3.
+    """
+    from impactbeams import costs
+    from impactbeams.sweep.estimate import _run_seconds, cell_seconds, sample_points
+    from impactbeams.sweep.run import run_sweep
+
+    cases, shares = [], []
+    for n in CONTACT_MODES:
+        for count in CONTACT_CASES:
+            sweep = contacts_sweep(count, n)
+            run_sweep(sweep, threads=1)  # the first compiles
+            seconds = timed(lambda sweep=sweep: run_sweep(sweep, threads=1), 3) / sweep.size
+            points = sample_points(sweep, limit=sweep.size)
+            events = float(np.mean([np.sum(_run_seconds(sweep, point.each_contact()))
+                                    for point in points]))
+            if count > 1:
+                shares.append((seconds - events) / count)
+            cases.append({"contacts": count, "n_modes": n, "measured_s_per_cell": seconds,
+                          "events_model_s_per_cell": events})
+            log(f"{count} contacts, {n} modes: {seconds * 1e3:.2f} ms per cell (events' model "
+                f"{events * 1e3:.2f} ms)")
+    fitted = round_constants(float(np.mean(shares)))  # as costs.py will hold it
+    previous, costs.CONTACT_CELL = costs.CONTACT_CELL, fitted
+    for case in cases:
+        sweep = contacts_sweep(case["contacts"], case["n_modes"])
+        case["estimated_s_per_cell"] = float(np.mean(cell_seconds(
+            sweep, sample_points(sweep, limit=sweep.size))))
+        case["measured_over_estimated"] = case["measured_s_per_cell"] / case[
+            "estimated_s_per_cell"]
+    costs.CONTACT_CELL = previous
+    log(f"several contacts: {fitted * 1e3:.2f} ms per contact and cell beyond the events")
+    return cases, fitted
+
+
 def round_constants(constants):
     """Two significant digits (floats), recursively."""
     if isinstance(constants, dict):
@@ -378,9 +441,14 @@ def main() -> None:
                         help="keep the compile and start-up figures of the existing output")
     parser.add_argument("--only-continuation", action="store_true",
                         help="measure CONTINUATION_POINT only, keep the other constants")
+    parser.add_argument("--only-contacts", action="store_true",
+                        help="measure CONTACT_CELL only, keep the other constants")
     args = parser.parse_args()
     if args.only_continuation:
         continuation_only(args.output)
+        return
+    if args.only_contacts:
+        contacts_only(args.output)
         return
     warnings.simplefilter("ignore")
     log = lambda text: print(text, flush=True)  # noqa: E731
@@ -405,6 +473,7 @@ def main() -> None:
     constants["GEOMETRY"] = geometry_cost(log)
     constants["THREAD_SPEEDUP"] = {1: 1.0, 2: thread_speedup(log)}
     measured["continuation"], constants["CONTINUATION_POINT"] = continuation_costs(log)
+    measured["contacts"], constants["CONTACT_CELL"] = contacts_costs(log)
     if args.skip_compile:
         previous = json.loads(args.output.read_text())
         constants["START_UP"] = previous["constants"]["START_UP"]
@@ -440,6 +509,20 @@ def continuation_only(output):
     result["measured"]["continuation"] = measured
     result["continuation_measured_utc"] = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
     result["continuation_load_average"] = list(os.getloadavg())
+    output.write_text(json.dumps(result, indent=1) + "\n")
+    write_module(constants)
+
+
+def contacts_only(output):
+    """Measure CONTACT_CELL alone into ``output`` and the module (the rest kept)."""
+    warnings.simplefilter("ignore")
+    result = json.loads(output.read_text())
+    measured, fitted = contacts_costs(lambda text: print(text, flush=True))
+    constants = result["constants"]
+    constants["CONTACT_CELL"] = fitted
+    result["measured"]["contacts"] = measured
+    result["contacts_measured_utc"] = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
+    result["contacts_load_average"] = list(os.getloadavg())
     output.write_text(json.dumps(result, indent=1) + "\n")
     write_module(constants)
 

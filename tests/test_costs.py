@@ -483,3 +483,79 @@ def test_a_wait_for_the_compile_helper_is_reported_and_kept_alive(fresh, monkeyp
     assert 1 <= len(beats) <= 5 and beats[0].endswith(", expected 8-17 s")
     assert re.fullmatch(r"impactbeams: compiled 1 kernels in \d+\.\d s \(cached for later runs; "
                         r"announced 8-17 s\)", lines[-1])
+
+
+# --- several contacts (issue 33) -------------------------------------------------------------
+
+def _contacts_sweep(contacts, observables=("impact_count",), **extra):
+    params = {"counterpart": "stop", "force_amplitude": 1e-3, "contact_stiffness": 1e4,
+              "damping_ratio": 0.01, **contacts}
+    return sweep_from_mapping({"t_max": 0.2, "n_modes": 8, "observables": list(observables),
+                               "params": params,
+                               "axes": {"omega": {"min": 300.0, "max": 500.0, "num": 6}},
+                               **extra})
+
+
+TIP = {"clearance": 6e-6}
+MID_AND_TIP = [{"position1": 0.05, "clearance": 2e-6}, TIP]
+
+
+def test_a_first_impact_map_of_several_contacts_costs_each_contacts_map():
+    """It runs each contact's own map (`plan._first_contact`): the sum of their estimates, and
+    with the tip stop among them more than the tip stop's map alone."""
+    from impactbeams.sweep.definition import contact_sweeps
+
+    sweep = _contacts_sweep({"contacts": MID_AND_TIP}, ("first_impact_time",))
+    total = expected_seconds(sweep, 1)
+    assert total == pytest.approx(sum(expected_seconds(each, 1)
+                                      for each in contact_sweeps(sweep)), rel=1e-14)
+    assert total > expected_seconds(_contacts_sweep(TIP, ("first_impact_time",)), 1)
+
+
+def test_a_cell_of_several_contacts_costs_its_contacts_runs_and_their_handling():
+    """A cell of the full dynamics: each contact's own run's events (one contact's model of
+    them, with its own clearance: a contact 1 mm away costs a free run's cycles) and
+    CONTACT_CELL per contact and run (the long run is a second run); one contact given as
+    ``contacts`` is the flat keys' estimate (folded: the same sweep)."""
+    from impactbeams.sweep.estimate import cell_seconds, sample_points
+
+    far = [TIP, {"position1": 0.05, "clearance": 1e-3}]
+    sweep = _contacts_sweep({"contacts": far})
+    single = _contacts_sweep(TIP)
+    points, alone = sample_points(sweep), sample_points(single)
+    far_runs = [point.each_contact()[1] for point in points]
+    free = np.array([costs.dynamics_seconds(run.numeric(), run.law, 8, 0.2, "dynamics",
+                                            run.partner) for run in far_runs])
+    assert not any(costs.impacts(run.numeric(), 8, 0.2) for run in far_runs)
+    expected = cell_seconds(single, alone) + 2 * costs.CONTACT_CELL + free
+    np.testing.assert_allclose(cell_seconds(sweep, points), expected, rtol=1e-12)
+    both = _contacts_sweep({"contacts": far}, ("impact_count", "response_period"),
+                           transient_periods=20, sampled_periods=4)
+    long_run = _contacts_sweep({"contacts": far}, ("response_period",), transient_periods=20,
+                               sampled_periods=4)
+    assert float(np.mean(cell_seconds(both, points))) == pytest.approx(float(np.mean(
+        cell_seconds(long_run, points) + cell_seconds(sweep, points))), rel=1e-12)
+    assert expected_seconds(_contacts_sweep({"contacts": [TIP]}), 1) == expected_seconds(
+        single, 1)
+    four = MID_AND_TIP + [{"position1": 0.05, "side": "above", "clearance": 3e-6},
+                          {"side": "above", "clearance": 8e-6}]
+    assert (expected_seconds(single, 1) < expected_seconds(_contacts_sweep(
+        {"contacts": MID_AND_TIP}), 1) < expected_seconds(_contacts_sweep({"contacts": four}), 1))
+
+
+def test_the_several_contacts_calibration_is_the_models_and_within_a_factor_of_three():
+    """The calibration's cases (1, 2, 4 contacts at 8 and 16 modes, benchmarks/
+    calibrate_costs.py --only-contacts): their recorded estimates are what the model gives
+    now, and each measured time per cell is within a factor of 3 of it, the spread of one
+    contact's estimates of the shipped sweeps and random runs (docs/limits.md, "Time")."""
+    from impactbeams.sweep.estimate import cell_seconds, sample_points
+
+    calibrate = _load_benchmark("calibrate_costs")
+    cases = json.loads(CALIBRATION.read_text())["measured"]["contacts"]
+    assert {(case["contacts"], case["n_modes"]) for case in cases} == {
+        (count, n) for count in (1, 2, 4) for n in calibrate.CONTACT_MODES}
+    for case in cases:
+        sweep = calibrate.contacts_sweep(case["contacts"], case["n_modes"])
+        estimate = float(np.mean(cell_seconds(sweep, sample_points(sweep, limit=sweep.size))))
+        assert case["estimated_s_per_cell"] == pytest.approx(estimate, rel=1e-12)
+        assert 1 / 3 < case["measured_s_per_cell"] / estimate < 3

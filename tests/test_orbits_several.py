@@ -105,7 +105,7 @@ def test_a_section_state_in_contact_starts_in_its_active_set():
     assert np.abs(several.state - one.state).max() < 1e-14 * np.abs(one.state).max()
     assert np.abs(several.jacobian - one.jacobian).max() < 1e-13 * np.abs(one.jacobian).max()
     together = ContactsPeriodMap(TOGETHER, N_MODES)
-    b = together._weights  # the gaps' weights: both modal gaps -5 um
+    b = together.contacts.gap_weights  # the gaps' weights: both modal gaps -5 um
     q = b.T @ np.linalg.solve(b @ b.T, np.array([-6e-6, -7e-6]))
     pushed = np.concatenate([q, np.zeros(N_MODES)])
     assert together.active_mask(pushed) == 3
@@ -182,9 +182,9 @@ def test_multipliers_are_the_finite_difference_monodromys_eigenvalues(orbits, na
 
 
 def test_what_orbits_of_several_contacts_refuse(orbits):
-    """A continuation of a flat contact key, two-parameter curves, the single contact's
-    PeriodMap and an orbit's Dataset (simulate's initial_state) refuse several contacts in
-    one line; the contacts' measures are there, the interval value is NaN."""
+    """A continuation of a flat contact key, two-parameter curves and the single contact's
+    PeriodMap refuse several contacts in one line; the contacts' measures are there, the
+    interval value is NaN."""
     with pytest.raises(ParameterError, match="parameter = 'clearance' is not allowed: with 2 "
                                              "contacts each gives its own"):
         Continuation(TWO_SIDED, "clearance", 1e-6, 4e-6)
@@ -194,9 +194,6 @@ def test_what_orbits_of_several_contacts_refuse(orbits):
                          "force_amplitude", 1e-4, 2e-3, 300.0, 500.0, N_MODES)
     with pytest.raises(ParameterError, match="not allowed in PeriodMap"):
         PeriodMap(TWO_SIDED, N_MODES)
-    with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
-                                             r"PeriodicOrbit.to_dataset \(simulate's"):
-        orbits["two-sided"][0].to_dataset()
     result = ContactsPeriodMap(TWO_SIDED, N_MODES)(settled(ContactsPeriodMap(TWO_SIDED,
                                                                               N_MODES), 40))
     assert result.peak_force > 0 and result.impulse > 0 and result.peak_forces.size >= 2
@@ -279,3 +276,47 @@ def test_continuation_of_a_two_sided_stop_locates_the_second_stops_grazing():
     error = _located_against_the_orbits_gap(dataset, indices[2], 1)
     print(f"second stop's grazing located to {error:.1e}")
     assert error < 1e-8
+
+
+@pytest.mark.parametrize("name", list(RUNS))
+def test_an_orbits_dataset_is_one_period_of_simulate_from_its_state(orbits, name):
+    """``to_dataset()``: `simulate` of several contacts over one period from the orbit's
+    section state (every variable bit for bit: its tips, energies, each contact's gap and
+    force, contacts and episodes) with the multipliers; the run closes on the orbit, its end
+    state within the orbit's residual of its start (energy norm: the same map, another run
+    of it, measured equal to 1e-15)."""
+    orbit, period_map = orbits[name]
+    dataset = orbit.to_dataset(samples_per_period=64)
+    times = np.linspace(0.0, orbit.duration, 65)
+    alone = simulate(RUNS[name], orbit.duration, N_MODES, times=times,
+                     initial_state=orbit.state)
+    for variable in alone.variables:
+        np.testing.assert_array_equal(dataset[variable].values, alone[variable].values)
+    assert dataset.contact_forces.dims == ("time", "contact") and dataset.sizes["impact"] >= 2
+    np.testing.assert_array_equal(dataset.floquet_multiplier_real, orbit.multipliers.real)
+    assert dataset.attrs["orbit_stable"] == 1 and dataset.attrs["orbit_contacts"] >= 2
+    scale = energy_scale(period_map)
+    end = np.concatenate([dataset.final_displacement, dataset.final_velocity])
+    assert (np.linalg.norm(scale * (end - orbit.state))
+            <= (orbit.residual + 1e-13) * np.linalg.norm(scale * orbit.state))
+
+
+def test_an_orbits_dataset_beside_a_contact_that_never_closes_is_the_single_contacts():
+    """A tip stop beside a mid-span one 1 mm away: the single contact's orbit Dataset in the
+    variables both have (tips, energies, contacts, episodes, multipliers), to 1e-12 of each
+    one's largest (measured 2.7e-14 for tip_velocity_1, 7e-15 or less otherwise; the
+    multipliers' exponents 7e-11, the logarithm of multipliers that agree to 3e-15)."""
+    single = FORCED.replace(clearance=2e-6)
+    two = single.replace(contacts=(Contact(clearance=2e-6), Contact(MID, clearance=1e-3)))
+    with pytest.warns(RuntimeWarning, match="does not resolve"):
+        one = periodic_orbit(single, N_MODES).to_dataset(samples_per_period=64)
+    several = periodic_orbit(two, N_MODES).to_dataset(samples_per_period=64)
+    assert several.sizes["impact"] == one.sizes["impact"] >= 2
+    for name in ("tip_deflection_1", "tip_velocity_1", "energy", "kinetic_energy",
+                 "impact_onset_time", "impact_duration", "impact_impulse", "impact_peak_force",
+                 "episode_onset_time", "episode_peak_force", "floquet_multiplier_real",
+                 "floquet_multiplier_imag", "final_displacement", "final_velocity"):
+        reference = one[name].values
+        assert np.abs(several[name].values - reference).max() <= 1e-12 * np.abs(
+            reference).max(), name
+    np.testing.assert_allclose(several.contact_forces.sel(contact=1), 0.0, rtol=0, atol=0)

@@ -335,8 +335,9 @@ def _mapping(**changes):
      "the swept axes (omega), given by stepped_axis, or add [axes.force_amplitude]"),
     (_mapping(stepped_axis="damping_ratio"),
      "stepped_axis = 'damping_ratio' is not allowed: must be one of omega, force_amplitude, "
-     "base_amplitude, clearance (a drive parameter: the carried modal state needs the same "
-     "modes from step to step) (in sweep)"),
+     "base_amplitude, clearance or, with several contacts, contacts.INDEX.clearance (a drive "
+     "parameter or a clearance: the carried modal state needs the same modes from step to "
+     "step) (in sweep)"),
     ({key: value for key, value in FOLD.items() if key != "stepping"} | {"stepped_axis": "omega"},
      "stepped_axis in sweep = 'omega' is not allowed: needs stepping = \"up\", \"down\" or "
      "\"both\""),

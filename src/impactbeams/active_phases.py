@@ -27,12 +27,15 @@ from impactbeams.contact.active_sets import SeveralContacts, possible_sets, seve
 from impactbeams.contact.spring import polar
 from impactbeams.kernels import several_contacts as kernel
 from impactbeams.kernels.contact_spring import contact_states, spring_drives, to_contact
+from impactbeams.kernels.contacts_tangent import contacts_lyapunov_sums
 from impactbeams.kernels.dynamics import EVENT_LIMIT, STATUS_NAMES
 from impactbeams.kernels.events import phase_event
 from impactbeams.kernels.layout import (
     DRIVE_EQUILIBRIUM,
     FREE,
     PHASE_SCALARS,
+    ROW_EVENT,
+    ROW_FREQUENCY,
     SCALAR_CONST,
     SCALAR_COSINE,
     SCALAR_SINE,
@@ -45,7 +48,8 @@ from impactbeams.kernels.layout import (
 )
 from impactbeams.kernels.stroboscope import tip_motions as tip_motions_kernel
 from impactbeams.longtime import LongTime, response_period, steady_rate
-from impactbeams.packing import Packed, pack_run
+from impactbeams.packing import Packed, pack_run, section_gap
+from impactbeams.params import ParameterError
 
 # the per-contact quantities of a run (`episodes`), as `impactbeams.simulate`'s impact table's
 IMPACT_COLUMNS = ("impact_onset_time", "impact_duration", "impact_impulse",
@@ -85,6 +89,21 @@ class PackedContacts:
         """The phases' arrays as `run_contacts` and `sample_contacts` take them."""
         return (self.tables, self.forces, self.scalars, self.modes, self.drives, self.lefts,
                 self.rights, self.set_of_mask, self.settings)
+
+    @property
+    def gap_weights(self) -> np.ndarray:
+        """Each contact's modal gap weights b_j (rows, m per unit coordinate): its own run's."""
+        return np.array([run.tables[FREE, ROW_EVENT] for run in self.runs])
+
+    def tangent_arrays(self) -> tuple:
+        """The arrays `kernels.contacts_tangent` takes before a run's phases.
+
+        The phases', the settings, whether a dashpot releases early, the gap weights and the
+        free modes' frequencies (rad/s; the energy product a renormalisation uses).
+        """
+        return (self.tables, self.scalars, self.modes, self.drives, self.lefts, self.rights,
+                self.set_of_mask, self.settings, self.early_release, self.gap_weights,
+                self.runs[0].tables[FREE, ROW_FREQUENCY])
 
 
 def _gap_terms(runs: tuple[Packed, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -208,6 +227,10 @@ class ContactRun:
     status: str
     t_end: float
 
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """(time, mask, switched, q, v): the phases as `kernels.contacts_tangent` reads them."""
+        return self.time, self.mask, self.switched, self.q, self.v
+
 
 # phases per kernel call of a run that reports its progress (it resumes at its last phase)
 PROGRESS_WINDOW = 512
@@ -279,6 +302,31 @@ def sample(packed: PackedContacts, run: ContactRun, times: np.ndarray,
                            run.time, run.mask, run.q, run.v, times, q, v)
     phase = np.searchsorted(run.time, times, side="right") - 1
     return q, v, run.mask[phase]
+
+
+def contacts_start(packed: PackedContacts, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The run's start from the free state z = (q, q') at t = 0: (q, q', closed contacts' mask).
+
+    The contacts closed are the set S whose forces R_S = -K_S g_S - C_S g_S' are all > 0 while
+    every other contact's physical gap is >= 0 (as one contact starts closed iff g < 0 and
+    R > 0); the smallest such set (without dashpots there is one). A state that no set
+    fits (a contact overlapping while its force would pull) is refused (ParameterError).
+    """
+    modal = np.array([section_gap(run, z) for run in packed.runs])
+    gaps, rates = modal[:, 0], modal[:, 1]
+    for members in packed.members:
+        index = list(members)
+        phase = packed.contacts.sets[members]
+        forces = -phase.effective_stiffness @ gaps[index] - phase.effective_damping @ rates[index]
+        physical = gaps + packed.contacts.residual[:, index] @ forces
+        others = [j for j in range(len(packed.runs)) if j not in members]
+        if np.all(forces > 0.0) and np.all(physical[others] >= 0.0):
+            m = z.size // 2
+            return z[:m].copy(), z[m:].copy(), sum(1 << j for j in members)
+    raise ParameterError(
+        f"initial_state is not allowed: no set of closed contacts fits it (modal gaps "
+        f"{gaps.tolist()!r} m, rates {rates.tolist()!r} m/s: a contact overlaps while its "
+        "force would pull); start from an open state or an earlier run's end")
 
 
 def gap_rate(packed: PackedContacts, mask: int, contact: int, q: np.ndarray, v: np.ndarray,
@@ -391,25 +439,34 @@ def _episode_row(rows: dict[str, list[float]], contact: int, t: float) -> int:
 
 def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynamics: bool = True,
                      long_time: LongTime | None = None, transient_periods: int = 0,
-                     contacts: SeveralContacts | None = None) -> dict[str, object]:
+                     contacts: SeveralContacts | None = None, lyapunov: bool = False,
+                     start: Callable[[PackedContacts], tuple[np.ndarray, np.ndarray, int]]
+                     | None = None) -> dict[str, object]:
     """A map cell of several contacts: its runs' observables, as `simulate` makes the runs.
 
-    ``dynamics``: the run over [0, t_max] (s) summarised (`summarize`); ``long_time``: the run
-    over (transient + sampled) forcing periods and its long-time values (`long_time_values`,
-    the episode separation a quarter period of the slowest free mode, as a single contact's
-    map), ``dynamics_status`` then the worse of the two runs' (``first_contact`` the long
-    run's without the other). n_modes per beam, from rest or the uplifts, the search span the
-    run's horizon, at most ``max_phases`` phases per run; ``contacts``: the active sets'
-    phases, if built already.
+    ``dynamics``: the run over [0, t_max] (s) summarised (`summarize`); ``lyapunov``: that
+    run's largest Lyapunov exponent after ``transient_periods`` (`largest_exponent`);
+    ``long_time``: the run over (transient + sampled) forcing periods and its long-time values
+    (`long_time_values`, the episode separation a quarter period of the slowest free mode, as
+    a single contact's map), ``dynamics_status`` then the worse of the two runs'
+    (``first_contact`` the long run's without the other), and its end state z = (q, q') as
+    ``final_displacement``, ``final_velocity`` (`impactbeams.simulate`'s; NaN where the run
+    stopped early). n_modes per beam, from rest or the uplifts (the long run from
+    ``start(packed)``'s state and closed contacts if given: a stepped sweep's), the search
+    span the run's horizon, at most ``max_phases`` phases per run; ``contacts``: the active
+    sets' phases, if built already.
     """
     out: dict[str, object] = {}
-    if dynamics:
+    if dynamics or lyapunov:
         packed = pack_contacts(params, n_modes, t_max, t_max, contacts)
-        out.update(summarize(packed, run_contacts(packed, max_phases), t_max))
+        run = run_contacts(packed, max_phases)
+        out.update(summarize(packed, run, t_max))
+        if lyapunov:
+            out["lyapunov_exponent"] = largest_exponent(packed, run, transient_periods)
     if long_time is not None:
         horizon = float(long_time.horizon(params.omega, transient_periods))
         packed = pack_contacts(params, n_modes, horizon, horizon, contacts)
-        run = run_contacts(packed, max_phases)
+        run = run_contacts(packed, max_phases, None if start is None else start(packed))
         summary = summarize(packed, run, horizon)
         out.setdefault("first_contact", summary["first_contact"])
         status = summary["dynamics_status"]
@@ -418,7 +475,22 @@ def cell_observables(params, n_modes: int, t_max: float, max_phases: int, dynami
         out.update(long_time_values(packed, run, impacts, long_time, transient_periods,
                                     separation))
         out["dynamics_status"] = max(status, out.get("dynamics_status", 0))
+        end = (np.concatenate(sample(packed, run, np.array([run.t_end]))[:2], axis=1)[0]
+               if run.status == "complete" else np.full(2 * run.q.shape[1], math.nan))
+        out["final_displacement"], out["final_velocity"] = np.split(end, 2)
     return out
+
+
+def largest_exponent(packed: PackedContacts, run: ContactRun, transient_periods: int) -> float:
+    """The largest Lyapunov exponent (1/s) of a recorded run, NaN without a complete period.
+
+    Averaged over the renormalisation intervals after ``transient_periods`` (as
+    `impactbeams.simulate`'s ``lyapunov``, `kernels.contacts_tangent.contacts_lyapunov_sums`).
+    """
+    sums, counts, interval = contacts_lyapunov_sums(*packed.tangent_arrays(), run.arrays(),
+                                                    run.t_end, 1, transient_periods, 1)
+    periods = int(counts.sum())
+    return float(sums[0, 0] / (periods * interval)) if periods else math.nan
 
 
 def summarize(packed: PackedContacts, run: ContactRun, t_max: float) -> dict[str, float]:

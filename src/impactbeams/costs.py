@@ -25,6 +25,10 @@ Numba's disk cache, `impactbeams.compilation`) and the compute, per cell of a sw
   ``SAMPLING`` per output time and mode, and with the energy balance its two quadratures,
   `energy_seconds`).
 
+A cell of several contacts (`impactbeams.sweep.estimate.cell_seconds`) costs each contact's own
+run's events as above and ``CONTACT_CELL`` per contact and run: the packing of its run and
+of the active sets' event functions, and the reading of the run in Python.
+
 Time on T threads: the compute divided by ``THREAD_SPEEDUP[T]`` (measured on 2 cores).
 
 The constants are measured by ``python benchmarks/calibrate_costs.py``, which writes
@@ -73,6 +77,7 @@ START_UP = 0.39
 COMPILE_LOAD = 0.98
 COMPILE_CORES = 2
 CONTINUATION_POINT = (0.0017, 0.53)
+CONTACT_CELL = 0.0019
 # ----------------------------------------------------------------------------------------------
 
 # The announced range about the load-scaled compile (`compile_estimate`): the load can rise

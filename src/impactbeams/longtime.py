@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from impactbeams.kernels import layout
-from impactbeams.params import is_integer, is_real, require
+from impactbeams.params import CONTACTS, contact_field, is_integer, is_real, require
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -101,6 +101,8 @@ STEPPINGS = {"up": ("up",), "down": ("down",), "both": ("up", "down")}  # the ro
 # axes along which a stepped sweep may carry its state: the drive's (a cell's forcing and gap;
 # the modes, and so the carried coordinates, stay those of the row's geometry)
 STEPPED_AXES = ("omega", "force_amplitude", "base_amplitude", "clearance")
+# with several contacts a contact's clearance too: the axis contacts.INDEX.clearance
+STEPPED_CONTACT_FIELD = "clearance"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -115,7 +117,8 @@ class Stepping:
 
     Attributes:
         direction: "up", "down" or "both".
-        axis: the swept parameter stepped along, one of ``STEPPED_AXES`` (default omega).
+        axis: the swept parameter stepped along, one of ``STEPPED_AXES`` (default omega), or
+            with several contacts one contact's clearance, ``contacts.INDEX.clearance``.
     """
 
     direction: str
@@ -126,9 +129,11 @@ class Stepping:
                 isinstance(self.direction, str) and self.direction in STEPPINGS,
                 f"must be one of {', '.join(map(repr, STEPPINGS))}")
         require("stepped_axis", self.axis,
-                isinstance(self.axis, str) and self.axis in STEPPED_AXES,
-                f"must be one of {', '.join(STEPPED_AXES)} (a drive parameter: the carried "
-                "modal state needs the same modes from step to step)")
+                isinstance(self.axis, str) and (self.axis in STEPPED_AXES or (
+                    contact_field(self.axis) or (0, ""))[1] == STEPPED_CONTACT_FIELD),
+                f"must be one of {', '.join(STEPPED_AXES)} or, with several contacts, "
+                f"{CONTACTS}.INDEX.{STEPPED_CONTACT_FIELD} (a drive parameter or a clearance: "
+                "the carried modal state needs the same modes from step to step)")
 
     @property
     def directions(self) -> tuple[str, ...]:

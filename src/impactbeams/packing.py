@@ -19,6 +19,7 @@ import numpy as np
 
 from impactbeams.configuration import BELOW, SPRING_LAW
 from impactbeams.kernels import layout
+from impactbeams.kernels.events import event_value, phase_event_function
 from impactbeams.kernels.forcing import run_inputs
 
 if TYPE_CHECKING:
@@ -328,3 +329,12 @@ def reduced_model(params: Params, n_modes: int) -> ReducedModel:
                         free.tip1, free.tip2, spring.residual1, spring.residual2,
                         params.contact_stiffness, spring.effective_stiffness,
                         params.clearance, params.force_amplitude, params.omega)
+
+
+def section_gap(packed: Packed, z: np.ndarray, t: float = 0.0) -> tuple[float, float]:
+    """The gap g (m) and its rate g' (m/s) of the free state z = (q, q') at time t (s)."""
+    n = packed.q0.size
+    scalars = packed.phase_scalars[layout.FREE]
+    gap, rate = event_value(z[:n], z[n:], t, phase_event_function(
+        packed.tables[layout.FREE], scalars, packed.settings["forcing_frequency"]))
+    return float(gap), float(rate)

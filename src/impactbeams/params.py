@@ -927,6 +927,19 @@ def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
     return resolve_materials(values, source)
 
 
+def contact_field(name: str) -> tuple[int, str] | None:
+    """(index, field) of an axis ``contacts.INDEX.FIELD``; None for any other axis name.
+
+    Only the form is read here (an index of digits, a field of `Contact`); `_contact_axis`
+    checks it against the contacts.
+    """
+    parts = name.split(".")
+    if len(parts) != 3 or parts[0] != CONTACTS or not parts[1].isdigit() or not (
+            parts[1] == "0" or not parts[1].startswith("0")):
+        return None
+    return int(parts[1]), parts[2]
+
+
 def require_one_contact(params: Params, what: str) -> None:
     """Raise ParameterError if ``params`` has several contacts, which ``what`` cannot take yet.
 

@@ -31,7 +31,15 @@ from impactbeams.kernels.contact_spring import tangent_switch, to_contact
 from impactbeams.kernels.events import phase_event
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, SPRING_DRIVE_ROWS
-from impactbeams.kernels.tangent import advance_tangents
+from impactbeams.kernels.records import CLOCK_RENORMALIZATIONS, CLOCK_TIME
+from impactbeams.kernels.tangent import (
+    advance_tangents,
+    lyapunov_schedule,
+    new_tangent,
+    orthonormalize,
+    record_growth,
+    renormalization_time,
+)
 
 
 @kernel
@@ -102,28 +110,44 @@ def open_gaps_clear(tables, scalars, modes, drives, lefts, settings, a, n, early
 
 @kernel
 def carry_contact_tangents(tables, scalars, modes, drives, lefts, rights, set_of_mask, settings,
-                           early_release, gap_weights, recorded, t_end, early, tangent_q,
-                           tangent_v):
+                           early_release, gap_weights, free_frequencies, recorded, t_end, early,
+                           schedule, tangent):
     """Carry the tangent rows (dq, dq') from ``recorded``'s start to ``t_end`` (s), in place.
 
     ``recorded`` = (time, mask, switched, q, v) of `run_contacts` (its arrays cut to the run's
     phases); ``early``: the bit mask of contacts released early at the start (0 without a
-    dashpot). The rows are free coordinates at both ends.
+    dashpot). ``tangent``, a `records.Tangent` ``(q, v, clock, sums, counts)``: the rows in
+    the free coordinates at ``clock[CLOCK_TIME] = recorded.time[0]``, there on return at
+    ``t_end``. ``schedule = (interval, t_max, transient, total)`` as for one contact
+    (`tangent.carry_tangents`): the rows are orthonormalised in the energy product of the
+    ``free_frequencies`` (rad/s) at ``i interval`` for i = 1 .. total and the logs of the
+    growth summed into ``sums``, ``counts``; ``total`` = 0 (the monodromy) renormalises none,
+    each phase then carried whole.
     """
     seg_time, seg_mask, seg_switched, seg_q, seg_v = recorded
+    tangent_q, tangent_v, clock, sums, counts = tangent
+    interval, t_max, _, total = schedule
     n = gap_weights.shape[0]
     rows, m = tangent_q.shape
-    no_force = np.zeros(m, dtype=np.complex128)
     no_drive = np.zeros((len(SPRING_DRIVE_ROWS), m), dtype=np.complex128)
     y_q, y_v = np.empty((rows, m)), np.empty((rows, m))
+    log_growth = np.empty(rows)
     count = seg_time.size
     for k in range(count):
         a = set_of_mask[seg_mask[k]]
         t_stop = seg_time[k + 1] if k + 1 < count else t_end
         oscillators = (lefts[a], rights[a], modes[a, 0])
-        tangent_switch(tangent_q, tangent_v, CONTACT, oscillators, no_drive, y_q, y_v)
-        advance_tangents(tables[a, 0], y_q, y_v, seg_time[k], t_stop - seg_time[k], no_force)
-        tangent_switch(y_q, y_v, FREE, oscillators, no_drive, tangent_q, tangent_v)
+        while clock[CLOCK_RENORMALIZATIONS] < total:
+            t_next = renormalization_time(clock[CLOCK_RENORMALIZATIONS] + 1.0, interval, t_max)
+            if t_next > t_stop:
+                break
+            _advance_in_set(tables[a, 0], oscillators, no_drive, clock, t_next, tangent_q,
+                            tangent_v, y_q, y_v)
+            orthonormalize(tangent_q, tangent_v, free_frequencies, log_growth)
+            clock[CLOCK_RENORMALIZATIONS] += 1.0
+            record_growth(sums, counts, log_growth, int(clock[CLOCK_RENORMALIZATIONS]), schedule)
+        _advance_in_set(tables[a, 0], oscillators, no_drive, clock, t_stop, tangent_q,
+                        tangent_v, y_q, y_v)
         if k + 1 == count or not early_release:
             continue  # without a dashpot every S = I (module doc)
         early = open_gaps_clear(tables, scalars, modes, drives, lefts, settings, a, n,
@@ -141,3 +165,37 @@ def carry_contact_tangents(tables, scalars, modes, drives, lefts, rights, set_of
         early &= ~(1 << switched)
         if not closing:
             early |= 1 << switched
+
+
+@kernel
+def _advance_in_set(table, oscillators, no_drive, clock, t, tangent_q, tangent_v, y_q, y_v):
+    """Advance the free-coordinate rows from ``clock[CLOCK_TIME]`` to t (s) in one set's phase.
+
+    Through the set's oscillators (``oscillators`` = (left, right, modes); ``y_q``, ``y_v``
+    their scratch rows) and back; the clock then reads t.
+    """
+    no_force = no_drive[0]
+    tangent_switch(tangent_q, tangent_v, CONTACT, oscillators, no_drive, y_q, y_v)
+    advance_tangents(table, y_q, y_v, clock[CLOCK_TIME], t - clock[CLOCK_TIME], no_force)
+    tangent_switch(y_q, y_v, FREE, oscillators, no_drive, tangent_q, tangent_v)
+    clock[CLOCK_TIME] = t
+
+
+@kernel
+def contacts_lyapunov_sums(tables, scalars, modes, drives, lefts, rights, set_of_mask, settings,
+                           early_release, gap_weights, free_frequencies, recorded, t_end,
+                           columns, transient, batches):
+    """Lyapunov sums of a recorded run of several contacts from t = 0 (all its phases).
+
+    As `tangent.recorded_run_sums` for one contact: ``columns`` tangent rows from
+    `tangent.new_tangent`, renormalised every forcing period (Omega = 0: the slowest free
+    mode's) to ``settings.t_max``; returns ``(sums, counts, interval)``. The run starts with
+    no contact released early (`run_contacts` from rest or a given state).
+    """
+    schedule = lyapunov_schedule(settings.forcing_frequency, free_frequencies, settings.t_max,
+                                 transient)
+    tangent = new_tangent(columns, free_frequencies, batches)
+    carry_contact_tangents(tables, scalars, modes, drives, lefts, rights, set_of_mask, settings,
+                           early_release, gap_weights, free_frequencies, recorded, t_end, 0,
+                           schedule, tangent)
+    return tangent.sums, tangent.counts, schedule[0]

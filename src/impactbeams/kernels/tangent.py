@@ -154,7 +154,7 @@ def advance_tangents(table, tangent_q, tangent_v, t, h, no_force):
 
 
 @kernel
-def _record(sums, counts, log_growth, i, schedule):
+def record_growth(sums, counts, log_growth, i, schedule):
     """Add interval i's log growths to its batch, if i (from 1) lies after the transient."""
     _, _, transient, total = schedule
     j = i - 1 - transient
@@ -203,7 +203,7 @@ def carry_tangents(tables, phase_scalars, spring, settings, recorded, t_end, sch
                          scratch_v, log_growth)
             clock[CLOCK_TIME] = t_next
             clock[CLOCK_RENORMALIZATIONS] += 1.0
-            _record(sums, counts, log_growth, int(clock[CLOCK_RENORMALIZATIONS]), schedule)
+            record_growth(sums, counts, log_growth, int(clock[CLOCK_RENORMALIZATIONS]), schedule)
         advance_tangents(tables[phase], tangent_q, tangent_v, clock[CLOCK_TIME],
                           seg_end - clock[CLOCK_TIME], no_force)
         clock[CLOCK_TIME] = seg_end

@@ -26,11 +26,11 @@ import numpy as np
 
 from impactbeams.kernels.layout import CONTACT, TIP_V1, TIP_V2, TIP_Y1, TIP_Y2
 from impactbeams.longtime import DEFAULT_PERIOD_TOLERANCE, response_period
-from impactbeams.packing import Packed
+from impactbeams.packing import Packed, section_gap
 from impactbeams.params import is_integer, is_real, require
 from impactbeams.sweep.plan import MAX_PHASES_PER_PERIOD
 from impactbeams.trajectory.phases import Trajectory, run, sample, tips_at, tips_of
-from impactbeams.trajectory.start import phase_state, section_gap
+from impactbeams.trajectory.start import phase_state
 
 # the label of a cell whose samples did not settle within Settling.max_periods
 NOT_SETTLED = -1

@@ -34,7 +34,8 @@ from impactbeams.active_phases import (
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels import several_contacts as kernel
 from impactbeams.kernels.contacts_tangent import carry_contact_tangents, event_at
-from impactbeams.kernels.layout import FREE, ROW_EVENT, TIP_COLUMNS, TIP_Y1, TIP_Y2
+from impactbeams.kernels.layout import FREE, TIP_COLUMNS, TIP_Y1, TIP_Y2
+from impactbeams.kernels.records import Tangent
 from impactbeams.orbits.period_map import (
     MAX_EVENTS,
     SAMPLES_PER_PERIOD,
@@ -78,7 +79,6 @@ class ContactsPeriodMap(SectionMap):
                                                       self.horizon)
         # contact 0's own run: the free phase (modes, start, section states) all runs share
         self.packed = self.contacts.runs[0]
-        self._weights = np.array([run.tables[FREE, ROW_EVENT] for run in self.contacts.runs])
         self._separation = default_separation(self.packed)
 
     @one_blas_thread
@@ -254,13 +254,11 @@ class ContactsPeriodMap(SectionMap):
         n = self.packed.q0.size
         rows_q = np.ascontiguousarray(columns[:n].T)
         rows_v = np.ascontiguousarray(columns[n:].T)
-        packed = self.contacts
         start = self._early(int(run.mask[0]), run.q[0], run.v[0])
-        carry_contact_tangents(packed.tables, packed.scalars, packed.modes, packed.drives,
-                               packed.lefts, packed.rights, packed.set_of_mask,
-                               packed.settings, packed.early_release, self._weights,
-                               (run.time, run.mask, run.switched, run.q, run.v), run.t_end,
-                               start, rows_q, rows_v)
+        tangent = Tangent(rows_q, rows_v, np.array([run.time[0], 0.0]),
+                          np.zeros((1, rows_q.shape[0])), np.zeros(1, dtype=np.int64))
+        carry_contact_tangents(*self.contacts.tangent_arrays(), run.arrays(), run.t_end, start,
+                               (math.inf, run.t_end, 0, 0), tangent)  # no renormalisation
         return np.hstack([rows_q, rows_v]).T
 
     def _run(self, z0: np.ndarray) -> ContactRun:

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import dataclasses
 from typing import TYPE_CHECKING
 
 import numpy as np
 import xarray as xr
 
-from impactbeams.params import require_one_contact
 from impactbeams.trajectory.simulation import simulate
 from impactbeams.variables import attributes, validate
 
@@ -18,9 +16,8 @@ if TYPE_CHECKING:
 
 def orbit_dataset(orbit: PeriodicOrbit, samples_per_period: int) -> xr.Dataset:
     """`simulate` over [0, p T] from the orbit's section state, with its multipliers."""
-    require_one_contact(orbit.params, "PeriodicOrbit.to_dataset (simulate's initial_state)")
     # the orbit's state replaces the run's start (uplifts and start="steady" belong to a guess)
-    params = dataclasses.replace(orbit.params, start="rest", uplift1=0.0, uplift2=0.0)
+    params = orbit.params.replace(start="rest", uplift1=0.0, uplift2=0.0)
     times = np.linspace(0.0, orbit.duration, samples_per_period * orbit.period + 1)
     dataset = simulate(params, orbit.duration, orbit.n_modes, times=times,
                        initial_state=orbit.state)

@@ -54,6 +54,7 @@ from impactbeams.params import (
     PointName,
     check_joint,
     check_range,
+    contact_field,
     fold_contacts,
     is_integer,
     is_path,
@@ -123,19 +124,6 @@ CONTACT_AXIS = CONTACTS + ".{index}.{field}"
 # name); a point moves the contact's gap weights: a geometry axis
 SWEPT_CONTACT_FIELDS = tuple(field for field, key in FLAT_KEYS.items()
                              if key in (*CONTACT_LAW_KEYS, *CONTACT_POSITIONS))
-
-
-def contact_field(name: str) -> tuple[int, str] | None:
-    """(index, field) of an axis ``contacts.INDEX.FIELD``; None for any other axis name.
-
-    Only the form is read here (an index of digits, a field of `Contact`); `_contact_axis`
-    checks it against the contacts.
-    """
-    parts = name.split(".")
-    if len(parts) != 3 or parts[0] != CONTACTS or not parts[1].isdigit() or not (
-            parts[1] == "0" or not parts[1].startswith("0")):
-        return None
-    return int(parts[1]), parts[2]
 
 
 def swept_parameter(name: str) -> str:
@@ -664,28 +652,31 @@ def _contact_sweep(sweep: Sweep, index: int, contact: Contact) -> Sweep:
         axes = (Axis("clearance", clearance, clearance, 1, "linear"),)
         fixed.pop("clearance", None)
     return dataclasses.replace(sweep, fixed=fixed, axes=axes, observables=observables,
-                               source=f"{sweep.source}, {CONTACTS}[{index}]")
+                               source=f"{sweep.source}, {CONTACTS}[{index}]",
+                               stepping=_contact_stepping(sweep, index))
+
+
+def _contact_stepping(sweep: Sweep, index: int) -> Stepping | None:
+    """Contact ``index``'s own sweep's stepping: along its name of the stepped axis, if kept.
+
+    (That sweep is checked and planned, never stepped: `plan._several_dynamics` steps the
+    sweep of several contacts.)
+    """
+    stepping = sweep.stepping
+    kept = [sweep.axes[k].name for k in contact_axes(sweep, index)]
+    if stepping is None or stepping.axis not in kept:
+        return None
+    return dataclasses.replace(stepping, axis=swept_parameter(stepping.axis))
 
 
 def _check_several(sweep: Sweep) -> None:
     """Refuse what a sweep of several contacts cannot do yet: one line, before any work.
 
     It maps the first contact among them (``first_impact_time``), the full dynamics'
-    observables (``DYNAMICS_OBSERVABLES``) and the long-time ones, unstepped, not the Lyapunov
-    exponent, and sweeps no flat contact key (each contact has its own: which one an axis
+    observables (``DYNAMICS_OBSERVABLES``), the Lyapunov exponent and the long-time ones,
+    stepped or not, and sweeps no flat contact key (each contact has its own: which one an axis
     would change is not said; an axis ``contacts.INDEX.FIELD`` says it).
     """
-    require(f"observables in {sweep.source}", list(sweep.observables),
-            LYAPUNOV not in sweep.observables,
-            f"with {len(sweep.base.contacts)} contacts a sweep maps {FIRST_IMPACT!r}, the "
-            f"full dynamics' {', '.join(map(repr, DYNAMICS_OBSERVABLES))}, each contact's "
-            f"{', '.join(map(repr, CONTACT_OBSERVABLES))} and the long-time observables; the "
-            "Lyapunov exponent is not built for several contacts "
-            "(docs/limits.md, 'Several contacts')")
-    require("stepping", sweep.stepping.direction if sweep.stepping else None,
-            sweep.stepping is None, f"with {len(sweep.base.contacts)} contacts a long-time "
-            "sweep starts each cell from rest (its end state is not carried to the next): "
-            "leave stepping out (docs/limits.md, 'Several contacts')")
     for axis in sweep.axes:
         require(f"[axes.{axis.name}] of {sweep.source}", axis.name,
                 axis.name not in CONTACT_FIELDS,

@@ -21,6 +21,7 @@ from impactbeams.sweep.definition import (
     FIRST_IMPACT,
     LYAPUNOV,
     Sweep,
+    contact_sweeps,
     expected_memory,
     geometry_count,
     stored_values,
@@ -47,10 +48,14 @@ def expected_seconds(sweep: Sweep, threads: int | None = None) -> float:
     The set-up of every geometry, then the cells over the threads: a first-impact map's cost
     per cell, or the full dynamics' per cycle of each run (over t_max for the dynamics
     observables, again for the Lyapunov exponent, and over the long run's periods), averaged
-    over a regular sub-grid of at most ``COST_SAMPLES`` cells. Start-up and compile are apart
-    (``costs.START_UP``, ``costs.COMPILE``).
+    over a regular sub-grid of at most ``COST_SAMPLES`` cells (several contacts: `cell_seconds`;
+    a first-impact map of several, the sum of each contact's own map's). Start-up and compile
+    are apart (``costs.START_UP``, ``costs.COMPILE``).
     """
     threads = threads or os.cpu_count() or 1
+    if not sweep.needs_dynamics and sweep.base.several_contacts:
+        # the first contact among several: each contact's own map (`plan._first_contact`)
+        return sum(expected_seconds(each, threads) for each in contact_sweeps(sweep))
     set_up = costs.geometry_seconds(geometry_count(sweep), sweep.n_modes)
     if not sweep.needs_dynamics and by_columns(sweep):
         return set_up + costs.first_impact_seconds(sweep.size, sweep.n_modes) / costs.speedup(
@@ -62,8 +67,25 @@ def expected_seconds(sweep: Sweep, threads: int | None = None) -> float:
 def cell_seconds(sweep: Sweep, points: list[Params]) -> np.ndarray:
     """Seconds on one core of the cells with parameters ``points``.
 
-    Full dynamics, or first impacts searched cell by cell (a map not run by columns).
+    Full dynamics, or first impacts searched cell by cell (a map not run by columns). A cell
+    of several contacts (`impactbeams.active_phases.cell_observables`) costs, in each of its
+    runs (over t_max for the dynamics observables and the Lyapunov exponent, one; the long
+    run, another), ``costs.CONTACT_CELL`` per contact (packing its run and the active sets'
+    functions, and reading the run in Python), and the events of each contact's own run
+    (`Params.each_contact`) as one contact's cell of them.
     """
+    if points and points[0].several_contacts:
+        runs = (any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, *CONTACT_OBSERVABLES,
+                             LYAPUNOV) for name in sweep.observables)
+                + (sweep.long_time is not None))
+        return np.array([runs * costs.CONTACT_CELL * len(point.contacts)
+                         + float(np.sum(_run_seconds(sweep, point.each_contact())))
+                         for point in points])
+    return _run_seconds(sweep, points)
+
+
+def _run_seconds(sweep: Sweep, points: list[Params] | tuple[Params, ...]) -> np.ndarray:
+    """`cell_seconds` of one contact's cells (one law may differ from point to point)."""
     seconds = np.zeros(len(points))
     for law in set(point.law for point in points):
         index = [k for k, point in enumerate(points) if point.law == law]

@@ -123,7 +123,9 @@ def _several_dynamics(sweep: Sweep, start: int, stop: int, parallel: bool,
     phases, `active_phases.cell_observables`), cell by cell, the active sets' phases built once
     per geometry of the chunk (`geometry_axes`: a clearance or a drive does not change them);
     with ``parallel`` the cells run on Numba's thread count of threads (the kernel releases
-    the GIL), each alone: the same values.
+    the GIL), each alone: the same values. A stepped sweep runs its rows (`stepped_rows`) so,
+    each row's cells one after the other, each long run from where the one before ended
+    (`_carried_start`).
     """
     from concurrent.futures import ThreadPoolExecutor
 
@@ -132,29 +134,70 @@ def _several_dynamics(sweep: Sweep, start: int, stop: int, parallel: bool,
     from impactbeams.active_phases import cell_observables
     from impactbeams.contact.active_sets import SeveralContacts, several_contacts
 
-    index = np.unravel_index(np.arange(start, stop), sweep.shape)
+    # the axes' indices (a stepped sweep's directions come first, `Sweep.shape`)
+    index = np.unravel_index(np.arange(start, stop), sweep.shape)[-len(sweep.axes):]
     values = [axis.values for axis in sweep.axes]  # (the plan's are its first contact's)
     dynamics = any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, *CONTACT_OBSERVABLES)
                    for name in sweep.observables)
     geometry = geometry_axes(sweep)
     phases: dict[tuple[int, ...], SeveralContacts] = {}  # each geometry's active sets, once
 
-    def one(i: int) -> dict[str, float]:
+    def one(i: int, state: np.ndarray | None = None) -> dict[str, object]:
         changes = {axis.name: values[k][index[k][i]] for k, axis in enumerate(sweep.axes)}
         params = sweep.params_at(changes)
         key = tuple(int(index[k][i]) for k in geometry)
         if key not in phases:
             phases[key] = several_contacts(params, sweep.n_modes)
         return cell_observables(params, sweep.n_modes, sweep.t_max, MAX_SEGMENTS, dynamics,
-                                sweep.long_time, sweep.transient_periods, phases[key])
+                                sweep.long_time, sweep.transient_periods, phases[key],
+                                LYAPUNOV in sweep.observables,
+                                None if state is None else _carried_start(state))
 
-    if parallel and stop - start > 1:
+    def row(cells: np.ndarray) -> list[tuple[int, dict[str, object]]]:
+        out, state = [], None
+        for i in cells:
+            out.append((int(i), one(int(i), state)))
+            if sweep.stepping is not None:
+                state = np.concatenate([out[-1][1][name] for name in STEPPED_END_STATE])
+        return out
+
+    rows = (stepped_rows(sweep, start, stop) if sweep.stepping is not None
+            else np.arange(stop - start)[:, None])
+    if parallel and rows.shape[0] > 1:
         with ThreadPoolExecutor(numba.get_num_threads()) as pool:
-            cells = list(pool.map(one, range(stop - start)))
+            done = list(pool.map(row, rows))
     else:
-        cells = [one(i) for i in range(stop - start)]
-    return {name: np.array([cell[name] for cell in cells], dtype=VARIABLES[name].dtype)
-            for name in sweep.stored}
+        done = [row(cells) for cells in rows]
+    cells = dict(itertools.chain.from_iterable(done))
+    return {name: np.array([cells[i][name] for i in range(stop - start)],
+                           dtype=VARIABLES[name].dtype) for name in sweep.stored}
+
+
+def _carried_start(state: np.ndarray):
+    """A stepped cell's start from the state z = (q, q') its predecessor ended in.
+
+    As `impactbeams.simulate` starts from that ``initial_state`` (`active_phases.contacts_start`:
+    the closed contacts from the state), so that the cell is the run simulate makes. Where the
+    predecessor stopped early (NaN) or ended inside a dashpot's early release (no set of
+    closed contacts fits the state, which simulate refuses) the cell starts from rest, as one
+    contact's stepped cell after a run that stopped early; the latter with a RuntimeWarning.
+    """
+    import warnings
+
+    from impactbeams.active_phases import contacts_start
+    from impactbeams.params import ParameterError
+
+    def start(packed):
+        if not np.all(np.isfinite(state)):
+            return None
+        try:
+            return contacts_start(packed, state)
+        except ParameterError as error:
+            warnings.warn(f"a stepped cell starts from rest: {error}", RuntimeWarning,
+                          stacklevel=2)
+            return None
+
+    return start
 
 
 def _contact_times(sweep: Sweep, index: int, each: Sweep, start: int, stop: int,

@@ -12,12 +12,16 @@ import dataclasses
 import math
 
 import numpy as np
+import xarray as xr
 
+from impactbeams.active_phases import ContactRun, PackedContacts
+from impactbeams.kernels.contacts_tangent import contacts_lyapunov_sums
 from impactbeams.kernels.tangent import interval_count, recorded_run_sums, renormalization_interval
 from impactbeams.modes import beam
 from impactbeams.packing import Packed
 from impactbeams.params import ParameterError, Params, require, require_integer
 from impactbeams.trajectory.phases import Trajectory
+from impactbeams.variables import attributes
 
 BATCHES = 16  # consecutive groups of periods whose means give the standard error
 
@@ -72,9 +76,25 @@ def check_request(params: Params, n_modes: int, t_max: float, count: int,
 def lyapunov_exponents(packed: Packed, trajectory: Trajectory, count: int,
                        transient_periods: int) -> Exponents:
     """The ``count`` leading exponents of the recorded spring-law run (1/s)."""
-    sums, counts, interval = recorded_run_sums(
+    return _exponents(*recorded_run_sums(
         packed.tables, packed.phase_scalars, packed.dynamics.spring_arrays, packed.settings,
-        trajectory.segments, trajectory.t_end, count, transient_periods, BATCHES)
+        trajectory.segments, trajectory.t_end, count, transient_periods, BATCHES))
+
+
+def contacts_exponents(packed: PackedContacts, run: ContactRun, count: int,
+                       transient_periods: int) -> Exponents:
+    """The ``count`` leading exponents (1/s) of a recorded run of several contacts.
+
+    Its tangents through every active set's phase and the saltation at every switch
+    (`impactbeams.kernels.contacts_tangent`), renormalised as one contact's.
+    """
+    return _exponents(*contacts_lyapunov_sums(*packed.tangent_arrays(), run.arrays(),
+                                              run.t_end, count, transient_periods, BATCHES))
+
+
+def _exponents(sums: np.ndarray, counts: np.ndarray, interval: float) -> Exponents:
+    """The exponents (1/s) and their batch-means errors of Benettin's sums."""
+    count = sums.shape[1]
     periods = int(counts.sum())
     if periods == 0:
         return Exponents(np.full(count, np.nan), np.full(count, np.nan), interval, 0)
@@ -83,3 +103,21 @@ def lyapunov_exponents(packed: Packed, trajectory: Trajectory, count: int,
     errors = (means.std(axis=0, ddof=1) / math.sqrt(means.shape[0]) if means.shape[0] > 1
               else np.full(count, np.nan))
     return Exponents(sums.sum(axis=0) / (periods * interval), errors, interval, periods)
+
+
+def with_exponents(dataset: xr.Dataset, exponents: Exponents, transient: int) -> xr.Dataset:
+    """The run's Lyapunov exponents as variables, with how they were averaged."""
+    averaging = {"renormalization_interval": exponents.interval,
+                 "transient_periods": transient, "averaged_periods": exponents.periods}
+    dataset["lyapunov_exponent"] = ((), exponents.values[0],
+                                    {**attributes("lyapunov_exponent"), **averaging})
+    dataset["lyapunov_exponent_error"] = ((), exponents.errors[0],
+                                          attributes("lyapunov_exponent_error"))
+    if exponents.values.size > 1:
+        dataset = dataset.assign_coords(exponent=("exponent", np.arange(exponents.values.size),
+                                                  attributes("exponent")))
+        dataset["lyapunov_spectrum"] = ("exponent", exponents.values,
+                                        {**attributes("lyapunov_spectrum"), **averaging})
+        dataset["lyapunov_spectrum_error"] = ("exponent", exponents.errors,
+                                              attributes("lyapunov_spectrum_error"))
+    return dataset

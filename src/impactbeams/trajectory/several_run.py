@@ -40,6 +40,7 @@ from impactbeams.active_phases import (
     PackedContacts,
     _modal_gap_rates,
     contact_quantities,
+    contacts_start,
     episode_labels,
     episodes,
     force_rates,
@@ -52,14 +53,15 @@ from impactbeams.active_phases import (
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels.layout import FREE, SCALAR_LOAD_RATE, TABLE_ROWS
 from impactbeams.longtime import LongTime
-from impactbeams.params import ParameterError, Params, modes_per_beam, without_unused_law_keys
+from impactbeams.params import Params, modes_per_beam, without_unused_law_keys
 from impactbeams.preflight import format_time
 from impactbeams.progress import Progress
 from impactbeams.trajectory.episodes import default_separation
 from impactbeams.trajectory.fields import with_deflections
+from impactbeams.trajectory.lyapunov import contacts_exponents, with_exponents
 from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.poincare import with_long_time
-from impactbeams.trajectory.start import initial_free_state, section_gap, with_final_state
+from impactbeams.trajectory.start import initial_free_state, with_final_state
 from impactbeams.variables import attributes, global_attributes, validate
 
 _NODES, _WEIGHTS = leggauss(12)
@@ -72,7 +74,7 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
                       initial_state: object = None, progress: bool = False,
                       episode_separation: float | None = None, expected: float = math.nan,
                       long_time: LongTime | None = None, transient_periods: int = 0,
-                      fields: int = 0) -> xr.Dataset:
+                      fields: int = 0, lyapunov: int = 0) -> xr.Dataset:
     """`impactbeams.simulate` of several contacts (its arguments checked): a Dataset.
 
     Along ``time``: ``energy``, ``kinetic_energy``, ``unresolved_kinetic_energy``, the tips
@@ -83,7 +85,9 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
     ``contact_episode`` each contact's own; ``final_displacement``, ``final_velocity``; with
     ``long_time`` its variables after ``transient_periods`` (`active_phases.long_time_values`);
     with ``fields`` (a number of points per beam) the deflection fields, as one spring
-    contact's (the modes' and the tip force's quasi-static part).
+    contact's (the modes' and the tip force's quasi-static part); with ``lyapunov`` that many
+    leading Lyapunov exponents after ``transient_periods``, as one contact's
+    (`impactbeams.trajectory.lyapunov.contacts_exponents`).
     ``expected``: the announced compute time (s) with ``progress``.
     """
     packed = pack_contacts(params, n_modes, t_max, search_span)
@@ -132,6 +136,10 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
             dataset, packed.runs[0],
             lambda t: (np.full(t.size, FREE, dtype=np.int64), sample(packed, run, t)[0]),
             run.t_end, times, fields)
+    if lyapunov:
+        dataset = with_exponents(dataset, contacts_exponents(packed, run, lyapunov,
+                                                             transient_periods),
+                                 transient_periods)
     if long_time is not None:
         dataset = with_long_time(dataset, long_time_values(
             packed, run, impacts, long_time, transient_periods, separation), long_time,
@@ -147,31 +155,6 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
         energy_frame="relative"))
     validate(dataset)  # as registered, or a bug of the package
     return dataset
-
-
-def contacts_start(packed: PackedContacts, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """The run's start from the free state z = (q, q') at t = 0: (q, q', closed contacts' mask).
-
-    The contacts closed are the set S whose forces R_S = -K_S g_S - C_S g_S' are all > 0 while
-    every other contact's physical gap is >= 0 (as one contact starts closed iff g < 0 and
-    R > 0); the smallest such set (without dashpots there is one). A state that no set
-    fits (a contact overlapping while its force would pull) is refused (ParameterError).
-    """
-    modal = np.array([section_gap(run, z) for run in packed.runs])
-    gaps, rates = modal[:, 0], modal[:, 1]
-    for members in packed.members:
-        index = list(members)
-        phase = packed.contacts.sets[members]
-        forces = -phase.effective_stiffness @ gaps[index] - phase.effective_damping @ rates[index]
-        physical = gaps + packed.contacts.residual[:, index] @ forces
-        others = [j for j in range(len(packed.runs)) if j not in members]
-        if np.all(forces > 0.0) and np.all(physical[others] >= 0.0):
-            m = z.size // 2
-            return z[:m].copy(), z[m:].copy(), sum(1 << j for j in members)
-    raise ParameterError(
-        f"initial_state is not allowed: no set of closed contacts fits it (modal gaps "
-        f"{gaps.tolist()!r} m, rates {rates.tolist()!r} m/s: a contact overlaps while its "
-        "force would pull); start from an open state or an earlier run's end")
 
 
 def _series(packed: PackedContacts, run: ContactRun, times: np.ndarray,

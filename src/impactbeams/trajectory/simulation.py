@@ -41,7 +41,7 @@ from impactbeams.progress import Progress
 from impactbeams.trajectory.episodes import default_separation, episode_table
 from impactbeams.trajectory.fields import SAMPLE_CHUNK, time_series, with_deflections
 from impactbeams.trajectory.impacts import impact_table
-from impactbeams.trajectory.lyapunov import Exponents, check_request, lyapunov_exponents
+from impactbeams.trajectory.lyapunov import check_request, lyapunov_exponents, with_exponents
 from impactbeams.trajectory.phases import Trajectory, run, sample
 from impactbeams.trajectory.poincare import long_time_variables
 from impactbeams.trajectory.start import (
@@ -154,7 +154,8 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
             exponents (an integer up to 4 n_modes, the state's dimension): variables
             ``lyapunov_exponent`` and ``lyapunov_exponent_error`` (1/s), and with more than one
             ``lyapunov_spectrum`` and its error along ``exponent``. Tangent propagation with
-            Benettin renormalisation every forcing period; spring law only (docs/model.md).
+            Benettin renormalisation every forcing period; spring law only (docs/model.md);
+            with several contacts through every active set's phase (docs/lyapunov.md).
         transient_periods: forcing periods at the start left out of the exponents' average,
             and before the first stroboscopic sample of ``long_time``.
         long_time: also the long-time response ([`impactbeams.longtime.LongTime`][]):
@@ -233,7 +234,7 @@ def simulate(params: Params, t_max: float, n_modes: int | None = None, dt_output
                                    trajectory.t_end, out_times, run_inputs.n_points)
     if lyapunov:
         exponents = lyapunov_exponents(packed, trajectory, int(lyapunov), transient_periods)
-        dataset = _with_exponents(dataset, exponents, transient_periods)
+        dataset = with_exponents(dataset, exponents, transient_periods)
     if long_time is not None:
         dataset = long_time_variables(packed, trajectory, dataset, long_time, transient_periods)
     dataset = with_final_state(dataset, final_state(packed, trajectory))
@@ -252,29 +253,27 @@ def _simulate_several(params: Params, t_max: float, n_modes: int | None, dt_outp
                       n_points: int) -> xr.Dataset:
     """[`simulate`][] of several contacts (`impactbeams.trajectory.several_run`).
 
-    Lyapunov exponents are refused in one line; the other options are checked as for one
-    contact, on each contact's run, at the most modes any of them recommends.
+    The options are checked as for one contact, on each contact's run, at the most modes any
+    of them recommends.
     """
     from impactbeams.trajectory.several import check_contact_runs
     from impactbeams.trajectory.several_run import simulate_contacts
 
-    require("lyapunov", lyapunov, not lyapunov,
-            f"with {len(params.contacts)} contacts simulate gives the time series, fields, "
-            "energy balance, contacts, episodes and long-time samples, not Lyapunov exponents "
-            "(docs/limits.md, 'Several contacts')")
     n_modes = check_contact_runs(params, t_max, n_modes)
     runs = params.each_contact()
     checked = [_checked_inputs(run, t_max, n_modes, dt_output, times, n_points, max_events,
                                search_span, episode_separation, fields, energy_balance)
                for run in runs]
     inputs = checked[0]
+    if lyapunov:
+        check_request(runs[0], inputs.n_modes, inputs.t_max, lyapunov, transient_periods)
     return simulate_contacts(params, inputs.t_max, inputs.n_modes, inputs.times,
                              inputs.search_span, inputs.max_events,
                              energy_balance=energy_balance, initial_state=initial_state,
                              progress=progress, episode_separation=inputs.episode_separation,
                              expected=sum(each.seconds for each in checked),
                              long_time=long_time, transient_periods=transient_periods,
-                             fields=inputs.n_points if fields else 0)
+                             fields=inputs.n_points if fields else 0, lyapunov=int(lyapunov))
 
 
 class _EventPace:
@@ -448,24 +447,6 @@ def _integration_bar(trajectory: Trajectory, enabled: bool, what: str,
                      ) -> Callable[[float], None]:
     """A progress bar over the simulated time an energy quadrature has integrated."""
     return Progress(trajectory.t_end, enabled=enabled, unit=f"s integrated ({what})").reach
-
-
-def _with_exponents(dataset: xr.Dataset, exponents: Exponents, transient: int) -> xr.Dataset:
-    """The run's Lyapunov exponents as variables, with how they were averaged."""
-    averaging = {"renormalization_interval": exponents.interval,
-                 "transient_periods": transient, "averaged_periods": exponents.periods}
-    dataset["lyapunov_exponent"] = ((), exponents.values[0],
-                                    {**attributes("lyapunov_exponent"), **averaging})
-    dataset["lyapunov_exponent_error"] = ((), exponents.errors[0],
-                                          attributes("lyapunov_exponent_error"))
-    if exponents.values.size > 1:
-        dataset = dataset.assign_coords(exponent=("exponent", np.arange(exponents.values.size),
-                                                  attributes("exponent")))
-        dataset["lyapunov_spectrum"] = ("exponent", exponents.values,
-                                        {**attributes("lyapunov_spectrum"), **averaging})
-        dataset["lyapunov_spectrum_error"] = ("exponent", exponents.errors,
-                                              attributes("lyapunov_spectrum_error"))
-    return dataset
 
 
 def _global_attributes(params: Params, n_modes: int, t_max: float, trajectory: Trajectory,

@@ -21,10 +21,9 @@ import xarray as xr
 from impactbeams import modes
 from impactbeams.contact.free import quadrature
 from impactbeams.kernels import contact
-from impactbeams.kernels.events import event_value, phase_event_function
 from impactbeams.kernels.layout import CONTACT, FREE
 from impactbeams.modes import BeamShapes
-from impactbeams.packing import Packed
+from impactbeams.packing import Packed, section_gap
 from impactbeams.params import MAX_DEFLECTION, ParameterError, require_type
 from impactbeams.trajectory.phases import Trajectory, free_states
 from impactbeams.variables import attributes
@@ -256,15 +255,6 @@ def initial_free_state(packed: Packed, initial_state: object) -> np.ndarray:
     else:
         z = initial_state
     return checked_state(packed, z)
-
-
-def section_gap(packed: Packed, z: np.ndarray, t: float = 0.0) -> tuple[float, float]:
-    """The gap g (m) and its rate g' (m/s) of the free state z = (q, q') at time t (s)."""
-    n = packed.q0.size
-    scalars = packed.phase_scalars[FREE]
-    gap, rate = event_value(z[:n], z[n:], t, phase_event_function(
-        packed.tables[FREE], scalars, packed.settings["forcing_frequency"]))
-    return float(gap), float(rate)
 
 
 def with_final_state(dataset: xr.Dataset, z: np.ndarray) -> xr.Dataset:
