@@ -55,15 +55,15 @@ class Trajectory:
 def run(packed: Packed, max_events: int,
         report: Callable[[float, int], None] | None = None,
         start: tuple[np.ndarray, np.ndarray, int] | None = None,
-        window: int = _WINDOW) -> Trajectory:
+        window: int | None = None) -> Trajectory:
     """Run the event kernel, in windows of segments, up to ``max_events`` segments.
 
     ``start``: the state ``(q, q', phase)`` at t = 0 in that phase's coordinates
     (`impactbeams.trajectory.start.phase_state`); default ``(packed.q0, packed.v0, FREE)``.
-    ``window``: the segments of the first window, and of the arrays at first: a run that
-    ends within it is one call of the kernel. A run known to be short asks for less (a
-    period map's dozen segments: arrays for a thousand cost more in fresh pages than its
-    kernel takes, 30 of 130 us on the stiff stop's map).
+    ``window``: the segments of the first window (default ``_WINDOW``), and of the arrays at
+    first: a run that ends within it is one call of the kernel. A run known to be short asks
+    for less (a period map's dozen segments: arrays for a thousand cost more in fresh pages
+    than its kernel takes, 30 of 130 us on the stiff stop's map).
 
     Each window ends where the run can resume exactly (``stroboscope.resume_point``: a free
     segment after a contact of positive length, where no history carries over), so that the
@@ -73,6 +73,7 @@ def run(packed: Packed, max_events: int,
     """
     from impactbeams.kernels.stroboscope import resume_point
 
+    window = _WINDOW if window is None else window
     arrays = segments(min(window, max_events), packed.q0.size)
     q0, v0, phase0 = (packed.q0, packed.v0, FREE) if start is None else start
     first = 0
