@@ -23,8 +23,9 @@ import xarray as xr
 from scipy.stats import binomtest
 
 from impactbeams import LongTime, ParameterError, Params, simulate
+from impactbeams.kernels.basins import settled_from
 from impactbeams.orbits import Settling, basin_stability, basins, periodic_orbit
-from impactbeams.orbits.basin_cells import NOT_SETTLED, STOPPED, CellRunner, settled_from
+from impactbeams.orbits.basin_cells import NOT_SETTLED, STOPPED, CellRunner
 from impactbeams.orbits.basin_map import wilson
 
 PARAMS = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
@@ -100,7 +101,7 @@ def test_sampled_cells_agree_with_a_direct_long_simulation(coarse):
         # the periods it needed: the direct samples x_k, k >= 1, repeat from the same one on
         x = np.stack([run.poincare_deflection1, run.poincare_deflection2 + PARAMS.clearance,
                       run.poincare_velocity1 / omega, run.poincare_velocity2 / omega], -1)[1:]
-        assert settled_from(x, 1, Settling().tolerance) == needed[cell]
+        assert settled_from(x, x.shape[0], 1, Settling().tolerance) == needed[cell]
 
 
 def test_attractors_are_periodic_orbit_s(coarse):
