@@ -25,7 +25,7 @@ from scipy.stats import binomtest
 from impactbeams import LongTime, ParameterError, Params, simulate
 from impactbeams.kernels.basins import settled_from
 from impactbeams.orbits import Settling, basin_stability, basins, periodic_orbit
-from impactbeams.orbits.basin_cells import NOT_SETTLED, STOPPED, CellRunner
+from impactbeams.orbits.basin_cells import NOT_SETTLED, STOPPED, CellRunner, periodic
 from impactbeams.orbits.basin_map import wilson
 
 PARAMS = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
@@ -224,6 +224,76 @@ def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch,
     np.testing.assert_array_equal(again.basin.values, coarse.basin.values)
     with pytest.raises(ParameterError, match="different result"):
         basins(PARAMS, grid(5), n_modes=N_MODES, output=output)
+
+
+def block_by_block(runner, z, known=None):
+    """One cell settled a block at a time in Python (`CellRunner.block`, NumPy's tests): the
+    path cells took before one kernel call ran a chunk. (period, contacts, settle periods,
+    status, samples, end q, end q', end phase)."""
+    s = runner.settling
+    start, history, found = runner.start(z), [], None
+    while start is not None and len(history) * s.block_periods < s.max_periods:
+        result = runner.block(start)
+        if result is None:
+            start = None
+            break
+        trajectory, x, start, _ = result
+        history.append(x)
+        x = np.concatenate(history)
+        tail = x[-s.window:]
+        if x.shape[0] < s.window:
+            continue
+        if known is None:
+            period = periodic(tail, s)
+        else:
+            step = np.abs(tail[known:] - tail[:-known]).max()
+            period = known if step <= s.tolerance * np.abs(tail).max() else 0
+        if period:
+            step = np.max(np.abs(x[period:] - x[:-period]), axis=-1)
+            scale = np.maximum.accumulate(np.max(np.abs(x), axis=-1)[::-1])[::-1][:-period]
+            apart = np.flatnonzero(step > s.tolerance * scale)
+            found = (period, runner.contacts(trajectory, period),
+                     int(apart[-1] + 2 if apart.size else 1), 0, x[-period:])
+            break
+    run = len(history) * s.block_periods
+    if start is None:
+        return 0, 0, run, STOPPED, None, None, None, -1
+    if found is None:
+        return 0, 0, run, NOT_SETTLED, None, *start
+    return *found, *start
+
+
+@pytest.mark.parametrize(("params", "n_modes", "settling", "known"), [
+    (PARAMS, N_MODES, Settling(), None),
+    (PARAMS, N_MODES, Settling(), 2),
+    (Params(counterpart="stop", contact_law="tied", omega=300.0, force_amplitude=1e-4), 2,
+     Settling(block_periods=8, window=8, max_period=4, max_periods=64), None),
+])
+def test_a_chunk_kernel_call_is_the_block_by_block_run_bit_for_bit(params, n_modes, settling,
+                                                                  known):
+    """A chunk's cells in one kernel call (`kernels.basins.settle_cells`) give the bits the
+    Python loop over blocks gives: starts in contact (spring law) and refused (tied law),
+    settled, unsettled (a known period that is not the cells') and stopped cells."""
+    from impactbeams.orbits.basin_map import Plane, _packed, _Setup
+
+    setup = _Setup.checked(params, n_modes, settling, (), None, 1, None, False)
+    a, b = np.meshgrid(*grid(3), indexing="ij")
+    states = Plane.checked(setup, None).states(a.ravel(), b.ravel())
+    runner = CellRunner(_packed(params, n_modes, settling), settling)
+    cells = runner.run_cells(states, None if known is None else np.full(9, known))
+    statuses = set()
+    for i, z in enumerate(states):
+        period, contacts, settle, status, x, q, v, phase = block_by_block(runner, z, known)
+        statuses.add((status, contacts))
+        assert (cells.period[i], cells.contacts[i], cells.settle_periods[i], cells.status[i],
+                cells.end_phase[i]) == (period, contacts, settle, status, phase)
+        if period:
+            np.testing.assert_array_equal(cells.samples[i, :period], x)
+            assert np.isnan(cells.samples[i, period:]).all()
+        if q is not None:
+            np.testing.assert_array_equal(np.concatenate([cells.end_q[i], cells.end_v[i]]),
+                                          np.concatenate([q, v]))
+    assert len(statuses) >= 2  # not all alike: both attractors, or more than one status
 
 
 def test_unsettled_cells_are_labelled_not_settled():

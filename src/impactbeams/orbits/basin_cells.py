@@ -181,14 +181,8 @@ class CellRunner:
         return out
 
 
-def periodic(x: np.ndarray, settling: Settling, known: int | None = None) -> int:
-    """The period of the samples x (samples, 4), 0 if none (`response_period`).
-
-    With ``known``: that period if the samples repeat with it (the same test), else 0.
-    """
-    if known is not None:
-        step = np.abs(x[known:] - x[:-known]).max()
-        return known if step <= settling.tolerance * np.abs(x).max() else 0
+def periodic(x: np.ndarray, settling: Settling) -> int:
+    """The period of the samples x (samples, 4), 0 if none (`response_period`)."""
     y1, y2, v1, v2 = x.T
     return int(response_period(y1, y2, v1, v2, 1.0, settling.tolerance, settling.max_period))
 
