@@ -338,6 +338,7 @@ def _plot(args: argparse.Namespace) -> int:
         _hide_dask()
     from impactbeams.plotting import parse_assignments, parse_levels, plot_dataset
     from impactbeams.plotting.arrays import read_figure_data
+    from impactbeams.plotting.curves import is_curve
     from impactbeams.plotting.events import chosen_events
     from impactbeams.preflight import image_output, read_netcdf
 
@@ -348,9 +349,11 @@ def _plot(args: argparse.Namespace) -> int:
     diagram = read_netcdf(args.over, "--over") if args.over else None
     also = [read_netcdf(path, "--with") for path in args.also]
     for path, curve in zip(args.also, also, strict=True):
-        if "curve_kind" not in curve.attrs:
-            raise ParameterError(f"--with file {path!r} is not a bifurcation curve (no "
-                                 "curve_kind)")
+        if not is_curve(curve):
+            raise ParameterError(f"--with file {path!r} is not a curve in a plane of two "
+                                 "parameters: a bifurcation curve (impactbeams continue with "
+                                 "a [curve]) or a closed-form grazing curve (impactbeams "
+                                 "grazing PARAMETER)")
     notes = plot_dataset(dataset, output, args.var,
                          values=parse_assignments(args.slice, "--slice"),
                          indices=parse_assignments(args.slice_index, "--slice-index"),
