@@ -1164,9 +1164,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="second axis: beam 1's initial tip velocity (m/s) from its first "
                             "mode, or z[J] with --coordinates")
     basin.add_argument("--states", metavar="FILE",
-                       help="initial states instead of a plane: rows of section states z = "
-                            "(q, q') in a .npy or .npz file (its one array, or 'states'), or "
-                            "a basin map's .nc (its states)")
+                       help="initial states instead of a plane: rows z = (q, q') in a .npy "
+                            "or .npz file (its one array, or 'states'), or a basin map's .nc")
     basin.add_argument("--attractors", metavar="CURVE.nc",
                        help="an impactbeams continue output: its orbits where its branches "
                             "cross this --omega (or the continued parameter's value) label "
