@@ -338,7 +338,6 @@ def _plot(args: argparse.Namespace) -> int:
         _hide_dask()
     from impactbeams.plotting import parse_assignments, parse_levels, plot_dataset
     from impactbeams.plotting.arrays import read_figure_data
-    from impactbeams.plotting.curves import is_curve
     from impactbeams.plotting.events import chosen_events
     from impactbeams.preflight import image_output, read_netcdf
 
@@ -349,6 +348,8 @@ def _plot(args: argparse.Namespace) -> int:
     diagram = read_netcdf(args.over, "--over") if args.over else None
     also = [read_netcdf(path, "--with") for path in args.also]
     for path, curve in zip(args.also, also, strict=True):
+        from impactbeams.plotting.curves import is_curve  # with --with only: xarray's import
+
         if not is_curve(curve):
             raise ParameterError(f"--with file {path!r} is not a curve in a plane of two "
                                  "parameters: a bifurcation curve (impactbeams continue with "

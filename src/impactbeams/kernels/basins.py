@@ -20,11 +20,10 @@ from impactbeams.kernels.events import event_value, phase_event_function
 from impactbeams.kernels.jit import kernel
 from impactbeams.kernels.layout import CONTACT, FREE, TIP_V1, TIP_V2, TIP_Y1, TIP_Y2
 from impactbeams.kernels.records import recorded_prefix, segments
-from impactbeams.kernels.stroboscope import tip_motion
+from impactbeams.kernels.stroboscope import NO_STATE, tip_motion
 
 NOT_SETTLED = -1  # a cell's status: no period within its periods
 STOPPED = -2  # a run stopped before its horizon, or a start the tied law refuses
-REFUSED = -1  # `start_phase`: no phase, the tied law refuses the start
 
 
 @kernel
@@ -90,7 +89,7 @@ def settled_from(x, count, period, tolerance):
 def start_phase(z, tables, phase_scalars, overlap, shifts, spring, drives, settings, q, v):
     """The section state z = (q, q') at t = 0 into (q, v) in its phase's coordinates; the phase.
 
-    The tied law starts free, from an open gap only (``REFUSED`` otherwise); the spring law in
+    The tied law starts free, from an open gap only (``NO_STATE`` otherwise); the spring law in
     contact iff g < 0 and its force -k_e g - c_e g' > 0 (`trajectory.start.phase_state`).
     """
     n = q.size
@@ -98,7 +97,7 @@ def start_phase(z, tables, phase_scalars, overlap, shifts, spring, drives, setti
         tables[FREE], phase_scalars[FREE], settings.forcing_frequency))
     contact.copy_state(z[:n], z[n:], q, v)
     if not contact.keeps_free_coordinates(settings.contact_law):
-        return FREE if gap > 0.0 else REFUSED
+        return FREE if gap > 0.0 else NO_STATE
     force = -settings.contact_stiffness * gap - settings.contact_damping * gap_rate
     if not (gap < 0.0 and force > 0.0):
         return FREE
@@ -144,12 +143,12 @@ def settle_cells(tables, forces, phase_scalars, overlap, shifts, spring, drives,
         phase = start_phase(states[i], tables, phase_scalars, overlap, shifts, spring, drives,
                             settings, q, v)
         run = 0  # forcing periods run
-        while phase != REFUSED and run < max_periods:
+        while phase != NO_STATE and run < max_periods:  # NO_STATE: refused, or stopped
             count, run_status, _ = run_events(tables, forces, phase_scalars, overlap, shifts,
                                               spring, drives, settings, q, v, recorded, 0.0,
                                               phase)
             if run_status != COMPLETE:
-                phase = REFUSED
+                phase = NO_STATE
                 break
             sample_states(tables, forces, spring, drives, settings,
                           recorded_prefix(recorded, count), times, sample_q, sample_v,
@@ -174,9 +173,11 @@ def settle_cells(tables, forces, phase_scalars, overlap, shifts, spring, drives,
                 period[i] = p
                 contacts[i] = _onsets_since(recorded, count, times[-1] - p * forcing_period)
                 settle_periods[i] = settled_from(history, run, p, tolerance)
-                samples[i, :p] = history[run - p:run]
+                for k in range(p):  # element by element: no slice assignment's message
+                    for c in range(4):
+                        samples[i, k, c] = history[run - p + k, c]
                 break
-        if phase == REFUSED:
+        if phase == NO_STATE:
             status[i], settle_periods[i] = STOPPED, run
             continue
         contact.copy_state(q, v, end_q[i], end_v[i])
