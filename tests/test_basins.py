@@ -268,6 +268,8 @@ def block_by_block(runner, z, known=None):
     (PARAMS, N_MODES, Settling(), 2),
     (Params(counterpart="stop", contact_law="tied", omega=300.0, force_amplitude=1e-4), 2,
      Settling(block_periods=8, window=8, max_period=4, max_periods=64), None),
+    (Params(counterpart="stop", contact_law="tied", omega=300.0, force_amplitude=1e-4,
+            damping_ratio=0.02), 2, Settling(), None),  # settles: two contacts per orbit
 ])
 def test_a_chunk_kernel_call_is_the_block_by_block_run_bit_for_bit(params, n_modes, settling,
                                                                   known):
