@@ -14,9 +14,14 @@ contacts per period). A grid of ``--points`` x ``--points`` (the default contact
   to label every cell), with its stroboscopic samples (`long_time`); CPU time, one thread,
   over every ``--stride``-th cell, scaled to the grid.
 
+* Workers: the soft stop's map of ``--ratio-points`` x ``--ratio-points`` states (81: 6561)
+  on 1 and on 2 worker threads, in turn ``--repeats`` times in this process; wall and CPU
+  time of each, and the load average (1 min) before each pair, the machine being shared.
+
 Writes basins.json (and prints it) to ``--out`` (default docs/benchmarks).
 
-    python benchmarks/bench_basins.py [--points 21] [--stride 7] [--out DIR]
+    python benchmarks/bench_basins.py [--points 21] [--stride 7] [--ratio-points 81]
+        [--repeats 3] [--out DIR]
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import platform
 import time
 from pathlib import Path
@@ -92,10 +98,29 @@ def measure(params: Params, n_modes: int, points: int, stride: int) -> dict:
     }
 
 
+def workers(params: Params, n_modes: int, points: int, repeats: int) -> dict:
+    """The same map on 1 and on 2 worker threads, in turn ``repeats`` times: wall, CPU (s)."""
+    basins(params, axes(3), n_modes=n_modes, workers=2)  # compiles
+    runs: dict[str, list[float]] = {key: [] for key in (
+        "load_1min", "wall_1_worker", "cpu_1_worker", "wall_2_workers", "cpu_2_workers")}
+    for _ in range(repeats):
+        runs["load_1min"].append(os.getloadavg()[0])
+        for count, name in ((1, "1_worker"), (2, "2_workers")):
+            wall, cpu = time.perf_counter(), time.process_time()
+            basins(params, axes(points), n_modes=n_modes, workers=count)
+            runs[f"cpu_{name}"].append(time.process_time() - cpu)
+            runs[f"wall_{name}"].append(time.perf_counter() - wall)
+    ratios = [one / two for one, two in zip(runs["wall_1_worker"], runs["wall_2_workers"],
+                                            strict=True)]
+    return {"n_modes": n_modes, "cells": points ** 2, **runs, "wall_ratio_1_to_2": ratios}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--points", type=int, default=21)
     parser.add_argument("--stride", type=int, default=7)
+    parser.add_argument("--ratio-points", type=int, default=81)
+    parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--out", type=Path, default=Path(__file__).parents[1] / "docs"
                         / "benchmarks")
     args = parser.parse_args()
@@ -107,6 +132,7 @@ def main() -> None:
         points = args.points if shrink == 1 else args.points // 2 + 1
         report[name] = measure(params, required_modes(params), points,
                                max(1, args.stride // shrink))
+    report["workers"] = workers(SOFT, required_modes(SOFT), args.ratio_points, args.repeats)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "basins.json").write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2))

@@ -23,8 +23,9 @@ import xarray as xr
 from scipy.stats import binomtest
 
 from impactbeams import LongTime, ParameterError, Params, simulate
+from impactbeams.kernels.basins import settled_from
 from impactbeams.orbits import Settling, basin_stability, basins, periodic_orbit
-from impactbeams.orbits.basin_cells import NOT_SETTLED, STOPPED, CellRunner, settled_from
+from impactbeams.orbits.basin_cells import NOT_SETTLED, STOPPED, CellRunner, periodic
 from impactbeams.orbits.basin_map import wilson
 
 PARAMS = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
@@ -100,7 +101,7 @@ def test_sampled_cells_agree_with_a_direct_long_simulation(coarse):
         # the periods it needed: the direct samples x_k, k >= 1, repeat from the same one on
         x = np.stack([run.poincare_deflection1, run.poincare_deflection2 + PARAMS.clearance,
                       run.poincare_velocity1 / omega, run.poincare_velocity2 / omega], -1)[1:]
-        assert settled_from(x, 1, Settling().tolerance) == needed[cell]
+        assert settled_from(x, x.shape[0], 1, Settling().tolerance) == needed[cell]
 
 
 def test_attractors_are_periodic_orbit_s(coarse):
@@ -223,6 +224,78 @@ def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch,
     np.testing.assert_array_equal(again.basin.values, coarse.basin.values)
     with pytest.raises(ParameterError, match="different result"):
         basins(PARAMS, grid(5), n_modes=N_MODES, output=output)
+
+
+def block_by_block(runner, z, known=None):
+    """One cell settled a block at a time in Python (`CellRunner.block`, NumPy's tests): the
+    path cells took before one kernel call ran a chunk. (period, contacts, settle periods,
+    status, samples, end q, end q', end phase)."""
+    s = runner.settling
+    start, history, found = runner.start(z), [], None
+    while start is not None and len(history) * s.block_periods < s.max_periods:
+        result = runner.block(start)
+        if result is None:
+            start = None
+            break
+        trajectory, x, start, _ = result
+        history.append(x)
+        x = np.concatenate(history)
+        tail = x[-s.window:]
+        if x.shape[0] < s.window:
+            continue
+        if known is None:
+            period = periodic(tail, s)
+        else:
+            step = np.abs(tail[known:] - tail[:-known]).max()
+            period = known if step <= s.tolerance * np.abs(tail).max() else 0
+        if period:
+            step = np.max(np.abs(x[period:] - x[:-period]), axis=-1)
+            scale = np.maximum.accumulate(np.max(np.abs(x), axis=-1)[::-1])[::-1][:-period]
+            apart = np.flatnonzero(step > s.tolerance * scale)
+            found = (period, runner.contacts(trajectory, period),
+                     int(apart[-1] + 2 if apart.size else 1), 0, x[-period:])
+            break
+    run = len(history) * s.block_periods
+    if start is None:
+        return 0, 0, run, STOPPED, None, None, None, -1
+    if found is None:
+        return 0, 0, run, NOT_SETTLED, None, *start
+    return *found, *start
+
+
+@pytest.mark.parametrize(("params", "n_modes", "settling", "known"), [
+    (PARAMS, N_MODES, Settling(), None),
+    (PARAMS, N_MODES, Settling(), 2),
+    (Params(counterpart="stop", contact_law="tied", omega=300.0, force_amplitude=1e-4), 2,
+     Settling(block_periods=8, window=8, max_period=4, max_periods=64), None),
+    (Params(counterpart="stop", contact_law="tied", omega=300.0, force_amplitude=1e-4,
+            damping_ratio=0.02), 2, Settling(), None),  # settles: two contacts per orbit
+])
+def test_a_chunk_kernel_call_is_the_block_by_block_run_bit_for_bit(params, n_modes, settling,
+                                                                  known):
+    """A chunk's cells in one kernel call (`kernels.basins.settle_cells`) give the bits the
+    Python loop over blocks gives: starts in contact (spring law) and refused (tied law),
+    settled, unsettled (a known period that is not the cells') and stopped cells."""
+    from impactbeams.orbits.basin_map import Plane, _packed, _Setup
+
+    setup = _Setup.checked(params, n_modes, settling, (), None, 1, None, False)
+    a, b = np.meshgrid(*grid(3), indexing="ij")
+    states = Plane.checked(setup, None).states(a.ravel(), b.ravel())
+    runner = CellRunner(_packed(params, n_modes, settling), settling)
+    cells = runner.run_cells(states, None if known is None else np.full(9, known))
+    statuses = set()
+    for i, z in enumerate(states):
+        period, contacts, settle, status, x, q, v, phase = block_by_block(runner, z, known)
+        statuses.add((status, contacts))
+        assert (cells.period[i], cells.contacts[i], cells.settle_periods[i], cells.status[i],
+                cells.end_phase[i]) == (period, contacts, settle, status, phase)
+        if period:
+            np.testing.assert_array_equal(cells.samples[i, :period], x)
+            assert np.isnan(cells.samples[i, period:]).all()
+        if q is not None:
+            np.testing.assert_array_equal(np.concatenate([cells.end_q[i], cells.end_v[i]]),
+                                          np.concatenate([q, v]))
+    assert len(statuses) >= 2  # not all alike: both attractors, or more than one status
 
 
 def test_unsettled_cells_are_labelled_not_settled():
@@ -448,3 +521,107 @@ def test_a_bad_basins_file_is_one_line_before_any_run(tmp_path, monkeypatch, cap
     assert "axis1 in [basins] of b.toml = 4e-05,0.0 is not allowed: need LOW < HIGH" in (
         capsys.readouterr().err)
 
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory, coarse):
+    """The coarse map's states in a .npz, and a continuation of its model in Omega across
+    300 rad/s (the branch crosses it three times: impacting stable, unstable, non-impacting)."""
+    from impactbeams.continuation import Continuation, continue_orbits
+
+    folder = tmp_path_factory.mktemp("files")
+    np.savez(folder / "starts.npz", states=coarse_states(coarse))
+    continue_orbits(Continuation(PARAMS, "omega", 250.0, 330.0, n_modes=N_MODES,
+                                 max_branches=1)).to_netcdf(folder / "curve.nc")
+    coarse.to_netcdf(folder / "coarse.nc")
+    return folder
+
+
+def coarse_states(dataset):
+    n = dataset.coordinate.size
+    return np.concatenate([dataset.start_displacement.values.reshape(-1, n),
+                           dataset.start_velocity.values.reshape(-1, n)], axis=1)
+
+
+MODEL = ["--counterpart", "stop", "--contact-stiffness", "100", "--damping-ratio", "0.02",
+         "--force-amplitude", "1e-4", "--omega", "300", "--n-modes", "5"]
+
+
+def test_cli_states_and_attractors_from_files(files, coarse, capsys):
+    """``--states`` (a .npz of the coarse map's states) and ``--attractors`` (a continuation):
+    the continuation's three orbits at 300 rad/s label the cells, each cell on the given orbit
+    whose state is the coarse map's own attractor's (found by running, to 1e-8), none on the
+    unstable one; a basin map's .nc gives its states again."""
+    from impactbeams.cli import main
+
+    output = files / "given.nc"
+    assert main(["basins", *MODEL, "--states", str(files / "starts.npz"), "--attractors",
+                 str(files / "curve.nc"), "-o", str(output), "--quiet"]) == 0
+    given = xr.open_dataset(output)
+    assert given.attractor_given.values.tolist() == [1, 1, 1]
+    labels = given.basin.values
+    for found in coarse.attractor.values:
+        state = state_of(coarse, found)
+        apart = [np.abs(state_of(given, k) - state).max() / np.abs(state).max()
+                 for k in given.attractor.values]
+        match = int(np.argmin(apart))
+        assert apart[match] < 1e-8, apart
+        np.testing.assert_array_equal(labels == match, coarse.basin.values.ravel() == found)
+    unstable = set(given.attractor.values) - set(labels)
+    assert len(unstable) == 1 and given.basin_fraction[unstable.pop()] == 0.0
+    np.testing.assert_array_equal(given.start_displacement.values,
+                                  coarse_states(coarse)[:, :N_MODES])
+    again = files / "again.nc"
+    assert main(["basins", *MODEL, "--states", str(files / "coarse.nc"), "-o", str(again),
+                 "--quiet"]) == 0
+    np.testing.assert_array_equal(xr.open_dataset(again).basin.values, coarse.basin.values.ravel())
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (["--states", "bad.npy"], "--states = 'bad.npy' holds an array of shape (3, 4): must be "
+                              "rows of 10 numbers"),
+    (["--states", "two.npz"], "--states = 'two.npz' holds arrays a, b: name the initial"),
+    (["--states", "none.npz"], "--states = 'none.npz': no such file"),
+    (["--states", "starts.txt"], "--states = 'starts.txt' is not allowed: must be a .npy"),
+    (["--states", "starts.npz", "--n-modes", "4"], "rows of 8 numbers"),
+    (["--states", "starts.npz", "--axis1", "0,1"], "--axis1 is not allowed with --states"),
+    (["--axis1", "0,1"], "--axis2 is needed: the plane's two axes --axis1 and --axis2, or "
+                         "--states"),
+    (["--states", "starts.npz", "--attractors", "coarse.nc"],
+     "--attractors = 'coarse.nc' is not a continuation's output"),
+    (["--states", "starts.npz", "--attractors", "curve.nc", "--force-amplitude", "2e-4"],
+     "its orbits are of force_amplitude = 0.0001, the map's force_amplitude is 0.0002"),
+    (["--states", "starts.npz", "--attractors", "curve.nc", "--omega", "400"],
+     "its branches do not reach omega = 400 (they cover 250 to 330)"),
+    (["--states", "starts.npz", "--attractors", "curve.nc", "--n-modes", "4"],
+     "its orbits have n_modes = 5, the map's 4"),
+])
+def test_bad_states_and_attractors_files_are_one_line(files, monkeypatch, capsys, change,
+                                                      message):
+    from impactbeams.cli import main
+
+    monkeypatch.setattr(CellRunner, "run_cells", lambda *_: pytest.fail("ran"))
+    monkeypatch.chdir(files)
+    np.save("bad.npy", np.zeros((3, 4)))
+    np.savez("two.npz", a=np.zeros((2, 10)), b=np.zeros((2, 10)))
+    assert main(["basins", *MODEL, *change, "-o", "x.nc"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == [f"impactbeams: error: {err.split('error: ')[1].strip()}"]
+    assert message in err
+    assert not Path("x.nc").exists()
+
+
+def test_a_basins_file_names_its_states_and_attractors(files, coarse, capsys):
+    """``states`` and ``attractors`` in a [basins] table, relative to the file's folder: the
+    map of ``--states`` and ``--attractors``; with axis1 beside states: one line."""
+    from impactbeams.cli import main
+
+    table = BASINS_FILE.split("axis1")[0]
+    (files / "given.toml").write_text(table + 'states = "starts.npz"\nattractors = "curve.nc"\n')
+    output = files / "from_file.nc"
+    assert main(["run", str(files / "given.toml"), "-o", str(output), "--quiet"]) == 0
+    np.testing.assert_array_equal(xr.open_dataset(output).basin.values,
+                                  xr.open_dataset(files / "given.nc").basin.values)
+    (files / "both.toml").write_text(BASINS_FILE + 'states = "starts.npz"\n')
+    assert main(["run", str(files / "both.toml"), "-o", str(output)]) == 2
+    assert "axis1 in [basins] of" in capsys.readouterr().err

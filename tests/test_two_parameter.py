@@ -637,7 +637,9 @@ def test_plot_draws_several_curves_of_one_plane_from_the_command_line(
     assert (tmp_path / "both.png").stat().st_size > 0
     capsys.readouterr()
     for first, also, message in (
-            ("up", "map", "--with file '{}' is not a bifurcation curve (no curve_kind)"),
+            ("up", "map", "--with file '{}' is not a curve in a plane of two parameters: a "
+                          "bifurcation curve (impactbeams continue with a [curve]) or a "
+                          "closed-form grazing curve (impactbeams grazing PARAMETER)"),
             ("up", "other", "curve 1 is in (omega, clearance), not in the first one's plane "
                             "(omega, force_amplitude): draw them apart"),
             ("map", "up", "--with is not allowed: it adds bifurcation curves to a bifurcation "
@@ -647,6 +649,54 @@ def test_plot_draws_several_curves_of_one_plane_from_the_command_line(
         (line,) = capsys.readouterr().err.splitlines()
         assert line == f"impactbeams: error: {message.format(names[also])}"
         assert not (tmp_path / "no.png").exists()
+
+
+def test_plot_draws_the_closed_form_grazing_curve_with_a_continued_one(
+        small_grazing, tmp_path, capsys, monkeypatch):
+    """``plot CURVE.nc --with GRAZING.nc``, GRAZING.nc written by ``impactbeams grazing``: one
+    figure with the continued curve and the closed-form one (dotted, its own legend entry),
+    each line's points those of its file; the grazing frequencies of one drive (no plane):
+    one line, exit 2."""
+    from impactbeams.cli import main
+    from impactbeams.io import write_netcdf
+    from impactbeams.plotting import curves as plotted
+
+    model = ["--contact-stiffness", "1e4", "--damping-ratio", "0.02", "--clearance", "1.1e-5",
+             "--n-modes", "3"]
+    curve, closed, frequencies = (tmp_path / f"{name}.nc" for name in
+                                  ("curve", "closed", "frequencies"))
+    write_netcdf(small_grazing, curve)
+    assert main(["grazing", "force_amplitude", "--omega-min", "230", "--omega-max", "235",
+                 "--points", "11", *model, "-o", str(closed), "--quiet"]) == 0
+    assert main(["grazing", "omega", "--omega-min", "230", "--omega-max", "240",
+                 "--force-amplitude", "3e-5", *model, "-o", str(frequencies), "--quiet"]) == 0
+    drawn = []
+    original = plotted.draw_curves
+    monkeypatch.setattr(plotted, "draw_curves", lambda axes, curves, *rest, **options: (
+        drawn.append(axes), original(axes, curves, *rest, **options))[1])
+    image = tmp_path / "both.png"
+    assert main(["plot", str(curve), "--with", str(closed), "-o", str(image)]) == 0
+    assert image.stat().st_size > 0
+    (axes,) = drawn
+    legend = [text.get_text() for text in axes.get_legend().get_texts()]
+    assert "grazing curve" in legend
+    assert "closed-form grazing curve (linear response)" in legend
+    with xr.open_dataset(closed) as written:
+        dotted = [line for line in axes.get_lines() if line.get_linestyle() == ":"]
+        (line,) = dotted
+        np.testing.assert_array_equal(line.get_xdata(), written.omega.values)
+        # drawn in the continued curve's units (uN): the file's force amplitudes scaled
+        ratio = line.get_ydata() / written.force_amplitude.values
+        np.testing.assert_allclose(ratio, 1e6, rtol=1e-15)
+    solid = np.concatenate([line.get_xdata() for line in axes.get_lines()
+                            if line.get_linestyle() == "-" and len(line.get_xdata()) > 1])
+    assert set(small_grazing.omega.values) <= set(solid)
+    capsys.readouterr()
+    assert main(["plot", str(curve), "--with", str(frequencies), "-o",
+                 str(tmp_path / "no.png")]) == 2
+    (message,) = capsys.readouterr().err.splitlines()
+    assert "is not a curve in a plane of two parameters" in message
+    assert not (tmp_path / "no.png").exists()
 
 
 def test_a_curve_cut_at_max_points_exits_3_unless_allowed(tmp_path, capsys):

@@ -348,9 +348,13 @@ def _plot(args: argparse.Namespace) -> int:
     diagram = read_netcdf(args.over, "--over") if args.over else None
     also = [read_netcdf(path, "--with") for path in args.also]
     for path, curve in zip(args.also, also, strict=True):
-        if "curve_kind" not in curve.attrs:
-            raise ParameterError(f"--with file {path!r} is not a bifurcation curve (no "
-                                 "curve_kind)")
+        from impactbeams.plotting.curves import is_curve  # with --with only: xarray's import
+
+        if not is_curve(curve):
+            raise ParameterError(f"--with file {path!r} is not a curve in a plane of two "
+                                 "parameters: a bifurcation curve (impactbeams continue with "
+                                 "a [curve]) or a closed-form grazing curve (impactbeams "
+                                 "grazing PARAMETER)")
     notes = plot_dataset(dataset, output, args.var,
                          values=parse_assignments(args.slice, "--slice"),
                          indices=parse_assignments(args.slice_index, "--slice-index"),
@@ -535,9 +539,12 @@ def _basins(args: argparse.Namespace) -> int:
     from impactbeams.preflight import require_output_file
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
-    plan = BasinPlan(params_from_args(args), (args.axis1, args.axis2), args.points, args.random,
-                     args.seed, args.coordinates, args.n_modes, args.max_periods)
-    plan.checked(lambda key: f"--{key}")
+    axes = (args.axis1, args.axis2)
+    plan = BasinPlan(params_from_args(args), None if axes == (None, None) else axes,
+                     args.points, args.random, args.seed, args.coordinates, args.n_modes,
+                     args.max_periods, *(None if name is None else Path(name)
+                                         for name in (args.states, args.attractors)))
+    plan.checked()
     return _basin_map(args, plan, output, args.workers, args.chunk_cells)
 
 
@@ -1147,15 +1154,23 @@ def build_parser() -> argparse.ArgumentParser:
     add_parameter_options(grazing)
     grazing.set_defaults(handler=_grazing)
 
-    basin = command("basins", "--axis1 LOW,HIGH --axis2 LOW,HIGH -o OUT.nc [OPTIONS] "
-                    "[PARAMETER OPTIONS]", help="basins of attraction over a plane of initial "
-                                                "states, at fixed parameters")
-    basin.add_argument("--axis1", type=_range, required=True, metavar="LOW,HIGH",
+    basin = command("basins", "(--axis1 LOW,HIGH --axis2 LOW,HIGH | --states FILE) -o OUT.nc "
+                    "[OPTIONS] [PARAMETER OPTIONS]", help="basins of attraction over a plane "
+                                                          "of initial states, at fixed "
+                                                          "parameters")
+    basin.add_argument("--axis1", type=_range, metavar="LOW,HIGH",
                        help="first axis: beam 1's initial tip deflection (m) from its first "
                             "mode, or z[I] with --coordinates")
-    basin.add_argument("--axis2", type=_range, required=True, metavar="LOW,HIGH",
+    basin.add_argument("--axis2", type=_range, metavar="LOW,HIGH",
                        help="second axis: beam 1's initial tip velocity (m/s) from its first "
                             "mode, or z[J] with --coordinates")
+    basin.add_argument("--states", metavar="FILE",
+                       help="initial states instead of a plane: rows z = (q, q') in a .npy "
+                            "or .npz file (its one array, or 'states'), or a basin map's .nc")
+    basin.add_argument("--attractors", metavar="CURVE.nc",
+                       help="an impactbeams continue output: its orbits where its branches "
+                            "cross this --omega (or the continued parameter's value) label "
+                            "the basins first")
     basin.add_argument("--coordinates", type=_index_pair, metavar="I,J",
                        help="the plane of modal coordinates z[I], z[J] of z = (q, q'), in "
                             "modal units (default: the tip plane)")

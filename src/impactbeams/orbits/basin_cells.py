@@ -2,7 +2,9 @@
 
 A cell starts from a section state z = (q, q') at t = 0 (forcing phase 0) and runs in blocks of
 ``Settling.block_periods`` forcing periods T = 2 pi / Omega on the package's exact event-driven
-run (`impactbeams.trajectory.phases.run`, the kernels `simulate` uses). After each block its
+run (the kernels `simulate` uses; a chunk of cells in one call of
+`impactbeams.kernels.basins.settle_cells`, one block of an attractor's run on here,
+`CellRunner.block`). After each block its
 stroboscopic samples, the tips' motion at t = k T, are tested for a period as the long-time
 response's are (`impactbeams.longtime.response_period`) over the last ``Settling.window``
 samples; the next block starts from the state the last one ended in, on the section again
@@ -24,6 +26,7 @@ import math
 
 import numpy as np
 
+from impactbeams.kernels.basins import NOT_SETTLED, STOPPED, settle_cells
 from impactbeams.kernels.layout import CONTACT, TIP_V1, TIP_V2, TIP_Y1, TIP_Y2
 from impactbeams.longtime import DEFAULT_PERIOD_TOLERANCE, response_period
 from impactbeams.packing import Packed, section_gap
@@ -32,11 +35,9 @@ from impactbeams.sweep.plan import MAX_PHASES_PER_PERIOD
 from impactbeams.trajectory.phases import Trajectory, run, sample, tips_at, tips_of
 from impactbeams.trajectory.start import phase_state
 
-# the label of a cell whose samples did not settle within Settling.max_periods
-NOT_SETTLED = -1
-# the label of a cell whose run stopped before its horizon (the event limit), or whose start the
-# tied law refuses (the tips overlap at t = 0: the tied law starts from an open gap only)
-STOPPED = -2
+# the label of a cell whose samples did not settle within Settling.max_periods: NOT_SETTLED;
+# of a cell whose run stopped before its horizon (the event limit), or whose start the tied law
+# refuses (the tips overlap at t = 0: the tied law starts from an open gap only): STOPPED
 
 
 @dataclasses.dataclass(frozen=True)
@@ -162,70 +163,28 @@ class CellRunner:
     def run_cells(self, states: np.ndarray, periods: np.ndarray | None = None) -> Cells:
         """Every section state of ``states`` (cells, 2 N) run until it settles.
 
-        ``periods``: each cell's known period (its attractor's), tested alone; None: the
-        smallest that repeats (`periodic`).
+        One kernel call for them all (`kernels.basins.settle_cells`: no Python between cells,
+        so that chunks on threads run in parallel). ``periods``: each cell's known period (its
+        attractor's), tested alone; None: the smallest that repeats (`periodic`).
         """
-        s, n = self.settling, self.packed.q0.size
+        s, packed, n = self.settling, self.packed, self.packed.q0.size
         count = states.shape[0]
         out = Cells(np.zeros(count, np.int32), np.zeros(count, np.int32),
                     np.zeros(count, np.int32), np.zeros(count, np.int32),
                     np.full((count, s.max_period, 4), np.nan), np.full((count, n), np.nan),
                     np.full((count, n), np.nan), np.full(count, -1, np.int32))
-        for i, z in enumerate(states):
-            self._settle(z, i, out, None if periods is None else int(periods[i]))
+        known = np.zeros(count, np.int32) if periods is None else np.asarray(periods, np.int32)
+        settle_cells(packed.tables, packed.forces, packed.phase_scalars, *packed.switching(),
+                     packed.settings, np.ascontiguousarray(states, dtype=np.float64), known,
+                     self.times, self.omega, self.forcing_period, s.window, s.tolerance,
+                     s.max_period, s.max_periods, self.max_events, *out.arrays().values())
         return out
 
-    def _settle(self, z: np.ndarray, i: int, out: Cells, known: int | None) -> None:
-        """Run cell i from z until it settles (with period ``known`` if given); row i of out."""
-        s = self.settling
-        start = self.start(z)
-        history: list[np.ndarray] = []
-        while start is not None and len(history) * s.block_periods < s.max_periods:
-            result = self.block(start)
-            if result is None:
-                start = None
-                break
-            trajectory, x, start, _ = result
-            history.append(x)
-            samples = np.concatenate(history)
-            period = periodic(samples[-s.window:], s, known) if samples.shape[0] >= s.window else 0
-            if period:
-                out.period[i], out.contacts[i] = period, self.contacts(trajectory, period)
-                out.settle_periods[i] = settled_from(samples, period, s.tolerance)
-                out.samples[i, :period] = samples[-period:]
-                break
-        periods = len(history) * s.block_periods
-        if start is None:
-            out.status[i], out.settle_periods[i] = STOPPED, periods
-            return
-        out.end_q[i], out.end_v[i], out.end_phase[i] = start
-        if not out.period[i]:
-            out.status[i], out.settle_periods[i] = NOT_SETTLED, periods
 
-
-def periodic(x: np.ndarray, settling: Settling, known: int | None = None) -> int:
-    """The period of the samples x (samples, 4), 0 if none (`response_period`).
-
-    With ``known``: that period if the samples repeat with it (the same test), else 0.
-    """
-    if known is not None:
-        step = np.abs(x[known:] - x[:-known]).max()
-        return known if step <= settling.tolerance * np.abs(x).max() else 0
+def periodic(x: np.ndarray, settling: Settling) -> int:
+    """The period of the samples x (samples, 4), 0 if none (`response_period`)."""
     y1, y2, v1, v2 = x.T
     return int(response_period(y1, y2, v1, v2, 1.0, settling.tolerance, settling.max_period))
-
-
-def settled_from(x: np.ndarray, period: int, tolerance: float) -> int:
-    """The first sample k from which x repeats with ``period`` to the end, within tolerance.
-
-    Relative to the scale of the samples from k on, as `response_period`'s; k + 1 forcing
-    periods have passed at sample k (the first sample is taken after one period).
-    """
-    step = np.max(np.abs(x[period:] - x[:-period]), axis=-1)  # x[k + p] - x[k]
-    # the scale from each sample to the end
-    scale = np.maximum.accumulate(np.max(np.abs(x), axis=-1)[::-1])[::-1][:-period]
-    apart = np.flatnonzero(step > tolerance * scale)
-    return int(apart[-1] + 2 if apart.size else 1)
 
 
 def distance(a: np.ndarray, b: np.ndarray) -> float:
@@ -236,3 +195,6 @@ def distance(a: np.ndarray, b: np.ndarray) -> float:
     if scale == 0.0:  # both at rest (no drive): the same state
         return 0.0
     return float(hausdorff / scale)
+
+
+__all__ = ["NOT_SETTLED", "STOPPED", "CellRunner", "Cells", "Settling", "distance", "periodic"]

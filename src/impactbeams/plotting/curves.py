@@ -5,7 +5,10 @@ solid where stable but for the bifurcating multiplier (`curve_stable`), dashed w
 codimension-two points marked and labelled where a label fits (`branches.place_labels`), the
 start circled. `draw_curves` draws several on one axes, over a map of the same plane if
 given (a first-impact map, or a long-time sweep: where the orbits impact, how often, ...);
-`draw_curve` draws one.
+`draw_curve` draws one. A closed-form grazing curve (`impactbeams.orbits.grazing_curve`, the
+linear response's, `impactbeams grazing` with a parameter besides omega) is drawn with them as
+a dotted line of its own colour (no stability, no codimension-two points): the check of a
+continued grazing curve by eye.
 """
 
 from __future__ import annotations
@@ -30,8 +33,9 @@ MARKERS = {"end": ("s", "E"), "turning_point": ("v", "T"), "cusp": ("D", "CP"),
            "resonance_1_1": ("*", "R1"), "resonance_1_2": ("*", "R2"),
            "resonance_1_3": ("*", "R3"), "resonance_1_4": ("*", "R4"),
            "fold_neimark_sacker": ("P", "LPNS"), "flip_neimark_sacker": ("X", "PDNS")}
+CLOSED_FORM = "closed_form_grazing"  # the kind of a closed-form grazing curve
 KIND_NAMES = {"grazing": "grazing", "fold": "fold", "period_doubling": "period doubling",
-              "neimark_sacker": "Neimark-Sacker"}
+              "neimark_sacker": "Neimark-Sacker", CLOSED_FORM: "closed-form grazing"}
 # one colour per kind of curve; over a map's colours the first is black
 COLOURS = ("C0", "C3", "C2", "C1", "C4")
 OVER_MAP_COLOURS = ("k", "C3", "C1", "C6", "C4")
@@ -89,17 +93,17 @@ def draw_curves(axes: Axes, curves: Sequence[xr.Dataset],
         limits = axes.get_xlim(), axes.get_ylim()
     labelled: Labelled = []
     palette = COLOURS if plane is None else OVER_MAP_COLOURS
-    kinds = list(dict.fromkeys(curve.attrs["curve_kind"] for curve in curves))
+    kinds = list(dict.fromkeys(kind_of(curve) for curve in curves))
     for number, curve in enumerate(curves):
-        kind = kinds.index(curve.attrs["curve_kind"])
-        first_of_kind = all(other.attrs["curve_kind"] != curve.attrs["curve_kind"]
-                            for other in curves[:number])
-        labelled += _draw(axes, curve, palette[kind % len(palette)], units, first_of_kind)
-    if plane is not None:  # the map's edges, or the curves' ends past them
+        kind = kinds.index(kind_of(curve))
+        first_of_kind = all(kind_of(other) != kind_of(curve) for other in curves[:number])
+        draw = _draw_closed_form if kind_of(curve) == CLOSED_FORM else _draw
+        labelled += draw(axes, curve, palette[kind % len(palette)], units, first_of_kind)
+    if plane is not None:  # the map's edges, or the curves' ends past them (NaN: no point)
         for set_limits, (low, high), parameter, (factor, _) in zip(
                 (axes.set_xlim, axes.set_ylim), limits, (first, second), units, strict=True):
             drawn = np.concatenate([factor * curve[parameter].values for curve in curves])
-            set_limits(min(low, float(drawn.min())), max(high, float(drawn.max())))
+            set_limits(min(low, float(np.nanmin(drawn))), max(high, float(np.nanmax(drawn))))
     place_labels(axes, labelled)
     return notes
 
@@ -134,11 +138,46 @@ def _draw(axes: Axes, dataset: xr.Dataset, colour: str, units: tuple[Units, Unit
     return labelled
 
 
+def _draw_closed_form(axes: Axes, dataset: xr.Dataset, colour: str,
+                      units: tuple[Units, Units], in_legend: bool = True) -> Labelled:
+    """A closed-form grazing curve's line (dotted: no orbit's stability); no labels."""
+    first, second = parameters_of(dataset)
+    (x_factor, _), (y_factor, _) = units
+    axes.plot(x_factor * dataset[first].values, y_factor * dataset[second].values, ":",
+              color=colour, linewidth=2.0,
+              label=f"{KIND_NAMES[CLOSED_FORM]} curve (linear response)" if in_legend
+              else "_nolegend_")
+    return []
+
+
+def kind_of(curve: xr.Dataset) -> str:
+    """A curve's kind: its ``curve_kind``, or ``CLOSED_FORM`` for a closed-form grazing one."""
+    return str(curve.attrs.get("curve_kind", CLOSED_FORM))
+
+
+def parameters_of(curve: xr.Dataset) -> tuple[str, str]:
+    """The (first, second) parameters of a curve: a closed-form grazing one's is omega first."""
+    if "curve_parameters" in curve.attrs:
+        first, second = curve.attrs["curve_parameters"].split()
+        return first, second
+    return "omega", str(curve.attrs["grazing_parameter"])
+
+
+def is_curve(dataset: xr.Dataset | PlainDataset) -> bool:
+    """Whether ``dataset`` draws as a curve in a plane of two parameters (this module).
+
+    A continued bifurcation curve, or a closed-form grazing curve in (omega, a drive or the
+    clearance); the grazing frequencies of one drive (``grazing_parameter`` omega) are points.
+    """
+    return "curve_kind" in dataset.attrs or dataset.attrs.get(
+        "grazing_parameter", "omega") != "omega"
+
+
 def _plane_of(curves: Sequence[xr.Dataset]) -> tuple[str, str]:
     """The parameters (first, second) every one of ``curves`` is drawn in."""
     if not curves:
         raise ParameterError("curves = [] is not allowed: give at least one curve's Dataset")
-    planes = [tuple(curve.attrs["curve_parameters"].split()) for curve in curves]
+    planes = [parameters_of(curve) for curve in curves]
     for number, plane in enumerate(planes):
         if plane != planes[0]:
             raise ParameterError(f"curve {number} is in ({', '.join(plane)}), not in the first "
@@ -159,7 +198,7 @@ def _select_plane(over: xr.Dataset | PlainDataset, variable: str | None,
     name = choose_variable(plain, variable)
     data, notes = select(plain, name, values or {}, indices or {})
     dims = data[name].dims
-    parameters = curve.attrs["curve_parameters"].split()
+    parameters = parameters_of(curve)
     missing = [p for p in parameters if p not in dims]
     if missing:
         raise ParameterError(f"the map (--over) is not over the curve's parameters "
