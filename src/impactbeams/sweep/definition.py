@@ -526,8 +526,6 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
         return _numeric_axis(name, _contact_axis(name, where), spec, where, source)
     require(where, name, name != USER_STRUCTURE, f"{name} is not sweepable: give the "
             "structure in [params] (one sweep per structure)")
-    require(where, name, name not in CONTACT_POSITIONS, f"{name} is not sweepable: give it in "
-            "[params] (one sweep per contact point)")
     if name not in PARAMETERS:
         raise unknown_key("parameter", name, f"[axes] of {source}", PARAMETERS)
     if name == "contact_law":
@@ -690,10 +688,10 @@ def _check_contact_points(sweep: Sweep) -> None:
 
     Where a point may lie (0 < x <= l) and the initial gap there (its unit tip-load shape is
     monotone in x and in l) hold on the whole grid if they hold at its corners; the corner
-    grid's joint check (`_corners`) sees one point per contact, not the axis.
+    grid's joint check (`_corners`) sees one point per contact, not the axis. The axis is a
+    flat key (``contact_position1``: the one contact's) or one contact's field.
     """
-    if not any(contact_field(axis.name) is not None and swept_parameter(axis.name)
-               in CONTACT_POSITIONS for axis in sweep.axes):
+    if not any(swept_parameter(axis.name) in CONTACT_POSITIONS for axis in sweep.axes):
         return
     ends = [(axis.first,) if axis.choices or axis.num == 1 else (axis.min, axis.max)
             for axis in sweep.axes]
@@ -713,7 +711,7 @@ def _check_grid(sweep: Sweep) -> None:
     The fixed parameters are checked at the grid's first point (names, types, values); every
     condition on several parameters, and the modes and horizon, at all corners of the grid.
     """
-    if sweep.params_at({}).several_contacts:
+    if CONTACTS in sweep.fixed:  # (one contact given as a table is folded to the flat keys)
         _check_several(sweep)
         _check_contact_points(sweep)
         for each in contact_sweeps(sweep):
@@ -723,6 +721,7 @@ def _check_grid(sweep: Sweep) -> None:
     require(f"observables in {sweep.source}", given, not given,
             "each contact's share is a map of several contacts' ([[params.contacts]]); with "
             "one contact map impact_count and max_contact_force")
+    _check_contact_points(sweep)
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
