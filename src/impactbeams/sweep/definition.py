@@ -55,6 +55,7 @@ from impactbeams.params import (
     check_joint,
     check_range,
     contact_field,
+    flat_parameter,
     fold_contacts,
     is_integer,
     is_path,
@@ -124,15 +125,6 @@ CONTACT_AXIS = CONTACTS + ".{index}.{field}"
 # name); a point moves the contact's gap weights: a geometry axis
 SWEPT_CONTACT_FIELDS = tuple(field for field, key in FLAT_KEYS.items()
                              if key in (*CONTACT_LAW_KEYS, *CONTACT_POSITIONS))
-
-
-def swept_parameter(name: str) -> str:
-    """The parameter an axis named ``name`` sets in a cell's run (its own contact's, if any).
-
-    ``contacts.0.clearance`` sets contact 0's run's ``clearance``; any other axis, its own name.
-    """
-    field = contact_field(name)
-    return name if field is None else FLAT_KEYS[field[1]]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -637,7 +629,7 @@ def contact_axes(sweep: Sweep, index: int) -> tuple[int, ...]:
 
 
 def _contact_sweep(sweep: Sweep, index: int, contact: Contact) -> Sweep:
-    axes = tuple(dataclasses.replace(sweep.axes[k], name=swept_parameter(sweep.axes[k].name))
+    axes = tuple(dataclasses.replace(sweep.axes[k], name=flat_parameter(sweep.axes[k].name))
                  for k in contact_axes(sweep, index))
     # one contact's run has no per-contact observables (its own are impact_count, ...)
     observables = tuple(name for name in sweep.observables
@@ -664,7 +656,7 @@ def _contact_stepping(sweep: Sweep, index: int) -> Stepping | None:
     kept = [sweep.axes[k].name for k in contact_axes(sweep, index)]
     if stepping is None or stepping.axis not in kept:
         return None
-    return dataclasses.replace(stepping, axis=swept_parameter(stepping.axis))
+    return dataclasses.replace(stepping, axis=flat_parameter(stepping.axis))
 
 
 def _check_several(sweep: Sweep) -> None:
@@ -691,7 +683,7 @@ def _check_contact_points(sweep: Sweep) -> None:
     grid's joint check (`_corners`) sees one point per contact, not the axis. The axis is a
     flat key (``contact_position1``: the one contact's) or one contact's field.
     """
-    if not any(swept_parameter(axis.name) in CONTACT_POSITIONS for axis in sweep.axes):
+    if not any(flat_parameter(axis.name) in CONTACT_POSITIONS for axis in sweep.axes):
         return
     ends = [(axis.first,) if axis.choices or axis.num == 1 else (axis.min, axis.max)
             for axis in sweep.axes]
@@ -787,7 +779,7 @@ def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
     per_cell = set(CELL_PARAMETERS)
     if sweep.needs_dynamics and any(law.compliant for law in contact_laws(sweep)):
         per_cell.discard("damping_ratio")
-    return tuple(k for k, a in enumerate(sweep.axes) if swept_parameter(a.name) not in per_cell)
+    return tuple(k for k, a in enumerate(sweep.axes) if flat_parameter(a.name) not in per_cell)
 
 
 def contact_laws(sweep: Sweep) -> list[ContactLaw]:
