@@ -427,12 +427,49 @@ def test_maps_of_a_contact_at_a_point_equal_single_runs():
                 assert float(cell.max_contact_force) == float(run.impact_peak_force.max())
 
 
-def test_a_contact_position_is_not_a_sweep_axis():
-    from impactbeams.sweep import sweep_from_mapping
+@pytest.mark.filterwarnings("ignore:n_modes = 4 does not resolve:RuntimeWarning")
+def test_maps_along_the_contact_position_equal_single_runs():
+    """contact_position1 as an axis (a geometry: each position its own gap weights and static
+    correction), beside omega, up to the tip: every cell of a first-impact map and of a
+    dynamics map is simulate() of Params with that position, as above (first impact to
+    1e-12 s, count and peak force bit for bit)."""
+    from impactbeams.sweep import run_sweep, sweep_from_mapping
 
-    with pytest.raises(ParameterError, match="contact_position1 is not sweepable"):
-        sweep_from_mapping({**POINT_SWEEP, "observables": ["first_impact_time"],
-                            "axes": {"contact_position1": {"min": 0.02, "max": 0.08, "num": 3}}})
+    fixed = {name: value for name, value in POINT_SWEEP["params"].items()
+             if name != "contact_position1"}
+    axes = {"omega": {"min": 100.0, "max": 500.0, "num": 2},
+            "contact_position1": {"min": 0.04, "max": 0.1, "num": 3}}
+    first, dynamics = (run_sweep(sweep_from_mapping(
+        {**POINT_SWEEP, "params": fixed, "axes": axes, "observables": observables}),
+        parallel=False) for observables in (["first_impact_time"], [
+            "first_impact_time", "impact_count", "max_contact_force"]))
+    assert dynamics.contact_position1.attrs["units"] == "m"
+    assert "contact_position1" not in dynamics.attrs
+    assert np.isfinite(first.first_impact_time.values).all()
+    for i, omega in enumerate(dynamics.omega.values):
+        for j, position in enumerate(dynamics.contact_position1.values):
+            params = Params(**fixed, omega=float(omega), contact_position1=float(position))
+            run = simulate(params, 0.05, n_modes=4, dt_output=0.05)
+            cell = dynamics.isel(omega=i, contact_position1=j)
+            expected = float(run.impact_onset_time[0])
+            assert float(cell.first_impact_time) == pytest.approx(expected, abs=1e-12)
+            assert float(first.first_impact_time[i, j]) == pytest.approx(expected, abs=1e-12)
+            assert int(cell.impact_count) == run.impact.size
+            assert float(cell.max_contact_force) == float(run.impact_peak_force.max())
+
+
+def test_a_contact_position_axis_beyond_the_beam_is_refused_in_one_line(tmp_path, capsys):
+    from impactbeams.cli import main
+
+    path = tmp_path / "sweep.toml"
+    path.write_text('t_max = 0.05\nn_modes = 4\n[params]\ncounterpart = "stop"\n'
+                    "[axes.contact_position1]\nmin = 0.04\nmax = 0.3\nnum = 3\n")
+    assert main(["run", str(path), "-o", str(tmp_path / "out.nc")]) == 2
+    assert capsys.readouterr().err == (
+        f"impactbeams: error: at the grid point contact_position1 = 0.3 of {path}: "
+        "contact_position1 = 0.3 is not allowed: must be > 0 and <= l1 = 0.1 (m: a point of "
+        "beam 1, its distance from the clamp)\n")
+    assert list(tmp_path.iterdir()) == [path]
 
 
 @pytest.mark.filterwarnings("ignore:n_modes = 6 does not resolve:RuntimeWarning")

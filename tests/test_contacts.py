@@ -239,6 +239,24 @@ def test_first_contact_of_stops_at_mid_span_and_at_the_tip_against_the_fe_model(
         assert deviation < 5e-6
 
 
+@pytest.mark.parametrize(("dashpot", "zeta"), [(0.5, 0.0), (5.0, 0.02)])
+def test_first_contact_of_a_damped_two_sided_stop_is_certain(dashpot, zeta):
+    """A two-sided stop with dashpots (N s/m) and modal damping: while one stop is closed the
+    other's gap exceeds the sum of the clearances, so the first contact's episode is certain and
+    reported. Against the several contacts' own dynamics (`contact_sequence`: both stops, the
+    active sets' kernel): the same first contact to 1e-12 (measured 2.2e-14: the two kernels sum
+    their closed forms in another order), and the next contact starts after its release."""
+    params = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 3e-6, damping=dashpot),
+                            damping_ratio=zeta)
+    got = first_contact(params, 0.03, n_modes=8)
+    sequence = contact_sequence(params, 0.03, n_modes=8)
+    assert got.episode_certain and got.contact == int(sequence.impact_contact[0]) == 0
+    for value, name in ((got.onset, "onset_time"), (got.duration, "duration"),
+                        (got.impulse, "impulse"), (got.peak_force, "peak_force")):
+        assert value == pytest.approx(float(sequence[f"impact_{name}"][0]), rel=1e-12), name
+    assert got.release < float(sequence.impact_onset_time[1])
+
+
 def test_first_contact_of_one_contact_is_simulates_first_contact_bit_for_bit():
     params = FORCED.replace(clearance=3e-6, contact_position1=MID)
     got = first_contact(params, 0.03, n_modes=12)

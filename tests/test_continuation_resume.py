@@ -6,7 +6,9 @@ variable and coordinate bitwise, with its dtype and attributes, every global att
 time-stamped ``history`` (`test_resume.assert_same_map`, as for the sweeps). The model is
 `test_continuation_events`'s (two beams, 3 modes each) over 248.8 to 250.5 rad/s: ``POINTS``
 points on two branches (a period doubling switched to), about 3 s; the Newton-Picard variant
-carries its basis from step to step, which the checkpoints must carry too.
+carries its basis from step to step, which the checkpoints must carry too. A continuation of
+several contacts (a two-sided stop, ``[[params.contacts]]``) resumes the same way, from Python
+and from the command line.
 """
 
 import functools
@@ -17,8 +19,13 @@ import warnings
 import pytest
 
 import impactbeams as ib
-from impactbeams.cli import main
-from impactbeams.continuation import Continuation, ContinuationInterrupted, continue_orbits
+from impactbeams.cli import EXIT_INTERRUPTED, main
+from impactbeams.continuation import (
+    Continuation,
+    ContinuationInterrupted,
+    continue_orbits,
+    load_continuation,
+)
 from impactbeams.continuation.checkpoint import saved_points
 from impactbeams.params import ParameterError
 from test_resume import _interrupt, assert_same_map, uninterrupted_runs
@@ -177,3 +184,61 @@ def test_a_full_disk_is_refused_before_the_header(files, tmp_path, capsys, monke
     # 21 points at max_step (1.7 / 20 rad/s), 2 N = 12: each a 1.2 kB monodromy and the rest
     assert expected_log_size(load_continuation(files / "newton.toml")) == 2 * 21 * (
         8 * 144 + 64 * 12 + 2048)
+
+
+# --- several contacts: a two-sided stop (issue 33) ---------------------------------------------
+
+# 3 um below and 6 um above mid-span, with dashpots, 8 modes: along F0 from 0.3 to 0.38 mN the
+# orbit grazes the stop below (as tests/test_orbits_several.py's branch): 26 points, 2-3 s
+SEVERAL_FILE = (
+    "n_modes = 8\n[params]\ncounterpart = 'stop'\ncontact_stiffness = 1e4\n"
+    "damping_ratio = 0.05\nomega = 400.0\n"
+    "[[params.contacts]]\nposition1 = 0.05\nside = 'below'\nclearance = 3e-6\ndamping = 0.5\n"
+    "[[params.contacts]]\nposition1 = 0.05\nside = 'above'\nclearance = 6e-6\ndamping = 0.5\n"
+    "[continuation]\nparameter = 'force_amplitude'\nmin = 3e-4\nmax = 3.8e-4\n"
+    "method = '{method}'\n")
+
+
+def test_a_continuation_of_several_contacts_resumes_to_the_uninterrupted_one(tmp_path):
+    """Interrupted after 5 points, from Python, resumed across the grazing: the resumed run's
+    file and Dataset are the uninterrupted run's, bit for bit (the Dataset but its
+    ``history``)."""
+    (tmp_path / "c.toml").write_text(SEVERAL_FILE.format(method="newton"))
+    continuation = load_continuation(tmp_path / "c.toml")
+    assert len(continuation.params.contacts) == 2
+    reference = continue_orbits(continuation, None, tmp_path / "reference.nc")
+    out = tmp_path / "out.nc"
+    with pytest.raises(ContinuationInterrupted):
+        continue_orbits(continuation, _stop_after(5), out)
+    assert 0 < saved_points(out) < reference.branch_point.size
+    resumed = continue_orbits(continuation, None, out)
+    assert_same_map(out, tmp_path / "reference.nc")
+    assert resumed.attrs.pop("history") and reference.attrs.pop("history")
+    assert resumed.identical(reference)
+
+
+def test_a_continuation_of_several_contacts_from_its_file_resumes_from_the_cli(
+        tmp_path, capsys, monkeypatch):
+    """`impactbeams continue` of ``[[params.contacts]]``, interrupted (Ctrl-C) after 4 saved
+    points and run again: the uninterrupted run's file."""
+    from impactbeams.continuation import checkpoint
+
+    (tmp_path / "c.toml").write_text(SEVERAL_FILE.format(method="newton-picard"))
+    command = ["continue", str(tmp_path / "c.toml"), "--quiet", "-o"]
+    assert main([*command, str(tmp_path / "reference.nc")]) == 0
+    save, saved = checkpoint.CourseLog.__call__, []
+
+    def interrupted(self, course):
+        save(self, course)
+        saved.append(course)
+        if len(saved) == 4:
+            raise KeyboardInterrupt
+
+    out = tmp_path / "out.nc"
+    with monkeypatch.context() as patch:
+        patch.setattr(checkpoint.CourseLog, "__call__", interrupted)
+        assert main([*command, str(out)]) == EXIT_INTERRUPTED
+    assert saved_points(out) == 4
+    capsys.readouterr()
+    assert main([*command, str(out)]) == 0
+    assert_same_map(out, tmp_path / "reference.nc")

@@ -7,6 +7,8 @@ without dashpots, and a two-sided stop at mid-span (`tests/test_several_contacts
 k = 1e4 N/m, zeta = 0.05 and 8 modes: stable period-1 orbits.
 """
 
+import re
+
 import numpy as np
 import pytest
 
@@ -253,6 +255,39 @@ def test_continuation_of_a_two_sided_stop_locates_its_first_grazing():
     print(f"first grazing located to {error:.1e}")
     assert error < 1e-8
     assert np.all(dataset.tip_amplitude_1.values > 0)  # the measures of several contacts
+
+
+def test_continuation_in_one_contacts_clearance_is_the_single_contacts_branch():
+    """``contacts.0.clearance`` continued (a stop below mid-span, one far above that never
+    closes): every branch point is a fixed point of the single stop's own period map
+    (`PeriodMap`, the one-contact kernels) at that clearance, to 1e-12 of the state
+    (measured 1.1e-15), across the grazing where the orbit's 2 contacts become 1."""
+    params = FORCED.replace(contacts=two_sided_stop(MID, None, 1e-4), force_amplitude=3.8e-4)
+    name = "contacts.0.clearance"
+    dataset = continue_orbits(Continuation(params, name, 2.5e-6, 2.9e-6, n_modes=N_MODES))
+    assert dataset[name].dims == ("branch_point",) and dataset[name].attrs["units"] == "m"
+    assert dataset[name].attrs["long_name"].endswith(" of contacts[0]")
+    assert dataset.attrs["continued_parameter"] == name
+    assert {1, 2} <= set(dataset.contacts_per_orbit.values.tolist())
+    single = FORCED.replace(contact_position1=MID, force_amplitude=3.8e-4)
+    for clearance, state in zip(dataset[name].values, dataset.section_state.values,
+                                strict=True):
+        mapped = PeriodMap(single.replace(clearance=float(clearance)), N_MODES)(state).state
+        assert np.linalg.norm(mapped - state) <= 1e-12 * np.linalg.norm(state), clearance
+
+
+@pytest.mark.parametrize(("parameter", "params", "message"), [
+    ("contacts.0.position1", TWO_SIDED, "a contact's continuable fields are clearance, "
+     "stiffness, damping"),
+    ("contacts.2.stiffness", TWO_SIDED, "there are 2 contacts (indices 0 to 1)"),
+    ("contacts.0.clearance", FORCED, "continues a field of one of several contacts, and params "
+     "has one or none: one contact is the flat keys (continue clearance)"),
+    ("clearance", TWO_SIDED, "with 2 contacts each gives its own: continue one contact's as "
+     "'contacts.INDEX.FIELD' (FIELD one of clearance, stiffness, damping)")])
+def test_what_a_continuation_of_several_contacts_refuses(parameter, params, message):
+    with pytest.raises(ParameterError, match=re.escape(f"parameter = {parameter!r} is not "
+                                                       f"allowed: {message}")):
+        Continuation(params, parameter, 1e-6, 4e-6)
 
 
 @pytest.mark.slow  # 25 s: 55 points along a branch that touches three times

@@ -86,7 +86,7 @@ from impactbeams.structure.parts import (
     check_attachments,
     check_clamp,
 )
-from impactbeams.variables import PARAMETERS
+from impactbeams.variables import PARAMETERS, parameter_attributes
 
 if TYPE_CHECKING:  # imported where used: only a run with attachments or a structure needs them
     from impactbeams.structure.cantilever import Cantilever
@@ -938,6 +938,46 @@ def contact_field(name: str) -> tuple[int, str] | None:
             parts[1] == "0" or not parts[1].startswith("0")):
         return None
     return int(parts[1]), parts[2]
+
+
+def flat_parameter(name: str) -> str:
+    """The parameter ``name`` sets in a run: a contact's field its flat key, any other itself.
+
+    ``contacts.0.clearance`` sets contact 0's run's ``clearance`` (`Params.each_contact`).
+    """
+    field = contact_field(name)
+    return name if field is None else FLAT_KEYS[field[1]]
+
+
+def named_attributes(name: str) -> dict[str, str]:
+    """CF attributes (units, long_name) of the parameter ``name`` as a coordinate.
+
+    A contact's field (``contacts.0.clearance``) has its flat key's, naming the contact.
+    """
+    attributes = parameter_attributes(flat_parameter(name))
+    field = contact_field(name)
+    if field is not None:
+        attributes["long_name"] += f" of contacts[{field[0]}]"
+    return attributes
+
+
+def parameter_value(params: Params, name: str) -> Any:
+    """The value of ``params``' parameter ``name``: its own, or a contact field's run's."""
+    field = contact_field(name)
+    if field is None:
+        return getattr(params, name)
+    return getattr(params.each_contact()[field[0]], FLAT_KEYS[field[1]])
+
+
+def with_parameter(params: Params, name: str, value: Any) -> Params:
+    """``params`` with its parameter ``name`` (or that field of one contact) set to ``value``."""
+    field = contact_field(name)
+    if field is None:
+        return params.replace(**{name: value})
+    index, which = field
+    contacts = list(params.contacts)
+    contacts[index] = dataclasses.replace(contacts[index], **{which: value})
+    return params.replace(**{CONTACTS: tuple(contacts)})
 
 
 def require_one_contact(params: Params, what: str) -> None:

@@ -28,7 +28,7 @@ from impactbeams.orbits.shooting import (
     leading,
     orthonormal,
 )
-from impactbeams.params import Params
+from impactbeams.params import Params, parameter_value, with_parameter
 
 # the round-off of a gap read from a run (m, per metre of clearance): a gap is the clearance
 # less the tips' deflections, each to a few eps of itself (measured: 1e-19 m at 5e-4 m)
@@ -77,7 +77,7 @@ class BeamOrbits:
         if p not in self._maps:
             if len(self._maps) >= CACHED_MAPS:
                 self._maps.pop(next(iter(self._maps)))
-            params = self.params.replace(**{self.parameter: p})
+            params = with_parameter(self.params, self.parameter, p)
             self._maps[p] = (self._origin.at(params) if self.parameter in CELL_ONLY
                              else make_period_map(params, self.n_modes, self.period))
         return self._maps[p]
@@ -184,7 +184,7 @@ class BeamOrbits:
 
     def state_weights(self) -> np.ndarray:
         """D with D z = (omega q, q'): the energy norm's coordinates (one per component)."""
-        packed = self.period_map(getattr(self.params, self.parameter)).packed
+        packed = self.period_map(parameter_value(self.params, self.parameter)).packed
         omega = packed.tables[FREE, ROW_FREQUENCY]
         return np.concatenate([omega, np.ones(omega.size)])
 

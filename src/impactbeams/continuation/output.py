@@ -10,13 +10,8 @@ import numpy as np
 from impactbeams.continuation.arclength import Point
 from impactbeams.continuation.branch import Branch
 from impactbeams.continuation.events import LABELS
-from impactbeams.variables import (
-    PARAMETERS,
-    VARIABLES,
-    attributes,
-    parameter_attributes,
-    validate,
-)
+from impactbeams.params import flat_parameter, named_attributes
+from impactbeams.variables import PARAMETERS, VARIABLES, attributes, validate
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -72,8 +67,8 @@ def branches_dataset(branches: list[Branch], parameter: str,
     for name in dataset.variables:
         if name in VARIABLES:
             dataset[name].attrs.update(attributes(str(name)))
-    if parameter in PARAMETERS:
-        dataset[parameter].attrs.update(parameter_attributes(parameter))
+    if flat_parameter(parameter) in PARAMETERS:
+        dataset[parameter].attrs.update(named_attributes(parameter))
     validate(dataset)
     return dataset
 

@@ -41,15 +41,19 @@ from impactbeams.continuation.output import branches_dataset
 from impactbeams.orbits.period_map import check_law
 from impactbeams.orbits.shooting import GUARD, METHODS
 from impactbeams.params import (
+    CONTACTS,
     MAX_MODES,
     ParameterError,
     Params,
     check_range,
+    contact_field,
+    flat_parameter,
     is_path,
     require,
     require_finite,
     require_integer,
     require_type,
+    with_parameter,
 )
 from impactbeams.structure.contacts import FLAT_KEYS
 from impactbeams.variables import PARAMETERS, global_attributes
@@ -59,6 +63,8 @@ if TYPE_CHECKING:
 
 # what can be continued: every numeric parameter but the uplifts, which only set a run's start
 CONTINUABLE = tuple(name for name in Params.numeric_names() if not name.startswith("uplift"))
+# a contact's fields continued as contacts.INDEX.FIELD: its law's (its point is a geometry)
+_CONTACT_FIELDS = tuple(field for field, key in FLAT_KEYS.items() if key in CONTINUABLE)
 DIRECTIONS = ("up", "down")
 STATE_SCALE_CLEARANCES = 10.0  # the default state_scale, in clearances
 
@@ -66,6 +72,9 @@ STATE_SCALE_CLEARANCES = 10.0  # the default state_scale, in clearances
 @dataclasses.dataclass(frozen=True)
 class Continuation:
     """What to continue: ``parameter`` of ``params`` from ``low`` to ``high`` (its units).
+
+    ``parameter``: a numeric parameter's name, or with several contacts one contact's law
+    field, ``contacts.INDEX.FIELD`` (its clearance, stiffness or damping).
 
     ``direction``: "up" starts at ``start`` (default ``low``) going up, "down" at ``start``
     (default ``high``) going down. ``period``: forcing periods of the orbit. ``n_modes``: per
@@ -104,15 +113,10 @@ class Continuation:
         require_type("params", self.params, isinstance(self.params, Params),
                      "an impactbeams.Params")
         check_law(self.params)
-        if self.params.several_contacts:  # each contact gives its own law and point
-            require("parameter", self.parameter, self.parameter not in FLAT_KEYS.values(),
-                    f"with {len(self.params.contacts)} contacts each gives its own: continue "
-                    "another parameter (docs/limits.md, 'Several contacts')")
-        require("parameter", self.parameter, self.parameter in CONTINUABLE,
-                f"must be one of {', '.join(CONTINUABLE)}")
+        self._check_parameter()
         for name in ("low", "high"):
             value = require_finite(name, getattr(self, name))
-            check_range(self.parameter, value)
+            check_range(flat_parameter(self.parameter), value)
         require("high", self.high, self.high > self.low,
                 f"the range [{self.low!r}, {self.high!r}] is empty: need high > low")
         require("direction", self.direction, self.direction in DIRECTIONS,
@@ -137,13 +141,40 @@ class Continuation:
         if self.parameter == "omega":
             require("min", self.low, self.low > 0, "a periodic orbit needs omega > 0", "rad/s")
         for end in (self.low, self.high):  # with the fixed ones, at both ends (monotone rules)
-            self.params.replace(**{self.parameter: end})
+            with_parameter(self.params, self.parameter, end)
         self._check_steps()
+
+    def _check_parameter(self) -> None:
+        """A continuable parameter; with several contacts, a law's field of one of them.
+
+        Each contact gives its own law (``contacts.INDEX.FIELD``: that contact's clearance,
+        stiffness or damping); its point is not continued (nor the flat point of one).
+        """
+        contacts = self.params.contacts
+        field = contact_field(self.parameter)
+        if field is None:
+            require("parameter", self.parameter, not (
+                contacts and self.parameter in FLAT_KEYS.values()),
+                f"with {len(contacts)} contacts each gives its own: continue one contact's "
+                f"as '{CONTACTS}.INDEX.FIELD' (FIELD one of {', '.join(_CONTACT_FIELDS)})")
+            require("parameter", self.parameter, self.parameter in CONTINUABLE,
+                    f"must be one of {', '.join(CONTINUABLE)}, or with several contacts "
+                    f"'{CONTACTS}.INDEX.FIELD'")
+            return
+        index, name = field
+        require("parameter", self.parameter, len(contacts) >= 2,
+                f"continues a field of one of several contacts, and params has "
+                f"{len(contacts) or 'one or none'}: one contact is the flat keys (continue "
+                f"{FLAT_KEYS.get(name, 'clearance')})")
+        require("parameter", self.parameter, index < len(contacts),
+                f"there are {len(contacts)} contacts (indices 0 to {len(contacts) - 1})")
+        require("parameter", self.parameter, name in _CONTACT_FIELDS,
+                f"a contact's continuable fields are {', '.join(_CONTACT_FIELDS)}")
 
     def _check_steps(self) -> None:
         """min_step <= step <= max_step, said in the parameter's units (given or default)."""
         step, low, high = self._steps()
-        unit = PARAMETERS[self.parameter].units
+        unit = PARAMETERS[flat_parameter(self.parameter)].units
         require("min_step", low, low <= high, f"must be <= max_step = {high:g}", unit)
         require("step", step, low <= step <= high,
                 f"must lie from min_step = {low:g} to max_step = {high:g}", unit)
@@ -240,7 +271,7 @@ def orbits_problem(c: Continuation) -> BeamOrbits:
 
     A ParameterError for a method or subspace that does not fit its coordinates.
     """
-    params = c.params.replace(**{c.parameter: c.first})
+    params = with_parameter(c.params, c.parameter, c.first)
     return BeamOrbits(params, c.parameter, mode_count(c), c.period, c.method, c.subspace)
 
 

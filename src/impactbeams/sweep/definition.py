@@ -55,6 +55,7 @@ from impactbeams.params import (
     check_joint,
     check_range,
     contact_field,
+    flat_parameter,
     fold_contacts,
     is_integer,
     is_path,
@@ -124,15 +125,6 @@ CONTACT_AXIS = CONTACTS + ".{index}.{field}"
 # name); a point moves the contact's gap weights: a geometry axis
 SWEPT_CONTACT_FIELDS = tuple(field for field, key in FLAT_KEYS.items()
                              if key in (*CONTACT_LAW_KEYS, *CONTACT_POSITIONS))
-
-
-def swept_parameter(name: str) -> str:
-    """The parameter an axis named ``name`` sets in a cell's run (its own contact's, if any).
-
-    ``contacts.0.clearance`` sets contact 0's run's ``clearance``; any other axis, its own name.
-    """
-    field = contact_field(name)
-    return name if field is None else FLAT_KEYS[field[1]]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -526,8 +518,6 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
         return _numeric_axis(name, _contact_axis(name, where), spec, where, source)
     require(where, name, name != USER_STRUCTURE, f"{name} is not sweepable: give the "
             "structure in [params] (one sweep per structure)")
-    require(where, name, name not in CONTACT_POSITIONS, f"{name} is not sweepable: give it in "
-            "[params] (one sweep per contact point)")
     if name not in PARAMETERS:
         raise unknown_key("parameter", name, f"[axes] of {source}", PARAMETERS)
     if name == "contact_law":
@@ -639,7 +629,7 @@ def contact_axes(sweep: Sweep, index: int) -> tuple[int, ...]:
 
 
 def _contact_sweep(sweep: Sweep, index: int, contact: Contact) -> Sweep:
-    axes = tuple(dataclasses.replace(sweep.axes[k], name=swept_parameter(sweep.axes[k].name))
+    axes = tuple(dataclasses.replace(sweep.axes[k], name=flat_parameter(sweep.axes[k].name))
                  for k in contact_axes(sweep, index))
     # one contact's run has no per-contact observables (its own are impact_count, ...)
     observables = tuple(name for name in sweep.observables
@@ -666,7 +656,7 @@ def _contact_stepping(sweep: Sweep, index: int) -> Stepping | None:
     kept = [sweep.axes[k].name for k in contact_axes(sweep, index)]
     if stepping is None or stepping.axis not in kept:
         return None
-    return dataclasses.replace(stepping, axis=swept_parameter(stepping.axis))
+    return dataclasses.replace(stepping, axis=flat_parameter(stepping.axis))
 
 
 def _check_several(sweep: Sweep) -> None:
@@ -690,10 +680,10 @@ def _check_contact_points(sweep: Sweep) -> None:
 
     Where a point may lie (0 < x <= l) and the initial gap there (its unit tip-load shape is
     monotone in x and in l) hold on the whole grid if they hold at its corners; the corner
-    grid's joint check (`_corners`) sees one point per contact, not the axis.
+    grid's joint check (`_corners`) sees one point per contact, not the axis. The axis is a
+    flat key (``contact_position1``: the one contact's) or one contact's field.
     """
-    if not any(contact_field(axis.name) is not None and swept_parameter(axis.name)
-               in CONTACT_POSITIONS for axis in sweep.axes):
+    if not any(flat_parameter(axis.name) in CONTACT_POSITIONS for axis in sweep.axes):
         return
     ends = [(axis.first,) if axis.choices or axis.num == 1 else (axis.min, axis.max)
             for axis in sweep.axes]
@@ -713,7 +703,7 @@ def _check_grid(sweep: Sweep) -> None:
     The fixed parameters are checked at the grid's first point (names, types, values); every
     condition on several parameters, and the modes and horizon, at all corners of the grid.
     """
-    if sweep.params_at({}).several_contacts:
+    if CONTACTS in sweep.fixed:  # (one contact given as a table is folded to the flat keys)
         _check_several(sweep)
         _check_contact_points(sweep)
         for each in contact_sweeps(sweep):
@@ -723,6 +713,7 @@ def _check_grid(sweep: Sweep) -> None:
     require(f"observables in {sweep.source}", given, not given,
             "each contact's share is a map of several contacts' ([[params.contacts]]); with "
             "one contact map impact_count and max_contact_force")
+    _check_contact_points(sweep)
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
@@ -788,7 +779,7 @@ def geometry_axes(sweep: Sweep) -> tuple[int, ...]:
     per_cell = set(CELL_PARAMETERS)
     if sweep.needs_dynamics and any(law.compliant for law in contact_laws(sweep)):
         per_cell.discard("damping_ratio")
-    return tuple(k for k, a in enumerate(sweep.axes) if swept_parameter(a.name) not in per_cell)
+    return tuple(k for k, a in enumerate(sweep.axes) if flat_parameter(a.name) not in per_cell)
 
 
 def contact_laws(sweep: Sweep) -> list[ContactLaw]:

@@ -17,13 +17,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from impactbeams.io import Layout, build_netcdf, writing_netcdf
-from impactbeams.params import CONTACTS, MATERIAL_KEYS, without_unused_law_keys
+from impactbeams.params import CONTACTS, MATERIAL_KEYS, named_attributes, without_unused_law_keys
 from impactbeams.sweep.definition import (
     FIRST_IMPACT,
     LONG_TIME_KEYS,
     Sweep,
     contact_field,
-    swept_parameter,
 )
 from impactbeams.sweep.plan import Chunking, code_digest, contact_resolution, flat_boxes
 from impactbeams.variables import (
@@ -31,7 +30,6 @@ from impactbeams.variables import (
     attributes,
     check_variables,
     global_attributes,
-    parameter_attributes,
 )
 
 if TYPE_CHECKING:
@@ -44,7 +42,7 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
     """The map's coordinates, variables and attributes; ``chunks``: its blocks on disk."""
     coords = {} if sweep.stepping is None else {
         "sweep_direction": (np.array(sweep.stepping.directions), attributes("sweep_direction"))}
-    coords.update({axis.name: (axis.values, {**axis_attributes(axis.name),
+    coords.update({axis.name: (axis.values, {**named_attributes(axis.name),
                                              "scale": axis.scale}) for axis in sweep.axes})
     grid = tuple(coords)
     variables = {name: (dtype, attributes(name), grid + VARIABLES[name].dims[1:])
@@ -79,19 +77,6 @@ def map_layout(sweep: Sweep, chunks: tuple[int, ...] | None = None) -> Layout:
     layout = Layout(coords, variables, attrs, chunks or sweep.shape)
     check_variables(layout.described())  # the map in memory and its file: as registered
     return layout
-
-
-def axis_attributes(name: str) -> dict[str, str]:
-    """CF attributes (units, long_name) of the axis ``name``: its parameter's.
-
-    An axis on a contact's field (``contacts.0.clearance``) has its flat key's, naming the
-    contact.
-    """
-    attributes = parameter_attributes(swept_parameter(name))
-    field = contact_field(name)
-    if field is not None:
-        attributes["long_name"] += f" of contacts[{field[0]}]"
-    return attributes
 
 
 def cell_values(sweep: Sweep) -> dict[str, tuple[np.dtype, tuple[int, ...]]]:

@@ -85,8 +85,9 @@ class FirstContact:
 def exclusive(params: Params) -> bool:
     """Whether at most one of ``params``' contacts can be closed at a time.
 
-    One contact, or two at one point of each beam from opposite sides (a two-sided stop)
-    without a dashpot (with one, a releasing contact's force outlasts its closed gap).
+    One contact, or two at one point of each beam from opposite sides (a two-sided stop),
+    dashpots and damping or not: a contact's force acts only while its gap g is closed (< 0),
+    and the other's gap is then the sum of the two clearances less g, > 0.
     """
     runs = params.each_contact()
     if len(runs) == 1:
@@ -94,8 +95,7 @@ def exclusive(params: Params) -> bool:
     if len(runs) > 2:
         return False
     a, b = runs
-    return (a.contact_point == b.contact_point and a.side.sign == -b.side.sign
-            and a.contact_damping == 0.0 and b.contact_damping == 0.0)
+    return a.contact_point == b.contact_point and a.side.sign == -b.side.sign
 
 
 def _packs(params: Params, t_max: float, n_modes: int) -> list[Packed]:
