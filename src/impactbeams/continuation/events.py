@@ -170,7 +170,7 @@ def interval_test(point: Point) -> float:
 
 
 # ``point_at(s, guess)``: the corrected point on the plane at arclength s (None if Newton
-# fails), Newton started from ``guess`` (a point on that plane) if not None
+# fails), Newton started from ``guess`` (a point near the branch there) if not None
 PointAt = Callable[[float, "np.ndarray | None"], "Point | None"]
 # an unbracketed end (no corrected point beyond) is a root if the test's value there is within
 # this many times the secant's slope from the start times the bracket's width (a root in it)
@@ -359,10 +359,10 @@ def guess_at(low: Bracket, high: Bracket, s: float,
     width = s1 - s0
     weight = min(max((s - s0) / width, 0.0), 1.0)
     guess = (1.0 - weight) * low_point.x + weight * high_point.x
-    outside = [(max(s0 - place, place - s1), place, point) for place, point in corrected
-               if max(s0 - place, place - s1) > max(BEND_DISTANCE * width, 0.0)]
+    outside = [(max(s0 - place, place - s1), place, point) for place, point in corrected]
+    outside = [known for known in outside if known[0] > BEND_DISTANCE * width]
     if outside:
-        _, place, point = min(outside, key=lambda far: far[0])
+        _, place, point = min(outside, key=lambda known: known[0])
         # the parabola's part that vanishes at both ends, through the third point
         line = low_point.x + (place - s0) / width * (high_point.x - low_point.x)
         guess += (s - s0) / (place - s0) * ((s - s1) / (place - s1)) * (point.x - line)
