@@ -188,20 +188,27 @@ def test_wilson_interval_is_scipy_s():
                                    rtol=1e-12, atol=1e-15)
 
 
-def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch, coarse):
-    """Chunks of 16 cells: the third chunk fails; the two before it are saved, and the same
-    call then computes only the other six and gives the uninterrupted map bit for bit."""
-    output = tmp_path / "basins.nc"
-    calls = []
-    original = CellRunner.run_cells
+def interrupted_at_third_chunk(monkeypatch):
+    """`CellRunner.run_cells` raising KeyboardInterrupt at its third call (Ctrl-C in the third
+    chunk); the list of the calls' cell counts, which grows as they are made."""
+    calls, original = [], CellRunner.run_cells
 
-    def failing(self, states, periods=None):
+    def interrupted(self, states, periods=None):
         calls.append(states.shape[0])
         if len(calls) == 3:
             raise KeyboardInterrupt
         return original(self, states, periods)
 
-    monkeypatch.setattr(CellRunner, "run_cells", failing)
+    monkeypatch.setattr(CellRunner, "run_cells", interrupted)
+    return calls
+
+
+def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch, coarse):
+    """Chunks of 16 cells: the third chunk fails; the two before it are saved, and the same
+    call then computes only the other six and gives the uninterrupted map bit for bit."""
+    output = tmp_path / "basins.nc"
+    original = CellRunner.run_cells
+    calls = interrupted_at_third_chunk(monkeypatch)
     with pytest.raises(KeyboardInterrupt):
         basins(PARAMS, grid(11), n_modes=N_MODES, output=output, workers=1, chunk_cells=16)
     assert not output.exists()
@@ -470,16 +477,8 @@ def test_a_basins_file_is_a_sweep_kind_of_run(tmp_path, monkeypatch, capsys, coa
 
     path, output = tmp_path / "basins.toml", tmp_path / "basins.nc"
     path.write_text(BASINS_FILE + "points = 11\n")
-    calls = []
     original = CellRunner.run_cells
-
-    def interrupted(self, states, periods=None):
-        calls.append(states.shape[0])
-        if len(calls) == 3:
-            raise KeyboardInterrupt
-        return original(self, states, periods)
-
-    monkeypatch.setattr(CellRunner, "run_cells", interrupted)
+    interrupted_at_third_chunk(monkeypatch)
     assert main(["run", str(path), "-o", str(output), "--threads", "1", "--quiet"]) == 130
     assert len(list((tmp_path / "basins.nc.partial").glob("chunk_*.npz"))) == 2
     monkeypatch.setattr(CellRunner, "run_cells", original)
