@@ -283,12 +283,12 @@ def test_a_chunk_kernel_call_is_the_block_by_block_run_bit_for_bit(params, n_mod
     """A chunk's cells in one kernel call (`kernels.basins.settle_cells`) give the bits the
     Python loop over blocks gives: starts in contact (spring law) and refused (tied law),
     settled, unsettled (a known period that is not the cells') and stopped cells."""
-    from impactbeams.orbits.basin_map import Plane, _packed, _Setup
+    from impactbeams.orbits.basin_map import Plane, _Setup
 
     setup = _Setup.checked(params, n_modes, settling, (), None, 1, None, False)
     a, b = np.meshgrid(*grid(3), indexing="ij")
     states = Plane.checked(setup, None).states(a.ravel(), b.ravel())
-    runner = CellRunner(_packed(params, n_modes, settling), settling)
+    runner = setup.runner
     cells = runner.run_cells(states, None if known is None else np.full(9, known))
     statuses = set()
     for i, z in enumerate(states):

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pytest
 
-from impactbeams import Params, simulate
+from impactbeams import Contact, Params, simulate
 from impactbeams.packing import reduced_model
 from impactbeams.params import ParameterError
 
@@ -52,7 +52,10 @@ def test_reduced_model_holds_the_static_correction() -> None:
 
 @pytest.mark.parametrize("change", [{"contact_law": "tied"}, {"contact_damping": 0.1},
                                     {"base_amplitude": 1e-6}, {"contact_side": "above"},
-                                    {"contact_position1": 0.1}, {"contact_position2": 0.1}])
+                                    {"contact_position1": 0.1}, {"contact_position2": 0.1},
+                                    # two tip stops from below: two gap elements
+                                    {"contacts": (Contact(clearance=1e-5),
+                                                  Contact(clearance=2e-5, stiffness=1e5))}])
 def test_reduced_model_refuses_what_it_cannot_express(change: dict) -> None:
     name = next(iter(change))
     with pytest.raises(ParameterError, match=f"reduced_model: {name} = "):

@@ -122,16 +122,26 @@ def _contact_frequencies(p: Params, n: int) -> list[float]:
 
 
 def _modes(args: argparse.Namespace) -> int:
+    """``modes``: the free beams' frequencies, then each contact's contact phase's.
+
+    Several contacts: the free modes are the structure's (no contact acts in them), and each
+    contact's column is its contact phase closed alone, what one contact prints (its run,
+    `Params.each_contact`).
+    """
     from impactbeams.modes import beam
 
     p = params_from_args(args)
     beams = ("beam1", "beam2")[:p.partner.beams]
+    runs = p.each_contact()
+    contact = [_contact_frequencies(run, args.n) for run in runs]
     result = {
         "free": {name: beam(p, int(name[-1])).free_modes(args.n).frequencies.tolist()
                  for name in beams},
         "contact_law": p.contact_law,
         "counterpart": p.counterpart,
-        "contact": _contact_frequencies(p, args.n),
+        **({"contacts": [{"contact": _contact_words(p, i), "frequencies": frequencies}
+                         for i, frequencies in enumerate(contact)]}
+           if p.several_contacts else {"contact": contact[0]}),
         **({"structure1": p.structure1.describe(args.n)} if p.structure1 is not None else {}),
     }
     if args.json:
@@ -140,11 +150,15 @@ def _modes(args: argparse.Namespace) -> int:
     against = f" {p.partner.words}" if p.partner.words else ""
     if p.structure1 is not None:  # its eigenproblem: size, method, memory
         print(p.structure1.describe(args.n))
-    print(f"natural frequencies (rad/s); contact phase of the {p.contact_law} law{against}")
+    names = [f"contacts[{i}]" for i in range(len(runs))] if p.several_contacts else ["contact"]
+    print(f"natural frequencies (rad/s); contact phase of the {p.contact_law} law{against}"
+          + (", each contact closed alone:" if p.several_contacts else ""))
+    for i in range(len(runs) if p.several_contacts else 0):
+        print(f"  {_contact_words(p, i)}")
     print(f"{'mode':>4} " + " ".join(f"{'beam ' + b[-1] + ' free':>16}" for b in beams)
-          + f" {'contact':>16}")
+          + "".join(f" {name:>16}" for name in names))
     for i in range(args.n):
-        row = (*(result["free"][b][i] for b in beams), result["contact"][i])
+        row = (*(result["free"][b][i] for b in beams), *(column[i] for column in contact))
         print(f"{i + 1:>4} " + " ".join(f"{w:16.6f}" for w in row))
     return 0
 

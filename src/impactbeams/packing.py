@@ -303,11 +303,16 @@ def reduced_model(params: Params, n_modes: int) -> ReducedModel:
     """The reduced model of ``params`` with ``n_modes`` per beam (spring law, tip force only).
 
     Raises ParameterError for what it cannot express: the tied law, a dashpot, base excitation,
-    a contact elsewhere than the tips or from above.
+    a contact elsewhere than the tips or from above, several contacts (one gap element).
     """
     from impactbeams.contact import build_free_phase, spring_contact
-    from impactbeams.params import ParameterError
+    from impactbeams.params import CONTACTS, ParameterError
 
+    if params.several_contacts:  # its peers take one gap element: R is one max(0, ...)
+        raise ParameterError(
+            f"reduced_model: {CONTACTS} = {len(params.contacts)} contacts; it supports one "
+            "contact only (a linear modal model with one spring gap element between the tips, "
+            "which its peers take)")
     law = params.law  # a spring gap element: a compliant law that keeps the free coordinates
     for name, value, supported, allowed in (
             ("contact_law", params.contact_law, law.compliant and law.tangent_flow,

@@ -37,7 +37,7 @@ import numpy as np
 
 from impactbeams.orbits.basin_cells import Settling
 from impactbeams.orbits.basin_inputs import continued_orbits, read_states, section_dimension
-from impactbeams.orbits.basin_map import basin_stability, basins
+from impactbeams.orbits.basin_map import basin_stability, basins, default_modes
 from impactbeams.params import (
     ParameterError,
     Params,
@@ -118,9 +118,7 @@ class BasinPlan:
 
         ``options``: theirs (output, chunk_cells, workers, progress, client).
         """
-        from impactbeams.contact.spring import recommended_modes
-
-        n_modes = recommended_modes(self.params) if self.n_modes is None else self.n_modes
+        n_modes = default_modes(self.params) if self.n_modes is None else self.n_modes
         given = () if self.attractors is None else continued_orbits(
             self.attractors, self.params, n_modes, self.name.format("attractors"))
         common = {"n_modes": n_modes, "attractors": given,

@@ -51,7 +51,7 @@ from impactbeams.orbits.basin_cells import (
     distance,
     periodic,
 )
-from impactbeams.orbits.period_map import PeriodMap
+from impactbeams.orbits.contacts_map import make_period_map
 from impactbeams.packing import Packed, pack_run
 from impactbeams.params import (
     MAX_MODES,
@@ -85,15 +85,16 @@ AMPLITUDE_SAMPLES = 256  # per forcing period, for an attractor's tip amplitude
 TIP_PLANE = ("start_tip_deflection", "start_tip_velocity")
 RECORD = "run.json"
 # what computes a basin map beyond a sweep's numeric code: a change makes saved chunks stale
-BASIN_CODE = ("orbits/basin_cells.py", "trajectory/phases.py", "trajectory/start.py",
-              "longtime.py")
+BASIN_CODE = ("orbits/basin_cells.py", "orbits/basin_contacts.py", "orbits/contacts_map.py",
+              "active_phases.py", "trajectory/phases.py", "trajectory/start.py", "longtime.py")
 
 
 @dataclasses.dataclass(frozen=True)
 class Attractor:
     """One attractor: period p, contacts per orbit, its p samples x (p, 4) and where it is.
 
-    ``start``: the state (q, q', phase) of a run on it, on the section; ``given``: a caller's
+    ``start``: the state (q, q', phase; several contacts: the closed ones' bit mask) of a run
+    on it, on the section; ``given``: a caller's
     orbit. After `describe`: ``state`` (free z), ``amplitude`` (m), ``multipliers``,
     ``residual`` (the samples' relative change over the last period run).
     """
@@ -269,7 +270,7 @@ class _Setup:
     workers: int
     output: Path | None
     progress: bool
-    packed: Packed
+    runner: CellRunner
     client: Client | None = None
 
     @classmethod
@@ -277,8 +278,6 @@ class _Setup:
                 chunk_cells: object, workers: object, output: object,
                 progress: object, client: object = None) -> _Setup:
         """Every common argument checked, one line each (ParameterError), before any run."""
-        from impactbeams.contact.spring import recommended_modes
-
         require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
         require("omega", params.omega, params.omega > 0,
                 "basins are of the forced response: omega > 0", "rad/s")
@@ -287,9 +286,8 @@ class _Setup:
         for uplift in ("uplift1", "uplift2"):
             require(uplift, getattr(params, uplift), getattr(params, uplift) == 0.0,
                     "the initial states replace the uplifts: leave it 0", "m")
-        if n_modes is None:
-            n_modes = recommended_modes(params)
-        n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
+        n_modes = require_integer("n_modes", default_modes(params) if n_modes is None
+                                  else n_modes, 1, MAX_MODES)
         settling = Settling() if settling is None else settling
         require_type("settling", settling, isinstance(settling, Settling),
                      "None or an impactbeams.orbits.Settling")
@@ -307,10 +305,15 @@ class _Setup:
 
             require_type("client", client, isinstance(client, require_dask().Client),
                          "None or a dask.distributed Client")
-        packed = _packed(params, n_modes, settling)
+        runner = cell_runner(params, n_modes, settling)
         given = _given(attractors, params, n_modes, settling)
         return cls(params, n_modes, settling, given, chunk_cells, workers,
-                   None if output is None else Path(output), progress, packed, client)
+                   None if output is None else Path(output), progress, runner, client)
+
+    @property
+    def packed(self) -> Packed:
+        """The run of one block (several contacts: the first contact's, their free phase)."""
+        return self.runner.packed
 
     @property
     def dimension(self) -> int:
@@ -357,7 +360,6 @@ class _Setup:
 
     def _cells(self, states: np.ndarray, store: _ChunkStore | None) -> Cells:
         """Every cell settled, chunk by chunk (the saved ones loaded)."""
-        runner = CellRunner(self.packed, self.settling)
         bounds = [(start, min(start + self.chunk_cells, states.shape[0]))
                   for start in range(0, states.shape[0], self.chunk_cells)]
         bar = Progress(states.shape[0], enabled=self.progress)
@@ -369,7 +371,7 @@ class _Setup:
                 bar.update(stop - start, computed=False)
         pending = {chunk: states[slice(*bounds[chunk])] for chunk in range(len(bounds))
                    if chunk not in done}
-        run = (_on_threads(runner, pending, self.workers) if self.client is None else
+        run = (_on_threads(self.runner, pending, self.workers) if self.client is None else
                _on_cluster(self, pending))
         with contextlib.closing(run):  # an error or an interrupt: the pending ones cancelled
             for chunk, cells in run:
@@ -384,7 +386,7 @@ class _Setup:
     def _dataset(self, states: np.ndarray, cells: Cells, coords: dict,
                  shape: tuple[int, ...], plane: str, identity: dict[str, str]) -> xr.Dataset:
         """Label the cells, describe the attractors, and the Dataset of it all."""
-        runner = CellRunner(self.packed, self.settling)
+        runner = self.runner
         known = [_given_attractor(runner, orbit) for orbit in self.given]
         labels = _labels(cells, known, self.settling.match_tolerance)
         known = [attractor if attractor.given else _described(runner, attractor, self)
@@ -424,13 +426,31 @@ def _on_cluster(setup: _Setup, pending: dict[int, np.ndarray]) -> Iterator[tuple
 
 def run_chunk(params: Params, n_modes: int, settling: Settling, states: np.ndarray) -> Cells:
     """A chunk's cells on a Dask worker: the model packed there, as `basins` packs it."""
-    return CellRunner(_packed(params, n_modes, settling), settling).run_cells(states)
+    return cell_runner(params, n_modes, settling).run_cells(states)
 
 
-def _packed(params: Params, n_modes: int, settling: Settling) -> Packed:
-    """The run of one block of ``settling.block_periods`` forcing periods."""
+def cell_runner(params: Params, n_modes: int, settling: Settling) -> CellRunner:
+    """The runner of cells: of one block of ``settling.block_periods`` forcing periods.
+
+    One contact: the packed run and one kernel call a chunk (`CellRunner`); several: the
+    active sets' phases, cell by cell (`impactbeams.orbits.basin_contacts`).
+    """
+    if params.several_contacts:
+        from impactbeams.orbits.basin_contacts import ContactCellRunner
+
+        return ContactCellRunner(params, n_modes, settling)
     horizon = settling.block_periods * (2.0 * math.pi / params.omega)  # the last sample
-    return pack_run(params, n_modes, horizon, horizon)
+    return CellRunner(pack_run(params, n_modes, horizon, horizon), settling)
+
+
+def default_modes(params: Params) -> int:
+    """The modes per beam of a basin map when none is given: the most any contact's run needs.
+
+    As `impactbeams.simulate`'s (one contact: `impactbeams.contact.recommended_modes`).
+    """
+    from impactbeams.contact.spring import recommended_modes
+
+    return max(recommended_modes(run) for run in params.each_contact())
 
 
 def _threads() -> int:
@@ -516,7 +536,8 @@ def _described(runner: CellRunner, attractor: Attractor, setup: _Setup) -> Attra
     return dataclasses.replace(attractor, period=p, contacts=runner.contacts(trajectory, p),
                                samples=x[-p:], start=start, state=z,
                                amplitude=_amplitude(runner, trajectory, p), residual=residual,
-                               multipliers=_multipliers(setup, z, p))
+                               multipliers=_multipliers(setup, z, p)
+                               if runner.mappable(start) else None)
 
 
 def _resettled(runner: CellRunner, states: np.ndarray, cells: Cells, labels: np.ndarray,
@@ -539,7 +560,7 @@ def _multipliers(setup: _Setup, z: np.ndarray, period: int) -> np.ndarray | None
     """The Floquet multipliers at z (by decreasing modulus); None without a tangent flow."""
     if not setup.params.law.tangent_flow or not np.all(np.isfinite(z)):
         return None
-    period_map = PeriodMap(setup.params, setup.n_modes, period)
+    period_map = make_period_map(setup.params, setup.n_modes, period)
     mu = np.linalg.eigvals(period_map(z, directions="all", measures=False).jacobian)
     return mu[np.argsort(-np.abs(mu), kind="stable")]
 

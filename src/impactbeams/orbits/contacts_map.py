@@ -254,7 +254,7 @@ class ContactsPeriodMap(SectionMap):
         n = self.packed.q0.size
         rows_q = np.ascontiguousarray(columns[:n].T)
         rows_v = np.ascontiguousarray(columns[n:].T)
-        start = self._early(int(run.mask[0]), run.q[0], run.v[0])
+        start = self.early_released(int(run.mask[0]), run.q[0], run.v[0])
         tangent = Tangent(rows_q, rows_v, np.array([run.time[0], 0.0]),
                           np.zeros((1, rows_q.shape[0])), np.zeros(1, dtype=np.int64))
         carry_contact_tangents(*self.contacts.tangent_arrays(), run.arrays(), run.t_end, start,
@@ -270,7 +270,7 @@ class ContactsPeriodMap(SectionMap):
                     np.empty(size, dtype=np.int64), np.empty((size, m)), np.empty((size, m)),
                     np.empty((size, n)), np.empty((size, n)))
         mask = self.active_mask(z0)
-        if self._early(mask, q0, v0):
+        if self.early_released(mask, q0, v0):
             raise RuntimeError("the period map's section state lies in a dashpot's early "
                                "release (an open contact's gap < 0): a run of several "
                                "contacts starts with every open gap >= 0")
@@ -308,7 +308,7 @@ class ContactsPeriodMap(SectionMap):
                 forced = mask if forced is None else forced
         return 0 if forced is None else forced
 
-    def _early(self, mask: int, q: np.ndarray, v: np.ndarray) -> int:
+    def early_released(self, mask: int, q: np.ndarray, v: np.ndarray) -> int:
         """The open contacts whose gaps are < 0 at (q, q', 0) in the set of ``mask`` (bits)."""
         if not self.contacts.early_release:
             return 0
