@@ -25,6 +25,7 @@ from impactbeams import Contact, LongTime, Params, simulate, two_sided_stop
 from impactbeams.kernels.basins import settled_from
 from impactbeams.orbits import Settling, basins, periodic_orbit
 from impactbeams.orbits.basin_contacts import ContactCellRunner
+from impactbeams.orbits.basin_map import Plane, _Setup
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
 
 PARAMS = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
@@ -67,6 +68,29 @@ def test_a_stop_that_never_closes_gives_the_single_contact_s_map():
     for part in ("real", "imag"):
         name = f"attractor_multiplier_{part}"
         np.testing.assert_allclose(far[name].values, single[name].values, rtol=0, atol=1e-12)
+
+
+def test_with_a_dashpot_states_inside_its_early_release_run_as_one_contact_s():
+    """A dashpot on the tip stop (0.02 N s/m) beside the far one: states of the plane's lower
+    right (into the stop, moving up fast), four of them inside the dashpot's early release
+    (the stop open, its spring still compressed: no set of closed contacts fits), give the
+    single contact's labels and settle periods cell by cell; such a state's run starts
+    released: its first switch is that gap's opening (function n + 0), not an onset."""
+    single = PARAMS.replace(contact_damping=0.02)
+    far = single.replace(contacts=FAR.contacts)
+    setup = _Setup.checked(far, N_MODES, None, (), None, 1, None, False)
+    a, b = np.meshgrid(np.linspace(-3e-5, 0.0, 7), np.linspace(0.0, 0.05, 6), indexing="ij")
+    states = Plane.checked(setup, None).states(a.ravel(), b.ravel())
+    released = [i for i, z in enumerate(states)
+                if not setup.runner.mappable(setup.runner.start(z))]
+    assert len(released) == 4
+    run = setup.runner.block(setup.runner.start(states[released[0]]))[0]
+    assert (run.mask[0], run.switched[1]) == (0, 2)
+    expected = basins(single, initial_states=states, n_modes=N_MODES)
+    found = basins(far, initial_states=states, n_modes=N_MODES)
+    assert set(expected.basin.values) == {0, 1}
+    for name in ("basin", "settle_periods", "attractor_contacts"):
+        np.testing.assert_array_equal(found[name].values, expected[name].values)
 
 
 def test_a_two_sided_stop_closes_both_sides_on_one_attractor(two_sided):
@@ -200,3 +224,14 @@ def test_cli_basins_of_several_contacts(tmp_path, capsys, two_sided):
         assert word in err and "Traceback" not in err, err
         assert len(err.strip().splitlines()) == 1 and err.startswith("impactbeams: error:")
     assert not (tmp_path / "x.nc").exists()
+
+
+def test_chunks_on_a_dask_cluster_give_the_same_map(two_sided):
+    """Each chunk one task on a local cluster (the contacts packed on the worker): the same
+    map, bit for bit, as one thread here."""
+    from test_distributed import local_cluster
+
+    with local_cluster(1) as client:
+        remote = basins(TWO_SIDED, grid(9), n_modes=N_MODES, client=client, chunk_cells=27)
+    for name in ("basin", "settle_periods", "attractor_displacement", "attractor_velocity"):
+        np.testing.assert_array_equal(remote[name].values, two_sided[name].values)
