@@ -188,10 +188,10 @@ def test_wilson_interval_is_scipy_s():
                                    rtol=1e-12, atol=1e-15)
 
 
-def interrupted_at_third_chunk(monkeypatch):
-    """`CellRunner.run_cells` raising KeyboardInterrupt at its third call (Ctrl-C in the third
+def interrupted_at_third_chunk(monkeypatch, runner=CellRunner):
+    """``runner.run_cells`` raising KeyboardInterrupt at its third call (Ctrl-C in the third
     chunk); the list of the calls' cell counts, which grows as they are made."""
-    calls, original = [], CellRunner.run_cells
+    calls, original = [], runner.run_cells
 
     def interrupted(self, states, periods=None):
         calls.append(states.shape[0])
@@ -199,8 +199,20 @@ def interrupted_at_third_chunk(monkeypatch):
             raise KeyboardInterrupt
         return original(self, states, periods)
 
-    monkeypatch.setattr(CellRunner, "run_cells", interrupted)
+    monkeypatch.setattr(runner, "run_cells", interrupted)
     return calls
+
+
+def counting_chunks(monkeypatch, original, calls, runner=CellRunner):
+    """``runner.run_cells`` as ``original``, each chunk's cell count appended to ``calls``
+    (not the runs again of the cells that settled on a multiple of their period)."""
+
+    def counted(self, states, periods=None):
+        if periods is None:
+            calls.append(states.shape[0])
+        return original(self, states, periods)
+
+    monkeypatch.setattr(runner, "run_cells", counted)
 
 
 def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch, coarse):
@@ -214,12 +226,7 @@ def test_an_interrupted_run_resumes_from_its_saved_chunks(tmp_path, monkeypatch,
     assert not output.exists()
     assert len(list((tmp_path / "basins.nc.partial").glob("chunk_*.npz"))) == 2
     calls.clear()
-    def counted(self, states, periods=None):  # the chunks' runs (not the settle periods')
-        if periods is None:
-            calls.append(states.shape[0])
-        return original(self, states, periods)
-
-    monkeypatch.setattr(CellRunner, "run_cells", counted)
+    counting_chunks(monkeypatch, original, calls)
     resumed = basins(PARAMS, grid(11), n_modes=N_MODES, output=output, workers=1,
                      chunk_cells=16)
     assert len(calls) == 6 and not (tmp_path / "basins.nc.partial").exists()

@@ -27,6 +27,7 @@ from impactbeams.orbits import Settling, basins, periodic_orbit
 from impactbeams.orbits.basin_contacts import ContactCellRunner
 from impactbeams.orbits.basin_map import Plane, _Setup
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
+from test_basins import counting_chunks, interrupted_at_third_chunk
 
 PARAMS = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
                 force_amplitude=1e-4, omega=300.0)
@@ -170,26 +171,13 @@ def test_an_interrupted_run_resumes_on_threads(tmp_path, monkeypatch, two_sided)
     """Chunks of 9 cells on two threads: Ctrl-C in the third chunk keeps the finished ones,
     and the same call then runs only the others and gives the one-thread map bit for bit."""
     output = tmp_path / "basins.nc"
-    calls, original = [], ContactCellRunner.run_cells
-
-    def interrupted(self, states, periods=None):
-        calls.append(states.shape[0])
-        if len(calls) == 3:
-            raise KeyboardInterrupt
-        return original(self, states, periods)
-
-    monkeypatch.setattr(ContactCellRunner, "run_cells", interrupted)
+    original = ContactCellRunner.run_cells
+    calls = interrupted_at_third_chunk(monkeypatch, ContactCellRunner)
     with pytest.raises(KeyboardInterrupt):
         basins(TWO_SIDED, grid(9), n_modes=N_MODES, output=output, workers=1, chunk_cells=9)
     assert len(list((tmp_path / "basins.nc.partial").glob("chunk_*.npz"))) == 2
     calls.clear()
-
-    def counted(self, states, periods=None):  # the chunks' runs (not the settle periods')
-        if periods is None:
-            calls.append(states.shape[0])
-        return original(self, states, periods)
-
-    monkeypatch.setattr(ContactCellRunner, "run_cells", counted)
+    counting_chunks(monkeypatch, original, calls, ContactCellRunner)
     resumed = basins(TWO_SIDED, grid(9), n_modes=N_MODES, output=output, workers=2,
                      chunk_cells=9)
     assert calls == [9] * 7 and not (tmp_path / "basins.nc.partial").exists()
