@@ -185,28 +185,37 @@ def test_an_interrupted_run_resumes_on_threads(tmp_path, monkeypatch, two_sided)
         np.testing.assert_array_equal(resumed[name].values, two_sided[name].values)
 
 
+BOX_OPTIONS = ["--axis1", "-4e-5,4e-5", "--axis2", "-1.2e-2,1.2e-2"]
+
+
+def params_file(folder, above=1e-5):
+    """TWO_SIDED's parameters file (the stop above ``above`` m away), as TWO_SIDED gives them:
+    the contacts' stiffness the run's."""
+    path = folder / f"two_sided_{above}.toml"
+    path.write_text(
+        '[params]\ncounterpart = "stop"\ncontact_stiffness = 100.0\ndamping_ratio = 0.02\n'
+        "force_amplitude = 1e-4\nomega = 300.0\n"
+        '[[params.contacts]]\nside = "below"\nclearance = 1e-5\n'
+        f'[[params.contacts]]\nside = "above"\nclearance = {above}\n')
+    return path
+
+
 def test_cli_basins_of_several_contacts(tmp_path, capsys, two_sided):
     """``impactbeams basins --params`` of a file with ``[[params.contacts]]``: the map's file
     (the same labels as the library's); bad input: one line, exit 2, nothing written."""
     from impactbeams.cli import main
 
-    params = tmp_path / "two_sided.toml"
-    params.write_text(
-        '[params]\ncounterpart = "stop"\ndamping_ratio = 0.02\nforce_amplitude = 1e-4\n'
-        "omega = 300.0\n"
-        '[[params.contacts]]\nside = "below"\nclearance = 1e-5\nstiffness = 100.0\n'
-        '[[params.contacts]]\nside = "above"\nclearance = 1e-5\nstiffness = 100.0\n')
+    params = params_file(tmp_path)
     output = tmp_path / "basins.nc"
-    box = ["--axis1", "-4e-5,4e-5", "--axis2", "-1.2e-2,1.2e-2"]
-    assert main(["basins", "--params", str(params), "--n-modes", "5", *box, "--points", "9",
+    assert main(["basins", "--params", str(params), "--n-modes", "5", *BOX_OPTIONS, "--points", "9",
                  "-o", str(output)]) == 0
     assert "81 initial states, 2 attractors" in capsys.readouterr().err
     with xr.open_dataset(output) as written:
         np.testing.assert_array_equal(written.basin.values, two_sided.basin.values)
-    for bad, word in ((["--contact-stiffness", "200"], "contact_stiffness"),
+    for bad, word in ((["--contact-position1", "0.05"], "contact_position1"),
                       (["--coordinates", "0,20"], "coordinates"),
                       (["--omega", "0"], "omega")):
-        assert main(["basins", "--params", str(params), "--n-modes", "5", *box, *bad,
+        assert main(["basins", "--params", str(params), "--n-modes", "5", *BOX_OPTIONS, *bad,
                      "-o", str(tmp_path / "x.nc")]) == 2
         err = capsys.readouterr().err
         assert word in err and "Traceback" not in err, err
@@ -223,3 +232,30 @@ def test_chunks_on_a_dask_cluster_give_the_same_map(two_sided):
         remote = basins(TWO_SIDED, grid(9), n_modes=N_MODES, client=client, chunk_cells=27)
     for name in ("basin", "settle_periods", "attractor_displacement", "attractor_velocity"):
         np.testing.assert_array_equal(remote[name].values, two_sided[name].values)
+
+
+def test_a_continuation_of_several_contacts_labels_the_map(tmp_path, capsys, two_sided):
+    """``--attractors`` a continuation of the two-sided stop in Omega: its orbit at 300 rad/s
+    (the impacting one, converged on the map's contacts) labels first, every cell as found;
+    a continuation of other contacts (the stop above 20 um away) is refused in one line."""
+    from impactbeams.cli import main
+    from impactbeams.continuation import Continuation, continue_orbits
+
+    curve = tmp_path / "curve.nc"
+    continue_orbits(Continuation(TWO_SIDED, "omega", 250.0, 330.0, n_modes=N_MODES,
+                                 max_branches=1)).to_netcdf(curve)
+    output = tmp_path / "given.nc"
+    assert main(["basins", "--params", str(params_file(tmp_path)), "--n-modes", "5", *BOX_OPTIONS,
+                 "--points", "9", "--attractors", str(curve), "-o", str(output)]) == 0
+    with xr.open_dataset(output) as given:
+        assert given.attractor_given.values.tolist() == [1, 0]
+        assert given.attractor_contacts.values.tolist() == [2, 0]
+        impacting = int(np.argmax(two_sided.attractor_contacts.values))
+        np.testing.assert_array_equal(given.basin.values == 0,
+                                      two_sided.basin.values == impacting)
+    capsys.readouterr()
+    assert main(["basins", "--params", str(params_file(tmp_path, 2e-5)), "--n-modes", "5",
+                 *BOX_OPTIONS, "--attractors", str(curve), "-o", str(tmp_path / "x.nc")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("impactbeams: error:") and len(err.strip().splitlines()) == 1
+    assert "its orbits are of contacts = " in err and "clearance=2e-05" in err

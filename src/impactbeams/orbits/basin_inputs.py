@@ -19,7 +19,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from impactbeams.params import ParameterError, Params
+from impactbeams.params import CONTACTS, ParameterError, Params, contact_field, parameter_value
+from impactbeams.variables import parameter_text
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -85,7 +86,7 @@ def continued_orbits(path: str | Path, params: Params, n_modes: int,
     branches = _continuation(Path(path), where)
     parameter = str(branches.attrs["continued_parameter"])
     _require_same_model(branches, params, n_modes, parameter, f"{where} = '{path}'")
-    value = float(getattr(params, parameter))
+    value = float(parameter_value(params, parameter))
     guesses = _crossings(branches, parameter, value)
     if not guesses:
         values = branches[parameter].values
@@ -128,14 +129,20 @@ def _continuation(path: Path, where: str) -> xr.Dataset:
 
 def _require_same_model(branches: xr.Dataset, params: Params, n_modes: int, parameter: str,
                         where: str) -> None:
-    """The continuation's modes and fixed parameters are the map's (one line if not)."""
+    """The continuation's modes and fixed parameters are the map's (one line if not).
+
+    Several contacts are compared as their attribute's text, unless the continued parameter
+    is one contact's field (``contacts.INDEX.FIELD``, whose value the text holds): then each
+    orbit's Newton solve on the map's contacts is the check.
+    """
     if int(branches.attrs.get("n_modes", -1)) != n_modes:
         raise ParameterError(f"{where}: its orbits have n_modes = {branches.attrs.get('n_modes')}"
                              f", the map's {n_modes}: give the map the same n_modes")
+    continued = CONTACTS if contact_field(parameter) is not None else parameter
     for key, value in params.as_dict().items():
-        if key == parameter or key not in branches.attrs or isinstance(value, (list, dict)):
+        if key == continued or key not in branches.attrs or isinstance(value, (list, dict)):
             continue
-        saved = branches.attrs[key]
+        saved, value = branches.attrs[key], parameter_text(value)
         if (saved != value if isinstance(value, str)
                 else not np.isclose(float(saved), float(value), rtol=1e-12, atol=0.0)):
             raise ParameterError(f"{where}: its orbits are of {key} = {saved}, the map's "
