@@ -237,9 +237,11 @@ def test_chunks_on_a_dask_cluster_give_the_same_map(two_sided):
 def test_a_continuation_of_several_contacts_labels_the_map(tmp_path, capsys, two_sided):
     """``--attractors`` a continuation of the two-sided stop in Omega: its orbit at 300 rad/s
     (the impacting one, converged on the map's contacts) labels first, every cell as found;
-    a continuation of other contacts (the stop above 20 um away) is refused in one line."""
+    one in the stop above's clearance gives that orbit at the map's clearance; a continuation
+    of other contacts (the stop above 20 um away) is refused in one line."""
     from impactbeams.cli import main
     from impactbeams.continuation import Continuation, continue_orbits
+    from impactbeams.orbits.basin_inputs import continued_orbits
 
     curve = tmp_path / "curve.nc"
     continue_orbits(Continuation(TWO_SIDED, "omega", 250.0, 330.0, n_modes=N_MODES,
@@ -253,6 +255,15 @@ def test_a_continuation_of_several_contacts_labels_the_map(tmp_path, capsys, two
         impacting = int(np.argmax(two_sided.attractor_contacts.values))
         np.testing.assert_array_equal(given.basin.values == 0,
                                       two_sided.basin.values == impacting)
+    # continued in the stop above's clearance: its point at the map's 10 um is the same orbit
+    # (each converged by Newton on the map's contacts to a relative residual of 1e-11, which
+    # leaves 1e-11 / (1 - |mu|) = 1e-10 of the state; measured 4.3e-12)
+    along = tmp_path / "clearance.nc"
+    continue_orbits(Continuation(TWO_SIDED, "contacts.1.clearance", 0.8e-5, 1.2e-5,
+                                 n_modes=N_MODES, max_branches=1)).to_netcdf(along)
+    (orbit,) = continued_orbits(along, TWO_SIDED, N_MODES, "attractors")
+    (same,) = continued_orbits(curve, TWO_SIDED, N_MODES, "attractors")
+    assert np.abs(orbit.state - same.state).max() < 1e-9 * np.abs(same.state).max()
     capsys.readouterr()
     assert main(["basins", "--params", str(params_file(tmp_path, 2e-5)), "--n-modes", "5",
                  *BOX_OPTIONS, "--attractors", str(curve), "-o", str(tmp_path / "x.nc")]) == 2
