@@ -96,7 +96,8 @@ class Cells:
     period p (the transient; the periods run if not settled); ``status``: 0 settled,
     ``NOT_SETTLED`` or ``STOPPED``; ``samples``: the last p samples x, (cells, max_period, 4),
     NaN beyond p; ``end_q``, ``end_v``, ``end_phase``: the state at the end of the last block,
-    in that phase's coordinates (the start of a run that continues it).
+    in that phase's coordinates (the start of a run that continues it; several contacts: the
+    free coordinates and the bit mask of the contacts closed, `basin_contacts`).
     """
 
     period: np.ndarray

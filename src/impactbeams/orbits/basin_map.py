@@ -16,6 +16,9 @@ attractor is run on from its first cell until it repeats to ``Settling.state_tol
 state, its tip amplitude and (spring law) its Floquet multipliers, from the period map's exact
 Jacobian, describe it.
 
+With several contacts the cells run on the active sets' phases, cell by cell
+(`impactbeams.orbits.basin_contacts`), labelled and described the same way.
+
 Cells run in chunks, in parallel threads (the kernels release the GIL) or one Dask task each
 (``client``); with an ``output`` file each finished chunk is saved under ``OUT.nc.partial/`` at
 once, so an interrupted run loses no finished chunk and the same call resumes it.
