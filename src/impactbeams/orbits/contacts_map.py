@@ -31,11 +31,12 @@ from impactbeams.active_phases import (
     gap_rate,
     pack_contacts,
     sample,
+    tip_motions,
 )
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels import several_contacts as kernel
 from impactbeams.kernels.contacts_tangent import carry_contact_tangents, event_at
-from impactbeams.kernels.layout import FREE, TIP_COLUMNS, TIP_Y1, TIP_Y2
+from impactbeams.kernels.layout import TIP_Y1, TIP_Y2
 from impactbeams.kernels.records import Tangent
 from impactbeams.orbits.period_map import (
     INTERVAL_SAMPLES,
@@ -50,7 +51,6 @@ from impactbeams.orbits.period_map import (
 )
 from impactbeams.params import Params, require, require_integer, require_type
 from impactbeams.trajectory.episodes import default_separation, episode_count
-from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.several import check_contact_runs
 from impactbeams.trajectory.start import checked_state
 
@@ -166,20 +166,18 @@ class ContactsPeriodMap(SectionMap):
         return min(candidates, key=abs) if candidates else math.nan
 
     def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
-        """The tips (``kernels.layout`` TIP_* columns; velocities NaN) of ``result``'s run.
+        """The tips (``kernels.layout`` TIP_* columns) of ``result``'s run at ``times`` (s).
 
-        As `impactbeams.simulate` of several contacts reads them: the free coordinates' tips
-        plus each closed contact's force through the flexibility the modes miss.
+        As `impactbeams.simulate` of several contacts reads them
+        (`active_phases.tip_motions`): the free coordinates' tips plus each closed contact's
+        force through the flexibility the modes miss, the velocities with its rate.
         """
         times = np.asarray(times, dtype=float)
         q, v, mask = sample(self.contacts, result.trajectory, times)
-        free = observables(self.packed, np.full(times.size, FREE, dtype=np.int64), times, q, v)
         forces = contact_quantities(self.contacts, times, q, v, mask)["contact_force"]
-        springs = [run.dynamics.spring for run in self.contacts.runs]
-        out = np.full((times.size, len(TIP_COLUMNS)), math.nan)
-        out[:, TIP_Y1] = free["tip_deflection_1"] + forces @ [s.tip_shift1 for s in springs]
-        out[:, TIP_Y2] = free["tip_deflection_2"] - forces @ [s.tip_shift2 for s in springs]
-        return out
+        motions = tip_motions(self.contacts, times, q, v, mask, forces)
+        return np.column_stack([motions[name] for name in (
+            "tip_deflection_1", "tip_deflection_2", "tip_velocity_1", "tip_velocity_2")])
 
     def _grid(self) -> np.ndarray:
         """``SAMPLES_PER_PERIOD`` equally spaced times a period over the run (s)."""
