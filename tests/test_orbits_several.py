@@ -15,10 +15,11 @@ import pytest
 from impactbeams import Contact, ParameterError, Params, simulate, two_sided_stop
 from impactbeams.active_phases import contact_quantities, sample
 from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
-from impactbeams.kernels.layout import FREE, ROW_EVENT, TIP_Y1
+from impactbeams.kernels.layout import FREE, ROW_EVENT, TIP_V1, TIP_Y1
 from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
 from impactbeams.trajectory.start import phase_state
+from impactbeams.variables import BIFURCATIONS
 from orbit_reference import central_jacobian, settled
 from orbit_reference import map_energy_scale as energy_scale
 
@@ -143,6 +144,27 @@ def test_orbits_of_several_contacts_are_where_a_long_simulate_settles(orbits, na
     assert largest <= orbit.max_tip1 * (1 + 1e-12) and orbit.max_tip1 < largest * (1 + 1e-3)
 
 
+@pytest.mark.parametrize("name", list(RUNS))
+def test_the_orbits_tip_velocities_are_its_tips_rates(orbits, name):
+    """``tip_motions``' velocity of beam 1's tip (its modes' and the closed forces' rates
+    through the flexibility the modes miss) against central differences of its deflection at
+    255 times of the period, each farther than two steps from a switch: the difference is the
+    differences' truncation, O(h^2), falling 100-fold from steps 1e-5 T to 1e-6 T (measured
+    4.1e-8 -> 4.4e-10, 6.0e-7 -> 6.0e-9, 3.4e-7 -> 3.4e-9 of the largest velocity)."""
+    orbit, period_map = orbits[name]
+    result = period_map(orbit.state, measures=False)
+    switches = result.trajectory.time
+    times = np.linspace(0.0, period_map.horizon, 257)[1:-1]
+    errors = []
+    for step in (1e-5 * period_map.horizon, 1e-6 * period_map.horizon):
+        t = times[[np.min(np.abs(switches - at)) > 2 * step for at in times]]
+        velocity = period_map.tip_motions(result, t)[:, TIP_V1]
+        rates = (period_map.tip_motions(result, t + step)[:, TIP_Y1]
+                 - period_map.tip_motions(result, t - step)[:, TIP_Y1]) / (2 * step)
+        errors.append(np.abs(rates - velocity).max() / np.abs(velocity).max())
+    assert errors[1] < 1e-8 and 50 < errors[0] / errors[1] < 200
+
+
 def test_a_symmetric_two_sided_stop_has_a_symmetric_orbit(orbits):
     """Equal clearances on both sides and F0 sin(Omega t): the equations are invariant under
     z -> -z, t -> t + T/2, and the stable orbit with them: z(T/2) = -z(0) (measured 3e-15 in
@@ -185,8 +207,7 @@ def test_multipliers_are_the_finite_difference_monodromys_eigenvalues(orbits, na
 
 def test_what_orbits_of_several_contacts_refuse(orbits):
     """A continuation of a flat contact key, two-parameter curves and the single contact's
-    PeriodMap refuse several contacts in one line; the contacts' measures are there, the
-    interval value is NaN."""
+    PeriodMap refuse several contacts in one line; the contacts' measures are there."""
     with pytest.raises(ParameterError, match="parameter = 'clearance' is not allowed: with 2 "
                                              "contacts each gives its own"):
         Continuation(TWO_SIDED, "clearance", 1e-6, 4e-6)
@@ -199,16 +220,65 @@ def test_what_orbits_of_several_contacts_refuse(orbits):
     result = ContactsPeriodMap(TWO_SIDED, N_MODES)(settled(ContactsPeriodMap(TWO_SIDED,
                                                                               N_MODES), 40))
     assert result.peak_force > 0 and result.impulse > 0 and result.peak_forces.size >= 2
-    assert result.max_tip1 > 0 and np.isnan(result.interval_gap)
-    # overlapping (gap -0.1 um) but opening fast enough that the dashpot's pull exceeds the
-    # spring's push (-k g - c g' < 0): inside an early release, which a run does not start in
+    assert result.max_tip1 > 0
+
+
+def test_an_orbit_whose_section_lies_in_a_dashpots_early_release():
+    """A two-sided stop (1 um each side, dashpots) at 426.5 rad/s: the stop above releases
+    early at 0.9984 T and its gap opens at 1.0017 T, so the orbit's section state lies in that
+    early release (the stop's gap -15 nm while open). The map starts there as the run goes on
+    after the release (`resume_contacts` with it released early): `simulate` from rest over
+    300 periods, its own run through the early release, ends on the orbit's state to 1e-11
+    in the energy norm (measured 2.6e-13; the transient decays as |mu|^300), and the
+    monodromy carried from that start is central differences' to their truncation (1.6e-9
+    at step 1e-5, falling as h^2)."""
+    params = FORCED.replace(omega=426.5, contacts=two_sided_stop(MID, 1e-6, 1e-6, damping=0.5))
+    orbit = periodic_orbit(params, N_MODES, method="newton")
+    period_map = ContactsPeriodMap(params, N_MODES)
+    z = orbit.state
+    m = z.size // 2
+    gaps = period_map._events(0, z[:m], z[m:])
+    assert orbit.residual < 1e-12 and period_map.active_mask(z) == 0
+    assert gaps[0] > 0 > gaps[1] and period_map._early(0, z[:m], z[m:]) == 2
+    run = period_map(z, measures=False).trajectory
+    assert run.switched[1] == 3 and run.time[1] < 0.01 * period_map.horizon  # it opens
+    period = period_map.forcing_period
+    ds = simulate(params, 300 * period, N_MODES, times=np.array([300 * period]))
+    end = np.concatenate([ds.final_displacement.values, ds.final_velocity.values])
+    scale = energy_scale(period_map)
+    assert np.linalg.norm(scale * (end - z)) < 1e-11 * np.linalg.norm(scale * z)
+    carried = in_energy(period_map, period_map(z, directions="all", measures=False).jacobian)
+    errors = []
+    for step in (1e-4, 1e-5):
+        reference = in_energy(period_map, central_jacobian(
+            lambda x: period_map(x, measures=False).state, z, scale, step))
+        errors.append(np.linalg.norm(carried - reference, 2) / np.linalg.norm(reference, 2))
+    assert errors[1] < 1e-8 and 50 < errors[0] / errors[1] < 200
+
+
+def test_a_section_state_that_pulls_if_closed_starts_released_early():
+    """Overlapping but opening fast enough that the dashpot's pull exceeds the spring's push:
+    the contact starts released early, as the single contact's `phase_state` starts free
+    there, and its gap's opening (function n + f) is the run's first switch. The mid-span
+    stop alone (gap -1.1 um); then both stops overlapping by 1 um, the tip's opening at
+    0.05 m/s: no set fits, and the one chosen has the mid-span stop closed (its force > 0)
+    with the tip's released early (closed, it would pull), not the empty set."""
     period_map = ContactsPeriodMap(DASHPOTS, N_MODES)
     weights = period_map.packed.tables[FREE, ROW_EVENT]  # the mid-span stop's gap
     unit = weights / (weights @ weights)
     z = np.concatenate([-1.1e-6 * unit, 5e-2 * unit])
-    assert period_map.active_mask(z) == 0
-    with pytest.raises(RuntimeError, match="lies in a dashpot's early release"):
-        period_map(z)
+    assert period_map.active_mask(z) == 0 and period_map._early(0, z[:N_MODES],
+                                                                 z[N_MODES:]) == 1
+    single = PeriodMap(STOP.replace(force_amplitude=1e-3, omega=400.0, contact_position1=MID,
+                                    clearance=1e-6, contact_damping=0.5), N_MODES)
+    assert phase_state(single.packed, z)[2] == FREE
+    assert period_map(z).trajectory.switched[1] == 2  # contact 0's gap opens: function 2 + 0
+    b = period_map.contacts.gap_weights  # the modal gaps: clearances 1, 2 um, both -3 um
+    z = np.concatenate([b.T @ np.linalg.solve(b @ b.T, rows) for rows in ([-3e-6, -3e-6],
+                                                                          [0.0, 5e-2])])
+    assert period_map.active_mask(z) == 1 and period_map._early(1, z[:N_MODES],
+                                                                 z[N_MODES:]) == 2
+    assert period_map(z).trajectory.switched[1] == 3  # contact 1's gap opens
 
 
 # a two-sided stop 3 um below and 6 um above mid-span: along F0 the orbit first touches the
@@ -217,8 +287,6 @@ BACKLASH = FORCED.replace(contacts=two_sided_stop(MID, 3e-6, 6e-6))
 
 
 def _grazings(dataset):
-    from impactbeams.variables import BIFURCATIONS
-
     labels = dataset.bifurcation.values
     return [i for i in np.flatnonzero(labels) if BIFURCATIONS[labels[i]] == "grazing"]
 
@@ -355,3 +423,66 @@ def test_an_orbits_dataset_beside_a_contact_that_never_closes_is_the_single_cont
         assert np.abs(several[name].values - reference).max() <= 1e-12 * np.abs(
             reference).max(), name
     np.testing.assert_allclose(several.contact_forces.sel(contact=1), 0.0, rtol=0, atol=0)
+
+
+# issue 31's merge (`tests/test_continuation_events.py`): two beams, 3 modes, the tips' contact
+# at 11 um; near 257.46 rad/s the orbit's 3 contacts become 2
+BEAMS = Params(contact_stiffness=1e4, damping_ratio=0.02, force_amplitude=3e-5,
+               clearance=1.1e-5)
+FAR = BEAMS.replace(contacts=(Contact(clearance=1.1e-5),
+                              Contact(0.5 * BEAMS.l1, 0.5 * BEAMS.l2, clearance=1e-3)))
+# a second contact at 0.8 of both beams, 8.75 um: it closes too (a merge near 257.176 rad/s)
+BOTH = BEAMS.replace(contacts=(Contact(clearance=1.1e-5),
+                               Contact(0.8 * BEAMS.l1, 0.8 * BEAMS.l2, clearance=8.75e-6)))
+
+
+def _located(params, low, high, **extra):
+    dataset = continue_orbits(Continuation(params, "omega", low, high, n_modes=3,
+                                           max_branches=1, **extra))
+    labels = [BIFURCATIONS[code] for code in dataset.bifurcation.values]
+    return dataset, [(label, float(dataset.omega[i])) for i, label in enumerate(labels)
+                     if label in ("contact_merge", "contact_split")]
+
+
+def test_interval_value_beside_a_contact_that_never_closes_is_the_single_contacts():
+    """The interval value of the tips' contact beside one 1 mm away that never closes: the
+    single contact's (`PeriodMap`, its kernel) at every point of the branch from 257.44 to
+    257.5 rad/s, on both sides of the merge (a free interval's height > 0, a contact's rise
+    < 0), to 1e-14 of the clearance, a few times a gap's round-off (measured 6.5e-16: the
+    set's force over its effective stiffness against the free coordinates' gap), and the
+    merge located at the same frequency (measured 2.2e-16 relative; each to 1e-11 of the
+    range at the root of its interval value)."""
+    one, one_events = _located(BEAMS, 257.44, 257.5, start=257.44)
+    two, two_events = _located(FAR, 257.44, 257.5, start=257.44)
+    assert [label for label, _ in one_events] == ["contact_merge"]
+    assert [label for label, _ in two_events] == ["contact_merge"]
+    assert two_events[0][1] == pytest.approx(one_events[0][1], rel=1e-14)
+    signs = set()
+    for omega, state in zip(one.omega.values, one.section_state.values, strict=True):
+        single = PeriodMap(BEAMS.replace(omega=float(omega)), 3)
+        several = ContactsPeriodMap(FAR.replace(omega=float(omega)), 3)
+        expected = single.approach(single(state, measures=False)).interval_gap
+        value = several.approach(several(state, measures=False)).interval_gap
+        assert abs(value - expected) <= 1e-14 * BEAMS.clearance, omega
+        signs.add(np.sign(expected))
+    assert {-1.0, 1.0} <= signs
+
+
+def test_a_merge_with_two_contacts_closing_is_where_bisection_finds_it(monkeypatch):
+    """Both contacts close in the orbit (each alone, both each period) and 4 contacts per
+    orbit become 3 near 257.176 rad/s: the merge located at the root of the interval value
+    (0 there to 1e-9 of the clearance; measured 8.6e-16) is where bisection on the contacts
+    per orbit (the interval value NaN, as before it was built) finds it, within the
+    bisection's tolerance, 1e-11 of the range (measured: the same frequency)."""
+    dataset, events = _located(BOTH, 257.1, 257.25)
+    assert [label for label, _ in events] == ["contact_merge"]
+    index = int(np.flatnonzero(dataset.omega.values == events[0][1])[0])
+    period_map = ContactsPeriodMap(BOTH.replace(omega=events[0][1]), 3)
+    result = period_map.approach(period_map(dataset.section_state.values[index],
+                                            measures=False))
+    assert {1, 2} <= set(result.trajectory.mask.tolist())
+    assert abs(result.interval_gap) <= 1e-9 * BOTH.clearance
+    monkeypatch.setattr(ContactsPeriodMap, "_interval_gap", lambda self, run: np.nan)
+    _, bisected = _located(BOTH, 257.1, 257.25)
+    assert [label for label, _ in bisected] == ["contact_merge"]
+    assert abs(bisected[0][1] - events[0][1]) <= 1e-11 * (257.25 - 257.1)

@@ -317,3 +317,33 @@ def test_every_chunk_of_a_map_calls_the_same_twin(monkeypatch):
     monkeypatch.setattr(first_impact, "first_impact_map_serial", refused)
     chunked = run_sweep(sweep, progress=False, chunk_cells=first_impact._BLOCK + 8)
     np.testing.assert_array_equal(chunked.first_impact_time.values, expected)
+
+
+@pytest.mark.parametrize(("params", "axis", "first", "worst"), [
+    # a longer beam 1 is softer: more of its modes lie below the contact's stiffness
+    ({"contact_stiffness": 1e5}, {"l1": {"min": 0.1, "max": 0.3, "num": 3}}, 20, 44),
+    # the second of two contacts stiffens from 1e3 to 1e6 N/m
+    ({"contacts": [{"clearance": 1e-5}, {"position1": 0.05, "clearance": 1e-5}]},
+     {"contacts.1.stiffness": {"min": 1e3, "max": 1e6, "num": 3}}, 32, 36),
+], ids=["length", "several"])
+def test_the_contact_resolution_warning_reads_the_grids_worst_point(params, axis, first,
+                                                                   worst):
+    """Along an axis that changes the geometry the warning reads the point that needs the
+    most modes, not the first: there `needed_modes` of every contact, each grid point's
+    (computed here point by point), gives ``first`` and at the grid's end ``worst``; a run
+    with ``first`` modes warns that it needs ``worst``, and its Dataset says so."""
+    from impactbeams.contact.spring import needed_modes
+
+    sweep = sweep_from_mapping({"t_max": 1e-3, "n_modes": first,
+                                "observables": ["impact_count"], "params": params,
+                                "axes": axis}, source="test sweep")
+    (name, spec), = axis.items()
+    per_point = [max(needed_modes(run) for run in sweep.params_at({name: value}).each_contact())
+                 for value in np.linspace(spec["min"], spec["max"], spec["num"])]
+    assert per_point[0] == first and max(per_point) == per_point[-1] == worst
+    assert contact_resolution(sweep) == worst
+    with pytest.warns(RuntimeWarning, match=f"n_modes = {first} does not resolve the spring "
+                                            f"contact of test sweep: use n_modes >= {worst}"):
+        dataset = run_sweep(sweep, parallel=False)
+    assert dataset.attrs["contact_resolved"] == 0
+    assert dataset.attrs["contact_resolution_modes"] == worst

@@ -268,7 +268,9 @@ VARIABLES.update({
     "release_energy_change": Variable(
         ("impact",), "J", "energy change at release",
         "total mechanical energy just after minus just before the release projection (a "
-        "truncation effect: the highest contact modes are not spanned by the free modes)"),
+        "truncation effect: the highest contact modes are not spanned by the free modes); "
+        "with several contacts the closed springs' energy a dashpot's early release gives up "
+        "(one contact's energy keeps it while the gap reopens)"),
     "release_gap": Variable(
         ("impact",), "m", "gap just after release",
         "gap of the released state in the free basis (0 in the exact model)"),

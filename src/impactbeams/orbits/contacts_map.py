@@ -11,7 +11,7 @@ Jacobian dz(pT)/dz(0) is carried along the recorded phases by
 `impactbeams.kernels.contacts_tangent` (each phase's closed-form propagation, the saltation
 matrix at every switch): exact up to round-off. The same interface as
 `impactbeams.orbits.period_map.PeriodMap` where shooting uses it; its measures are the contacts'
-(counts, peak forces, impulses): the tips' maxima and the gap's minima are NaN. SI units.
+(counts, peak forces, impulses, each contact's gap minima and interval value). SI units.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+from collections.abc import Iterable
 
 import numpy as np
 
@@ -30,13 +31,15 @@ from impactbeams.active_phases import (
     gap_rate,
     pack_contacts,
     sample,
+    tip_motions,
 )
 from impactbeams.blas import one_blas_thread
 from impactbeams.kernels import several_contacts as kernel
 from impactbeams.kernels.contacts_tangent import carry_contact_tangents, event_at
-from impactbeams.kernels.layout import FREE, TIP_COLUMNS, TIP_Y1, TIP_Y2
+from impactbeams.kernels.layout import TIP_Y1, TIP_Y2
 from impactbeams.kernels.records import Tangent
 from impactbeams.orbits.period_map import (
+    INTERVAL_SAMPLES,
     MAX_EVENTS,
     SAMPLES_PER_PERIOD,
     PeriodMap,
@@ -48,7 +51,6 @@ from impactbeams.orbits.period_map import (
 )
 from impactbeams.params import Params, require, require_integer, require_type
 from impactbeams.trajectory.episodes import default_separation, episode_count
-from impactbeams.trajectory.observables import observables
 from impactbeams.trajectory.several import check_contact_runs
 from impactbeams.trajectory.start import checked_state
 
@@ -112,7 +114,7 @@ class ContactsPeriodMap(SectionMap):
         phases closed in a row, cut at the run's ends), in order of contacts then time;
         ``impact_velocities``: the closing contact's physical gap rate at each onset in
         (0, pT); the tips' maxima sampled `SAMPLES_PER_PERIOD` times a period and refined by
-        Brent's method; ``interval_gap`` NaN (not built for several contacts).
+        Brent's method.
         """
         if math.isfinite(result.max_tip1):
             return result
@@ -137,7 +139,8 @@ class ContactsPeriodMap(SectionMap):
 
         ``min_gap``, ``min_gap_time``: the smallest interior local minimum of any contact's
         physical gap while it is open (sampled `SAMPLES_PER_PERIOD` times a period, refined by
-        Brent's method); ``least_peak_force``: the smallest contact episode's peak (N).
+        Brent's method); ``least_peak_force``: the smallest contact episode's peak (N);
+        ``interval_gap``: `_interval_gap`.
         """
         if result.approached:
             return result
@@ -145,7 +148,8 @@ class ContactsPeriodMap(SectionMap):
         peaks = self._episode_peaks(result.trajectory)
         return dataclasses.replace(
             result, min_gap=min_gap, min_gap_time=min_gap_time, approached=True,
-            least_peak_force=float(np.min(peaks[:, 1])) if peaks.size else math.nan)
+            least_peak_force=float(np.min(peaks[:, 1])) if peaks.size else math.nan,
+            interval_gap=self._interval_gap(result.trajectory))
 
     def grazing_value(self, result: PeriodMapResult) -> float:
         """The signed grazing value (m) of an `approach`-ed ``result``; NaN if it has none.
@@ -162,20 +166,18 @@ class ContactsPeriodMap(SectionMap):
         return min(candidates, key=abs) if candidates else math.nan
 
     def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
-        """The tips (``kernels.layout`` TIP_* columns; velocities NaN) of ``result``'s run.
+        """The tips (``kernels.layout`` TIP_* columns) of ``result``'s run at ``times`` (s).
 
-        As `impactbeams.simulate` of several contacts reads them: the free coordinates' tips
-        plus each closed contact's force through the flexibility the modes miss.
+        As `impactbeams.simulate` of several contacts reads them
+        (`active_phases.tip_motions`): the free coordinates' tips plus each closed contact's
+        force through the flexibility the modes miss, the velocities with its rate.
         """
         times = np.asarray(times, dtype=float)
         q, v, mask = sample(self.contacts, result.trajectory, times)
-        free = observables(self.packed, np.full(times.size, FREE, dtype=np.int64), times, q, v)
         forces = contact_quantities(self.contacts, times, q, v, mask)["contact_force"]
-        springs = [run.dynamics.spring for run in self.contacts.runs]
-        out = np.full((times.size, len(TIP_COLUMNS)), math.nan)
-        out[:, TIP_Y1] = free["tip_deflection_1"] + forces @ [s.tip_shift1 for s in springs]
-        out[:, TIP_Y2] = free["tip_deflection_2"] - forces @ [s.tip_shift2 for s in springs]
-        return out
+        motions = tip_motions(self.contacts, times, q, v, mask, forces)
+        return np.column_stack([motions[name] for name in (
+            "tip_deflection_1", "tip_deflection_2", "tip_velocity_1", "tip_velocity_2")])
 
     def _grid(self) -> np.ndarray:
         """``SAMPLES_PER_PERIOD`` equally spaced times a period over the run (s)."""
@@ -220,6 +222,84 @@ class ContactsPeriodMap(SectionMap):
                     best = value
         return best
 
+    def _interval_values(self, run: ContactRun, times: np.ndarray, masks: np.ndarray,
+                         ) -> np.ndarray:
+        """Each contact's interval function (m) at ``times`` in the sets of ``masks``, (k, n).
+
+        An open contact's physical gap; a closed one's -R_f (1/k_f + r_f): its force over
+        its stiffness in series with the flexibility the modes miss at it, the overlap it
+        would have alone, which is 0 where R_f is (its release) and, closed alone without a
+        dashpot, its modal gap: the single contact's gap read from the free coordinates.
+        """
+        q, v, _ = sample(self.contacts, run, times)
+        quantities = contact_quantities(self.contacts, times, q, v, masks)
+        closed = (masks[:, None] >> np.arange(len(self.contacts.runs))) & 1 == 1
+        springs = self.contacts.contacts
+        compliance = 1.0 / springs.stiffness + np.diag(springs.residual)
+        return np.where(closed, -quantities["contact_force"] * compliance, quantities["gap"])
+
+    def _interval_gap(self, run: ContactRun) -> float:
+        """The interval value (m): a contact's gap's local maximum nearest 0 between its closings.
+
+        As `PeriodMap._interval_gap`, per contact on `_interval_values` (so that where every
+        other contact stays open it is the single contact's): the height of a free interval
+        between two of its closings (> 0, the period's ends joined) or the interior rises
+        within its closed phases (< 0: where one
+        reaches 0 the contact splits), each phase sampled ``INTERVAL_SAMPLES`` times; the
+        sample nearest 0 of all contacts, refined by Brent's method between its neighbours.
+        NaN without a candidate.
+        """
+        ends = np.append(run.time[1:], run.t_end)
+        times = np.linspace(run.time, ends, INTERVAL_SAMPLES, axis=1)
+        masks = np.repeat(run.mask, INTERVAL_SAMPLES)
+        values = self._interval_values(run, times.ravel(), masks).reshape(
+            *times.shape, -1)
+        best = None  # (|sample|, phase, sample, contact)
+        for f in range(values.shape[2]):
+            for k, i in self._interval_candidates((run.mask >> f) & 1 == 1, ends > run.time,
+                                                  values[:, :, f]):
+                if best is None or abs(values[k, i, f]) < best[0]:
+                    best = (abs(values[k, i, f]), k, i, f)
+        if best is None:
+            return math.nan
+        _, k, i, f = best
+        phase_mask = run.mask[k:k + 1]
+        lo, hi = times[k, max(i - 1, 0)], times[k, min(i + 1, INTERVAL_SAMPLES - 1)]
+        if not hi > lo:  # a phase of no duration: its samples are one state
+            return float(values[k, i, f])
+
+        def depth(t: float) -> float:  # minus the function: its maximum is a minimum
+            return -float(self._interval_values(run, np.array([t]), phase_mask)[0, f])
+
+        return -refined(depth, lo, hi, -values[k, i, f], times[k, i])[0]
+
+    @staticmethod
+    def _interval_candidates(closed: np.ndarray, lasting: np.ndarray, values: np.ndarray,
+                             ) -> list[tuple[int, int]]:
+        """(phase, sample) of one contact's candidate maxima between its closings.
+
+        ``closed``, ``lasting``: whether it is closed in each phase and the phase lasts;
+        ``values``: its samples (phases, samples). As `kernels.extrema.interval_gap`: each
+        lasting closed phase's interior sample maxima, then each free interval's (its open
+        phases in a row, the period's ends joined, closed on both sides) highest sample,
+        also at a phase's end (the kernel leaves those out: there a free interval of almost
+        no duration, at a merge, has its height, about 0, in every sample).
+        """
+        found = [(k, i) for k in np.flatnonzero(closed & lasting)
+                 for i in range(1, values.shape[1] - 1)
+                 if values[k, i - 1] < values[k, i] >= values[k, i + 1]]
+        if not closed.any():
+            return found
+        first = int(np.argmax(closed))  # the free intervals from the first closing, cyclic
+        phases = np.roll(np.arange(closed.size), -first)
+        free = np.roll(~closed, -first)
+        starts = np.flatnonzero(free & ~np.concatenate([[False], free[:-1]]))
+        for start in starts:
+            span = phases[start:start + int(np.argmin(np.append(free[start:], False)))]
+            k = span[int(np.argmax(values[span].max(axis=1)))]
+            found.append((k, int(np.argmax(values[k]))))
+        return found
+
     def _episode_peaks(self, run: ContactRun) -> np.ndarray:
         """(contact, peak force in N) of each contact episode of ``run``, rows (k, 2)."""
         rows = []
@@ -262,7 +342,11 @@ class ContactsPeriodMap(SectionMap):
         return np.hstack([rows_q, rows_v]).T
 
     def _run(self, z0: np.ndarray) -> ContactRun:
-        """The run of the active sets' phases from the section state z0 to p T."""
+        """The run of the active sets' phases from the section state z0 to p T.
+
+        An open contact whose gap is < 0 at the start was released early by its dashpot: the
+        run follows it as after its release (`kernels.several_contacts.resume_contacts`).
+        """
         n, m = len(self.contacts.runs), self.packed.q0.size
         q0, v0 = z0[:m].copy(), z0[m:].copy()
         size = self.max_events
@@ -270,34 +354,39 @@ class ContactsPeriodMap(SectionMap):
                     np.empty(size, dtype=np.int64), np.empty((size, m)), np.empty((size, m)),
                     np.empty((size, n)), np.empty((size, n)))
         mask = self.active_mask(z0)
-        if self.early_released(mask, q0, v0):
-            raise RuntimeError("the period map's section state lies in a dashpot's early "
-                               "release (an open contact's gap < 0): a run of several "
-                               "contacts starts with every open gap >= 0")
-        count, status, t_end = kernel.run_contacts(*self.contacts.kernel_arrays(),
-                                                   self.contacts.early_release, q0, v0, 0.0,
-                                                   mask, recorded)
+        count, status, t_end = kernel.resume_contacts(
+            *self.contacts.kernel_arrays(), self.contacts.early_release, q0, v0, 0.0, mask,
+            self.early_released(mask, q0, v0), recorded)
         return ContactRun(*(array[:count] for array in recorded),
                           CONTACT_STATUS_NAMES[status], float(t_end))
 
-    def _events(self, mask: int, q: np.ndarray, v: np.ndarray, t: float = 0.0) -> np.ndarray:
-        """Each contact's event function in the set of ``mask`` at (q, q', t): R_f or gap."""
+    def _events(self, mask: int, q: np.ndarray, v: np.ndarray, t: float = 0.0,
+                functions: Iterable[int] | None = None) -> np.ndarray:
+        """Event ``functions`` of the set of ``mask`` at (q, q', t); default each contact's.
+
+        Function f < n: contact f's R_f if closed, its gap if open; n + f: minus the force
+        open contact f would have with it added (`active_phases.pack_contacts`).
+        """
         packed = self.contacts
         a = int(packed.set_of_mask[mask])
         y, y_rate = np.empty(q.size), np.empty(q.size)
         return np.array([event_at(packed.tables, packed.scalars, packed.modes, packed.drives,
                                   packed.lefts, packed.settings, a, f, q, v, t, y, y_rate)[0]
-                         for f in range(len(packed.runs))])
+                         for f in (range(len(packed.runs)) if functions is None
+                                   else functions)])
 
     def active_mask(self, z: np.ndarray) -> int:
         """The bit mask of the contacts closed at the section state z (t = 0).
 
         The first possible set whose forces are all > 0 and open gaps all >= 0; without one
-        (a dashpot's early release) the first whose forces are > 0.
+        (a dashpot's early release) the first whose forces are > 0 and whose open contacts
+        with a gap < 0 would pull if closed (the force each would have with it added is
+        <= 0: released early, as one contact's `phase_state` starts free where g < 0 and
+        -k g - c g' <= 0); without one either, the first whose forces are > 0.
         """
         m = self.packed.q0.size
         q, v = z[:m], z[m:]
-        forced = None
+        released = forced = None
         for members in self.contacts.members:
             mask = sum(1 << f for f in members)
             events = self._events(mask, q, v)
@@ -305,11 +394,28 @@ class ContactsPeriodMap(SectionMap):
             if np.all(events[closed] > 0.0):
                 if np.all(events[~closed] >= 0.0):
                     return mask
+                if released is None and self._pulls(mask, events, q, v):
+                    released = mask
                 forced = mask if forced is None else forced
-        return 0 if forced is None else forced
+        return next(mask for mask in (released, forced, 0) if mask is not None)
+
+    def _pulls(self, mask: int, events: np.ndarray, q: np.ndarray, v: np.ndarray) -> bool:
+        """Whether each open contact of ``mask`` whose gap (``events``) is < 0 would pull.
+
+        Its force in the set with it added is <= 0 (function n + f of the set, minus that
+        force, >= 0); a contact that cannot close with the set's (the other side of a
+        two-sided stop) is not asked.
+        """
+        n = events.size
+        overlapping = [f for f in range(n) if not (mask >> f) & 1 and events[f] < 0.0
+                       and self.contacts.set_of_mask[mask | 1 << f] >= 0]
+        return all(self._events(mask, q, v, functions=(n + f,))[0] >= 0.0 for f in overlapping)
 
     def early_released(self, mask: int, q: np.ndarray, v: np.ndarray) -> int:
-        """The open contacts whose gaps are < 0 at (q, q', 0) in the set of ``mask`` (bits)."""
+        """The open contacts whose gaps are < 0 at (q, q', 0) in the set of ``mask`` (bits).
+
+        With a dashpot: the contacts released early, which the run starts in.
+        """
         if not self.contacts.early_release:
             return 0
         events = self._events(mask, q, v)

@@ -22,7 +22,7 @@ import numpy as np
 
 from impactbeams.kernels import layout
 from impactbeams.longtime import LongTime
-from impactbeams.params import Params
+from impactbeams.params import Params, flat_parameter
 from impactbeams.sweep.definition import (
     CELL_PARAMETERS,
     CONTACT_OBSERVABLES,
@@ -88,16 +88,26 @@ def code_digest(package: Path = Path(__file__).parents[1],
 
 
 def contact_resolution(sweep: Sweep) -> int | None:
-    """n_modes that resolves a spring-law dynamics map's stiffest contact; None otherwise."""
+    """n_modes that resolves a spring-law dynamics map's every contact; None otherwise.
+
+    The most any contact (`Params.each_contact`) needs (`needed_modes`) at any geometry of
+    the grid: every combination of the values of the axes that change the modes (a length,
+    a contact's point, a beam's stiffness, ...; `geometry_axes`), a contact stiffness axis at
+    its largest value only (a stiffer contact needs no fewer modes), the other parameters the
+    first point's. At most ``MAX_GEOMETRIES`` combinations, each some 1 ms.
+    """
     compliant = [law for law in contact_laws(sweep) if law.compliant]
     if not sweep.needs_dynamics or not compliant:
         return None
     from impactbeams.contact.spring import needed_modes  # SciPy's optimisers: only when needed
 
-    swept = [axis.max for axis in sweep.axes if axis.name == "contact_stiffness"]
-    stiffest = swept[0] if swept else sweep.base.contact_stiffness
-    return needed_modes(sweep.base.replace(contact_law=compliant[0].name,
-                                           contact_stiffness=stiffest))
+    axes = [sweep.axes[k] for k in geometry_axes(sweep) if not sweep.axes[k].choices]
+    values = [[axis.max] if flat_parameter(axis.name) == "contact_stiffness" else axis.values
+              for axis in axes]
+    law = {"contact_law": compliant[0].name}
+    return max(needed_modes(run) for point in itertools.product(*values)
+               for run in sweep.params_at({**dict(zip((axis.name for axis in axes), point,
+                                                      strict=True)), **law}).each_contact())
 
 
 def _first_contact(sweep: Sweep, start: int, stop: int, parallel: bool, plan: Plan,

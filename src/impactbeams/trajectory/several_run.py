@@ -110,6 +110,7 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
     data = _series(packed, run, times)
     impacts = {name: np.array(values, dtype=np.int64 if name == "impact_contact" else float)
                for name, values in episodes(packed, run).items()}
+    switches = _switch_columns(packed, run, impacts)
     separation = (default_separation(packed.runs[0]) if episode_separation is None
                   else episode_separation)
     works = _contact_works(packed, run, impacts) if energy_balance else None
@@ -130,7 +131,7 @@ def simulate_contacts(params: Params, t_max: float, n_modes: int, times: np.ndar
             size = table["episode_onset_time"].size
             table["episode_dissipated_energy"] = at[size:2 * size] - at[:size]
             at = at[2 * size:]
-    dataset = _dataset(data, impacts, joint, own, times)
+    dataset = _dataset(data, {**impacts, **switches}, joint, own, times)
     if fields:  # the free coordinates, as one spring contact's (its phases keep them)
         dataset = with_deflections(
             dataset, packed.runs[0],
@@ -167,27 +168,87 @@ def _series(packed: PackedContacts, run: ContactRun, times: np.ndarray,
     The energy is the beams' (`impactbeams.trajectory.observables`) plus the closed contacts'
     g_S^T K_eff g_S / 2 and the work of F through beam 1's tip shifts under them.
     """
-    params = packed.runs[0].params
     q, v, mask = sample(packed, run, times)
-    free = observables(packed.runs[0], np.full(times.size, FREE, dtype=np.int64), times, q, v)
+    free = _free_observables(packed, times, q, v)
     contact = contact_quantities(packed, times, q, v, mask)
-    springs = [run_.dynamics.spring for run_ in packed.runs]
-    shift1 = np.array([spring.tip_shift1 for spring in springs])
     forces = contact["contact_force"]
-    tip_force = params.force_amplitude * np.sin(params.omega * times)
-    # the observables of contact 0's run count its own spring where its modal gap is < 0
-    # (`observables._spring_contact`): the closed contacts' energy replaces it
-    own_gap = contact["modal_gap"][:, 0]
-    own_spring = np.where(own_gap < 0.0, 0.5 * springs[0].effective_stiffness * own_gap**2, 0.0)
     return {
         **tip_motions(packed, times, q, v, mask, forces),
         "kinetic_energy": free["kinetic_energy"],
         "unresolved_kinetic_energy": free["unresolved_kinetic_energy"],
-        "energy": (free["energy"] - own_spring + contact["contact_energy"]
-                   - tip_force * (forces @ shift1)),
+        "energy": _energy(packed, times, free, contact),
         "contact_gaps": contact["gap"],
         "contact_forces": forces,
     }
+
+
+def _free_observables(packed: PackedContacts, t: np.ndarray, q: np.ndarray, v: np.ndarray,
+                      ) -> dict[str, np.ndarray]:
+    """Contact 0's run's observables (energies, tips) of the free states (q, v) at t (s)."""
+    return observables(packed.runs[0], np.full(t.size, FREE, dtype=np.int64), t, q, v)
+
+
+def _energy(packed: PackedContacts, t: np.ndarray, free: dict[str, np.ndarray],
+            contact: dict[str, np.ndarray]) -> np.ndarray:
+    """The energy (J) at t (s): the beams' (``free``) and the closed contacts' (``contact``).
+
+    The beams' `observables` of the free states, the closed springs' g_S^T K_eff g_S / 2
+    (`contact_quantities`) and minus the tip force times beam 1's tip shifts under them.
+    """
+    params = packed.runs[0].params
+    springs = [run_.dynamics.spring for run_ in packed.runs]
+    shift1 = np.array([spring.tip_shift1 for spring in springs])
+    tip_force = params.force_amplitude * np.sin(params.omega * t)
+    # the observables of contact 0's run count its own spring where its modal gap is < 0
+    # (`observables._spring_contact`): the closed contacts' energy replaces it
+    own_gap = contact["modal_gap"][:, 0]
+    own_spring = np.where(own_gap < 0.0, 0.5 * springs[0].effective_stiffness * own_gap**2, 0.0)
+    return (free["energy"] - own_spring + contact["contact_energy"]
+            - tip_force * (contact["contact_force"] @ shift1))
+
+
+def _switch_columns(packed: PackedContacts, run: ContactRun, impacts: dict[str, np.ndarray],
+                    ) -> dict[str, np.ndarray]:
+    """Each contact's per-impact energy columns, as one contact's impact table has them.
+
+    At its onset (the state kept, the set changed): ``impact_energy_loss``, the energy
+    (`_energy`) in the set before minus after (J; a dashpot's force jumps there, and with it
+    the springs' energy and the tip force's term), and ``impact_kinetic_energy_loss`` (J, 0:
+    the kinetic energy is the state's); at its release: ``release_energy_change``, after minus
+    before (J; what a dashpot's early release gives up), ``release_gap`` (m, its physical gap
+    in the set after: < 0 released early) and ``release_contact_force`` (N, its force in the
+    set before: 0 to round-off); ``restitution_coefficient``, minus its gap's rate after the
+    release over before the onset. NaN where the run holds no such switch (a contact closed
+    at its start has no onset in it, one closed at its end no release).
+    """
+    n, count = len(packed.runs), impacts["impact_onset_time"].size
+    columns = {name: np.full(count, math.nan) for name in (
+        "impact_energy_loss", "impact_kinetic_energy_loss", "release_energy_change",
+        "release_gap", "release_contact_force")}
+    with np.errstate(divide="ignore", invalid="ignore"):  # a re-onset at rest: no ratio
+        columns["restitution_coefficient"] = (-impacts["separation_velocity"]
+                                              / impacts["impact_velocity"])
+    t, q, v = run.time[1:], run.q[1:], run.v[1:]
+    free = _free_observables(packed, t, q, v)
+    before = contact_quantities(packed, t, q, v, run.mask[:-1])
+    after = contact_quantities(packed, t, q, v, run.mask[1:])
+    change = _energy(packed, t, free, after) - _energy(packed, t, free, before)
+    # the contacts closed at the start have the first rows (`active_phases.episodes`)
+    rows = {f: row for row, f in enumerate(f for f in range(n) if (run.mask[0] >> f) & 1)}
+    onsets = len(rows)
+    for k, f in enumerate(run.switched[1:].tolist()):
+        if f >= n:  # a gap opened after an early release: no switch of the set
+            continue
+        if (run.mask[k + 1] >> f) & 1:
+            rows[f], onsets = onsets, onsets + 1
+            columns["impact_energy_loss"][rows[f]] = -change[k]
+            columns["impact_kinetic_energy_loss"][rows[f]] = 0.0
+        else:
+            row = rows.pop(f)
+            columns["release_energy_change"][row] = change[k]
+            columns["release_gap"][row] = after["gap"][k, f]
+            columns["release_contact_force"][row] = before["contact_force"][k, f]
+    return columns
 
 
 def _episode_table(impacts: dict[str, np.ndarray], labels: np.ndarray,
