@@ -151,10 +151,6 @@ class CellRunner:
         end = (q[-1], v[-1], int(phase[-1]))
         return trajectory, x, end, z if phase[-1] != CONTACT else np.full(z.size, np.nan)
 
-    def mappable(self, start: tuple[np.ndarray, np.ndarray, int]) -> bool:
-        """Whether the period map takes ``start`` (always: its law is checked where used)."""
-        return True
-
     def tips(self, trajectory: Trajectory, times: np.ndarray) -> np.ndarray:
         """The tips' motion (TIP_* columns of `kernels.layout`) of a block at ``times`` (s)."""
         return tips_at(self.packed, trajectory, times)

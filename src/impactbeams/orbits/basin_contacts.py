@@ -56,11 +56,6 @@ class ContactCellRunner(CellRunner):
         m = z.size // 2
         return z[:m].copy(), z[m:].copy(), self.map.active_mask(z)
 
-    def mappable(self, start: tuple[np.ndarray, np.ndarray, int]) -> bool:
-        """Whether the period map takes ``start``: not inside a dashpot's early release."""
-        q, v, mask = start
-        return not self.map.early_released(mask, q, v)
-
     def block(self, start: tuple[np.ndarray, np.ndarray, int]) -> tuple[
             ContactRun, np.ndarray, tuple[np.ndarray, np.ndarray, int], np.ndarray] | None:
         """One block from ``start``; None if its run stopped early (as `CellRunner.block`)."""

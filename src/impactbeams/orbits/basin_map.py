@@ -539,8 +539,7 @@ def _described(runner: CellRunner, attractor: Attractor, setup: _Setup) -> Attra
     return dataclasses.replace(attractor, period=p, contacts=runner.contacts(trajectory, p),
                                samples=x[-p:], start=start, state=z,
                                amplitude=_amplitude(runner, trajectory, p), residual=residual,
-                               multipliers=_multipliers(setup, z, p)
-                               if runner.mappable(start) else None)
+                               multipliers=_multipliers(setup, z, p))
 
 
 def _resettled(runner: CellRunner, states: np.ndarray, cells: Cells, labels: np.ndarray,
