@@ -14,7 +14,7 @@ import pytest
 
 from impactbeams import Contact, ParameterError, Params, simulate, two_sided_stop
 from impactbeams.active_phases import contact_quantities, sample
-from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
+from impactbeams.continuation import Continuation, continue_orbits
 from impactbeams.kernels.layout import FREE, ROW_EVENT, TIP_Y1
 from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
@@ -184,16 +184,12 @@ def test_multipliers_are_the_finite_difference_monodromys_eigenvalues(orbits, na
 
 
 def test_what_orbits_of_several_contacts_refuse(orbits):
-    """A continuation of a flat contact key, two-parameter curves and the single contact's
-    PeriodMap refuse several contacts in one line; the contacts' measures are there, the
-    interval value is NaN."""
+    """A continuation of a flat contact key and the single contact's PeriodMap refuse
+    several contacts in one line; the contacts' measures are there, the interval value is
+    NaN."""
     with pytest.raises(ParameterError, match="parameter = 'clearance' is not allowed: with 2 "
                                              "contacts each gives its own"):
         Continuation(TWO_SIDED, "clearance", 1e-6, 4e-6)
-    with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
-                                             "two-parameter curves"):
-        BifurcationCurve(TWO_SIDED, "grazing", "omega", 400.0, np.zeros(16),
-                         "force_amplitude", 1e-4, 2e-3, 300.0, 500.0, N_MODES)
     with pytest.raises(ParameterError, match="not allowed in PeriodMap"):
         PeriodMap(TWO_SIDED, N_MODES)
     result = ContactsPeriodMap(TWO_SIDED, N_MODES)(settled(ContactsPeriodMap(TWO_SIDED,

@@ -1,0 +1,173 @@
+"""Bifurcation curves in two parameters with several contacts (issue 33, "several contacts").
+
+The independent checks: beside a stop that never closes, the single contact's curves (its own
+map's kernels); with two contacts active, a curve's end against the fold or grazing that a
+one-parameter branch locates at the end's second parameter.
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import impactbeams as ib
+from impactbeams import Contact, ParameterError, two_sided_stop
+from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
+from impactbeams.continuation.twoparameter import continue_curve
+from impactbeams.orbits import PeriodMap
+from impactbeams.params import with_parameter
+from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
+
+# the shipped example's soft stop at the tip, 3 modes (tests/test_two_parameter.py's STOP)
+STOP = ib.Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
+                 force_amplitude=1e-4)
+# the same stop with a stop above the tip 1 mm away, which the orbits (tips < 0.1 mm) never reach
+FAR = STOP.replace(contacts=two_sided_stop(None, None, 1e-3))
+# the tip stop and one 4 um below mid-span: both closed on the orbits from 210 rad/s up
+TWO = STOP.replace(contacts=(Contact(clearance=1.1e-5), Contact(0.5 * STOP.l1, clearance=4e-6)))
+N_MODES = 3
+# a curve's end on its box's edge solves the augmented system to Newton's 1e-10 of the scaled
+# unknowns, and a one-parameter branch locates its event to 1e-11 of its range: 1e-9 relative,
+# as tests/test_two_parameter.py's AGREE
+AGREE = 1e-9
+
+
+def _single_start(kind, low, high):
+    """The ``kind`` event of the single stop's branch in Omega over [low, high]."""
+    continuation = Continuation(STOP, "omega", low, high, n_modes=N_MODES, max_branches=1)
+    return continuation, continue_orbits(continuation)
+
+
+@pytest.fixture(scope="module")
+def single_grazing():
+    """The single stop's grazing at 201.78 rad/s followed up in F0 to 1.5e-4 N."""
+    started = _single_start("grazing", 195.0, 205.0)
+    curve = BifurcationCurve.from_branch(*started, "grazing", "force_amplitude", 5e-5, 1.5e-4,
+                                         box=(150.0, 330.0), max_points=15)
+    return curve, continue_curve(curve)
+
+
+def test_grazing_curve_beside_a_stop_that_never_closes_is_the_single_stops(single_grazing):
+    """From the same start, the grazing curve of the tip stop with a far stop above is the
+    single stop's, point by point: the maps agree to round-off (states 5e-16, monodromies
+    4e-14: tests/test_orbits_several.py), so the corrector takes the same steps and lands
+    where it stops, within its last correction (1e-10 of the scaled unknowns, F0 per its range
+    1e-4 N: 1e-10 of F0; measured 7e-12 relative)."""
+    curve, single = single_grazing
+    several = continue_curve(dataclasses.replace(curve, params=FAR))
+    validate(several)
+    assert several.attrs["curve_contact"] == 0 and "curve_contact" not in single.attrs
+    assert several.attrs["curve_ending"] == single.attrs["curve_ending"] == "bound"
+    assert several.branch_point.size == single.branch_point.size >= 10
+    for name in ("omega", "force_amplitude"):
+        np.testing.assert_allclose(several[name].values, single[name].values, rtol=1e-10,
+                                   atol=0.0)
+    states = single.section_state.values
+    assert np.abs(several.section_state.values - states).max() < 1e-10 * np.abs(states).max()
+    # (not the contacts per orbit: each point's orbit touches at zero depth, 0 or 1 by
+    # round-off)
+
+
+def test_fold_curve_beside_a_stop_that_never_closes_is_the_single_stops():
+    """The upper fold (317.95 rad/s at 0.1 mN) followed up in F0: the far stop's curve lies
+    on the single stop's. Its points slide along the curve by up to 6e-10 of F0 (the
+    pseudo-arclength planes are set by tangents from differences over 1e-8 of the state, which
+    the maps' round-off moves by 1e-6 of their size: measured, the points' Omega and F0
+    differ in the curve's own proportion), so each one is checked to be a fold of the single
+    stop's own map (`PeriodMap`, the one-contact kernels): a fixed point and a multiplier at
+    +1 to 1e-10 (each point solves the far stop's system to Newton's tolerance, its residual
+    ~1e-20 at quadratic convergence, and the maps agree to 4e-14: measured 1.7e-15 of the
+    state and 4.9e-15); the ends, at the same F0 on the box's edge, agree in Omega to 1e-12
+    (measured 3.3e-16)."""
+    started = _single_start("fold", 290.0, 322.0)
+    curve = BifurcationCurve.from_branch(*started, "fold", "force_amplitude", 5e-5, 1.5e-4,
+                                         box=(150.0, 330.0), max_points=15)
+    single = continue_curve(curve)
+    several = continue_curve(dataclasses.replace(curve, params=FAR))
+    assert several.attrs["curve_ending"] == single.attrs["curve_ending"] == "bound"
+    for end in (0, -1):
+        assert float(several.force_amplitude[end]) == float(single.force_amplitude[end])
+        assert float(several.omega[end]) == pytest.approx(float(single.omega[end]), rel=1e-12)
+    for point in range(several.branch_point.size):
+        at = several.isel(branch_point=point)
+        params = STOP.replace(omega=float(at.omega), force_amplitude=float(at.force_amplitude))
+        z = at.section_state.values
+        result = PeriodMap(params, N_MODES)(z, directions="all", measures=False)
+        assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
+        assert np.abs(np.linalg.eigvals(result.jacobian) - 1.0).min() < 1e-10
+
+
+def _events(params, omega, state, label, width=0.3):
+    """The ``label`` events the branch in Omega over ``omega`` +- ``width`` locates, started
+    at ``omega - width`` from ``state`` (the guess only: the events are the branch's own)."""
+    branch = continue_orbits(Continuation(params, "omega", omega - width, omega + width,
+                                          state=state, n_modes=N_MODES, max_branches=1,
+                                          transient_periods=0))
+    return branch.omega.values[branch.bifurcation.values == BIFURCATIONS.index(label)]
+
+
+def test_grazing_curve_of_the_second_contact_in_its_clearance():
+    """Both stops closed: the mid-span stop's grazing (209.83 rad/s: 1 to 2 contacts per
+    orbit) followed in its own clearance, ``contacts.1.clearance``, to 4.1 um. The curve
+    follows that stop (``curve_contact`` 1), and at its end the branch in Omega at that
+    clearance locates a grazing at the end's frequency (measured 2.5e-14 relative). The gap
+    is the stop's physical one, the tip stop's force deflecting it through the flexibility
+    the modes miss: read from the free coordinates alone, the end was 1.7e-4 off."""
+    name = "contacts.1.clearance"
+    continuation = Continuation(TWO, "omega", 205.0, 215.0, n_modes=N_MODES, max_branches=1)
+    branch = continue_orbits(continuation)
+    curve = continue_curve(BifurcationCurve.from_branch(
+        continuation, branch, "grazing", name, 3e-6, 4.1e-6, box=(150.0, 330.0),
+        max_points=10))
+    validate(curve)
+    assert curve.attrs["curve_contact"] == 1 and curve.attrs["curve_ending"] == "bound"
+    assert curve.attrs["curve_parameters"] == f"omega {name}"
+    assert curve[name].attrs["long_name"].endswith(" of contacts[1]")
+    end = curve.isel(branch_point=-1)
+    assert float(end[name]) == 4.1e-6 and 1 <= int(end.contacts_per_orbit) <= 2
+    params = with_parameter(TWO, name, 4.1e-6)
+    (located,) = _events(params, float(end.omega), end.section_state.values, "grazing")
+    assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
+
+
+def test_fold_curve_with_two_contacts_closed():
+    """The upper fold of the orbits with both stops closed (323.55 rad/s, 2 contacts per
+    orbit) followed up in F0 to 0.102 mN: at its end the branch in Omega at that force
+    locates a fold at the end's frequency (measured 8.9e-16 relative)."""
+    continuation = Continuation(TWO, "omega", 280.0, 330.0, n_modes=N_MODES, max_branches=1,
+                                max_points=80)  # up to just past the fold
+    branch = continue_orbits(continuation)
+    curve = continue_curve(BifurcationCurve.from_branch(
+        continuation, branch, "fold", "force_amplitude", 1e-4, 1.02e-4, step=0.1, max_step=0.2,
+        max_points=20))
+    assert curve.attrs["curve_ending"] == "bound" and "curve_contact" not in curve.attrs
+    assert np.all(curve.contacts_per_orbit.values == 2)
+    end = curve.isel(branch_point=-1)
+    assert float(end.force_amplitude) == 1.02e-4
+    located = _events(TWO.replace(force_amplitude=1.02e-4), float(end.omega),
+                      end.section_state.values, "fold")
+    assert float(end.omega) == pytest.approx(float(located[0]), rel=AGREE, abs=0.0)
+    assert list(np.flatnonzero(curve.curve_event.values)) == [curve.branch_point.size - 1]
+    assert CURVE_EVENTS[int(end.curve_event)] == "end"
+
+
+@pytest.mark.parametrize(("changes", "message"), [
+    ({"second": "clearance"}, "second = 'clearance' is not allowed: with 2 contacts each "
+     "gives its own: continue one contact's as 'contacts.INDEX.FIELD'"),
+    ({"second": "contacts.2.clearance"}, "second = 'contacts.2.clearance' is not allowed: "
+     "there are 2 contacts (indices 0 to 1)"),
+    ({"parameter": "contacts.0.position1"}, "parameter = 'contacts.0.position1' is not "
+     "allowed: a contact's continuable fields are clearance, stiffness, damping"),
+    ({"second": "contacts.0.clearance", "params": STOP}, "second = 'contacts.0.clearance' is "
+     "not allowed: continues a field of one of several contacts, and params has one or none"),
+    ({"second": "contacts.1.clearance", "low": 1e-6, "high": 3e-6},
+     "contacts.1.clearance = 4e-06 is not allowed: (the start's, from params) must lie in "
+     "[1e-06, 3e-06]"),
+])
+def test_bad_input_with_several_contacts_in_one_line(changes, message):
+    values = {"params": TWO, "kind": "grazing", "parameter": "omega", "value": 300.0,
+              "state": np.zeros(6), "second": "force_amplitude", "low": 5e-5, "high": 3e-4,
+              "parameter_low": 200.0, "parameter_high": 400.0, "n_modes": N_MODES, **changes}
+    with pytest.raises(ParameterError) as error:
+        BifurcationCurve(**values)
+    assert message in str(error.value) and "\n" not in str(error.value)
