@@ -9,6 +9,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+import xarray as xr
 
 import impactbeams as ib
 from impactbeams import Contact, ParameterError, two_sided_stop
@@ -106,7 +107,17 @@ def _events(params, omega, state, label, width=0.3):
     return branch.omega.values[branch.bifurcation.values == BIFURCATIONS.index(label)]
 
 
-def test_grazing_curve_of_the_second_contact_in_its_clearance():
+@pytest.fixture(scope="module")
+def clearance_curve():
+    """The mid-span stop's grazing (209.83 rad/s, both stops closed past it) followed up in
+    its own clearance to 4.1 um (the command's file below)."""
+    continuation = Continuation(TWO, "omega", 205.0, 215.0, n_modes=N_MODES, max_branches=1)
+    branch = continue_orbits(continuation)
+    return continue_curve(BifurcationCurve.from_branch(
+        continuation, branch, "grazing", "contacts.1.clearance", 3e-6, 4.1e-6, max_points=10))
+
+
+def test_grazing_curve_of_the_second_contact_in_its_clearance(clearance_curve):
     """Both stops closed: the mid-span stop's grazing (209.83 rad/s: 1 to 2 contacts per
     orbit) followed in its own clearance, ``contacts.1.clearance``, to 4.1 um. The curve
     follows that stop (``curve_contact`` 1), and at its end the branch in Omega at that
@@ -114,11 +125,7 @@ def test_grazing_curve_of_the_second_contact_in_its_clearance():
     is the stop's physical one, the tip stop's force deflecting it through the flexibility
     the modes miss: read from the free coordinates alone, the end was 1.7e-4 off."""
     name = "contacts.1.clearance"
-    continuation = Continuation(TWO, "omega", 205.0, 215.0, n_modes=N_MODES, max_branches=1)
-    branch = continue_orbits(continuation)
-    curve = continue_curve(BifurcationCurve.from_branch(
-        continuation, branch, "grazing", name, 3e-6, 4.1e-6, box=(150.0, 330.0),
-        max_points=10))
+    curve = clearance_curve
     validate(curve)
     assert curve.attrs["curve_contact"] == 1 and curve.attrs["curve_ending"] == "bound"
     assert curve.attrs["curve_parameters"] == f"omega {name}"
@@ -171,3 +178,57 @@ def test_bad_input_with_several_contacts_in_one_line(changes, message):
     with pytest.raises(ParameterError) as error:
         BifurcationCurve(**values)
     assert message in str(error.value) and "\n" not in str(error.value)
+
+
+CURVE_FILE = """n_modes = 3
+[params]
+counterpart = "stop"
+contact_stiffness = 100.0
+damping_ratio = 0.02
+force_amplitude = 1e-4
+[[params.contacts]]
+clearance = 1.1e-5
+[[params.contacts]]
+position1 = 0.05
+clearance = 4e-6
+[continuation]
+parameter = "omega"
+min = 205.0
+max = 215.0
+max_branches = 1
+[curve]
+kind = "grazing"
+second = "contacts.1.clearance"
+min = 3e-6
+max = 4.1e-6
+max_points = 10
+"""
+
+
+def test_the_command_follows_a_curve_of_several_contacts(clearance_curve, tmp_path):
+    """`impactbeams continue` with ``[[params.contacts]]`` and a ``[curve]``: the file is the
+    Python call's curve, bit for bit."""
+    from impactbeams.cli import main
+
+    path, out = tmp_path / "two.toml", tmp_path / "two.nc"
+    path.write_text(CURVE_FILE)
+    assert main(["continue", str(path), "-o", str(out), "--quiet"]) == 0
+    expected = clearance_curve
+    with xr.open_dataset(out) as written:
+        validate(written)
+        assert written.attrs["curve_contact"] == 1
+        for name in ("omega", "contacts.1.clearance", "section_state"):
+            np.testing.assert_array_equal(written[name].values, expected[name].values)
+
+
+def test_a_flat_contact_key_in_the_curve_table_is_one_line(tmp_path, capsys):
+    from impactbeams.cli import main
+
+    path, out = tmp_path / "two.toml", tmp_path / "two.nc"
+    path.write_text(CURVE_FILE.replace('second = "contacts.1.clearance"',
+                                       'second = "clearance"'))
+    assert main(["continue", str(path), "-o", str(out)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith("impactbeams: error: second = 'clearance' is not allowed: with 2 "
+                           "contacts each gives its own")
+    assert not out.exists()
