@@ -12,18 +12,13 @@ import pytest
 import xarray as xr
 
 import impactbeams as ib
-from impactbeams import Contact, ParameterError, two_sided_stop
+from impactbeams import ParameterError
 from impactbeams.cli import main
 from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
 from impactbeams.continuation.twoparameter import continue_curve
 from impactbeams.variables import validate
+from several_stops import FAR, N_MODES, STOP, TWO, TWO_TOML
 
-STOP = ib.Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
-                 force_amplitude=1e-4)
-FAR = STOP.replace(contacts=two_sided_stop(None, None, 1e-3))  # a stop above never reached
-# the tip stop and one 4 um below mid-span (tests/test_two_parameter_several.py's)
-TWO = STOP.replace(contacts=(Contact(clearance=1.1e-5), Contact(0.5 * STOP.l1, clearance=4e-6)))
-N_MODES = 3
 OMEGA = np.linspace(50.0, 900.0, 171)
 
 
@@ -125,22 +120,9 @@ def test_bad_input_in_one_line(call, message):
     assert message in str(error.value) and "\n" not in str(error.value)
 
 
-PARAMS_FILE = """[params]
-counterpart = "stop"
-contact_stiffness = 100.0
-damping_ratio = 0.02
-force_amplitude = 1e-4
-[[params.contacts]]
-clearance = 1.1e-5
-[[params.contacts]]
-position1 = 0.05
-clearance = 4e-6
-"""
-
-
 @pytest.mark.parametrize("parameter", ["force_amplitude", "contacts.1.clearance", "omega"])
 def test_the_command_takes_a_parameters_file_with_contacts(tmp_path, capsys, parameter):
-    (tmp_path / "two.toml").write_text(PARAMS_FILE)
+    (tmp_path / "two.toml").write_text(TWO_TOML)
     output = tmp_path / "grazing.nc"
     assert main(["grazing", parameter, "--omega-min", "50", "--omega-max", "900", "--points",
                  "11", "--params", str(tmp_path / "two.toml"), "--n-modes", "3", "-o",
@@ -155,7 +137,7 @@ def test_the_command_takes_a_parameters_file_with_contacts(tmp_path, capsys, par
 
 
 def test_the_command_refuses_the_flat_clearance_of_several_contacts(tmp_path, capsys):
-    (tmp_path / "two.toml").write_text(PARAMS_FILE)
+    (tmp_path / "two.toml").write_text(TWO_TOML)
     output = tmp_path / "grazing.nc"
     assert main(["grazing", "clearance", "--omega-min", "50", "--omega-max", "900",
                  "--params", str(tmp_path / "two.toml"), "-o", str(output)]) == 2

@@ -11,22 +11,14 @@ import numpy as np
 import pytest
 import xarray as xr
 
-import impactbeams as ib
-from impactbeams import Contact, ParameterError, two_sided_stop
+from impactbeams import ParameterError
 from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
 from impactbeams.continuation.twoparameter import continue_curve
 from impactbeams.orbits import PeriodMap
 from impactbeams.params import with_parameter
 from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
+from several_stops import FAR, N_MODES, STOP, TWO, TWO_TOML
 
-# the shipped example's soft stop at the tip, 3 modes (tests/test_two_parameter.py's STOP)
-STOP = ib.Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
-                 force_amplitude=1e-4)
-# the same stop with a stop above the tip 1 mm away, which the orbits (tips < 0.1 mm) never reach
-FAR = STOP.replace(contacts=two_sided_stop(None, None, 1e-3))
-# the tip stop and one 4 um below mid-span: both closed on the orbits from 210 rad/s up
-TWO = STOP.replace(contacts=(Contact(clearance=1.1e-5), Contact(0.5 * STOP.l1, clearance=4e-6)))
-N_MODES = 3
 # a curve's end on its box's edge solves the augmented system to Newton's 1e-10 of the scaled
 # unknowns, and a one-parameter branch locates its event to 1e-11 of its range: 1e-9 relative,
 # as tests/test_two_parameter.py's AGREE
@@ -180,18 +172,7 @@ def test_bad_input_with_several_contacts_in_one_line(changes, message):
     assert message in str(error.value) and "\n" not in str(error.value)
 
 
-CURVE_FILE = """n_modes = 3
-[params]
-counterpart = "stop"
-contact_stiffness = 100.0
-damping_ratio = 0.02
-force_amplitude = 1e-4
-[[params.contacts]]
-clearance = 1.1e-5
-[[params.contacts]]
-position1 = 0.05
-clearance = 4e-6
-[continuation]
+CURVE_FILE = "n_modes = 3\n" + TWO_TOML + """[continuation]
 parameter = "omega"
 min = 205.0
 max = 215.0
