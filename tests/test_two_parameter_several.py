@@ -12,12 +12,20 @@ import pytest
 import xarray as xr
 
 from impactbeams import ParameterError
-from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
+from impactbeams.continuation import (
+    BifurcationCurve,
+    Continuation,
+    ContinuationInterrupted,
+    continue_orbits,
+)
+from impactbeams.continuation.checkpoint import saved_points
 from impactbeams.continuation.twoparameter import continue_curve
 from impactbeams.orbits import PeriodMap
 from impactbeams.params import with_parameter
 from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
 from several_stops import FAR, N_MODES, STOP, TWO, TWO_TOML
+from test_continuation_resume import _stop_after
+from test_resume import assert_same_map
 
 # a curve's end on its box's edge solves the augmented system to Newton's 1e-10 of the scaled
 # unknowns, and a one-parameter branch locates its event to 1e-11 of its range: 1e-9 relative,
@@ -100,13 +108,40 @@ def _events(params, omega, state, label, width=0.3):
 
 
 @pytest.fixture(scope="module")
-def clearance_curve():
+def clearance_spec():
     """The mid-span stop's grazing (209.83 rad/s, both stops closed past it) followed up in
     its own clearance to 4.1 um (the command's file below)."""
     continuation = Continuation(TWO, "omega", 205.0, 215.0, n_modes=N_MODES, max_branches=1)
     branch = continue_orbits(continuation)
-    return continue_curve(BifurcationCurve.from_branch(
-        continuation, branch, "grazing", "contacts.1.clearance", 3e-6, 4.1e-6, max_points=10))
+    return BifurcationCurve.from_branch(continuation, branch, "grazing",
+                                        "contacts.1.clearance", 3e-6, 4.1e-6, max_points=10)
+
+
+@pytest.fixture(scope="module")
+def clearance_file(clearance_spec, tmp_path_factory):
+    """The curve's file written by an uninterrupted call."""
+    out = tmp_path_factory.mktemp("uninterrupted") / "curve.nc"
+    continue_curve(clearance_spec, None, out)
+    return out
+
+
+@pytest.fixture(scope="module")
+def clearance_curve(clearance_file):
+    with xr.open_dataset(clearance_file) as dataset:
+        return dataset.load()
+
+
+def test_an_interrupted_curve_of_several_contacts_resumes_to_the_same_file(
+        clearance_spec, clearance_file, tmp_path):
+    """Interrupted at its second point (Ctrl-C) and called again, the curve ends with the
+    uninterrupted call's file, bit for bit: the contact it follows is its start's again."""
+    out = tmp_path / "out.nc"
+    with pytest.raises(ContinuationInterrupted) as interrupted:
+        continue_curve(clearance_spec, _stop_after(2), out)
+    assert interrupted.value.dataset.attrs["curve_contact"] == 1
+    assert saved_points(out) >= 1  # resumed from them
+    continue_curve(clearance_spec, None, out)
+    assert_same_map(out, clearance_file)
 
 
 def test_grazing_curve_of_the_second_contact_in_its_clearance(clearance_curve):
