@@ -33,8 +33,8 @@ from test_resume import assert_same_map
 AGREE = 1e-9
 
 
-def _single_start(kind, low, high):
-    """The ``kind`` event of the single stop's branch in Omega over [low, high]."""
+def _single_start(low, high):
+    """The single stop's branch in Omega over [low, high], with its continuation."""
     continuation = Continuation(STOP, "omega", low, high, n_modes=N_MODES, max_branches=1)
     return continuation, continue_orbits(continuation)
 
@@ -42,7 +42,7 @@ def _single_start(kind, low, high):
 @pytest.fixture(scope="module")
 def single_grazing():
     """The single stop's grazing at 201.78 rad/s followed up in F0 to 1.5e-4 N."""
-    started = _single_start("grazing", 195.0, 205.0)
+    started = _single_start(195.0, 205.0)
     curve = BifurcationCurve.from_branch(*started, "grazing", "force_amplitude", 5e-5, 1.5e-4,
                                          box=(150.0, 330.0), max_points=15)
     return curve, continue_curve(curve)
@@ -80,7 +80,7 @@ def test_fold_curve_beside_a_stop_that_never_closes_is_the_single_stops():
     ~1e-20 at quadratic convergence, and the maps agree to 4e-14: measured 1.7e-15 of the
     state and 4.9e-15); the ends, at the same F0 on the box's edge, agree in Omega to 1e-12
     (measured 3.3e-16)."""
-    started = _single_start("fold", 290.0, 322.0)
+    started = _single_start(290.0, 322.0)
     curve = BifurcationCurve.from_branch(*started, "fold", "force_amplitude", 5e-5, 1.5e-4,
                                          box=(150.0, 330.0), max_points=15)
     single = continue_curve(curve)
@@ -162,6 +162,31 @@ def test_grazing_curve_of_the_second_contact_in_its_clearance(clearance_curve):
     params = with_parameter(TWO, name, 4.1e-6)
     (located,) = _events(params, float(end.omega), end.section_state.values, "grazing")
     assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
+
+
+def test_grazing_curve_from_a_branch_in_one_contacts_clearance():
+    """The contact's field as the first parameter: the branch in ``contacts.1.clearance`` at
+    212 rad/s locates the mid-span stop's grazing (4.098 um); followed up in Omega to
+    212.5 rad/s, the curve's end is the grazing that the branch in that clearance at 212.5
+    rad/s locates (started 0.02 um below the end's, from its orbit; measured 2.1e-15
+    relative)."""
+    name = "contacts.1.clearance"
+    continuation = Continuation(TWO.replace(omega=212.0), name, 3e-6, 5e-6, direction="down",
+                                n_modes=N_MODES, max_branches=1)
+    curve = continue_curve(BifurcationCurve.from_branch(
+        continuation, continue_orbits(continuation), "grazing", "omega", 211.0, 212.5,
+        max_points=10))
+    assert curve.attrs["curve_parameters"] == f"{name} omega"
+    assert curve.attrs["curve_contact"] == 1 and curve.attrs["curve_ending"] == "bound"
+    end = curve.isel(branch_point=-1)
+    assert float(end.omega) == 212.5
+    clearance = float(end[name])
+    branch = continue_orbits(Continuation(
+        TWO.replace(omega=212.5), name, clearance - 2e-8, clearance + 2e-8,
+        state=end.section_state.values, n_modes=N_MODES, max_branches=1, transient_periods=0))
+    (located,) = branch[name].values[branch.bifurcation.values == BIFURCATIONS.index(
+        "grazing")]
+    assert clearance == pytest.approx(float(located), rel=AGREE, abs=0.0)
 
 
 def test_fold_curve_with_two_contacts_closed():
