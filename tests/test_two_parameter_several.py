@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from impactbeams import ParameterError
+from impactbeams import Contact, ParameterError
 from impactbeams.continuation import (
     BifurcationCurve,
     Continuation,
@@ -26,6 +26,7 @@ from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
 from several_stops import FAR, N_MODES, STOP, TWO, TWO_TOML
 from test_continuation_resume import _stop_after
 from test_resume import assert_same_map
+from test_two_parameter import SMALL
 
 # a curve's end on its box's edge solves the augmented system to Newton's 1e-10 of the scaled
 # unknowns, and a one-parameter branch locates its event to 1e-11 of its range: 1e-9 relative,
@@ -96,6 +97,44 @@ def test_fold_curve_beside_a_stop_that_never_closes_is_the_single_stops():
         result = PeriodMap(params, N_MODES)(z, directions="all", measures=False)
         assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
         assert np.abs(np.linalg.eigvals(result.jacobian) - 1.0).min() < 1e-10
+
+
+# tests/test_two_parameter.py's small model (two beams, a stiff spring between the tips) with
+# a second contact between the tips from above 1 mm away, which its orbits never close
+SMALL_FAR = SMALL.replace(contacts=(Contact(clearance=1.1e-5),
+                                    Contact(side="above", clearance=1e-3)))
+
+
+@pytest.mark.parametrize(("kind", "direction"), [("period_doubling", "up"),
+                                                 ("neimark_sacker", "down")])
+def test_multiplier_curves_beside_a_contact_that_never_closes_are_the_single_ones(kind,
+                                                                                  direction):
+    """The small model's period doubling (244.73 rad/s) and Neimark-Sacker point
+    (243.83 rad/s) followed up in F0 by 10 %: with the far contact, the same points to 1e-10
+    relative (measured 7.4e-13), each one a period doubling (a multiplier at -1) or a
+    Neimark-Sacker point (a pair on the unit circle) of the single contact's own map, to
+    1e-10 (measured 9.2e-14 and 4.3e-14; fixed points to 2.2e-15 of the state)."""
+    continuation = Continuation(SMALL, "omega", 236.0, 246.0, start=244.0,
+                                direction=direction, n_modes=N_MODES, max_branches=1,
+                                max_points=60, transient_periods=600)
+    curve = BifurcationCurve.from_branch(continuation, continue_orbits(continuation), kind,
+                                         "force_amplitude", 3e-5, 3.3e-5, max_points=12)
+    single = continue_curve(curve)
+    several = continue_curve(dataclasses.replace(curve, params=SMALL_FAR))
+    assert several.branch_point.size == single.branch_point.size == 12
+    for name in ("omega", "force_amplitude"):
+        np.testing.assert_allclose(several[name].values, single[name].values, rtol=1e-10,
+                                   atol=0.0)
+    for point in range(several.branch_point.size):
+        at = several.isel(branch_point=point)
+        params = SMALL.replace(omega=float(at.omega), force_amplitude=float(at.force_amplitude))
+        z = at.section_state.values
+        result = PeriodMap(params, N_MODES)(z, directions="all", measures=False)
+        assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
+        mu = np.linalg.eigvals(result.jacobian)
+        critical = (np.abs(mu + 1.0) if kind == "period_doubling"
+                    else np.abs(np.abs(mu[mu.imag > 0]) - 1.0))
+        assert critical.min() < 1e-10
 
 
 def _events(params, omega, state, label, width=0.3):
