@@ -1139,9 +1139,9 @@ def build_parser() -> argparse.ArgumentParser:
                       "[OPTIONS] [PARAMETER OPTIONS]",
                       help="where the non-impacting orbit first touches, in closed form")
     grazing.add_argument("parameter", metavar="PARAMETER",
-                         help="force_amplitude, base_amplitude or clearance (with several "
-                              "contacts one's, contacts.INDEX.clearance): its grazing value "
-                              "at each Omega; omega: the grazing frequencies")
+                         help="force_amplitude, base_amplitude, clearance or one contact's "
+                              "contacts.INDEX.clearance: its grazing value at each Omega; "
+                              "omega: the grazing frequencies")
     grazing.add_argument("--omega-min", type=_number, required=True, metavar="RAD/S",
                          help="lowest forcing frequency (rad/s)")
     grazing.add_argument("--omega-max", type=_number, required=True, metavar="RAD/S",

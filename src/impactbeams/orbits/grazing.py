@@ -201,7 +201,8 @@ def steady_gap(params: Params, n_modes: int) -> SteadyGap:
     base motion of either or both clamps, or both drives. The uplifts and ``start`` do not
     enter: they set a run's start, not its periodic orbit.
     """
-    if params.several_contacts:  # (a Params, or LinearGap says what it takes)
+    require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
+    if params.several_contacts:
         raise ParameterError(
             f"{CONTACTS}: {len(params.contacts)} contacts are not allowed in steady_gap, which "
             "gives one gap: the gap of contact INDEX is steady_gap(params.each_contact()[INDEX], "
