@@ -90,13 +90,21 @@ def test_fold_curve_beside_a_stop_that_never_closes_is_the_single_stops():
     for end in (0, -1):
         assert float(several.force_amplitude[end]) == float(single.force_amplitude[end])
         assert float(several.omega[end]) == pytest.approx(float(single.omega[end]), rel=1e-12)
-    for point in range(several.branch_point.size):
-        at = several.isel(branch_point=point)
-        params = STOP.replace(omega=float(at.omega), force_amplitude=float(at.force_amplitude))
+    for mu in _single_maps_multipliers(several, STOP):
+        assert np.abs(mu - 1.0).min() < 1e-10
+
+
+def _single_maps_multipliers(curve, params):
+    """The multipliers at each point of ``curve`` (in Omega and F0) of ``params``' own map
+    (`PeriodMap`), whose fixed point each point's orbit is checked to be (to 1e-10)."""
+    for point in range(curve.branch_point.size):
+        at = curve.isel(branch_point=point)
         z = at.section_state.values
-        result = PeriodMap(params, N_MODES)(z, directions="all", measures=False)
+        result = PeriodMap(params.replace(omega=float(at.omega),
+                                          force_amplitude=float(at.force_amplitude)),
+                           N_MODES)(z, directions="all", measures=False)
         assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
-        assert np.abs(np.linalg.eigvals(result.jacobian) - 1.0).min() < 1e-10
+        yield np.linalg.eigvals(result.jacobian)
 
 
 # tests/test_two_parameter.py's small model (two beams, a stiff spring between the tips) with
@@ -125,13 +133,7 @@ def test_multiplier_curves_beside_a_contact_that_never_closes_are_the_single_one
     for name in ("omega", "force_amplitude"):
         np.testing.assert_allclose(several[name].values, single[name].values, rtol=1e-10,
                                    atol=0.0)
-    for point in range(several.branch_point.size):
-        at = several.isel(branch_point=point)
-        params = SMALL.replace(omega=float(at.omega), force_amplitude=float(at.force_amplitude))
-        z = at.section_state.values
-        result = PeriodMap(params, N_MODES)(z, directions="all", measures=False)
-        assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
-        mu = np.linalg.eigvals(result.jacobian)
+    for mu in _single_maps_multipliers(several, SMALL):
         critical = (np.abs(mu + 1.0) if kind == "period_doubling"
                     else np.abs(np.abs(mu[mu.imag > 0]) - 1.0))
         assert critical.min() < 1e-10
