@@ -207,7 +207,9 @@ def test_the_command_writes_the_librarys_curve(tmp_path, capsys, parameter, extr
      "--start is not allowed with grazing"),
     (["clearance", "--omega-min", "1", "--omega-max", "10", "--points", "1"],
      "argument --points: 1 is not allowed: must be an integer >= 2"),
-    (["uplift1", "--omega-min", "1", "--omega-max", "10"], "invalid choice: 'uplift1'"),
+    (["uplift1", "--omega-min", "1", "--omega-max", "10"],
+     "parameter = 'uplift1' is not allowed: must be one of 'force_amplitude', "
+     "'base_amplitude', 'clearance', 'omega'"),
 ])
 def test_the_commands_bad_input_exits_2_in_one_line(tmp_path, capsys, argv, message):
     output = tmp_path / "grazing.nc"

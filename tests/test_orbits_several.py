@@ -14,7 +14,7 @@ import pytest
 
 from impactbeams import Contact, ParameterError, Params, simulate, two_sided_stop
 from impactbeams.active_phases import contact_quantities, sample
-from impactbeams.continuation import BifurcationCurve, Continuation, continue_orbits
+from impactbeams.continuation import Continuation, continue_orbits
 from impactbeams.kernels.layout import FREE, ROW_EVENT, TIP_V1, TIP_Y1
 from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
@@ -206,15 +206,11 @@ def test_multipliers_are_the_finite_difference_monodromys_eigenvalues(orbits, na
 
 
 def test_what_orbits_of_several_contacts_refuse(orbits):
-    """A continuation of a flat contact key, two-parameter curves and the single contact's
-    PeriodMap refuse several contacts in one line; the contacts' measures are there."""
+    """A continuation of a flat contact key and the single contact's PeriodMap refuse
+    several contacts in one line; the contacts' measures are there."""
     with pytest.raises(ParameterError, match="parameter = 'clearance' is not allowed: with 2 "
                                              "contacts each gives its own"):
         Continuation(TWO_SIDED, "clearance", 1e-6, 4e-6)
-    with pytest.raises(ParameterError, match="contacts: 2 contacts are not allowed in "
-                                             "two-parameter curves"):
-        BifurcationCurve(TWO_SIDED, "grazing", "omega", 400.0, np.zeros(16),
-                         "force_amplitude", 1e-4, 2e-3, 300.0, 500.0, N_MODES)
     with pytest.raises(ParameterError, match="not allowed in PeriodMap"):
         PeriodMap(TWO_SIDED, N_MODES)
     result = ContactsPeriodMap(TWO_SIDED, N_MODES)(settled(ContactsPeriodMap(TWO_SIDED,
@@ -239,7 +235,7 @@ def test_an_orbit_whose_section_lies_in_a_dashpots_early_release():
     m = z.size // 2
     gaps = period_map._events(0, z[:m], z[m:])
     assert orbit.residual < 1e-12 and period_map.active_mask(z) == 0
-    assert gaps[0] > 0 > gaps[1] and period_map._early(0, z[:m], z[m:]) == 2
+    assert gaps[0] > 0 > gaps[1] and period_map.early_released(0, z[:m], z[m:]) == 2
     run = period_map(z, measures=False).trajectory
     assert run.switched[1] == 3 and run.time[1] < 0.01 * period_map.horizon  # it opens
     period = period_map.forcing_period
@@ -267,7 +263,7 @@ def test_a_section_state_that_pulls_if_closed_starts_released_early():
     weights = period_map.packed.tables[FREE, ROW_EVENT]  # the mid-span stop's gap
     unit = weights / (weights @ weights)
     z = np.concatenate([-1.1e-6 * unit, 5e-2 * unit])
-    assert period_map.active_mask(z) == 0 and period_map._early(0, z[:N_MODES],
+    assert period_map.active_mask(z) == 0 and period_map.early_released(0, z[:N_MODES],
                                                                  z[N_MODES:]) == 1
     single = PeriodMap(STOP.replace(force_amplitude=1e-3, omega=400.0, contact_position1=MID,
                                     clearance=1e-6, contact_damping=0.5), N_MODES)
@@ -276,7 +272,7 @@ def test_a_section_state_that_pulls_if_closed_starts_released_early():
     b = period_map.contacts.gap_weights  # the modal gaps: clearances 1, 2 um, both -3 um
     z = np.concatenate([b.T @ np.linalg.solve(b @ b.T, rows) for rows in ([-3e-6, -3e-6],
                                                                           [0.0, 5e-2])])
-    assert period_map.active_mask(z) == 1 and period_map._early(1, z[:N_MODES],
+    assert period_map.active_mask(z) == 1 and period_map.early_released(1, z[:N_MODES],
                                                                  z[N_MODES:]) == 2
     assert period_map(z).trajectory.switched[1] == 3  # contact 1's gap opens
 

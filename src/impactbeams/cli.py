@@ -46,7 +46,7 @@ from impactbeams.params import (
     refuse_unused_law_keys,
     without_unused_law_keys,
 )
-from impactbeams.variables import BASIN_POINTS, GRAZING_PARAMETERS, PARAMETERS
+from impactbeams.variables import BASIN_POINTS, PARAMETERS
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -527,12 +527,14 @@ def _grazing(args: argparse.Namespace) -> int:
     from impactbeams.io import write_netcdf
     from impactbeams.lock import output_lock
     from impactbeams.orbits import grazing_curve, grazing_frequencies
+    from impactbeams.orbits.grazing import check_grazing_parameter
     from impactbeams.preflight import require_output_file
 
     output = require_output_file(args.output, "-o/--output", {".nc"}, "netCDF")
     params = params_from_args(args)
     n_modes = args.n_modes or 5
     _require_grazing_options(args)
+    check_grazing_parameter(params, args.parameter, ("omega",))
     with output_lock(output):
         if args.parameter == "omega":
             dataset = grazing_frequencies(params, n_modes, args.omega_min, args.omega_max,
@@ -1151,9 +1153,9 @@ def build_parser() -> argparse.ArgumentParser:
                       "[OPTIONS] [PARAMETER OPTIONS]",
                       help="where the non-impacting orbit first touches, in closed form")
     grazing.add_argument("parameter", metavar="PARAMETER",
-                         choices=(*GRAZING_PARAMETERS, "omega"),
-                         help="force_amplitude, base_amplitude or clearance: its grazing value "
-                              "at each Omega; omega: the grazing frequencies")
+                         help="force_amplitude, base_amplitude, clearance or one contact's "
+                              "contacts.INDEX.clearance: its grazing value at each Omega; "
+                              "omega: the grazing frequencies")
     grazing.add_argument("--omega-min", type=_number, required=True, metavar="RAD/S",
                          help="lowest forcing frequency (rad/s)")
     grazing.add_argument("--omega-max", type=_number, required=True, metavar="RAD/S",

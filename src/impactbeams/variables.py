@@ -541,6 +541,11 @@ VARIABLES.update({
         "Omega t mod 2 pi, in [0, 2 pi), at which the steady non-impacting orbit's gap "
         "touches zero at the point (its minimum over the forcing period; phase 0 where the "
         "drives' sines rise through 0); NaN where the curve has no point"),
+    "grazing_contact": Variable(
+        ("grazing_point",), "1", "contact that grazes",
+        "index in the run's contacts of the contact whose gap touches zero first at the point "
+        "(grazing curves of several contacts); -1 where the curve has no point",
+        dtype="int32"),
 })
 
 # bifurcation curves in two parameters (impactbeams.continuation.twoparameter), along

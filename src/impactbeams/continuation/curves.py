@@ -27,20 +27,23 @@ import numpy as np
 
 from impactbeams.continuation.beams import BeamOrbits, grazing_value
 from impactbeams.continuation.problem import PARAMETER_STEP, Evaluation, multipliers_of
-from impactbeams.orbits import PeriodMap, PeriodMapResult
+from impactbeams.orbits import ContactsPeriodMap, PeriodMap, PeriodMapResult
 from impactbeams.orbits.shooting import GUARD
-from impactbeams.params import Params
+from impactbeams.params import Params, parameter_value, with_parameter
 
+SectionMaps = PeriodMap | ContactsPeriodMap  # one contact's, several contacts'
 CACHED_PLANES = 4  # BeamOrbits kept by p2 value (the engine's dr/dp2 asks for a second one)
 
 
 class Grazing:
-    """The orbit's smallest gap over the period is zero (m).
+    """The orbit's smallest gap over the period is zero (m): of one contact, ``contact``.
 
     The gap read from the free coordinates (`PeriodMap.least_gap`): in free flight the gap's
     smallest value (a certified search: samples refined by Brent's method on the gap's
-    rate), in a contact the depth the tips would reach without it. Both sides have one slope
-    at the grazing, where the signed grazing value of the one-parameter branches
+    rate), in a contact the depth the tips would reach without it. With several contacts
+    the gap of the one that grazes at the curve's start (`start`), read as if it were open
+    (`ContactsPeriodMap.least_gap`): the others' grazings are other curves. Both sides have
+    one slope at the grazing, where the signed grazing value of the one-parameter branches
     (`beams.grazing_value`: minus the overlap in a contact) changes it by 1 + the static
     compliance times the contact stiffness: Newton on the curve converges quadratically
     instead of linearly (measured on the small model's grazing curve in (Omega, F0): 3
@@ -52,12 +55,19 @@ class Grazing:
     # the curve is where the contacts change: it goes on across them
     smooth_across_contacts = True
 
-    def value(self, period_map: PeriodMap, result: PeriodMapResult,
+    def __init__(self) -> None:
+        self.contact = 0
+
+    def start(self, period_map: SectionMaps, result: PeriodMapResult) -> None:
+        """Follow the contact whose gap is nearest 0 on the start's orbit ``result``."""
+        self.contact = period_map.grazing_contact(result)
+
+    def value(self, period_map: SectionMaps, result: PeriodMapResult,
               drz: np.ndarray | None = None) -> float:
         """The condition at an orbit's run (``drz`` unused)."""
-        return period_map.least_gap(result)
+        return period_map.least_gap(result, self.contact)
 
-    def probe(self, period_map: PeriodMap, result: PeriodMapResult) -> float:
+    def probe(self, period_map: SectionMaps, result: PeriodMapResult) -> float:
         """A quantity whose forward differences are the condition's (its value)."""
         return self.value(period_map, result)
 
@@ -97,11 +107,14 @@ class Multiplier:
         self.c: np.ndarray | None = None
         self._left = self._right = np.empty(0)  # w and v of the last solve
 
+    def start(self, period_map: SectionMaps, result: PeriodMapResult) -> None:
+        """Nothing to choose: the borders are set at the first point (`of`)."""
+
     def matrix(self, monodromy: np.ndarray) -> np.ndarray:
         """A of the monodromy in the energy coordinates, D M D^-1: M - sigma I."""
         return monodromy - self.sigma * np.eye(len(monodromy))
 
-    def value(self, period_map: PeriodMap, result: PeriodMapResult,
+    def value(self, period_map: SectionMaps, result: PeriodMapResult,
               drz: np.ndarray | None = None) -> float:
         """The test function s at an orbit's run whose monodromy minus the identity is ``drz``."""
         return self.of(self._matrix_at(period_map, result, drz))
@@ -119,7 +132,7 @@ class Multiplier:
         self._right, self._left = right[:n], np.linalg.solve(bordered.T, rhs)[:n]
         return float(right[n])
 
-    def probe(self, period_map: PeriodMap, result: PeriodMapResult) -> float:
+    def probe(self, period_map: SectionMaps, result: PeriodMapResult) -> float:
         """-w' A v at a run, with the last solve's v and w: its differences are s's.
 
         M in full, then A and the products: the tangent propagation of v alone rounds
@@ -133,7 +146,7 @@ class Multiplier:
         monodromy = drz + np.eye(weights.size)
         self._set_borders(self.matrix(weights[:, None] * monodromy / weights[None, :]))
 
-    def _matrix_at(self, period_map: PeriodMap, result: PeriodMapResult,
+    def _matrix_at(self, period_map: SectionMaps, result: PeriodMapResult,
                    drz: np.ndarray | None = None) -> np.ndarray:
         weights = state_weights(period_map)
         monodromy = (period_map.jacobian(result, "all") if drz is None
@@ -204,7 +217,7 @@ CONDITIONS = {"grazing": Grazing, "fold": lambda: Multiplier(1.0),
 KINDS = tuple(CONDITIONS)
 
 
-def state_weights(period_map: PeriodMap) -> np.ndarray:
+def state_weights(period_map: SectionMaps) -> np.ndarray:
     """D with D z = (omega q, q'), the energy norm's coordinates."""
     from impactbeams.kernels.layout import FREE, ROW_FREQUENCY
 
@@ -229,12 +242,23 @@ class CurveProblem:
         self.n_modes, self.period, self.condition = n_modes, period, condition
         self._planes: dict[float, BeamOrbits] = {}
 
+    def start(self, z: np.ndarray, p1: float) -> None:
+        """Fit the condition to the start's orbit ``z`` at p1 and p2 (params') (`Grazing`)."""
+        period_map = self.orbits(parameter_value(self.params, self.second)).period_map(p1)
+        self.condition.start(period_map, period_map(z, measures=False))
+
+    @property
+    def followed_contact(self) -> int | None:
+        """With several contacts, the one whose grazing a grazing curve follows; else None."""
+        return (self.condition.contact if self.params.several_contacts
+                and isinstance(self.condition, Grazing) else None)
+
     def orbits(self, p2: float) -> BeamOrbits:
         """The orbits of p1 at p2 (ParameterError if p2 is not allowed)."""
         if p2 not in self._planes:
             if len(self._planes) >= CACHED_PLANES:
                 self._planes.pop(next(iter(self._planes)))
-            params = self.params.replace(**{self.second: p2})
+            params = with_parameter(self.params, self.second, p2)
             # (Newton's full monodromy: the subspace is unused, the smallest allowed)
             self._planes[p2] = BeamOrbits(params, self.first, self.n_modes, self.period,
                                           method="newton", subspace=GUARD + 1)
@@ -243,7 +267,7 @@ class CurveProblem:
     @property
     def gap_round_off(self) -> float:
         """How well a gap is known (m), as `BeamOrbits.gap_round_off`."""
-        return self.orbits(getattr(self.params, self.second)).gap_round_off
+        return self.orbits(parameter_value(self.params, self.second)).gap_round_off
 
     def evaluate(self, y: np.ndarray, p: float, jacobian: bool = True,
                  grazing: bool = True) -> Evaluation:
@@ -289,7 +313,7 @@ class CurveProblem:
             shifted[j] += h
             gradient[j] = (self.condition.probe(period_map, period_map(shifted, measures=False))
                            - base) / h
-        h = PARAMETER_STEP * max(abs(p1), abs(getattr(self.params, self.first)))
+        h = PARAMETER_STEP * max(abs(p1), abs(parameter_value(self.params, self.first)))
         moved = orbits.period_map(p1 + h)
         other = moved(z, measures=False)
         gradient[-1] = (self.condition.probe(moved, other) - base) / h

@@ -113,7 +113,7 @@ class Continuation:
         require_type("params", self.params, isinstance(self.params, Params),
                      "an impactbeams.Params")
         check_law(self.params)
-        self._check_parameter()
+        check_continued(self.params, "parameter", self.parameter)
         for name in ("low", "high"):
             value = require_finite(name, getattr(self, name))
             check_range(flat_parameter(self.parameter), value)
@@ -143,33 +143,6 @@ class Continuation:
         for end in (self.low, self.high):  # with the fixed ones, at both ends (monotone rules)
             with_parameter(self.params, self.parameter, end)
         self._check_steps()
-
-    def _check_parameter(self) -> None:
-        """A continuable parameter; with several contacts, a law's field of one of them.
-
-        Each contact gives its own law (``contacts.INDEX.FIELD``: that contact's clearance,
-        stiffness or damping); its point is not continued (nor the flat point of one).
-        """
-        contacts = self.params.contacts
-        field = contact_field(self.parameter)
-        if field is None:
-            require("parameter", self.parameter, not (
-                contacts and self.parameter in FLAT_KEYS.values()),
-                f"with {len(contacts)} contacts each gives its own: continue one contact's "
-                f"as '{CONTACTS}.INDEX.FIELD' (FIELD one of {', '.join(_CONTACT_FIELDS)})")
-            require("parameter", self.parameter, self.parameter in CONTINUABLE,
-                    f"must be one of {', '.join(CONTINUABLE)}, or with several contacts "
-                    f"'{CONTACTS}.INDEX.FIELD'")
-            return
-        index, name = field
-        require("parameter", self.parameter, len(contacts) >= 2,
-                f"continues a field of one of several contacts, and params has "
-                f"{len(contacts) or 'one or none'}: one contact is the flat keys (continue "
-                f"{FLAT_KEYS.get(name, 'clearance')})")
-        require("parameter", self.parameter, index < len(contacts),
-                f"there are {len(contacts)} contacts (indices 0 to {len(contacts) - 1})")
-        require("parameter", self.parameter, name in _CONTACT_FIELDS,
-                f"a contact's continuable fields are {', '.join(_CONTACT_FIELDS)}")
 
     def _check_steps(self) -> None:
         """min_step <= step <= max_step, said in the parameter's units (given or default)."""
@@ -206,6 +179,33 @@ class Continuation:
         return Settings(step=step / width, min_step=low / width, max_step=high / width,
                         max_points=self.max_points, max_branches=self.max_branches,
                         micro_contacts=self.micro_contacts, turn_aim=TURN_AIM)
+
+
+def check_continued(params: Params, what: str, name: str) -> None:
+    """``name`` (given as ``what``) is continuable; with several contacts, a law's field of one.
+
+    Each contact gives its own law (``contacts.INDEX.FIELD``: that contact's clearance,
+    stiffness or damping); its point is not continued (nor the flat point of one).
+    """
+    contacts = params.contacts
+    field = contact_field(name)
+    if field is None:
+        require(what, name, not (contacts and name in FLAT_KEYS.values()),
+                f"with {len(contacts)} contacts each gives its own: continue one contact's "
+                f"as '{CONTACTS}.INDEX.FIELD' (FIELD one of {', '.join(_CONTACT_FIELDS)})")
+        require(what, name, name in CONTINUABLE,
+                f"must be one of {', '.join(CONTINUABLE)}, or with several contacts "
+                f"'{CONTACTS}.INDEX.FIELD'")
+        return
+    index, field_name = field
+    require(what, name, len(contacts) >= 2,
+            f"continues a field of one of several contacts, and params has "
+            f"{len(contacts) or 'one or none'}: one contact is the flat keys (continue "
+            f"{FLAT_KEYS.get(field_name, 'clearance')})")
+    require(what, name, index < len(contacts),
+            f"there are {len(contacts)} contacts (indices 0 to {len(contacts) - 1})")
+    require(what, name, field_name in _CONTACT_FIELDS,
+            f"a contact's continuable fields are {', '.join(_CONTACT_FIELDS)}")
 
 
 Progress = Callable[[Branch, Point], None]

@@ -75,10 +75,11 @@ from impactbeams.continuation.curves import (
 from impactbeams.continuation.events import Located, continuous_root, grazing_test, locate
 from impactbeams.continuation.output import branches_dataset
 from impactbeams.continuation.run import (
-    CONTINUABLE,
     DIRECTIONS,
     STATE_SCALE_CLEARANCES,
     Continuation,
+    check_continued,
+    least_clearance,
     mode_count,
 )
 from impactbeams.params import (
@@ -86,11 +87,13 @@ from impactbeams.params import (
     ParameterError,
     Params,
     check_range,
+    flat_parameter,
     is_path,
+    named_attributes,
+    parameter_value,
     require,
     require_finite,
     require_integer,
-    require_one_contact,
     require_type,
 )
 from impactbeams.variables import (
@@ -98,7 +101,6 @@ from impactbeams.variables import (
     CURVE_EVENTS,
     attributes,
     global_attributes,
-    parameter_attributes,
 )
 
 if TYPE_CHECKING:
@@ -152,24 +154,22 @@ class BifurcationCurve:
     def __post_init__(self) -> None:
         require_type("params", self.params, isinstance(self.params, Params),
                      "an impactbeams.Params")
-        require_one_contact(self.params, "two-parameter curves")
         require("kind", self.kind, self.kind in KINDS,
                 f"must be one of {', '.join(map(repr, KINDS))}")
         for name in ("parameter", "second"):
-            require(name, getattr(self, name), getattr(self, name) in CONTINUABLE,
-                    f"must be one of {', '.join(CONTINUABLE)}")
+            check_continued(self.params, name, getattr(self, name))
         require("second", self.second, self.second != self.parameter,
                 f"must differ from parameter = {self.parameter!r}")
         for name, parameter in (("low", self.second), ("high", self.second),
                                 ("parameter_low", self.parameter),
                                 ("parameter_high", self.parameter)):
-            check_range(parameter, require_finite(name, getattr(self, name)))
+            check_range(flat_parameter(parameter), require_finite(name, getattr(self, name)))
         require("high", self.high, self.high > self.low,
                 f"the range [{self.low!r}, {self.high!r}] is empty: need high > low")
         require("parameter_high", self.parameter_high,
                 self.parameter_high > self.parameter_low,
                 f"the box [{self.parameter_low!r}, {self.parameter_high!r}] is empty")
-        start = getattr(self.params, self.second)
+        start = parameter_value(self.params, self.second)
         require(self.second, start, self.low <= start <= self.high,
                 f"(the start's, from params) must lie in [{self.low!r}, {self.high!r}]")
         require("value", self.value, self.parameter_low <= require_finite("value", self.value)
@@ -285,19 +285,22 @@ def continue_curve(curve: BifurcationCurve, progress: Progress | None = None,
                  "None or the path of a netCDF file (str or pathlib.Path)")
     problem = CurveProblem(curve.params, curve.parameter, curve.second, curve.n_modes,
                            curve.period, CONDITIONS[curve.kind]())
+    problem.start(np.asarray(curve.state, dtype=float), curve.value)
     if output is None:
-        return _interrupted_with_dataset(curve, lambda: follow(problem, curve, progress))
+        return _interrupted_with_dataset(curve, problem, lambda: follow(problem, curve,
+                                                                        progress))
     return checkpointed(Path(output), curve, lambda log: _interrupted_with_dataset(
-        curve, lambda: follow(problem, curve, progress, log)))
+        curve, problem, lambda: follow(problem, curve, progress, log)))
 
 
-def _interrupted_with_dataset(curve: BifurcationCurve,
+def _interrupted_with_dataset(curve: BifurcationCurve, problem: CurveProblem,
                               followed: Callable[[], Branch]) -> xr.Dataset:
     """The Dataset of ``followed()``; a `ContinuationInterrupted` from it gets the points'."""
     try:
-        return curve_dataset(followed(), curve)
+        return curve_dataset(followed(), curve, problem.followed_contact)
     except ContinuationInterrupted as interrupted:
-        interrupted.dataset = curve_dataset(interrupted.branches[0], curve)
+        interrupted.dataset = curve_dataset(interrupted.branches[0], curve,
+                                            problem.followed_contact)
         raise
 
 
@@ -332,7 +335,7 @@ def follow(problem: CurveProblem, curve: BifurcationCurve, progress: Progress | 
 def _started(problem: CurveProblem, curve: BifurcationCurve, settings: Settings,
              progress: Progress | None) -> tuple[Follower, Branch]:
     """The engine on ``problem`` and the curve of its first point, corrected at the start."""
-    p2 = getattr(curve.params, curve.second)
+    p2 = parameter_value(curve.params, curve.second)
     scaling = _scaling(problem, curve, p2)
     follower = Follower(problem, scaling, settings)
     orientation = np.zeros(scaling.state.size + 1)
@@ -355,7 +358,7 @@ def _scaling(problem: CurveProblem, curve: BifurcationCurve, p2: float) -> Scali
     weights = orbits.state_weights()
     tip = orbits.period_map(curve.value)(z, measures=True).max_tip1
     size = float(np.linalg.norm(weights * z))
-    scale = curve.state_scale or STATE_SCALE_CLEARANCES * curve.params.clearance
+    scale = curve.state_scale or STATE_SCALE_CLEARANCES * least_clearance(curve.params)
     per_metre = size / tip if tip > 0 and size > 0 else 1.0
     return Scaling(np.append(weights / (per_metre * scale),
                              1.0 / (curve.parameter_high - curve.parameter_low)),
@@ -604,7 +607,8 @@ def _end_at_grazing(follower: Follower, curve: Branch, current: Point, taken: fl
     curve.ending = GRAZED
 
 
-def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
+def curve_dataset(curve: Branch, spec: BifurcationCurve, contact: int | None = None,
+                  ) -> xr.Dataset:
     """The curve's points along ``branch_point``: both parameters as coordinates.
 
     The variables of a one-parameter branch (the orbit's measures, multipliers, contacts,
@@ -613,7 +617,8 @@ def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
     (the unit tangent's parameter parts, scaled: their zeros are the turning points),
     ``curve_event`` (the codimension-two points), ``curve_stable`` (in place of ``stable``,
     which the critical multiplier at round-off from the circle would decide). Attributes: the
-    kind, the parameters (``curve_parameters``), the ending (``curve_ending``).
+    kind, the parameters (``curve_parameters``), the ending (``curve_ending``); with several
+    contacts, ``curve_contact``: ``contact``, the one whose grazing a grazing curve follows.
     """
     unlabelled = [dataclasses.replace(point, label="") for point in curve.points]
     attrs = global_attributes(
@@ -625,7 +630,8 @@ def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
         curve_kind=spec.kind, curve_parameters=f"{spec.parameter} {spec.second}",
         curve_ending=curve.ending,
         locate_tolerance=spec.settings().locate_tolerance * (spec.high - spec.low),
-        newton_tolerance=spec.settings().tolerance)
+        newton_tolerance=spec.settings().tolerance,
+        **({} if contact is None else {"curve_contact": contact}))
     dataset = branches_dataset([Branch(unlabelled, spec.period, curve.scaling)], spec.second,
                                attrs)
     dataset = dataset.drop_vars(["bifurcation", "branch", "stable"])
@@ -634,7 +640,7 @@ def curve_dataset(curve: Branch, spec: BifurcationCurve) -> xr.Dataset:
     states = dataset.section_state.values
     dataset = dataset.isel(state=slice(0, states.shape[1] - 1))
     dataset = dataset.assign_coords({spec.parameter: ("branch_point", states[:, -1])})
-    dataset[spec.parameter].attrs.update(parameter_attributes(spec.parameter))
+    dataset[spec.parameter].attrs.update(named_attributes(spec.parameter))
     dataset["curve_condition"] = ("branch_point", np.array(
         [point.evaluation.residual[-1] for point in curve.points]))
     for name, index in (("curve_tangent_1", -2), ("curve_tangent_2", -1)):

@@ -165,6 +165,29 @@ class ContactsPeriodMap(SectionMap):
             candidates.append(-float(np.min(peaks[:, 1] / stiffness)))
         return min(candidates, key=abs) if candidates else math.nan
 
+    def least_gap(self, result: PeriodMapResult, contact: int = 0) -> float:
+        """The smallest value over the run of ``contact``'s gap read as if it were open (m).
+
+        Its physical gap in the set of the contacts closed but itself (the others' forces
+        deflect it through the flexibility the modes miss): while it is open its gap, while
+        it is closed the depth it would reach without its own force, so that it passes
+        through 0 with one slope where the orbit touches (as `PeriodMap.least_gap`, which it
+        is beside contacts that never close). Sampled `SAMPLES_PER_PERIOD` times a period,
+        the smallest refined by Brent's method between its neighbours.
+        """
+        run = result.trajectory
+        times = self._grid()
+        gap = self._open_gaps(run, times, contact)
+        i = min(max(int(np.argmin(gap)), 1), times.size - 2)
+        return refined(lambda t: float(self._open_gaps(run, np.array([t]), contact)[0]),
+                       times[i - 1], times[i + 1], gap[i], times[i])[0]
+
+    def _open_gaps(self, run: ContactRun, times: np.ndarray, contact: int) -> np.ndarray:
+        """``contact``'s physical gap (m) at ``times`` in the sets closed there but itself."""
+        q, v, mask = sample(self.contacts, run, times)
+        opened = mask & ~(1 << contact)
+        return contact_quantities(self.contacts, times, q, v, opened)["gap"][:, contact]
+
     def tip_motions(self, result: PeriodMapResult, times: np.ndarray) -> np.ndarray:
         """The tips (``kernels.layout`` TIP_* columns) of ``result``'s run at ``times`` (s).
 

@@ -18,6 +18,12 @@ clearance. The grazing drive or clearance at each Omega is therefore a closed fo
 (`grazing_curve`); at fixed drives the grazing frequencies are the roots of
 ``Delta - |G(Omega)|``, bracketed on a grid and refined by Brent's method
 (`grazing_frequencies`).
+
+With several contacts each has its own gap on the same linear orbit, ``Delta_j +
+Im(G_j e^(i Omega t))`` (its own run's weights and harmonic, `Params.each_contact`): the orbit
+first touches where the first of them does, the smallest of their grazing drives, the
+largest ``|G_j| - Delta_j`` in Omega; one contact's clearance grazes at its ``|G_j|`` where
+no other gap is closed already.
 """
 
 from __future__ import annotations
@@ -33,9 +39,13 @@ from scipy.optimize import brentq
 from impactbeams.contact import build_free_phase
 from impactbeams.drive import base_participation
 from impactbeams.params import (
+    CONTACTS,
     GRAZING_BRACKETS,
     MAX_MODES,
+    ParameterError,
     Params,
+    contact_field,
+    named_attributes,
     require,
     require_finite,
     require_integer,
@@ -155,6 +165,32 @@ class LinearGap:
         return values
 
 
+def contact_gaps(params: Params, n_modes: int) -> tuple[LinearGap, ...]:
+    """Each contact's `LinearGap`: its own run's (`Params.each_contact`; one free phase)."""
+    require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
+    return tuple(LinearGap(run, n_modes) for run in params.each_contact())
+
+
+def check_grazing_parameter(params: Params, parameter: str, others: tuple[str, ...] = (),
+                            ) -> None:
+    """``parameter`` has a grazing curve: a drive, or the clearance (one contact's, of several).
+
+    With several contacts each gives its own clearance: ``contacts.INDEX.clearance``.
+    ``others``: more names the caller takes (the command line's ``omega``).
+    """
+    count = len(params.each_contact())
+    field = contact_field(parameter)
+    if count == 1:
+        named, allowed = (*GRAZING_PARAMETERS, *others), ""
+    else:
+        named = (*(name for name in GRAZING_PARAMETERS if name != "clearance"), *others)
+        allowed = (f" or one contact's clearance, '{CONTACTS}.INDEX.clearance' with INDEX from 0 "
+                   f"to {count - 1} (with {count} contacts each gives its own)")
+    require("parameter", parameter, parameter in named or (
+        count > 1 and field is not None and field[0] < count and field[1] == "clearance"),
+        f"must be one of {', '.join(map(repr, named))}{allowed}")
+
+
 def steady_gap(params: Params, n_modes: int) -> SteadyGap:
     """The gap of ``params``' non-impacting steady orbit at its ``omega``, exactly.
 
@@ -165,6 +201,12 @@ def steady_gap(params: Params, n_modes: int) -> SteadyGap:
     base motion of either or both clamps, or both drives. The uplifts and ``start`` do not
     enter: they set a run's start, not its periodic orbit.
     """
+    require_type("params", params, isinstance(params, Params), "an impactbeams.Params")
+    if params.several_contacts:
+        raise ParameterError(
+            f"{CONTACTS}: {len(params.contacts)} contacts are not allowed in steady_gap, which "
+            "gives one gap: the gap of contact INDEX is steady_gap(params.each_contact()[INDEX], "
+            "n_modes)")
     linear = LinearGap(params, n_modes)
     (omega,) = linear.check_frequencies(params.omega)
     return SteadyGap(params.clearance, complex(linear.phasor(omega)), float(omega))
@@ -199,6 +241,32 @@ def phase_of_minimum(phasor: ArrayLike) -> np.ndarray:
     return (-0.5 * math.pi - np.angle(phasor)) % (2.0 * math.pi)
 
 
+def first_grazing(gaps: tuple[LinearGap, ...], parameter: str, omega: np.ndarray,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`grazing_values` of the contact of ``gaps`` that touches first, and which it is.
+
+    A drive: the smallest of the contacts' grazing values (NaN where the other drive alone
+    already closes a gap: the orbit touches at no drive); one contact's clearance
+    (``contacts.INDEX.clearance``): that contact's, NaN where another gap is closed at any
+    clearance of it. The contact's index, -1 where the value is NaN.
+    """
+    field = contact_field(parameter)
+    if field is None:
+        values, touching = (np.array(rows) for rows in zip(
+            *(grazing_values(gap, parameter, omega) for gap in gaps), strict=True))
+    else:  # the others' gaps do not depend on it: closed (NaN) or never touched (inf)
+        touching = np.array([gap.phasor(omega) for gap in gaps])
+        values = np.where(np.abs(touching) < [[gap.params.clearance] for gap in gaps],
+                          np.inf, np.nan)
+        values[field[0]] = np.abs(touching[field[0]])
+    closed = np.any(np.isnan(values), axis=0)
+    contact = np.where(closed, -1, np.argmin(np.where(np.isnan(values), np.inf, values),
+                                             axis=0))
+    columns = np.arange(omega.size)
+    first = np.where(closed, np.nan, values[contact, columns])
+    return first, np.where(closed, np.nan, touching[contact, columns]), contact
+
+
 def grazing_curve(params: Params, n_modes: int, parameter: str,
                   omega: ArrayLike) -> xr.Dataset:
     """The grazing curve in the plane (Omega, ``parameter``): where the orbit first touches.
@@ -209,21 +277,27 @@ def grazing_curve(params: Params, n_modes: int, parameter: str,
     it (above it, for the clearance) the orbit has no contact. Closed form (module
     docstring): the response is linear in each drive and does not depend on the clearance;
     a drive's grazing value keeps the other drive at ``params``' value, and is NaN where that
-    drive alone already closes the gap.
+    drive alone already closes the gap. With several contacts the first contact's to touch
+    (`first_grazing`; the clearance one contact's, ``contacts.INDEX.clearance``).
 
     Returns a Dataset along ``grazing_point``, one point per frequency: the coordinate
     ``omega``, the variables ``parameter`` and ``grazing_phase`` (the forcing phase of the
-    touch), the fixed parameters as attributes. A curve continued in two parameters is
-    checked against it point by point: `grazing_curve` at the continued points' frequencies.
+    touch), with several contacts ``grazing_contact`` (which one touches), the fixed
+    parameters as attributes. A curve continued in two parameters is checked against it
+    point by point: `grazing_curve` at the continued points' frequencies.
     """
-    linear = LinearGap(params, n_modes)
-    require("parameter", parameter, parameter in GRAZING_PARAMETERS,
-            f"must be one of {', '.join(map(repr, GRAZING_PARAMETERS))}")
-    frequencies = linear.check_frequencies(omega)
-    values, touching = grazing_values(linear, parameter, frequencies)
-    return _dataset(params, n_modes, parameter, frequencies, values, touching,
+    gaps = contact_gaps(params, n_modes)
+    check_grazing_parameter(params, parameter)
+    frequencies = gaps[0].check_frequencies(omega)
+    values, touching, contact = first_grazing(gaps, parameter, frequencies)
+    return _dataset(params, n_modes, parameter, frequencies, values, touching, contact,
                     "closed form: the steady gap's amplitude |G|, linear in each drive, "
                     "equal to the clearance")
+
+
+def _least_gap(gaps: tuple[LinearGap, ...], omega: np.ndarray) -> np.ndarray:
+    """Each contact's smallest gap ``Delta_j - |G_j|`` (m) at each Omega, rows by contact."""
+    return np.array([gap.params.clearance - np.abs(gap.phasor(omega)) for gap in gaps])
 
 
 def grazing_frequencies(params: Params, n_modes: int, low: float, high: float,
@@ -231,43 +305,54 @@ def grazing_frequencies(params: Params, n_modes: int, low: float, high: float,
     """The forcing frequencies in [low, high] (rad/s) where ``params``' orbit just touches.
 
     The roots of the smallest gap ``Delta - |G(Omega)|`` (m) at ``params``' drives and
-    clearance: bracketed on ``brackets`` evenly spaced frequencies, each sign change refined
-    by Brent's method (`scipy.optimize.brentq`, to 4 machine epsilons of Omega). Two roots
-    closer together than the grid's step (a curve just touching the line of fixed drive) can
-    be missed: a finer grid finds them. Returns the `grazing_curve` Dataset of the roots, in
-    increasing Omega, with the drives and clearance as attributes.
+    clearance (with several contacts the smallest of theirs): bracketed on ``brackets``
+    evenly spaced frequencies, each sign change refined by Brent's method
+    (`scipy.optimize.brentq`, to 4 machine epsilons of Omega). Two roots closer together
+    than the grid's step (a curve just touching the line of fixed drive) can be missed: a
+    finer grid finds them. Returns the `grazing_curve` Dataset of the roots, in increasing
+    Omega, with the drives and clearance as attributes.
     """
-    linear = LinearGap(params, n_modes)
+    gaps = contact_gaps(params, n_modes)
     require_integer("brackets", brackets, 2)
     low, high = require_finite("low", low, "rad/s"), require_finite("high", high, "rad/s")
     require("high", high, low < high, f"the range [{low!r}, {high!r}] is empty: need high > low",
             "rad/s")
-    grid = linear.check_frequencies(np.linspace(low, high, brackets))
+    grid = gaps[0].check_frequencies(np.linspace(low, high, brackets))
 
     def smallest_gap(omega: float) -> float:
-        return params.clearance - abs(complex(linear.phasor(omega)))
+        return float(np.min(_least_gap(gaps, np.array([omega]))))
 
-    gaps = params.clearance - np.abs(linear.phasor(grid))
+    least = _least_gap(gaps, grid).min(axis=0)
     roots = [brentq(smallest_gap, a, b, xtol=1e-300, rtol=4 * np.finfo(float).eps)
-             for a, b, ga, gb in zip(grid[:-1], grid[1:], gaps[:-1], gaps[1:], strict=True)
+             for a, b, ga, gb in zip(grid[:-1], grid[1:], least[:-1], least[1:], strict=True)
              if ga * gb < 0.0]
-    roots = np.array(sorted([*roots, *grid[gaps == 0.0]]))
-    return _dataset(params, n_modes, "omega", roots, roots, linear.phasor(roots),
+    roots = np.array(sorted([*roots, *grid[least == 0.0]]))
+    contact = np.argmin(_least_gap(gaps, roots), axis=0)
+    touching = np.array([gaps[j].phasor(root) for j, root in zip(contact, roots, strict=True)],
+                        dtype=complex)
+    return _dataset(params, n_modes, "omega", roots, roots, touching, contact,
                     f"roots of Delta - |G(Omega)|: sign changes on {brackets} evenly spaced "
                     "frequencies refined by Brent's method")
 
 
 def _dataset(params: Params, n_modes: int, parameter: str, omega: np.ndarray,
-             values: np.ndarray, touching: np.ndarray, method: str) -> xr.Dataset:
-    """A grazing curve's points along ``grazing_point`` (registry: impactbeams.variables)."""
+             values: np.ndarray, touching: np.ndarray, contact: np.ndarray,
+             method: str) -> xr.Dataset:
+    """A grazing curve's points along ``grazing_point`` (registry: impactbeams.variables).
+
+    ``contact``: which contact touches at each point, a variable with several contacts.
+    """
     import xarray as xr
 
     coords = {POINT: (POINT, np.arange(omega.size, dtype=np.int64), attributes(POINT)),
               "omega": (POINT, omega, parameter_attributes("omega"))}
     # the grazing value is data, not a coordinate: NaN where the other drive closes the gap
     data = {} if parameter == "omega" else {
-        parameter: (POINT, values, parameter_attributes(parameter))}
+        parameter: (POINT, values, named_attributes(parameter))}
     data["grazing_phase"] = (POINT, phase_of_minimum(touching), attributes("grazing_phase"))
+    if params.several_contacts:
+        data["grazing_contact"] = (POINT, contact.astype(np.int32), attributes(
+            "grazing_contact"))
     fixed = {name: value for name, value in params.as_dict().items()
              if name not in ("omega", parameter)}
     dataset = xr.Dataset(

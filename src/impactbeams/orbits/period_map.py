@@ -157,6 +157,15 @@ class SectionMap:
         i = int(np.argmax(sampled))
         return sampled, i, times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
 
+    def least_gap(self, result: PeriodMapResult, contact: int = 0) -> float:
+        """The smallest value over ``result``'s run of ``contact``'s gap as if it were open (m)."""
+        raise NotImplementedError
+
+    def grazing_contact(self, result: PeriodMapResult) -> int:
+        """The contact whose `least_gap` on ``result``'s run is nearest 0: the one that grazes."""
+        return min(range(len(self.params.each_contact())),
+                   key=lambda contact: abs(self.least_gap(result, contact)))
+
 
 class PeriodMap(SectionMap):
     """The map z(0) -> z(p T) of ``params`` (spring law, Omega > 0) with ``n_modes`` per beam.
@@ -264,8 +273,10 @@ class PeriodMap(SectionMap):
                                    approached=True,
                                    interval_gap=self._interval_gap(result.trajectory))
 
-    def least_gap(self, result: PeriodMapResult) -> float:
+    def least_gap(self, result: PeriodMapResult, contact: int = 0) -> float:
         """The smallest value over the run of the gap read from the free coordinates (m).
+
+        (``contact``: 0, the map's one.)
 
         In free flight it is the gap. In a contact the free coordinates leave out the
         contact force's static part: the value is the overlap times -(1 + that part's
