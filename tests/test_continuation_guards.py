@@ -116,6 +116,43 @@ def test_a_step_onto_another_strand_is_refused_and_retried_shorter(monkeypatch):
     assert changes == pytest.approx(np.arange(1, 11) / 10.0, abs=2e-11)
 
 
+class OneSided(Staircase):
+    """The staircase's branch z = p with one change of the contacts, 3 to 4 at p = 0.5, whose
+    interval value goes to 0 on the near side only ((0.5 - p) / 100 m, linear) and stays
+    2e-3 on the far side, and whose grazing value is 5e-3 on both: neither changes sign (a
+    shallow contact beside another's release on the stiff stop). ``solves`` counts the
+    evaluations."""
+
+    def __init__(self):
+        self.solves = 0
+
+    def evaluate(self, z, p, jacobian=True, grazing=True):
+        self.solves += 1
+        near = p < 0.5
+        evaluation = super().evaluate(z, p, jacobian, grazing)
+        return dataclasses.replace(evaluation, contacts=3 if near else 4, grazing=5e-3,
+                                   interval=(0.5 - p) / 100.0 if near else 2e-3)
+
+
+def test_a_change_no_sign_shows_is_located_from_the_side_whose_value_vanishes():
+    # bisection on the contacts from the step of 0.05 to 1e-11 takes 31 corrector solves (124
+    # evaluations); the near side's value, signed by the side (`_sided`), a secant beside its
+    # root (`_beside_secant`) each: 11 solves, 36 evaluations
+    from impactbeams.continuation import branch as branch_module
+    from impactbeams.continuation.branch import _located_change
+
+    problem = OneSided()
+    follower = branch_module.Follower(problem, Scaling(np.ones(1), 1.0), SETTINGS)
+    a, b = (follower.at_parameter(np.array([p, p]), np.array([0.0, 1.0])).point
+            for p in (0.48, 0.53))
+    problem.solves = 0
+    located = _located_change(follower, a, b, a.tangent, branch_module._contacts_of(a))
+    assert located.before.evaluation.contacts == 3 and located.beyond.evaluation.contacts == 4
+    assert located.before.x[-1] <= 0.5 <= located.beyond.x[-1]
+    assert located.beyond.x[-1] - located.before.x[-1] <= SETTINGS.locate_tolerance
+    assert problem.solves <= 40  # (measured: 36)
+
+
 def test_near_zero_has_the_test_functions_round_off_as_its_floor():
     # a multiplier that crosses -1 slowly (|mu| - 1 = 1e-6 (s - 0.3) over a step of 1 in
     # x~), its modulus off by 5e-14 of round-off that does not shrink with the bracket (as

@@ -195,16 +195,16 @@ def cell_rows(columns: Mapping[str, np.ndarray | float], shape: int | tuple[int,
     ``shape`` (a swept axis's values along its dimension).
     """
     box = (shape,) if isinstance(shape, int) else shape
-    names = _cell_columns(columns)
+    names = _cell_columns(columns["base_amplitude"])
     cells = np.empty((*box, len(names)))
     for index, name in enumerate(names):
         cells[..., index] = columns[name]
     return cells.reshape(-1, len(names))
 
 
-def _cell_columns(columns: Mapping[str, np.ndarray | float]) -> tuple[str, ...]:
-    """The cell columns (``layout.CELL_COLUMNS``) that rows of ``columns`` carry."""
-    if np.ndim(columns["base_amplitude"]) == 0 and columns["base_amplitude"] == 0.0:
+def _cell_columns(base_amplitude: np.ndarray | float) -> tuple[str, ...]:
+    """The cell columns (``layout.CELL_COLUMNS``) of rows with these base amplitudes (m)."""
+    if np.ndim(base_amplitude) == 0 and base_amplitude == 0.0:
         return layout.CELL_COLUMNS[:layout.CELL_U0]  # no shaker: a row without U0 reads 0
     return layout.CELL_COLUMNS
 
@@ -259,9 +259,10 @@ def pack_run(params: Params, n_modes: int, t_max: float, search_span: float,
 
     dynamics = dynamics_arrays(params, n_modes) if dynamics is None else dynamics
     check_steady(params, dynamics.free)
-    # one cell: its row straight from the values (`cell_rows`' for a box of one)
-    values = {**params.as_dict(), "geometry": 0.0}
-    cell = np.array([values[name] for name in _cell_columns(values)], dtype=float)
+    # one cell: its row straight from the values (`cell_rows`' for a box of one; the geometry
+    # is the run's own, index 0)
+    cell = np.array([0.0 if name == "geometry" else getattr(params, name)
+                     for name in _cell_columns(params.base_amplitude)], dtype=float)
     damped, forces, scalars, settings, q0, v0, drives = run_inputs(
         cell, dynamics.tables, dynamics.geometry, dynamics.spring_arrays, t_max, search_span)
     return Packed(dynamics, damped, forces, scalars, drives, settings[0], q0, v0)

@@ -178,6 +178,9 @@ ROOT_MARGIN = 1e3
 # a far end whose test value is this many times the near end's says nothing of the root: the
 # test jumps between them (`_next_arclength`)
 JUMP_RATIO = 1e3
+# how far beside a one-sided secant's root a solve lands, against the root's distance from
+# the near end (`_beside_secant`): more than the secant's error there
+BESIDE = 1e-2
 
 
 class Located(NamedTuple):
@@ -195,7 +198,8 @@ class Located(NamedTuple):
 
 def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
            test: Callable[[Point], float], tolerance: float,
-           value_tolerance: float = math.inf, may_jump: bool = False) -> Located:
+           value_tolerance: float = math.inf, may_jump: bool = False,
+           one_sided: bool = False) -> Located:
     """The points on both sides of the root of ``test`` between ``start`` and ``end``.
 
     ``start`` is at s = 0, ``end`` at s = ``s_end`` (None if the corrector failed there: it
@@ -212,7 +216,11 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
     (a grazing's gap: where the branch crosses the grazing surface slantwise, the parameter
     pinned leaves the gap less well known). ``may_jump``: the test may jump (a grazing value,
     where a free-flight minimum of the gap vanishes): a bracket whose ends' values stay far
-    from 0 as it narrows is then no root either, and the search ends there.
+    from 0 as it narrows is then no root either, and the search ends there. ``one_sided``:
+    the test may go to 0 on one side of the root only (the other side's value stays away,
+    another contact's standing in there): each solve lands beside the secant root of the end
+    nearer 0 (`_beside_secant`), and no end's value is halved (Illinois's rule, for a test
+    continuous across its root).
     """
     low: Bracket = (0.0, test(start), start)
     high: Bracket = (s_end, test(end) if end is not None else math.nan, end)
@@ -229,7 +237,7 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
             # there (e.g. a free-flight minimum of the gap vanishes), or the corrector fails
             # beyond it (a fold's reach); narrowing the bracket cannot change that
             break
-        s = _next_arclength(low, high, *before)
+        s = _next_arclength(low, high, *before, one_sided)
         width = high[0] - low[0]
         if width > 0.5 * widths[0]:
             # two solves did not halve the bracket (a secant creeps from one end): the middle,
@@ -242,12 +250,12 @@ def locate(point_at: PointAt, start: Point, s_end: float, end: Point | None,
         value = test(point) if point is not None else math.nan
         if point is not None and math.isfinite(value) and (value > 0) == (low[1] > 0):
             low, before[0] = (s, value, point), _true(low, test)
-            if side == -1:
+            if side == -1 and not one_sided:
                 high = (high[0], high[1] / 2.0, high[2])
             side = -1
         else:
             high, before[1] = (s, value, point), _true(high, test)
-            if side == 1:
+            if side == 1 and not one_sided:
                 low = (low[0], low[1] / 2.0, low[2])
             side = 1
     return Located(low[0], low[2], high[2],
@@ -381,7 +389,7 @@ def _known(low: Bracket, high: Bracket, tolerance: float) -> bool:
 
 
 def _next_arclength(low: Bracket, high: Bracket, low_before: Bracket | None = None,
-                    high_before: Bracket | None = None) -> float:
+                    high_before: Bracket | None = None, one_sided: bool = False) -> float:
     """Regula falsi between the ends, or one end's secant (off the ends by a margin).
 
     Where one end has no value (the corrector failed there: past a grazing, or beyond a
@@ -389,15 +397,19 @@ def _next_arclength(low: Bracket, high: Bracket, low_before: Bracket | None = No
     end says nothing of the root: the other end's secant (through its previous place,
     ``low_before`` or ``high_before``) is extrapolated to 0, doubled so that the solve lands
     past the root (a root is then bracketed from one side's slope in a few solves, not crept
-    up on, or bisected from a step down to the tolerance). Without such a secant inside the
-    bracket, regula falsi (its next solve gives that end a previous place), or the middle
-    where the far end has no value.
+    up on, or bisected from a step down to the tolerance); with ``one_sided`` the secant of the
+    end nearer 0 always, the solve just beside its root (`_beside_secant`). Without such a
+    secant inside the bracket, regula falsi (its next solve gives that end a previous place),
+    or the middle where the far end has no value.
     """
     (s0, f0, _), (s1, f1, _) = low, high
     if not math.isfinite(f0):
         return 0.5 * (s0 + s1)
     secant = None
-    if not math.isfinite(f1) or abs(f1) > JUMP_RATIO * abs(f0):
+    if one_sided:  # the end nearer 0 is the side whose value vanishes
+        secant = (_beside_secant(low, low_before, s1) if not math.isfinite(f1)
+                  or abs(f0) <= abs(f1) else _beside_secant(high, high_before, s0))
+    elif not math.isfinite(f1) or abs(f1) > JUMP_RATIO * abs(f0):
         secant = _doubled_secant(low, low_before, (s0, s1))
     elif abs(f0) > JUMP_RATIO * abs(f1):
         secant = _doubled_secant(high, high_before, (s0, s1))
@@ -428,3 +440,21 @@ def _doubled_secant(end: Bracket, previous: Bracket | None, bracket: tuple[float
     s = end[0] - 2.0 * end[1] * (previous[0] - end[0]) / (previous[1] - end[1])
     margin = 1e-3 * (bracket[1] - bracket[0])
     return s if bracket[0] + margin < s < bracket[1] - margin else None
+
+
+def _beside_secant(near: Bracket, previous: Bracket | None, far: float) -> float | None:
+    """``near``'s secant through ``previous`` to 0, put just beside it; None if none.
+
+    Just past the root (``BESIDE`` of its distance from ``near``, toward the ``far`` end)
+    while the far end is farther than twice that, else just short of it: the far end then
+    comes within that margin of the root and the near end next, so that a bracket whose far
+    side jumps shrinks by about ``BESIDE`` every two solves (from a step to 1e-11 of it in
+    some ten, where bisection takes 35). None without a secant, or one outside the bracket.
+    """
+    if previous is None or previous[1] == near[1]:
+        return None
+    root = near[0] - near[1] * (previous[0] - near[0]) / (previous[1] - near[1])
+    toward = math.copysign(1.0, far - near[0])
+    margin = BESIDE * abs(root - near[0])
+    s = root + (toward if abs(far - root) > 2.0 * margin else -toward) * margin
+    return s if min(near[0], far) < s < max(near[0], far) else None
