@@ -18,11 +18,13 @@ import pytest
 import xarray as xr
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgb
+from matplotlib.figure import Figure
+from matplotlib.patches import ConnectionPatch
 from matplotlib.text import Annotation, Text
 from matplotlib.transforms import Bbox
 
 from impactbeams.plotting import plot_dataset
-from impactbeams.plotting.branches import MARKERS, place_legend
+from impactbeams.plotting.branches import MARKERS, _side_connectors, place_legend
 from impactbeams.variables import BIFURCATIONS, attributes, parameter_attributes
 
 SHAKER = {"l1": 0.2, "width1": 0.02, "thickness1": 0.001, "counterpart": "stop",
@@ -275,6 +277,27 @@ def test_a_narrow_period_two_branch_is_zoomed_in_an_inset_drawn_above(crowded):
         assert not any(marker.overlaps(box) for marker in _markers(line)), line.get_label()
     assert not axes.get_legend().get_window_extent(renderer).overlaps(box)
     assert "branch 1 (period 2; inset)" in [t.get_text() for t in axes.get_legend().get_texts()]
+
+
+def test_an_inset_level_with_its_window_is_joined_to_it_from_the_facing_sides():
+    """Matplotlib shows none of its four connectors where the zoomed window lies level with an
+    inset beside it (the stiff case going down: the period-2 branch at 160 rad/s, the inset to
+    its right; on main the inset stood unjoined): two lines then join the window's right
+    corners to the inset's left ones."""
+    figure = Figure()
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    axes.plot([0.0, 300.0], [0.0, 1.2])
+    inset = axes.inset_axes([0.6, 0.35, 0.3, 0.3])
+    inset.set_xlim(160.2, 160.7)
+    inset.set_ylim(0.578, 0.601)
+    indicator = axes.indicate_inset_zoom(inset)
+    figure.draw_without_rendering()
+    assert not any(connector.get_visible() for connector in indicator.connectors)
+    _side_connectors(axes, inset, 0.6)
+    joined = sorted((tuple(map(float, line.xy1)), tuple(map(float, line.xy2)))
+                    for line in axes.patches if isinstance(line, ConnectionPatch))
+    assert joined == [((160.7, 0.578), (0.0, 0.0)), ((160.7, 0.601), (0.0, 1.0))]
 
 
 def test_a_narrow_branch_without_room_for_an_inset_says_its_range(captured, tmp_path):

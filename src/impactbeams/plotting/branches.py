@@ -22,6 +22,7 @@ from matplotlib.backend_bases import RendererBase
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import ConnectionPatch
 from matplotlib.text import Annotation, Text
 from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import Bbox
@@ -415,8 +416,31 @@ def _zoom(axes: Axes, x: np.ndarray, y: np.ndarray, dataset: xr.Dataset, narrow:
     inset.ticklabel_format(useOffset=False)
     for axis in (inset.xaxis, inset.yaxis):
         axis.set_major_locator(MaxNLocator(3))
-    axes.indicate_inset_zoom(inset, edgecolor="0.4")
+    indicator = axes.indicate_inset_zoom(inset, edgecolor=INSET_EDGE)
+    figure.draw_without_rendering()  # (the connectors' visibility is decided at a draw)
+    if not any(connector.get_visible() for connector in indicator.connectors):
+        _side_connectors(axes, inset, bounds[0])
     return [axes.transAxes.inverted().transform_bbox(Bbox([corner - room, corner + size]))]
+
+
+def _side_connectors(axes: Axes, inset: Axes, inset_left: float) -> None:
+    """Join the zoomed region's side facing the inset to the inset's facing side.
+
+    Matplotlib joins a region's corners to the inset's same corners only, and shows none
+    where the region lies level with an inset beside it (each such line would cross one of
+    them): the two lines are then drawn from the facing sides' corners. ``inset_left``: the
+    inset's left edge (axes fraction).
+    """
+    (x0, x1), (y0, y1) = inset.get_xlim(), inset.get_ylim()
+    region_right = axes.transLimits.transform((x1, y1))[0]  # axes fraction
+    x_region, x_inset = (x1, 0.0) if inset_left >= region_right else (x0, 1.0)
+    for y_region, y_inset in ((y0, 0.0), (y1, 1.0)):
+        axes.add_artist(ConnectionPatch((x_region, y_region), (x_inset, y_inset),
+                                        axes.transData, inset.transAxes, color=INSET_EDGE,
+                                        linewidth=0.8))
+
+
+INSET_EDGE = "0.4"  # the zoomed region's frame and its connectors
 
 
 def _display(axes: Axes, boxes: Sequence[Bbox]) -> list[np.ndarray]:
