@@ -150,3 +150,16 @@ def test_a_continuation_refuses_a_part_or_field_that_is_not_there(parameter, mes
     with pytest.raises(ParameterError, match=re.escape(
             f"{MASS} = -0.0001 is not allowed: must be a finite real number >= 0 (kg)")):
         Continuation(params, MASS, -1e-4, 1e-3)
+
+
+def test_a_continuation_file_continues_a_parts_field(tmp_path):
+    """``[continuation] parameter = "attachments1.0.mass"``, the part in full in [params]:
+    the continuation Python builds (its value there replaced along the branch)."""
+    from impactbeams.continuation.definition import load_continuation
+
+    path = tmp_path / "mass.toml"
+    path.write_text('n_modes = 4\n[params]\ncounterpart = "stop"\ncontact_stiffness = 1e4\n'
+                    "attachments1 = [{position = 0.1, mass = 5e-4}]\n[continuation]\n"
+                    f'parameter = "{MASS}"\nmin = 5e-4\nmax = 1e-3\n')
+    params = Params(**STOP, attachments1=(PointMass(0.1, 5e-4),))
+    assert load_continuation(path) == Continuation(params, MASS, 5e-4, 1e-3, n_modes=4)
