@@ -129,6 +129,18 @@ def test_bad_attachment_axes_are_refused_in_one_line(fixed, axis, message):
     assert "\n" not in str(error.value)
 
 
+def test_a_misnamed_part_axis_or_too_many_part_geometries_are_refused():
+    with pytest.raises(ParameterError, match=re.escape(
+            "an axis on an attachment's field is named attachments1.INDEX.FIELD, e.g. "
+            "'attachments1.0.mass'")):
+        _sweep(TIP, {"attachments1.x.mass": {"min": 0.0, "max": 1e-3, "num": 2}})
+    # each point of the parts' axes is checked as parameters before any modes are built
+    with pytest.raises(ParameterError, match="the parts' axes give 40000 geometries"):
+        _sweep({**STOP, "attachments1": [{}]},
+               {MASS: {"min": 0.0, "max": 1e-3, "num": 200},
+                "attachments1.0.position": {"min": 0.05, "max": 0.1, "num": 200}})
+
+
 def test_a_negative_mass_or_a_part_off_the_beam_is_refused_naming_the_grid_point(
         tmp_path, capsys):
     negative = f"{MASS} = -0.001 is not allowed: must be a finite real number >= 0 (kg)"

@@ -385,11 +385,11 @@ def _contact_axis(name: str, where: str) -> str:
 
 def _attachment_axis(name: str, where: str) -> None:
     """Refuse an ``attachments1.INDEX.FIELD`` axis whose form or field is not a part's."""
-    field = attachment_field(name)
-    example = ATTACHMENT_AXIS.format(which=name.split(".")[0], index=0, field="mass")
+    field, which = attachment_field(name), name.split(".")[0]
     require(where, name, field is not None,
-            f"an axis on an attachment's field is named {example.split('.')[0]}.INDEX.FIELD, "
-            f"e.g. {example!r} (INDEX: the part's place in that array of tables, from 0)")
+            f"an axis on an attachment's field is named {which}.INDEX.FIELD, e.g. "
+            f"{ATTACHMENT_AXIS.format(which=which, index=0, field='mass')!r} (INDEX: the "
+            "part's place in that array of tables, from 0)")
     if field[2] not in ATTACHMENT_FIELDS:
         raise unknown_key("attachment field", field[2], where, ATTACHMENT_FIELDS)
 
@@ -423,9 +423,10 @@ def _check_attachment_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...],
             raise ParameterError(
                 f"{where} = {axis.name!r} is not allowed: is given both in [params] ({which}"
                 f"[{index}].{name} = {part[name]!r}) and as an axis: remove one of them")
-        require(where, axis.num, axis.num <= MAX_GEOMETRIES,
-                f"num = {axis.num}: an attachment's every value is its own geometry (its modes), "
-                f"checked as parameters before the run: at most {MAX_GEOMETRIES}")
+    swept = {axis.name: axis.num for axis in axes if attachment_field(axis.name) is not None}
+    require(f"[axes] of {source}", swept, math.prod(swept.values()) <= MAX_GEOMETRIES,
+            f"the parts' axes give {math.prod(swept.values())} geometries, each checked as "
+            f"parameters (0.3 ms) before its modes are built: at most {MAX_GEOMETRIES}")
 
 
 def _check_contact_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: str) -> None:
