@@ -426,7 +426,7 @@ def _check_attachment_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...],
     swept = {axis.name: axis.num for axis in axes if attachment_field(axis.name) is not None}
     require(f"[axes] of {source}", swept, math.prod(swept.values()) <= MAX_GEOMETRIES,
             f"the parts' axes give {math.prod(swept.values())} geometries, each checked as "
-            f"parameters (0.3 ms) before its modes are built: at most {MAX_GEOMETRIES}")
+            f"parameters (up to 1 ms) before its modes are built: at most {MAX_GEOMETRIES}")
 
 
 def _check_contact_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: str) -> None:
