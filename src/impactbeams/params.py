@@ -79,6 +79,8 @@ from impactbeams.configuration import BEAM, BOTH, ContactLaw, Counterpart, Mount
 from impactbeams.kernels import layout
 from impactbeams.structure.contacts import FLAT_KEYS, Contact, as_contact
 from impactbeams.structure.parts import (
+    FIELD_UNITS,
+    FIELD_WORDS,
     Attachment,
     Spring,
     as_part,
@@ -933,23 +935,45 @@ def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
     return resolve_materials(values, source)
 
 
-def contact_field(name: str) -> tuple[int, str] | None:
-    """(index, field) of an axis ``contacts.INDEX.FIELD``; None for any other axis name.
+# the tuple parameters whose elements' fields are parameters of their own, named
+# NAME.INDEX.FIELD: a contact's (``contacts.0.clearance``) and an attachment's
+# (``attachments1.0.mass``)
+ELEMENT_PARAMETERS = (CONTACTS, *ATTACHMENTS)
+# the fields of any attachment (a point mass's or a spring's) and their units
+ATTACHMENT_FIELDS = {name: unit for units in FIELD_UNITS.values() for name, unit in units.items()}
 
-    Only the form is read here (an index of digits, a field of `Contact`); `_contact_axis`
-    checks it against the contacts.
+
+def element_field(name: str) -> tuple[str, int, str] | None:
+    """(tuple parameter, index, field) of a name ``NAME.INDEX.FIELD``; None for any other.
+
+    Only the form is read here (NAME one of ``ELEMENT_PARAMETERS``, an index of digits);
+    what checks the name against the parameters (`impactbeams.sweep.definition`'s axes,
+    `impactbeams.continuation.run.check_continued`) checks the index and the field.
     """
     parts = name.split(".")
-    if len(parts) != 3 or parts[0] != CONTACTS or not parts[1].isdigit() or not (
+    if len(parts) != 3 or parts[0] not in ELEMENT_PARAMETERS or not parts[1].isdigit() or not (
             parts[1] == "0" or not parts[1].startswith("0")):
         return None
-    return int(parts[1]), parts[2]
+    return parts[0], int(parts[1]), parts[2]
+
+
+def contact_field(name: str) -> tuple[int, str] | None:
+    """(index, field) of a contact's field ``contacts.INDEX.FIELD``; None for any other name."""
+    field = element_field(name)
+    return field[1:] if field is not None and field[0] == CONTACTS else None
+
+
+def attachment_field(name: str) -> tuple[str, int, str] | None:
+    """(attachments, index, field) of ``attachments1.INDEX.FIELD`` (or 2); None for others."""
+    field = element_field(name)
+    return field if field is not None and field[0] in ATTACHMENTS else None
 
 
 def flat_parameter(name: str) -> str:
     """The parameter ``name`` sets in a run: a contact's field its flat key, any other itself.
 
-    ``contacts.0.clearance`` sets contact 0's run's ``clearance`` (`Params.each_contact`).
+    ``contacts.0.clearance`` sets contact 0's run's ``clearance`` (`Params.each_contact`); an
+    attachment's field (``attachments1.0.mass``) has no flat key: itself.
     """
     field = contact_field(name)
     return name if field is None else FLAT_KEYS[field[1]]
@@ -958,32 +982,74 @@ def flat_parameter(name: str) -> str:
 def named_attributes(name: str) -> dict[str, str]:
     """CF attributes (units, long_name) of the parameter ``name`` as a coordinate.
 
-    A contact's field (``contacts.0.clearance``) has its flat key's, naming the contact.
+    A contact's field (``contacts.0.clearance``) has its flat key's, naming the contact; an
+    attachment's field (``attachments1.0.mass``) its part's unit, naming the part.
     """
+    element = element_field(name)
+    if element is not None and element[0] in ATTACHMENTS:
+        which, index, field = element
+        return {"units": ATTACHMENT_FIELDS[field],
+                "long_name": f"{FIELD_WORDS[field]} of {which}[{index}]"}
     attributes = parameter_attributes(flat_parameter(name))
-    field = contact_field(name)
-    if field is not None:
-        attributes["long_name"] += f" of contacts[{field[0]}]"
+    if element is not None:
+        attributes["long_name"] += f" of {CONTACTS}[{element[1]}]"
     return attributes
 
 
+def check_parameter(name: str, value: Any, point: PointName = no_point) -> None:
+    """Raise ParameterError unless ``value`` (a float or an array) is allowed for ``name``.
+
+    A numeric parameter's or a contact field's range (`check_range` of its flat key); an
+    attachment's field, a finite real number >= 0 (where the part lies on its beam, the
+    parameters' joint check).
+    """
+    field = attachment_field(name)
+    if field is None:
+        check_range(flat_parameter(name), value, point)
+        return
+    values = np.asarray(value, dtype=float)
+    require_all(name, values, np.isfinite(values) & (values >= 0.0), point, lambda j: (
+        f"must be a finite real number >= 0 ({ATTACHMENT_FIELDS[field[2]]})"))
+
+
 def parameter_value(params: Params, name: str) -> Any:
-    """The value of ``params``' parameter ``name``: its own, or a contact field's run's."""
-    field = contact_field(name)
+    """The value of ``params``' parameter ``name``: its own, or that field of one element."""
+    field = element_field(name)
     if field is None:
         return getattr(params, name)
-    return getattr(params.each_contact()[field[0]], FLAT_KEYS[field[1]])
+    which, index, field_name = field
+    if which == CONTACTS:  # a contact's run's value, its own or the flat default
+        return getattr(params.each_contact()[index], FLAT_KEYS[field_name])
+    return getattr(getattr(params, which)[index], field_name)
 
 
 def with_parameter(params: Params, name: str, value: Any) -> Params:
-    """``params`` with its parameter ``name`` (or that field of one contact) set to ``value``."""
-    field = contact_field(name)
+    """``params`` with its parameter ``name`` (or that field of one element) set to ``value``."""
+    field = element_field(name)
     if field is None:
         return params.replace(**{name: value})
-    index, which = field
-    contacts = list(params.contacts)
-    contacts[index] = dataclasses.replace(contacts[index], **{which: value})
-    return params.replace(**{CONTACTS: tuple(contacts)})
+    return params.replace(**with_element_fields({field[0]: getattr(params, field[0]),
+                                                 name: value}))
+
+
+def with_element_fields(values: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` with each ``NAME.INDEX.FIELD`` value set in that element of ``NAME``.
+
+    An element is a part or contact (its field replaced) or a file's table (the field added:
+    a swept field is left out of it).
+    """
+    plain: dict[str, Any] = {}
+    elements: dict[str, list[Any]] = {}
+    for name, value in values.items():
+        field = element_field(name)
+        if field is None:
+            plain[name] = value
+            continue
+        which, index, field_name = field
+        given = elements.setdefault(which, list(values.get(which, ())))
+        given[index] = ({**given[index], field_name: value} if isinstance(given[index], dict)
+                        else dataclasses.replace(given[index], **{field_name: value}))
+    return {**plain, **{which: tuple(given) for which, given in elements.items()}}
 
 
 def require_one_contact(params: Params, what: str) -> None:

@@ -45,10 +45,11 @@ from impactbeams.params import (
     MAX_MODES,
     ParameterError,
     Params,
-    check_range,
+    attachment_field,
+    check_parameter,
     contact_field,
-    flat_parameter,
     is_path,
+    named_attributes,
     require,
     require_finite,
     require_integer,
@@ -56,7 +57,8 @@ from impactbeams.params import (
     with_parameter,
 )
 from impactbeams.structure.contacts import FLAT_KEYS
-from impactbeams.variables import PARAMETERS, global_attributes
+from impactbeams.structure.parts import FIELD_UNITS
+from impactbeams.variables import global_attributes
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -116,7 +118,7 @@ class Continuation:
         check_continued(self.params, "parameter", self.parameter)
         for name in ("low", "high"):
             value = require_finite(name, getattr(self, name))
-            check_range(flat_parameter(self.parameter), value)
+            check_parameter(self.parameter, value)
         require("high", self.high, self.high > self.low,
                 f"the range [{self.low!r}, {self.high!r}] is empty: need high > low")
         require("direction", self.direction, self.direction in DIRECTIONS,
@@ -147,7 +149,7 @@ class Continuation:
     def _check_steps(self) -> None:
         """min_step <= step <= max_step, said in the parameter's units (given or default)."""
         step, low, high = self._steps()
-        unit = PARAMETERS[flat_parameter(self.parameter)].units
+        unit = named_attributes(self.parameter)["units"]
         require("min_step", low, low <= high, f"must be <= max_step = {high:g}", unit)
         require("step", step, low <= step <= high,
                 f"must lie from min_step = {low:g} to max_step = {high:g}", unit)
@@ -188,6 +190,9 @@ def check_continued(params: Params, what: str, name: str) -> None:
     stiffness or damping); its point is not continued (nor the flat point of one).
     """
     contacts = params.contacts
+    if attachment_field(name) is not None:
+        _check_attachment_field(params, what, name)
+        return
     field = contact_field(name)
     if field is None:
         require(what, name, not (contacts and name in FLAT_KEYS.values()),
@@ -206,6 +211,19 @@ def check_continued(params: Params, what: str, name: str) -> None:
             f"there are {len(contacts)} contacts (indices 0 to {len(contacts) - 1})")
     require(what, name, field_name in _CONTACT_FIELDS,
             f"a contact's continuable fields are {', '.join(_CONTACT_FIELDS)}")
+
+
+def _check_attachment_field(params: Params, what: str, name: str) -> None:
+    """``name`` (``attachments1.INDEX.FIELD``) is a field of one of ``params``' parts."""
+    which, index, field = attachment_field(name)
+    parts = getattr(params, which)
+    require(what, name, index < len(parts),
+            f"there are {len(parts)} parts in params.{which}"
+            + (f" (indices 0 to {len(parts) - 1})" if parts else ""))
+    fields = FIELD_UNITS[type(parts[index])]
+    require(what, name, field in fields,
+            f"{which}[{index}] is a {type(parts[index]).__name__}: its fields are "
+            f"{', '.join(fields)}")
 
 
 Progress = Callable[[Branch, Point], None]

@@ -86,8 +86,7 @@ from impactbeams.params import (
     MAX_MODES,
     ParameterError,
     Params,
-    check_range,
-    flat_parameter,
+    check_parameter,
     is_path,
     named_attributes,
     parameter_value,
@@ -163,7 +162,7 @@ class BifurcationCurve:
         for name, parameter in (("low", self.second), ("high", self.second),
                                 ("parameter_low", self.parameter),
                                 ("parameter_high", self.parameter)):
-            check_range(flat_parameter(parameter), require_finite(name, getattr(self, name)))
+            check_parameter(parameter, require_finite(name, getattr(self, name)))
         require("high", self.high, self.high > self.low,
                 f"the range [{self.low!r}, {self.high!r}] is empty: need high > low")
         require("parameter_high", self.parameter_high,

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from impactbeams.params import CONTACTS, ParameterError, Params, contact_field, parameter_value
+from impactbeams.params import ParameterError, Params, element_field, parameter_value
 from impactbeams.variables import parameter_text
 
 if TYPE_CHECKING:
@@ -138,7 +138,8 @@ def _require_same_model(branches: xr.Dataset, params: Params, n_modes: int, para
     if int(branches.attrs.get("n_modes", -1)) != n_modes:
         raise ParameterError(f"{where}: its orbits have n_modes = {branches.attrs.get('n_modes')}"
                              f", the map's {n_modes}: give the map the same n_modes")
-    continued = CONTACTS if contact_field(parameter) is not None else parameter
+    field = element_field(parameter)  # a contact's or a part's: its tuple is continued
+    continued = parameter if field is None else field[0]
     for key, value in params.as_dict().items():
         if key == continued or key not in branches.attrs or isinstance(value, (list, dict)):
             continue

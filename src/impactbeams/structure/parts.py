@@ -52,8 +52,7 @@ class PointMass:
     rotary_inertia: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_fields(self, {"position": "m", "mass": "kg", "rotary_inertia": "kg m^2"},
-                      positive=False)
+        _check_fields(self, FIELD_UNITS[PointMass], positive=False)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,11 +70,17 @@ class Spring:
     rotational_stiffness: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_fields(self, {"position": "m", "stiffness": "N/m",
-                             "rotational_stiffness": "N m/rad"}, positive=False)
+        _check_fields(self, FIELD_UNITS[Spring], positive=False)
 
 
 Attachment = PointMass | Spring
+# each part's numeric fields and their units: every one a finite real number >= 0
+FIELD_UNITS = {PointMass: {"position": "m", "mass": "kg", "rotary_inertia": "kg m^2"},
+               Spring: {"position": "m", "stiffness": "N/m", "rotational_stiffness": "N m/rad"}}
+# what each field is, in words (a swept or continued field's long_name)
+FIELD_WORDS = {"position": "distance from the clamp", "mass": "point mass",
+               "rotary_inertia": "rotary inertia", "stiffness": "stiffness to ground",
+               "rotational_stiffness": "rotational stiffness to ground"}
 
 
 def check_attachments(attachments: tuple[Any, ...], length: float,
@@ -112,10 +117,6 @@ def check_clamp(attachments: tuple[Any, ...]) -> None:
                 "beam would turn freely about it)", "N m/rad")
 
 
-_TABLE_FIELDS = {PointMass: ("position", "mass", "rotary_inertia"),
-                 Spring: ("position", "stiffness", "rotational_stiffness")}
-
-
 def as_part(name: str, value: Any) -> Any:
     """``value`` as a part: a PointMass or Spring as it is, a table (a TOML file's) built.
 
@@ -126,7 +127,7 @@ def as_part(name: str, value: Any) -> Any:
     """
     if not isinstance(value, dict):
         return value
-    for kind, fields in _TABLE_FIELDS.items():
+    for kind, fields in FIELD_UNITS.items():
         if "position" in value and set(value) <= set(fields) and len(value) > 1 and (
                 kind is Spring or "mass" in value):
             return kind(**value)

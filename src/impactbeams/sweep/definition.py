@@ -38,6 +38,7 @@ from impactbeams.configuration import LAWS, ContactLaw, counterpart_named
 from impactbeams.kernels.layout import CELL_COLUMNS
 from impactbeams.longtime import LongTime, Stepping
 from impactbeams.params import (
+    ATTACHMENT_FIELDS,
     ATTACHMENTS,
     BEAM1_KEYS,
     CHOICES,
@@ -52,7 +53,9 @@ from impactbeams.params import (
     ParameterError,
     Params,
     PointName,
+    attachment_field,
     check_joint,
+    check_parameter,
     check_range,
     contact_field,
     flat_parameter,
@@ -70,6 +73,7 @@ from impactbeams.params import (
     resolve_materials,
     unknown_key,
     value_at,
+    with_element_fields,
 )
 from impactbeams.preflight import (
     MAX_PHASE,
@@ -78,6 +82,7 @@ from impactbeams.preflight import (
     require_memory,
 )
 from impactbeams.structure.contacts import FLAT_KEYS, Contact
+from impactbeams.structure.parts import FIELD_UNITS
 from impactbeams.variables import (
     LONG_TIME_VARIABLES,
     PARAMETERS,
@@ -121,6 +126,8 @@ EXACT_VALUES = 2**20  # the longest axis whose values Axis.value builds
 # an axis on one field of one of several contacts: "contacts.0.clearance" (in a sweep file
 # [axes."contacts.0.clearance"]); its values are that contact's field's, in the flat key's unit
 CONTACT_AXIS = CONTACTS + ".{index}.{field}"
+# an axis on one field of one part a beam carries: "attachments1.0.mass" (its unit the field's)
+ATTACHMENT_AXIS = "{which}.{index}.{field}"
 # the contact fields an axis may sweep: its point on each beam and its law's (its side is a
 # name); a point moves the contact's gap weights: a geometry axis
 SWEPT_CONTACT_FIELDS = tuple(field for field, key in FLAT_KEYS.items()
@@ -268,26 +275,13 @@ class Sweep:
         the rest.
         """
         first = {axis.name: axis.first for axis in self.axes}
-        return Params.from_mapping(with_contact_fields({**self.fixed, **first, **changes}),
+        return Params.from_mapping(with_element_fields({**self.fixed, **first, **changes}),
                                    source=f"[params] of {self.source}")
 
     def fingerprint(self) -> str:
         """Hash of the definition and package version: a resumed run must match it."""
         text = json.dumps({"sweep": self.definition(), "version": __version__}, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-
-def with_contact_fields(values: Mapping[str, Any]) -> dict[str, Any]:
-    """``values`` with each ``contacts.INDEX.FIELD`` value set in that contact of ``contacts``."""
-    contacts = list(values.get(CONTACTS, ()))
-    plain = {}
-    for name, value in values.items():
-        field = contact_field(name)
-        if field is None:
-            plain[name] = value
-        else:
-            contacts[field[0]] = dataclasses.replace(contacts[field[0]], **{field[1]: value})
-    return {**plain, CONTACTS: tuple(contacts)} if contacts else plain
 
 
 def load_sweep(path: str | os.PathLike[str]) -> Sweep:
@@ -335,6 +329,7 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
     _check_conflicts(fixed, axes, source)
     _check_contact_axes(fixed, axes, source)
+    _check_attachment_axes(fixed, axes, source)
     if not counterpart_named(fixed.get("counterpart")).has_beam2:  # its keys are mistakes
         refuse_beam2(fixed, f"[params] of {source}")
         refuse_beam2([axis.name for axis in axes], f"[axes] of {source}")
@@ -388,6 +383,52 @@ def _contact_axis(name: str, where: str) -> str:
     raise unknown_key("contact field", name_of_field, where, SWEPT_CONTACT_FIELDS)
 
 
+def _attachment_axis(name: str, where: str) -> None:
+    """Refuse an ``attachments1.INDEX.FIELD`` axis whose form or field is not a part's."""
+    field, which = attachment_field(name), name.split(".")[0]
+    require(where, name, field is not None,
+            f"an axis on an attachment's field is named {which}.INDEX.FIELD, e.g. "
+            f"{ATTACHMENT_AXIS.format(which=which, index=0, field='mass')!r} (INDEX: the "
+            "part's place in that array of tables, from 0)")
+    if field[2] not in ATTACHMENT_FIELDS:
+        raise unknown_key("attachment field", field[2], where, ATTACHMENT_FIELDS)
+
+
+def _check_attachment_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...],
+                           source: str) -> None:
+    """Refuse an axis on a part's field beyond the parts, not that part's, or given twice.
+
+    The field must be left out of the part's table (a part built in Python gives them all:
+    give it as a table to sweep one of its fields); the table, with it, must be a part.
+    """
+    for axis in axes:
+        field = attachment_field(axis.name)
+        if field is None:
+            continue
+        which, index, name = field
+        where = f"{axis_table(axis.name)} of {source}"
+        parts = fixed.get(which, ())
+        count = len(parts) if isinstance(parts, (list, tuple)) else 0  # (Params checks it)
+        require(where, axis.name, index < count, f"there are {count} parts in {which} of "
+                "[params]" + (f" (indices 0 to {count - 1})" if count else ""))
+        part = parts[index]
+        if not isinstance(part, dict):  # a part: it gives every field it has
+            fields = FIELD_UNITS.get(type(part), {})
+            table = {key: getattr(part, key) for key in fields if key != name}
+            raise ParameterError(
+                f"{where} = {axis.name!r} is not allowed: {which}[{index}] = {part!r} " + (
+                    f"gives its {name}: give the part as a table without it to sweep it, "
+                    f"e.g. {table}" if name in fields else f"has no field {name!r}"))
+        if name in part:
+            raise ParameterError(
+                f"{where} = {axis.name!r} is not allowed: is given both in [params] ({which}"
+                f"[{index}].{name} = {part[name]!r}) and as an axis: remove one of them")
+    swept = {axis.name: axis.num for axis in axes if attachment_field(axis.name) is not None}
+    require(f"[axes] of {source}", swept, math.prod(swept.values()) <= MAX_GEOMETRIES,
+            f"the parts' axes give {math.prod(swept.values())} geometries, each checked as "
+            f"parameters (up to 1 ms) before its modes are built: at most {MAX_GEOMETRIES}")
+
+
 def _check_contact_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: str) -> None:
     """Refuse an axis on a contact's field without several contacts, or the index, or given twice.
 
@@ -414,7 +455,7 @@ def _check_contact_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source
                 "axis: remove one of them")
     swept = [axis.name for axis in axes if contact_field(axis.name) is not None]
     if swept:  # a flat law key used by no contact once the axes set theirs
-        refuse_unused_law_keys(fixed, with_contact_fields(
+        refuse_unused_law_keys(fixed, with_element_fields(
             {**fixed, **dict.fromkeys(swept, 1.0)})[CONTACTS], f"[params] of {source}")
 
 
@@ -509,13 +550,18 @@ def axis_table(name: str) -> str:
 
 def _axis(name: str, spec: Any, source: str) -> Axis:
     where = f"{axis_table(name)} of {source}"
-    require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: a beam's "
-            "attachments are fixed for a sweep (give them in [params], from Python)")
+    require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: give a beam's "
+            "parts in [params], and sweep one part's field as "
+            f"[axes.\"{ATTACHMENT_AXIS.format(which=name, index=0, field='mass')}\"]")
     require(where, name, name != CONTACTS, f"{name} is not sweepable: give the contacts in "
             "[params] (one sweep per set of contacts), and sweep a contact's field as "
             f"[axes.\"{CONTACT_AXIS.format(index=0, field='clearance')}\"]")
     if name.startswith(CONTACTS + "."):
-        return _numeric_axis(name, _contact_axis(name, where), spec, where, source)
+        _contact_axis(name, where)
+        return _numeric_axis(name, spec, where, source)
+    if name.split(".")[0] in ATTACHMENTS:
+        _attachment_axis(name, where)
+        return _numeric_axis(name, spec, where, source)
     require(where, name, name != USER_STRUCTURE, f"{name} is not sweepable: give the "
             "structure in [params] (one sweep per structure)")
     if name not in PARAMETERS:
@@ -524,11 +570,11 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
         return _law_axis(spec, where)
     require(where, name, name not in CHOICES,  # a name, not a number: only the law is swept
             f"{name} is not sweepable: give it in [params] (one sweep per {name})")
-    return _numeric_axis(name, name, spec, where, source)
+    return _numeric_axis(name, spec, where, source)
 
 
-def _numeric_axis(name: str, parameter: str, spec: Any, where: str, source: str) -> Axis:
-    """Axis ``name`` over values of ``parameter`` (its allowed range) from its table ``spec``."""
+def _numeric_axis(name: str, spec: Any, where: str, source: str) -> Axis:
+    """Axis ``name`` over values of that parameter (its allowed range) from its table ``spec``."""
     require(where, spec, isinstance(spec, dict), "must be a table with min, max, num, scale")
     for key in spec:
         if key not in _AXIS_KEYS:
@@ -547,8 +593,8 @@ def _numeric_axis(name: str, parameter: str, spec: Any, where: str, source: str)
     if scale == "log":
         require(f"min in {where}", lo, lo > 0, "a log axis needs min > 0")
     # the values run monotonically from min to max (both exact): checking the ends suffices
-    check_range(parameter, np.array([lo, hi]),
-                lambda index: f"axis {name!r} of {source} reaches a non-physical point: ")
+    check_parameter(name, np.array([lo, hi]),
+                    lambda index: f"axis {name!r} of {source} reaches a non-physical point: ")
     return Axis(name, lo, hi, int(num), scale)
 
 
@@ -584,7 +630,7 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
         axis_ends = np.array([axis.min, axis.max] if axis.num > 1 and not axis.choices
                              else [axis.min])
         ends.append(axis_ends)
-        if not axis.choices:
+        if not axis.choices and attachment_field(axis.name) is None:  # (a part: `_check_points`)
             values[axis.name] = axis_ends.reshape([-1 if d == k else 1 for d in range(dims)])
 
     def point(index: tuple[int, ...]) -> str:
@@ -675,20 +721,26 @@ def _check_several(sweep: Sweep) -> None:
                 f"FIELD one of {', '.join(SWEPT_CONTACT_FIELDS)}), its side one sweep each")
 
 
-def _check_contact_points(sweep: Sweep) -> None:
-    """With an axis on a contact's point, every corner of the grid as parameters (checked).
+def _check_points(sweep: Sweep) -> None:
+    """With an axis on a contact's point or a part's field, grid points as parameters (checked).
 
-    Where a point may lie (0 < x <= l) and the initial gap there (its unit tip-load shape is
-    monotone in x and in l) hold on the whole grid if they hold at its corners; the corner
-    grid's joint check (`_corners`) sees one point per contact, not the axis. The axis is a
-    flat key (``contact_position1``: the one contact's) or one contact's field.
+    Where a contact point may lie (0 < x <= l) and the initial gap there (its unit tip-load
+    shape is monotone in x and in l) hold on the whole grid if they hold at its corners; the
+    corner grid's joint check (`_corners`) sees one point per contact, not the axis. The axis
+    is a flat key (``contact_position1``: the one contact's) or one contact's field. A part's
+    rules (on its beam; the tip compliance the drive's check reads, not monotone in a
+    rotational spring's place) are checked at every value of its axis, the other axes at
+    their ends.
     """
-    if not any(flat_parameter(axis.name) in CONTACT_POSITIONS for axis in sweep.axes):
+    if not any(flat_parameter(axis.name) in CONTACT_POSITIONS
+               or attachment_field(axis.name) is not None for axis in sweep.axes):
         return
-    ends = [(axis.first,) if axis.choices or axis.num == 1 else (axis.min, axis.max)
-            for axis in sweep.axes]
-    for corner in itertools.product(*ends):
-        changes = {axis.name: value for axis, value in zip(sweep.axes, corner, strict=True)}
+    values = [axis.values if attachment_field(axis.name) is not None
+              else (axis.first,) if axis.choices or axis.num == 1 else (axis.min, axis.max)
+              for axis in sweep.axes]
+    for point in itertools.product(*values):
+        changes = {axis.name: _plain(value)
+                   for axis, value in zip(sweep.axes, point, strict=True)}
         try:
             sweep.params_at(changes)
         except ParameterError as error:
@@ -705,7 +757,7 @@ def _check_grid(sweep: Sweep) -> None:
     """
     if CONTACTS in sweep.fixed:  # (one contact given as a table is folded to the flat keys)
         _check_several(sweep)
-        _check_contact_points(sweep)
+        _check_points(sweep)
         for each in contact_sweeps(sweep):
             _check_grid(each)
         return
@@ -713,7 +765,7 @@ def _check_grid(sweep: Sweep) -> None:
     require(f"observables in {sweep.source}", given, not given,
             "each contact's share is a map of several contacts' ([[params.contacts]]); with "
             "one contact map impact_count and max_contact_force")
-    _check_contact_points(sweep)
+    _check_points(sweep)
     values, point = _corners(sweep)
     for name in ("EI1", "EI2", "rhoA1", "rhoA2"):  # from the material keys, if swept
         check_range(name, values[name], point)
@@ -722,9 +774,19 @@ def _check_grid(sweep: Sweep) -> None:
     if sweep.base.structure1 is not None and "1" in sweep.base.mount.shaken_beams(
             sweep.base.partner):
         sweep.base.structure1.require_support(values["base_amplitude"])
-    check_run(values, sweep.t_max, sweep.n_modes, point, sweep.base.grounded_springs,
+    check_run(values, sweep.t_max, sweep.n_modes, point, _grounded_springs(sweep),
               sweep.base.structure1)
     _check_long_time(sweep, values, point)
+
+
+def _grounded_springs(sweep: Sweep) -> int:
+    """The most springs to ground on one beam anywhere on the grid (`Params.grounded_springs`).
+
+    A spring's stiffness axis may start at 0: every part's axis at its largest value (where
+    a stiffness is > 0 if it is anywhere; a place at its largest is a checked grid point).
+    """
+    largest = {axis.name: axis.max for axis in sweep.axes if attachment_field(axis.name)}
+    return sweep.params_at(largest).grounded_springs
 
 
 def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) -> None:
@@ -740,7 +802,7 @@ def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) 
         "long-time observables sample once per forcing period: need omega > 0 (rad/s)"))
     periods = sweep.transient_periods + sweep.long_time.sampled_periods
     horizon = sweep.long_time.horizon(omega, sweep.transient_periods)
-    highest = highest_frequency(values, sweep.n_modes, sweep.base.grounded_springs,
+    highest = highest_frequency(values, sweep.n_modes, _grounded_springs(sweep),
                                 sweep.base.structure1)
     phase = np.maximum(highest, omega) * horizon
     require_all("transient_periods + sampled_periods", periods, phase <= MAX_PHASE, point,

@@ -17,12 +17,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from impactbeams.io import Layout, build_netcdf, writing_netcdf
-from impactbeams.params import CONTACTS, MATERIAL_KEYS, named_attributes, without_unused_law_keys
+from impactbeams.params import (
+    MATERIAL_KEYS,
+    element_field,
+    named_attributes,
+    without_unused_law_keys,
+)
 from impactbeams.sweep.definition import (
     FIRST_IMPACT,
     LONG_TIME_KEYS,
     Sweep,
-    contact_field,
 )
 from impactbeams.sweep.plan import Chunking, code_digest, contact_resolution, flat_boxes
 from impactbeams.variables import (
@@ -140,13 +144,16 @@ def map_file(sweep: Sweep, path: Path, building: Path,
 def _fixed_parameters(sweep: Sweep) -> dict[str, float]:
     """The parameters no axis changes (a swept material key makes EI_i and rhoA_i vary).
 
-    Beside several contacts, not the law keys every contact gives its own of (or sweeps).
+    Beside several contacts, not the law keys every contact gives its own of (or sweeps); the
+    contacts or parts with a swept field as given (a part's table without it).
     """
     swept = {axis.name for axis in sweep.axes}
     for i in ("1", "2"):
         if any(k + i in swept for k in MATERIAL_KEYS):
             swept |= {"EI" + i, "rhoA" + i}
     fixed = without_unused_law_keys(sweep.base.as_dict())
-    if any(contact_field(name) is not None for name in swept):  # as given: the swept fields'
-        fixed[CONTACTS] = sweep.fixed[CONTACTS]  # values are the coordinates, left None here
+    for name in swept:  # as given: the swept fields' values are the coordinates, left out here
+        field = element_field(name)
+        if field is not None:
+            fixed[field[0]] = tuple(sweep.fixed[field[0]])
     return {name: value for name, value in fixed.items() if name not in swept}
