@@ -158,7 +158,11 @@ class SectionMap:
         return sampled, i, times[max(i - 1, 0)], times[min(i + 1, times.size - 1)]
 
     def least_gap(self, result: PeriodMapResult, contact: int = 0) -> float:
-        """The smallest value over ``result``'s run of ``contact``'s gap as if it were open (m)."""
+        """The smallest value over ``result``'s run of ``contact``'s gap as if it were open (m).
+
+        Each map's own (`PeriodMap`, `ContactsPeriodMap`): a section map without contacts has
+        none.
+        """
         raise NotImplementedError
 
     def grazing_contact(self, result: PeriodMapResult) -> int:
