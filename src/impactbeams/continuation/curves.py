@@ -231,15 +231,19 @@ class CurveProblem:
     The engine's state is y = (z, p1) (n + 1 values), its parameter p2; the residual is the
     orbit's P^p(z) - z (``period`` forcing periods) and the condition. ``n_modes`` per beam,
     the full monodromy (Newton: the curves are for models small enough that M is cheap).
+    ``first_box``: p1's box (low, high), its scale where the start's p1 is 0.
     The evaluation's ``grazing`` is the orbit's grazing value for a multiplier's curve (its
     sign change is a codimension-two point: the bifurcating orbit touches), NaN for a grazing
     curve (there it is the condition itself); its multipliers are the orbit's.
     """
 
     def __init__(self, params: Params, first: str, second: str, n_modes: int, period: int,
-                 condition: Grazing | Multiplier) -> None:
+                 condition: Grazing | Multiplier, first_box: tuple[float, float]) -> None:
         self.params, self.first, self.second = params, first, second
         self.n_modes, self.period, self.condition = n_modes, period, condition
+        # p1's scale for its differences: its start's size, or where that is 0 (a mass, a
+        # damping continued from none) its box's width, as a branch's parameter its range's
+        self.first_scale = abs(parameter_value(params, first)) or first_box[1] - first_box[0]
         self._planes: dict[float, BeamOrbits] = {}
 
     def start(self, z: np.ndarray, p1: float) -> None:
@@ -300,7 +304,8 @@ class CurveProblem:
         """dP/dp1 and the condition's gradient in (z, p1), by forward differences.
 
         Steps of ``PARAMETER_STEP`` times the orbit's size in each coordinate (the energy
-        norm's) and times max(|p1|, its scale) in p1, where truncation and round-off balance.
+        norm's) and times max(|p1|, ``first_scale``) in p1, where truncation and round-off
+        balance.
         """
         period_map = orbits.period_map(p1)
         weights = state_weights(period_map)
@@ -313,7 +318,7 @@ class CurveProblem:
             shifted[j] += h
             gradient[j] = (self.condition.probe(period_map, period_map(shifted, measures=False))
                            - base) / h
-        h = PARAMETER_STEP * max(abs(p1), abs(parameter_value(self.params, self.first)))
+        h = PARAMETER_STEP * max(abs(p1), self.first_scale)
         moved = orbits.period_map(p1 + h)
         other = moved(z, measures=False)
         gradient[-1] = (self.condition.probe(moved, other) - base) / h

@@ -283,7 +283,8 @@ def continue_curve(curve: BifurcationCurve, progress: Progress | None = None,
     require_type("output", output, output is None or is_path(output),
                  "None or the path of a netCDF file (str or pathlib.Path)")
     problem = CurveProblem(curve.params, curve.parameter, curve.second, curve.n_modes,
-                           curve.period, CONDITIONS[curve.kind]())
+                           curve.period, CONDITIONS[curve.kind](),
+                           (curve.parameter_low, curve.parameter_high))
     problem.start(np.asarray(curve.state, dtype=float), curve.value)
     if output is None:
         return _interrupted_with_dataset(curve, problem, lambda: follow(problem, curve,
@@ -383,6 +384,8 @@ def _steps(follower: Follower, curve: Branch, box: np.ndarray, progress: Progres
     while len(curve.points) < settings.max_points:
         if save is not None:
             save(Position(current, ds, Steps([current])))
+        if _ended_past_edge(follower, curve, current, ds, box, progress):
+            return
         point, taken, grazing = follower.step(current, ds)
         if point is None:
             if crosses(current.evaluation.grazing, grazing):
@@ -452,6 +455,39 @@ def _outside(point: Point, box: np.ndarray) -> tuple[int, float] | None:
         if not low <= point.x[index] <= high:
             return index, low if point.x[index] < low else high
     return None
+
+
+def _ended_past_edge(follower: Follower, curve: Branch, current: Point, ds: float,
+                     box: np.ndarray, progress: Progress | None) -> bool:
+    """End the curve on the box's edge where the step ``ds`` from ``current`` aims past it.
+
+    Only where the aim's parameters are refused: past an edge at a parameter's smallest
+    allowed value (a mass, a drive of 0) every iterate's are, so no step lands outside the
+    box, as past another edge, and the steps would creep up to it, halved until they fail.
+    The edge's point is corrected onto it from the aim instead.
+    """
+    aim = dataclasses.replace(current, x=current.x + ds * current.tangent)
+    outside = _outside(aim, box)
+    if outside is None or _allowed(follower, aim):
+        return False
+    end = _at_edge(follower, current, aim, box, outside)
+    if end is None:
+        return False
+    _keep(follower, curve, _events(follower, current, end), progress)
+    curve.ending = BOUND
+    return True
+
+
+def _allowed(follower: Follower, point: Point) -> bool:
+    """Whether both parameters of ``point`` are allowed values (`check_parameter`)."""
+    y, p2 = follower.scaling.unscaled(point.x)
+    problem = follower.problem
+    try:
+        check_parameter(problem.first, float(y[-1]))
+        check_parameter(problem.second, p2)
+    except ParameterError:
+        return False
+    return True
 
 
 def _at_edge(follower: Follower, a: Point, b: Point, box: np.ndarray,
