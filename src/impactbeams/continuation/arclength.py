@@ -327,7 +327,7 @@ class Follower:
         while True:
             correction = self.at_arclength(start, ds)
             point = correction.point
-            if point is not None and (_turn(start, point) <= self.settings.max_angle
+            if point is not None and (self.turns_within(start, point)
                                       or ds <= self.settings.min_step
                                       or (ds <= KINK_STEP and not same_piece(start, point))):
                 # across a change of the contact sequence the tangent jumps however small the
@@ -347,6 +347,10 @@ class Follower:
                    else 0.5)
             if ds < self.settings.min_step:
                 return None, ds, grazing
+
+    def turns_within(self, start: Point, point: Point) -> bool:
+        """Whether a step from ``start`` to ``point`` turned by at most ``max_angle``."""
+        return _turn(start, point) <= self.settings.max_angle
 
     def next_step(self, taken: float, start: Point, point: Point) -> float:
         """The step after one of length ``taken`` from ``start`` that reached ``point``.

@@ -464,15 +464,19 @@ def _ended_past_edge(follower: Follower, curve: Branch, current: Point, ds: floa
     Only where the aim's parameters are refused: past an edge at a parameter's smallest
     allowed value (a mass, a drive of 0) every iterate's are, so no step lands outside the
     box, as past another edge, and the steps would creep up to it, halved until they fail.
-    The edge's point is corrected onto it from the aim instead.
+    The edge's point is corrected onto it from the aim instead, accepted as a step's point
+    would be (within ``max_angle`` of the tangent: not another part of the curve) and
+    unless a multiplier's curve would reach it across a change of its orbit's contacts
+    (it is stepped up to that, as before).
     """
     aim = dataclasses.replace(current, x=current.x + ds * current.tangent)
     outside = _outside(aim, box)
     if outside is None or _allowed(follower, aim):
         return False
     end = _at_edge(follower, current, aim, box, outside)
-    if end is None:
-        return False
+    if end is None or not follower.turns_within(current, end) or not (
+            follower.problem.condition.smooth_across_contacts or same_piece(current, end)):
+        return False  # (a multiplier's curve ends at a change of its contacts before it)
     _keep(follower, curve, _events(follower, current, end), progress)
     curve.ending = BOUND
     return True
