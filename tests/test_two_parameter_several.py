@@ -20,7 +20,7 @@ from impactbeams.continuation import (
 )
 from impactbeams.continuation.checkpoint import saved_points
 from impactbeams.continuation.twoparameter import continue_curve
-from impactbeams.orbits import PeriodMap
+from impactbeams.orbits import ContactsPeriodMap, PeriodMap
 from impactbeams.params import with_parameter
 from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
 from several_stops import FAR, N_MODES, STOP, TWO, TWO_TOML
@@ -137,6 +137,46 @@ def test_multiplier_curves_beside_a_contact_that_never_closes_are_the_single_one
         critical = (np.abs(mu + 1.0) if kind == "period_doubling"
                     else np.abs(np.abs(mu[mu.imag > 0]) - 1.0))
         assert critical.min() < 1e-10
+
+
+# the small model with a second contact between the tips, from above 12 um away: its orbits
+# from 240 rad/s up close both (2 contacts per orbit, one each)
+SMALL_TWO = SMALL.replace(contacts=(Contact(clearance=1.1e-5),
+                                    Contact(side="above", clearance=1.2e-5)))
+
+
+# (the undamped case in the slow run: the dashpot's is the same test of both contacts closed)
+@pytest.mark.parametrize("dashpot", [pytest.param(0.0, marks=pytest.mark.slow), 0.02])
+def test_period_doubling_curve_with_two_contacts_closed(dashpot):
+    """The period doubling of the orbits closing both contacts (245.157 rad/s; 245.192 with a
+    dashpot of 0.02 N s/m on each) followed up in F0 by 10 % (Omega falls 0.19 rad/s):
+    every point is a period doubling of its own map (`ContactsPeriodMap` at its Omega and
+    F0, the multipliers its monodromy's eigenvalues, not the curve's bordered test): a fixed
+    point to 1e-10 of the state (measured 7.7e-15) with a multiplier at -1 to 1e-10
+    (measured 8.5e-14), whose run closes both contacts; at its end the branch in Omega at
+    that F0 locates a period doubling at the end's frequency, to 1e-9 (measured 4.3e-15)."""
+    params = SMALL_TWO.replace(contact_damping=dashpot)
+    continuation = Continuation(params, "omega", 245.0, 245.4, n_modes=N_MODES,
+                                max_branches=1, max_points=20, transient_periods=300)
+    curve = continue_curve(BifurcationCurve.from_branch(
+        continuation, continue_orbits(continuation), "period_doubling", "force_amplitude",
+        3e-5, 3.3e-5, box=(244.0, 246.0), step=0.1, max_step=0.25, max_points=12))
+    assert curve.attrs["curve_ending"] == "bound" and float(curve.force_amplitude[-1]) == 3.3e-5
+    assert float(curve.omega[0]) == pytest.approx(245.157 if dashpot == 0 else 245.192,
+                                                  abs=1e-3)
+    for point in range(curve.branch_point.size):
+        at = curve.isel(branch_point=point)
+        z = at.section_state.values
+        result = ContactsPeriodMap(params.replace(
+            omega=float(at.omega), force_amplitude=float(at.force_amplitude)), N_MODES)(
+            z, directions="all", measures=False)
+        assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
+        assert np.abs(np.linalg.eigvals(result.jacobian) + 1.0).min() < 1e-10
+        assert np.bitwise_or.reduce(np.asarray(result.trajectory.mask, dtype=int)) == 0b11
+    end = curve.isel(branch_point=-1)
+    (located,) = _events(params.replace(force_amplitude=3.3e-5), float(end.omega),
+                         end.section_state.values, "period_doubling", width=0.1)
+    assert float(end.omega) == pytest.approx(float(located), rel=AGREE, abs=0.0)
 
 
 def _events(params, omega, state, label, width=0.3):
