@@ -519,3 +519,29 @@ def test_a_variable_without_samples_is_not_told_to_slice_a_period():
     assert str(error.value).startswith("a map needs a 2-D sweep (a line a 1-D one): "
                                        "final_displacement has dimensions sweep_direction (2), "
                                        "omega (3), coordinate (4)")
+
+
+def test_a_title_of_several_contacts_gives_each_contacts_clearance():
+    """With several contacts the title gives each contact's clearance (its own, or the run's
+    for a contact without one), not the flat ``clearance`` alone; a contact's clearance on
+    an axis (a curve's or branch's parameter, a sweep's dimension) is left out."""
+    from impactbeams import Contact, Params
+    from impactbeams.plotting.labels import case_title
+    from impactbeams.variables import global_attributes
+
+    params = Params(counterpart="stop", clearance=1.1e-5,
+                    contacts=(Contact(), Contact(0.05, clearance=4e-6)))
+    attrs = global_attributes("t", "h", params.as_dict())
+    branch = xr.Dataset(attrs={**attrs, "continued_parameter": "omega"})
+    title = case_title(branch, "tip_amplitude_1", ("branch_point",))
+    assert "$\\Delta_{0}$ = 11 µm, $\\Delta_{1}$ = 4 µm, spring law" in title
+    assert "$\\Delta$ =" not in title
+    curve = xr.Dataset(attrs={**attrs, "curve_parameters": "omega contacts.1.clearance"})
+    title = case_title(curve, "contacts.1.clearance", ("branch_point",))
+    assert "$\\Delta_{0}$ = 11 µm" in title and "Delta_{1}" not in title
+    swept = xr.Dataset({"impact_count": ("contacts.0.clearance", [1, 2])}, attrs=attrs)
+    title = case_title(swept, "impact_count", ("contacts.0.clearance",))
+    assert "$\\Delta_{1}$ = 4 µm" in title and "Delta_{0}" not in title
+    # one contact: the flat clearance, as before
+    single = xr.Dataset(attrs=global_attributes("t", "h", Params(clearance=1.1e-5).as_dict()))
+    assert "$\\Delta$ = 11 µm" in case_title(single, "impact_count", ())

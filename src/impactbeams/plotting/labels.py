@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from impactbeams.configuration import MOUNTS, counterpart_named
+from impactbeams.params import CONTACTS, contact_field
+from impactbeams.structure.contacts import FLAT_KEYS
 from impactbeams.variables import LONG_TIME_VARIABLES, PARAMETERS, VARIABLES
 
 if TYPE_CHECKING:
@@ -119,17 +121,19 @@ def with_units(value: float, units: str, digits: int = 3) -> str:
     return format_number(value, digits) + (f" {unit}" if unit else "")
 
 
-def quantity(name: str, value: Any, units: str) -> str:
+def quantity(name: str, value: Any, units: str, index: int | None = None) -> str:
     r"""``"$\Omega$ = 50 rad/s"``: a parameter's symbol (or name), value and units.
 
     Lengths and forces take the prefix a reader uses (`with_units`); a forcing frequency is
-    also given in Hz.
+    also given in Hz. ``index``: of one contact's value, a subscript (``"$\Delta_{1}$"``).
     """
+    named = symbol(name) or name.replace("_", " ")
+    if index is not None:
+        named = f"{named[:-1]}_{{{index}}}$" if named.endswith("$") else f"{named} {index}"
     if not isinstance(value, int | float | np.number):
         unit = units_text(units)
-        return f"{symbol(name) or name.replace('_', ' ')} = {value}" + (f" {unit}" if unit
-                                                                         else "")
-    text = f"{symbol(name) or name.replace('_', ' ')} = {with_units(float(value), units)}"
+        return f"{named} = {value}" + (f" {unit}" if unit else "")
+    text = f"{named} = {with_units(float(value), units)}"
     if name == "omega" and units == "rad/s" and value > 0:
         text += f" ({float(value) / (2 * math.pi):.3g} Hz)"
     return text
@@ -155,19 +159,63 @@ def case_title(dataset: PlainDataset | xr.Dataset, variable: str, shown: tuple[s
     ``shown``: the dimensions drawn (their values are on the axes, not in the title).
     """
     values: dict[str, tuple[Any, str]] = {}
+    clearances = contact_clearances(dataset.attrs)
     for name in _CASE:
-        if name in dataset.attrs and name not in dataset.dims:
+        if name == "clearance" and clearances:  # each contact's own, but one on an axis
+            values.update({f"{CONTACTS}.{j}.clearance": (value, PARAMETERS[name].units)
+                           for j, value in enumerate(clearances)
+                           if f"{CONTACTS}.{j}.clearance" not in _varied(dataset, shown)})
+        elif name in dataset.attrs and name not in dataset.dims:
             values[name] = (dataset.attrs[name], PARAMETERS[name].units)
     for name, coordinate in dataset.coords.items():  # sliced dimensions: scalar coordinates
         if coordinate.ndim == 0 and name not in shown:
             values[str(name)] = (coordinate.item(), coordinate.attrs.get("units", ""))
-    parts = [base_motion(v, dataset.attrs) if n == "base_amplitude" else quantity(n, v, u)
-             for n, (v, u) in values.items() if not (n in _ZERO_BY_DEFAULT and v == 0)]
+    parts = [_case_part(n, v, u, dataset.attrs) for n, (v, u) in values.items()
+             if not (n in _ZERO_BY_DEFAULT and v == 0)]
     if "base_amplitude" in (*dataset.dims, dataset.attrs.get("continued_parameter")):
         parts.append(f"shaker {shaker_place(dataset.attrs)}")  # U0 on an axis: where it acts
     parts += _run_settings(dataset.attrs, law=variable not in _LAW_FREE,
                            long_time=variable in LONG_TIME_VARIABLES)
     return ", ".join(parts)
+
+
+def _case_part(name: str, value: Any, units: str, attrs: Mapping[str, Any]) -> str:
+    """One fixed parameter of a title, e.g. a contact's field with its subscript.
+
+    The base motion with its place; a contact's field (``contacts.INDEX.FIELD``) as its flat
+    key's symbol with the contact's index.
+    """
+    if name == "base_amplitude":
+        return base_motion(value, attrs)
+    field = contact_field(name)
+    return (quantity(name, value, units) if field is None
+            else quantity(FLAT_KEYS[field[1]], value, units, index=field[0]))
+
+
+# one contact of a ``contacts`` attribute (`variables.parameter_text`) and its own clearance
+_CONTACT_TEXT = re.compile(r"Contact\((.*?)\)")
+_OWN_CLEARANCE = re.compile(r"\bclearance=([^,)]+)")
+
+
+def contact_clearances(attrs: Mapping[str, Any]) -> list[float]:
+    """Each contact's clearance (m) of a run of several contacts' ``attrs``; [] for one.
+
+    A contact without its own (``clearance=None``) has the run's flat ``clearance``.
+    """
+    text = attrs.get("contacts")
+    contacts = _CONTACT_TEXT.findall(text) if isinstance(text, str) else []
+    if len(contacts) < 2:
+        return []
+    own = [_OWN_CLEARANCE.search(fields) for fields in contacts]
+    return [float(attrs["clearance"]) if found is None or found.group(1) == "None"
+            else float(found.group(1)) for found in own]
+
+
+def _varied(dataset: PlainDataset | xr.Dataset, shown: tuple[str, ...]) -> set[str]:
+    """The parameters a figure's axes vary: its dimensions, a branch's or curve's parameters."""
+    attrs = dataset.attrs
+    return {*map(str, dataset.dims), *shown, *str(attrs.get("curve_parameters", "")).split(),
+            str(attrs.get("continued_parameter", ""))}
 
 
 def _run_settings(attrs: Mapping[str, Any], law: bool, long_time: bool) -> list[str]:
