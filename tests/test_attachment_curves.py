@@ -103,6 +103,29 @@ def test_the_command_follows_a_grazing_curve_in_a_tip_mass_the_closed_forms(tmp_
         (closed,) = ib.grazing_frequencies(at_mass(TIP_MASS, mass), N_MODES, omega - 1.0,
                                            omega + 1.0).omega.values
         assert omega == pytest.approx(closed, rel=AGREE, abs=0.0)
+    # the grazing curve in the mass: at each Omega the root of the least gap in the mass
+    # (the modes built at each mass Brent's method tries), to round-off (measured 8.8e-16)
+    closed = ib.grazing_curve(TIP_MASS, N_MODES, MASS, omegas, within=(3e-4, 6e-4))
+    assert closed[MASS].attrs["units"] == "kg"
+    np.testing.assert_allclose(closed[MASS].values, masses, rtol=1e-13, atol=0.0)
+
+
+@pytest.mark.parametrize(("within", "parameter", "message"), [
+    (None, MASS, "within = None is not allowed: give the range of attachments1.0.mass to "
+     "search, within=(low, high)"),
+    ((6e-4, 3e-4), MASS, "is empty: need low < high"),
+    ((-1e-4, 3e-4), MASS, "attachments1.0.mass = -0.0001 is not allowed: must be a finite "
+     "real number >= 0 (kg)"),
+    ((0.0, 1.0), "force_amplitude", "within = (0.0, 1.0) is not allowed: is for a part's "
+     "field: force_amplitude has a closed form (leave it None)"),
+    ((0.0, 1.0), "attachments1.0.stiffness", "parameter = 'attachments1.0.stiffness' is not "
+     "allowed: attachments1[0] is a PointMass: its fields are position, mass"),
+])
+def test_a_grazing_curve_in_a_parts_field_refuses_bad_input_in_one_line(within, parameter,
+                                                                        message):
+    with pytest.raises(ib.ParameterError) as error:
+        ib.grazing_curve(TIP_MASS, N_MODES, parameter, [200.0], within=within)
+    assert message in str(error.value) and "\n" not in str(error.value)
 
 
 def test_a_grazing_curve_from_a_branch_in_the_mass_ends_on_the_bare_beams_grazing():
@@ -169,3 +192,14 @@ def test_basins_at_a_tip_mass_labelled_by_a_continuation_in_the_mass(tmp_path):
                         run.poincare_velocity1[-1] / BASIN_MODEL.omega])
         apart = np.abs(points - end).max(axis=-1) / scale
         assert apart[label] < 1e-6 and apart[1 - label] > 0.1, (cell, apart)
+
+
+def test_the_grazing_command_refuses_a_parts_field_in_one_line(tmp_path, capsys):
+    (tmp_path / "mass.toml").write_text(CURVE_FILE.split("[continuation]")[0].split(
+        "\n", 1)[1])
+    assert main(["grazing", MASS, "--omega-min", "150", "--omega-max", "250", "--params",
+                 str(tmp_path / "mass.toml"), "-o", str(tmp_path / "g.nc")]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"impactbeams: error: PARAMETER = '{MASS}' is not allowed here: "
+                           "a part's field has no closed form")
+    assert not (tmp_path / "g.nc").exists()

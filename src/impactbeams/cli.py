@@ -39,6 +39,7 @@ from impactbeams.params import (
     USER_STRUCTURE,
     ParameterError,
     Params,
+    attachment_field,
     modes_per_beam,
     nearest,
     read_toml,
@@ -627,6 +628,10 @@ def _require_grazing_options(args: argparse.Namespace) -> None:
     if not high > low:
         raise ParameterError(f"--omega-max = {high!r} is not allowed: the range [{low!r}, "
                              f"{high!r}] is empty: need --omega-max > --omega-min (rad/s)")
+    if attachment_field(args.parameter) is not None:
+        raise ParameterError(f"PARAMETER = {args.parameter!r} is not allowed here: a part's "
+                             "field has no closed form, its grazing is a root in it searched "
+                             "within a range: grazing_curve(..., within=(low, high)) in Python")
     for name in _NOT_GRAZING:
         if getattr(args, name) is not None:
             raise ParameterError(f"--{name} is not allowed with grazing: the steady orbit does "

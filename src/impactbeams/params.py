@@ -969,6 +969,19 @@ def attachment_field(name: str) -> tuple[str, int, str] | None:
     return field if field is not None and field[0] in ATTACHMENTS else None
 
 
+def check_attachment_field(params: Params, what: str, name: str) -> None:
+    """``name`` (``attachments1.INDEX.FIELD``) is a field of one of ``params``' parts."""
+    which, index, field = attachment_field(name)
+    parts = getattr(params, which)
+    require(what, name, index < len(parts),
+            f"there are {len(parts)} parts in params.{which}"
+            + (f" (indices 0 to {len(parts) - 1})" if parts else ""))
+    fields = FIELD_UNITS[type(parts[index])]
+    require(what, name, field in fields,
+            f"{which}[{index}] is a {type(parts[index]).__name__}: its fields are "
+            f"{', '.join(fields)}")
+
+
 def flat_parameter(name: str) -> str:
     """The parameter ``name`` sets in a run: a contact's field its flat key, any other itself.
 

@@ -46,6 +46,7 @@ from impactbeams.params import (
     ParameterError,
     Params,
     attachment_field,
+    check_attachment_field,
     check_parameter,
     contact_field,
     is_path,
@@ -57,7 +58,6 @@ from impactbeams.params import (
     with_parameter,
 )
 from impactbeams.structure.contacts import FLAT_KEYS
-from impactbeams.structure.parts import FIELD_UNITS
 from impactbeams.variables import global_attributes
 
 if TYPE_CHECKING:
@@ -191,7 +191,7 @@ def check_continued(params: Params, what: str, name: str) -> None:
     """
     contacts = params.contacts
     if attachment_field(name) is not None:
-        _check_attachment_field(params, what, name)
+        check_attachment_field(params, what, name)
         return
     field = contact_field(name)
     if field is None:
@@ -211,19 +211,6 @@ def check_continued(params: Params, what: str, name: str) -> None:
             f"there are {len(contacts)} contacts (indices 0 to {len(contacts) - 1})")
     require(what, name, field_name in _CONTACT_FIELDS,
             f"a contact's continuable fields are {', '.join(_CONTACT_FIELDS)}")
-
-
-def _check_attachment_field(params: Params, what: str, name: str) -> None:
-    """``name`` (``attachments1.INDEX.FIELD``) is a field of one of ``params``' parts."""
-    which, index, field = attachment_field(name)
-    parts = getattr(params, which)
-    require(what, name, index < len(parts),
-            f"there are {len(parts)} parts in params.{which}"
-            + (f" (indices 0 to {len(parts) - 1})" if parts else ""))
-    fields = FIELD_UNITS[type(parts[index])]
-    require(what, name, field in fields,
-            f"{which}[{index}] is a {type(parts[index]).__name__}: its fields are "
-            f"{', '.join(fields)}")
 
 
 Progress = Callable[[Branch, Point], None]

@@ -44,12 +44,16 @@ from impactbeams.params import (
     MAX_MODES,
     ParameterError,
     Params,
+    attachment_field,
+    check_attachment_field,
+    check_parameter,
     contact_field,
     named_attributes,
     require,
     require_finite,
     require_integer,
     require_type,
+    with_parameter,
 )
 from impactbeams.variables import (
     GRAZING_PARAMETERS,
@@ -178,6 +182,9 @@ def check_grazing_parameter(params: Params, parameter: str, others: tuple[str, .
     With several contacts each gives its own clearance: ``contacts.INDEX.clearance``.
     ``others``: more names the caller takes (the command line's ``omega``).
     """
+    if attachment_field(parameter) is not None:
+        check_attachment_field(params, "parameter", parameter)
+        return
     count = len(params.each_contact())
     field = contact_field(parameter)
     if count == 1:
@@ -188,7 +195,8 @@ def check_grazing_parameter(params: Params, parameter: str, others: tuple[str, .
                    f"to {count - 1} (with {count} contacts each gives its own)")
     require("parameter", parameter, parameter in named or (
         count > 1 and field is not None and field[0] < count and field[1] == "clearance"),
-        f"must be one of {', '.join(map(repr, named))}{allowed}")
+        f"must be one of {', '.join(map(repr, named))}{allowed}, or a part's field "
+        "'attachments1.INDEX.FIELD' (with within=(low, high))")
 
 
 def steady_gap(params: Params, n_modes: int) -> SteadyGap:
@@ -267,8 +275,8 @@ def first_grazing(gaps: tuple[LinearGap, ...], parameter: str, omega: np.ndarray
     return first, np.where(closed, np.nan, touching[contact, columns]), contact
 
 
-def grazing_curve(params: Params, n_modes: int, parameter: str,
-                  omega: ArrayLike) -> xr.Dataset:
+def grazing_curve(params: Params, n_modes: int, parameter: str, omega: ArrayLike,
+                  within: tuple[float, float] | None = None) -> xr.Dataset:
     """The grazing curve in the plane (Omega, ``parameter``): where the orbit first touches.
 
     At each forcing frequency of ``omega`` (rad/s), the value of ``parameter`` (N for
@@ -285,14 +293,76 @@ def grazing_curve(params: Params, n_modes: int, parameter: str,
     touch), with several contacts ``grazing_contact`` (which one touches), the fixed
     parameters as attributes. A curve continued in two parameters is checked against it
     point by point: `grazing_curve` at the continued points' frequencies.
+
+    A part's field (``attachments1.INDEX.FIELD``: a mass, a spring's stiffness, a place)
+    moves the modes, so G is no closed form in it: at each Omega its grazing value is the
+    first root of the least gap from ``within`` = (low, high) upward (where the orbit starts
+    or stops touching), bracketed on ``FIELD_BRACKETS`` values of the field (each its own
+    modes) and refined by Brent's method; NaN where no bracket changes sign.
     """
     gaps = contact_gaps(params, n_modes)
     check_grazing_parameter(params, parameter)
     frequencies = gaps[0].check_frequencies(omega)
-    values, touching, contact = first_grazing(gaps, parameter, frequencies)
-    return _dataset(params, n_modes, parameter, frequencies, values, touching, contact,
-                    "closed form: the steady gap's amplitude |G|, linear in each drive, "
-                    "equal to the clearance")
+    if attachment_field(parameter) is not None:
+        values, touching, contact = field_grazing(params, n_modes, parameter, frequencies,
+                                                  within)
+        method = (f"first root of the least gap Delta - |G| in {parameter} from {within[0]!r}:"
+                  f" a sign change on {FIELD_BRACKETS} values refined by Brent's method")
+    else:
+        require("within", within, within is None, f"is for a part's field: {parameter} has "
+                "a closed form (leave it None)")
+        values, touching, contact = first_grazing(gaps, parameter, frequencies)
+        method = ("closed form: the steady gap's amplitude |G|, linear in each drive, equal "
+                  "to the clearance")
+    return _dataset(params, n_modes, parameter, frequencies, values, touching, contact, method)
+
+
+# the values of a part's field on which its grazing is bracketed (each value its own modes)
+FIELD_BRACKETS = 17
+
+
+def field_grazing(params: Params, n_modes: int, parameter: str, omega: np.ndarray,
+                  within: object) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`first_grazing`'s values in a part's field ``parameter`` (`grazing_curve`'s docstring).
+
+    The least gap of all contacts at each Omega is a function of the field through the
+    modes alone (the drives and clearances fixed): its first sign change on an even grid of
+    ``within`` is refined by `scipy.optimize.brentq` to 4 machine epsilons of the field.
+    """
+    require("within", within, isinstance(within, tuple) and len(within) == 2,
+            f"give the range of {parameter} to search, within=(low, high)")
+    low, high = (require_finite("within", value) for value in within)
+    require("within", within, low < high, "is empty: need low < high")
+    for value in (low, high):
+        check_parameter(parameter, value)
+    grid = np.linspace(low, high, FIELD_BRACKETS)
+    least = np.array([_least_gap(_gaps_at(params, n_modes, parameter, value), omega).min(axis=0)
+                      for value in grid])  # (field value, Omega)
+    values = np.full(omega.size, np.nan)
+    touching = np.full(omega.size, np.nan, dtype=complex)
+    contact = np.full(omega.size, -1)
+    for i, frequency in enumerate(omega):
+        touches = least[:, i] <= 0.0
+        changed = np.flatnonzero(touches != touches[0])
+        if not changed.size:
+            continue  # touched throughout the range, or nowhere in it
+
+        def gap(value: float, at: np.ndarray = omega[i:i + 1]) -> float:
+            return float(_least_gap(_gaps_at(params, n_modes, parameter, value), at).min())
+
+        k = int(changed[0])
+        values[i] = brentq(gap, grid[k - 1], grid[k], xtol=1e-300,
+                           rtol=4 * np.finfo(float).eps)
+        gaps = _gaps_at(params, n_modes, parameter, values[i])
+        contact[i] = int(np.argmin(_least_gap(gaps, np.array([frequency]))[:, 0]))
+        touching[i] = complex(gaps[contact[i]].phasor(frequency))
+    return values, touching, contact
+
+
+def _gaps_at(params: Params, n_modes: int, parameter: str,
+             value: float) -> tuple[LinearGap, ...]:
+    """Each contact's `LinearGap` with ``parameter`` (a part's field) set to ``value``."""
+    return contact_gaps(with_parameter(params, parameter, float(value)), n_modes)
 
 
 def _least_gap(gaps: tuple[LinearGap, ...], omega: np.ndarray) -> np.ndarray:
