@@ -31,7 +31,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from impactbeams.kernels import layout
-from impactbeams.params import CONTACTS, contact_field, is_integer, is_real, require
+from impactbeams.params import (
+    CONTACTS,
+    attachment_field,
+    contact_field,
+    is_integer,
+    is_real,
+    require,
+)
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -128,6 +135,13 @@ class Stepping:
         require("stepping", self.direction,
                 isinstance(self.direction, str) and self.direction in STEPPINGS,
                 f"must be one of {', '.join(map(repr, STEPPINGS))}")
+        require("stepped_axis", self.axis,
+                not isinstance(self.axis, str) or attachment_field(self.axis) is None,
+                "a part's field changes the modes, whose coordinates a cell carries from its "
+                "predecessor: carried as the beams' deflection and velocity instead, the next "
+                "modes would keep only their span of it, and how a part joins a moving beam "
+                "(its velocity kept, or its momentum) has no one answer. Step along a drive "
+                "or a clearance, the part's axis as parallel rows")
         require("stepped_axis", self.axis,
                 isinstance(self.axis, str) and (self.axis in STEPPED_AXES or (
                     contact_field(self.axis) or (0, ""))[1] == STEPPED_CONTACT_FIELD),
