@@ -139,6 +139,26 @@ def test_multiplier_curves_beside_a_contact_that_never_closes_are_the_single_one
         assert critical.min() < 1e-10
 
 
+def test_fold_curve_of_a_stop_with_a_dashpot():
+    """A dashpot of 0.02 N s/m on the soft stop moves its upper fold to 308.98 rad/s (from
+    317.95); followed up in F0 to 0.15 mN, every point is a fold of the stop's own map at its
+    Omega and F0 (a fixed point to 1e-10 and a multiplier at +1 to 1e-10: measured 2.2e-15),
+    and the end is the fold the branch in Omega at 0.15 mN locates (1e-9; measured equal)."""
+    params = STOP.replace(contact_damping=0.02)
+    continuation = Continuation(params, "omega", 290.0, 330.0, n_modes=N_MODES, max_branches=1)
+    curve = continue_curve(BifurcationCurve.from_branch(
+        continuation, continue_orbits(continuation), "fold", "force_amplitude", 5e-5, 1.5e-4,
+        box=(150.0, 330.0), max_points=15))
+    assert curve.attrs["curve_ending"] == "bound"
+    assert float(curve.omega[0]) == pytest.approx(308.98, abs=0.01)
+    for mu in _single_maps_multipliers(curve, params):
+        assert np.abs(mu - 1.0).min() < 1e-10
+    end = curve.isel(branch_point=-1)
+    (located,) = _events(params.replace(force_amplitude=1.5e-4), float(end.omega),
+                         end.section_state.values, "fold")
+    assert float(end.omega) == pytest.approx(float(located), rel=AGREE, abs=0.0)
+
+
 # the small model with a second contact between the tips, from above 12 um away: its orbits
 # from 240 rad/s up close both (2 contacts per orbit, one each)
 SMALL_TWO = SMALL.replace(contacts=(Contact(clearance=1.1e-5),
