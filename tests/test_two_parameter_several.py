@@ -199,6 +199,38 @@ def test_period_doubling_curve_with_two_contacts_closed(dashpot):
     assert float(end.omega) == pytest.approx(float(located), rel=AGREE, abs=0.0)
 
 
+# the small model's contact split in two springs of half its stiffness, at the tips and 2 mm
+# inward (10.7 um): orbits closing both, with Neimark-Sacker points
+SMALL_SPLIT = SMALL.replace(contacts=(Contact(clearance=1.1e-5, stiffness=5e3),
+                                      Contact(0.098, 0.118, clearance=1.07e-5, stiffness=5e3)))
+
+
+@pytest.mark.slow  # (8 s; the period doubling's curve above is the fast check of two contacts)
+def test_neimark_sacker_curve_with_two_contacts_closed():
+    """The first Neimark-Sacker point coming down from 248 rad/s (247.24 rad/s, both contacts
+    closing) followed up in F0: every point is a Neimark-Sacker point of its own map
+    (`ContactsPeriodMap`'s monodromy: a complex pair on the unit circle to 1e-10, measured
+    3.6e-12; a fixed point to 1e-10, measured 3.7e-15) whose run closes both contacts."""
+    continuation = Continuation(SMALL_SPLIT, "omega", 242.0, 250.0, start=248.0,
+                                direction="down", n_modes=N_MODES, max_branches=1,
+                                max_points=12, transient_periods=600)
+    curve = continue_curve(BifurcationCurve.from_branch(
+        continuation, continue_orbits(continuation), "neimark_sacker", "force_amplitude",
+        3e-5, 3.2e-5, max_points=12))
+    assert curve.branch_point.size == 12
+    assert float(curve.omega[0]) == pytest.approx(247.237, abs=1e-3)
+    for point in range(curve.branch_point.size):
+        at = curve.isel(branch_point=point)
+        z = at.section_state.values
+        result = ContactsPeriodMap(SMALL_SPLIT.replace(
+            omega=float(at.omega), force_amplitude=float(at.force_amplitude)), N_MODES)(
+            z, directions="all", measures=False)
+        assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
+        mu = np.linalg.eigvals(result.jacobian)
+        assert np.abs(np.abs(mu[mu.imag > 0]) - 1.0).min() < 1e-10
+        assert np.bitwise_or.reduce(np.asarray(result.trajectory.mask, dtype=int)) == 0b11
+
+
 def _events(params, omega, state, label, width=0.3):
     """The ``label`` events the branch in Omega over ``omega`` +- ``width`` locates, started
     at ``omega - width`` from ``state`` (the guess only: the events are the branch's own)."""
