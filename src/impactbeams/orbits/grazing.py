@@ -306,7 +306,7 @@ def grazing_curve(params: Params, n_modes: int, parameter: str, omega: ArrayLike
     if attachment_field(parameter) is not None:
         values, touching, contact = field_grazing(params, n_modes, parameter, frequencies,
                                                   within)
-        method = (f"first root of the least gap Delta - |G| in {parameter} from {within[0]!r}:"
+        method = (f"first root of the least gap Delta - |G| in {parameter} from {within[0]}:"
                   f" a sign change on {FIELD_BRACKETS} values refined by Brent's method")
     else:
         require("within", within, within is None, f"is for a part's field: {parameter} has "
@@ -329,7 +329,7 @@ def field_grazing(params: Params, n_modes: int, parameter: str, omega: np.ndarra
     modes alone (the drives and clearances fixed): its first sign change on an even grid of
     ``within`` is refined by `scipy.optimize.brentq` to 4 machine epsilons of the field.
     """
-    require("within", within, isinstance(within, tuple) and len(within) == 2,
+    require("within", within, isinstance(within, (tuple, list)) and len(within) == 2,
             f"give the range of {parameter} to search, within=(low, high)")
     low, high = (require_finite("within", value) for value in within)
     require("within", within, low < high, "is empty: need low < high")

@@ -163,7 +163,7 @@ def case_title(dataset: PlainDataset | xr.Dataset, variable: str, shown: tuple[s
     for name in _CASE:
         if name == "clearance" and clearances:  # each contact's own, but one on an axis
             values.update({f"{CONTACTS}.{j}.clearance": (value, PARAMETERS[name].units)
-                           for j, value in enumerate(clearances)
+                           for j, value in clearances.items()
                            if f"{CONTACTS}.{j}.clearance" not in _varied(dataset, shown)})
         elif name in dataset.attrs and name not in dataset.dims:
             values[name] = (dataset.attrs[name], PARAMETERS[name].units)
@@ -197,18 +197,24 @@ _CONTACT_TEXT = re.compile(r"Contact\((.*?)\)")
 _OWN_CLEARANCE = re.compile(r"\bclearance=([^,)]+)")
 
 
-def contact_clearances(attrs: Mapping[str, Any]) -> list[float]:
-    """Each contact's clearance (m) of a run of several contacts' ``attrs``; [] for one.
+def contact_clearances(attrs: Mapping[str, Any]) -> dict[int, float]:
+    """Each contact's clearance (m) by index, of several contacts' ``attrs``; {} for one.
 
-    A contact without its own (``clearance=None``) has the run's flat ``clearance``.
+    A contact without its own (``clearance=None``) has the run's flat ``clearance`` (left
+    out if the attributes have none).
     """
     text = attrs.get("contacts")
     contacts = _CONTACT_TEXT.findall(text) if isinstance(text, str) else []
     if len(contacts) < 2:
-        return []
-    own = [_OWN_CLEARANCE.search(fields) for fields in contacts]
-    return [float(attrs["clearance"]) if found is None or found.group(1) == "None"
-            else float(found.group(1)) for found in own]
+        return {}
+    clearances = {}
+    for j, fields in enumerate(contacts):
+        own = _OWN_CLEARANCE.search(fields)
+        value = attrs.get("clearance") if own is None or own.group(1) == "None" else float(
+            own.group(1))
+        if value is not None:
+            clearances[j] = float(value)
+    return clearances
 
 
 def _varied(dataset: PlainDataset | xr.Dataset, shown: tuple[str, ...]) -> set[str]:
