@@ -184,15 +184,8 @@ def test_period_doubling_curve_with_two_contacts_closed(dashpot):
     assert curve.attrs["curve_ending"] == "bound" and float(curve.force_amplitude[-1]) == 3.3e-5
     assert float(curve.omega[0]) == pytest.approx(245.157 if dashpot == 0 else 245.192,
                                                   abs=1e-3)
-    for point in range(curve.branch_point.size):
-        at = curve.isel(branch_point=point)
-        z = at.section_state.values
-        result = ContactsPeriodMap(params.replace(
-            omega=float(at.omega), force_amplitude=float(at.force_amplitude)), N_MODES)(
-            z, directions="all", measures=False)
-        assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
-        assert np.abs(np.linalg.eigvals(result.jacobian) + 1.0).min() < 1e-10
-        assert np.bitwise_or.reduce(np.asarray(result.trajectory.mask, dtype=int)) == 0b11
+    for mu in _both_closing_multipliers(curve, params):
+        assert np.abs(mu + 1.0).min() < 1e-10
     end = curve.isel(branch_point=-1)
     (located,) = _events(params.replace(force_amplitude=3.3e-5), float(end.omega),
                          end.section_state.values, "period_doubling", width=0.1)
@@ -219,16 +212,23 @@ def test_neimark_sacker_curve_with_two_contacts_closed():
         3e-5, 3.2e-5, max_points=12))
     assert curve.branch_point.size == 12
     assert float(curve.omega[0]) == pytest.approx(247.237, abs=1e-3)
+    for mu in _both_closing_multipliers(curve, SMALL_SPLIT):
+        assert np.abs(np.abs(mu[mu.imag > 0]) - 1.0).min() < 1e-10
+
+
+def _both_closing_multipliers(curve, params):
+    """The multipliers at each point of ``curve`` (in Omega and F0) of ``params``' own map
+    (`ContactsPeriodMap`), whose fixed point each point's orbit is checked to be (to 1e-10)
+    and whose run is checked to close both contacts."""
     for point in range(curve.branch_point.size):
         at = curve.isel(branch_point=point)
         z = at.section_state.values
-        result = ContactsPeriodMap(SMALL_SPLIT.replace(
+        result = ContactsPeriodMap(params.replace(
             omega=float(at.omega), force_amplitude=float(at.force_amplitude)), N_MODES)(
             z, directions="all", measures=False)
         assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
-        mu = np.linalg.eigvals(result.jacobian)
-        assert np.abs(np.abs(mu[mu.imag > 0]) - 1.0).min() < 1e-10
         assert np.bitwise_or.reduce(np.asarray(result.trajectory.mask, dtype=int)) == 0b11
+        yield np.linalg.eigvals(result.jacobian)
 
 
 def _events(params, omega, state, label, width=0.3):
