@@ -40,7 +40,7 @@ from impactbeams.longtime import LongTime, Stepping
 from impactbeams.params import (
     ATTACHMENT_FIELDS,
     ATTACHMENTS,
-    BEAM1_KEYS,
+    BEAM_SEGMENTS,
     CHOICES,
     CONTACT_FIELDS,
     CONTACT_LAW_KEYS,
@@ -553,6 +553,8 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
     require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: give a beam's "
             "parts in [params], and sweep one part's field as "
             f"[axes.\"{ATTACHMENT_AXIS.format(which=name, index=0, field='mass')}\"]")
+    require(where, name, name not in BEAM_SEGMENTS, f"{name} is not sweepable: give the beam's "
+            "segments in [params] (one sweep per stepped beam)")
     require(where, name, name != CONTACTS, f"{name} is not sweepable: give the contacts in "
             "[params] (one sweep per set of contacts), and sweep a contact's field as "
             f"[axes.\"{CONTACT_AXIS.format(index=0, field='clearance')}\"]")
@@ -606,6 +608,11 @@ def _check_conflicts(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: s
                              f"as [axes.{name}] of {source}: remove one of them")
     given = {**{name: "[params]" for name in fixed}, **{name: "[axes]" for name in swept}}
     for i in ("1", "2"):
+        beam = [key + i for key in ("l", "EI", "rhoA", *MATERIAL_KEYS) if key + i in swept]
+        if fixed.get("segments" + i) and beam:
+            raise ParameterError(
+                f"[axes.{beam[0]}] of {source} is not allowed with segments{i} in [params]: the "
+                f"segments give beam {i}'s length, EI and rhoA (one sweep per stepped beam)")
         direct = [k + i for k in ("EI", "rhoA") if k + i in given]
         material = [k + i for k in MATERIAL_KEYS if k + i in given]
         if direct and material:
@@ -625,7 +632,8 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
     ends = []
     values: dict[str, Any] = {name: value for name, value in sweep.fixed.items()
                               if name not in CHOICES and name not in ATTACHMENTS
-                              and name != USER_STRUCTURE and name not in CONTACT_POSITIONS}
+                              and name not in BEAM_SEGMENTS and name != USER_STRUCTURE
+                              and name not in CONTACT_POSITIONS}
     for k, axis in enumerate(sweep.axes):
         axis_ends = np.array([axis.min, axis.max] if axis.num > 1 and not axis.choices
                              else [axis.min])
@@ -646,10 +654,9 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
 
     resolved = resolve_materials(values, f"[params] of {sweep.source}", point)
     defaults = Params().numeric()
-    # beam 1 as a user structure: its equivalent beam's l1, EI1, rhoA1 (Params' own)
-    beam1 = {name: sweep.base.numeric()[name] for name in BEAM1_KEYS
-             if sweep.base.structure1 is not None and name in defaults}
-    return {**defaults, **beam1, **resolved}, point
+    # a stepped beam's or a user structure's derived l, EI, rhoA (Params' own)
+    derived = {name: sweep.base.numeric()[name] for name in sweep.base.derived_keys()}
+    return {**defaults, **derived, **resolved}, point
 
 
 def contact_sweeps(sweep: Sweep) -> tuple[Sweep, ...]:
