@@ -1,0 +1,150 @@
+"""Stepped beams in runs (issue 33): Params(segments1=...), files, runs and refusals.
+
+References: the textbook cantilever's run of today's closed forms (a beam of equal segments
+is it), the FE model of tests/fe_spring.py with EI and rhoA per element (its own error shown
+by refining the mesh), the exact modes of `impactbeams.structure.Cantilever`, themselves
+checked against FE models in tests/test_structure_modes.py.
+"""
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from fe_spring import fe_spring_contacts
+from impactbeams import simulate
+from impactbeams.cli import main
+from impactbeams.modes import beam
+from impactbeams.params import ParameterError, Params
+from impactbeams.structure import Cantilever, PointMass, Segment
+from impactbeams.sweep import sweep_from_mapping
+
+EI, RHOA = 9.0167e-3, 1.8402e-2  # the default steel strip (N m^2, kg/m)
+# a stiffer, heavier root (3 EI, 1.5 rhoA over 4 cm) on a 0.1 m beam: every step on 1 cm
+ROOT = (Segment(0.04, 3 * EI, 1.5 * RHOA), Segment(0.06, EI, RHOA))
+STOP = Params(counterpart="stop", contact_stiffness=1e4, segments1=ROOT)
+# beam 2 stepped too, softer and lighter towards its tip
+PAIR = Params(contact_stiffness=1e4, segments1=ROOT,
+              segments2=(Segment(0.06, EI, RHOA), Segment(0.06, 0.5 * EI, 0.8 * RHOA)))
+
+
+@pytest.mark.parametrize("counterpart", ["beam", "stop"])
+def test_equal_segments_give_the_uniform_beams_run(counterpart):
+    """Each beam as two equal halves: the structure's modes (Wittrick-Williams, roots refined
+    on the wave-coefficient determinant to a few ulps, static data from the Green's function)
+    in place of the closed forms give today's contacts to round-off, not bit for bit: onsets
+    to 1e-13 relative (measured 2.2e-14 over the first 10), durations to 1e-13 of the release
+    time (5e-16 s measured), peak forces to 1e-10 (measured 9e-12). One segment is the flat
+    keys themselves: bit for bit."""
+    today = Params(counterpart=counterpart, contact_stiffness=1e4, EI1=EI, rhoA1=RHOA)
+    halves = {"segments1": (Segment(0.05, EI, RHOA),) * 2}
+    if counterpart == "beam":
+        halves["segments2"] = (Segment(0.06, today.EI2, today.rhoA2),) * 2
+    stepped = today.replace(**halves)
+    assert not beam(stepped, 1).closed_form and beam(today, 1).closed_form
+    # the derived l1, EI1, rhoA1 (tip compliance, mean mass per length): the uniform beam's
+    assert (stepped.l1, stepped.EI1, stepped.rhoA1) == (today.l1, today.EI1, today.rhoA1)
+    assert today.replace(segments1=(Segment(0.1, EI, RHOA),)) == today
+    expected, got = (simulate(p, 0.05, n_modes=20) for p in (today, stepped))
+    onsets = expected.impact_onset_time.values[:10]
+    np.testing.assert_allclose(got.impact_onset_time.values[:10], onsets, rtol=1e-13, atol=0)
+    durations = expected.impact_duration.values[:10]
+    assert np.all(np.abs(got.impact_duration.values[:10] - durations)
+                  <= 1e-13 * (onsets + durations))
+    np.testing.assert_allclose(got.impact_peak_force.values[:10],
+                               expected.impact_peak_force.values[:10], rtol=1e-10, atol=0)
+    assert got.attrs["segments1"] == "; ".join(map(repr, halves["segments1"]))
+    assert "l1" not in got.attrs and "segments1" not in expected.attrs
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("params", [STOP, PAIR], ids=["stop", "two beams"])
+def test_first_contacts_of_stepped_beams_agree_with_the_fe_model(params):
+    """The first two contacts of 160 modes per beam against the FE model with EI and rhoA per
+    element, every step on a node.
+
+    The FE's first onset converges as h^4 (16x per halving; at least 8x asserted), so
+    |f160 - f320| bounds the 320-element run's error; ours must lie within it. 160 modes: at
+    40 the modes' own truncation (the residual falls like N^-3 at a free tip) is 3e-11 s on
+    the second onset and 1.4e-10 N on the first peak, as large as the FE's error. Measured
+    (stop): onsets 1.5e-13 s and 3.4e-12 s from f320 (|f160 - f320| 1.7e-12 s, 1.5e-11 s).
+    """
+    fe = {n: fe_spring_contacts(params, 1e4, t_max=0.05, n_elements=(n, n), n_contacts=2,
+                                mode_rtol=1e-9) for n in (40, 80, 160, 320)}
+    ds = simulate(params, 0.05, n_modes=160)
+    ours = {"onset": ds.impact_onset_time.values[:2], "duration": ds.impact_duration.values[:2],
+            "peak": ds.impact_peak_force.values[:2]}
+    f40, f80, f160 = (fe[n]["onset"][0] for n in (40, 80, 160))
+    assert abs(f40 - f80) >= 8 * abs(f80 - f160), (f40, f80, f160)
+    for key, values in ours.items():
+        f160, f320 = fe[160][key], fe[320][key]
+        scale = 1.0 if key == "onset" else np.abs(f320)
+        bound = np.abs(f160 - f320) / scale + 4e-16 * np.abs(f320) / scale + 1e-12 * (
+            key != "onset")
+        assert np.all(np.abs(values - f320) / scale <= bound), (key, values - f320, bound)
+
+
+def test_files_and_the_command_line_take_segments(capsys, tmp_path):
+    """[[params.segments1]] tables: `impactbeams modes` lists the stepped beam's exact modes,
+    a first-impact map equals single runs (both certified to round-off: 1e-12 s); the tied
+    law and a beam key beside the segments are refused in one line, exit code 2."""
+    tables = "".join(f"[[params.segments1]]\nlength = {s.length!r}\nEI = {s.EI!r}\n"
+                     f"rhoA = {s.rhoA!r}\n" for s in ROOT)
+    params = tmp_path / "rig.toml"
+    params.write_text('[params]\ncounterpart = "stop"\ncontact_stiffness = 1e4\n' + tables)
+    assert main(["modes", "--n", "6", "--json", "--params", str(params)]) == 0
+    listed = json.loads(capsys.readouterr().out)["free"]["beam1"]
+    assert listed == Cantilever(ROOT).modes(6).frequencies.tolist()
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('t_max = 0.05\nn_modes = 10\nobservables = ["first_impact_time"]\n'
+                     '[params]\ncounterpart = "stop"\ncontact_stiffness = 1e4\n' + tables
+                     + "[axes.omega]\nmin = 40.0\nmax = 60.0\nnum = 3\n")
+    assert main(["run", str(sweep), "-o", str(tmp_path / "out.nc"), "--quiet"]) == 0
+    with xr.open_dataset(tmp_path / "out.nc") as ds:
+        assert ds.attrs["segments1"] == "; ".join(map(repr, ROOT))
+        for omega, mapped in zip(ds.omega.values, ds.first_impact_time.values, strict=True):
+            run = simulate(STOP.replace(omega=float(omega)), 0.05, n_modes=10, dt_output=0.05)
+            assert float(mapped) == pytest.approx(float(run.impact_onset_time[0]), abs=1e-12)
+    for extra, message in ((["--contact-law", "tied"], "supports the paper's uniform beams"),
+                           (["--l1", "0.2"], "l1 = 0.2 is not allowed: must equal the total "
+                                             "length of segments1, 0.1 m")):
+        assert main(["modes", "--params", str(params), *extra]) == 2
+        assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("build", "message"), [
+    (lambda: Params(segments1=ROOT, l1=0.2),
+     r"l1 = 0.2 is not allowed: must equal the total length of segments1, 0.1 m"),
+    (lambda: Params(segments1=ROOT, EI1=EI), "EI1 in Params.. is not allowed with segments1"),
+    (lambda: Params.from_mapping({"segments1": ROOT, "width1": 0.01}),
+     "width1 in parameters is not allowed with segments1: each segment gives its own EI and "
+     "rhoA"),
+    (lambda: Params(segments1=ROOT, contact_law="tied"),
+     "contact_law = 'tied' supports the paper's uniform beams only: use contact_law = 'spring' "
+     "for a stepped beam"),
+    (lambda: Segment(0.05, -EI, RHOA), "Segment.EI = -0.0090167 is not allowed: must be a "
+                                       "finite real number > 0"),
+    (lambda: Params(segments1=(Segment(0.05, 1e-30, RHOA), ROOT[1])),
+     r"segments1\[0\].EI: EI1 = 1e-30 is not allowed: must be from 1e-24 to 1e\+17"),
+    (lambda: Params.from_mapping({"segments1": [{"length": 0.05, "EI": EI}]}),
+     r"segments1\[0\] = \{'length': 0.05, 'EI': 0.0090167\} is not allowed: a segment is a "
+     "table of length"),
+    (lambda: Params(segments1=(ROOT[0], PointMass(0.1, 1e-3))),
+     r"segments1\[1\] = PointMass.* is not allowed: must be an impactbeams.Segment"),
+    (lambda: Params(segments1=0.1), "segments1 = 0.1 is not allowed: must be a tuple"),
+    (lambda: Params(counterpart="stop", segments2=ROOT), "counterpart = 'stop' has no beam 2"),
+    (lambda: STOP.replace(l1=0.2), "l1 = 0.2 is not allowed: must equal the total length"),
+    (lambda: Params(segments1=ROOT, attachments1=(PointMass(0.12, 1e-3),)),
+     r"attachments1\[0\].position = 0.12 is not allowed: must lie on the beam, 0 < x <= 0.1"),
+    (lambda: sweep_from_mapping({"t_max": 0.05, "observables": ["first_impact_time"],
+                                 "axes": {"segments1": {"min": 0.0, "max": 1.0, "num": 2}}}),
+     "segments1 is not sweepable"),
+    (lambda: sweep_from_mapping({"t_max": 0.05, "observables": ["first_impact_time"],
+                                 "params": {"segments1": ROOT},
+                                 "axes": {"EI1": {"min": 1e-3, "max": 1e-2, "num": 2}}}),
+     r"\[axes.EI1\] of sweep is not allowed with segments1 in \[params\]"),
+])
+def test_bad_segments_are_refused_in_one_line(build, message):
+    with pytest.raises(ParameterError, match=message):
+        build()
