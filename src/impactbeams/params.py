@@ -860,6 +860,23 @@ class Params:
                    for parts in (self.attachments1, self.attachments2))
 
     @property
+    def step_factors(self) -> tuple[float, float]:
+        """How far each beam's frequencies may lie above those of its l, EI, rhoA (1 if uniform).
+
+        A stepped beam's Rayleigh quotient is at most max(EI) / min(rhoA) times that of the
+        same shape on a beam of unit EI and rhoA, so (min-max) each of its frequencies is at
+        most sqrt(max(EI) / min(rhoA)) / sqrt(EI / rhoA) times its equivalent uniform beam's
+        (`preflight.highest_frequency`'s bound).
+        """
+        factors = []
+        for i in ("1", "2"):
+            segments = getattr(self, "segments" + i)
+            factors.append(math.sqrt(max(s.EI for s in segments) / min(s.rhoA for s in segments)
+                                     * getattr(self, "rhoA" + i) / getattr(self, "EI" + i))
+                           if segments else 1.0)
+        return factors[0], factors[1]
+
+    @property
     def tip_compliance(self) -> tuple[float, float]:
         """Static tip compliances c_i of the two cantilevers (m/N), l_i^3 / (3 EI_i) if uniform.
 

@@ -782,7 +782,7 @@ def _check_grid(sweep: Sweep) -> None:
             sweep.base.partner):
         sweep.base.structure1.require_support(values["base_amplitude"])
     check_run(values, sweep.t_max, sweep.n_modes, point, _grounded_springs(sweep),
-              sweep.base.structure1)
+              sweep.base.structure1, sweep.base.step_factors)
     _check_long_time(sweep, values, point)
 
 
@@ -810,7 +810,7 @@ def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) 
     periods = sweep.transient_periods + sweep.long_time.sampled_periods
     horizon = sweep.long_time.horizon(omega, sweep.transient_periods)
     highest = highest_frequency(values, sweep.n_modes, _grounded_springs(sweep),
-                                sweep.base.structure1)
+                                sweep.base.structure1, sweep.base.step_factors)
     phase = np.maximum(highest, omega) * horizon
     require_all("transient_periods + sampled_periods", periods, phase <= MAX_PHASE, point,
                 lambda j: (f"the run of {value_at(horizon, j):.3g} s turns the fastest "
