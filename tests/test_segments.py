@@ -19,6 +19,7 @@ from impactbeams.modes import beam
 from impactbeams.params import ParameterError, Params
 from impactbeams.structure import Cantilever, PointMass, Segment
 from impactbeams.sweep import sweep_from_mapping
+from test_attachments import assert_todays_contacts
 
 EI, RHOA = 9.0167e-3, 1.8402e-2  # the default steel strip (N m^2, kg/m)
 # a stiffer, heavier root (3 EI, 1.5 rhoA over 4 cm) on a 0.1 m beam: every step on 1 cm
@@ -47,43 +48,44 @@ def test_equal_segments_give_the_uniform_beams_run(counterpart):
     assert (stepped.l1, stepped.EI1, stepped.rhoA1) == (today.l1, today.EI1, today.rhoA1)
     assert today.replace(segments1=(Segment(0.1, EI, RHOA),)) == today
     expected, got = (simulate(p, 0.05, n_modes=20) for p in (today, stepped))
-    onsets = expected.impact_onset_time.values[:10]
-    np.testing.assert_allclose(got.impact_onset_time.values[:10], onsets, rtol=1e-13, atol=0)
-    durations = expected.impact_duration.values[:10]
-    assert np.all(np.abs(got.impact_duration.values[:10] - durations)
-                  <= 1e-13 * (onsets + durations))
-    np.testing.assert_allclose(got.impact_peak_force.values[:10],
-                               expected.impact_peak_force.values[:10], rtol=1e-10, atol=0)
+    assert_todays_contacts(got, expected)
     assert got.attrs["segments1"] == "; ".join(map(repr, halves["segments1"]))
     assert "l1" not in got.attrs and "segments1" not in expected.attrs
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("params", [STOP, PAIR], ids=["stop", "two beams"])
-def test_first_contacts_of_stepped_beams_agree_with_the_fe_model(params):
+@pytest.mark.parametrize(("params", "meshes"), [(STOP, (80, 160, 320)),
+                                                (PAIR, (160, 320, 640))],
+                         ids=["stop", "two beams"])
+def test_first_contacts_of_stepped_beams_agree_with_the_fe_model(params, meshes):
     """The first two contacts of 160 modes per beam against the FE model with EI and rhoA per
     element, every step on a node.
 
     The FE's first onset converges as h^4 (16x per halving, reached from above: 7.7x from 40
-    to 80 elements, 11x from 80 to 160; at least 8x asserted there), so |f160 - f320| bounds
-    the 320-element run's error; ours must lie within it. 160 modes: at
-    40 the modes' own truncation (the residual falls like N^-3 at a free tip) is 3e-11 s on
-    the second onset and 1.4e-10 N on the first peak, as large as the FE's error. Measured
-    (stop): onsets 1.5e-13 s and 3.4e-12 s from f320 (|f160 - f320| 1.7e-12 s, 1.5e-11 s).
+    to 80 elements, 11x from 80 to 160, 12.5x from 320 to 640 on two beams; at least 8x
+    asserted), so the finest mesh's distance from the one before bounds its error; ours must
+    lie within it. Two stepped beams need 640 elements: their second contact's duration
+    crosses over between 160 and 320 (f160 - f320 = +2.9e-11 s, f320 - f640 = -3.1e-11 s),
+    where the distance to 320 is no bound. 160 modes: at 40 the modes' own truncation (the
+    residual falls like N^-3 at a free tip) is 3e-11 s on the second onset and 1.4e-10 N on
+    the first peak, as large as the FE's error; 160 and 200 modes agree to 5e-13 s. Measured
+    from the finest mesh (stop, 320): onsets 1.5e-13 s and 3.4e-12 s (the bound 1.7e-12 s,
+    1.5e-11 s); two beams (640): onsets 1e-14 s and 1.5e-12 s (1.4e-13 s, 2.3e-11 s),
+    durations 4e-12 s and 3e-12 s (4.6e-11 s, 3.1e-11 s).
     """
     fe = {n: fe_spring_contacts(params, 1e4, t_max=0.05, n_elements=(n, n), n_contacts=2,
-                                mode_rtol=1e-9) for n in (40, 80, 160, 320)}
+                                mode_rtol=1e-9) for n in meshes}
     ds = simulate(params, 0.05, n_modes=160)
     ours = {"onset": ds.impact_onset_time.values[:2], "duration": ds.impact_duration.values[:2],
             "peak": ds.impact_peak_force.values[:2]}
-    f80, f160, f320 = (fe[n]["onset"][0] for n in (80, 160, 320))
-    assert abs(f80 - f160) >= 8 * abs(f160 - f320), (f80, f160, f320)
+    coarse, middle, fine = (fe[n]["onset"][0] for n in meshes)
+    assert abs(coarse - middle) >= 8 * abs(middle - fine), (coarse, middle, fine)
     for key, values in ours.items():
-        f160, f320 = fe[160][key], fe[320][key]
-        scale = 1.0 if key == "onset" else np.abs(f320)
-        bound = np.abs(f160 - f320) / scale + 4e-16 * np.abs(f320) / scale + 1e-12 * (
+        middle, fine = fe[meshes[1]][key], fe[meshes[2]][key]
+        scale = 1.0 if key == "onset" else np.abs(fine)
+        bound = np.abs(middle - fine) / scale + 4e-16 * np.abs(fine) / scale + 1e-12 * (
             key != "onset")
-        assert np.all(np.abs(values - f320) / scale <= bound), (key, values - f320, bound)
+        assert np.all(np.abs(values - fine) / scale <= bound), (key, values - fine, bound)
 
 
 def test_files_and_the_command_line_take_segments(capsys, tmp_path):
