@@ -145,6 +145,12 @@ def test_files_and_the_command_line_take_segments(capsys, tmp_path):
      "segments1 is not sweepable"),
     (lambda: sweep_from_mapping({"t_max": 0.05, "observables": ["first_impact_time"],
                                  "params": {"segments1": ROOT},
+                                 "axes": {"segments1.0.EI": {"min": EI, "max": 2 * EI,
+                                                             "num": 2}}}),
+     "segments1.0.EI is not sweepable: give the beam's segments in .params. .one sweep per "
+     "stepped beam; a segment's field is not an axis yet"),
+    (lambda: sweep_from_mapping({"t_max": 0.05, "observables": ["first_impact_time"],
+                                 "params": {"segments1": ROOT},
                                  "axes": {"EI1": {"min": 1e-3, "max": 1e-2, "num": 2}}}),
      r"\[axes.EI1\] of sweep is not allowed with segments1 in \[params\]"),
 ])

@@ -553,8 +553,9 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
     require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: give a beam's "
             "parts in [params], and sweep one part's field as "
             f"[axes.\"{ATTACHMENT_AXIS.format(which=name, index=0, field='mass')}\"]")
-    require(where, name, name not in BEAM_SEGMENTS, f"{name} is not sweepable: give the beam's "
-            "segments in [params] (one sweep per stepped beam)")
+    require(where, name, name.split(".")[0] not in BEAM_SEGMENTS, f"{name} is not sweepable: "
+            "give the beam's segments in [params] (one sweep per stepped beam; a segment's "
+            "field is not an axis yet)")
     require(where, name, name != CONTACTS, f"{name} is not sweepable: give the contacts in "
             "[params] (one sweep per set of contacts), and sweep a contact's field as "
             f"[axes.\"{CONTACT_AXIS.format(index=0, field='clearance')}\"]")
