@@ -153,6 +153,12 @@ def test_files_and_the_command_line_take_segments(capsys, tmp_path):
                                  "params": {"segments1": ROOT},
                                  "axes": {"EI1": {"min": 1e-3, "max": 1e-2, "num": 2}}}),
      r"\[axes.EI1\] of sweep is not allowed with segments1 in \[params\]"),
+    # one segment is its beam's l1, EI1, rhoA1 at the grid's corners too (not the defaults)
+    (lambda: sweep_from_mapping({"t_max": 0.05, "observables": ["first_impact_time"],
+                                 "params": {"counterpart": "stop", "segments1": [
+                                     {"length": 0.05, "EI": EI, "rhoA": RHOA}]},
+                                 "axes": {"clearance": {"min": 1e-5, "max": 0.02, "num": 2}}}),
+     r"clearance = 0.02 is not allowed: the clearance must be <= 0.2 l1 = 0.01 m"),
 ])
 def test_bad_segments_are_refused_in_one_line(build, message):
     with pytest.raises(ParameterError, match=message):

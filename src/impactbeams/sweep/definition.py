@@ -60,6 +60,7 @@ from impactbeams.params import (
     contact_field,
     flat_parameter,
     fold_contacts,
+    fold_segments,
     is_integer,
     is_path,
     is_real,
@@ -631,7 +632,9 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
     """
     dims = len(sweep.axes)
     ends = []
-    values: dict[str, Any] = {name: value for name, value in sweep.fixed.items()
+    # (one segment is its beam's l, EI, rhoA; several: the base's derived ones, below)
+    fixed = fold_segments(sweep.fixed, f"[params] of {sweep.source}")
+    values: dict[str, Any] = {name: value for name, value in fixed.items()
                               if name not in CHOICES and name not in ATTACHMENTS
                               and name not in BEAM_SEGMENTS and name != USER_STRUCTURE
                               and name not in CONTACT_POSITIONS}
