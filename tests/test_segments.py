@@ -20,6 +20,7 @@ from impactbeams.modes import beam
 from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.params import ParameterError, Params
 from impactbeams.structure import Cantilever, PointMass, Segment
+from impactbeams.structure.user import ModalStructure
 from impactbeams.sweep import sweep_from_mapping
 from test_attachments import assert_todays_contacts
 
@@ -161,6 +162,9 @@ def test_files_and_the_command_line_take_segments(capsys, tmp_path):
     (lambda: Params(segments1=0.1), "segments1 = 0.1 is not allowed: must be a tuple"),
     (lambda: Params(counterpart="stop", segments2=ROOT), "counterpart = 'stop' has no beam 2"),
     (lambda: STOP.replace(l1=0.2), "l1 = 0.2 is not allowed: must equal the total length"),
+    (lambda: Params(counterpart="stop", segments1=ROOT, structure1=ModalStructure(
+        [100.0, 700.0], [1.0, 1.0], 1e-3, 1e-3, 0.1)),
+     r"segments1 = \(Segment.*\) is not allowed: structure1 is beam 1 \(a user structure\)"),
     (lambda: Params(segments1=ROOT, attachments1=(PointMass(0.12, 1e-3),)),
      r"attachments1\[0\].position = 0.12 is not allowed: must lie on the beam, 0 < x <= 0.1"),
     (lambda: sweep_from_mapping({"t_max": 0.05, "observables": ["first_impact_time"],

@@ -583,8 +583,9 @@ class Params:
         require(USER_STRUCTURE, structure, isinstance(structure, (MatrixStructure, ModalStructure)),
                 "must be an impactbeams.MatrixStructure, a ModalStructure or the path of a .npz "
                 "file")
+        derived = _EQUIVALENT_BEAM1 if self.segments1 else ()  # (the segments' own: named)
         for field in dataclasses.fields(Params):
-            if field.name in BEAM1_KEYS:
+            if field.name in BEAM1_KEYS and field.name not in derived:
                 require(field.name, getattr(self, field.name),
                         getattr(self, field.name) == field.default, _STRUCTURE_IS_BEAM1)
         require(USER_STRUCTURE, structure, self.law.tangent_flow,
