@@ -86,6 +86,9 @@ from impactbeams.structure.contacts import FLAT_KEYS, Contact, as_contact
 from impactbeams.structure.parts import (
     FIELD_UNITS,
     FIELD_WORDS,
+    SEGMENT_KEYS,
+    SEGMENT_UNITS,
+    SEGMENT_WORDS,
     Attachment,
     Segment,
     Spring,
@@ -1048,7 +1051,7 @@ def fold_segments(values: Mapping[str, Any], source: str) -> dict[str, Any]:
         for j, segment in enumerate(segments):
             require(f"{name}[{j}]", segment, isinstance(segment, Segment),
                     "must be an impactbeams.Segment (its length, EI and rhoA)")
-            for field, key in (("length", "l"), ("EI", "EI"), ("rhoA", "rhoA")):
+            for field, key in SEGMENT_KEYS.items():
                 check_range(key + i, getattr(segment, field),
                             lambda index, at=f"{name}[{j}].{field}": f"{at}: ")
         given = [key + i for key in ("EI", "rhoA", *MATERIAL_KEYS) if key + i in folded]
@@ -1069,11 +1072,13 @@ def fold_segments(values: Mapping[str, Any], source: str) -> dict[str, Any]:
 
 
 # the tuple parameters whose elements' fields are parameters of their own, named
-# NAME.INDEX.FIELD: a contact's (``contacts.0.clearance``) and an attachment's
-# (``attachments1.0.mass``)
-ELEMENT_PARAMETERS = (CONTACTS, *ATTACHMENTS)
+# NAME.INDEX.FIELD: a contact's (``contacts.0.clearance``), an attachment's
+# (``attachments1.0.mass``) and a segment's (``segments1.0.EI``)
+ELEMENT_PARAMETERS = (CONTACTS, *ATTACHMENTS, *BEAM_SEGMENTS)
 # the fields of any attachment (a point mass's or a spring's) and their units
 ATTACHMENT_FIELDS = {name: unit for units in FIELD_UNITS.values() for name, unit in units.items()}
+# each kind of a beam's element (its parts, its segments) and its fields' units
+PART_FIELDS = {**FIELD_UNITS, Segment: SEGMENT_UNITS}
 
 
 def element_field(name: str) -> tuple[str, int, str] | None:
@@ -1102,6 +1107,16 @@ def attachment_field(name: str) -> tuple[str, int, str] | None:
     return field if field is not None and field[0] in ATTACHMENTS else None
 
 
+def part_field(name: str) -> tuple[str, int, str] | None:
+    """(tuple, index, field) of a beam's part's or segment's field; None for others.
+
+    ``attachments1.0.mass`` or ``segments1.0.EI`` (or of beam 2): a field that changes the
+    beam's geometry, checked at every value of its axis (`impactbeams.sweep.definition`).
+    """
+    field = element_field(name)
+    return field if field is not None and field[0] != CONTACTS else None
+
+
 def flat_parameter(name: str) -> str:
     """The parameter ``name`` sets in a run: a contact's field its flat key, any other itself.
 
@@ -1116,13 +1131,15 @@ def named_attributes(name: str) -> dict[str, str]:
     """CF attributes (units, long_name) of the parameter ``name`` as a coordinate.
 
     A contact's field (``contacts.0.clearance``) has its flat key's, naming the contact; an
-    attachment's field (``attachments1.0.mass``) its part's unit, naming the part.
+    attachment's field (``attachments1.0.mass``) or a segment's (``segments1.0.EI``) its unit,
+    naming the part.
     """
     element = element_field(name)
-    if element is not None and element[0] in ATTACHMENTS:
+    if element is not None and element[0] != CONTACTS:
         which, index, field = element
-        return {"units": ATTACHMENT_FIELDS[field],
-                "long_name": f"{FIELD_WORDS[field]} of {which}[{index}]"}
+        units, words = ((ATTACHMENT_FIELDS, FIELD_WORDS) if which in ATTACHMENTS
+                        else (SEGMENT_UNITS, SEGMENT_WORDS))
+        return {"units": units[field], "long_name": f"{words[field]} of {which}[{index}]"}
     attributes = parameter_attributes(flat_parameter(name))
     if element is not None:
         attributes["long_name"] += f" of {CONTACTS}[{element[1]}]"
@@ -1132,11 +1149,15 @@ def named_attributes(name: str) -> dict[str, str]:
 def check_parameter(name: str, value: Any, point: PointName = no_point) -> None:
     """Raise ParameterError unless ``value`` (a float or an array) is allowed for ``name``.
 
-    A numeric parameter's or a contact field's range (`check_range` of its flat key); an
-    attachment's field, a finite real number >= 0 (where the part lies on its beam, the
-    parameters' joint check).
+    A numeric parameter's or a contact field's range (`check_range` of its flat key); a
+    segment's field, that of its beam's key (``segments1.0.EI``: ``EI1``'s); an attachment's
+    field, a finite real number >= 0 (where the part lies on its beam, the parameters' joint
+    check).
     """
-    field = attachment_field(name)
+    field = part_field(name)
+    if field is not None and field[0] in BEAM_SEGMENTS:
+        check_range(SEGMENT_KEYS[field[2]] + field[0][-1], value, point)
+        return
     if field is None:
         check_range(flat_parameter(name), value, point)
         return

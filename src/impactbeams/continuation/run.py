@@ -41,15 +41,17 @@ from impactbeams.continuation.output import branches_dataset
 from impactbeams.orbits.period_map import check_law
 from impactbeams.orbits.shooting import GUARD, METHODS
 from impactbeams.params import (
+    BEAM_SEGMENTS,
     CONTACTS,
     MAX_MODES,
+    PART_FIELDS,
     ParameterError,
     Params,
-    attachment_field,
     check_parameter,
     contact_field,
     is_path,
     named_attributes,
+    part_field,
     require,
     require_finite,
     require_integer,
@@ -57,7 +59,6 @@ from impactbeams.params import (
     with_parameter,
 )
 from impactbeams.structure.contacts import FLAT_KEYS
-from impactbeams.structure.parts import FIELD_UNITS
 from impactbeams.variables import global_attributes
 
 if TYPE_CHECKING:
@@ -190,8 +191,8 @@ def check_continued(params: Params, what: str, name: str) -> None:
     stiffness or damping); its point is not continued (nor the flat point of one).
     """
     contacts = params.contacts
-    if attachment_field(name) is not None:
-        _check_attachment_field(params, what, name)
+    if part_field(name) is not None:
+        _check_part_field(params, what, name)
         return
     field = contact_field(name)
     if field is None:
@@ -201,6 +202,9 @@ def check_continued(params: Params, what: str, name: str) -> None:
         require(what, name, name in CONTINUABLE,
                 f"must be one of {', '.join(CONTINUABLE)}, or with several contacts "
                 f"'{CONTACTS}.INDEX.FIELD'")
+        require(what, name, name not in params.derived_keys(),
+                "it is derived here from the beam's segments or structure: continue a segment's "
+                "field ('segments1.INDEX.FIELD', FIELD one of length, EI, rhoA)")
         return
     index, field_name = field
     require(what, name, len(contacts) >= 2,
@@ -213,14 +217,19 @@ def check_continued(params: Params, what: str, name: str) -> None:
             f"a contact's continuable fields are {', '.join(_CONTACT_FIELDS)}")
 
 
-def _check_attachment_field(params: Params, what: str, name: str) -> None:
-    """``name`` (``attachments1.INDEX.FIELD``) is a field of one of ``params``' parts."""
-    which, index, field = attachment_field(name)
+def _check_part_field(params: Params, what: str, name: str) -> None:
+    """``name`` (``attachments1.INDEX.FIELD``, ``segments1...``) is a field of a part of params.
+
+    A beam of one segment is its l, EI, rhoA (continue those).
+    """
+    which, index, field = part_field(name)
     parts = getattr(params, which)
     require(what, name, index < len(parts),
             f"there are {len(parts)} parts in params.{which}"
-            + (f" (indices 0 to {len(parts) - 1})" if parts else ""))
-    fields = FIELD_UNITS[type(parts[index])]
+            + (f" (indices 0 to {len(parts) - 1})" if parts else "")
+            + (" (one segment is the beam's l, EI, rhoA: continue those)"
+               if which in BEAM_SEGMENTS and not parts else ""))
+    fields = PART_FIELDS[type(parts[index])]
     require(what, name, field in fields,
             f"{which}[{index}] is a {type(parts[index]).__name__}: its fields are "
             f"{', '.join(fields)}")

@@ -41,6 +41,9 @@ class Segment:
 
 
 SEGMENT_UNITS = {"length": "m", "EI": "N m^2", "rhoA": "kg/m"}  # each a finite number > 0
+# each field's beam key (l, EI, rhoA: whose allowed values it takes) and what it is, in words
+SEGMENT_KEYS = {"length": "l", "EI": "EI", "rhoA": "rhoA"}
+SEGMENT_WORDS = {"length": "length", "EI": "bending stiffness", "rhoA": "mass per unit length"}
 
 
 @dataclasses.dataclass(frozen=True)
