@@ -22,7 +22,8 @@ resonance). Events (impact onset g = 0, release R = 0) are found by sampling on 
 with a cubic-Hermite check for dips between samples, and refining the first sign change with
 scipy.optimize.brentq to a few ulps of the event time.
 
-Public: steel_strip, tip_dof, beam_matrices, beam_flexibility, static_tip_shape,
+Public: steel_strip, tip_dof, beam_matrices, beam_flexibility, stepped_beam,
+static_tip_shape,
 cantilever_frequencies, contact_frequencies, first_impact_time, simulate_impacts.
 
 Units: SI throughout (m, s, N, kg, rad/s).
@@ -74,15 +75,8 @@ def tip_dof(n_elements: int) -> int:
     return 2 * n_elements - 2
 
 
-def beam_matrices(
-    EI: float, rhoA: float, length: float, n_elements: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """Stiffness K and consistent mass M of a uniform cantilever (SI units, DOFs w and theta).
-
-    Uniform mesh of `n_elements` Hermite-cubic elements; the clamped node is removed, so both
-    matrices are (2 n, 2 n), symmetric positive definite, DOFs ordered as in `tip_dof`.
-    """
-    h = length / n_elements
+def _element(EI: float, rhoA: float, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Stiffness and consistent mass of one Hermite-cubic element of length h (m)."""
     k_e = (EI / h**3) * np.array(
         [
             [12.0, 6 * h, -12.0, 6 * h],
@@ -99,6 +93,19 @@ def beam_matrices(
             [-13 * h, -3 * h**2, -22 * h, 4 * h**2],
         ]
     )
+    return k_e, m_e
+
+
+def beam_matrices(
+    EI: float, rhoA: float, length: float, n_elements: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Stiffness K and consistent mass M of a uniform cantilever (SI units, DOFs w and theta).
+
+    Uniform mesh of `n_elements` Hermite-cubic elements; the clamped node is removed, so both
+    matrices are (2 n, 2 n), symmetric positive definite, DOFs ordered as in `tip_dof`.
+    """
+    h = length / n_elements
+    k_e, m_e = _element(EI, rhoA, h)
     n_full = 2 * (n_elements + 1)
     K = np.zeros((n_full, n_full))
     M = np.zeros((n_full, n_full))
@@ -129,6 +136,43 @@ def beam_flexibility(EI: float, length: float, n_elements: int) -> np.ndarray:
     F[0::2, 1::2] = np.where(xr <= xc, xr**2 / 2, xc * (2 * xr - xc) / 2)
     F[1::2, 0::2] = F[0::2, 1::2].T
     return F / EI
+
+
+def stepped_beam(segments, n_elements: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """K, M and the flexibility F = K^-1 of a stepped cantilever (DOFs as in `tip_dof`).
+
+    ``segments``: (length, EI, rhoA) from the clamp out (m, N m^2, kg/m), each a whole number
+    of the ``n_elements`` equal elements (so that every step is a node). F is the exact nodal
+    flexibility by the unit-load method, F_IJ = int_0^L f_I(s) f_J(s) / EI(s) ds with f the
+    moment of a unit load at DOF I (x_I - s for a force, 1 for a moment, 0 beyond x_I):
+    Hermite elements hold it exactly for EI constant on each element. Simpson's rule is exact
+    for these quadratics, and as F = Q Q^T with every entry of Q >= 0 it carries no
+    cancellation (no solve with K).
+    """
+    lengths = np.array([s[0] for s in segments])
+    length = float(np.sum(lengths))
+    h = length / n_elements
+    counts = np.rint(lengths / h).astype(int)
+    assert counts.sum() == n_elements and np.allclose(counts * h, lengths, rtol=1e-12, atol=0)
+    EI = np.repeat([s[1] for s in segments], counts)
+    rhoA = np.repeat([s[2] for s in segments], counts)
+    n_full = 2 * (n_elements + 1)
+    K, M = np.zeros((n_full, n_full)), np.zeros((n_full, n_full))
+    for e in range(n_elements):
+        idx = slice(2 * e, 2 * e + 4)
+        k_e, m_e = _element(EI[e], rhoA[e], h)
+        K[idx, idx] += k_e
+        M[idx, idx] += m_e
+    x = h * np.arange(1, n_elements + 1)  # the nodes past the clamp
+    starts = h * np.arange(n_elements)
+    points = starts[:, None] + h * np.array([0.0, 0.5, 1.0])[None, :]  # (element, Simpson point)
+    weights = np.sqrt(h * np.array([1.0, 4.0, 1.0])[None, :] / (6.0 * EI[:, None]))
+    beyond = (x[:, None] > starts[None, :])[:, :, None]  # node i lies past element e's start
+    Q = np.empty((2 * n_elements, n_elements, 3))
+    Q[0::2] = np.where(beyond, (x[:, None, None] - points[None]) * weights[None], 0.0)
+    Q[1::2] = np.where(beyond, weights[None], 0.0)
+    Q = Q.reshape(2 * n_elements, -1)
+    return K[2:, 2:], M[2:, 2:], Q @ Q.T
 
 
 def static_tip_shape(F: np.ndarray, tip_deflection: float) -> np.ndarray:
@@ -219,6 +263,18 @@ class _Pair:
         K1, M1 = beam_matrices(EI1, rhoA1, l1, n_elements)
         return cls(K1, M1, beam_flexibility(EI1, l1, n_elements), K1.shape[0],
                    tip_dof(n_elements), None, None)
+
+    @classmethod
+    def of_beams(cls, beams: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> _Pair:
+        """The pair of given beams' (K, M, F), as `build` does; one beam: as `single`."""
+        n1 = beams[0][0].shape[0]
+        blocks = [scipy.linalg.block_diag(*matrices) for matrices in zip(*beams, strict=True)]
+        if len(beams) == 1:
+            return cls(*blocks, n1, n1 - 2, None, None)
+        tip2 = blocks[0].shape[0] - 2
+        T = np.delete(np.eye(blocks[0].shape[0]), tip2, axis=1)
+        T[tip2, n1 - 2] = 1.0  # beam 2's tip follows beam 1's tip
+        return cls(*blocks, n1, n1 - 2, tip2, T)
 
     def gap_rows(self, matrix: np.ndarray) -> np.ndarray:
         """Rows of g - clearance = y1(l1) - y2(l2) (y1(l1) alone at a stop) of a DOF matrix."""

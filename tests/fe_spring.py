@@ -47,6 +47,7 @@ from fe_reference import (
     _Output,
     _Pair,
     static_tip_shape,
+    stepped_beam,
 )
 
 
@@ -79,6 +80,8 @@ def build_pair(params, n_elements: tuple[int, int]) -> _Pair:
     ``contact_position2``, ``contact_side``, as in impactbeams' Params; the positions on nodes)
     gives a `_PointPair`, whose gap is at those nodes.
 
+    A stepped beam (``params.segments1``, ``segments2``: objects with ``length``, ``EI``,
+    ``rhoA``; each a whole number of elements) has EI and rhoA per element (`stepped_beam`).
     A beam's attachments (``params.attachments1``, ``attachments2``: objects with a
     ``position`` (m) on a node, as `impactbeams.structure`'s parts) sit on that node: a point
     mass (``mass`` kg, ``rotary_inertia`` kg m^2) lumped on its deflection and slope, a spring
@@ -86,7 +89,10 @@ def build_pair(params, n_elements: tuple[int, int]) -> _Pair:
     closed-form flexibility by the Woodbury identity (no solve with K).
     """
     p = params
-    if getattr(p, "counterpart", "beam") == "stop":
+    beams = (1,) if getattr(p, "counterpart", "beam") == "stop" else (1, 2)
+    if any(getattr(p, f"segments{beam}", ()) for beam in beams):  # a stepped beam
+        pair = _Pair.of_beams([_stepped(p, beam, n_elements[beam - 1]) for beam in beams])
+    elif beams == (1,):
         pair = _Pair.single(p.EI1, p.rhoA1, p.l1, n_elements[0])
     else:
         pair = _Pair.build(p.EI1, p.rhoA1, p.l1, p.EI2, p.rhoA2, p.l2, tuple(n_elements))
@@ -121,6 +127,13 @@ def build_pair(params, n_elements: tuple[int, int]) -> _Pair:
                                                          n_elements[1], pair.n1)
     fields = {f.name: getattr(pair, f.name) for f in dataclasses.fields(_Pair)}
     return _PointPair(**fields, contact1=contact1, contact2=contact2, side=side)
+
+
+def _stepped(params, beam: int, n_elements: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """K, M, F of beam ``beam``: its ``segments`` (objects with length, EI, rhoA), or uniform."""
+    segments = [(s.length, s.EI, s.rhoA) for s in getattr(params, f"segments{beam}", ())]
+    return stepped_beam(segments or [tuple(getattr(params, f"{key}{beam}")
+                                           for key in ("l", "EI", "rhoA"))], n_elements)
 
 
 def _gap_vector(pair: _Pair) -> np.ndarray:

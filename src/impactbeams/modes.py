@@ -241,7 +241,7 @@ class UniformBeam:
 
 @dataclasses.dataclass(frozen=True)
 class AttachedBeam:
-    """A cantilever with attachments (`impactbeams.structure.Cantilever`).
+    """A stepped cantilever or one with attachments (`impactbeams.structure.Cantilever`).
 
     The same data as `UniformBeam`: exact modes by Wittrick-Williams and wave coefficients,
     built once per (beam, n) and process; the static data from its Green's function.
@@ -321,13 +321,13 @@ def _structure_modes(structure: Cantilever | MatrixStructure | ModalStructure,
 def beam(params: Params, which: int) -> UniformBeam | AttachedBeam:
     """Beam ``which`` (1 or 2) of ``params``, as the engine sees it.
 
-    The one place that tells a textbook cantilever (closed forms) from one with attachments
-    and from the user's own structure (``params.structure1``).
+    The one place that tells a textbook cantilever (closed forms) from a stepped beam or one
+    with attachments and from the user's own structure (``params.structure1``).
     """
     if which == 1 and params.structure1 is not None:
         return UserBeam(params.structure1)
-    i = str(which)
-    if not getattr(params, "attachments" + i):  # (`Params` builds uniform beams only)
+    if params.uniform_beam(which):
+        i = str(which)
         return UniformBeam(getattr(params, "EI" + i), getattr(params, "rhoA" + i),
                            getattr(params, "l" + i))
     return AttachedBeam(params.structure(which))

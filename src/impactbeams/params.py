@@ -38,6 +38,11 @@ name               unit    meaning
                            (default: the tip l2)
 ``contact_side``   -       which way beam 1 closes the contact: "below" (default: what it meets
                            is below it, it moves down onto it) or "above" (it moves up onto it)
+``segments1``,    -       a stepped beam: its uniform `impactbeams.Segment`s from the clamp out
+``segments2``              (each its length, EI and rhoA; a TOML array of tables
+                           [[params.segments1]]) in place of l, EI, rhoA (``Params.l1``, ``EI1``,
+                           ``rhoA1`` are then derived: `Params._take_segments`); one segment
+                           given so is the keys l, EI, rhoA
 ``contacts``       -       two or more contacts (`impactbeams.Contact`: each its point, side,
                            clearance and law; a TOML array of tables [[params.contacts]]); one
                            contact given so is the keys above (`fold_contacts`); clearance,
@@ -81,9 +86,14 @@ from impactbeams.structure.contacts import FLAT_KEYS, Contact, as_contact
 from impactbeams.structure.parts import (
     FIELD_UNITS,
     FIELD_WORDS,
+    SEGMENT_KEYS,
+    SEGMENT_UNITS,
+    SEGMENT_WORDS,
     Attachment,
+    Segment,
     Spring,
     as_part,
+    as_segment,
     check_attachments,
     check_clamp,
 )
@@ -428,7 +438,7 @@ COUNTERPARTS = tuple(configuration.COUNTERPARTS)
 CONTACT_POSITIONS = ("contact_position1", "contact_position2")
 # keys that describe beam 2: refused when given with a counterpart that has no beam 2
 BEAM2_KEYS = ("l2", "EI2", "rhoA2", *(key + "2" for key in MATERIAL_KEYS), "attachments2",
-              "contact_position2")
+              "segments2", "contact_position2")
 # several contacts (`impactbeams.Contact`), each with its own point, side, clearance and law
 CONTACTS = "contacts"
 # the run's keys a Contact stands for (with several contacts, each contact's own)
@@ -440,15 +450,22 @@ CONTACT_LAW_KEYS = ("clearance", "contact_stiffness", "contact_damping")
 _CONTACT_PLACE = (*CONTACT_POSITIONS, "contact_side")
 # each beam's point masses and springs (`impactbeams.structure`), given from Python
 ATTACHMENTS = ("attachments1", "attachments2")
+# each beam as uniform segments from the clamp out (a stepped beam), in place of l, EI, rhoA
+BEAM_SEGMENTS = ("segments1", "segments2")
+# |l - the segments' total| (relative) within which a given l is that length: the total is
+# rounded once (math.fsum), a length typed in decimals may be an ulp or two off it
+_SAME_LENGTH = 8 * np.finfo(float).eps
 # beam 1 as the user's own structure (`impactbeams.structure.user`): an object or a .npz file
 USER_STRUCTURE = "structure1"
 # what a user structure replaces: beam 1's keys (l1, EI1, rhoA1 are then its equivalent beam's)
 BEAM1_KEYS = ("l1", "EI1", "rhoA1", *(key + "1" for key in MATERIAL_KEYS), "attachments1",
-              "contact_position1")
+              "segments1", "contact_position1")
 _EQUIVALENT_BEAM1 = ("l1", "EI1", "rhoA1")
 # fields a run's parameters (Datasets, files) name only when they differ from the default: the
-# attachments, a user structure and where and from which side the contact acts
-_ONLY_IF_GIVEN = (*ATTACHMENTS, USER_STRUCTURE, *CONTACT_POSITIONS, "contact_side", "contacts")
+# attachments, a stepped beam's segments, a user structure and where and from which side the
+# contact acts
+_ONLY_IF_GIVEN = (*ATTACHMENTS, *BEAM_SEGMENTS, USER_STRUCTURE, *CONTACT_POSITIONS,
+                  "contact_side", "contacts")
 SHAKERS = tuple(configuration.MOUNTS)  # which clamps the shaker carries (impactbeams.drive)
 # the parameters whose value is a name, and the names allowed (the default first)
 CHOICES = {"contact_law": CONTACT_LAWS, "counterpart": COUNTERPARTS,
@@ -509,6 +526,8 @@ class Params:
     start: str = "rest"
     attachments1: tuple[Attachment, ...] = ()
     attachments2: tuple[Attachment, ...] = ()
+    segments1: tuple[Segment, ...] = ()  # two or more; one segment is l1, EI1, rhoA1
+    segments2: tuple[Segment, ...] = ()
     structure1: MatrixStructure | ModalStructure | None = None
     contact_position1: float | None = None  # m from beam 1's clamp; None: its tip
     contact_position2: float | None = None  # m from beam 2's clamp; None: its tip
@@ -526,6 +545,7 @@ class Params:
 
     def __post_init__(self) -> None:
         self._resolve_drives()
+        self._take_segments()
         for name, allowed in CHOICES.items():
             value = getattr(self, name)
             require(name, value, isinstance(value, str) and value in allowed,
@@ -566,8 +586,9 @@ class Params:
         require(USER_STRUCTURE, structure, isinstance(structure, (MatrixStructure, ModalStructure)),
                 "must be an impactbeams.MatrixStructure, a ModalStructure or the path of a .npz "
                 "file")
+        derived = _EQUIVALENT_BEAM1 if self.segments1 else ()  # (the segments' own: named)
         for field in dataclasses.fields(Params):
-            if field.name in BEAM1_KEYS:
+            if field.name in BEAM1_KEYS and field.name not in derived:
                 require(field.name, getattr(self, field.name),
                         getattr(self, field.name) == field.default, _STRUCTURE_IS_BEAM1)
         require(USER_STRUCTURE, structure, self.law.tangent_flow,
@@ -579,6 +600,34 @@ class Params:
         for name, value in (("structure1", structure), ("l1", structure.length), ("EI1", EI),
                             ("rhoA1", rhoA)):
             object.__setattr__(self, name, value)
+
+    def _take_segments(self) -> None:
+        """Each stepped beam's l, EI and rhoA: its length, tip compliance and mass.
+
+        l is the segments' total length, EI that of the uniform beam of the same tip
+        compliance (l^3 / (3 EI)) and rhoA its mean mass per length: the input checks and the
+        cost estimates read them; the runs take the segments (`structure`).
+        """
+        for i in ("1", "2"):
+            segments = getattr(self, "segments" + i)
+            if not segments:
+                continue
+            bare = _cantilever(segments, ())
+            length = bare.length
+            for key, value in (("l", length), ("EI", length**3 / (3.0 * bare.tip_compliance)),
+                               ("rhoA", math.fsum(s.length * s.rhoA for s in segments) / length)):
+                object.__setattr__(self, key + i, value)
+
+    def derived_keys(self) -> tuple[str, ...]:
+        """The beams' l, EI, rhoA that are derived, not given: a stepped beam's, a structure's.
+
+        A Dataset and a copy (`replace`) leave them out: the segments or the structure say them.
+        """
+        keys = _EQUIVALENT_BEAM1 if self.structure1 is not None else ()
+        for i in ("1", "2"):
+            if getattr(self, "segments" + i):
+                keys += ("l" + i, "EI" + i, "rhoA" + i)
+        return keys
 
     def _set_checked(self, name: str, value: Any) -> None:
         """Set the numeric parameter ``name`` to ``value`` as a float, if allowed."""
@@ -612,6 +661,10 @@ class Params:
             require(name, parts, self.law.tangent_flow,
                     f"contact_law = {self.contact_law!r} supports the paper's uniform beams "
                     "only: use contact_law = 'spring' for a beam with attachments")
+        for name in BEAM_SEGMENTS:
+            require(name, getattr(self, name), not getattr(self, name) or self.law.tangent_flow,
+                    f"contact_law = {self.contact_law!r} supports the paper's uniform beams "
+                    "only: use contact_law = 'spring' for a stepped beam")
         self._check_contact_point()
         # a compliant clamp lets the tip force deflect the tip more than l1^3 / (3 EI1)
         check_joint(self.numeric(), partner=self.partner, mount=self.mount,
@@ -692,7 +745,7 @@ class Params:
         """Names of the numeric parameters (all but the named choices), in field order."""
         return tuple(f.name for f in dataclasses.fields(Params)
                      if f.name not in CHOICES and f.name not in ATTACHMENTS
-                     and f.name not in (USER_STRUCTURE, CONTACTS)
+                     and f.name not in BEAM_SEGMENTS and f.name not in (USER_STRUCTURE, CONTACTS)
                      and f.name not in CONTACT_POSITIONS)
 
     def numeric(self) -> dict[str, float]:
@@ -738,7 +791,7 @@ class Params:
             length = getattr(self, f"l{which}")
             if x == length or (which == 2 and not self.partner.has_beam2):
                 shapes.append(1.0)
-            elif getattr(self, f"attachments{which}"):
+            elif not self.uniform_beam(which):
                 shapes.append(float(self.structure(which).unit_tip_shape(np.array([x]))[0]))
             else:
                 shapes.append((3.0 * length * x * x - x**3) / (2.0 * length**3))
@@ -782,10 +835,22 @@ class Params:
         return self.clearance + side * (shape1 * self.uplift1 - shape2 * self.uplift2)
 
     def structure(self, which: int) -> Cantilever:
-        """Beam ``which`` (1 or 2) as a cantilever: uniform, carrying its ``attachments``."""
+        """Beam ``which`` (1 or 2) as a cantilever: its segments, carrying its ``attachments``.
+
+        A beam not given by ``segments`` is one segment of its l, EI, rhoA.
+        """
         i = str(which)
-        return _cantilever(getattr(self, "EI" + i), getattr(self, "rhoA" + i),
-                           getattr(self, "l" + i), getattr(self, "attachments" + i))
+        segments = getattr(self, "segments" + i) or _uniform(
+            getattr(self, "l" + i), getattr(self, "EI" + i), getattr(self, "rhoA" + i))
+        return _cantilever(segments, getattr(self, "attachments" + i))
+
+    def uniform_beam(self, which: int) -> bool:
+        """Whether beam ``which`` is the textbook cantilever: one segment, nothing attached.
+
+        Its modes, tip compliance and static shape are then in closed form.
+        """
+        i = str(which)
+        return not (getattr(self, "attachments" + i) or getattr(self, "segments" + i))
 
     @property
     def grounded_springs(self) -> int:
@@ -797,6 +862,23 @@ class Params:
         return max(sum((part.stiffness > 0) + (part.rotational_stiffness > 0)
                        for part in parts if isinstance(part, Spring) and part.position > 0)
                    for parts in (self.attachments1, self.attachments2))
+
+    @property
+    def step_factors(self) -> tuple[float, float]:
+        """How far each beam's frequencies may lie above those of its l, EI, rhoA (1 if uniform).
+
+        A stepped beam's Rayleigh quotient is at most max(EI) / min(rhoA) times that of the
+        same shape on a beam of unit EI and rhoA, so (min-max) each of its frequencies is at
+        most sqrt(max(EI) / min(rhoA)) / sqrt(EI / rhoA) times its equivalent uniform beam's
+        (`preflight.highest_frequency`'s bound).
+        """
+        factors = []
+        for i in ("1", "2"):
+            segments = getattr(self, "segments" + i)
+            factors.append(math.sqrt(max(s.EI for s in segments) / min(s.rhoA for s in segments)
+                                     * getattr(self, "rhoA" + i) / getattr(self, "EI" + i))
+                           if segments else 1.0)
+        return factors[0], factors[1]
 
     @property
     def tip_compliance(self) -> tuple[float, float]:
@@ -814,7 +896,7 @@ class Params:
         With attachments its cantilever's (the Green's function: a module loaded only then).
         """
         i = str(which)
-        if getattr(self, "attachments" + i):
+        if not self.uniform_beam(which):
             return self.structure(which).tip_compliance
         return getattr(self, "l" + i) ** 3 / (3 * getattr(self, "EI" + i))
 
@@ -830,11 +912,11 @@ class Params:
         l1, EI1, rhoA1 are left out.
         """
         # floats, names and frozen parts only: no deep copy needed (dataclasses.asdict's cost)
-        user = self.structure1 is not None
+        derived = self.derived_keys()
         return {field.name: getattr(self, field.name) for field in _FIELDS()
                 if (field.name not in _ONLY_IF_GIVEN
                     or getattr(self, field.name) != field.default)
-                and not (user and field.name in _EQUIVALENT_BEAM1)}
+                and field.name not in derived}
 
     def replace(self, **changes: Any) -> Params:
         """Return a copy with some parameters changed (material keys allowed).
@@ -848,7 +930,8 @@ class Params:
         refuse_unused_law_keys(changes, contacts, "Params.replace()")
         if changes.keys() <= _CHECKED_ALONE and not (
                 not self.partner.has_beam2 and changes.keys() & BEAM2_KEYS) and not (
-                self.structure1 is not None and changes.keys() & BEAM1_KEYS):
+                self.structure1 is not None and changes.keys() & BEAM1_KEYS) and not (
+                changes.keys() & set(self.derived_keys())):
             # numbers other than the drives, on parameters already checked: only the changes
             # and the joint rules need checking (a continuation changes one per period map)
             changed = object.__new__(Params)  # copy.copy's reduce protocol takes 5 us
@@ -867,6 +950,9 @@ class Params:
         for i in ("1", "2"):
             if any(k + i in changes for k in MATERIAL_KEYS):
                 del base["EI" + i], base["rhoA" + i]
+            if changes.get("segments" + i):  # the segments replace the beam's l, EI, rhoA
+                for key in ("l", "EI", "rhoA"):
+                    base.pop(key + i, None)
         if not configuration.counterpart_named(changes.get("counterpart", self.counterpart)
                                                ).has_beam2:  # beam 2 left at its defaults
             base = {key: value for key, value in base.items() if key not in BEAM2_KEYS}
@@ -902,12 +988,18 @@ _STRUCTURE_IS_BEAM1 = "structure1 is beam 1 (a user structure): leave beam 1's k
 
 
 @functools.lru_cache(maxsize=64)
-def _cantilever(EI: float, rhoA: float, length: float,
+def _cantilever(segments: tuple[Segment, ...],
                 attachments: tuple[Attachment, ...]) -> Cantilever:
     """The checked `Cantilever` of a beam, built once (a run asks for it often, 15 us each)."""
     from impactbeams.structure.cantilever import Cantilever
 
-    return Cantilever.uniform(EI, rhoA, length, attachments)
+    return Cantilever(segments, attachments)
+
+
+@functools.lru_cache(maxsize=64)
+def _uniform(length: float, EI: float, rhoA: float) -> tuple[Segment]:
+    """The one segment of a uniform beam (m, N m^2, kg/m), built once."""
+    return (Segment(length, EI, rhoA),)
 
 
 def modes_per_beam(n_modes: int, partner: Counterpart) -> str:
@@ -925,22 +1017,68 @@ def _field_values(values: Mapping[str, Any], source: str, given_fields: bool,
     their defaults are checked on construction).
     """
     for key in values:
-        if key not in PARAMETERS and key not in ATTACHMENTS and key not in (USER_STRUCTURE,
-                                                                             CONTACTS):
-            raise unknown_key("parameter", key, source,
-                              [*sorted(PARAMETERS), *ATTACHMENTS, USER_STRUCTURE, CONTACTS])
+        if key not in PARAMETERS and key not in (*ATTACHMENTS, *BEAM_SEGMENTS, USER_STRUCTURE,
+                                                 CONTACTS):
+            raise unknown_key("parameter", key, source, [*sorted(PARAMETERS), *ATTACHMENTS,
+                                                         *BEAM_SEGMENTS, USER_STRUCTURE, CONTACTS])
     if not configuration.counterpart_named(values.get("counterpart")).has_beam2:
         refuse_beam2([key for key in values if given_fields or key[:-1] in MATERIAL_KEYS],
                      source)
-    return resolve_materials(values, source)
+    return resolve_materials(fold_segments(values, source), source)
+
+
+def fold_segments(values: Mapping[str, Any], source: str) -> dict[str, Any]:
+    """``values`` with each beam's ``segments`` checked: one segment becomes its l, EI, rhoA.
+
+    Beside segments, the beam's EI, rhoA or material keys raise ParameterError (each segment
+    gives its own), and so does its l unless it is the segments' total length (then it is
+    dropped: `Params._take_segments` sets it). Each segment's values must be allowed values
+    of l, EI and rhoA. One segment is the simple form: its fields replace the flat keys, so
+    that it gives the uniform beam's run bit for bit; two or more stay ``segments``.
+    """
+    folded = dict(values)
+    for i in ("1", "2"):
+        name = "segments" + i
+        if name not in folded:
+            continue
+        segments = folded.pop(name)
+        require(name, segments, isinstance(segments, (tuple, list)),
+                "must be a tuple of impactbeams.Segment (in a TOML file: an array of tables, "
+                f"[[params.{name}]])")
+        segments = tuple(as_segment(f"{name}[{j}]", s) for j, s in enumerate(segments))
+        if not segments:
+            continue
+        for j, segment in enumerate(segments):
+            require(f"{name}[{j}]", segment, isinstance(segment, Segment),
+                    "must be an impactbeams.Segment (its length, EI and rhoA)")
+            for field, key in SEGMENT_KEYS.items():
+                check_range(key + i, getattr(segment, field),
+                            lambda index, at=f"{name}[{j}].{field}": f"{at}: ")
+        given = [key + i for key in ("EI", "rhoA", *MATERIAL_KEYS) if key + i in folded]
+        if given:
+            raise ParameterError(
+                f"{', '.join(given)} in {source} {'is' if len(given) == 1 else 'are'} not "
+                f"allowed with {name}: each segment gives its own EI and rhoA (leave beam {i}'s "
+                f"{', '.join(given)} out)")
+        total = math.fsum(s.length for s in segments)
+        if "l" + i in folded:
+            length = folded.pop("l" + i)
+            require("l" + i, length, is_real(length) and abs(length - total) <= _SAME_LENGTH
+                    * total, f"must equal the total length of {name}, {total!r} m (or be left "
+                    "out: the segments give it)", "m")
+        folded.update({"l" + i: segments[0].length, "EI" + i: segments[0].EI,
+                       "rhoA" + i: segments[0].rhoA} if len(segments) == 1 else {name: segments})
+    return folded
 
 
 # the tuple parameters whose elements' fields are parameters of their own, named
-# NAME.INDEX.FIELD: a contact's (``contacts.0.clearance``) and an attachment's
-# (``attachments1.0.mass``)
-ELEMENT_PARAMETERS = (CONTACTS, *ATTACHMENTS)
+# NAME.INDEX.FIELD: a contact's (``contacts.0.clearance``), an attachment's
+# (``attachments1.0.mass``) and a segment's (``segments1.0.EI``)
+ELEMENT_PARAMETERS = (CONTACTS, *ATTACHMENTS, *BEAM_SEGMENTS)
 # the fields of any attachment (a point mass's or a spring's) and their units
 ATTACHMENT_FIELDS = {name: unit for units in FIELD_UNITS.values() for name, unit in units.items()}
+# each kind of a beam's element (its parts, its segments) and its fields' units
+PART_FIELDS = {**FIELD_UNITS, Segment: SEGMENT_UNITS}
 
 
 def element_field(name: str) -> tuple[str, int, str] | None:
@@ -969,14 +1107,29 @@ def attachment_field(name: str) -> tuple[str, int, str] | None:
     return field if field is not None and field[0] in ATTACHMENTS else None
 
 
-def check_attachment_field(params: Params, what: str, name: str) -> None:
-    """``name`` (``attachments1.INDEX.FIELD``) is a field of one of ``params``' parts."""
-    which, index, field = attachment_field(name)
+def part_field(name: str) -> tuple[str, int, str] | None:
+    """(tuple, index, field) of a beam's part's or segment's field; None for others.
+
+    ``attachments1.0.mass`` or ``segments1.0.EI`` (or of beam 2): a field that changes the
+    beam's geometry, checked at every value of its axis (`impactbeams.sweep.definition`).
+    """
+    field = element_field(name)
+    return field if field is not None and field[0] != CONTACTS else None
+
+
+def check_part_field(params: Params, what: str, name: str) -> None:
+    """``name`` (``attachments1.INDEX.FIELD``, ``segments1...``) is a field of a part of params.
+
+    A beam of one segment is its l, EI, rhoA (continue those).
+    """
+    which, index, field = part_field(name)
     parts = getattr(params, which)
     require(what, name, index < len(parts),
             f"there are {len(parts)} parts in params.{which}"
-            + (f" (indices 0 to {len(parts) - 1})" if parts else ""))
-    fields = FIELD_UNITS[type(parts[index])]
+            + (f" (indices 0 to {len(parts) - 1})" if parts else "")
+            + (" (one segment is the beam's l, EI, rhoA: continue those)"
+               if which in BEAM_SEGMENTS and not parts else ""))
+    fields = PART_FIELDS[type(parts[index])]
     require(what, name, field in fields,
             f"{which}[{index}] is a {type(parts[index]).__name__}: its fields are "
             f"{', '.join(fields)}")
@@ -996,13 +1149,15 @@ def named_attributes(name: str) -> dict[str, str]:
     """CF attributes (units, long_name) of the parameter ``name`` as a coordinate.
 
     A contact's field (``contacts.0.clearance``) has its flat key's, naming the contact; an
-    attachment's field (``attachments1.0.mass``) its part's unit, naming the part.
+    attachment's field (``attachments1.0.mass``) or a segment's (``segments1.0.EI``) its unit,
+    naming the part.
     """
     element = element_field(name)
-    if element is not None and element[0] in ATTACHMENTS:
+    if element is not None and element[0] != CONTACTS:
         which, index, field = element
-        return {"units": ATTACHMENT_FIELDS[field],
-                "long_name": f"{FIELD_WORDS[field]} of {which}[{index}]"}
+        units, words = ((ATTACHMENT_FIELDS, FIELD_WORDS) if which in ATTACHMENTS
+                        else (SEGMENT_UNITS, SEGMENT_WORDS))
+        return {"units": units[field], "long_name": f"{words[field]} of {which}[{index}]"}
     attributes = parameter_attributes(flat_parameter(name))
     if element is not None:
         attributes["long_name"] += f" of {CONTACTS}[{element[1]}]"
@@ -1012,11 +1167,15 @@ def named_attributes(name: str) -> dict[str, str]:
 def check_parameter(name: str, value: Any, point: PointName = no_point) -> None:
     """Raise ParameterError unless ``value`` (a float or an array) is allowed for ``name``.
 
-    A numeric parameter's or a contact field's range (`check_range` of its flat key); an
-    attachment's field, a finite real number >= 0 (where the part lies on its beam, the
-    parameters' joint check).
+    A numeric parameter's or a contact field's range (`check_range` of its flat key); a
+    segment's field, that of its beam's key (``segments1.0.EI``: ``EI1``'s); an attachment's
+    field, a finite real number >= 0 (where the part lies on its beam, the parameters' joint
+    check).
     """
-    field = attachment_field(name)
+    field = part_field(name)
+    if field is not None and field[0] in BEAM_SEGMENTS:
+        check_range(SEGMENT_KEYS[field[2]] + field[0][-1], value, point)
+        return
     if field is None:
         check_range(flat_parameter(name), value, point)
         return

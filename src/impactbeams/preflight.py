@@ -41,21 +41,24 @@ MAX_PHASE = 1e10
 
 
 def highest_frequency(values: Mapping[str, Any], n_modes: int, springs: int = 0,
-                      structure1: MatrixStructure | ModalStructure | None = None) -> np.ndarray:
+                      structure1: MatrixStructure | ModalStructure | None = None,
+                      steps: tuple[float, float] = (1.0, 1.0)) -> np.ndarray:
     """The highest free-mode frequency (rad/s) of both beams with ``n_modes`` modes each.
 
     ``values``: resolved parameters (floats or arrays that broadcast, as in `check_run`);
     ``springs``: the springs to ground a beam carries (`Params.grounded_springs`). Each is a
     rank-one stiffening, which raises the n-th frequency at most to the (n+1)-th: a bound is
     the uniform beam's mode ``n_modes + springs`` (point masses and a compliant clamp only
-    lower the frequencies). A user structure as beam 1 (``structure1``) gives its own
-    ``n_modes``-th frequency (of the modes it has).
+    lower the frequencies). A stepped beam's frequencies lie at most ``steps`` (one factor
+    per beam, `Params.step_factors`) above those of its l, EI, rhoA. A user structure as beam 1
+    (``structure1``) gives its own ``n_modes``-th frequency (of the modes it has).
     """
     from impactbeams.modes import cantilever_roots  # SciPy: only when a run is checked
 
     root = cantilever_roots(n_modes + springs)[-1]
-    highest = [np.sqrt(np.asarray(values[f"EI{i}"]) / values[f"rhoA{i}"])
-               * (root / np.asarray(values[f"l{i}"])) ** 2 for i in ("1", "2")]
+    highest = [step * np.sqrt(np.asarray(values[f"EI{i}"]) / values[f"rhoA{i}"])
+               * (root / np.asarray(values[f"l{i}"])) ** 2
+               for i, step in zip(("1", "2"), steps, strict=True)]
     if structure1 is not None:
         highest[0] = structure1.modes(min(n_modes, structure1.mode_limit)).frequencies[-1]
     return np.maximum(*highest)
@@ -63,19 +66,20 @@ def highest_frequency(values: Mapping[str, Any], n_modes: int, springs: int = 0,
 
 def check_run(values: Mapping[str, Any], t_max: float, n_modes: int,
               point: PointName = no_point, springs: int = 0,
-              structure1: MatrixStructure | ModalStructure | None = None) -> None:
+              structure1: MatrixStructure | ModalStructure | None = None,
+              steps: tuple[float, float] = (1.0, 1.0)) -> None:
     """Refuse a run whose modes or horizon leave the model's or double precision's range.
 
     ``values``: the resolved numeric parameters (floats, or arrays broadcasting over a
     sweep's corner grid); ``t_max`` in s; ``n_modes`` free modes per beam (already checked to
-    be an integer within the package's limit); ``springs``, ``structure1``: see
+    be an integer within the package's limit); ``springs``, ``structure1``, ``steps``: see
     `highest_frequency`. Raises ParameterError.
     """
     if structure1 is not None:
         limit = structure1.mode_limit
         require("n_modes", n_modes, n_modes <= limit,
                 f"{structure1.name} has {limit} modes: n_modes must be at most {limit}")
-    highest = highest_frequency(values, n_modes, springs, structure1)
+    highest = highest_frequency(values, n_modes, springs, structure1, steps)
     require_all("n_modes", np.asarray(n_modes), highest <= MAX_FREQUENCY, point, lambda j: (
         f"the highest mode would have the frequency {value_at(highest, j):.3g} rad/s, above "
         f"{MAX_FREQUENCY:g} rad/s where a continuum beam model does not hold: use fewer modes"))

@@ -87,8 +87,8 @@ def build_tied_model(params: Params, n_modes: int) -> ModalModel:
     free = build_free_phase(params, n_modes)  # checks both arguments first
     if not (beam(params, 1).closed_form and beam(params, 2).closed_form):
         raise ParameterError("build_tied_model: the tied law supports the paper's uniform beams "
-                             "only, not a beam with attachments or a user structure (use the "
-                             "spring law)")
+                             "only, not a beam with attachments or a user structure, nor a "
+                             "stepped beam (use the spring law)")
     if not params.partner.has_beam2:
         return _stop_model(params, free)
     n = free.beam1.frequencies.size

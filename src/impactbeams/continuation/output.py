@@ -10,7 +10,7 @@ import numpy as np
 from impactbeams.continuation.arclength import Point
 from impactbeams.continuation.branch import Branch
 from impactbeams.continuation.events import LABELS
-from impactbeams.params import attachment_field, flat_parameter, named_attributes
+from impactbeams.params import flat_parameter, named_attributes, part_field
 from impactbeams.variables import PARAMETERS, VARIABLES, attributes, validate
 
 if TYPE_CHECKING:
@@ -67,7 +67,7 @@ def branches_dataset(branches: list[Branch], parameter: str,
     for name in dataset.variables:
         if name in VARIABLES:
             dataset[name].attrs.update(attributes(str(name)))
-    if flat_parameter(parameter) in PARAMETERS or attachment_field(parameter) is not None:
+    if flat_parameter(parameter) in PARAMETERS or part_field(parameter) is not None:
         dataset[parameter].attrs.update(named_attributes(parameter))
     validate(dataset)
     return dataset

@@ -45,12 +45,12 @@ from impactbeams.params import (
     MAX_MODES,
     ParameterError,
     Params,
-    attachment_field,
-    check_attachment_field,
     check_parameter,
+    check_part_field,
     contact_field,
     is_path,
     named_attributes,
+    part_field,
     require,
     require_finite,
     require_integer,
@@ -190,8 +190,8 @@ def check_continued(params: Params, what: str, name: str) -> None:
     stiffness or damping); its point is not continued (nor the flat point of one).
     """
     contacts = params.contacts
-    if attachment_field(name) is not None:
-        check_attachment_field(params, what, name)
+    if part_field(name) is not None:
+        check_part_field(params, what, name)
         return
     field = contact_field(name)
     if field is None:
@@ -201,6 +201,9 @@ def check_continued(params: Params, what: str, name: str) -> None:
         require(what, name, name in CONTINUABLE,
                 f"must be one of {', '.join(CONTINUABLE)}, or with several contacts "
                 f"'{CONTACTS}.INDEX.FIELD'")
+        require(what, name, name not in params.derived_keys(),
+                "it is derived here from the beam's segments or structure: continue a segment's "
+                "field ('segments1.INDEX.FIELD', FIELD one of length, EI, rhoA)")
         return
     index, field_name = field
     require(what, name, len(contacts) >= 2,

@@ -45,8 +45,8 @@ from impactbeams.params import (
     ParameterError,
     Params,
     attachment_field,
-    check_attachment_field,
     check_parameter,
+    check_part_field,
     contact_field,
     named_attributes,
     require,
@@ -183,7 +183,7 @@ def check_grazing_parameter(params: Params, parameter: str, others: tuple[str, .
     ``others``: more names the caller takes (the command line's ``omega``).
     """
     if attachment_field(parameter) is not None:
-        check_attachment_field(params, "parameter", parameter)
+        check_part_field(params, "parameter", parameter)
         return
     count = len(params.each_contact())
     field = contact_field(parameter)

@@ -37,7 +37,13 @@ class Segment:
     rhoA: float
 
     def __post_init__(self) -> None:
-        _check_fields(self, {"length": "m", "EI": "N m^2", "rhoA": "kg/m"}, positive=True)
+        _check_fields(self, SEGMENT_UNITS, positive=True)
+
+
+SEGMENT_UNITS = {"length": "m", "EI": "N m^2", "rhoA": "kg/m"}  # each a finite number > 0
+# each field's beam key (l, EI, rhoA: whose allowed values it takes) and what it is, in words
+SEGMENT_KEYS = {"length": "l", "EI": "EI", "rhoA": "rhoA"}
+SEGMENT_WORDS = {"length": "length", "EI": "bending stiffness", "rhoA": "mass per unit length"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -135,3 +141,20 @@ def as_part(name: str, value: Any) -> Any:
         f"{name} = {value!r} is not allowed: a point mass is a table of position, mass and "
         "rotary_inertia (optional); a spring, of position, stiffness and/or "
         "rotational_stiffness")
+
+
+def as_segment(name: str, value: Any) -> Any:
+    """``value`` as a Segment: a Segment as it is, a table (a TOML file's) of its fields built.
+
+    A table must give exactly ``length``, ``EI`` and ``rhoA``, else ParameterError naming
+    ``name``; anything else is returned for the caller to refuse.
+    """
+    if not isinstance(value, dict):
+        return value
+    if set(value) != set(SEGMENT_UNITS):
+        raise ParameterError(f"{name} = {value!r} is not allowed: a segment is a table of "
+                             "length (m), EI (N m^2) and rhoA (kg/m)")
+    try:
+        return Segment(**value)
+    except ParameterError as error:
+        raise ParameterError(f"{name}: {error}") from None

@@ -40,7 +40,7 @@ from impactbeams.longtime import LongTime, Stepping
 from impactbeams.params import (
     ATTACHMENT_FIELDS,
     ATTACHMENTS,
-    BEAM1_KEYS,
+    BEAM_SEGMENTS,
     CHOICES,
     CONTACT_FIELDS,
     CONTACT_LAW_KEYS,
@@ -49,6 +49,7 @@ from impactbeams.params import (
     CONTACTS,
     MATERIAL_KEYS,
     MAX_MODES,
+    PART_FIELDS,
     USER_STRUCTURE,
     ParameterError,
     Params,
@@ -63,6 +64,8 @@ from impactbeams.params import (
     is_integer,
     is_path,
     is_real,
+    no_point,
+    part_field,
     read_toml,
     refuse_beam2,
     refuse_unused_law_keys,
@@ -82,7 +85,7 @@ from impactbeams.preflight import (
     require_memory,
 )
 from impactbeams.structure.contacts import FLAT_KEYS, Contact
-from impactbeams.structure.parts import FIELD_UNITS
+from impactbeams.structure.parts import SEGMENT_UNITS
 from impactbeams.variables import (
     LONG_TIME_VARIABLES,
     PARAMETERS,
@@ -126,7 +129,8 @@ EXACT_VALUES = 2**20  # the longest axis whose values Axis.value builds
 # an axis on one field of one of several contacts: "contacts.0.clearance" (in a sweep file
 # [axes."contacts.0.clearance"]); its values are that contact's field's, in the flat key's unit
 CONTACT_AXIS = CONTACTS + ".{index}.{field}"
-# an axis on one field of one part a beam carries: "attachments1.0.mass" (its unit the field's)
+# an axis on one field of one part a beam carries or of one of its segments:
+# "attachments1.0.mass", "segments1.0.EI" (its unit the field's)
 ATTACHMENT_AXIS = "{which}.{index}.{field}"
 # the contact fields an axis may sweep: its point on each beam and its law's (its side is a
 # name); a point moves the contact's gap weights: a geometry axis
@@ -329,7 +333,7 @@ def sweep_from_mapping(data: Mapping[str, Any], source: str = "sweep") -> Sweep:
     axes = tuple(_axis(name, spec, source) for name, spec in axes_table.items())
     _check_conflicts(fixed, axes, source)
     _check_contact_axes(fixed, axes, source)
-    _check_attachment_axes(fixed, axes, source)
+    _check_part_axes(fixed, axes, source)
     if not counterpart_named(fixed.get("counterpart")).has_beam2:  # its keys are mistakes
         refuse_beam2(fixed, f"[params] of {source}")
         refuse_beam2([axis.name for axis in axes], f"[axes] of {source}")
@@ -383,26 +387,30 @@ def _contact_axis(name: str, where: str) -> str:
     raise unknown_key("contact field", name_of_field, where, SWEPT_CONTACT_FIELDS)
 
 
-def _attachment_axis(name: str, where: str) -> None:
-    """Refuse an ``attachments1.INDEX.FIELD`` axis whose form or field is not a part's."""
-    field, which = attachment_field(name), name.split(".")[0]
+def _part_axis(name: str, where: str) -> None:
+    """Refuse an ``attachments1.INDEX.FIELD`` (``segments1``) axis not on a part's field."""
+    field, which = part_field(name), name.split(".")[0]
+    kind, fields = (("attachment", ATTACHMENT_FIELDS) if which in ATTACHMENTS
+                    else ("segment", SEGMENT_UNITS))
+    example = "mass" if which in ATTACHMENTS else "EI"
     require(where, name, field is not None,
-            f"an axis on an attachment's field is named {which}.INDEX.FIELD, e.g. "
-            f"{ATTACHMENT_AXIS.format(which=which, index=0, field='mass')!r} (INDEX: the "
-            "part's place in that array of tables, from 0)")
-    if field[2] not in ATTACHMENT_FIELDS:
-        raise unknown_key("attachment field", field[2], where, ATTACHMENT_FIELDS)
+            f"an axis on {'an' if which in ATTACHMENTS else 'a'} {kind}'s field is named "
+            f"{which}.INDEX.FIELD, e.g. "
+            f"{ATTACHMENT_AXIS.format(which=which, index=0, field=example)!r} (INDEX: the "
+            f"{'part' if which in ATTACHMENTS else kind}'s place in that array of tables, "
+            "from 0)")
+    if field[2] not in fields:
+        raise unknown_key(f"{kind} field", field[2], where, fields)
 
 
-def _check_attachment_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...],
-                           source: str) -> None:
-    """Refuse an axis on a part's field beyond the parts, not that part's, or given twice.
+def _check_part_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: str) -> None:
+    """Refuse an axis on a part's (a segment's) field beyond them, not its, or given twice.
 
     The field must be left out of the part's table (a part built in Python gives them all:
     give it as a table to sweep one of its fields); the table, with it, must be a part.
     """
     for axis in axes:
-        field = attachment_field(axis.name)
+        field = part_field(axis.name)
         if field is None:
             continue
         which, index, name = field
@@ -413,7 +421,7 @@ def _check_attachment_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...],
                 "[params]" + (f" (indices 0 to {count - 1})" if count else ""))
         part = parts[index]
         if not isinstance(part, dict):  # a part: it gives every field it has
-            fields = FIELD_UNITS.get(type(part), {})
+            fields = PART_FIELDS.get(type(part), {})
             table = {key: getattr(part, key) for key in fields if key != name}
             raise ParameterError(
                 f"{where} = {axis.name!r} is not allowed: {which}[{index}] = {part!r} " + (
@@ -423,7 +431,7 @@ def _check_attachment_axes(fixed: Mapping[str, Any], axes: tuple[Axis, ...],
             raise ParameterError(
                 f"{where} = {axis.name!r} is not allowed: is given both in [params] ({which}"
                 f"[{index}].{name} = {part[name]!r}) and as an axis: remove one of them")
-    swept = {axis.name: axis.num for axis in axes if attachment_field(axis.name) is not None}
+    swept = {axis.name: axis.num for axis in axes if part_field(axis.name) is not None}
     require(f"[axes] of {source}", swept, math.prod(swept.values()) <= MAX_GEOMETRIES,
             f"the parts' axes give {math.prod(swept.values())} geometries, each checked as "
             f"parameters (up to 1 ms) before its modes are built: at most {MAX_GEOMETRIES}")
@@ -553,14 +561,17 @@ def _axis(name: str, spec: Any, source: str) -> Axis:
     require(where, name, name not in ATTACHMENTS, f"{name} is not sweepable: give a beam's "
             "parts in [params], and sweep one part's field as "
             f"[axes.\"{ATTACHMENT_AXIS.format(which=name, index=0, field='mass')}\"]")
+    require(where, name, name not in BEAM_SEGMENTS, f"{name} is not sweepable: give a beam's "
+            "segments in [params], and sweep one segment's field as "
+            f"[axes.\"{ATTACHMENT_AXIS.format(which=name, index=0, field='EI')}\"]")
     require(where, name, name != CONTACTS, f"{name} is not sweepable: give the contacts in "
             "[params] (one sweep per set of contacts), and sweep a contact's field as "
             f"[axes.\"{CONTACT_AXIS.format(index=0, field='clearance')}\"]")
     if name.startswith(CONTACTS + "."):
         _contact_axis(name, where)
         return _numeric_axis(name, spec, where, source)
-    if name.split(".")[0] in ATTACHMENTS:
-        _attachment_axis(name, where)
+    if name.split(".")[0] in (*ATTACHMENTS, *BEAM_SEGMENTS):
+        _part_axis(name, where)
         return _numeric_axis(name, spec, where, source)
     require(where, name, name != USER_STRUCTURE, f"{name} is not sweepable: give the "
             "structure in [params] (one sweep per structure)")
@@ -606,6 +617,11 @@ def _check_conflicts(fixed: Mapping[str, Any], axes: tuple[Axis, ...], source: s
                              f"as [axes.{name}] of {source}: remove one of them")
     given = {**{name: "[params]" for name in fixed}, **{name: "[axes]" for name in swept}}
     for i in ("1", "2"):
+        beam = [key + i for key in ("l", "EI", "rhoA", *MATERIAL_KEYS) if key + i in swept]
+        if fixed.get("segments" + i) and beam:
+            raise ParameterError(
+                f"[axes.{beam[0]}] of {source} is not allowed with segments{i} in [params]: the "
+                f"segments give beam {i}'s length, EI and rhoA (one sweep per stepped beam)")
         direct = [k + i for k in ("EI", "rhoA") if k + i in given]
         material = [k + i for k in MATERIAL_KEYS if k + i in given]
         if direct and material:
@@ -625,12 +641,13 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
     ends = []
     values: dict[str, Any] = {name: value for name, value in sweep.fixed.items()
                               if name not in CHOICES and name not in ATTACHMENTS
-                              and name != USER_STRUCTURE and name not in CONTACT_POSITIONS}
+                              and name not in BEAM_SEGMENTS and name != USER_STRUCTURE
+                              and name not in CONTACT_POSITIONS}
     for k, axis in enumerate(sweep.axes):
         axis_ends = np.array([axis.min, axis.max] if axis.num > 1 and not axis.choices
                              else [axis.min])
         ends.append(axis_ends)
-        if not axis.choices and attachment_field(axis.name) is None:  # (a part: `_check_points`)
+        if not axis.choices and part_field(axis.name) is None:  # (a part: `_check_points`)
             values[axis.name] = axis_ends.reshape([-1 if d == k else 1 for d in range(dims)])
 
     def point(index: tuple[int, ...]) -> str:
@@ -646,10 +663,12 @@ def _corners(sweep: Sweep) -> tuple[dict[str, Any], PointName]:
 
     resolved = resolve_materials(values, f"[params] of {sweep.source}", point)
     defaults = Params().numeric()
-    # beam 1 as a user structure: its equivalent beam's l1, EI1, rhoA1 (Params' own)
-    beam1 = {name: sweep.base.numeric()[name] for name in BEAM1_KEYS
-             if sweep.base.structure1 is not None and name in defaults}
-    return {**defaults, **beam1, **resolved}, point
+    # a stepped beam's (one segment's too) or a user structure's l, EI, rhoA: the first
+    # point's (a segment's axis: `_check_points`)
+    given = [key + i for i in ("1", "2") if sweep.fixed.get("segments" + i)
+             for key in ("l", "EI", "rhoA")]
+    derived = {name: getattr(sweep.base, name) for name in (*sweep.base.derived_keys(), *given)}
+    return {**defaults, **derived, **resolved}, point
 
 
 def contact_sweeps(sweep: Sweep) -> tuple[Sweep, ...]:
@@ -730,19 +749,26 @@ def _check_points(sweep: Sweep) -> None:
     is a flat key (``contact_position1``: the one contact's) or one contact's field. A part's
     rules (on its beam; the tip compliance the drive's check reads, not monotone in a
     rotational spring's place) are checked at every value of its axis, the other axes at
-    their ends.
+    their ends; so are a segment's, and there the modes and horizon too (its beam's l, EI,
+    rhoA and frequency bound, which the corners take from the first point, move with it).
     """
     if not any(flat_parameter(axis.name) in CONTACT_POSITIONS
-               or attachment_field(axis.name) is not None for axis in sweep.axes):
+               or part_field(axis.name) is not None for axis in sweep.axes):
         return
-    values = [axis.values if attachment_field(axis.name) is not None
+    values = [axis.values if part_field(axis.name) is not None
               else (axis.first,) if axis.choices or axis.num == 1 else (axis.min, axis.max)
               for axis in sweep.axes]
+    stepped = any(axis.name.split(".")[0] in BEAM_SEGMENTS for axis in sweep.axes)
     for point in itertools.product(*values):
         changes = {axis.name: _plain(value)
                    for axis, value in zip(sweep.axes, point, strict=True)}
         try:
-            sweep.params_at(changes)
+            params = sweep.params_at(changes)
+            if stepped:
+                check_run(params.numeric(), sweep.t_max, sweep.n_modes,
+                          springs=_grounded_springs(sweep), structure1=params.structure1,
+                          steps=params.step_factors)
+                _check_long_time(sweep, params.numeric(), no_point, params.step_factors)
         except ParameterError as error:
             named = ", ".join(f"{name} = {value!r}" for name, value in changes.items())
             raise ParameterError(f"at the grid point {named} of {sweep.source}: {error}"
@@ -775,8 +801,8 @@ def _check_grid(sweep: Sweep) -> None:
             sweep.base.partner):
         sweep.base.structure1.require_support(values["base_amplitude"])
     check_run(values, sweep.t_max, sweep.n_modes, point, _grounded_springs(sweep),
-              sweep.base.structure1)
-    _check_long_time(sweep, values, point)
+              sweep.base.structure1, sweep.base.step_factors)
+    _check_long_time(sweep, values, point, sweep.base.step_factors)
 
 
 def _grounded_springs(sweep: Sweep) -> int:
@@ -789,7 +815,8 @@ def _grounded_springs(sweep: Sweep) -> int:
     return sweep.params_at(largest).grounded_springs
 
 
-def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) -> None:
+def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName,
+                     steps: tuple[float, float]) -> None:
     """Long runs need a forcing period, and a horizon within double precision's phase range.
 
     Each cell runs (transient_periods + sampled_periods) forcing periods; the longest run is
@@ -803,7 +830,7 @@ def _check_long_time(sweep: Sweep, values: Mapping[str, Any], point: PointName) 
     periods = sweep.transient_periods + sweep.long_time.sampled_periods
     horizon = sweep.long_time.horizon(omega, sweep.transient_periods)
     highest = highest_frequency(values, sweep.n_modes, _grounded_springs(sweep),
-                                sweep.base.structure1)
+                                sweep.base.structure1, steps)
     phase = np.maximum(highest, omega) * horizon
     require_all("transient_periods + sampled_periods", periods, phase <= MAX_PHASE, point,
                 lambda j: (f"the run of {value_at(horizon, j):.3g} s turns the fastest "

@@ -119,7 +119,7 @@ def check_contact_runs(params: Params, t_max: float, n_modes: int | None) -> int
          else require_integer("n_modes", n_modes, 1, MAX_MODES))
     for run in runs:
         check_run(run.numeric(), t_max, n, springs=run.grounded_springs,
-                  structure1=run.structure1)
+                  structure1=run.structure1, steps=run.step_factors)
     return n
 
 

@@ -108,7 +108,7 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
                     ) + costs.SAMPLING * n_times * n_modes
     if energy_balance:
         fastest = float(highest_frequency(params.numeric(), n_modes, params.grounded_springs,
-                                        params.structure1))
+                                          params.structure1, params.step_factors))
         seconds += costs.energy_seconds(fastest, n_modes, t_max, n_times)
     return Cost(2 * 8 * series * n_times + sampling + segments, seconds)
 
@@ -351,7 +351,7 @@ def _checked_inputs(params: Params, t_max: float, n_modes: int | None, dt_output
         n_modes = recommended_modes(params)
     n_modes = require_integer("n_modes", n_modes, 1, MAX_MODES)
     check_run(params.numeric(), t_max, n_modes, springs=params.grounded_springs,
-              structure1=params.structure1)
+              structure1=params.structure1, steps=params.step_factors)
     n_times = times.size if times is not None else _output_count(t_max, dt_output)
     cost = simulation_cost(params, t_max, n_modes, n_times, fields, n_points, energy_balance,
                            max_events)
@@ -380,7 +380,7 @@ def _announce(params: Params, run_inputs: _RunInputs) -> None:
 def _announce_energy(params: Params, n_modes: int, t_end: float, n_times: int) -> None:
     """The expected time of the energy balance over a run that stopped at ``t_end`` (s)."""
     fastest = highest_frequency(params.numeric(), n_modes, params.grounded_springs,
-                                        params.structure1)
+                                params.structure1, params.step_factors)
     seconds = costs.energy_seconds(float(fastest), n_modes, t_end, n_times)
     print(f"simulate: the energy balance over the {t_end:.4g} s simulated: roughly "
           f"{format_time(seconds)}", file=sys.stderr)

@@ -172,8 +172,9 @@ def projected_fields(packed: Packed, fields: InitialFields) -> np.ndarray:
     p, free = packed.params, packed.dynamics.free
     if not (modes.beam(p, 1).closed_form and modes.beam(p, 2).closed_form):
         raise ParameterError("initial_state: initial fields are projected on uniform beams "
-                             "only, not on a beam with attachments or a user structure (start "
-                             "from rest, a steady state or an earlier run's Dataset)")
+                             "only, not on a beam with attachments or a user structure, nor "
+                             "on a stepped beam (start from rest, a steady state or an earlier "
+                             "run's Dataset)")
     if not p.partner.has_beam2:
         for name in ("deflection2", "velocity2"):
             if getattr(fields, name) is not None:
