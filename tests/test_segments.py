@@ -18,6 +18,7 @@ from impactbeams.cli import main
 from impactbeams.continuation import Continuation, continue_orbits
 from impactbeams.modes import beam
 from impactbeams.orbits import PeriodMap, periodic_orbit
+from impactbeams.orbits.grazing import grazing_curve
 from impactbeams.params import (
     ParameterError,
     Params,
@@ -283,3 +284,15 @@ def test_the_preflight_bounds_the_highest_frequency_of_a_stepped_beam(segments):
         assert highest_frequency(params.numeric(), n, steps=params.step_factors) >= exact[n - 1]
     if segments[0].rhoA > segments[1].rhoA and segments[0].EI < segments[1].EI:
         assert highest_frequency(params.numeric(), 20) < 0.8 * exact[-1]
+
+
+def test_a_grazing_curve_in_a_segments_field_finds_the_segment_whose_orbit_grazes():
+    """A shaken stepped beam's clearance set to its orbit's closed-form gap amplitude |G| at
+    200 rad/s: the grazing in the root's EI at 200 rad/s, a root searched on the segment's own
+    modes (no closed form), is the root's EI, to Brent's tolerance (4 eps; measured equal)."""
+    shaken = STOP.replace(shaker="beam1", base_amplitude=1e-4, force_amplitude=0.0,
+                          damping_ratio=0.01)
+    amplitude = grazing_curve(shaken, 5, "clearance", [200.0])["clearance"].values[0]
+    found = grazing_curve(shaken.replace(clearance=float(amplitude)), 5, ROOT_EI, [200.0],
+                          within=(1.5 * EI, 4.5 * EI))
+    assert found[ROOT_EI].values[0] == pytest.approx(3 * EI, rel=1e-14)

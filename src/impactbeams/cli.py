@@ -39,9 +39,9 @@ from impactbeams.params import (
     USER_STRUCTURE,
     ParameterError,
     Params,
-    attachment_field,
     modes_per_beam,
     nearest,
+    part_field,
     read_toml,
     refuse_beam2,
     refuse_unused_law_keys,
@@ -628,7 +628,7 @@ def _require_grazing_options(args: argparse.Namespace) -> None:
     if not high > low:
         raise ParameterError(f"--omega-max = {high!r} is not allowed: the range [{low!r}, "
                              f"{high!r}] is empty: need --omega-max > --omega-min (rad/s)")
-    if attachment_field(args.parameter) is not None:
+    if part_field(args.parameter) is not None:
         raise ParameterError(f"PARAMETER = {args.parameter!r} is not allowed here: a part's "
                              "field has no closed form, its grazing is a root in it searched "
                              "within a range: grazing_curve(..., within=(low, high)) in Python")

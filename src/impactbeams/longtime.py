@@ -33,10 +33,10 @@ import numpy as np
 from impactbeams.kernels import layout
 from impactbeams.params import (
     CONTACTS,
-    attachment_field,
     contact_field,
     is_integer,
     is_real,
+    part_field,
     require,
 )
 
@@ -136,7 +136,7 @@ class Stepping:
                 isinstance(self.direction, str) and self.direction in STEPPINGS,
                 f"must be one of {', '.join(map(repr, STEPPINGS))}")
         require("stepped_axis", self.axis,
-                not isinstance(self.axis, str) or attachment_field(self.axis) is None,
+                not isinstance(self.axis, str) or part_field(self.axis) is None,
                 "a part's field changes the modes, whose coordinates a cell carries from its "
                 "predecessor: carried as the beams' deflection and velocity instead, the next "
                 "modes would keep only their span of it, and how a part joins a moving beam "

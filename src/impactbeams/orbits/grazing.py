@@ -44,11 +44,11 @@ from impactbeams.params import (
     MAX_MODES,
     ParameterError,
     Params,
-    attachment_field,
     check_parameter,
     check_part_field,
     contact_field,
     named_attributes,
+    part_field,
     require,
     require_finite,
     require_integer,
@@ -182,7 +182,7 @@ def check_grazing_parameter(params: Params, parameter: str, others: tuple[str, .
     With several contacts each gives its own clearance: ``contacts.INDEX.clearance``.
     ``others``: more names the caller takes (the command line's ``omega``).
     """
-    if attachment_field(parameter) is not None:
+    if part_field(parameter) is not None:
         check_part_field(params, "parameter", parameter)
         return
     count = len(params.each_contact())
@@ -196,7 +196,7 @@ def check_grazing_parameter(params: Params, parameter: str, others: tuple[str, .
     require("parameter", parameter, parameter in named or (
         count > 1 and field is not None and field[0] < count and field[1] == "clearance"),
         f"must be one of {', '.join(map(repr, named))}{allowed}, or a part's field "
-        "'attachments1.INDEX.FIELD' (with within=(low, high))")
+        "'attachments1.INDEX.FIELD' or 'segments1.INDEX.FIELD' (with within=(low, high))")
 
 
 def steady_gap(params: Params, n_modes: int) -> SteadyGap:
@@ -294,7 +294,8 @@ def grazing_curve(params: Params, n_modes: int, parameter: str, omega: ArrayLike
     parameters as attributes. A curve continued in two parameters is checked against it
     point by point: `grazing_curve` at the continued points' frequencies.
 
-    A part's field (``attachments1.INDEX.FIELD``: a mass, a spring's stiffness, a place)
+    A part's field (``attachments1.INDEX.FIELD``: a mass, a spring's stiffness, a place;
+    ``segments1.INDEX.FIELD``: a segment's length, EI or rhoA)
     moves the modes, so G is no closed form in it: at each Omega its grazing value is the
     first root of the least gap from ``within`` = (low, high) upward (where the orbit starts
     or stops touching), bracketed on ``FIELD_BRACKETS`` values of the field (each its own
@@ -303,7 +304,7 @@ def grazing_curve(params: Params, n_modes: int, parameter: str, omega: ArrayLike
     gaps = contact_gaps(params, n_modes)
     check_grazing_parameter(params, parameter)
     frequencies = gaps[0].check_frequencies(omega)
-    if attachment_field(parameter) is not None:
+    if part_field(parameter) is not None:
         values, touching, contact = field_grazing(params, n_modes, parameter, frequencies,
                                                   within)
         method = (f"first root of the least gap Delta - |G| in {parameter} from {within[0]}:"
