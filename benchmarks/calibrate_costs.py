@@ -1,6 +1,7 @@
 """Measure the constants of the cost model (impactbeams.costs) on this machine.
 
     python benchmarks/calibrate_costs.py [--output docs/benchmarks/costs.json] [--skip-compile]
+                                         [--only-compile]
 
 Compute costs on one thread in this process (warm kernels; the first call of each kind is
 discarded), per cell (first-impact maps) or per cycle of an impacting cell (full dynamics,
@@ -443,7 +444,12 @@ def main() -> None:
                         help="measure CONTINUATION_POINT only, keep the other constants")
     parser.add_argument("--only-contacts", action="store_true",
                         help="measure CONTACT_CELL only, keep the other constants")
+    parser.add_argument("--only-compile", action="store_true",
+                        help="measure COMPILE and START_UP only, keep the other constants")
     args = parser.parse_args()
+    if args.only_compile:
+        compile_only(args.output)
+        return
     if args.only_continuation:
         continuation_only(args.output)
         return
@@ -523,6 +529,24 @@ def contacts_only(output):
     result["measured"]["contacts"] = measured
     result["contacts_measured_utc"] = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
     result["contacts_load_average"] = list(os.getloadavg())
+    output.write_text(json.dumps(result, indent=1) + "\n")
+    write_module(constants)
+
+
+def compile_only(output):
+    """Measure COMPILE, START_UP and COMPILE_LOAD alone into ``output`` and the module."""
+    warnings.simplefilter("ignore")
+    result = json.loads(output.read_text())
+    constants = result["constants"]
+    compile_seconds, result["measured"]["warm_command"] = compile_costs(
+        lambda text: print(text, flush=True))
+    load_after = os.getloadavg()  # the load the compile times were measured at, as in main
+    constants.update(round_constants({
+        "COMPILE": compile_seconds, "COMPILE_LOAD": load_after[0],
+        "START_UP": min(result["measured"]["warm_command"].values())}))
+    constants["COMPILE_CORES"] = os.cpu_count()
+    result["compile_measured_utc"] = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
+    result["compile_load_average"] = list(load_after)
     output.write_text(json.dumps(result, indent=1) + "\n")
     write_module(constants)
 

@@ -16,6 +16,7 @@ from fe_spring import fe_spring_contacts
 from impactbeams import simulate
 from impactbeams.cli import main
 from impactbeams.continuation import Continuation, continue_orbits
+from impactbeams.continuation.twoparameter import BifurcationCurve, continue_curve
 from impactbeams.modes import beam
 from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.orbits.grazing import grazing_curve
@@ -296,3 +297,27 @@ def test_a_grazing_curve_in_a_segments_field_finds_the_segment_whose_orbit_graze
     found = grazing_curve(shaken.replace(clearance=float(amplitude)), 5, ROOT_EI, [200.0],
                           within=(1.5 * EI, 4.5 * EI))
     assert found[ROOT_EI].values[0] == pytest.approx(3 * EI, rel=1e-14)
+
+
+def test_a_fold_curve_in_a_segments_EI_is_a_fold_of_each_EIs_map():
+    """The soft stop's lower fold (301.0 rad/s, 3 modes) on a beam whose root segment is 1.2
+    times stiffer, followed down in that segment's EI: every point is a fixed point of the
+    period map built at its EI and Omega to 1e-10 of the state (measured 2.2e-15) with a
+    multiplier at +1 to 1e-10 (as tests/test_attachment_curves.py's curve in a tip mass), and
+    the fold moves."""
+    soft = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
+                  force_amplitude=1e-4)
+    stiff_root = soft.replace(segments1=(Segment(0.04, 1.2 * soft.EI1, soft.rhoA1),
+                                         Segment(0.06, soft.EI1, soft.rhoA1)))
+    continuation = Continuation(stiff_root, "omega", 240.0, 340.0, n_modes=3, subspace=4,
+                                max_branches=1)
+    curve = continue_curve(BifurcationCurve.from_branch(
+        continuation, continue_orbits(continuation), "fold", ROOT_EI, soft.EI1,
+        1.2 * soft.EI1, direction="down", which=1, max_points=4))
+    assert curve.branch_point.size == 4 and curve.omega.values[-1] < curve.omega.values[0] - 1
+    for root_EI, omega, z in zip(curve[ROOT_EI].values, curve.omega.values,
+                                 curve.section_state.values, strict=True):
+        at = with_parameter(stiff_root.replace(omega=float(omega)), ROOT_EI, float(root_EI))
+        result = PeriodMap(at, 3)(z, directions="all", measures=False)
+        assert np.linalg.norm(result.state - z) <= 1e-10 * np.linalg.norm(z)
+        assert np.abs(np.linalg.eigvals(result.jacobian) - 1.0).min() < 1e-10
