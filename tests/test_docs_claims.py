@@ -3,11 +3,13 @@
 Each test pins a claim a new user could check and found false: the docs' home page behind the
 README, a count of subcommands typed by hand, a contact-law axis said to be refused and then
 used, parameters missing from the model page's table, a sweep file's comments about its own
-map, and "results converge" said of a chaotic rattle.
+map, "results converge" said of a chaotic rattle, and the tests the accuracy table cites.
 """
 
 import argparse
+import ast
 import dataclasses
+import functools
 import re
 from pathlib import Path
 
@@ -20,6 +22,7 @@ from impactbeams.sweep.definition import _AXIS_KEYS, sweep_from_mapping
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text()
 DOCS = ROOT / "docs"
+TESTS = ROOT / "tests"
 
 
 def _features(text: str) -> str:
@@ -114,3 +117,43 @@ def test_the_newcomer_script_finds_the_readme_job_and_the_three_tasks():
     assert {task for task, _, _ in tasks} == set(newcomer.TASKS)
     assert any(code == 2 for _, _, code in tasks)  # the refused input, as the page shows it
     assert any(command.startswith("impactbeams simulate") for _, command, _ in tasks)
+
+
+def _accuracy_table_rows() -> list[str]:
+    """The rows of the README's accuracy table (header and rule left out)."""
+    section = README.split("## Accuracy: what is checked, against what", 1)[1]
+    table = section[section.index("| claim"):].split("\n\n", 1)[0]
+    return table.splitlines()[2:]
+
+
+@functools.cache
+def _test_functions(file: str) -> set[str]:
+    """The names of the test functions pytest collects from tests/``file`` (module level and
+    in classes); none if there is no such file."""
+    path = TESTS / file
+    if not path.is_file():
+        return set()
+    tree = ast.parse(path.read_text())
+    bodies = [tree.body, *(node.body for node in tree.body if isinstance(node, ast.ClassDef))]
+    return {node.name for body in bodies for node in body
+            if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")}
+
+
+def test_every_test_the_accuracy_table_cites_exists():
+    """Each `file.py::test_name` of the accuracy table, and each `::test_name` after it in the
+    same cell (the same file), names a test function of tests/; each `file.py` a file."""
+    cited, missing = 0, []
+    for row in _accuracy_table_rows():
+        for cell in row.strip().strip("|").split(" | "):
+            current = None
+            for file, name in re.findall(r"`([\w/.]+\.py)?(?:::(\w+))?`", cell):
+                if file:
+                    current = file
+                    if not any(path.is_file() for path in (ROOT / file, TESTS / file)):
+                        missing.append(file)
+                if name:
+                    cited += 1
+                    if current is None or name not in _test_functions(Path(current).name):
+                        missing.append(f"{current}::{name}")
+    assert cited > 40  # the table was parsed
+    assert not missing
