@@ -66,24 +66,27 @@ ENERGY_NODE = 1.7e-07
 GEOMETRY = 8.9e-06
 THREAD_SPEEDUP = {1: 1.0, 2: 1.8}
 COMPILE = {
-    "first_impact": 4.9,
-    "first_impact_parallel": 7.2,
-    "dynamics": 18.0,
-    "lyapunov": 19.0,
-    "long_time": 13.0,
-    "simulate": 9.8,
+    "first_impact": 8.2,
+    "first_impact_parallel": 11.0,
+    "dynamics": 24.0,
+    "lyapunov": 28.0,
+    "long_time": 17.0,
+    "simulate": 17.0,
 }
-START_UP = 0.39
-COMPILE_LOAD = 0.98
+START_UP = 0.63
+COMPILE_LOAD = 1.0
 COMPILE_CORES = 2
 CONTINUATION_POINT = (0.0017, 0.53)
 CONTACT_CELL = 0.0019
 # ----------------------------------------------------------------------------------------------
 
 # The announced range about the load-scaled compile (`compile_estimate`): the load can rise
-# during a compile, which the range's top allows for in part; the compile announced against
-# the compile taken, on a fresh cache: docs/benchmarks/newcomer.json (scripts/newcomer.py).
-COMPILE_RANGE = (0.7, 1.5)
+# during a compile, which the range's top allows for in part; and an idle machine's own speed
+# drifts, which the bottom allows for: the same code's cold first map took 6.0 s on the
+# development machine at 07:10 and 8.3 s at 20:29 the same day, load 1 both times
+# (benchmarks/bench_compile.py). The compile announced against the compile taken, on a fresh
+# cache: docs/benchmarks/newcomer.json (scripts/newcomer.py).
+COMPILE_RANGE = (0.6, 1.5)
 
 def compile_time(kind: str, entry: str | None = None) -> float:
     """Expected cold compile (s) of a run of ``kind`` (``COMPILE``).
