@@ -931,7 +931,8 @@ class Params:
         if changes.keys() <= _CHECKED_ALONE and not (
                 not self.partner.has_beam2 and changes.keys() & BEAM2_KEYS) and not (
                 self.structure1 is not None and changes.keys() & BEAM1_KEYS) and not (
-                changes.keys() & set(self.derived_keys())):
+                (self.segments1 or self.segments2)
+                and changes.keys() & set(self.derived_keys())):
             # numbers other than the drives, on parameters already checked: only the changes
             # and the joint rules need checking (a continuation changes one per period map)
             changed = object.__new__(Params)  # copy.copy's reduce protocol takes 5 us
