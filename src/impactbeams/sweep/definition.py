@@ -759,6 +759,7 @@ def _check_points(sweep: Sweep) -> None:
               else (axis.first,) if axis.choices or axis.num == 1 else (axis.min, axis.max)
               for axis in sweep.axes]
     stepped = any(axis.name.split(".")[0] in BEAM_SEGMENTS for axis in sweep.axes)
+    springs = _grounded_springs(sweep) if stepped else 0  # (the grid's most: once)
     for point in itertools.product(*values):
         changes = {axis.name: _plain(value)
                    for axis, value in zip(sweep.axes, point, strict=True)}
@@ -766,7 +767,7 @@ def _check_points(sweep: Sweep) -> None:
             params = sweep.params_at(changes)
             if stepped:
                 check_run(params.numeric(), sweep.t_max, sweep.n_modes,
-                          springs=_grounded_springs(sweep), structure1=params.structure1,
+                          springs=springs, structure1=params.structure1,
                           steps=params.step_factors)
                 _check_long_time(sweep, params.numeric(), no_point, params.step_factors)
         except ParameterError as error:
