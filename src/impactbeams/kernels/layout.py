@@ -44,7 +44,8 @@ Contact laws: ``TIED`` (the paper's: tips tied in contact, contact modes of the 
 projections at switches: ``overlap``, ``shifts``) and ``SPRING`` (compliant: the free
 coordinates kept, the contact phase as the oscillators of `impactbeams.kernels.contact_spring`:
 ``spring = (left, right, modes)`` per geometry and ``drives`` per run, rows
-``SPRING_MODE_ROWS`` and ``SPRING_DRIVE_ROWS``). In the spring law the contact table has the
+``SPRING_MODE_ROWS`` and ``SPRING_DRIVE_ROWS``); a run's arrays of both laws travel as one
+`impactbeams.kernels.records.Switching`. In the spring law the contact table has the
 oscillators' frequencies and damping ratios, the contact force weights as ``event`` and zeros in
 the other rows.
 

@@ -29,6 +29,10 @@ bound its four array fields, +26% with the per-step kernels binding theirs too).
   float (a sine alone) or a complex (sine + i cosine), ``forcing_frequency`` Omega (rad/s).
 * `Rotor`: the arrays of an event function's rotor (`impactbeams.kernels.rotor`), and the
   work arrays of the search that uses it (the state and drives with the steady states split off).
+* `Switching`: the state machine's switching arrays of one run, built once per run (see
+  `Switching`); only `impactbeams.kernels.contact` and the law modules it dispatches to read
+  its fields, every other kernel passes it on whole; `StackedSwitching`: a map's geometries'
+  records stacked, `geometry_switching` takes one out.
 * `Tangent`: the tangent vectors of a run and Benettin's sums
   (`impactbeams.kernels.tangent.carry_tangents`); ``clock[CLOCK_TIME]`` is the time (s) the
   tangents are at, ``clock[CLOCK_RENORMALIZATIONS]`` the renormalisations done.
@@ -43,8 +47,9 @@ from impactbeams.kernels.jit import kernel
 Segments = namedtuple("Segments", ("time", "phase", "sustained", "q", "v", "end_q", "end_v"))
 
 RunInputs = namedtuple("RunInputs", ("tables", "forces", "phase_scalars", "settings_array", "q0",
-                                     "v0", "drives"))
-RunInputs.__doc__ = """One run's inputs; ``settings_array`` holds its settings record.
+                                     "v0", "switching"))
+RunInputs.__doc__ = """One run's inputs; ``settings_array`` holds its settings record,
+``switching`` its `Switching`.
 
 The record ``settings_array[0]`` is a view that does not keep its array alive, and Numba
 frees an array after its last use in the frame that owns it: a kernel that built a RunInputs
@@ -58,6 +63,29 @@ EventFunction = namedtuple("EventFunction", ("weights", "const", "sine_amp", "fo
 
 Rotor = namedtuple("Rotor", ("amplitudes", "eigenvalues", "driven", "levels", "factors", "rates",
                              "split", "split_force"))
+
+Switching = namedtuple("Switching", ("overlap", "shifts", "spring", "drives"))
+Switching.__doc__ = """The switching arrays of one run: those of its contact law, whichever it is.
+
+The tied law's ``overlap`` (M, M) = <Z_m, Y_n> and static ``shifts`` (rows ``FREE``,
+``CONTACT``; `impactbeams.kernels.contact_tied`), the spring law's ``spring`` = (left,
+right, modes) and its per-run mode ``drives`` (`impactbeams.kernels.contact_spring`); the
+other law's arrays are zeros of the same size, or empty (drives). A geometry's record
+(`impactbeams.packing.dynamics_arrays`) has empty ``drives``;
+`impactbeams.kernels.forcing.run_inputs` returns the run's, with its drives. A map stacks
+its geometries' records field by field (`impactbeams.packing.stacked_switching`);
+`geometry_switching` takes one out.
+"""
+
+StackedSwitching = namedtuple("StackedSwitching", ("overlap", "shifts", "left", "right", "modes",
+                                                   "drives"))
+StackedSwitching.__doc__ = """A map's geometries' `Switching` records, stacked field by field.
+
+Index g: geometry g's. Flat, the spring arrays a field each: a parallel map's loop takes the
+fields of a record it receives as arguments of their own, and an array may be one, a tuple of
+arrays may not (Numba's parfor lowering: "scalar type UniTuple(...) given for non scalar
+argument").
+"""
 
 Tangent = namedtuple("Tangent", ("q", "v", "clock", "sums", "counts"))
 CLOCK = ("time", "renormalizations")
@@ -79,3 +107,10 @@ def recorded_prefix(recorded, count):
     return Segments(recorded.time[:count], recorded.phase[:count], recorded.sustained[:count],
                     recorded.q[:count], recorded.v[:count], recorded.end_q[:count],
                     recorded.end_v[:count])
+
+
+@kernel
+def geometry_switching(stacked, g):
+    """Geometry ``g``'s `Switching` of a map's `StackedSwitching` ``stacked`` (views)."""
+    return Switching(stacked.overlap[g], stacked.shifts[g],
+                     (stacked.left[g], stacked.right[g], stacked.modes[g]), stacked.drives[g])
