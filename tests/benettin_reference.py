@@ -22,7 +22,7 @@ from impactbeams.kernels import dynamics as dyn
 from impactbeams.kernels.contact_spring import to_contact, to_free
 from impactbeams.kernels.events import event_value, phase_event_function
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_FREQUENCY
-from impactbeams.kernels.records import segments
+from impactbeams.kernels.records import SWITCH_DRIVES, SWITCH_SPRING, segments
 
 _CAPACITY = 4096  # segments of one perturbed step, doubled as needed
 
@@ -54,9 +54,10 @@ def _phase_state(packed, q, v, t):
     force = -s["contact_stiffness"] * gap - s["contact_damping"] * gap_rate
     if not (gap < 0.0 and force > 0.0):
         return FREE, q, v
-    left, _, modes = packed.switching.spring
+    left, _, modes = packed.switching[SWITCH_SPRING]
     y, y_rate = np.empty_like(q), np.empty_like(v)
-    to_contact(q, v, t, left, modes, packed.switching.drives, s["forcing_frequency"], y, y_rate)
+    to_contact(q, v, t, left, modes, packed.switching[SWITCH_DRIVES], s["forcing_frequency"], y,
+               y_rate)
     return CONTACT, y, y_rate
 
 
@@ -78,10 +79,10 @@ def run_from(packed, q, v, t0, t1):
     seg_phase, end_q, end_v = buffers.phase, buffers.end_q, buffers.end_v
     q_end, v_end = end_q[count - 1].copy(), end_v[count - 1].copy()
     if seg_phase[count - 1] == CONTACT:
-        _, right, modes = packed.switching.spring
+        _, right, modes = packed.switching[SWITCH_SPRING]
         y, y_rate = q_end.copy(), v_end.copy()
-        to_free(y, y_rate, t1, right, modes, packed.switching.drives, settings["forcing_frequency"],
-                q_end, v_end)
+        to_free(y, y_rate, t1, right, modes, packed.switching[SWITCH_DRIVES],
+                settings["forcing_frequency"], q_end, v_end)
     return q_end, v_end
 
 

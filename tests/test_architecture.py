@@ -441,7 +441,7 @@ def test_the_loose_group_check_sees_loose_arguments():
     assert _loose_group_kernels(ast.parse(code)) == ["walk", "evaluate"]
 
 
-# The switching arrays (issue 33): a run's travel as one `records.Switching`, whose fields only
+# The switching arrays (issue 33): a run's travel as one switching record, whose fields only
 # the contact seam reads; every other kernel takes the record and passes it on whole.
 SWITCHING_SEAM = {"contact.py", "contact_tied.py", "contact_spring.py"}
 SWITCHING_FIELDS = {"overlap", "shifts", "spring"}
@@ -460,7 +460,7 @@ def test_kernels_take_one_switching_record():
              for names in [_loose_switching_kernels(ast.parse(path.read_text(), str(path)))]
              if names}
     assert not loose, ("kernels that take a switching array as a parameter (take the run's "
-                       f"records.Switching, ``switching``, whole): {loose}")
+                       f"switching record, records.SWITCHING, whole): {loose}")
 
 
 def test_the_switching_check_sees_loose_arguments():

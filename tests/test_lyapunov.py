@@ -15,7 +15,7 @@ from impactbeams.kernels import lyapunov as lyapunov_kernels
 from impactbeams.kernels import tangent
 from impactbeams.kernels.contact_spring import to_contact, to_free
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_FREQUENCY, SPRING_DRIVE_ROWS
-from impactbeams.kernels.records import Segments, Tangent
+from impactbeams.kernels.records import SWITCH_SPRING, Segments, Tangent
 from impactbeams.packing import cell_rows, pack_run
 from impactbeams.params import Params
 from impactbeams.sweep import run_sweep, sweep_from_mapping
@@ -73,7 +73,7 @@ def tangent_jacobian(packed, trajectory, t0, t1, settings=None):
     m = trajectory.q.shape[1]
     identity = np.eye(2 * m)
     rows_q, rows_v = identity[:, :m].copy(), identity[:, m:].copy()
-    spring = packed.switching.spring
+    spring = packed.switching[SWITCH_SPRING]
     if seg_phase[0] == CONTACT:
         _map_rows(rows_q, rows_v, CONTACT, spring)
     state = Tangent(rows_q, rows_v, np.array([t0, 0.0]), np.zeros((1, 2 * m)),

@@ -58,7 +58,7 @@ ENTRY_KERNELS = {
 _SETTINGS_ARRAYS = "float64[:, :, ::1], complex128[:, ::1]"
 _SEGMENTS = ("Segments(float64[::1], int64[::1], bool[::1], float64[:, ::1], float64[:, ::1], "
              "float64[:, ::1], float64[:, ::1])")
-_SWITCHING = ("Switching(float64[:, ::1], float64[:, ::1], UniTuple(complex128[:, ::1], 3), "
+_SWITCHING = ("Tuple(float64[:, ::1], float64[:, ::1], UniTuple(complex128[:, ::1], 3), "
               "complex128[:, ::1])")
 HELPER_JOBS = {
     "simulate": (("dynamics", "run_events",
@@ -446,8 +446,7 @@ def _type_names() -> dict[str, Any]:
     return {**vars(types), "bool": types.boolean,
             "settings": numba.from_dtype(layout.SETTINGS_DTYPE),
             **{name: named(getattr(records, name)) for name in (
-                "Segments", "RunInputs", "Oscillators", "EventFunction", "Rotor", "Switching",
-                "StackedSwitching", "Tangent")}}
+                "Segments", "RunInputs", "Oscillators", "EventFunction", "Rotor", "Tangent")}}
 
 
 if __name__ == "__main__":

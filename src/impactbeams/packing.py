@@ -21,7 +21,6 @@ from impactbeams.configuration import BELOW, SPRING_LAW
 from impactbeams.kernels import layout
 from impactbeams.kernels.events import event_value, phase_event_function
 from impactbeams.kernels.forcing import run_inputs
-from impactbeams.kernels.records import StackedSwitching, Switching
 
 if TYPE_CHECKING:
     from impactbeams.contact import FreePhase, ModalModel, SpringContact
@@ -136,9 +135,9 @@ class Dynamics:
     ``model``: the tied law's modal model (contact modes, projections), else None; ``spring``:
     the spring law's contact phase, else None. ``bases``: the coordinates in which sampled
     states come back (the spring law's are the free ones in both phases). ``switching``: the
-    geometry's `impactbeams.kernels.records.Switching` (the tied law's ``overlap``, ``shifts``,
-    the spring law's ``spring`` = (left, right, modes), in the layout of
-    `impactbeams.kernels.contact_spring`, zeros for the other law; no run's drives: empty).
+    geometry's switching record (`impactbeams.kernels.records.SWITCHING`: the tied law's
+    ``overlap``, ``shifts``, the spring law's ``spring`` = (left, right, modes), in the layout
+    of `impactbeams.kernels.contact_spring`, zeros for the other law; no run's drives: empty).
     """
 
     params: Params
@@ -148,7 +147,7 @@ class Dynamics:
     bases: tuple[Basis, Basis]
     tables: np.ndarray
     geometry: np.ndarray
-    switching: Switching
+    switching: tuple  # (overlap, shifts, spring, drives)
 
 
 def _no_spring(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -158,19 +157,28 @@ def _no_spring(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _geometry_switching(overlap: np.ndarray, shifts: np.ndarray,
-                        spring: tuple[np.ndarray, np.ndarray, np.ndarray]) -> Switching:
-    """A geometry's `Switching`: its laws' arrays, and the empty drives of no run."""
-    return Switching(overlap, shifts, spring,
-                     np.empty((len(layout.SPRING_DRIVE_ROWS), 0), dtype=np.complex128))
+                        spring: tuple[np.ndarray, np.ndarray, np.ndarray]) -> tuple:
+    """A geometry's switching record: its laws' arrays, and the empty drives of no run.
+
+    Every array C-contiguous, as the run's record that `run_inputs` returns: a kernel has one
+    signature whichever built the record it takes.
+    """
+    overlap, shifts = np.ascontiguousarray(overlap), np.ascontiguousarray(shifts)
+    spring = tuple(np.ascontiguousarray(array) for array in spring)
+    return (overlap, shifts, spring,
+            np.empty((len(layout.SPRING_DRIVE_ROWS), 0), dtype=np.complex128))
 
 
-def stacked_switching(records: Sequence[Switching]) -> StackedSwitching:
-    """The `Switching` records of a map's geometries stacked field by field (index: geometry).
+def stacked_switching(records: Sequence[tuple]) -> tuple[np.ndarray, ...]:
+    """The switching records of a map's geometries stacked field by field (index: geometry).
+
+    The fields of `impactbeams.kernels.records.STACKED_SWITCHING`, the spring arrays flat.
 
     The map kernels take geometry g's out with `impactbeams.kernels.records.geometry_switching`.
     """
-    return StackedSwitching(*(np.array(arrays) for arrays in zip(
-        *((r.overlap, r.shifts, *r.spring, r.drives) for r in records), strict=True)))
+    return tuple(np.array(arrays) for arrays in zip(
+        *((overlap, shifts, *spring, drives) for overlap, shifts, spring, drives in records),
+        strict=True))
 
 
 def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
@@ -232,15 +240,15 @@ class Packed:
     """One run's inputs, packed for the kernels (see kernels.layout).
 
     The geometry's arrays (``dynamics``) and what depends on the run's forcing, damping and
-    uplifts; ``switching``: the run's `impactbeams.kernels.records.Switching` (the geometry's
-    with the run's drives), which the kernels take whole.
+    uplifts; ``switching``: the run's switching record (`impactbeams.kernels.records.SWITCHING`:
+    the geometry's with the run's drives), which the kernels take whole.
     """
 
     dynamics: Dynamics
     tables: np.ndarray
     forces: np.ndarray
     phase_scalars: np.ndarray
-    switching: Switching
+    switching: tuple  # (overlap, shifts, spring, drives)
     settings: np.void  # a record of kernels.layout.SETTINGS_DTYPE
     q0: np.ndarray
     v0: np.ndarray

@@ -11,7 +11,7 @@ dissipation, peak force) are in `impactbeams.kernels.reductions`.
 The contact law is ``settings.contact_law``; what depends on it is dispatched by
 `impactbeams.kernels.contact` (switch maps: the tied law's projections, the spring law's change
 of coordinates), which alone reads the run's switching arrays: every kernel here takes them as
-one `records.Switching`, ``switching``, and passes it on whole.
+one switching record (`records.SWITCHING`), ``switching``, and passes it on whole.
 """
 
 import math

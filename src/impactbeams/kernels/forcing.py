@@ -56,7 +56,7 @@ from impactbeams.kernels.layout import (
     SPRING_DRIVE_ROWS,
     STEADY,
 )
-from impactbeams.kernels.records import Switching
+from impactbeams.kernels.records import SWITCH_OVERLAP, SWITCH_SHIFTS, SWITCH_SPRING
 
 
 @kernel
@@ -147,9 +147,9 @@ def spring_contact_inputs(cell, tables, geometry, switching, forces, scalars):
     (rows ``SPRING_DRIVE_ROWS``). With the gap weights w and the gap's harmonic term S
     (``scalars[FREE]``), the contact phase's modal drive is the free one plus
     ``-S (k_e + i c_e Omega) w`` (harmonic) and ``-k_e clearance w``; ``switching``: the
-    geometry's `records.Switching`, whose spring arrays the drives are of.
+    geometry's switching record (`records.SWITCHING`), whose spring arrays the drives are of.
     """
-    left, _, modes = switching.spring
+    left, _, modes = switching[SWITCH_SPRING]
     weights = tables[FREE, ROW_EVENT]
     stiffness, damping = geometry[GEO_STIFFNESS], geometry[GEO_DAMPING]
     forcing_frequency = cell[CELL_FORCING_FREQUENCY]
@@ -173,7 +173,7 @@ def run_inputs(cell, tables, geometry, switching, t_max, search_span):
     """Everything the dynamics kernel needs for one run of ``cell`` in its geometry.
 
     Returns (tables with the cell's damping ratios, complex drive amplitudes ``forces``,
-    phase scalars, settings, q0, q0', the run's `records.Switching`: the geometry's
+    phase scalars, settings, q0, q0', the run's switching record: the geometry's
     ``switching`` with the spring law's mode drives); ``tables`` of the geometry is left
     unchanged. In the spring law the contact oscillators' damping ratios come with the
     geometry's spring modes (solved for the cell's damping ratio).
@@ -193,6 +193,5 @@ def run_inputs(cell, tables, geometry, switching, t_max, search_span):
     else:
         drives = np.empty((len(SPRING_DRIVE_ROWS), 0), dtype=np.complex128)
     q0, v0 = rest_states(cell, geometry, damped[FREE], forces[FREE])
-    run_switching = Switching(switching.overlap, switching.shifts, switching.spring, drives)
     return (damped, forces, scalars, settings(cell, geometry, t_max, search_span), q0, v0,
-            run_switching)
+            (switching[SWITCH_OVERLAP], switching[SWITCH_SHIFTS], switching[SWITCH_SPRING], drives))

@@ -46,7 +46,8 @@ def cell_exponent(cell, tables, switching, geometry, t_max, transient, max_segme
     NaN if no period after the transient completed (or a law without a tangent flow, the
     tied one); a status other than ``COMPLETE`` (a window over ``max_segments`` phases, or
     stuck) ends the run there and the exponent covers the periods before.
-    ``switching``: the geometry's `records.Switching` (the run's drives come from the cell).
+    ``switching``: the geometry's switching record (`records.SWITCHING`; the run's drives
+    come from the cell).
     """
     if not has_tangent_flow(geometry[GEO_LAW]):
         return np.nan, COMPLETE

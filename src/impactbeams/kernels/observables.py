@@ -2,7 +2,7 @@
 
 Plain-array interface, packed by `impactbeams.packing` per geometry g (names in
 `impactbeams.kernels.layout`): ``tables[g]`` the phase tables of both phases, ``switching``
-the geometries' `records.Switching` stacked field by field (`packing.stacked_switching`;
+the geometries' switching records stacked field by field (`packing.stacked_switching`;
 geometry g's is `records.geometry_switching`, its drives empty), ``geometry[g]`` with fields
 ``GEOMETRY``; ``cells[i]`` with columns ``CELL_COLUMNS``. Each cell's run inputs come from
 `cells.cell_run` (as for one simulated run), its observables (``OUT_COLUMNS``) from
@@ -23,7 +23,8 @@ from impactbeams.kernels.reductions import summarize_run
 def cell_observables(cell, tables, switching, geometry, t_max, max_segments, out):
     """Run one cell's dynamics (at most ``max_segments`` phases) and write its OUT_COLUMNS.
 
-    ``switching``: the geometry's `records.Switching` (the run's drives come from the cell).
+    ``switching``: the geometry's switching record (`records.SWITCHING`; the run's drives
+    come from the cell).
     """
     _observe(cell_run(cell, tables, geometry, switching, t_max, t_max), max_segments, out)
 

@@ -172,7 +172,7 @@ def carry_tangents(tables, phase_scalars, switching, settings, recorded, t_end, 
                    tangent):
     """Carry the tangent vectors through the recorded segments of a spring-law run.
 
-    ``switching``: the run's `records.Switching`.
+    ``switching``: the run's switching record (`records.SWITCHING`).
     ``recorded``: the run's `records.Segments`, all of them recorded ones (each segment's end
     state ``end_q``, ``end_v`` gives the onsets' saltation).
     ``tangent``, a `records.Tangent` ``(q, v, clock, sums, counts)``: k tangent rows in the

@@ -17,7 +17,6 @@ import itertools
 import math
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,9 +42,6 @@ from impactbeams.sweep.definition import (
 )
 from impactbeams.variables import VARIABLES
 
-if TYPE_CHECKING:
-    from impactbeams.kernels.records import StackedSwitching, Switching
-
 # The code that decides a sweep's numbers: every kernel and the modules that build their inputs
 # (paths in the package). Saved chunks and finished files of other code are never reused.
 NUMERIC_CODE = ("kernels/*.py", "packing.py", "contact/*.py", "drive.py", "modes.py", "blas.py",
@@ -59,8 +55,8 @@ class Plan:
     """What the kernels need per geometry, and how cells map to geometries.
 
     ``tables``: the free phase of every geometry (first-impact map), or both phases with the
-    switching arrays (the geometries' `impactbeams.kernels.records.Switching` stacked, a
-    `StackedSwitching` of `impactbeams.packing.stacked_switching`) when a full-dynamics
+    switching arrays (the geometries' switching records stacked,
+    `impactbeams.packing.stacked_switching`) when a full-dynamics
     observable is asked for (see kernels.layout). ``fingerprint`` is the sweep's: a plan
     serves only the sweep it was built for.
     """
@@ -70,7 +66,7 @@ class Plan:
     tables: np.ndarray  # (geometries, phases, len(TABLE_ROWS), 2 n_modes)
     geometry: np.ndarray  # (geometries, len(GEOMETRY))
     geometry_axes: tuple[int, ...]  # positions of the axes that change the geometry
-    switching: StackedSwitching | None  # a dynamics map's switching arrays
+    switching: tuple[np.ndarray, ...] | None  # a dynamics map's switching arrays, stacked
     axis_values: tuple[np.ndarray, ...]  # every axis's values, computed once for all chunks
     # several contacts: each contact's own sweep's plan (`contact_sweeps`); the fields above
     # are then the first's
@@ -243,7 +239,7 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
 
 # the geometries built while a run is prepared (`reusing_geometries`), by (parameters, n_modes,
 # full dynamics): what the checks before a run build, its plan takes, not building it again
-_BUILT: list[dict[tuple[Params, int, bool], tuple[np.ndarray | Switching, ...]]] = []
+_BUILT: list[dict[tuple[Params, int, bool], tuple[np.ndarray | tuple, ...]]] = []
 
 
 @contextlib.contextmanager
@@ -264,8 +260,8 @@ def reusing_geometries() -> Iterator[None]:
 
 
 def _geometry_arrays(params: Params, sweep: Sweep, keep: bool = False,
-                     ) -> tuple[np.ndarray | Switching, ...]:
-    """One geometry's packed arrays: (tables, geometry row[, `Switching`]).
+                     ) -> tuple[np.ndarray | tuple, ...]:
+    """One geometry's packed arrays: (tables, geometry row[, switching record]).
 
     Those a check built in this run (`reusing_geometries`) are taken, not built again;
     ``keep``: a check's, left for the run's plan.
@@ -281,7 +277,7 @@ def _geometry_arrays(params: Params, sweep: Sweep, keep: bool = False,
 
 
 def _build_geometry_arrays(params: Params, sweep: Sweep,
-                           ) -> tuple[np.ndarray | Switching, ...]:
+                           ) -> tuple[np.ndarray | tuple, ...]:
     from impactbeams import packing
     from impactbeams.contact.free import build_free_phase
 
