@@ -71,7 +71,7 @@ def single_pass(packed, capacity: int):
     """
     n = packed.q0.size
     return dyn.run_events(packed.tables, packed.forces, packed.phase_scalars,
-                          *packed.switching(), packed.settings, packed.q0, packed.v0,
+                          packed.switching, packed.settings, packed.q0, packed.v0,
                           segments(capacity, n))
 
 
