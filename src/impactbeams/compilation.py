@@ -58,8 +58,8 @@ ENTRY_KERNELS = {
 _SETTINGS_ARRAYS = "float64[:, :, ::1], complex128[:, ::1]"
 _SEGMENTS = ("Segments(float64[::1], int64[::1], bool[::1], float64[:, ::1], float64[:, ::1], "
              "float64[:, ::1], float64[:, ::1])")
-_SWITCHING = ("Tuple(float64[:, ::1], float64[:, ::1], UniTuple(complex128[:, ::1], 3), "
-              "complex128[:, ::1])")
+_SWITCHING = ("Tuple((float64[:, ::1], float64[:, ::1], UniTuple(complex128[:, ::1], 3), "
+              "complex128[:, ::1],))")
 HELPER_JOBS = {
     "simulate": (("dynamics", "run_events",
                   f"{_SETTINGS_ARRAYS}, float64[:, ::1], {_SWITCHING}, settings, float64[::1], "
