@@ -74,8 +74,8 @@ Rotor = namedtuple("Rotor", ("amplitudes", "eigenvalues", "driven", "levels", "f
 # `impactbeams.kernels.contact` and the law modules it dispatches to (and `run_inputs`, which
 # builds it) read its fields; every other kernel passes it on whole. A plain tuple, not a
 # namedtuple: a kernel's call from Python with a namedtuple argument took 0.7 us more than with
-# a plain tuple (measured on the namedtuple version); the plain tuple's cold compiles measured
-# as main's with the arrays loose (CHANGELOG.md, issue 33).
+# a plain tuple (measured on the namedtuple version); the plain tuple's cold compiles and calls
+# against main's with the arrays loose: CHANGELOG.md, issue 33.
 SWITCHING = ("overlap", "shifts", "spring", "drives")
 SWITCH_OVERLAP, SWITCH_SHIFTS, SWITCH_SPRING, SWITCH_DRIVES = range(len(SWITCHING))
 # A map's geometries' switching records stacked field by field (index g: geometry g's), flat,
