@@ -137,14 +137,13 @@ def _replay_searches(tables, forces, scalars, seg_time, seg_phase, seg_q, seg_v,
 
 
 @numba.njit
-def _replay_switches(seg_time, seg_phase, end_q, end_v, overlap, shifts, spring, drives,
-                     settings):
+def _replay_switches(seg_time, seg_phase, end_q, end_v, switching, settings):
     """Repeat the change of coordinates at every recorded switch."""
     n = end_q.shape[1]
     q, v = np.empty(n), np.empty(n)
     for k in range(seg_time.size - 1):
-        contact.switch_state(end_q[k], end_v[k], seg_time[k + 1], 1 - seg_phase[k], overlap,
-                             shifts, spring, drives, settings, q, v)
+        contact.switch_state(end_q[k], end_v[k], seg_time[k + 1], 1 - seg_phase[k], switching,
+                             settings, q, v)
     return q[0]
 
 
@@ -184,7 +183,7 @@ def profile(sweep, omega: float) -> dict:
     searches = {name: _best(_replay_searches, *arrays, phase)
                 for name, phase in (("free", FREE), ("contact", CONTACT))}
     switches = _best(_replay_switches, trajectory.time, trajectory.phase, trajectory.end_q,
-                     trajectory.end_v, *packed.switching(), packed.settings)
+                     trajectory.end_v, packed.switching, packed.settings)
     propagations = _best(_replay_propagations, packed.tables, packed.forces, trajectory.time,
                          trajectory.phase, trajectory.q, trajectory.v, packed.settings)
     times = np.linspace(0.0, horizon, 200)

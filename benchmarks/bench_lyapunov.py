@@ -71,7 +71,7 @@ def single_pass(packed, capacity: int):
     """
     n = packed.q0.size
     return dyn.run_events(packed.tables, packed.forces, packed.phase_scalars,
-                          *packed.switching(), packed.settings, packed.q0, packed.v0,
+                          packed.switching, packed.settings, packed.q0, packed.v0,
                           segments(capacity, n))
 
 
@@ -85,16 +85,14 @@ def costs(params: Params, n_modes: int, t_max: float, repeats: int) -> dict:
 
     def tangent(count: int):
         return recorded_run_sums(
-            packed.tables, packed.phase_scalars, d.spring_arrays, packed.settings,
+            packed.tables, packed.phase_scalars, packed.switching, packed.settings,
             trajectory.segments, trajectory.t_end, count, 0, 16)
 
     def map_cell():
-        cell_observables(cell, d.tables, d.overlap, d.shifts, d.spring_arrays, d.geometry,
-                         t_max, MAX_SEGMENTS, out)
+        cell_observables(cell, d.tables, d.switching, d.geometry, t_max, MAX_SEGMENTS, out)
 
     def exponent_cell():
-        return cell_exponent(cell, d.tables, d.overlap, d.shifts, d.spring_arrays, d.geometry,
-                             t_max, 0, MAX_SEGMENTS)
+        return cell_exponent(cell, d.tables, d.switching, d.geometry, t_max, 0, MAX_SEGMENTS)
 
     def plain():
         return single_pass(packed, trajectory.time.size + 1)

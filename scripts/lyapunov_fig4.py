@@ -52,7 +52,7 @@ def batch_exponents(n_modes: int, t_max: float, batch: float) -> list[float]:
     packed = pack_run(PAPER, n_modes, t_max, t_max)
     trajectory = run(packed, 10**8)
     sums, counts, interval = recorded_run_sums(
-        packed.tables, packed.phase_scalars, packed.dynamics.spring_arrays, packed.settings,
+        packed.tables, packed.phase_scalars, packed.switching, packed.settings,
         trajectory.segments, trajectory.t_end, 1, 0, max(1, round(t_max / batch)))
     return [float(value) for value in sums[:, 0] / (counts * interval)]
 

@@ -22,7 +22,7 @@ from impactbeams.kernels import dynamics as dyn
 from impactbeams.kernels.contact_spring import to_contact, to_free
 from impactbeams.kernels.events import event_value, phase_event_function
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_FREQUENCY
-from impactbeams.kernels.records import segments
+from impactbeams.kernels.records import SWITCH_DRIVES, SWITCH_SPRING, segments
 
 _CAPACITY = 4096  # segments of one perturbed step, doubled as needed
 
@@ -37,8 +37,8 @@ def reference_states(packed, trajectory, times):
     n = trajectory.q.shape[1]
     q, v = np.empty((times.size, n)), np.empty((times.size, n))
     phase = np.empty(times.size, dtype=np.int64)
-    dyn.sample_states(packed.tables, packed.forces, packed.dynamics.spring_arrays, packed.drives,
-                      packed.settings, trajectory.segments, times, q, v, phase)
+    dyn.sample_states(packed.tables, packed.forces, packed.switching, packed.settings,
+                      trajectory.segments, times, q, v, phase)
     return q, v
 
 
@@ -54,9 +54,10 @@ def _phase_state(packed, q, v, t):
     force = -s["contact_stiffness"] * gap - s["contact_damping"] * gap_rate
     if not (gap < 0.0 and force > 0.0):
         return FREE, q, v
-    left, _, modes = packed.dynamics.spring_arrays
+    left, _, modes = packed.switching[SWITCH_SPRING]
     y, y_rate = np.empty_like(q), np.empty_like(v)
-    to_contact(q, v, t, left, modes, packed.drives, s["forcing_frequency"], y, y_rate)
+    to_contact(q, v, t, left, modes, packed.switching[SWITCH_DRIVES], s["forcing_frequency"], y,
+               y_rate)
     return CONTACT, y, y_rate
 
 
@@ -69,7 +70,7 @@ def run_from(packed, q, v, t0, t1):
     while True:
         buffers = segments(capacity, q.size)
         count, status, _ = dyn.run_events(packed.tables, packed.forces, packed.phase_scalars,
-                                          *packed.switching(), settings, q0, v0, buffers, t0,
+                                          packed.switching, settings, q0, v0, buffers, t0,
                                           phase)
         if status != dyn.EVENT_LIMIT:
             break
@@ -78,10 +79,10 @@ def run_from(packed, q, v, t0, t1):
     seg_phase, end_q, end_v = buffers.phase, buffers.end_q, buffers.end_v
     q_end, v_end = end_q[count - 1].copy(), end_v[count - 1].copy()
     if seg_phase[count - 1] == CONTACT:
-        _, right, modes = packed.dynamics.spring_arrays
+        _, right, modes = packed.switching[SWITCH_SPRING]
         y, y_rate = q_end.copy(), v_end.copy()
-        to_free(y, y_rate, t1, right, modes, packed.drives, settings["forcing_frequency"], q_end,
-                v_end)
+        to_free(y, y_rate, t1, right, modes, packed.switching[SWITCH_DRIVES],
+                settings["forcing_frequency"], q_end, v_end)
     return q_end, v_end
 
 

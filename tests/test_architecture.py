@@ -439,3 +439,34 @@ def test_the_loose_group_check_sees_loose_arguments():
             "def evaluate(q, v, t, weights, const, sine_amp):\n    pass\n"
             "def walk2(q, oscillators, event):\n    pass\n")
     assert _loose_group_kernels(ast.parse(code)) == ["walk", "evaluate"]
+
+
+# The switching arrays (issue 33): a run's travel as one switching record, whose fields only
+# the contact seam reads; every other kernel takes the record and passes it on whole.
+SWITCHING_SEAM = {"contact.py", "contact_tied.py", "contact_spring.py"}
+SWITCHING_FIELDS = {"overlap", "shifts", "spring"}
+
+
+def _loose_switching_kernels(tree: ast.AST) -> list[str]:
+    """Functions that take a switching array (``overlap``, ``shifts``, ``spring``) loose."""
+    return [node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)
+            and SWITCHING_FIELDS & {a.arg for a in node.args.args + node.args.kwonlyargs}]
+
+
+def test_kernels_take_one_switching_record():
+    """Outside the contact seam no kernel takes the switching arrays loose."""
+    loose = {path.name: names for path in sorted((PACKAGE / "kernels").glob("*.py"))
+             if path.name not in SWITCHING_SEAM
+             for names in [_loose_switching_kernels(ast.parse(path.read_text(), str(path)))]
+             if names}
+    assert not loose, ("kernels that take a switching array as a parameter (take the run's "
+                       f"switching record, records.SWITCHING, whole): {loose}")
+
+
+def test_the_switching_check_sees_loose_arguments():
+    code = ("def run_events(tables, forces, overlap, shifts, spring, drives, settings):\n"
+            "    pass\n"
+            "def sample_states(tables, forces, spring, drives, settings):\n    pass\n"
+            "def tied(q, *, shifts):\n    pass\n"
+            "def run(tables, forces, switching, settings):\n    pass\n")
+    assert _loose_switching_kernels(ast.parse(code)) == ["run_events", "sample_states", "tied"]

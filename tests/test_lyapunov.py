@@ -15,7 +15,7 @@ from impactbeams.kernels import lyapunov as lyapunov_kernels
 from impactbeams.kernels import tangent
 from impactbeams.kernels.contact_spring import to_contact, to_free
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_FREQUENCY, SPRING_DRIVE_ROWS
-from impactbeams.kernels.records import Segments, Tangent
+from impactbeams.kernels.records import SWITCH_SPRING, Segments, Tangent
 from impactbeams.packing import cell_rows, pack_run
 from impactbeams.params import Params
 from impactbeams.sweep import run_sweep, sweep_from_mapping
@@ -73,14 +73,14 @@ def tangent_jacobian(packed, trajectory, t0, t1, settings=None):
     m = trajectory.q.shape[1]
     identity = np.eye(2 * m)
     rows_q, rows_v = identity[:, :m].copy(), identity[:, m:].copy()
-    spring = packed.dynamics.spring_arrays
+    spring = packed.switching[SWITCH_SPRING]
     if seg_phase[0] == CONTACT:
         _map_rows(rows_q, rows_v, CONTACT, spring)
     state = Tangent(rows_q, rows_v, np.array([t0, 0.0]), np.zeros((1, 2 * m)),
                     np.zeros(1, np.int64))
     cut = Segments(seg_time, seg_phase, *(array[first:stop].copy() for array in (
         trajectory.sustained, trajectory.q, trajectory.v, trajectory.end_q, trajectory.end_v)))
-    tangent.carry_tangents(packed.tables, packed.phase_scalars, spring,
+    tangent.carry_tangents(packed.tables, packed.phase_scalars, packed.switching,
                            packed.settings if settings is None else settings, cut, t1,
                            (math.inf, t1, 0, 0), state)
     if seg_phase[-1] == CONTACT:
@@ -214,9 +214,8 @@ def test_windowed_cell_run_gives_the_exponent_in_bounded_memory():
     assert trajectory.time.size > 64 * 10
     d = packed.dynamics
     cell = cell_rows({**params.as_dict(), "geometry": 0.0}, 1)[0]
-    value, status = lyapunov_kernels.cell_exponent(cell, d.tables, d.overlap, d.shifts,
-                                                   d.spring_arrays, d.geometry, 60 * PERIOD,
-                                                   20, 64)
+    value, status = lyapunov_kernels.cell_exponent(cell, d.tables, d.switching, d.geometry,
+                                                   60 * PERIOD, 20, 64)
     recorded_result = lyapunov_exponents(packed, trajectory, 1, 20)
     assert status == 0
     # a stable orbit: restarting each window changes the run at round-off only

@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from impactbeams import simulate
 from impactbeams.cli import main
 from impactbeams.kernels import layout, stroboscope
+from impactbeams.kernels.records import geometry_switching
 from impactbeams.longtime import hysteresis
 from impactbeams.params import ParameterError
 from impactbeams.plotting import draw
@@ -156,10 +157,8 @@ def _alone(sweep, plan, cell, start_phase, start_state):
     omega = cell[layout.CELL_FORCING_FREQUENCY]
     samples = np.empty((long_time.sampled_periods, len(layout.TIP_COLUMNS)))
     summary, end = np.empty(len(layout.STROBOSCOPE_COLUMNS)), np.empty_like(start_state)
-    overlaps, shifts, *spring = plan.switching
-    stroboscope.cell_stroboscope(cell, plan.tables[0], overlaps[0], shifts[0],
-                                 tuple(array[0] for array in spring), plan.geometry[0],
-                                 long_time.sample_times(omega, transient),
+    stroboscope.cell_stroboscope(cell, plan.tables[0], geometry_switching(plan.switching, 0),
+                                 plan.geometry[0], long_time.sample_times(omega, transient),
                                  long_time.horizon(omega, transient), LONG_RUN_CAPACITY,
                                  MAX_PHASES_PER_PERIOD, start_phase, start_state, samples,
                                  summary, end)

@@ -58,11 +58,12 @@ ENTRY_KERNELS = {
 _SETTINGS_ARRAYS = "float64[:, :, ::1], complex128[:, ::1]"
 _SEGMENTS = ("Segments(float64[::1], int64[::1], bool[::1], float64[:, ::1], float64[:, ::1], "
              "float64[:, ::1], float64[:, ::1])")
-_DRIVES = "UniTuple(complex128[:, ::1], 3), complex128[:, ::1], settings"
+_SWITCHING = ("Tuple((float64[:, ::1], float64[:, ::1], UniTuple(complex128[:, ::1], 3), "
+              "complex128[:, ::1],))")
 HELPER_JOBS = {
     "simulate": (("dynamics", "run_events",
-                  f"{_SETTINGS_ARRAYS}, float64[:, ::1], float64[:, ::1], float64[:, ::1], "
-                  f"{_DRIVES}, float64[::1], float64[::1], {_SEGMENTS}, float64, int64"),),
+                  f"{_SETTINGS_ARRAYS}, float64[:, ::1], {_SWITCHING}, settings, float64[::1], "
+                  f"float64[::1], {_SEGMENTS}, float64, int64"),),
 }
 # What a helper compiles only to link, as a calling kernel would (`kernels.linking`), and hands over
 # in a file that this process links instead of compiling it: a first map calls one kernel
@@ -83,12 +84,11 @@ LINK_JOBS = {
 AHEAD_JOBS = {
     "simulate": (
         ("forcing", "run_inputs",
-         "float64[::1], float64[:, :, ::1], float64[::1], UniTuple(complex128[:, ::1], 3), "
-         "float64, float64"),
+         f"float64[::1], float64[:, :, ::1], float64[::1], {_SWITCHING}, float64, float64"),
         ("records", "segments", "int64, int64"),
         ("dynamics", "sample_states",
-         f"{_SETTINGS_ARRAYS}, {_DRIVES}, {_SEGMENTS}, float64[::1], float64[:, ::1], "
-         "float64[:, ::1], int64[::1]"),
+         f"{_SETTINGS_ARRAYS}, {_SWITCHING}, settings, {_SEGMENTS}, float64[::1], "
+         "float64[:, ::1], float64[:, ::1], int64[::1]"),
         ("stroboscope", "tip_loads_at", "settings, int64[::1], float64[::1], float64[:, ::1]"),
         ("stroboscope", "tip_motions",
          f"{_SETTINGS_ARRAYS}, float64[:, ::1], settings, int64[::1], float64[::1], "
@@ -97,7 +97,7 @@ AHEAD_JOBS = {
          f"{_SETTINGS_ARRAYS}, float64[:, ::1], settings, int64[::1], float64[::1], "
          "float64[:, ::1], float64[:, ::1], float64[:, ::1]"),
         ("dynamics", "observed_states",
-         f"int64[::1], float64[::1], float64[:, ::1], float64[:, ::1], {_DRIVES}, "
+         f"int64[::1], float64[::1], float64[:, ::1], float64[:, ::1], {_SWITCHING}, settings, "
          "float64[:, ::1], float64[:, ::1]"),
         ("peaks", "peak_force",
          "float64[:, ::1], complex128[::1], float64[::1], settings, float64[::1], float64[::1], "

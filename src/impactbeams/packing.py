@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -134,9 +134,10 @@ class Dynamics:
 
     ``model``: the tied law's modal model (contact modes, projections), else None; ``spring``:
     the spring law's contact phase, else None. ``bases``: the coordinates in which sampled
-    states come back (the spring law's are the free ones in both phases). ``overlap``,
-    ``shifts`` (tied) and ``spring_arrays`` = (left, right, modes) (spring, in the layout of
-    `impactbeams.kernels.contact_spring`) are zeros for the other law.
+    states come back (the spring law's are the free ones in both phases). ``switching``: the
+    geometry's switching record (`impactbeams.kernels.records.SWITCHING`: the tied law's
+    ``overlap``, ``shifts``, the spring law's ``spring`` = (left, right, modes), in the layout
+    of `impactbeams.kernels.contact_spring`, zeros for the other law; no run's drives: empty).
     """
 
     params: Params
@@ -146,15 +147,38 @@ class Dynamics:
     bases: tuple[Basis, Basis]
     tables: np.ndarray
     geometry: np.ndarray
-    overlap: np.ndarray
-    shifts: np.ndarray
-    spring_arrays: tuple[np.ndarray, np.ndarray, np.ndarray]
+    switching: tuple  # (overlap, shifts, spring, drives)
 
 
 def _no_spring(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Zero spring arrays of the full size (geometries of both laws stack in one map)."""
     return (np.zeros((2 * m, m), complex), np.zeros((m, 2 * m), complex),
             np.zeros((len(layout.SPRING_MODE_ROWS), m), complex))
+
+
+def _geometry_switching(overlap: np.ndarray, shifts: np.ndarray,
+                        spring: tuple[np.ndarray, np.ndarray, np.ndarray]) -> tuple:
+    """A geometry's switching record: its laws' arrays, and the empty drives of no run.
+
+    Every array C-contiguous, as the run's record that `run_inputs` returns: a kernel has one
+    signature whichever built the record it takes.
+    """
+    overlap, shifts = np.ascontiguousarray(overlap), np.ascontiguousarray(shifts)
+    spring = tuple(np.ascontiguousarray(array) for array in spring)
+    return (overlap, shifts, spring,
+            np.empty((len(layout.SPRING_DRIVE_ROWS), 0), dtype=np.complex128))
+
+
+def stacked_switching(records: Sequence[tuple]) -> tuple[np.ndarray, ...]:
+    """The switching records of a map's geometries stacked field by field (index: geometry).
+
+    The fields of `impactbeams.kernels.records.STACKED_SWITCHING`, the spring arrays flat.
+
+    The map kernels take geometry g's out with `impactbeams.kernels.records.geometry_switching`.
+    """
+    return tuple(np.array(arrays) for arrays in zip(
+        *((overlap, shifts, *spring, drives) for overlap, shifts, spring, drives in records),
+        strict=True))
 
 
 def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
@@ -169,8 +193,9 @@ def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
         model = build_tied_model(params, n_modes)
         tables, shifts = phase_tables(model)
         return Dynamics(params, model.free, model, None, bases(model), tables,
-                        geometry_row(params, model.free), model.overlap, shifts,
-                        _no_spring(model.free.frequencies.size))
+                        geometry_row(params, model.free),
+                        _geometry_switching(model.overlap, shifts,
+                                            _no_spring(model.free.frequencies.size)))
     free = build_free_phase(params, n_modes)
     spring = spring_contact(free, free.point_compliance, params.damping_ratio,
                             params.contact_stiffness, params.contact_damping)
@@ -179,9 +204,10 @@ def dynamics_arrays(params: Params, n_modes: int) -> Dynamics:
     m = free.frequencies.size  # zero tied-law arrays of the full size, as for the spring ones
     basis = free_basis(free, params)
     return Dynamics(params, free, None, spring, (basis, basis), tables,
-                    geometry_row(params, free, spring), np.zeros((m, m)), np.zeros((2, m)),
-                    (np.ascontiguousarray(spring.left.T),  # the kernels' layout
-                     np.ascontiguousarray(spring.right.T), modes))
+                    geometry_row(params, free, spring),
+                    _geometry_switching(np.zeros((m, m)), np.zeros((2, m)),
+                                        (np.ascontiguousarray(spring.left.T),  # the kernels' layout
+                                         np.ascontiguousarray(spring.right.T), modes)))
 
 
 def cell_rows(columns: Mapping[str, np.ndarray | float], shape: int | tuple[int, ...],
@@ -214,14 +240,15 @@ class Packed:
     """One run's inputs, packed for the kernels (see kernels.layout).
 
     The geometry's arrays (``dynamics``) and what depends on the run's forcing, damping and
-    uplifts.
+    uplifts; ``switching``: the run's switching record (`impactbeams.kernels.records.SWITCHING`:
+    the geometry's with the run's drives), which the kernels take whole.
     """
 
     dynamics: Dynamics
     tables: np.ndarray
     forces: np.ndarray
     phase_scalars: np.ndarray
-    drives: np.ndarray
+    switching: tuple  # (overlap, shifts, spring, drives)
     settings: np.void  # a record of kernels.layout.SETTINGS_DTYPE
     q0: np.ndarray
     v0: np.ndarray
@@ -241,11 +268,6 @@ class Packed:
         """Whether the run uses the spring contact law."""
         return self.dynamics.spring is not None
 
-    def switching(self) -> tuple:
-        """The state machine's switching arrays: overlap, shifts, spring arrays, drives."""
-        d = self.dynamics
-        return d.overlap, d.shifts, d.spring_arrays, self.drives
-
 
 def pack_run(params: Params, n_modes: int, t_max: float, search_span: float,
              dynamics: Dynamics | None = None) -> Packed:
@@ -263,9 +285,9 @@ def pack_run(params: Params, n_modes: int, t_max: float, search_span: float,
     # is the run's own, index 0)
     cell = np.array([0.0 if name == "geometry" else getattr(params, name)
                      for name in _cell_columns(params.base_amplitude)], dtype=float)
-    damped, forces, scalars, settings, q0, v0, drives = run_inputs(
-        cell, dynamics.tables, dynamics.geometry, dynamics.spring_arrays, t_max, search_span)
-    return Packed(dynamics, damped, forces, scalars, drives, settings[0], q0, v0)
+    damped, forces, scalars, settings, q0, v0, switching = run_inputs(
+        cell, dynamics.tables, dynamics.geometry, dynamics.switching, t_max, search_span)
+    return Packed(dynamics, damped, forces, scalars, switching, settings[0], q0, v0)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -86,7 +86,7 @@ def settled_from(x, count, period, tolerance):
 
 
 @kernel
-def start_phase(z, tables, phase_scalars, overlap, shifts, spring, drives, settings, q, v):
+def start_phase(z, tables, phase_scalars, switching, settings, q, v):
     """The section state z = (q, q') at t = 0 into (q, v) in its phase's coordinates; the phase.
 
     The tied law starts free, from an open gap only (``NO_STATE`` otherwise); the spring law in
@@ -101,8 +101,7 @@ def start_phase(z, tables, phase_scalars, overlap, shifts, spring, drives, setti
     force = -settings.contact_stiffness * gap - settings.contact_damping * gap_rate
     if not (gap < 0.0 and force > 0.0):
         return FREE
-    contact.switch_state(z[:n], z[n:], 0.0, CONTACT, overlap, shifts, spring, drives, settings,
-                         q, v)
+    contact.switch_state(z[:n], z[n:], 0.0, CONTACT, switching, settings, q, v)
     return CONTACT
 
 
@@ -117,10 +116,9 @@ def _onsets_since(recorded, count, since):
 
 
 @kernel
-def settle_cells(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings,
-                 states, known, times, omega, forcing_period, window, tolerance, max_period,
-                 max_periods, max_events, period, contacts, settle_periods, status, samples,
-                 end_q, end_v, end_phase):
+def settle_cells(tables, forces, phase_scalars, switching, settings, states, known, times, omega,
+                 forcing_period, window, tolerance, max_period, max_periods, max_events, period,
+                 contacts, settle_periods, status, samples, end_q, end_v, end_phase):
     """Every section state of ``states`` (cells, 2 N) run in blocks until it settles.
 
     A block runs from t = 0 to its horizon ``settings.t_max`` (at most ``max_events``
@@ -140,19 +138,16 @@ def settle_cells(tables, forces, phase_scalars, overlap, shifts, spring, drives,
     residual2 = contact.residual_flexibility2(tables[FREE], settings)
     z = np.empty(2 * n)
     for i in range(states.shape[0]):
-        phase = start_phase(states[i], tables, phase_scalars, overlap, shifts, spring, drives,
-                            settings, q, v)
+        phase = start_phase(states[i], tables, phase_scalars, switching, settings, q, v)
         run = 0  # forcing periods run
         while phase != NO_STATE and run < max_periods:  # NO_STATE: refused, or stopped
-            count, run_status, _ = run_events(tables, forces, phase_scalars, overlap, shifts,
-                                              spring, drives, settings, q, v, recorded, 0.0,
-                                              phase)
+            count, run_status, _ = run_events(tables, forces, phase_scalars, switching, settings,
+                                              q, v, recorded, 0.0, phase)
             if run_status != COMPLETE:
                 phase = NO_STATE
                 break
-            sample_states(tables, forces, spring, drives, settings,
-                          recorded_prefix(recorded, count), times, sample_q, sample_v,
-                          sample_phase)
+            sample_states(tables, forces, switching, settings, recorded_prefix(recorded, count),
+                          times, sample_q, sample_v, sample_phase)
             for k in range(block):
                 tip_motion(tables, forces, phase_scalars, settings, residual2, sample_phase[k],
                            times[k], sample_q[k], sample_v[k], tips[k])
@@ -162,8 +157,7 @@ def settle_cells(tables, forces, phase_scalars, overlap, shifts, spring, drives,
             run += block
             if contact.keeps_free_coordinates(settings.contact_law):  # sampled free: the phase
                 contact.copy_state(sample_q[block - 1], sample_v[block - 1], z[:n], z[n:])
-                phase = start_phase(z, tables, phase_scalars, overlap, shifts, spring, drives,
-                                    settings, q, v)
+                phase = start_phase(z, tables, phase_scalars, switching, settings, q, v)
             else:
                 contact.copy_state(sample_q[block - 1], sample_v[block - 1], q, v)
                 phase = sample_phase[block - 1]

@@ -15,11 +15,14 @@ from impactbeams.kernels.records import RunInputs
 
 
 @kernel
-def cell_run(cell, tables, geometry, spring, t_max, search_span):
-    """``RunInputs`` of map cell ``cell`` in its geometry (``forcing.run_inputs``); s."""
-    damped, forces, scalars, settings_array, q0, v0, drives = run_inputs(
-        cell, tables, geometry, spring, t_max, search_span)
-    return RunInputs(damped, forces, scalars, settings_array, q0, v0, drives)
+def cell_run(cell, tables, geometry, switching, t_max, search_span):
+    """``RunInputs`` of map cell ``cell`` in its geometry (``forcing.run_inputs``); s.
+
+    ``switching``: the geometry's switching record (`records.SWITCHING`).
+    """
+    damped, forces, scalars, settings_array, q0, v0, run_switching = run_inputs(
+        cell, tables, geometry, switching, t_max, search_span)
+    return RunInputs(damped, forces, scalars, settings_array, q0, v0, run_switching)
 
 
 @kernel

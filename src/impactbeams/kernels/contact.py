@@ -11,13 +11,21 @@ state is observed (tips, energies: the tied law's own phase, the spring law's fr
 coordinates), the quasi-static tip loads, the tips' correction for the flexibility the modes
 miss, the law's extra power (dashpot, the work at an onset's force jump), whether a contact
 waits for a rising force or may be released early, and the tangent dynamics' switches
-(saltation). Arrays and fields are named in `impactbeams.kernels.layout`; SI units.
+(saltation). The switching arrays come as one switching record per run (`records.SWITCHING`),
+and this module is the one that reads its fields, handing each law its own. Arrays and fields
+are named in `impactbeams.kernels.layout`; SI units.
 """
 
 from impactbeams.kernels import contact_spring, contact_tied
 from impactbeams.kernels.events import phase_event
 from impactbeams.kernels.jit import borrowing_kernel, kernel
 from impactbeams.kernels.layout import CONTACT, FREE, SPRING
+from impactbeams.kernels.records import (
+    SWITCH_DRIVES,
+    SWITCH_OVERLAP,
+    SWITCH_SHIFTS,
+    SWITCH_SPRING,
+)
 
 
 @kernel
@@ -37,39 +45,44 @@ def observed_phase(phase, settings):
 
 
 @borrowing_kernel
-def switch_state(q, v, t, to_phase, overlap, shifts, spring, drives, settings, q_new, v_new):
+def switch_state(q, v, t, to_phase, switching, settings, q_new, v_new):
     """The state (q, v) of the other phase at time t in ``to_phase``'s coordinates.
 
     Tied law: projection onto the new phase's modes. Spring law: the same physical state.
+    ``switching``: the run's switching record, whose fields only this seam reads.
     """
     if keeps_free_coordinates(settings.contact_law):
-        contact_spring.switch_state(q, v, t, to_phase, spring, drives, settings, q_new, v_new)
+        contact_spring.switch_state(q, v, t, to_phase, switching[SWITCH_SPRING],
+                                    switching[SWITCH_DRIVES], settings, q_new, v_new)
     else:
-        contact_tied.switch_state(q, v, t, to_phase, overlap, shifts, settings, q_new, v_new)
+        contact_tied.switch_state(q, v, t, to_phase, switching[SWITCH_OVERLAP],
+                                  switching[SWITCH_SHIFTS], settings, q_new, v_new)
 
 
 @borrowing_kernel
-def observed_state(phase, y, y_rate, t, spring, drives, settings, q, v):
+def observed_state(phase, y, y_rate, t, switching, settings, q, v):
     """Write into (q, v) the state (y, y') of ``phase`` at time t as it is observed.
 
     Spring law: a contact state back in the free coordinates; otherwise unchanged.
     """
     if phase == CONTACT and keeps_free_coordinates(settings.contact_law):
-        contact_spring.free_state(y, y_rate, t, spring, drives, settings, q, v)
+        contact_spring.free_state(y, y_rate, t, switching[SWITCH_SPRING],
+                                  switching[SWITCH_DRIVES], settings, q, v)
     else:
         copy_state(y, y_rate, q, v)
 
 
 @borrowing_kernel
-def phase_state(phase, q, v, t, spring, drives, settings, y, y_rate):
+def phase_state(phase, q, v, t, switching, settings, y, y_rate):
     """Write into (y, y') the observed state (q, v) of ``phase`` at time t in its own coordinates.
 
     The inverse of ``observed_state``: the spring law's contact coordinates from the free
-    ones (with the run's own ``drives``, so a state observed in one run starts another with
-    other drives); otherwise unchanged.
+    ones (with the run's own drives, ``switching[SWITCH_DRIVES]``: a state observed in one run
+    starts another with other drives); otherwise unchanged.
     """
     if phase == CONTACT and keeps_free_coordinates(settings.contact_law):
-        contact_spring.switch_state(q, v, t, CONTACT, spring, drives, settings, y, y_rate)
+        contact_spring.switch_state(q, v, t, CONTACT, switching[SWITCH_SPRING],
+                                    switching[SWITCH_DRIVES], settings, y, y_rate)
     else:
         copy_state(q, v, y, y_rate)
 
@@ -176,9 +189,14 @@ def has_tangent_flow(law):
 
 
 @kernel
-def tangent_switch(tangent_q, tangent_v, to_phase, spring, no_drive, out_q, out_v):
-    """Linear part of a switch into ``to_phase``'s coordinates (laws with a tangent flow)."""
-    contact_spring.tangent_switch(tangent_q, tangent_v, to_phase, spring, no_drive, out_q, out_v)
+def tangent_switch(tangent_q, tangent_v, to_phase, switching, no_drive, out_q, out_v):
+    """Linear part of a switch into ``to_phase``'s coordinates (laws with a tangent flow).
+
+    ``no_drive``: zero drives in the layout of ``switching[SWITCH_DRIVES]`` (the switch's
+    affine part).
+    """
+    contact_spring.tangent_switch(tangent_q, tangent_v, to_phase, switching[SWITCH_SPRING],
+                                  no_drive, out_q, out_v)
 
 
 @kernel

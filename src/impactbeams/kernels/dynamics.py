@@ -9,9 +9,9 @@ Plain-array interface, packed by `impactbeams.packing`; every array is named in
 dissipation, peak force) are in `impactbeams.kernels.reductions`.
 
 The contact law is ``settings.contact_law``; what depends on it is dispatched by
-`impactbeams.kernels.contact` (switch maps: the tied law's projections with ``overlap`` and
-``shifts``, the spring law's change of coordinates with ``spring = (left, right, modes)`` and
-``drives``).
+`impactbeams.kernels.contact` (switch maps: the tied law's projections, the spring law's change
+of coordinates), which alone reads the run's switching arrays: every kernel here takes them as
+one switching record (`records.SWITCHING`), ``switching``, and passes it on whole.
 """
 
 import math
@@ -297,8 +297,8 @@ def reonset_or_opening(force_table, force_drive, force_scalars, y_s, y_rate_s, g
 
 
 @kernel
-def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, settings, q0, v0,
-               recorded, t_start=0.0, phase_start=FREE):
+def run_events(tables, forces, phase_scalars, switching, settings, q0, v0, recorded, t_start=0.0,
+               phase_start=FREE):
     """Integrate from the free-phase state (q0, v0) at t = 0 to t_max, event by event.
 
     ``t_start``, ``phase_start``: start instead from the state (q0, v0) of that phase (in its
@@ -382,8 +382,7 @@ def run_events(tables, forces, phase_scalars, overlap, shifts, spring, drives, s
             instant_release = t_event if instant else -math.inf
             conflict = instant and sustained
             sustained = False
-        contact.switch_state(q_end, v_end, t_event, phase, overlap, shifts, spring, drives,
-                             settings, q, v)
+        contact.switch_state(q_end, v_end, t_event, phase, switching, settings, q, v)
         t = t_event
     return seg_time.size, EVENT_LIMIT, t
 
@@ -398,8 +397,7 @@ def segment_index(seg_time, count, t, start):
 
 
 @kernel
-def sample_states(tables, forces, spring, drives, settings, recorded, times, q_out, v_out,
-                  phase_out):
+def sample_states(tables, forces, switching, settings, recorded, times, q_out, v_out, phase_out):
     """Modal state and phase at each of the ascending ``times`` (s), in closed form.
 
     ``recorded``: the run's `records.Segments`, all of them recorded ones. At an event time the
@@ -415,13 +413,11 @@ def sample_states(tables, forces, spring, drives, settings, recorded, times, q_o
         phase_out[i] = phase
         propagate(tables[phase], forces[phase], recorded.q[k], recorded.v[k], recorded.time[k],
                   times[i], settings, y, y_rate)
-        contact.observed_state(phase, y, y_rate, times[i], spring, drives, settings, q_out[i],
-                               v_out[i])
+        contact.observed_state(phase, y, y_rate, times[i], switching, settings, q_out[i], v_out[i])
 
 
 @kernel
-def sample_grid(tables, forces, spring, drives, settings, recorded, times, q_out, v_out,
-                phase_out):
+def sample_grid(tables, forces, switching, settings, recorded, times, q_out, v_out, phase_out):
     """``sample_states`` at equally spaced ``times`` (s), a step at a time within a segment.
 
     A segment's first time is reached from the segment's start, each next one by one step
@@ -451,13 +447,11 @@ def sample_grid(tables, forces, spring, drives, settings, recorded, times, q_out
                 f, g = factors[phase, :, j], integrals[phase, :, j]
                 y[j], y_rate[j] = stepped_mode(y[j], y_rate[j], frequencies[j], force[j], f[0],
                                                f[1], f[2], f[3], f[4], g[0], g[1], phase_plus)
-        contact.observed_state(phase, y, y_rate, times[i], spring, drives, settings, q_out[i],
-                               v_out[i])
+        contact.observed_state(phase, y, y_rate, times[i], switching, settings, q_out[i], v_out[i])
 
 
 @kernel
-def sample_segments(tables, forces, spring, drives, settings, recorded, ends, count, q_out,
-                    v_out):
+def sample_segments(tables, forces, switching, settings, recorded, ends, count, q_out, v_out):
     """``count`` equally spaced states over each recorded segment, a step at a time.
 
     Segment k's samples, rows ``k * count`` to ``(k + 1) * count - 1`` of the outputs, are at
@@ -489,7 +483,7 @@ def sample_segments(tables, forces, spring, drives, settings, recorded, ends, co
                     y[j], y_rate[j] = stepped_mode(y[j], y_rate[j], frequencies[j], force[j],
                                                    f[0], f[1], f[2], f[3], f[4], g[0], g[1],
                                                    phase_plus)
-            contact.observed_state(phase, y, y_rate, t, spring, drives, settings,
+            contact.observed_state(phase, y, y_rate, t, switching, settings,
                                    q_out[k * count + i], v_out[k * count + i])
 
 
@@ -519,11 +513,11 @@ def _phase_step_factors(tables, forces, settings, h, phase, factors, integrals):
 
 
 @kernel
-def observed_states(phase, times, q, v, spring, drives, settings, q_out, v_out):
+def observed_states(phase, times, q, v, switching, settings, q_out, v_out):
     """States ``(q[i], v[i])`` of ``phase[i]`` at ``times[i]`` (s) as observed, into the outputs.
 
     ``contact.observed_state``: the spring law's contact states back in the free coordinates.
     """
     for i in range(times.size):
-        contact.observed_state(phase[i], q[i], v[i], times[i], spring, drives, settings,
-                               q_out[i], v_out[i])
+        contact.observed_state(phase[i], q[i], v[i], times[i], switching, settings, q_out[i],
+                               v_out[i])

@@ -43,7 +43,7 @@ GAP, TIP = 0, 1  # the quantities whose extrema are sought: the gap, a tip's |de
 
 
 @kernel
-def gap_extremum(tables, forces, phase_scalars, spring, drives, settings, recorded, omega, lo,
+def gap_extremum(tables, forces, phase_scalars, switching, settings, recorded, omega, lo,
                  hi, sign, xtol):
     """The gap's minimum (``sign`` 1) or maximum (-1) in (lo, hi): its time (s) and value (m).
 
@@ -52,12 +52,12 @@ def gap_extremum(tables, forces, phase_scalars, spring, drives, settings, record
     at lo and > 0 at hi (no such extremum between them). ``omega``: the forcing frequency
     (rad/s).
     """
-    return _extremum(GAP, sign, 0, 0.0, tables, forces, phase_scalars, spring, drives,
+    return _extremum(GAP, sign, 0, 0.0, tables, forces, phase_scalars, switching,
                      settings, recorded, omega, lo, hi, xtol)
 
 
 @kernel
-def tip_maximum(tables, forces, phase_scalars, spring, drives, settings, recorded, column,
+def tip_maximum(tables, forces, phase_scalars, switching, settings, recorded, column,
                 clamp, lo, hi, xtol):
     """The largest |tip ``column``| (``layout.TIP_Y1`` or ``TIP_Y2``) in (lo, hi): time, value.
 
@@ -65,22 +65,22 @@ def tip_maximum(tables, forces, phase_scalars, spring, drives, settings, recorde
     absolute. As `gap_extremum`, on the rate of |tip|: (NaN, NaN) unless it is > 0 at lo and
     < 0 at hi.
     """
-    return _extremum(TIP, -1.0, column, clamp, tables, forces, phase_scalars, spring, drives,
+    return _extremum(TIP, -1.0, column, clamp, tables, forces, phase_scalars, switching,
                      settings, recorded, settings.forcing_frequency, lo, hi, xtol)
 
 
 @kernel
-def _extremum(what, sign, column, clamp, tables, forces, phase_scalars, spring, drives,
+def _extremum(what, sign, column, clamp, tables, forces, phase_scalars, switching,
               settings, recorded, omega, lo, hi, xtol):
     """Brent's method on ``sign`` times the rate of ``what`` (of its size for a tip)."""
     n_coords = recorded.q.shape[1]
     work = (np.empty(n_coords), np.empty(n_coords), np.empty(n_coords), np.empty(n_coords),
             np.empty(4))
     x_pre, x_cur = lo, hi
-    _, f_pre = _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, spring,
-                           drives, settings, recorded, omega, x_pre, work)
-    _, f_cur = _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, spring,
-                           drives, settings, recorded, omega, x_cur, work)
+    _, f_pre = _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, switching,
+                           settings, recorded, omega, x_pre, work)
+    _, f_cur = _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, switching,
+                           settings, recorded, omega, x_cur, work)
     if not f_pre < 0.0 < f_cur:
         return math.nan, math.nan
     x_blk = f_blk = s_pre = s_cur = 0.0
@@ -88,21 +88,21 @@ def _extremum(what, sign, column, clamp, tables, forces, phase_scalars, spring, 
         done, x_pre, x_cur, x_blk, f_pre, f_blk, s_pre, s_cur = _brent_iteration(
             x_pre, x_cur, x_blk, f_pre, f_cur, f_blk, s_pre, s_cur, xtol, RTOL)
         value, f_cur = _value_rate(what, sign, column, clamp, tables, forces, phase_scalars,
-                                   spring, drives, settings, recorded, omega, x_cur, work)
+                                   switching, settings, recorded, omega, x_cur, work)
         if done:
             return x_cur, value
     return math.nan, math.nan
 
 
 @kernel
-def _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, spring, drives,
+def _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, switching,
                 settings, recorded, omega, t, work):
     """``what``'s value at t (s), and ``sign`` times its rate (of |tip| for a tip).
 
     ``work``: (y, y', q, q', tips) arrays to sample into.
     """
     y, y_rate, q, v, tips = work
-    phase = _state(tables, forces, spring, drives, settings, recorded, t, y, y_rate, q, v)
+    phase = _state(tables, forces, switching, settings, recorded, t, y, y_rate, q, v)
     if what == GAP:
         scalars, weights = phase_scalars[FREE], tables[FREE, ROW_EVENT]
         return _gap(scalars, weights, omega, t, q), sign * _rate(scalars, weights, omega, t, v)
@@ -115,7 +115,7 @@ def _value_rate(what, sign, column, clamp, tables, forces, phase_scalars, spring
 
 
 @kernel
-def smallest_free_minimum(tables, forces, phase_scalars, spring, drives, settings, recorded,
+def smallest_free_minimum(tables, forces, phase_scalars, switching, settings, recorded,
                           omega, times):
     """The gap's smallest interior minimum in free flight, sampled on ``times`` and refined.
 
@@ -129,7 +129,7 @@ def smallest_free_minimum(tables, forces, phase_scalars, spring, drives, setting
     n_coords, m = recorded.q.shape[1], times.size
     q, v = np.empty((m, n_coords)), np.empty((m, n_coords))
     phase = np.empty(m, dtype=np.int64)
-    sample_grid(tables, forces, spring, drives, settings, recorded, times, q, v, phase)
+    sample_grid(tables, forces, switching, settings, recorded, times, q, v, phase)
     scalars, weights = phase_scalars[FREE], tables[FREE, ROW_EVENT]
     gap = np.empty(m)
     for i in range(m):
@@ -143,13 +143,13 @@ def smallest_free_minimum(tables, forces, phase_scalars, spring, drives, setting
     if best < 0:
         return math.nan, math.nan, math.nan, math.nan, math.nan, math.nan
     lo, hi = times[best - 1], times[best + 1]
-    t, value = gap_extremum(tables, forces, phase_scalars, spring, drives, settings, recorded,
+    t, value = gap_extremum(tables, forces, phase_scalars, switching, settings, recorded,
                             omega, lo, hi, 1.0, 1e-14 * max(hi, 1.0))
     return t, value, times[best], gap[best], lo, hi
 
 
 @kernel
-def interval_gap(tables, forces, phase_scalars, spring, drives, settings, recorded, ends, omega,
+def interval_gap(tables, forces, phase_scalars, switching, settings, recorded, ends, omega,
                  count):
     """The gap's local maximum nearest 0 between contacts (m); NaN if there is none.
 
@@ -165,7 +165,7 @@ def interval_gap(tables, forces, phase_scalars, spring, drives, settings, record
     if not contact.any():
         return math.nan
     q, v = np.empty((segments * count, n_coords)), np.empty((segments * count, n_coords))
-    sample_segments(tables, forces, spring, drives, settings, recorded, ends, count, q, v)
+    sample_segments(tables, forces, switching, settings, recorded, ends, count, q, v)
     scalars, weights = phase_scalars[FREE], tables[FREE, ROW_EVENT]
     times, gap = np.empty((segments, count)), np.empty((segments, count))
     for k in range(segments):
@@ -193,10 +193,10 @@ def interval_gap(tables, forces, phase_scalars, spring, drives, settings, record
     y, y_rate, q_t, v_t = (np.empty(n_coords), np.empty(n_coords), np.empty(n_coords),
                            np.empty(n_coords))
     t = times[best_k, best_i]
-    _state(tables, forces, spring, drives, settings, recorded, t, y, y_rate, q_t, v_t)
+    _state(tables, forces, switching, settings, recorded, t, y, y_rate, q_t, v_t)
     value = _gap(scalars, weights, omega, t, q_t)
     lo, hi = times[best_k, best_i - 1], times[best_k, best_i + 1]
-    _, rise = gap_extremum(tables, forces, phase_scalars, spring, drives, settings, recorded,
+    _, rise = gap_extremum(tables, forces, phase_scalars, switching, settings, recorded,
                            omega, lo, hi, -1.0, 1e-14 * max(hi, 1.0))
     return value if math.isnan(rise) else max(value, rise)
 
@@ -210,13 +210,13 @@ def _nearer_zero(gap, best_k, best_i, k, i):
 
 
 @kernel
-def _state(tables, forces, spring, drives, settings, recorded, t, y, y_rate, q, v):
+def _state(tables, forces, switching, settings, recorded, t, y, y_rate, q, v):
     """The run's state at t (s), observed in the free coordinates, into (q, v); its phase."""
     k = segment_index(recorded.time, recorded.time.size, t, 0)
     phase = recorded.phase[k]
     propagate(tables[phase], forces[phase], recorded.q[k], recorded.v[k], recorded.time[k], t,
               settings, y, y_rate)
-    contact.observed_state(phase, y, y_rate, t, spring, drives, settings, q, v)
+    contact.observed_state(phase, y, y_rate, t, switching, settings, q, v)
     return phase
 
 

@@ -56,6 +56,7 @@ from impactbeams.kernels.layout import (
     SPRING_DRIVE_ROWS,
     STEADY,
 )
+from impactbeams.kernels.records import SWITCH_OVERLAP, SWITCH_SHIFTS, SWITCH_SPRING
 
 
 @kernel
@@ -138,16 +139,17 @@ def settings(cell, geometry, t_max, search_span):
 
 
 @kernel
-def spring_contact_inputs(cell, tables, geometry, spring, forces, scalars):
+def spring_contact_inputs(cell, tables, geometry, switching, forces, scalars):
     """The spring law's per-run contact phase: oscillator drives, event scalars, mode drives.
 
     Writes the oscillators' drive amplitudes into ``forces[CONTACT]`` and the contact force's
     constant and harmonic parts into ``scalars[CONTACT]``; returns the complex modes' drives
     (rows ``SPRING_DRIVE_ROWS``). With the gap weights w and the gap's harmonic term S
     (``scalars[FREE]``), the contact phase's modal drive is the free one plus
-    ``-S (k_e + i c_e Omega) w`` (harmonic) and ``-k_e clearance w``.
+    ``-S (k_e + i c_e Omega) w`` (harmonic) and ``-k_e clearance w``; ``switching``: the
+    geometry's switching record (`records.SWITCHING`), whose spring arrays the drives are of.
     """
-    left, _, modes = spring
+    left, _, modes = switching[SWITCH_SPRING]
     weights = tables[FREE, ROW_EVENT]
     stiffness, damping = geometry[GEO_STIFFNESS], geometry[GEO_DAMPING]
     forcing_frequency = cell[CELL_FORCING_FREQUENCY]
@@ -167,13 +169,14 @@ def spring_contact_inputs(cell, tables, geometry, spring, forces, scalars):
 
 
 @kernel
-def run_inputs(cell, tables, geometry, spring, t_max, search_span):
+def run_inputs(cell, tables, geometry, switching, t_max, search_span):
     """Everything the dynamics kernel needs for one run of ``cell`` in its geometry.
 
     Returns (tables with the cell's damping ratios, complex drive amplitudes ``forces``,
-    phase scalars, settings, q0, q0', the spring law's mode drives); ``tables`` of the
-    geometry is left unchanged. In the spring law the contact oscillators' damping ratios come
-    with the geometry's ``spring`` modes (solved for the cell's damping ratio).
+    phase scalars, settings, q0, q0', the run's switching record: the geometry's
+    ``switching`` with the spring law's mode drives); ``tables`` of the geometry is left
+    unchanged. In the spring law the contact oscillators' damping ratios come with the
+    geometry's spring modes (solved for the cell's damping ratio).
     """
     spring_law = keeps_free_coordinates(geometry[GEO_LAW])
     damped = tables.copy()
@@ -186,9 +189,9 @@ def run_inputs(cell, tables, geometry, spring, t_max, search_span):
         mode_drives(damped[phase, ROW_DRIVE], damped[phase, ROW_BASE],
                     damped[phase, ROW_FREQUENCY], damped[phase, ROW_ZETA], cell, forces[phase])
     if spring_law:
-        drives = spring_contact_inputs(cell, damped, geometry, spring, forces, scalars)
+        drives = spring_contact_inputs(cell, damped, geometry, switching, forces, scalars)
     else:
         drives = np.empty((len(SPRING_DRIVE_ROWS), 0), dtype=np.complex128)
     q0, v0 = rest_states(cell, geometry, damped[FREE], forces[FREE])
     return (damped, forces, scalars, settings(cell, geometry, t_max, search_span), q0, v0,
-            drives)
+            (switching[SWITCH_OVERLAP], switching[SWITCH_SHIFTS], switching[SWITCH_SPRING], drives))

@@ -44,9 +44,10 @@ Contact laws: ``TIED`` (the paper's: tips tied in contact, contact modes of the 
 projections at switches: ``overlap``, ``shifts``) and ``SPRING`` (compliant: the free
 coordinates kept, the contact phase as the oscillators of `impactbeams.kernels.contact_spring`:
 ``spring = (left, right, modes)`` per geometry and ``drives`` per run, rows
-``SPRING_MODE_ROWS`` and ``SPRING_DRIVE_ROWS``). In the spring law the contact table has the
-oscillators' frequencies and damping ratios, the contact force weights as ``event`` and zeros in
-the other rows.
+``SPRING_MODE_ROWS`` and ``SPRING_DRIVE_ROWS``); a run's arrays of both laws travel as one
+switching record (`impactbeams.kernels.records.SWITCHING`). In the spring law the contact table
+has the oscillators' frequencies and damping ratios, the contact force weights as ``event`` and
+zeros in the other rows.
 
 ``geometry[g]``, fields ``GEOMETRY``: c1, c2 (m/N), the gap's compliance to the tip force
 (``gap_compliance``, s G1(x1, l1), m/N: c1 at the tips), the side s, the accumulation time (s) of

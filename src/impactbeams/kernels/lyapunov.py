@@ -25,7 +25,7 @@ from impactbeams.kernels.layout import (
     GEO_LAW,
     ROW_FREQUENCY,
 )
-from impactbeams.kernels.records import recorded_prefix, segments
+from impactbeams.kernels.records import geometry_switching, recorded_prefix, segments
 from impactbeams.kernels.tangent import (
     carry_tangents,
     interval_count,
@@ -38,8 +38,7 @@ _INITIAL_CAPACITY = 256  # segments per window; doubled as needed up to max_segm
 
 
 @kernel
-def cell_exponent(cell, tables, overlap, shifts, spring, geometry, t_max, transient,
-                  max_segments):
+def cell_exponent(cell, tables, switching, geometry, t_max, transient, max_segments):
     """Largest Lyapunov exponent (1/s) of one cell's spring-law run over [0, t_max].
 
     Averaged over the complete forcing periods after the first ``transient``; each window
@@ -47,17 +46,19 @@ def cell_exponent(cell, tables, overlap, shifts, spring, geometry, t_max, transi
     NaN if no period after the transient completed (or a law without a tangent flow, the
     tied one); a status other than ``COMPLETE`` (a window over ``max_segments`` phases, or
     stuck) ends the run there and the exponent covers the periods before.
+    ``switching``: the geometry's switching record (`records.SWITCHING`; the run's drives
+    come from the cell).
     """
     if not has_tangent_flow(geometry[GEO_LAW]):
         return np.nan, COMPLETE
     schedule = lyapunov_schedule(cell[CELL_FORCING_FREQUENCY], tables[FREE, ROW_FREQUENCY], t_max,
                                  transient)
-    return _exponent(cell_run(cell, tables, geometry, spring, t_max, schedule[0]), overlap,
-                     shifts, spring, t_max, schedule, max_segments)
+    return _exponent(cell_run(cell, tables, geometry, switching, t_max, schedule[0]), t_max,
+                     schedule, max_segments)
 
 
 @kernel
-def _exponent(run, overlap, shifts, spring, t_max, schedule, max_segments):
+def _exponent(run, t_max, schedule, max_segments):
     """``cell_exponent`` of the cell's `RunInputs` ``run``, renormalised on ``schedule``."""
     settings = settings_of(run)
     interval = schedule[0]
@@ -69,9 +70,8 @@ def _exponent(run, overlap, shifts, spring, t_max, schedule, max_segments):
     for window in range(1, interval_count(t_max, interval) + 1):
         settings.t_max = renormalization_time(window, interval, t_max)
         while True:
-            count, status, _ = run_events(run.tables, run.forces, run.phase_scalars, overlap,
-                                          shifts, spring, run.drives, settings, q, v, recorded,
-                                          t, phase)
+            count, status, _ = run_events(run.tables, run.forces, run.phase_scalars,
+                                          run.switching, settings, q, v, recorded, t, phase)
             if status != EVENT_LIMIT or capacity >= max_segments:
                 break
             capacity = min(2 * capacity, max_segments)
@@ -79,7 +79,7 @@ def _exponent(run, overlap, shifts, spring, t_max, schedule, max_segments):
         if status != COMPLETE:
             break
         t = settings.t_max
-        carry_tangents(run.tables, run.phase_scalars, spring, settings,
+        carry_tangents(run.tables, run.phase_scalars, run.switching, settings,
                        recorded_prefix(recorded, count), t, schedule, tangent)
         q, v = recorded.end_q[count - 1].copy(), recorded.end_v[count - 1].copy()
         phase = recorded.phase[count - 1]
@@ -89,13 +89,11 @@ def _exponent(run, overlap, shifts, spring, t_max, schedule, max_segments):
     return sums[0, 0] / (counts[0] * interval), status
 
 
-def _lyapunov_map(cells, tables, overlaps, shifts, spring_left, spring_right, spring_modes,
-                  geometry, t_max, transient, max_segments, out):
+def _lyapunov_map(cells, tables, switching, geometry, t_max, transient, max_segments, out):
     """out[i] = (exponent (1/s), status) of cells[i]; each iteration owns row i."""
     for i in prange(cells.shape[0]):
         g = int(cells[i, CELL_GEOMETRY])
-        spring = (spring_left[g], spring_right[g], spring_modes[g])
-        out[i, 0], out[i, 1] = cell_exponent(cells[i], tables[g], overlaps[g], shifts[g], spring,
+        out[i, 0], out[i, 1] = cell_exponent(cells[i], tables[g], geometry_switching(switching, g),
                                              geometry[g], t_max, transient, max_segments)
 
 

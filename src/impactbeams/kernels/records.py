@@ -29,6 +29,7 @@ bound its four array fields, +26% with the per-step kernels binding theirs too).
   float (a sine alone) or a complex (sine + i cosine), ``forcing_frequency`` Omega (rad/s).
 * `Rotor`: the arrays of an event function's rotor (`impactbeams.kernels.rotor`), and the
   work arrays of the search that uses it (the state and drives with the steady states split off).
+* the switching record: a plain tuple, not a namedtuple (see `SWITCHING`).
 * `Tangent`: the tangent vectors of a run and Benettin's sums
   (`impactbeams.kernels.tangent.carry_tangents`); ``clock[CLOCK_TIME]`` is the time (s) the
   tangents are at, ``clock[CLOCK_RENORMALIZATIONS]`` the renormalisations done.
@@ -43,8 +44,9 @@ from impactbeams.kernels.jit import kernel
 Segments = namedtuple("Segments", ("time", "phase", "sustained", "q", "v", "end_q", "end_v"))
 
 RunInputs = namedtuple("RunInputs", ("tables", "forces", "phase_scalars", "settings_array", "q0",
-                                     "v0", "drives"))
-RunInputs.__doc__ = """One run's inputs; ``settings_array`` holds its settings record.
+                                     "v0", "switching"))
+RunInputs.__doc__ = """One run's inputs; ``settings_array`` holds its settings record,
+``switching`` its switching record (`SWITCHING`).
 
 The record ``settings_array[0]`` is a view that does not keep its array alive, and Numba
 frees an array after its last use in the frame that owns it: a kernel that built a RunInputs
@@ -58,6 +60,30 @@ EventFunction = namedtuple("EventFunction", ("weights", "const", "sine_amp", "fo
 
 Rotor = namedtuple("Rotor", ("amplitudes", "eigenvalues", "driven", "levels", "factors", "rates",
                              "split", "split_force"))
+
+# The switching record: the state machine's switching arrays of one run, those of its contact
+# law, whichever it is, as the plain tuple (overlap, shifts, spring, drives), its fields read by
+# the indices ``SWITCH_*`` (Numba freezes a module's ints: ``switching[SWITCH_SPRING]`` is a
+# static getitem). The tied law's ``overlap`` (M, M) = <Z_m, Y_n> and static ``shifts`` (rows
+# ``FREE``, ``CONTACT``; `impactbeams.kernels.contact_tied`), the spring law's ``spring`` =
+# (left, right, modes) and its per-run mode ``drives`` (`impactbeams.kernels.contact_spring`);
+# the other law's arrays are zeros of the same size, or empty (drives); every array
+# C-contiguous, so that each kernel has one signature whoever built the record. A geometry's
+# record (`impactbeams.packing.dynamics_arrays`) has empty drives;
+# `impactbeams.kernels.forcing.run_inputs` returns the run's, with its drives. Only
+# `impactbeams.kernels.contact` and the law modules it dispatches to (and `run_inputs`, which
+# builds it) read its fields; every other kernel passes it on whole. A plain tuple, not a
+# namedtuple: a kernel's call from Python with a namedtuple argument took 0.7 us more than with
+# a plain tuple (measured on the namedtuple version); the plain tuple's cold compiles and calls
+# against main's with the arrays loose: CHANGELOG.md, issue 33.
+SWITCHING = ("overlap", "shifts", "spring", "drives")
+SWITCH_OVERLAP, SWITCH_SHIFTS, SWITCH_SPRING, SWITCH_DRIVES = range(len(SWITCHING))
+# A map's geometries' switching records stacked field by field (index g: geometry g's), flat,
+# the spring arrays a field each: a parallel map's loop takes the fields of a record it receives
+# as arguments of their own, and an array may be one, a tuple of arrays may not (Numba's parfor
+# lowering: "scalar type UniTuple(...) given for non scalar argument"). `geometry_switching`
+# takes one out.
+STACKED_SWITCHING = ("overlap", "shifts", "left", "right", "modes", "drives")
 
 Tangent = namedtuple("Tangent", ("q", "v", "clock", "sums", "counts"))
 CLOCK = ("time", "renormalizations")
@@ -79,3 +105,10 @@ def recorded_prefix(recorded, count):
     return Segments(recorded.time[:count], recorded.phase[:count], recorded.sustained[:count],
                     recorded.q[:count], recorded.v[:count], recorded.end_q[:count],
                     recorded.end_v[:count])
+
+
+@kernel
+def geometry_switching(stacked, g):
+    """Geometry ``g``'s switching record of a map's stacked records ``stacked`` (views)."""
+    overlap, shifts, left, right, modes, drives = stacked
+    return overlap[g], shifts[g], (left[g], right[g], modes[g]), drives[g]

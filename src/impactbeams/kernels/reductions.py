@@ -46,7 +46,7 @@ _GAUSS_WEIGHTS = np.array([
 
 
 @kernel
-def _power(tables, forces, phase_scalars, spring, drives, settings, recorded, k, t, work_arrays):
+def _power(tables, forces, phase_scalars, switching, settings, recorded, k, t, work_arrays):
     """Power of the drives (W) and damping dissipation rate (W) at time t within segment k.
 
     The damping acts on each mode's whole coordinate, whose rate is ``q' - F' b``; the
@@ -66,7 +66,7 @@ def _power(tables, forces, phase_scalars, spring, drives, settings, recorded, k,
     # R' moves beam 1's tip through the flexibility its modes miss
     contact_force, contact_force_rate = contact.residual_force(phase, table, scalars, q, v, t,
                                                                settings)
-    contact.observed_state(phase, q, v, t, spring, drives, settings, free_q, free_v)
+    contact.observed_state(phase, q, v, t, switching, settings, free_q, free_v)
     observed = contact.observed_phase(phase, settings)
     table, scalars = tables[observed], phase_scalars[observed]
     force, force_rate = tip_load(settings, t)
@@ -94,7 +94,7 @@ def _power(tables, forces, phase_scalars, spring, drives, settings, recorded, k,
 
 
 @kernel
-def _integrate_power(tables, forces, phase_scalars, spring, drives, settings, recorded, k, a, b,
+def _integrate_power(tables, forces, phase_scalars, switching, settings, recorded, k, a, b,
                      work_arrays):
     """Integrals (J) of the power of F and of the dissipation over [a, b] in segment k.
 
@@ -111,7 +111,7 @@ def _integrate_power(tables, forces, phase_scalars, spring, drives, settings, re
         middle = a + (p + 0.5) * width
         for j in range(_GAUSS_NODES.size):
             t = middle + 0.5 * width * _GAUSS_NODES[j]
-            power, loss = _power(tables, forces, phase_scalars, spring, drives, settings,
+            power, loss = _power(tables, forces, phase_scalars, switching, settings,
                                  recorded, k, t, work_arrays)
             work += 0.5 * width * _GAUSS_WEIGHTS[j] * power
             dissipated += 0.5 * width * _GAUSS_WEIGHTS[j] * loss
@@ -119,7 +119,7 @@ def _integrate_power(tables, forces, phase_scalars, spring, drives, settings, re
 
 
 @kernel
-def work_of_force(tables, forces, phase_scalars, spring, drives, settings, recorded, t_end,
+def work_of_force(tables, forces, phase_scalars, switching, settings, recorded, t_end,
                   times, out, carried):
     """Work done by F and energy dissipated by damping from t = 0 to each of ``times`` (J).
 
@@ -137,12 +137,12 @@ def work_of_force(tables, forces, phase_scalars, spring, drives, settings, recor
         work = contact.onset_work(work, recorded.phase[k], tables, phase_scalars, settings,
                                   recorded.q[k], recorded.v[k], recorded.time[k])
         while i < times.size and (times[i] < seg_end or k + 1 == count):
-            dw, dd = _integrate_power(tables, forces, phase_scalars, spring, drives, settings,
+            dw, dd = _integrate_power(tables, forces, phase_scalars, switching, settings,
                                       recorded, k, t_done, times[i], work_arrays)
             work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, times[i])
             out[0, i], out[1, i] = work, dissipated
             i += 1
-        dw, dd = _integrate_power(tables, forces, phase_scalars, spring, drives, settings,
+        dw, dd = _integrate_power(tables, forces, phase_scalars, switching, settings,
                                   recorded, k, t_done, seg_end, work_arrays)
         work, dissipated, t_done = work + dw, dissipated + dd, max(t_done, seg_end)
     carried[0], carried[1], carried[2] = work, dissipated, t_done

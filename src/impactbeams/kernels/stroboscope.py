@@ -52,7 +52,7 @@ from impactbeams.kernels.layout import (
     TIP_Y1,
     TIP_Y2,
 )
-from impactbeams.kernels.records import recorded_prefix, segments
+from impactbeams.kernels.records import geometry_switching, recorded_prefix, segments
 
 NO_STATE = -1  # a phase index for no state: a run's own start, or a run that stopped early
 
@@ -149,8 +149,8 @@ def _count_onsets(seg_time, seg_phase, count, keep, window_start, window_end, se
 
 
 @kernel
-def sampled_run(run, overlap, shifts, spring, start_phase, q_start, v_start, times, separation,
-                capacity, max_phases, samples, summary, end_state):
+def sampled_run(run, start_phase, q_start, v_start, times, separation, capacity, max_phases,
+                samples, summary, end_state):
     """Run `RunInputs` ``run`` from t = 0 to its settings' ``t_max``; tip samples at ``times``.
 
     The run starts in ``start_phase`` from the state ``(q_start, v_start)`` as observed
@@ -163,7 +163,7 @@ def sampled_run(run, overlap, shifts, spring, start_phase, q_start, v_start, tim
     observed. Returns the phase at t_max, ``NO_STATE`` if the run stopped before it
     (``end_state`` is then NaN).
     """
-    tables, forces, phase_scalars, drives = run.tables, run.forces, run.phase_scalars, run.drives
+    tables, forces, phase_scalars = run.tables, run.forces, run.phase_scalars
     settings = settings_of(run)
     n_coords = run.q0.size
     recorded = segments(capacity, n_coords)
@@ -174,11 +174,11 @@ def sampled_run(run, overlap, shifts, spring, start_phase, q_start, v_start, tim
     samples[:] = np.nan
     summary[STROBE_ONSETS] = summary[STROBE_EPISODES] = 0.0
     t0, q, v, phase = 0.0, np.empty(n_coords), np.empty(n_coords), start_phase
-    contact.phase_state(phase, q_start, v_start, t0, spring, drives, settings, q, v)
+    contact.phase_state(phase, q_start, v_start, t0, run.switching, settings, q, v)
     done, phases, last_release = 0, 0, -math.inf
     while True:
-        count, status, t_end = run_events(tables, forces, phase_scalars, overlap, shifts,
-                                          spring, drives, settings, q, v, recorded, t0, phase)
+        count, status, t_end = run_events(tables, forces, phase_scalars, run.switching, settings,
+                                          q, v, recorded, t0, phase)
         keep, final = count, True
         if status == EVENT_LIMIT:
             resume = resume_point(seg_time, seg_phase, count)
@@ -188,7 +188,7 @@ def sampled_run(run, overlap, shifts, spring, start_phase, q_start, v_start, tim
         first = done
         while done < times.size and (times[done] < t_end or (final and times[done] <= t_end)):
             done += 1
-        sample_states(tables, forces, spring, drives, settings, recorded_prefix(recorded, count),
+        sample_states(tables, forces, run.switching, settings, recorded_prefix(recorded, count),
                       times[first:done], sample_q[first:done], sample_v[first:done],
                       sample_phase[first:done])
         for k in range(first, done):
@@ -199,14 +199,14 @@ def sampled_run(run, overlap, shifts, spring, start_phase, q_start, v_start, tim
         if final:
             summary[STROBE_STATUS] = status
             summary[STROBE_T_END] = t_end
-            return _end_state(status, recorded, count, t_end, spring, drives, settings,
+            return _end_state(status, recorded, count, t_end, run.switching, settings,
                               end_state)
         t0, phase = seg_time[keep], FREE  # a resume point starts a free segment
         contact.copy_state(seg_q[keep], seg_v[keep], q, v)
 
 
 @kernel
-def _end_state(status, recorded, count, t_end, spring, drives, settings, end_state):
+def _end_state(status, recorded, count, t_end, switching, settings, end_state):
     """The observed state at ``t_end`` (s) of a complete run into ``end_state``; its phase.
 
     ``NO_STATE`` (and NaN) if the run stopped before its horizon (``status`` not complete).
@@ -216,12 +216,12 @@ def _end_state(status, recorded, count, t_end, spring, drives, settings, end_sta
         return NO_STATE
     phase = recorded.phase[count - 1]
     contact.observed_state(phase, recorded.end_q[count - 1], recorded.end_v[count - 1], t_end,
-                           spring, drives, settings, end_state[0], end_state[1])
+                           switching, settings, end_state[0], end_state[1])
     return phase
 
 
 @kernel
-def cell_stroboscope(cell, tables, overlap, shifts, spring, geometry, times, horizon, capacity,
+def cell_stroboscope(cell, tables, switching, geometry, times, horizon, capacity,
                      max_phases_per_period, start_phase, start_state, samples, summary,
                      end_state):
     """One map cell's long run to ``horizon`` (s), sampled at ``times`` (s): ``sampled_run``.
@@ -235,24 +235,21 @@ def cell_stroboscope(cell, tables, overlap, shifts, spring, geometry, times, hor
     separation = 0.5 * math.pi / np.min(tables[FREE, ROW_FREQUENCY])
     periods = horizon * cell[CELL_FORCING_FREQUENCY] / (2.0 * math.pi)
     max_phases = int(max_phases_per_period * math.ceil(periods))
-    run = cell_run(cell, tables, geometry, spring, horizon, horizon)
+    run = cell_run(cell, tables, geometry, switching, horizon, horizon)
     if start_phase == NO_STATE:
-        return sampled_run(run, overlap, shifts, spring, FREE, run.q0, run.v0, times,
-                           separation, capacity, max_phases, samples, summary, end_state)
-    return sampled_run(run, overlap, shifts, spring, start_phase, start_state[0],
-                       start_state[1], times, separation, capacity, max_phases, samples,
-                       summary, end_state)
+        return sampled_run(run, FREE, run.q0, run.v0, times, separation, capacity,
+                           max_phases, samples, summary, end_state)
+    return sampled_run(run, start_phase, start_state[0], start_state[1], times, separation,
+                       capacity, max_phases, samples, summary, end_state)
 
 
-def _stroboscope_map(cells, tables, overlaps, shifts, spring_left, spring_right, spring_modes,
-                     geometry, times, horizons, capacity, max_phases_per_period, samples,
-                     summary):
+def _stroboscope_map(cells, tables, switching, geometry, times, horizons, capacity,
+                     max_phases_per_period, samples, summary):
     """Fill samples[i] and summary[i] for cells[i], each from its own start; i owns row i."""
     for i in prange(cells.shape[0]):
         g = int(cells[i, CELL_GEOMETRY])
-        spring = (spring_left[g], spring_right[g], spring_modes[g])
         end_state = np.empty((2, tables[g].shape[-1]))
-        cell_stroboscope(cells[i], tables[g], overlaps[g], shifts[g], spring, geometry[g],
+        cell_stroboscope(cells[i], tables[g], geometry_switching(switching, g), geometry[g],
                          times[i], horizons[i], capacity, max_phases_per_period, NO_STATE,
                          end_state, samples[i], summary[i], end_state)
 
@@ -260,9 +257,9 @@ def _stroboscope_map(cells, tables, overlaps, shifts, spring_left, spring_right,
 stroboscope_map_parallel, stroboscope_map_serial = parallel_kernel(_stroboscope_map)
 
 
-def _stepped_map(cells, steps, tables, overlaps, shifts, spring_left, spring_right,
-                 spring_modes, geometry, times, horizons, capacity, max_phases_per_period,
-                 samples, summary, start_phases, start_states, end_phases, end_states):
+def _stepped_map(cells, steps, tables, switching, geometry, times, horizons, capacity,
+                 max_phases_per_period, samples, summary, start_phases, start_states, end_phases,
+                 end_states):
     """Stepped-sine rows: cells ``steps[r, 0], steps[r, 1], ...`` of row r one after the other.
 
     The first from its own start, each next one from the state its predecessor ended in
@@ -276,13 +273,12 @@ def _stepped_map(cells, steps, tables, overlaps, shifts, spring_left, spring_rig
         for k in range(steps.shape[1]):
             i = steps[r, k]
             g = int(cells[i, CELL_GEOMETRY])
-            spring = (spring_left[g], spring_right[g], spring_modes[g])
             start_phases[i] = phase
             if phase == NO_STATE:
                 start_states[i] = np.nan
             else:
                 start_states[i] = end_states[steps[r, k - 1]]
-            phase = cell_stroboscope(cells[i], tables[g], overlaps[g], shifts[g], spring,
+            phase = cell_stroboscope(cells[i], tables[g], geometry_switching(switching, g),
                                      geometry[g], times[i], horizons[i], capacity,
                                      max_phases_per_period, phase, start_states[i], samples[i],
                                      summary[i], end_states[i])

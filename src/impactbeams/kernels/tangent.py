@@ -125,15 +125,16 @@ def initial_tangents(columns, frequencies):
 
 
 @kernel
-def _renormalize(tangent_q, tangent_v, phase, spring, no_drive, frequencies, scratch_q, scratch_v,
-                 log_growth):
+def _renormalize(tangent_q, tangent_v, phase, switching, no_drive, frequencies, scratch_q,
+                 scratch_v, log_growth):
     """Orthonormalise the tangents (in the free coordinates) in the coordinates of ``phase``."""
     if phase == FREE:
         orthonormalize(tangent_q, tangent_v, frequencies, log_growth)
         return
-    contact.tangent_switch(tangent_q, tangent_v, FREE, spring, no_drive, scratch_q, scratch_v)
+    contact.tangent_switch(tangent_q, tangent_v, FREE, switching, no_drive, scratch_q, scratch_v)
     orthonormalize(scratch_q, scratch_v, frequencies, log_growth)
-    contact.tangent_switch(scratch_q, scratch_v, CONTACT, spring, no_drive, tangent_q, tangent_v)
+    contact.tangent_switch(scratch_q, scratch_v, CONTACT, switching, no_drive, tangent_q,
+                           tangent_v)
 
 
 @kernel
@@ -167,9 +168,11 @@ def record_growth(sums, counts, log_growth, i, schedule):
 
 
 @kernel
-def carry_tangents(tables, phase_scalars, spring, settings, recorded, t_end, schedule, tangent):
+def carry_tangents(tables, phase_scalars, switching, settings, recorded, t_end, schedule,
+                   tangent):
     """Carry the tangent vectors through the recorded segments of a spring-law run.
 
+    ``switching``: the run's switching record (`records.SWITCHING`).
     ``recorded``: the run's `records.Segments`, all of them recorded ones (each segment's end
     state ``end_q``, ``end_v`` gives the onsets' saltation).
     ``tangent``, a `records.Tangent` ``(q, v, clock, sums, counts)``: k tangent rows in the
@@ -199,8 +202,8 @@ def carry_tangents(tables, phase_scalars, spring, settings, recorded, t_end, sch
                 break
             advance_tangents(tables[phase], tangent_q, tangent_v, clock[CLOCK_TIME],
                               t_next - clock[CLOCK_TIME], no_force)
-            _renormalize(tangent_q, tangent_v, phase, spring, no_drive, free_frequencies, scratch_q,
-                         scratch_v, log_growth)
+            _renormalize(tangent_q, tangent_v, phase, switching, no_drive, free_frequencies,
+                         scratch_q, scratch_v, log_growth)
             clock[CLOCK_TIME] = t_next
             clock[CLOCK_RENORMALIZATIONS] += 1.0
             record_growth(sums, counts, log_growth, int(clock[CLOCK_RENORMALIZATIONS]), schedule)
@@ -212,7 +215,7 @@ def carry_tangents(tables, phase_scalars, spring, settings, recorded, t_end, sch
         if phase == FREE:
             contact.onset_saltation(tangent_q, tangent_v, tables, phase_scalars, settings,
                                     recorded.end_q[k], recorded.end_v[k], seg_end)
-        contact.tangent_switch(tangent_q, tangent_v, seg_phase[k + 1], spring, no_drive,
+        contact.tangent_switch(tangent_q, tangent_v, seg_phase[k + 1], switching, no_drive,
                             scratch_q, scratch_v)
         for row in range(tangent_q.shape[0]):
             contact.copy_state(scratch_q[row], scratch_v[row], tangent_q[row], tangent_v[row])
@@ -237,7 +240,7 @@ def new_tangent(columns, free_frequencies, batches):
 
 
 @kernel
-def recorded_run_sums(tables, phase_scalars, spring, settings, recorded, t_end, columns,
+def recorded_run_sums(tables, phase_scalars, switching, settings, recorded, t_end, columns,
                       transient, batches):
     """Lyapunov sums of a recorded spring-law run from t = 0 (all its `records.Segments`).
 
@@ -247,5 +250,5 @@ def recorded_run_sums(tables, phase_scalars, spring, settings, recorded, t_end, 
     schedule = lyapunov_schedule(settings.forcing_frequency, tables[FREE, ROW_FREQUENCY],
                                  settings.t_max, transient)
     tangent = new_tangent(columns, tables[FREE, ROW_FREQUENCY], batches)
-    carry_tangents(tables, phase_scalars, spring, settings, recorded, t_end, schedule, tangent)
+    carry_tangents(tables, phase_scalars, switching, settings, recorded, t_end, schedule, tangent)
     return tangent.sums, tangent.counts, schedule[0]

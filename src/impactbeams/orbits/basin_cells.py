@@ -175,7 +175,7 @@ class CellRunner:
                     np.full((count, s.max_period, 4), np.nan), np.full((count, n), np.nan),
                     np.full((count, n), np.nan), np.full(count, -1, np.int32))
         known = np.zeros(count, np.int32) if periods is None else np.asarray(periods, np.int32)
-        settle_cells(packed.tables, packed.forces, packed.phase_scalars, *packed.switching(),
+        settle_cells(packed.tables, packed.forces, packed.phase_scalars, packed.switching,
                      packed.settings, np.ascontiguousarray(states, dtype=np.float64), known,
                      self.times, self.omega, self.forcing_period, s.window, s.tolerance,
                      s.max_period, s.max_periods, self.max_events, *out.arrays().values())

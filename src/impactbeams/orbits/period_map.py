@@ -336,7 +336,7 @@ class PeriodMap(SectionMap):
         """
         packed = self.packed
         return interval_gap(packed.tables, packed.forces, packed.phase_scalars,
-                            packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                            packed.switching, packed.settings,
                             trajectory.segments, trajectory.segment_end, self.params.omega,
                             INTERVAL_SAMPLES)
 
@@ -349,7 +349,7 @@ class PeriodMap(SectionMap):
         """
         packed = self.packed
         t, value = gap_extremum(packed.tables, packed.forces, packed.phase_scalars,
-                                packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                                packed.switching, packed.settings,
                                 trajectory.segments, self.params.omega, lo, hi,
                                 1.0 if minimum else -1.0, 1e-14 * max(hi, 1.0))
         return None if math.isnan(t) else (t, value)
@@ -382,7 +382,7 @@ class PeriodMap(SectionMap):
         rows_q, rows_v = self._switched(rows_q, rows_v, int(trajectory.phase[0]), CONTACT)
         state = Tangent(rows_q, rows_v, np.zeros(2), np.zeros((1, rows_q.shape[0])),
                         np.zeros(1, np.int64))
-        carry_tangents(packed.tables, packed.phase_scalars, packed.dynamics.spring_arrays,
+        carry_tangents(packed.tables, packed.phase_scalars, packed.switching,
                        packed.settings, trajectory.segments, trajectory.t_end,
                        (math.inf, self.horizon, 0, 0), state)
         rows_q, rows_v = self._switched(state.q, state.v, int(trajectory.phase[-1]), FREE)
@@ -395,7 +395,7 @@ class PeriodMap(SectionMap):
             return rows_q, rows_v
         no_drive = np.zeros((len(SPRING_DRIVE_ROWS), rows_q.shape[1]), complex)
         out_q, out_v = np.empty_like(rows_q), np.empty_like(rows_v)
-        contact.tangent_switch(rows_q, rows_v, to_phase, self.packed.dynamics.spring_arrays,
+        contact.tangent_switch(rows_q, rows_v, to_phase, self.packed.switching,
                                no_drive, out_q, out_v)
         return out_q, out_v
 
@@ -441,7 +441,7 @@ class PeriodMap(SectionMap):
         sampled, i, lo, hi = self.largest_sample(tips, times, column, clamp)
         packed = self.packed
         t, value = tip_maximum(packed.tables, packed.forces, packed.phase_scalars,
-                               packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                               packed.switching, packed.settings,
                                trajectory.segments, column, float(clamp), lo, hi,
                                1e-14 * max(hi, 1.0))
         if not math.isnan(t):
@@ -478,7 +478,7 @@ class PeriodMap(SectionMap):
         packed = self.packed
         t, value, sample_t, sample_value, lo, hi = smallest_free_minimum(
             packed.tables, packed.forces, packed.phase_scalars,
-            packed.dynamics.spring_arrays, packed.drives, packed.settings, trajectory.segments,
+            packed.switching, packed.settings, trajectory.segments,
             self.params.omega, self._grid())
         if math.isnan(sample_t):
             return math.nan, math.nan

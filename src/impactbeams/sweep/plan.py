@@ -55,10 +55,10 @@ class Plan:
     """What the kernels need per geometry, and how cells map to geometries.
 
     ``tables``: the free phase of every geometry (first-impact map), or both phases with the
-    switching arrays (``overlaps``, ``shifts`` of the tied law's projections; the spring law's
-    ``left``, ``right``, ``modes``) when a full-dynamics observable is asked for (see
-    kernels.layout). ``fingerprint`` is the sweep's: a plan serves only the
-    sweep it was built for.
+    switching arrays (the geometries' switching records stacked,
+    `impactbeams.packing.stacked_switching`) when a full-dynamics
+    observable is asked for (see kernels.layout). ``fingerprint`` is the sweep's: a plan
+    serves only the sweep it was built for.
     """
 
     fingerprint: str
@@ -66,7 +66,7 @@ class Plan:
     tables: np.ndarray  # (geometries, phases, len(TABLE_ROWS), 2 n_modes)
     geometry: np.ndarray  # (geometries, len(GEOMETRY))
     geometry_axes: tuple[int, ...]  # positions of the axes that change the geometry
-    switching: tuple[np.ndarray, ...] | None  # a dynamics map's switching arrays
+    switching: tuple[np.ndarray, ...] | None  # a dynamics map's switching arrays, stacked
     axis_values: tuple[np.ndarray, ...]  # every axis's values, computed once for all chunks
     # several contacts: each contact's own sweep's plan (`contact_sweeps`); the fields above
     # are then the first's
@@ -239,7 +239,7 @@ def _geometries(sweep: Sweep) -> Iterator[Params]:
 
 # the geometries built while a run is prepared (`reusing_geometries`), by (parameters, n_modes,
 # full dynamics): what the checks before a run build, its plan takes, not building it again
-_BUILT: list[dict[tuple[Params, int, bool], tuple[np.ndarray, ...]]] = []
+_BUILT: list[dict[tuple[Params, int, bool], tuple[np.ndarray | tuple, ...]]] = []
 
 
 @contextlib.contextmanager
@@ -260,8 +260,8 @@ def reusing_geometries() -> Iterator[None]:
 
 
 def _geometry_arrays(params: Params, sweep: Sweep, keep: bool = False,
-                     ) -> tuple[np.ndarray, ...]:
-    """One geometry's packed arrays: (tables, geometry row[, switching arrays]).
+                     ) -> tuple[np.ndarray | tuple, ...]:
+    """One geometry's packed arrays: (tables, geometry row[, switching record]).
 
     Those a check built in this run (`reusing_geometries`) are taken, not built again;
     ``keep``: a check's, left for the run's plan.
@@ -276,7 +276,8 @@ def _geometry_arrays(params: Params, sweep: Sweep, keep: bool = False,
     return arrays
 
 
-def _build_geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ...]:
+def _build_geometry_arrays(params: Params, sweep: Sweep,
+                           ) -> tuple[np.ndarray | tuple, ...]:
     from impactbeams import packing
     from impactbeams.contact.free import build_free_phase
 
@@ -284,8 +285,7 @@ def _build_geometry_arrays(params: Params, sweep: Sweep) -> tuple[np.ndarray, ..
         free = build_free_phase(params, sweep.n_modes)
         return packing.free_tables(free, params), packing.geometry_row(params, free)
     dynamics = packing.dynamics_arrays(params, sweep.n_modes)
-    return (dynamics.tables, dynamics.geometry, dynamics.overlap, dynamics.shifts,
-            *dynamics.spring_arrays)
+    return dynamics.tables, dynamics.geometry, dynamics.switching
 
 
 def check_contact_phases(sweep: Sweep) -> None:
@@ -356,15 +356,17 @@ def build_plan(sweep: Sweep) -> Plan:
 
     With several contacts, each contact's own sweep's plan (`per_contact`).
     """
+    from impactbeams.packing import stacked_switching
+
     if sweep.base.several_contacts:
         plans = tuple(build_plan(each) for each in contact_sweeps(sweep))
         return dataclasses.replace(plans[0], fingerprint=sweep.fingerprint(), base=sweep.base,
                                    per_contact=plans)
     per_geometry = [_geometry_arrays(params, sweep) for params in _geometries(sweep)]
-    tables, geometry, *switching = (np.array(arrays) for arrays in zip(*per_geometry,
-                                                                        strict=True))
-    return Plan(sweep.fingerprint(), sweep.base, tables, geometry, geometry_axes(sweep),
-                tuple(switching) or None, tuple(axis.values for axis in sweep.axes))
+    tables, geometry, *switching = zip(*per_geometry, strict=True)
+    return Plan(sweep.fingerprint(), sweep.base, np.array(tables), np.array(geometry),
+                geometry_axes(sweep), stacked_switching(switching[0]) if switching else None,
+                tuple(axis.values for axis in sweep.axes))
 
 
 def chunk_cells(sweep: Sweep, plan: Plan, start: int, stop: int) -> np.ndarray:
@@ -592,7 +594,7 @@ def compute_chunk(sweep: Sweep, start: int, stop: int, parallel: bool = True,
         kernel = (observables.observables_map_parallel if parallel
                   else observables.observables_map_serial)
         out = np.empty((cells.shape[0], len(layout.OUT_COLUMNS)))
-        kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max, MAX_SEGMENTS,
+        kernel(cells, plan.tables, plan.switching, plan.geometry, sweep.t_max, MAX_SEGMENTS,
                out)
         columns = dict(zip(layout.OUT_COLUMNS, out.T, strict=True))
     if LYAPUNOV in sweep.observables:
@@ -627,7 +629,7 @@ def _long_run(long_time: LongTime, transient_periods: int, plan: Plan, cells: np
     # cells differ in cost by orders of magnitude (a rattle at every period, or no contact at
     # all): the threads take them one at a time instead of in equal contiguous blocks
     with numba.parallel_chunksize(1):
-        kernel(cells, plan.tables, *plan.switching, plan.geometry,
+        kernel(cells, plan.tables, plan.switching, plan.geometry,
                long_time.sample_times(omega, transient_periods),
                long_time.horizon(omega, transient_periods), LONG_RUN_CAPACITY,
                MAX_PHASES_PER_PERIOD, samples, summary)
@@ -678,7 +680,7 @@ def _stepped_run(sweep: Sweep, plan: Plan, cells: np.ndarray, rows: np.ndarray,
                for name in ("start_phase", "end_phase")}
     carried.update({name: np.empty((cells.shape[0], 2, plan.tables.shape[-1]))
                     for name in ("start_state", "end_state")})
-    kernel(cells, rows, plan.tables, *plan.switching, plan.geometry,
+    kernel(cells, rows, plan.tables, plan.switching, plan.geometry,
            long_time.sample_times(omega, transient), long_time.horizon(omega, transient),
            LONG_RUN_CAPACITY, MAX_PHASES_PER_PERIOD, samples, summary, carried["start_phase"],
            carried["start_state"], carried["end_phase"], carried["end_state"])
@@ -709,7 +711,7 @@ def _lyapunov_columns(sweep: Sweep, plan: Plan, cells: np.ndarray, parallel: boo
 
     kernel = lyapunov.lyapunov_map_parallel if parallel else lyapunov.lyapunov_map_serial
     out = np.empty((cells.shape[0], 2))
-    kernel(cells, plan.tables, *plan.switching, plan.geometry, sweep.t_max,
+    kernel(cells, plan.tables, plan.switching, plan.geometry, sweep.t_max,
            sweep.transient_periods, MAX_SEGMENTS, out)
     status = np.maximum(out[:, 1], columns.get("dynamics_status", out[:, 1]))
     return {LYAPUNOV: out[:, 0], "dynamics_status": status}

@@ -74,7 +74,7 @@ def energy_integrals(packed: Packed, trajectory: Trajectory, times: np.ndarray,
         upto = int(np.searchsorted(times, end)) if stop < count else times.size
         piece = np.empty((2, upto - done))
         work_of_force(packed.tables, packed.forces, packed.phase_scalars,
-                      packed.dynamics.spring_arrays, packed.drives, packed.settings,
+                      packed.switching, packed.settings,
                       Segments(*(array[first:stop] for array in recorded)), end,
                       times[done:upto], piece, carried)
         out[:, done:upto], done = piece, upto

@@ -77,7 +77,7 @@ def lyapunov_exponents(packed: Packed, trajectory: Trajectory, count: int,
                        transient_periods: int) -> Exponents:
     """The ``count`` leading exponents of the recorded spring-law run (1/s)."""
     return _exponents(*recorded_run_sums(
-        packed.tables, packed.phase_scalars, packed.dynamics.spring_arrays, packed.settings,
+        packed.tables, packed.phase_scalars, packed.switching, packed.settings,
         trajectory.segments, trajectory.t_end, count, transient_periods, BATCHES))
 
 

@@ -85,7 +85,7 @@ def run(packed: Packed, max_events: int,
         views = Segments(*(array[first:stop] for array in arrays))
         began = time.perf_counter()
         count, status, t_end = dyn.run_events(packed.tables, packed.forces,
-                                              packed.phase_scalars, *packed.switching(),
+                                              packed.phase_scalars, packed.switching,
                                               packed.settings, q0, v0, views, t0, phase0)
         if status != dyn.EVENT_LIMIT or stop >= max_events:
             break
@@ -132,8 +132,8 @@ def sample(packed: Packed, trajectory: Trajectory, times: np.ndarray, grid: bool
     q, v = np.empty((times.size, n_coords)), np.empty((times.size, n_coords))
     phase = np.empty(times.size, dtype=np.int64)
     sampler = dyn.sample_grid if grid else dyn.sample_states
-    sampler(packed.tables, packed.forces, packed.dynamics.spring_arrays, packed.drives,
-            packed.settings, trajectory.segments, times, q, v, phase)
+    sampler(packed.tables, packed.forces, packed.switching, packed.settings, trajectory.segments,
+            times, q, v, phase)
     return phase, q, v
 
 
@@ -148,9 +148,8 @@ def sample_segments(packed: Packed, trajectory: Trajectory, count: int,
     n_coords = trajectory.q.shape[1]
     q = np.empty((trajectory.time.size * count, n_coords))
     v = np.empty_like(q)
-    dyn.sample_segments(packed.tables, packed.forces, packed.dynamics.spring_arrays,
-                        packed.drives, packed.settings, trajectory.segments,
-                        trajectory.segment_end, count, q, v)
+    dyn.sample_segments(packed.tables, packed.forces, packed.switching, packed.settings,
+                        trajectory.segments, trajectory.segment_end, count, q, v)
     return q, v
 
 
@@ -176,7 +175,6 @@ def free_states(packed: Packed, phase: np.ndarray, t: np.ndarray, q: np.ndarray,
     Only the spring law's contact states change: its contact oscillators back to (q, q').
     """
     q_out, v_out = np.empty_like(q), np.empty_like(v)
-    dyn.observed_states(phase, np.asarray(t, dtype=np.float64), q, v,
-                        packed.dynamics.spring_arrays, packed.drives, packed.settings, q_out,
-                        v_out)
+    dyn.observed_states(phase, np.asarray(t, dtype=np.float64), q, v, packed.switching,
+                        packed.settings, q_out, v_out)
     return q_out, v_out

@@ -127,7 +127,7 @@ def _episode(packed: Packed, q: np.ndarray, v: np.ndarray, t: float) -> Trajecto
     """One run's segments from the free state (q, v) at t (s) to the end of its next contact."""
     recorded = segments(_EPISODE, q.size)
     count, status, t_end = dyn.run_events(packed.tables, packed.forces, packed.phase_scalars,
-                                          *packed.switching(), packed.settings, q, v, recorded,
+                                          packed.switching, packed.settings, q, v, recorded,
                                           t, FREE)
     if status in (dyn.STUCK, dyn.SEARCH_LIMIT):
         raise RuntimeError(f"the event search stopped at t = {t_end!r} s: status "

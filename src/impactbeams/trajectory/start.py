@@ -95,7 +95,7 @@ def phase_state(packed: Packed, z: np.ndarray, t: float = 0.0,
     if not (gap < 0.0 and force > 0.0):
         return q, v, FREE
     y, y_rate = np.empty(n), np.empty(n)
-    contact.switch_state(q, v, t, CONTACT, *packed.switching(), s, y, y_rate)
+    contact.switch_state(q, v, t, CONTACT, packed.switching, s, y, y_rate)
     return y, y_rate, CONTACT
 
 
