@@ -239,6 +239,11 @@ SLOW_CLI = ("import sys, time\n"
             "sys.exit(main(sys.argv[1:]))\n")
 
 
+# Ctrl-C's handler in the child whatever the parent's: a shell without job control starts its
+# background jobs (and their children) with SIGINT ignored, and Python then installs none
+DEFAULT_SIGINT = "import signal\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+
+
 def _saved_chunks(partial):
     return len(list(partial.glob("chunk_*.npz")))
 
@@ -250,7 +255,8 @@ def _interrupt(command, partial, how, saved=_saved_chunks, script=SLOW_CLI,
     the process's stderr is in ``partial``'s folder, ``stderr.txt``."""
     log = partial.with_name("stderr.txt")
     with open(log, "w") as stderr:
-        process = subprocess.Popen([sys.executable, "-c", script, *command], stderr=stderr)
+        process = subprocess.Popen([sys.executable, "-c", DEFAULT_SIGINT + script, *command],
+                                   stderr=stderr)
         try:
             _wait_for(lambda: saved(partial) >= before, f"{before} saved", process, log)
             process.send_signal(how)
