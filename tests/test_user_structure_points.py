@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from fe_reference import beam_matrices, tip_dof
 from fe_spring import fe_several_contacts, fe_spring_contacts
@@ -22,12 +23,15 @@ from impactbeams import (
     ModalStructure,
     Params,
     contact_sequence,
+    periodic_orbit,
+    run_sweep,
     simulate,
     two_sided_stop,
 )
 from impactbeams.modes import beam
 from impactbeams.params import ParameterError
 from impactbeams.structure.user import read_structure
+from impactbeams.sweep import sweep_from_mapping
 
 STOP = Params(counterpart="stop", contact_stiffness=1e4)
 FORCED = STOP.replace(force_amplitude=1e-3, omega=400.0)
@@ -124,13 +128,18 @@ def modal_data(n: int, positions: tuple[float, ...]) -> ModalStructure:
                           participation=uniform.participation(shapes), positions=positions)
 
 
+SHAKER = {"shaker": "beam1", "base_amplitude": 2e-6, "force_amplitude": 0.0, "omega": 300.0}
+
+
+@pytest.mark.parametrize("drive", [{}, SHAKER], ids=["tip force", "shaker"])
 @pytest.mark.parametrize("contacts", [TOGETHER, BACKLASH], ids=["mid and tip", "backlash"])
-def test_modal_data_at_two_points_give_the_uniform_beams_contacts(contacts):
+def test_modal_data_at_two_points_give_the_uniform_beams_contacts(contacts, drive):
     """The closed forms at mid-span and the tip, as modal data with two points: the uniform
-    beam's run of the same contacts, every episode bit for bit."""
-    today = FORCED.replace(contacts=contacts)
+    beam's run of the same contacts, every episode bit for bit, driven at the tip or shaken
+    (the participation factors given)."""
+    today = FORCED.replace(contacts=contacts, **drive)
     given = today.replace(structure1=modal_data(20, (MID, L1)))
-    runs = [contact_sequence(p, 0.02, n_modes=20) for p in (today, given)]
+    runs = [contact_sequence(p, 0.03, n_modes=20) for p in (today, given)]
     assert runs[0].impact.size >= 3 and set(runs[0].impact_contact.values) == set(
         range(len(contacts)))
     for name in runs[0].data_vars:
@@ -148,6 +157,44 @@ def test_modal_data_driven_at_the_tip_and_touched_inside_give_the_uniform_beams_
     for name in ("impact_onset_time", "impact_duration", "impact_peak_force", "gap",
                  "contact_deflection_1", "tip_deflection_1"):
         np.testing.assert_array_equal(got[name].values, expected[name].values, err_msg=name)
+
+
+DAMPED = FORCED.replace(damping_ratio=0.05, contacts=TOGETHER)
+
+
+def _first_map(params: dict, observable: str):
+    return run_sweep(sweep_from_mapping({
+        "t_max": 0.02, "n_modes": 12, "observables": [observable], "params": params,
+        "axes": {"omega": {"min": 380.0, "max": 420.0, "num": 3}}}, source="points"),
+        parallel=False)
+
+
+def test_runs_maps_and_orbits_of_modal_data_at_two_points_are_todays():
+    """Every kind of run with the two stops on modal data at their points (12 modes given, 8
+    used in the runs, 12 in the maps; damped): `simulate` with energies and Lyapunov
+    exponents, first-impact and long-time maps, the periodic orbit by Newton, all as the
+    uniform beam's bit for bit; the energies to 1e-13 of the largest (the tip-load shape's
+    kinetic norm, given as 33/140 rhoA l and turned back into a mass per length: measured
+    2.6e-23 J of 2.9e-8 J)."""
+    given = DAMPED.replace(structure1=modal_data(12, (MID, L1)))
+    expected, got = (simulate(p, 0.02, n_modes=8, energy_balance=True, lyapunov=True)
+                     for p in (DAMPED, given))
+    assert expected.impact.size >= 3
+    for name in ("impact_onset_time", "contact_forces", "lyapunov_exponent", "work_of_force",
+                 "episode_dissipated_energy", "tip_deflection_1"):
+        np.testing.assert_array_equal(got[name].values, expected[name].values, err_msg=name)
+    scale = np.abs(expected.energy.values).max()
+    np.testing.assert_allclose(got.energy.values, expected.energy.values, rtol=0,
+                               atol=1e-13 * scale)
+    fixed = {"counterpart": "stop", "contact_stiffness": 1e4, "damping_ratio": 0.05,
+             "force_amplitude": 1e-3, "contacts": TOGETHER}
+    for observable in ("first_impact_time", "impact_count"):
+        maps = [_first_map({**fixed, **structure}, observable)
+                for structure in ({}, {"structure1": given.structure1})]
+        np.testing.assert_array_equal(maps[1][observable].values, maps[0][observable].values)
+    orbits = [periodic_orbit(p, 8, method="newton") for p in (DAMPED, given)]
+    np.testing.assert_array_equal(orbits[1].state, orbits[0].state)
+    np.testing.assert_array_equal(orbits[1].multipliers, orbits[0].multipliers)
 
 
 def test_an_npz_file_with_several_contact_dofs_is_the_object():
@@ -230,3 +277,32 @@ def test_bad_points_are_refused_in_one_line(build, message):
     with pytest.raises(ParameterError, match=message) as error:
         build()
     assert "\n" not in str(error.value)
+
+
+def test_the_command_line_and_a_sweep_file_name_a_rig_touched_at_two_dofs(capsys, tmp_path):
+    """``modes --structure1 rig.npz`` states its contact and force DOFs; a sweep file naming
+    the .npz with two contacts maps as the object does from Python."""
+    from impactbeams.cli import main
+
+    rig = fe_rig(10)
+    path = tmp_path / "rig.npz"
+    np.savez(path, mass=rig.mass, stiffness=rig.stiffness, contact_dof=np.array([8, 18]),
+             length=L1, positions=np.array([MID, L1]))
+    assert main(["modes", "--structure1", str(path), "--counterpart", "stop", "--n", "2",
+                 "--contact-stiffness", "1e4", "--contact-position1", str(MID)]) == 0
+    assert ("contacts at DOFs 8 (x = 0.05 m), 18 (x = 0.1 m), force at DOF 18"
+            in capsys.readouterr().out)
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(
+        't_max = 0.02\nn_modes = 12\nobservables = ["first_impact_time"]\n[params]\n'
+        'counterpart = "stop"\ncontact_stiffness = 1e4\nforce_amplitude = 1e-3\n'
+        f'structure1 = "{path}"\n[[params.contacts]]\nposition1 = {MID}\nclearance = 1e-6\n'
+        "[[params.contacts]]\nclearance = 2e-6\n[axes.omega]\nmin = 380.0\nmax = 420.0\n"
+        "num = 3\n")
+    assert main(["run", str(sweep), "-o", str(tmp_path / "out.nc"), "--quiet"]) == 0
+    python = _first_map({"counterpart": "stop", "contact_stiffness": 1e4,
+                         "force_amplitude": 1e-3, "structure1": rig, "contacts": TOGETHER},
+                        "first_impact_time")
+    with xr.open_dataset(tmp_path / "out.nc") as ds:
+        np.testing.assert_array_equal(ds.first_impact_time.values,
+                                      python.first_impact_time.values)
