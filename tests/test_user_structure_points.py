@@ -306,3 +306,25 @@ def test_the_command_line_and_a_sweep_file_name_a_rig_touched_at_two_dofs(capsys
     with xr.open_dataset(tmp_path / "out.nc") as ds:
         np.testing.assert_array_equal(ds.first_impact_time.values,
                                       python.first_impact_time.values)
+
+
+@pytest.mark.slow  # 6 s warm: a branch of period maps and 9 cells settled, twice each
+def test_a_continuation_and_basins_of_modal_data_at_two_points_are_todays():
+    """Continuation of the two stops' orbit in Omega, and basins of a two-sided stop at
+    mid-span (tests/test_basins_several.py's plane, 3 x 3 cells): the uniform beam's, bit
+    for bit."""
+    from impactbeams import Continuation, basins, continue_orbits
+
+    given = DAMPED.replace(structure1=modal_data(8, (MID, L1)))
+    branches = [continue_orbits(Continuation(p, "omega", 398.0, 402.0, start=400.0, n_modes=8,
+                                             max_branches=1)) for p in (DAMPED, given)]
+    assert branches[0].state.size > 0
+    for name in ("state", "multiplier", "omega"):
+        np.testing.assert_array_equal(branches[1][name].values, branches[0][name].values)
+    soft = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
+                  force_amplitude=1e-4, omega=300.0, contacts=two_sided_stop(MID, 1e-5, 1e-5))
+    plane = (np.linspace(-4e-5, 4e-5, 3), np.linspace(-1.2e-2, 1.2e-2, 3))  # m, m/s
+    maps = [basins(p, plane, n_modes=5, workers=1)
+            for p in (soft, soft.replace(structure1=modal_data(5, (MID, L1))))]
+    for name in maps[0].data_vars:
+        np.testing.assert_array_equal(maps[1][name].values, maps[0][name].values, err_msg=name)
