@@ -94,14 +94,14 @@ def _point_index(owner: str, positions: tuple[float, ...], x: float,
 class _UserStructure:
     """What both kinds share: the checks of the engine's requests and its points.
 
-    Each kind sets ``positions`` (m, one per point: its contact DOFs, then its force DOF if it
-    is none of them, at ``length``), ``tip_index`` (the force DOF's point) and
+    Each kind sets ``point_positions`` (m, one per point: its contact DOFs, then its force DOF
+    if it is none of them, at ``length``), ``tip_index`` (the force DOF's point) and
     ``point_flexibility`` (m/N, the static flexibility between the points, symmetric).
     """
 
     name: str
     length: float
-    positions: tuple[float, ...]
+    point_positions: tuple[float, ...]
     tip_index: int
     point_flexibility: np.ndarray
 
@@ -114,20 +114,22 @@ class _UserStructure:
 
     def require_position(self, name: str, x: float) -> None:
         """ParameterError naming ``name`` unless ``x`` (m) is one of its points' positions."""
-        _point_index(self.name, self.positions, x, name)
+        _point_index(self.name, self.point_positions, x, name)
 
     @property
     def several_points(self) -> bool:
         """Whether it has points other than its tip (contact DOFs apart from the force DOF)."""
-        return len(self.positions) > 1
+        return len(self.point_positions) > 1
 
     def flexibility(self, x: Any, y: Any) -> np.ndarray:
         """Deflection at the points at ``x`` under unit forces at the points at ``y`` (m/N).
 
         Shape (len(x), len(y)); positions in m, each one of its points'.
         """
-        rows = [_point_index(self.name, self.positions, float(a)) for a in np.atleast_1d(x)]
-        columns = [_point_index(self.name, self.positions, float(b)) for b in np.atleast_1d(y)]
+        rows = [_point_index(self.name, self.point_positions, float(a))
+                for a in np.atleast_1d(x)]
+        columns = [_point_index(self.name, self.point_positions, float(b))
+                   for b in np.atleast_1d(y)]
         return self.point_flexibility[np.ix_(rows, columns)]
 
     def unit_tip_shape(self, x: np.ndarray, derivative: int = 0) -> np.ndarray:
@@ -193,7 +195,7 @@ class MatrixStructure(_UserStructure):
         positions = _positions(self.name, self.positions, len(contact_dofs), self.length)
         force_dof = _force_dof(self.name, self.force_dof, contact_dofs, positions, self.length,
                                size)
-        dofs, positions = _points(contact_dofs, positions, force_dof, self.length)
+        dofs, points = _points(contact_dofs, positions, force_dof, self.length)
         influence = _influence(self.name, self.influence, size, dofs)
         factor = (_sparse_factor if sparse else _dense_factor)(f"{self.name}.stiffness", K)
         (_sparse_factor if sparse else _dense_factor)(f"{self.name}.mass", M)
@@ -209,7 +211,8 @@ class MatrixStructure(_UserStructure):
         contact = contact_dofs[0] if len(contact_dofs) == 1 else contact_dofs
         for key, value in (("mass", M), ("stiffness", K), ("contact_dof", contact),
                            ("length", float(self.length)), ("influence", influence),
-                           ("positions", positions), ("force_dof", force_dof),
+                           ("positions", positions), ("point_positions", points),
+                           ("force_dof", force_dof),
                            ("point_dofs", dofs), ("tip_index", tip),
                            ("point_flexibility", (flexibility + flexibility.T) / 2),
                            ("_sparse", sparse), ("digest", _digest(M, K, influence)),
@@ -220,7 +223,7 @@ class MatrixStructure(_UserStructure):
     def __repr__(self) -> str:
         kind = "sparse" if self._sparse else "dense"
         where = f", from {self.source}" if self.source else ""
-        points = (f", positions={self.positions[:len(self.contact_dofs)]!r}, "
+        points = (f", positions={self.positions!r}, "
                   f"force_dof={self.force_dof}" if self.several_points else "")
         return (f"MatrixStructure({self.size} DOFs, {kind}, contact_dof={self.contact_dof}, "
                 f"length={self.length!r}{points}, sha256={self.digest}{where})")
@@ -332,6 +335,7 @@ class ModalStructure(_UserStructure):
                            ("tip_compliance", float(flexibility[tip, tip])),
                            ("length", float(self.length)),
                            ("static_mass", float(self.static_mass)), ("positions", positions),
+                           ("point_positions", positions),
                            ("tip_index", tip), ("point_flexibility", flexibility),
                            ("_tip_values", np.ascontiguousarray(values[:, tip]))):
             object.__setattr__(self, key, value)
@@ -361,7 +365,7 @@ class ModalStructure(_UserStructure):
         n = self._checked_count(n, self.mode_limit)
         gamma = np.zeros(n) if self.participation is None else self.participation[:n]
         values = self.contact_values.reshape(self.mode_limit, -1)
-        return UserModes(self.frequencies[:n], values[:n], self.positions,
+        return UserModes(self.frequencies[:n], values[:n], self.point_positions,
                          self._tip_values[:n], gamma, self.name)
 
     def describe(self, n: int) -> str:
@@ -406,7 +410,7 @@ def _matrix_modes(structure: MatrixStructure, n: int) -> UserModes:
     phi = phi * np.where(tip < 0, -1.0, 1.0)
     gamma = np.zeros(n) if structure.influence is None else phi.T @ (M @ structure.influence)
     return UserModes(np.sqrt(eigenvalues), phi[list(structure.point_dofs)].T,
-                     structure.positions, np.abs(tip), gamma, structure.name)
+                     structure.point_positions, np.abs(tip), gamma, structure.name)
 
 
 def _digest(*arrays: Any) -> str:
