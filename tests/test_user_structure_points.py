@@ -49,7 +49,8 @@ def fe_rig(elements: int, **keys) -> MatrixStructure:
     """The FE cantilever as M, K, touched at its mid-span node and its tip (driven there)."""
     K, M = beam_matrices(STOP.EI1, STOP.rhoA1, L1, elements)
     middle = 2 * (elements // 2 - 1)  # node 0, the clamp, is removed: w_1, theta_1, ...
-    return MatrixStructure(M, K, contact_dof=(middle, tip_dof(elements)), length=L1,
+    keys = {"mass": M, "stiffness": K, **keys}
+    return MatrixStructure(contact_dof=(middle, tip_dof(elements)), length=L1,
                            positions=(MID, L1), **keys)
 
 
@@ -216,6 +217,19 @@ def test_an_npz_file_with_several_contact_dofs_is_the_object():
     assert read.point_positions == rig.point_positions == (MID, L1) and read.digest == rig.digest
     np.testing.assert_array_equal(read.point_flexibility, rig.point_flexibility)
     assert read_modal.digest == given.digest and read_modal.positions == given.positions
+
+
+def test_sparse_matrices_give_the_dense_points_flexibility():
+    """The flexibility between the points from a sparse LU (symmetric pivots) against the
+    dense Cholesky's: K's round-off apart, within 1e-12 (measured 9.8e-14); the modes'
+    values at the points within 1e-9 (eigsh against the flexibility's eigh, 6 modes)."""
+    import scipy.sparse
+
+    dense = fe_rig(10)
+    sparse = fe_rig(10, mass=scipy.sparse.csr_matrix(dense.mass),
+                    stiffness=scipy.sparse.csr_matrix(dense.stiffness))
+    np.testing.assert_allclose(sparse.point_flexibility, dense.point_flexibility, rtol=1e-12)
+    np.testing.assert_allclose(sparse.modes(6).values, dense.modes(6).values, rtol=1e-9)
 
 
 def _modal(**changes):
