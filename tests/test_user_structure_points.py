@@ -322,14 +322,27 @@ def test_the_command_line_and_a_sweep_file_name_a_rig_touched_at_two_dofs(capsys
                                       python.first_impact_time.values)
 
 
-@pytest.mark.slow  # 6 s warm: a branch of period maps and 9 cells settled, twice each
-def test_a_continuation_and_basins_of_modal_data_at_two_points_are_todays():
-    """Continuation of the two stops' orbit in Omega, and basins of a two-sided stop at
-    mid-span (tests/test_basins_several.py's plane, 3 x 3 cells): the uniform beam's, bit
-    for bit."""
-    from impactbeams import Continuation, basins, continue_orbits
+@pytest.mark.slow  # 8 s warm: a branch of period maps, 9 cells settled, a stepped sweep
+def test_a_continuation_basins_and_a_stepped_sweep_of_modal_data_at_two_points_are_todays():
+    """Continuation of the two stops' orbit in Omega, its grazing frequencies, a stepped-sine
+    sweep up in Omega, and basins of a two-sided stop at mid-span
+    (tests/test_basins_several.py's plane, 3 x 3 cells): the uniform beam's, bit for bit."""
+    from impactbeams import Continuation, basins, continue_orbits, grazing_frequencies
 
     given = DAMPED.replace(structure1=modal_data(8, (MID, L1)))
+    grazing = [grazing_frequencies(p, 8, 300.0, 500.0) for p in (DAMPED, given)]
+    for name in grazing[0].data_vars:
+        np.testing.assert_array_equal(grazing[1][name].values, grazing[0][name].values)
+    fixed = {"counterpart": "stop", "contact_stiffness": 1e4, "damping_ratio": 0.05,
+             "force_amplitude": 1e-3, "contacts": TOGETHER}
+    sweeps = [run_sweep(sweep_from_mapping({
+        "t_max": 0.02, "n_modes": 12, "observables": ["steady_impact_rate"], "params": params,
+        "stepping": "up", "transient_periods": 10, "sampled_periods": 2,
+        "axes": {"omega": {"min": 380.0, "max": 420.0, "num": 3}}}), parallel=False)
+        for params in (fixed, {**fixed, "structure1": modal_data(12, (MID, L1))})]
+    assert np.all(sweeps[0].steady_impact_rate.values > 0)
+    np.testing.assert_array_equal(sweeps[1].steady_impact_rate.values,
+                                  sweeps[0].steady_impact_rate.values)
     branches = [continue_orbits(Continuation(p, "omega", 398.0, 402.0, start=400.0, n_modes=8,
                                              max_branches=1)) for p in (DAMPED, given)]
     assert branches[0].state.size > 0
