@@ -322,7 +322,7 @@ def test_the_command_line_and_a_sweep_file_name_a_rig_touched_at_two_dofs(capsys
                                       python.first_impact_time.values)
 
 
-@pytest.mark.slow  # 8 s warm: a branch of period maps, 9 cells settled, a stepped sweep
+@pytest.mark.slow  # 10 s warm: a branch of period maps, 9 cells settled, a stepped sweep
 def test_a_continuation_basins_and_a_stepped_sweep_of_modal_data_at_two_points_are_todays():
     """Continuation of the two stops' orbit in Omega, its grazing frequencies, a stepped-sine
     sweep up in Omega, and basins of a two-sided stop at mid-span
