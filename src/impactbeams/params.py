@@ -705,6 +705,9 @@ class Params:
     def _check_contact_point(self) -> None:
         """A contact position on its beam (0 < x <= l); elsewhere than the tips only if compliant.
 
+        On a user structure (``structure1``) beam 1's position must name one of its points
+        (its contact DOFs' positions, or its tip, the force DOF).
+
         The tied law (the paper's) ties the tips from below: its contact modes are those of
         tied tips (or of beam 1 pinned at its tip), so a contact elsewhere or from above is
         refused, naming the parameter, before any compute.
@@ -787,7 +790,8 @@ class Params:
 
         u_i(x) = (3 l x^2 - x^3) / (2 l^3) on a bare beam (its static deflection under a tip
         force, per unit tip deflection: how an uplift moves the contact point), that of the
-        beam with its attachments otherwise; exactly (1.0, 1.0, 1.0) at the tips from below.
+        beam with its attachments or of the user's structure (at its contact DOF) otherwise;
+        exactly (1.0, 1.0, 1.0) at the tips from below.
         """
         shapes = []
         for which, x in enumerate(self.contact_point, start=1):
