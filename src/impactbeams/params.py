@@ -586,7 +586,8 @@ class Params:
         require(USER_STRUCTURE, structure, isinstance(structure, (MatrixStructure, ModalStructure)),
                 "must be an impactbeams.MatrixStructure, a ModalStructure or the path of a .npz "
                 "file")
-        derived = _EQUIVALENT_BEAM1 if self.segments1 else ()  # (the segments' own: named)
+        # (the segments' own: named; a contact's position names one of the structure's DOFs)
+        derived = (*(_EQUIVALENT_BEAM1 if self.segments1 else ()), "contact_position1")
         for field in dataclasses.fields(Params):
             if field.name in BEAM1_KEYS and field.name not in derived:
                 require(field.name, getattr(self, field.name),
@@ -704,6 +705,9 @@ class Params:
     def _check_contact_point(self) -> None:
         """A contact position on its beam (0 < x <= l); elsewhere than the tips only if compliant.
 
+        On a user structure (``structure1``) beam 1's position must name one of its points
+        (its contact DOFs' positions, or its tip, the force DOF).
+
         The tied law (the paper's) ties the tips from below: its contact modes are those of
         tied tips (or of beam 1 pinned at its tip), so a contact elsewhere or from above is
         refused, naming the parameter, before any compute.
@@ -713,6 +717,8 @@ class Params:
             require(name, position, position is None or 0.0 < position <= length,
                     f"must be > 0 and <= l{which} = {length!r} (m: a point of beam {which}, "
                     "its distance from the clamp)")
+        if self.structure1 is not None and self.contact_position1 is not None:
+            self.structure1.require_position(CONTACT_POSITIONS[0], self.contact_position1)
         if (self.at_tips and self.side.sign > 0.0) or self.law.tangent_flow:
             return
         name = next((key for key, tip in zip(CONTACT_POSITIONS, (self.l1, self.l2), strict=True)
@@ -784,13 +790,16 @@ class Params:
 
         u_i(x) = (3 l x^2 - x^3) / (2 l^3) on a bare beam (its static deflection under a tip
         force, per unit tip deflection: how an uplift moves the contact point), that of the
-        beam with its attachments otherwise; exactly (1.0, 1.0, 1.0) at the tips from below.
+        beam with its attachments or of the user's structure (at its contact DOF) otherwise;
+        exactly (1.0, 1.0, 1.0) at the tips from below.
         """
         shapes = []
         for which, x in enumerate(self.contact_point, start=1):
             length = getattr(self, f"l{which}")
             if x == length or (which == 2 and not self.partner.has_beam2):
                 shapes.append(1.0)
+            elif which == 1 and self.structure1 is not None:  # at one of its contact DOFs
+                shapes.append(float(self.structure1.unit_tip_shape(np.array([x]))[0]))
             elif not self.uniform_beam(which):
                 shapes.append(float(self.structure(which).unit_tip_shape(np.array([x]))[0]))
             else:

@@ -1,17 +1,22 @@
 """A structure of the user's own: mass and stiffness matrices from an FE code, or modal data.
 
-Beam 1 may be any linear, clamped structure touched at one translational DOF (the contact
-point, where the tip force acts too). The engine needs of it what it needs of a cantilever
-(`impactbeams.modes.UserBeam`): the lowest natural frequencies with each mass-normalised mode's
-value at the contact DOF, the participation factors of a support motion, the static flexibility
-at the contact DOF and the kinetic norm of the static contact-load shape.
+Beam 1 may be any linear, clamped structure touched at one or several translational DOFs (its
+contact DOFs) and driven by the harmonic force at one DOF (its force DOF, by default the
+contact DOF at the tip). Each contact DOF has a position (m), which a contact names as it names
+a point of a beam (``Contact(position1=...)``, ``contact_position1``); the force DOF is the
+structure's tip, at ``length``, where a contact given no position acts. The engine needs of it
+what it needs of a cantilever (`impactbeams.modes.UserBeam`): the lowest natural frequencies
+with each mass-normalised mode's value at these points, the participation factors of a support
+motion, the static flexibility between the points (the beam's Green's function at them) and
+the kinetic norm of the static tip-load shape.
 
 * `MatrixStructure` (M, K, dense or scipy.sparse): the modes from the symmetric problem
   ``K phi = omega^2 M phi`` solved through the flexibility, so that the low modes keep their
   digits on fine meshes (eigh(K, M) loses a relative eps (omega_max / omega_1)^2 on them):
   dense, with K = L L^T, the largest eigenvalues 1 / omega^2 of ``L^-1 M L^-T``; sparse, by
-  shift-invert Lanczos about 0 (``eigsh(K, M=M, sigma=0)``). The static flexibility at the
-  contact DOF is solved from K itself (``K u = e_c``), not summed over truncated modes.
+  shift-invert Lanczos about 0 (``eigsh(K, M=M, sigma=0)``). The static flexibility between
+  the points is solved from K itself (``K u = e_c``, one solve per point), not summed over
+  truncated modes.
 * `ModalStructure`: the same data given directly.
 
 `read_structure` reads either from a ``.npz`` file (array names in `NPZ_NAMES`). Every input is
@@ -41,33 +46,64 @@ _SINGULAR = 1e-15
 class UserModes:
     """The lowest modes of a user structure (SI units).
 
-    ``frequencies`` (rad/s, ascending); ``contact``: each mass-normalised mode's value at the
-    contact DOF (kg^-1/2, >= 0); ``gamma``: participation factors phi_n^T M r of the support
-    motion (kg^1/2), zero if the structure has no influence vector (`Params` then refuses a
-    shaker that moves it).
+    ``frequencies`` (rad/s, ascending); ``values``: each mass-normalised mode's value at each
+    point of the structure (its contact DOFs and its force DOF; kg^-1/2), one column per point
+    at ``positions`` (m); ``tip_values``: the column of the tip (the force DOF), each >= 0;
+    ``gamma``: participation factors phi_n^T M r of the support motion (kg^1/2), zero if the
+    structure has no influence vector (`Params` then refuses a shaker that moves it).
     """
 
     frequencies: np.ndarray
-    contact: np.ndarray
+    values: np.ndarray
+    positions: tuple[float, ...]
+    tip_values: np.ndarray
     gamma: np.ndarray
     name: str
 
     def tip(self, derivative: int = 0) -> np.ndarray:
-        """Each mode's value at the contact DOF (``derivative`` 0 only: a DOF has no slope)."""
-        require("derivative", derivative, derivative == 0,
-                f"{self.name} is a user structure: only its contact DOF's values are known")
-        return self.contact
+        """Each mode's value at the tip, the force DOF (``derivative`` 0: a DOF has no slope)."""
+        _require_value(self.name, derivative)
+        return self.tip_values
+
+    def __call__(self, x: np.ndarray, derivative: int = 0) -> np.ndarray:
+        """Each mode's value at the points at positions ``x`` (m), shape (modes, len(x))."""
+        _require_value(self.name, derivative)
+        columns = [_point_index(self.name, self.positions, float(at)) for at in np.atleast_1d(x)]
+        return self.values[:, columns]
 
     def participation(self) -> np.ndarray:
         """Gamma_n (kg^1/2)."""
         return self.gamma
 
 
+def _require_value(name: str, derivative: int) -> None:
+    require("derivative", derivative, derivative == 0,
+            f"{name} is a user structure: only its values at its contact and force DOFs are "
+            "known")
+
+
+def _point_index(owner: str, positions: tuple[float, ...], x: float,
+                 name: str = "position") -> int:
+    """The index of the point at position ``x`` (m), or ParameterError naming the positions."""
+    require(name, x, x in positions,
+            f"{owner} is touched only at its contact DOFs and its force DOF, at positions "
+            f"{', '.join(map(repr, positions))} (m)")
+    return positions.index(x)
+
+
 class _UserStructure:
-    """What both kinds share: the checks of the engine's requests (not a cantilever)."""
+    """What both kinds share: the checks of the engine's requests and its points.
+
+    Each kind sets ``point_positions`` (m, one per point: its contact DOFs, then its force DOF
+    if it is none of them, at ``length``), ``tip_index`` (the force DOF's point) and
+    ``point_flexibility`` (m/N, the static flexibility between the points, symmetric).
+    """
 
     name: str
     length: float
+    point_positions: tuple[float, ...]
+    tip_index: int
+    point_flexibility: np.ndarray
 
     def require_support(self, base_amplitude: Any) -> None:
         """ParameterError if ``base_amplitude`` (m) > 0 anywhere and it has no influence vector."""
@@ -76,10 +112,34 @@ class _UserStructure:
             "(participation factors): a shaker cannot move it; give one, or a shaker that "
             "leaves beam 1's clamp")
 
+    def require_position(self, name: str, x: float) -> None:
+        """ParameterError naming ``name`` unless ``x`` (m) is one of its points' positions."""
+        _point_index(self.name, self.point_positions, x, name)
+
+    @property
+    def several_points(self) -> bool:
+        """Whether it has points other than its tip (contact DOFs apart from the force DOF)."""
+        return len(self.point_positions) > 1
+
+    def flexibility(self, x: Any, y: Any) -> np.ndarray:
+        """Deflection at the points at ``x`` under unit forces at the points at ``y`` (m/N).
+
+        Shape (len(x), len(y)); positions in m, each one of its points'.
+        """
+        rows = [_point_index(self.name, self.point_positions, float(a))
+                for a in np.atleast_1d(x)]
+        columns = [_point_index(self.name, self.point_positions, float(b))
+                   for b in np.atleast_1d(y)]
+        return self.point_flexibility[np.ix_(rows, columns)]
+
     def unit_tip_shape(self, x: np.ndarray, derivative: int = 0) -> np.ndarray:
-        """Refused: a user structure has no positions along a beam."""
-        raise ParameterError(f"{self.name} is a user structure (matrices or modal data): "
-                             "fields along a beam are not defined for it; leave fields out")
+        """The static tip-load shape with unit tip deflection at the points at ``x`` (m).
+
+        Its values at the points only: a user structure has no positions between them.
+        """
+        _require_value(self.name, derivative)
+        tip = self.tip_index
+        return self.flexibility(x, self.length)[:, 0] / self.point_flexibility[tip, tip]
 
     def _checked_count(self, n: int, available: int) -> int:
         require("n_modes", n, is_integer(n) and 1 <= n <= available,
@@ -96,22 +156,30 @@ class MatrixStructure(_UserStructure):
             scipy.sparse.
         stiffness: K (N/m, N/rad, N m/rad per DOF), N x N, symmetric positive definite (the
             structure clamped: no rigid-body mode), dense or scipy.sparse.
-        contact_dof: the index of the translational DOF where the contact (and the tip force)
-            acts, 0 <= contact_dof < N.
+        contact_dof: the index of the translational DOF where a contact acts, 0 <= contact_dof
+            < N, or a sequence of such indices, all different (its contact DOFs).
         length: a length scale of the structure (m): deflections are small against it (the
-            checks of the clearance and the drives), as a beam's length is.
+            checks of the clearance and the drives), as a beam's length is. The tip (the
+            force DOF) sits at it.
         influence: the DOFs' motion under a unit support motion (None: no shaker), N values;
-            1 at the contact DOF (the contact point moves rigidly with the support).
+            1 at the contact DOFs and the force DOF (they move rigidly with the support).
         name: how messages call it (``structure1``); source: where it came from (a file).
+        positions: each contact DOF's position (m, 0 < x <= length, all different), which a
+            contact names (``Contact(position1=x)``); None: the one contact DOF at ``length``.
+        force_dof: the DOF where the harmonic force (``force_amplitude``) acts, the
+            structure's tip at ``length``; None: the contact DOF at ``length``. A contact DOF
+            other than the force DOF must not sit at ``length``.
     """
 
     mass: Any
     stiffness: Any
-    contact_dof: int
+    contact_dof: Any
     length: float
     influence: np.ndarray | None = None
     name: str = "structure1"
     source: str = ""
+    positions: Any = None
+    force_dof: int | None = None
 
     def __post_init__(self) -> None:
         import scipy.sparse
@@ -122,20 +190,31 @@ class MatrixStructure(_UserStructure):
         require(f"{self.name}.stiffness", f"{K.shape[0]} x {K.shape[1]}", K.shape == M.shape,
                 f"must have the mass matrix's shape, {M.shape[0]} x {M.shape[1]}")
         size = K.shape[0]
-        require(f"{self.name}.contact_dof", self.contact_dof,
-                is_integer(self.contact_dof) and 0 <= self.contact_dof < size,
-                f"must be a DOF index from 0 to {size - 1}")
         _check_length(self.name, self.length)
-        influence = _influence(self.name, self.influence, size, self.contact_dof)
+        contact_dofs = _dofs(f"{self.name}.contact_dof", self.contact_dof, size)
+        positions = _positions(self.name, self.positions, len(contact_dofs), self.length)
+        force_dof = _force_dof(self.name, self.force_dof, contact_dofs, positions, self.length,
+                               size)
+        dofs, points = _points(contact_dofs, positions, force_dof, self.length)
+        influence = _influence(self.name, self.influence, size, dofs)
         factor = (_sparse_factor if sparse else _dense_factor)(f"{self.name}.stiffness", K)
         (_sparse_factor if sparse else _dense_factor)(f"{self.name}.mass", M)
-        unit = np.zeros(size)
-        unit[self.contact_dof] = 1.0
-        static = factor(unit)  # K u = e_c: the flexibility's column at the contact DOF
-        compliance = float(static[self.contact_dof])
-        shape = static / compliance
-        for key, value in (("mass", M), ("stiffness", K), ("contact_dof", int(self.contact_dof)),
+        statics = []
+        for dof in dofs:  # K u = e_c, one solve each: the flexibility's columns at the points
+            unit = np.zeros(size)
+            unit[dof] = 1.0
+            statics.append(factor(unit))
+        flexibility = np.array([[static[dof] for static in statics] for dof in dofs])
+        tip = dofs.index(force_dof)
+        compliance = float(flexibility[tip, tip])
+        shape = statics[tip] / compliance
+        contact = contact_dofs[0] if len(contact_dofs) == 1 else contact_dofs
+        for key, value in (("mass", M), ("stiffness", K), ("contact_dof", contact),
                            ("length", float(self.length)), ("influence", influence),
+                           ("positions", positions), ("point_positions", points),
+                           ("force_dof", force_dof),
+                           ("point_dofs", dofs), ("tip_index", tip),
+                           ("point_flexibility", (flexibility + flexibility.T) / 2),
                            ("_sparse", sparse), ("digest", _digest(M, K, influence)),
                            ("tip_compliance", compliance),
                            ("static_mass", float(shape @ (M @ shape)))):
@@ -144,8 +223,16 @@ class MatrixStructure(_UserStructure):
     def __repr__(self) -> str:
         kind = "sparse" if self._sparse else "dense"
         where = f", from {self.source}" if self.source else ""
+        points = (f", positions={self.positions!r}, "
+                  f"force_dof={self.force_dof}" if self.several_points else "")
         return (f"MatrixStructure({self.size} DOFs, {kind}, contact_dof={self.contact_dof}, "
-                f"length={self.length!r}, sha256={self.digest}{where})")
+                f"length={self.length!r}{points}, sha256={self.digest}{where})")
+
+    @property
+    def contact_dofs(self) -> tuple[int, ...]:
+        """Its contact DOFs, as given."""
+        dofs = self.contact_dof
+        return dofs if isinstance(dofs, tuple) else (dofs,)
 
     @property
     def size(self) -> int:
@@ -163,7 +250,7 @@ class MatrixStructure(_UserStructure):
         return self.influence is not None
 
     def modes(self, n: int) -> UserModes:
-        """The ``n`` lowest modes, mass-normalised, each positive at the contact DOF."""
+        """The ``n`` lowest modes, mass-normalised, each positive at the force DOF."""
         return _matrix_modes(self, self._checked_count(n, self.size))
 
     def describe(self, n: int) -> str:
@@ -177,8 +264,16 @@ class MatrixStructure(_UserStructure):
             method = "the flexibility's symmetric eigenproblem (K = L L^T, LAPACK eigh)"
             memory = 8 * self.size**2 * 5  # M, K, L, L^-1 M L^-T, its eigenvectors
         return (f"{self.name}: {self.size} DOFs ({'sparse' if self._sparse else 'dense'}), "
-                f"contact at DOF {self.contact_dof}; its {n} lowest modes by {method}, "
-                f"about {memory / 2**20:.3g} MiB")
+                f"{self._where()}; its {n} lowest modes by {method}, about "
+                f"{memory / 2**20:.3g} MiB")
+
+    def _where(self) -> str:
+        """Where it is touched and driven, in words."""
+        if not self.several_points:
+            return f"contact at DOF {self.contact_dof}"
+        contacts = ", ".join(f"{dof} (x = {x!r} m)" for dof, x in zip(
+            self.contact_dofs, self.positions, strict=False))
+        return f"contacts at DOFs {contacts}, force at DOF {self.force_dof}"
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -187,24 +282,31 @@ class ModalStructure(_UserStructure):
 
     Args:
         frequencies: its lowest natural frequencies (rad/s), positive, ascending.
-        contact_values: each mass-normalised mode's value at the contact DOF (kg^-1/2).
+        contact_values: each mass-normalised mode's value at the contact DOF (kg^-1/2); with
+            several points, one column per point (modes x points): its contact DOFs and its
+            force DOF, the point at ``length``.
         tip_compliance: its static flexibility at the contact DOF (m/N), at least the modes'
-            share sum(contact_values^2 / frequencies^2).
-        static_mass: u^T M u (kg) of the static contact-load shape u with unit deflection at
-            the contact (the energies of every contact need it: the kinetic energy of the
-            quasi-static part).
-        length: a length scale (m), as `MatrixStructure`'s.
+            share sum(contact_values^2 / frequencies^2); with several points the flexibility
+            matrix between them (m/N, points x points), symmetric, positive definite and at
+            least the modes' share (what it leaves, the residual, positive semidefinite).
+        static_mass: u^T M u (kg) of the static tip-load shape u with unit deflection at the
+            tip, the force DOF (the energies of every contact need it: the kinetic energy of
+            the quasi-static part).
+        length: a length scale (m), as `MatrixStructure`'s; the tip (the force DOF) sits at it.
         participation: phi_n^T M r of a unit support motion (kg^1/2); None: no shaker.
+        positions: each point's position (m, 0 < x <= length, all different), one of them
+            ``length``, where the force acts; None: the one point, at ``length``.
     """
 
     frequencies: np.ndarray
     contact_values: np.ndarray
-    tip_compliance: float
+    tip_compliance: Any
     static_mass: float
     length: float
     participation: np.ndarray | None = None
     name: str = "structure1"
     source: str = ""
+    positions: Any = None
 
     def __post_init__(self) -> None:
         frequencies = _vector(f"{self.name}.frequencies", self.frequencies, None)
@@ -212,35 +314,41 @@ class ModalStructure(_UserStructure):
                 bool(np.all(frequencies > 0)) and bool(np.all(np.diff(frequencies) >= 0)),
                 "must be positive and ascending (rad/s)")
         size = frequencies.size
-        given = _vector(f"{self.name}.contact_values", self.contact_values, size)
-        # each mode's sign made positive at the contact, its participation factor's with it
-        sign = np.where(given < 0, -1.0, 1.0)
-        values = sign * given
+        given = _mode_values(f"{self.name}.contact_values", self.contact_values, size)
+        _check_length(self.name, self.length)
+        count = given.shape[1]
+        positions = _positions(self.name, self.positions, count, self.length)
+        require(f"{self.name}.positions", self.positions, self.length in positions,
+                f"must hold length = {self.length!r} (m): the tip, where the force acts")
+        tip = positions.index(self.length)
+        # each mode's sign made positive at the tip, its participation factor's with it
+        sign = np.where(given[:, tip] < 0, -1.0, 1.0)
+        values = sign[:, None] * given
         gamma = None if self.participation is None else sign * _vector(
             f"{self.name}.participation", self.participation, size)
-        _check_length(self.name, self.length)
-        modal = float(np.sum(values**2 / frequencies**2))
-        require(f"{self.name}.tip_compliance", self.tip_compliance,
-                is_real(self.tip_compliance) and np.isfinite(self.tip_compliance)
-                and self.tip_compliance >= modal * (1 - 1e-12),
-                f"must be at least the modes' flexibility sum(contact_values^2 / "
-                f"frequencies^2) = {modal:.6g} m/N (the static flexibility holds every mode)")
+        flexibility = _point_flexibility(self.name, self.tip_compliance, values, frequencies)
         require(f"{self.name}.static_mass", self.static_mass,
                 is_real(self.static_mass) and 0 < self.static_mass < np.inf, "must be > 0 (kg)")
-        for key, value in (("frequencies", frequencies), ("contact_values", values),
-                           ("participation", gamma), ("tip_compliance",
-                                                      float(self.tip_compliance)),
+        one = values[:, 0] if count == 1 else values  # the one point's: a vector as given
+        for key, value in (("frequencies", frequencies), ("contact_values", one),
+                           ("participation", gamma),
+                           ("tip_compliance", float(flexibility[tip, tip])),
                            ("length", float(self.length)),
-                           ("static_mass", float(self.static_mass))):
+                           ("static_mass", float(self.static_mass)), ("positions", positions),
+                           ("point_positions", positions),
+                           ("tip_index", tip), ("point_flexibility", flexibility),
+                           ("_tip_values", np.ascontiguousarray(values[:, tip]))):
             object.__setattr__(self, key, value)
+        extra = (flexibility, np.array(positions)) if count > 1 else ()
         object.__setattr__(self, "digest", _digest(
-            frequencies, values, gamma, np.array([self.tip_compliance, self.length,
-                                                  self.static_mass])))
+            frequencies, one, gamma, np.array([self.tip_compliance, self.length,
+                                               self.static_mass]), *extra))
 
     def __repr__(self) -> str:
         where = f", from {self.source}" if self.source else ""
-        return (f"ModalStructure({self.frequencies.size} modes, length={self.length!r}, "
-                f"sha256={self.digest}{where})")
+        points = f", positions={self.positions!r}" if self.several_points else ""
+        return (f"ModalStructure({self.frequencies.size} modes, length={self.length!r}"
+                f"{points}, sha256={self.digest}{where})")
 
     @property
     def mode_limit(self) -> int:
@@ -256,12 +364,16 @@ class ModalStructure(_UserStructure):
         """The first ``n`` modes given."""
         n = self._checked_count(n, self.mode_limit)
         gamma = np.zeros(n) if self.participation is None else self.participation[:n]
-        return UserModes(self.frequencies[:n], self.contact_values[:n], gamma, self.name)
+        values = self.contact_values.reshape(self.mode_limit, -1)
+        return UserModes(self.frequencies[:n], values[:n], self.point_positions,
+                         self._tip_values[:n], gamma, self.name)
 
     def describe(self, n: int) -> str:
         """What it is, in one line."""
+        where = (f"the points at {', '.join(map(repr, self.positions))} m" if
+                 self.several_points else "the contact DOF")
         return (f"{self.name}: modal data of {self.mode_limit} modes (frequencies, values at "
-                f"the contact DOF), {n} used")
+                f"{where}), {n} used")
 
 
 @functools.lru_cache(maxsize=16)
@@ -294,10 +406,11 @@ def _matrix_modes(structure: MatrixStructure, n: int) -> UserModes:
         raise ParameterError(f"{structure.name}.stiffness is not allowed: it is not positive "
                              f"definite (an eigenvalue {eigenvalues.min():.3g})")
     phi = phi / np.sqrt(np.einsum("in,in->n", phi, M @ phi))
-    contact = phi[structure.contact_dof]
-    phi = phi * np.where(contact < 0, -1.0, 1.0)
+    tip = phi[structure.force_dof]
+    phi = phi * np.where(tip < 0, -1.0, 1.0)
     gamma = np.zeros(n) if structure.influence is None else phi.T @ (M @ structure.influence)
-    return UserModes(np.sqrt(eigenvalues), np.abs(contact), gamma, structure.name)
+    return UserModes(np.sqrt(eigenvalues), phi[list(structure.point_dofs)].T,
+                     structure.point_positions, np.abs(tip), gamma, structure.name)
 
 
 def _digest(*arrays: Any) -> str:
@@ -377,14 +490,110 @@ def _sparse_factor(name: str, matrix: Any) -> Any:
     return lu.solve
 
 
-def _influence(name: str, influence: Any, size: int, contact_dof: int) -> np.ndarray | None:
+def _influence(name: str, influence: Any, size: int, dofs: tuple[int, ...],
+               ) -> np.ndarray | None:
+    """The influence vector, 1 at each point's DOF ``dofs`` (the contacts' and the force's)."""
     if influence is None:
         return None
     r = _vector(f"{name}.influence", influence, size)
-    require(f"{name}.influence[{contact_dof}]", float(r[contact_dof]),
-            abs(r[contact_dof] - 1.0) <= 1e-12, "must be 1: the contact DOF moves with the "
-            "support (the gap is measured from it)")
+    for dof in dofs:
+        require(f"{name}.influence[{dof}]", float(r[dof]), abs(r[dof] - 1.0) <= 1e-12,
+                "must be 1: the contact and force DOFs move with the support (the gaps and "
+                "the tip are measured from it)")
     return r
+
+
+def _dofs(name: str, value: Any, size: int) -> tuple[int, ...]:
+    """``value``, one DOF index or several, as a tuple of different indices below ``size``."""
+    several = isinstance(value, (tuple, list, np.ndarray)) and np.ndim(value) == 1
+    dofs = tuple(value) if several else (value,)
+    require(name, value, len(dofs) >= 1, "must name at least one DOF")
+    for index, dof in enumerate(dofs):
+        require(f"{name}[{index}]" if several else name, dof,
+                is_integer(dof) and 0 <= dof < size, f"must be a DOF index from 0 to {size - 1}")
+    require(name, value, len(set(dofs)) == len(dofs), "must name each DOF once")
+    return tuple(int(dof) for dof in dofs)
+
+
+def _positions(name: str, value: Any, count: int, length: float) -> tuple[float, ...]:
+    """Each of ``count`` points' position (m), 0 < x <= length, all different."""
+    if value is None:
+        require(f"{name}.positions", value, count == 1, f"must give each of the {count} "
+                "contact DOFs its position (m), which a contact names")
+        return (float(length),)
+    positions = _vector(f"{name}.positions", value, count)
+    require(f"{name}.positions", value, bool(np.all((positions > 0) & (positions <= length))),
+            f"must be > 0 and <= length = {length!r} (m)")
+    require(f"{name}.positions", value, np.unique(positions).size == count,
+            "must all differ (each names one contact DOF)")
+    return tuple(float(x) for x in positions)
+
+
+def _force_dof(name: str, value: Any, contact_dofs: tuple[int, ...],
+               positions: tuple[float, ...], length: float, size: int) -> int:
+    """The force DOF: ``value``, or the contact DOF at ``length``; the tip, at ``length``."""
+    at_tip = [dof for dof, x in zip(contact_dofs, positions, strict=True) if x == length]
+    if value is None:
+        require(f"{name}.force_dof", value, bool(at_tip), "must be given: no contact DOF is "
+                f"at length = {length!r} (m), the tip, where the force acts by default")
+        return at_tip[0]
+    require(f"{name}.force_dof", value, is_integer(value) and 0 <= value < size,
+            f"must be a DOF index from 0 to {size - 1}")
+    require(f"{name}.positions", positions, not at_tip or at_tip == [value],
+            f"must not put contact DOF {at_tip[0] if at_tip else ''} at length = {length!r} "
+            f"(m): the tip is the force DOF {value}")
+    require(f"{name}.positions", positions, value not in contact_dofs or at_tip == [value],
+            f"must put the force DOF {value}, a contact DOF, at length = {length!r} (m): the "
+            "tip")
+    return int(value)
+
+
+def _points(contact_dofs: tuple[int, ...], positions: tuple[float, ...], force_dof: int,
+            length: float) -> tuple[tuple[int, ...], tuple[float, ...]]:
+    """The points' DOFs and positions: the contact DOFs, then the force DOF at the tip."""
+    if force_dof in contact_dofs:
+        return contact_dofs, positions
+    return (*contact_dofs, force_dof), (*positions, float(length))
+
+
+def _mode_values(name: str, value: Any, modes: int) -> np.ndarray:
+    """Each mode's values at the points (kg^-1/2): a vector (one point) or modes x points."""
+    array = np.asarray(value) if isinstance(value, (np.ndarray, list, tuple)) else None
+    if array is None or array.ndim != 2:
+        return _vector(name, value, modes)[:, None]
+    require(name, f"shape {array.shape}", array.shape[0] == modes and array.shape[1] >= 1
+            and np.issubdtype(array.dtype, np.number) and np.isrealobj(array),
+            f"must be a real vector of {modes} values or a real matrix of {modes} rows (one "
+            "column per point)")
+    array = np.asarray(array, dtype=float)
+    require(name, "a matrix with NaN or inf", bool(np.all(np.isfinite(array))),
+            "every value must be finite")
+    return array
+
+
+def _point_flexibility(name: str, value: Any, values: np.ndarray,
+                       frequencies: np.ndarray) -> np.ndarray:
+    """The static flexibility between the points (m/N), checked against the modes' share."""
+    label = f"{name}.tip_compliance"
+    if values.shape[1] == 1:
+        modal = float(np.sum(values[:, 0]**2 / frequencies**2))
+        require(label, value, is_real(value) and np.isfinite(value)
+                and value >= modal * (1 - 1e-12),
+                f"must be at least the modes' flexibility sum(contact_values^2 / "
+                f"frequencies^2) = {modal:.6g} m/N (the static flexibility holds every mode)")
+        return np.array([[float(value)]])
+    count = values.shape[1]
+    matrix = _matrix(label, value, sparse=False)
+    require(label, f"shape {matrix.shape}", matrix.shape == (count, count),
+            f"must be {count} x {count}: the flexibility between the {count} points")
+    modal = (values / frequencies[:, None]**2).T @ values
+    scale = abs(matrix).max()
+    residual = np.linalg.eigvalsh(matrix - modal).min()
+    require(label, f"a matrix whose residual over the modes has eigenvalue {residual:.3g}",
+            residual >= -1e-12 * scale and np.linalg.eigvalsh(matrix).min() > 0, "must be "
+            "positive definite and at least the modes' flexibility (values^T diag(1 / "
+            "frequencies^2) values): the static flexibility holds every mode")
+    return matrix
 
 
 def _vector(name: str, value: Any, size: int | None) -> np.ndarray:
@@ -407,13 +616,16 @@ def _check_length(name: str, length: Any) -> None:
 
 
 # the arrays a .npz file may hold: a matrix structure or modal data (optional ones marked)
+# (several contact DOFs: ``contact_dof`` a vector with ``positions``; modal data at several
+# points: ``contact_values`` modes x points, ``tip_compliance`` points x points, ``positions``)
 NPZ_NAMES = {
     MatrixStructure: {"mass": True, "stiffness": True, "contact_dof": True, "length": True,
-                      "influence": False},
+                      "influence": False, "positions": False, "force_dof": False},
     ModalStructure: {"frequencies": True, "contact_values": True, "tip_compliance": True,
-                     "static_mass": True, "length": True, "participation": False},
+                     "static_mass": True, "length": True, "participation": False,
+                     "positions": False},
 }
-_SCALARS = ("contact_dof", "length", "tip_compliance", "static_mass")
+_SCALARS = ("contact_dof", "length", "tip_compliance", "static_mass", "force_dof")
 
 
 def read_structure(path: str | Path, name: str = "structure1") -> MatrixStructure | ModalStructure:
@@ -442,6 +654,8 @@ def read_structure(path: str | Path, name: str = "structure1") -> MatrixStructur
                 f"the file has no array {key!r} ({kind.__name__} needs it)")
     values = {key: (value.item() if key in _SCALARS and value.ndim == 0 else value)
               for key, value in arrays.items()}
+    if isinstance(values.get("contact_dof"), np.ndarray):  # several contact DOFs
+        values["contact_dof"] = tuple(values["contact_dof"].tolist())
     return kind(**values, name=name, source=str(path))
 
 
