@@ -82,6 +82,22 @@ def test_a_contact_that_never_closes_leaves_the_single_contacts_balance_and_epis
             np.testing.assert_allclose(got, alone[name].values, rtol=1e-12, atol=0)
 
 
+def test_a_run_in_which_no_contact_closes_is_the_single_contacts():
+    """Two stops 1 mm away, neither reached: no impacts, no episodes (the episode table of no
+    impacts used to fail: a ValueError), the tips and the energy balance those of the single
+    far stop to 1e-12 of their largest (measured 3e-15)."""
+    params = FORCED.replace(damping_ratio=0.01)
+    alone = simulate(params.replace(clearance=1e-3), 0.02, n_modes=12, dt_output=1e-4,
+                     energy_balance=True)
+    both = simulate(params.replace(contacts=(Contact(clearance=1e-3),
+                                             Contact(MID, clearance=1e-3))),
+                    0.02, n_modes=12, dt_output=1e-4, energy_balance=True)
+    assert both.sizes["impact"] == both.sizes["episode"] == both.sizes["contact_episode"] == 0
+    for name in ("tip_deflection_1", "energy", "work_of_force"):
+        reference = alone[name].values
+        assert np.abs(both[name].values - reference).max() <= 1e-12 * np.abs(reference).max()
+
+
 def test_the_energetic_restitution_with_a_dashpot_is_the_single_contacts():
     """A tip stop with a dashpot (c = 0.3 N s/m) beside a mid-span stop that never closes:
     the episodes' energetic restitution (R's work on the physical gap, whose rate has the
