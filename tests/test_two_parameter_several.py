@@ -218,6 +218,28 @@ def test_neimark_sacker_curve_with_two_contacts_closed():
         assert np.abs(np.abs(mu[mu.imag > 0]) - 1.0).min() < 1e-10
 
 
+@pytest.mark.slow  # (18 s; the period doubling's curve above is the fast check of an end)
+def test_neimark_sacker_curve_with_two_contacts_ends_on_the_branchs_point():
+    """The same Neimark-Sacker curve followed up to the box edge F0 = 31 uN (23 points,
+    "bound"; Omega falls from 247.237 to 247.094 rad/s): at the end's F0 the one-parameter
+    branch in Omega through the end's frequency, a continuation of its own (started 0.1 rad/s
+    below from the end's orbit, which is only its guess), locates one Neimark-Sacker point,
+    at the end's frequency to 1e-9 (the curve's Newton and the branch's location tolerances,
+    as AGREE; measured 8.1e-16 relative)."""
+    continuation = Continuation(SMALL_SPLIT, "omega", 242.0, 250.0, start=248.0,
+                                direction="down", n_modes=N_MODES, max_branches=1,
+                                max_points=12, transient_periods=600)
+    curve = continue_curve(BifurcationCurve.from_branch(
+        continuation, continue_orbits(continuation), "neimark_sacker", "force_amplitude",
+        3e-5, 3.1e-5, max_points=40))
+    assert curve.attrs["curve_ending"] == "bound" and float(curve.force_amplitude[-1]) == 3.1e-5
+    end = curve.isel(branch_point=-1)
+    assert float(end.omega) < float(curve.omega[0]) - 0.1
+    (located,) = _events(SMALL_SPLIT.replace(force_amplitude=3.1e-5), float(end.omega),
+                         end.section_state.values, "neimark_sacker", width=0.1)
+    assert float(end.omega) == pytest.approx(float(located), rel=AGREE, abs=0.0)
+
+
 def _both_closing_multipliers(curve, params):
     """The multipliers at each point of ``curve`` (in Omega and F0) of ``params``' own map
     (`ContactsPeriodMap`), whose fixed point each point's orbit is checked to be (to 1e-10)
