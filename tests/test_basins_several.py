@@ -28,7 +28,7 @@ from impactbeams.orbits.basin_contacts import ContactCellRunner
 from impactbeams.orbits.basin_map import Plane, _Setup
 from impactbeams.orbits.contacts_map import ContactsPeriodMap
 from impactbeams.structure import PointMass
-from test_basins import counting_chunks, interrupted_at_third_chunk
+from test_basins import counting_chunks, ends_apart, interrupted_at_third_chunk
 
 PARAMS = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
                 force_amplitude=1e-4, omega=300.0)
@@ -293,15 +293,7 @@ def test_basins_of_a_two_sided_stop_on_a_beam_with_a_tip_mass():
     assert sorted(dataset.attractor_contacts.values.tolist()) == [0, 2]
     labels = dataset.basin.values.ravel()
     assert set(labels) == {0, 1}
-    omega, period = TIP_MASS.omega, 2 * math.pi / TIP_MASS.omega
-    points = np.stack([dataset.attractor_section_deflection1[:, 0],
-                       dataset.attractor_section_velocity1[:, 0] / omega], axis=-1)
-    scale = np.abs(points).max()
     for label in (0, 1):
         for cell in np.flatnonzero(labels == label)[:3]:
-            run = simulate(TIP_MASS, 300 * period, N_MODES, dt_output=period,
-                           initial_state=starts(dataset)[cell],
-                           long_time=LongTime(sampled_periods=300, max_period=8))
-            end = np.array([run.poincare_deflection1[-1], run.poincare_velocity1[-1] / omega])
-            apart = np.abs(points - end).max(axis=-1) / scale
+            apart = ends_apart(TIP_MASS, dataset, N_MODES, cell)
             assert apart[label] < 1e-6 and apart[1 - label] > 0.1, (cell, apart)

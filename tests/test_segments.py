@@ -7,20 +7,18 @@ checked against FE models in tests/test_structure_modes.py.
 """
 
 import json
-import math
 
 import numpy as np
 import pytest
 import xarray as xr
 
 from fe_spring import fe_spring_contacts
-from impactbeams import LongTime, simulate
+from impactbeams import simulate
 from impactbeams.cli import main
 from impactbeams.continuation import Continuation, continue_orbits
 from impactbeams.continuation.twoparameter import BifurcationCurve, continue_curve
 from impactbeams.modes import beam
-from impactbeams.orbits import PeriodMap, basins, periodic_orbit
-from impactbeams.orbits.basin_inputs import continued_orbits
+from impactbeams.orbits import PeriodMap, periodic_orbit
 from impactbeams.orbits.grazing import grazing_curve
 from impactbeams.params import (
     ParameterError,
@@ -32,6 +30,7 @@ from impactbeams.params import (
 from impactbeams.structure import Cantilever, PointMass, Segment
 from impactbeams.structure.user import ModalStructure
 from impactbeams.sweep import run_sweep, sweep_from_mapping
+from test_attachment_curves import assert_basins_labelled_by
 from test_attachments import assert_todays_contacts
 
 EI, RHOA = 9.0167e-3, 1.8402e-2  # the default steel strip (N m^2, kg/m)
@@ -329,43 +328,19 @@ def test_basins_on_a_stepped_beam_labelled_by_a_continuation_in_a_segments_EI(tm
     """tests/test_attachment_curves.py's basins at a tip mass, with the root segment's EI in
     place of the mass: the soft stop (3 modes) on a beam whose root is 1.2 times stiffer, at
     325 rad/s inside its hysteresis band (the lower fold is at 301 rad/s). A continuation in
-    the root's EI (1.18 to 1.22 EI) labels the map with its orbit at 1.2 EI (a fixed point of
-    that EI's period map to 1e-10 of the state); the other orbit is found by running. A cell
-    of each basin ends where a direct `simulate` of 300 periods from its state ends: on the
-    cell's attractor to 1e-6 of the section points' scale (the transient decays by the
-    attractors' |mu| < 0.91 a period: 0.91^300 = 5e-13; measured on all 49 cells 6.5e-14 on
-    the continued orbit, 2.4e-10 on the one found by running, whose point is the settled
-    map's) and more than 10 % from the other (98 %)."""
+    the root's EI (6 points from 1.2 EI up) labels the map with its orbit at 1.2 EI (a fixed
+    point of that EI's period map to 1e-10 of the state); the other orbit is found by
+    running. A cell of each basin ends where a direct `simulate` of 300 periods from its
+    state ends: on the cell's attractor to 1e-6 of the section points' scale (the transient
+    decays by the attractors' |mu| < 0.91 a period: 0.91^300 = 5e-13; measured on all 49
+    cells 6.5e-14 on the continued orbit, 2.4e-10 on the one found by running, whose point is
+    the settled map's) and more than 10 % from the other (98 %)."""
     soft = Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
                   force_amplitude=1e-4, omega=325.0)
     model = soft.replace(segments1=(Segment(0.04, 1.2 * soft.EI1, soft.rhoA1),
                                     Segment(0.06, soft.EI1, soft.rhoA1)))
     continued = tmp_path / "root.nc"
-    continue_orbits(Continuation(model, ROOT_EI, 1.18 * soft.EI1, 1.22 * soft.EI1, n_modes=3,
+    continue_orbits(Continuation(model, ROOT_EI, 1.19 * soft.EI1, 1.21 * soft.EI1, n_modes=3,
+                                 start=1.2 * soft.EI1, max_points=6,
                                  max_branches=1)).to_netcdf(continued)
-    orbits = continued_orbits(continued, model, 3, "attractors")
-    assert len(orbits) == 1
-    z = orbits[0].state
-    assert np.linalg.norm(PeriodMap(model, 3)(z).state - z) <= 1e-10 * np.linalg.norm(z)
-    grid = (np.linspace(-4e-5, 4e-5, 7), np.linspace(-1.2e-2, 1.2e-2, 7))  # m, m/s
-    dataset = basins(model, grid, n_modes=3, attractors=orbits, workers=1)
-    assert dataset.attractor_given.values.tolist() == [1, 0]
-    assert sorted(dataset.attractor_contacts.values.tolist()) == [0, 1]
-    labels = dataset.basin.values.ravel()
-    assert set(labels) == {0, 1}
-    omega, period = model.omega, 2 * math.pi / model.omega
-    points = np.stack([dataset.attractor_section_deflection1[:, 0],
-                       dataset.attractor_section_velocity1[:, 0] / omega], -1)
-    scale = np.abs(points).max()
-    starts = np.concatenate([dataset.start_displacement.values,
-                             dataset.start_velocity.values], -1).reshape(labels.size, -1)
-    for label in (0, 1):
-        cell = int(np.flatnonzero(labels == label)[0])
-        # (the map's 3 modes, fewer than simulate's rule for the stop: it warns)
-        with pytest.warns(RuntimeWarning, match="does not resolve the spring contact"):
-            run = simulate(model, 300 * period, 3, dt_output=period,
-                           initial_state=starts[cell],
-                           long_time=LongTime(sampled_periods=300, max_period=8))
-        end = np.array([run.poincare_deflection1[-1], run.poincare_velocity1[-1] / omega])
-        apart = np.abs(points - end).max(axis=-1) / scale
-        assert apart[label] < 1e-6 and apart[1 - label] > 0.1, (cell, apart)
+    assert_basins_labelled_by(model, continued)

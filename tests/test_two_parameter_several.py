@@ -200,18 +200,24 @@ SMALL_SPLIT = SMALL.replace(contacts=(Contact(clearance=1.1e-5, stiffness=5e3),
                                       Contact(0.098, 0.118, clearance=1.07e-5, stiffness=5e3)))
 
 
+def _neimark_sacker_curve(high, max_points):
+    """SMALL_SPLIT's first Neimark-Sacker point coming down from 248 rad/s, followed in F0
+    from 30 uN up to ``high`` (N)."""
+    continuation = Continuation(SMALL_SPLIT, "omega", 242.0, 250.0, start=248.0,
+                                direction="down", n_modes=N_MODES, max_branches=1,
+                                max_points=12, transient_periods=600)
+    return continue_curve(BifurcationCurve.from_branch(
+        continuation, continue_orbits(continuation), "neimark_sacker", "force_amplitude",
+        3e-5, high, max_points=max_points))
+
+
 @pytest.mark.slow  # (8 s; the period doubling's curve above is the fast check of two contacts)
 def test_neimark_sacker_curve_with_two_contacts_closed():
     """The first Neimark-Sacker point coming down from 248 rad/s (247.24 rad/s, both contacts
     closing) followed up in F0: every point is a Neimark-Sacker point of its own map
     (`ContactsPeriodMap`'s monodromy: a complex pair on the unit circle to 1e-10, measured
     3.6e-12; a fixed point to 1e-10, measured 3.7e-15) whose run closes both contacts."""
-    continuation = Continuation(SMALL_SPLIT, "omega", 242.0, 250.0, start=248.0,
-                                direction="down", n_modes=N_MODES, max_branches=1,
-                                max_points=12, transient_periods=600)
-    curve = continue_curve(BifurcationCurve.from_branch(
-        continuation, continue_orbits(continuation), "neimark_sacker", "force_amplitude",
-        3e-5, 3.2e-5, max_points=12))
+    curve = _neimark_sacker_curve(3.2e-5, max_points=12)
     assert curve.branch_point.size == 12
     assert float(curve.omega[0]) == pytest.approx(247.237, abs=1e-3)
     for mu in _both_closing_multipliers(curve, SMALL_SPLIT):
@@ -226,12 +232,7 @@ def test_neimark_sacker_curve_with_two_contacts_ends_on_the_branchs_point():
     below from the end's orbit, which is only its guess), locates one Neimark-Sacker point,
     at the end's frequency to 1e-9 (the curve's Newton and the branch's location tolerances,
     as AGREE; measured 8.1e-16 relative)."""
-    continuation = Continuation(SMALL_SPLIT, "omega", 242.0, 250.0, start=248.0,
-                                direction="down", n_modes=N_MODES, max_branches=1,
-                                max_points=12, transient_periods=600)
-    curve = continue_curve(BifurcationCurve.from_branch(
-        continuation, continue_orbits(continuation), "neimark_sacker", "force_amplitude",
-        3e-5, 3.1e-5, max_points=40))
+    curve = _neimark_sacker_curve(3.1e-5, max_points=40)
     assert curve.attrs["curve_ending"] == "bound" and float(curve.force_amplitude[-1]) == 3.1e-5
     end = curve.isel(branch_point=-1)
     assert float(end.omega) < float(curve.omega[0]) - 0.1
