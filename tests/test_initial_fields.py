@@ -30,17 +30,24 @@ def _state(params: Params, fields: InitialFields, n_modes: int = N_MODES) -> np.
     return projected_fields(pack_run(params, n_modes, 0.01, 0.01), fields)
 
 
-@pytest.mark.parametrize(("parts", "tolerance"), [
+# a stiffer, heavier root (tests/test_segments.py's): 3 EI, 1.5 rhoA over 4 cm
+ROOT = (Segment(0.04, 3 * STOP.EI1, 1.5 * STOP.rhoA1), Segment(0.06, STOP.EI1, STOP.rhoA1))
+
+
+@pytest.mark.parametrize(("params", "tolerance"), [
     # masses and springs only: the Gauss quadrature per piece is exact to round-off (measured
     # 1.6e-15)
-    ((PointMass(0.1, 1e-3), PointMass(0.05, 2e-3), Spring(0.025, 300.0, 0.4)), 1e-14),
+    (STOP.replace(attachments1=(PointMass(0.1, 1e-3), PointMass(0.05, 2e-3),
+                                Spring(0.025, 300.0, 0.4))), 1e-14),
     # rotary inertias: the slope by fourth-order differences, round-off ~11 eps / (k h) ~ 3e-12
     # of the slope scale k |Y| (measured 8.4e-12)
-    (PARTS, 2e-11)])
-def test_a_mode_shape_projects_on_its_unit_vector(parts, tolerance):
+    (STOP.replace(attachments1=PARTS), 2e-11),
+    # a stepped beam with a tip mass and rotary inertia (measured 2.9e-12)
+    (STOP.replace(segments1=ROOT, attachments1=PARTS[:1]), 2e-11)],
+    ids=["masses-springs", "inertias", "stepped"])
+def test_a_mode_shape_projects_on_its_unit_vector(params, tolerance):
     """<Y_m, Y_n> = delta_mn with the attachments: each mode's shape, given as a field,
     projects on its own coordinate only (both the deflection and the velocity)."""
-    params = STOP.replace(attachments1=parts)
     packed = pack_run(params, N_MODES, 0.01, 0.01)
     shapes = packed.dynamics.free.beam1.shapes
     worst = 0.0

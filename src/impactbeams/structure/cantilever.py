@@ -582,8 +582,8 @@ class StructureModes:
         ends = np.minimum(p.ends, L)  # the last end is L to the last bit
         step = SLOPE_STEP / float(np.max(self.wave_numbers))
         stencils = [_stencil(at, step, L) for at in ends[p.inertia > 0]]
-        around = [at + step * np.array(offsets) for at, (offsets, _) in zip(
-            ends[p.inertia > 0], stencils, strict=True)]
+        around = [np.clip(at + step * np.array(offsets), 0.0, L)  # (round-off past an end)
+                  for at, (offsets, _) in zip(ends[p.inertia > 0], stencils, strict=True)]
         values = field(np.concatenate([x, ends, *around]))
         slopes, start = np.zeros(ends.size), x.size + ends.size
         for node, (offsets, weights_per_step) in zip(np.flatnonzero(p.inertia > 0), stencils,
