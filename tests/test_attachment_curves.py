@@ -7,14 +7,13 @@ frequencies of the linear response at that mass (`grazing_frequencies`: the mode
 with that mass, no shooting), the bare beam's at mass 0, and a direct `simulate` at the mass.
 """
 
-import math
 
 import numpy as np
 import pytest
 import xarray as xr
 
 import impactbeams as ib
-from impactbeams import LongTime, simulate
+from impactbeams import simulate
 from impactbeams.cli import main
 from impactbeams.continuation import Continuation, continue_orbits
 from impactbeams.continuation.twoparameter import BifurcationCurve, continue_curve
@@ -23,6 +22,7 @@ from impactbeams.orbits.basin_inputs import continued_orbits
 from impactbeams.params import with_parameter
 from impactbeams.structure import PointMass
 from impactbeams.variables import validate
+from test_basins import ends_apart
 
 MASS = "attachments1.0.mass"
 STOP = ib.Params(counterpart="stop", contact_stiffness=100.0, damping_ratio=0.02,
@@ -167,33 +167,31 @@ def test_basins_at_a_tip_mass_labelled_by_a_continuation_in_the_mass(tmp_path):
     continued = tmp_path / "mass.nc"
     continue_orbits(Continuation(BASIN_MODEL, MASS, 4.8e-4, 5.2e-4, n_modes=N_MODES,
                                  max_branches=1)).to_netcdf(continued)
-    orbits = continued_orbits(continued, BASIN_MODEL, N_MODES, "attractors")
+    assert_basins_labelled_by(BASIN_MODEL, continued)
+
+
+def assert_basins_labelled_by(model, continued):
+    """The 7 x 7 map of ``model`` (3 modes, BOX) labelled by the continuation in the file
+    ``continued``: its orbit at ``model`` a fixed point of the map to 1e-10 of the state, and
+    the impacting orbit found by running; the first cell of each basin ends where `simulate`
+    of 300 periods ends (`test_basins.ends_apart`: to 1e-6, and more than 10 % from the
+    other)."""
+    orbits = continued_orbits(continued, model, N_MODES, "attractors")
     assert len(orbits) == 1
     z = orbits[0].state
-    mapped = PeriodMap(BASIN_MODEL, N_MODES)(z).state
+    mapped = PeriodMap(model, N_MODES)(z).state
     assert np.linalg.norm(mapped - z) <= 1e-10 * np.linalg.norm(z)
     grid = tuple(np.linspace(low, high, 7) for low, high in BOX)
-    dataset = basins(BASIN_MODEL, grid, n_modes=N_MODES, attractors=orbits, workers=1)
+    dataset = basins(model, grid, n_modes=N_MODES, attractors=orbits, workers=1)
     assert dataset.attractor_given.values.tolist() == [1, 0]
     assert sorted(dataset.attractor_contacts.values.tolist()) == [0, 1]
     labels = dataset.basin.values.ravel()
     assert set(labels) == {0, 1}
-    period = 2 * math.pi / BASIN_MODEL.omega
-    points = np.stack([dataset.attractor_section_deflection1[:, 0],
-                       dataset.attractor_section_velocity1[:, 0] / BASIN_MODEL.omega], -1)
-    scale = np.abs(points).max()
-    starts = np.concatenate([dataset.start_displacement.values,
-                             dataset.start_velocity.values], -1).reshape(labels.size, -1)
     for label in (0, 1):
         cell = int(np.flatnonzero(labels == label)[0])
         # (the map's 3 modes, fewer than simulate's rule for the stop: it warns)
         with pytest.warns(RuntimeWarning, match="does not resolve the spring contact"):
-            run = simulate(BASIN_MODEL, 300 * period, N_MODES, dt_output=period,
-                           initial_state=starts[cell],
-                           long_time=LongTime(sampled_periods=300, max_period=8))
-        end = np.array([run.poincare_deflection1[-1],
-                        run.poincare_velocity1[-1] / BASIN_MODEL.omega])
-        apart = np.abs(points - end).max(axis=-1) / scale
+            apart = ends_apart(model, dataset, N_MODES, cell)
         assert apart[label] < 1e-6 and apart[1 - label] > 0.1, (cell, apart)
 
 

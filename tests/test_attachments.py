@@ -237,13 +237,10 @@ def test_bad_attachments_are_refused_in_one_line(build, message):
 
 def test_what_cannot_take_attachments_refuses_them():
     from impactbeams.contact import build_tied_model
-    from impactbeams.trajectory.start import InitialFields
 
     with pytest.raises(ParameterError, match="the tied law supports the paper's uniform beams"):
         build_tied_model(STOP, 5)
 
-    with pytest.raises(ParameterError, match="initial fields are projected on uniform beams"):
-        simulate(STOP, 0.01, n_modes=5, initial_state=InitialFields(deflection1=lambda x: x))
     with pytest.raises(ParameterError, match="attachments1 is not sweepable"):
         sweep_from_mapping({"t_max": 0.05, "observables": ["first_impact_time"],
                             "axes": {"attachments1": {"min": 0.0, "max": 1.0, "num": 2}}})

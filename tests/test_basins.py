@@ -53,6 +53,22 @@ def state_of(dataset, attractor):
                            dataset.attractor_velocity[attractor].values])
 
 
+def ends_apart(params, dataset, n_modes, cell, periods=300):
+    """How far a direct `simulate` of ``periods`` forcing periods from the basin map
+    ``dataset``'s ``cell`` ends from each attractor's section point (beam 1's deflection and
+    velocity / Omega), relative to those points' largest: one value per attractor."""
+    omega, period = params.omega, 2 * math.pi / params.omega
+    points = np.stack([dataset.attractor_section_deflection1[:, 0],
+                       dataset.attractor_section_velocity1[:, 0] / omega], axis=-1)
+    starts = np.concatenate([dataset.start_displacement.values, dataset.start_velocity.values],
+                            axis=-1).reshape(dataset.basin.size, -1)
+    run = simulate(params, periods * period, n_modes, dt_output=period,
+                   initial_state=starts[cell],
+                   long_time=LongTime(sampled_periods=periods, max_period=8))
+    end = np.array([run.poincare_deflection1[-1], run.poincare_velocity1[-1] / omega])
+    return np.abs(points - end).max(axis=-1) / np.abs(points).max()
+
+
 def test_two_coexisting_attractors(coarse):
     """The impacting orbit (one contact per period) and the non-impacting one, both period 1,
     every cell settled on one of them, each basin a sizeable share of the plane."""

@@ -58,18 +58,25 @@ def test_energy_balance_of_several_contacts_holds_to_round_off(params):
     assert np.all(np.diff(dissipation) >= -1e-14 * scale)
 
 
+def _alone_and_beside_a_far_stop(clearance, t_max, dt_output):
+    """Runs (12 modes, zeta = 0.01, forced, the energy balance) of a tip stop ``clearance`` m
+    away alone and beside a mid-span stop 1 mm away, which never closes."""
+    params = FORCED.replace(damping_ratio=0.01)
+    alone = simulate(params.replace(clearance=clearance), t_max, n_modes=12,
+                     dt_output=dt_output, energy_balance=True)
+    both = simulate(params.replace(contacts=(Contact(clearance=clearance),
+                                             Contact(MID, clearance=1e-3))),
+                    t_max, n_modes=12, dt_output=dt_output, energy_balance=True)
+    return alone, both
+
+
 def test_a_contact_that_never_closes_leaves_the_single_contacts_balance_and_episodes():
     """A tip stop (zeta = 0.01, forced) beside a mid-span stop 1 mm away that never closes,
     against simulate of the tip stop alone (its own kernel quadrature and episode table):
     energy, work and dissipation to 1e-12 of the largest energy (measured 1.2e-14), the
     episodes of all contacts and the tip stop's own episodes, column by column, to 1e-12
     relative (measured 8.6e-14, a restitution)."""
-    params = FORCED.replace(damping_ratio=0.01)
-    alone = simulate(params.replace(clearance=2e-6), 0.06, n_modes=12, dt_output=1e-5,
-                     energy_balance=True)
-    both = simulate(params.replace(contacts=(Contact(clearance=2e-6),
-                                             Contact(MID, clearance=1e-3))),
-                    0.06, n_modes=12, dt_output=1e-5, energy_balance=True)
+    alone, both = _alone_and_beside_a_far_stop(2e-6, 0.06, 1e-5)
     scale = float(alone.energy.max())
     for name in ("energy", "work_of_force", "damping_dissipation"):
         np.testing.assert_allclose(both[name].values, alone[name].values, rtol=0,
@@ -80,6 +87,17 @@ def test_a_contact_that_never_closes_leaves_the_single_contacts_balance_and_epis
     for name in EPISODE_COLUMNS:
         for got in (both[name].values, both["contact_" + name].values):
             np.testing.assert_allclose(got, alone[name].values, rtol=1e-12, atol=0)
+
+
+def test_a_run_in_which_no_contact_closes_is_the_single_contacts():
+    """Two stops 1 mm away, neither reached: no impacts, no episodes (the episode table of no
+    impacts used to fail: a ValueError), the tips and the energy balance those of the single
+    far stop to 1e-12 of their largest (measured 3e-15)."""
+    alone, both = _alone_and_beside_a_far_stop(1e-3, 0.02, 1e-4)
+    assert both.sizes["impact"] == both.sizes["episode"] == both.sizes["contact_episode"] == 0
+    for name in ("tip_deflection_1", "energy", "work_of_force"):
+        reference = alone[name].values
+        assert np.abs(both[name].values - reference).max() <= 1e-12 * np.abs(reference).max()
 
 
 def test_the_energetic_restitution_with_a_dashpot_is_the_single_contacts():

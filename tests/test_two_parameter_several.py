@@ -6,12 +6,13 @@ one-parameter branch locates at the end's second parameter.
 """
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
 import xarray as xr
 
-from impactbeams import Contact, ParameterError
+from impactbeams import Contact, ParameterError, simulate
 from impactbeams.continuation import (
     BifurcationCurve,
     Continuation,
@@ -23,6 +24,7 @@ from impactbeams.continuation.twoparameter import continue_curve
 from impactbeams.orbits import ContactsPeriodMap, PeriodMap
 from impactbeams.params import with_parameter
 from impactbeams.variables import BIFURCATIONS, CURVE_EVENTS, validate
+from orbit_reference import map_energy_scale
 from several_stops import FAR, N_MODES, STOP, TWO, TWO_TOML
 from test_continuation_resume import _stop_after
 from test_resume import assert_same_map
@@ -198,22 +200,45 @@ SMALL_SPLIT = SMALL.replace(contacts=(Contact(clearance=1.1e-5, stiffness=5e3),
                                       Contact(0.098, 0.118, clearance=1.07e-5, stiffness=5e3)))
 
 
+def _neimark_sacker_curve(high, max_points):
+    """SMALL_SPLIT's first Neimark-Sacker point coming down from 248 rad/s, followed in F0
+    from 30 uN up to ``high`` (N)."""
+    continuation = Continuation(SMALL_SPLIT, "omega", 242.0, 250.0, start=248.0,
+                                direction="down", n_modes=N_MODES, max_branches=1,
+                                max_points=12, transient_periods=600)
+    return continue_curve(BifurcationCurve.from_branch(
+        continuation, continue_orbits(continuation), "neimark_sacker", "force_amplitude",
+        3e-5, high, max_points=max_points))
+
+
 @pytest.mark.slow  # (8 s; the period doubling's curve above is the fast check of two contacts)
 def test_neimark_sacker_curve_with_two_contacts_closed():
     """The first Neimark-Sacker point coming down from 248 rad/s (247.24 rad/s, both contacts
     closing) followed up in F0: every point is a Neimark-Sacker point of its own map
     (`ContactsPeriodMap`'s monodromy: a complex pair on the unit circle to 1e-10, measured
     3.6e-12; a fixed point to 1e-10, measured 3.7e-15) whose run closes both contacts."""
-    continuation = Continuation(SMALL_SPLIT, "omega", 242.0, 250.0, start=248.0,
-                                direction="down", n_modes=N_MODES, max_branches=1,
-                                max_points=12, transient_periods=600)
-    curve = continue_curve(BifurcationCurve.from_branch(
-        continuation, continue_orbits(continuation), "neimark_sacker", "force_amplitude",
-        3e-5, 3.2e-5, max_points=12))
+    curve = _neimark_sacker_curve(3.2e-5, max_points=12)
     assert curve.branch_point.size == 12
     assert float(curve.omega[0]) == pytest.approx(247.237, abs=1e-3)
     for mu in _both_closing_multipliers(curve, SMALL_SPLIT):
         assert np.abs(np.abs(mu[mu.imag > 0]) - 1.0).min() < 1e-10
+
+
+@pytest.mark.slow  # (18 s; the period doubling's curve above is the fast check of an end)
+def test_neimark_sacker_curve_with_two_contacts_ends_on_the_branchs_point():
+    """The same Neimark-Sacker curve followed up to the box edge F0 = 31 uN (23 points,
+    "bound"; Omega falls from 247.237 to 247.094 rad/s): at the end's F0 the one-parameter
+    branch in Omega through the end's frequency, a continuation of its own (started 0.1 rad/s
+    below from the end's orbit, which is only its guess), locates one Neimark-Sacker point,
+    at the end's frequency to 1e-9 (the curve's Newton and the branch's location tolerances,
+    as AGREE; measured 8.1e-16 relative)."""
+    curve = _neimark_sacker_curve(3.1e-5, max_points=40)
+    assert curve.attrs["curve_ending"] == "bound" and float(curve.force_amplitude[-1]) == 3.1e-5
+    end = curve.isel(branch_point=-1)
+    assert float(end.omega) < float(curve.omega[0]) - 0.1
+    (located,) = _events(SMALL_SPLIT.replace(force_amplitude=3.1e-5), float(end.omega),
+                         end.section_state.values, "neimark_sacker", width=0.1)
+    assert float(end.omega) == pytest.approx(float(located), rel=AGREE, abs=0.0)
 
 
 def _both_closing_multipliers(curve, params):
@@ -295,6 +320,54 @@ def test_grazing_curve_of_the_second_contact_in_its_clearance(clearance_curve):
     params = with_parameter(TWO, name, 4.1e-6)
     (located,) = _events(params, float(end.omega), end.section_state.values, "grazing")
     assert float(end.omega) == pytest.approx(located, rel=AGREE, abs=0.0)
+
+
+# TWO with a dashpot on each stop (0.02 N s/m): the tip stop's is closed on every orbit
+DASHPOTS = TWO.replace(contacts=tuple(dataclasses.replace(c, damping=0.02) for c in TWO.contacts))
+
+
+# (the curve's steps scale with its box: the wide box's 10 points reach 2.7 times the damping)
+@pytest.mark.parametrize(("box", "max_points", "reach"), [
+    ((209.0, 211.0), 4, 0.022),
+    pytest.param((205.0, 215.0), 10, 0.05, marks=pytest.mark.slow)])  # 12 s
+def test_grazing_curve_in_the_closed_contacts_dashpot(box, max_points, reach):
+    """The mid-span stop's grazing (209.796 rad/s) with the tip stop closed on the orbit,
+    followed in the tip stop's own damping, ``contacts.0.damping``, from 0.02 N s/m up. At
+    every point, the map built at its Omega and damping (`ContactsPeriodMap`) has the point's
+    orbit as a fixed point to 1e-8 of the state in the energy norm (the curve's Newton stops
+    at 1e-10 of its scaled unknowns, the state per ``state_scale``, 10 clearances = 40 um of
+    tip motion, several times the orbit's; measured 5.5e-15, and 1.3e-9 at one point of the
+    wide box) whose run closes the tip stop, and its grazing contact's least physical gap,
+    the stop's gap with the tip stop's force (spring and dashpot) deflecting it, is 0 to
+    1e-10 of the stop's 4 um clearance (Newton's tolerance on the curve's scaled unknowns;
+    measured 1.3e-20 m). Independently,
+    `simulate` of one period from the point's state, sampled 4096 times: the stop never
+    pushes, its sampled gap never falls below 0 (round-off: 1e-18 m) and comes within
+    1e-6 of the gap's range of it (a quadratic touch sampled dt apart misses by at most
+    (pi / 4096)^2 / 2 = 2.9e-7 of that; measured 2e-12 m)."""
+    name = "contacts.0.damping"
+    continuation = Continuation(DASHPOTS, "omega", 209.7, 209.9, n_modes=N_MODES, step=0.05,
+                                max_branches=1)
+    curve = continue_curve(BifurcationCurve.from_branch(
+        continuation, continue_orbits(continuation), "grazing", name, 0.02, 0.2, box=box,
+        max_points=max_points))
+    assert curve.attrs["curve_contact"] == 1 and curve.branch_point.size == max_points
+    assert float(curve[name][-1]) > reach
+    for point in range(curve.branch_point.size):
+        at = curve.isel(branch_point=point)
+        params = with_parameter(DASHPOTS.replace(omega=float(at.omega)), name, float(at[name]))
+        period_map, z = ContactsPeriodMap(params, N_MODES), at.section_state.values
+        result, scale = period_map(z, measures=False), map_energy_scale(period_map)
+        assert (np.linalg.norm(scale * (result.state - z))
+                <= 1e-8 * np.linalg.norm(scale * z))
+        assert np.bitwise_or.reduce(np.asarray(result.trajectory.mask, dtype=int)) & 1
+        assert abs(period_map.least_gap(result, 1)) < 1e-10 * 4e-6
+        period = 2 * math.pi / params.omega
+        run = simulate(params, period, N_MODES, times=np.linspace(0.0, period, 4097),
+                       initial_state=z)
+        gap = run.contact_gaps.sel(contact=1).values
+        assert np.all(run.contact_forces.sel(contact=1).values == 0.0)
+        assert -1e-18 < gap.min() < 1e-6 * np.ptp(gap)
 
 
 def test_grazing_curve_from_a_branch_in_one_contacts_clearance():

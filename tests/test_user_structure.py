@@ -369,7 +369,9 @@ def test_what_needs_a_continuous_beam_refuses_a_user_structure():
     from impactbeams.trajectory.start import InitialFields
 
     params = STOP.replace(structure1=fe_structure())
-    with pytest.raises(ParameterError, match="not on a beam with attachments or a user "):
+    with pytest.raises(ParameterError, match=r"initial fields are projected on beams along x "
+                                             r"\(uniform, stepped or with attachments\), not "
+                                             "on a user structure"):
         simulate(params, 0.01, n_modes=12, initial_state=InitialFields(deflection1=lambda x: x))
     with pytest.raises(ParameterError, match="the tied law supports the paper's uniform beams "
                                              "only, not a beam with attachments or a user"):

@@ -23,12 +23,14 @@ from __future__ import annotations
 import dataclasses
 import functools
 import warnings
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from impactbeams.brent import brentq  # not SciPy's: it costs 0.3 s of start-up (brent.py)
 from impactbeams.params import MAX_MODES, Params
+from impactbeams.structure.waves import quadrature
 
 if TYPE_CHECKING:  # their modules load with the beams that need them (`Params.structure`)
     from impactbeams.structure import Cantilever, StructureModes
@@ -189,12 +191,13 @@ def participation(shapes: BeamShapes, rhoA: float) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True)
 class UniformBeam:
-    """The textbook cantilever (EI in N m^2, rhoA in kg/m, length in m): closed forms only.
+    """The textbook cantilever (EI in N m^2, rhoA in kg/m, length in m): closed forms.
 
     Each beam of a run is one of these or an `AttachedBeam`; both give the engine the same
     data: ``free_modes(n)``, ``tip_compliance`` (m/N), ``participation(shapes)`` (Gamma_n),
-    ``unit_tip_shape(x)``, ``static_mass_per_length`` (for <u, u> of that shape) and
-    ``closed_form``, ``continuous`` (fields along x) and ``mode_limit`` (the most modes).
+    ``projection(shapes, field)`` (<w, Y_n> of a field w), ``unit_tip_shape(x)``,
+    ``static_mass_per_length`` (for <u, u> of that shape) and ``closed_form``,
+    ``continuous`` (fields along x) and ``mode_limit`` (the most modes).
     """
 
     EI: float
@@ -228,6 +231,16 @@ class UniformBeam:
     def participation(self, shapes: BeamShapes) -> np.ndarray:
         """Gamma_n of ``shapes`` (kg^1/2), in closed form (`participation`)."""
         return participation(shapes, self.rhoA)
+
+    def projection(self, shapes: BeamShapes,
+                   field: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+        """<w, Y_n> = rhoA int w Y_n dx of a field w(x) (m or m/s) on each of ``shapes``.
+
+        Composite Gauss quadrature, two panels per half wave of the highest mode's square
+        (kg^1/2 per unit of w); ``field`` takes positions in [0, l] (m).
+        """
+        x, weights = quadrature(self.length, 2.0 * float(np.max(shapes.k)))
+        return self.rhoA * (shapes(x) @ (weights * field(x)))
 
     def unit_tip_shape(self, x: np.ndarray) -> np.ndarray:
         """u(x) = (3 l x^2 - x^3) / (2 l^3): static tip-load shape with unit tip deflection."""
@@ -280,6 +293,15 @@ class AttachedBeam:
     def participation(self, shapes: StructureModes) -> np.ndarray:
         """Gamma_n = <1, Y_n> of ``shapes`` (kg^1/2), the point masses included."""
         return shapes.participation()
+
+    def projection(self, shapes: StructureModes,
+                   field: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+        """<w, Y_n> of a field w(x) (m or m/s), the point masses and rotary inertias included.
+
+        `StructureModes.projection`: quadrature per piece, the slope at a rotary inertia by
+        differences of ``field`` (kg^1/2 per unit of w).
+        """
+        return shapes.projection(field)
 
     def unit_tip_shape(self, x: np.ndarray) -> np.ndarray:
         """The static tip-load shape with unit tip deflection at ``x`` (m)."""

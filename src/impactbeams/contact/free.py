@@ -26,25 +26,12 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numpy.polynomial.legendre import leggauss
 
 from impactbeams.modes import FreeModes, beam, deprecated_omega, values_at
 from impactbeams.params import Params, require_integer, require_one_contact, require_type
+from impactbeams.structure.waves import quadrature
 
-_GAUSS_ORDER = 12
-
-
-def quadrature(length: float, max_wavenumber: float) -> tuple[np.ndarray, np.ndarray]:
-    """Composite Gauss-Legendre nodes (m) and weights on [0, length].
-
-    Two panels per half-wave of the product of two shapes with wave numbers up to
-    ``max_wavenumber`` (1/m).
-    """
-    n_panels = max(16, int(np.ceil(4 * max_wavenumber * length / np.pi)))
-    nodes, weights = leggauss(_GAUSS_ORDER)
-    edges = np.linspace(0.0, length, n_panels + 1)
-    a, b = edges[:-1, None], edges[1:, None]
-    return ((a + b) / 2 + (b - a) / 2 * nodes).ravel(), ((b - a) / 2 * weights).ravel()
+__all__ = ["FreePhase", "build_free_phase", "quadrature", "unit_tip_shape"]
 
 
 def unit_tip_shape(length: float, x: np.ndarray) -> np.ndarray:

@@ -13,7 +13,8 @@ from importlib import import_module
 from typing import Any
 
 # each name's module, imported when first asked for: `Params` checks its parts on every
-# creation, but the eigen-solvers (cantilever, waves, flexibility) only with attachments
+# creation, but the eigen-solvers (cantilever, flexibility) only with attachments (waves, whose
+# quadrature every beam's fields use, is numpy only)
 _MODULES = {"Cantilever": "cantilever", "StructureModes": "cantilever", "PointMass": "parts",
             "Segment": "parts", "Spring": "parts", "Contact": "contacts",
             "two_sided_stop": "contacts"}

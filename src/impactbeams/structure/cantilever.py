@@ -20,7 +20,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -39,6 +39,16 @@ from impactbeams.structure.parts import (
 _RTOL = 4 * np.finfo(float).eps
 _COINCIDENT = 8 * np.finfo(float).eps  # bracket width (relative) at which roots are one
 _CLUSTER = np.sqrt(np.finfo(float).eps)  # roots closer than this (relative) share their shapes
+# a field's slope at a rotary inertia by fourth-order one-sided differences with step h =
+# SLOPE_STEP / k, k the highest mode's wave number (the shortest scale the modes resolve):
+# truncation (k h)^4 / 5 ~ 6e-14 and round-off ~ 11 eps / (k h) ~ 3e-12, both of k |w|
+SLOPE_STEP = float(np.finfo(float).eps ** 0.2)
+# (offsets in steps, weights / step): one-sided from the clamp side (at the tip), from the tip
+# side (at the clamp), and their mean elsewhere; never across the point, where the curvature of
+# a mode (or of the static shape) jumps under a rotary inertia or a rotational spring
+_BACKWARD = ((0, -1, -2, -3, -4), (25 / 12, -4.0, 3.0, -4 / 3, 0.25))
+_FORWARD = ((0, 1, 2, 3, 4), (-25 / 12, 4.0, -3.0, 4 / 3, -0.25))
+_BOTH_SIDES = ((-4, -3, -2, -1, 1, 2, 3, 4), (0.125, -2 / 3, 1.5, -2.0, 2.0, -1.5, 2 / 3, -0.125))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -476,6 +486,13 @@ def _mass_product(p: Pieces, k: np.ndarray, short: np.ndarray, a: np.ndarray,
     return (form(a + c) - form(a - c)) / 4.0
 
 
+def _stencil(at: float, step: float, length: float) -> tuple[tuple[float, ...], ...]:
+    """The difference stencil for a slope at ``at`` (m), its points within [0, ``length``]."""
+    if 4 * step <= at <= length - 4 * step:
+        return _BOTH_SIDES
+    return _BACKWARD if at > length - 4 * step else _FORWARD
+
+
 @dataclasses.dataclass(frozen=True)
 class StructureModes:
     """The first natural frequencies (rad/s) of ``beam`` and their mass-normalised shapes.
@@ -543,6 +560,39 @@ class StructureModes:
             at_nodes = np.einsum("ji,ji->j", end[:, 0], c)
             out[m] = p.rhoA @ (third / k) + p.mass @ at_nodes
         return out
+
+    def projection(self, field: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+        """<w, Y_n> of a field w(x) of the beam (m or m/s) on each mode (kg^1/2 per unit of w).
+
+        The mass inner product: ``int rhoA w Y_n dx + sum mass w(x_k) Y_n(x_k) + sum
+        rotary_inertia w'(x_k) Y_n'(x_k)``, the integral by Gauss quadrature on each piece
+        (where Y_n is smooth; two panels per half wave, `waves.quadrature`, as a uniform beam's).
+        ``field`` takes positions in [0, L] and returns the field there; the slope w' at a
+        rotary inertia is from fourth-order one-sided differences of it (the mean of both
+        sides inside the beam), step ``SLOPE_STEP`` / k with k the highest mode's wave number:
+        error ~3e-12 of k |w| for a field smooth on the modes' scale. `participation` is this
+        product for w = 1, in closed form.
+        """
+        p, L = self.beam.pieces, self.length
+        rules = [waves.quadrature(length, 2.0 * float(np.max(k)))
+                 for length, k in zip(p.lengths, self.wave_numbers.T, strict=True)]
+        x = np.concatenate([start + nodes for start, (nodes, _) in zip(p.starts, rules,
+                                                                       strict=True)])
+        weights = np.concatenate([rhoA * w for rhoA, (_, w) in zip(p.rhoA, rules, strict=True)])
+        ends = np.minimum(p.ends, L)  # the last end is L to the last bit
+        step = SLOPE_STEP / float(np.max(self.wave_numbers))
+        stencils = [_stencil(at, step, L) for at in ends[p.inertia > 0]]
+        around = [np.clip(at + step * np.array(offsets), 0.0, L)  # (round-off past an end)
+                  for at, (offsets, _) in zip(ends[p.inertia > 0], stencils, strict=True)]
+        values = field(np.concatenate([x, ends, *around]))
+        slopes, start = np.zeros(ends.size), x.size + ends.size
+        for node, (offsets, weights_per_step) in zip(np.flatnonzero(p.inertia > 0), stencils,
+                                                     strict=True):
+            slopes[node] = np.dot(weights_per_step, values[start:start + len(offsets)]) / step
+            start += len(offsets)
+        return (self(x) @ (weights * values[:x.size])
+                + self(ends) @ (p.mass * values[x.size:x.size + ends.size])
+                + self(ends, 1) @ (p.inertia * slopes))
 
     def with_signs(self) -> StructureModes:
         """The same modes, each with a non-negative tip deflection (tip slope if that is 0)."""

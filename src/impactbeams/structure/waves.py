@@ -13,6 +13,9 @@ On a segment of length h the deflection at frequency omega solves y'''' = y in x
 The dynamic stiffness (end forces against end displacements) is written with the same split:
 series for short segments, every hyperbolic function divided by cosh b for long ones, so that
 its entries stay finite at any b away from its poles.
+
+``quadrature``: the composite Gauss rule that resolves the products of such waves (the
+projections of fields on a beam's modes, uniform or in pieces).
 """
 
 from __future__ import annotations
@@ -20,10 +23,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.polynomial.legendre import leggauss
 
 SHORT = 2.0  # b at or below which a segment uses the Krylov series
 _TERMS = 12  # series terms: the 12th of S at b = 2 is 16^11 / 44! < 1e-40
 _INVERSE_FACTORIALS = np.array([1.0 / math.factorial(n) for n in range(4 * _TERMS)])
+_GAUSS_ORDER = 12
 
 
 def wave_number(omega: float, EI: np.ndarray, rhoA: np.ndarray) -> np.ndarray:
@@ -139,3 +144,16 @@ def free_count(b: float) -> int:
     """
     j = math.floor(b / math.pi)
     return j + int((-1) ** j * _numerators(b)[1] < 0)
+
+
+def quadrature(length: float, max_wavenumber: float) -> tuple[np.ndarray, np.ndarray]:
+    """Composite Gauss-Legendre nodes (m) and weights on [0, length].
+
+    Two panels per half-wave of the product of two shapes with wave numbers up to
+    ``max_wavenumber`` (1/m).
+    """
+    n_panels = max(16, int(np.ceil(4 * max_wavenumber * length / np.pi)))
+    nodes, weights = leggauss(_GAUSS_ORDER)
+    edges = np.linspace(0.0, length, n_panels + 1)
+    a, b = edges[:-1, None], edges[1:, None]
+    return ((a + b) / 2 + (b - a) / 2 * nodes).ravel(), ((b - a) / 2 * weights).ravel()

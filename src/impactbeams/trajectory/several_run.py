@@ -265,7 +265,7 @@ def _episode_table(impacts: dict[str, np.ndarray], labels: np.ndarray,
     contact = impacts["impact_contact"]
     count = int(labels[-1]) + 1 if labels.size else 0
     first = np.searchsorted(labels, np.arange(count))
-    stops = np.append(first[1:], labels.size).astype(int)
+    stops = np.append(first[1:], labels.size)[:count].astype(int)  # none without impacts
     table = {name: np.empty(count) for name in (
         "episode_onset_time", "episode_duration", "episode_impulse", "episode_peak_force",
         "episode_restitution")}
