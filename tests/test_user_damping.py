@@ -20,12 +20,13 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
 from fe_reference import beam_matrices, tip_dof
-from impactbeams import Continuation, MatrixStructure, ModalStructure, simulate
+from impactbeams import Continuation, MatrixStructure, simulate
 from impactbeams.modes import beam
 from impactbeams.orbits.grazing import LinearGap
 from impactbeams.params import ParameterError, Params
 from impactbeams.structure.user import read_structure
 from impactbeams.sweep import sweep_from_mapping
+from test_user_structure import analytic_modal_data
 
 STOP = Params(counterpart="stop", contact_stiffness=1e4)
 ELEMENTS = 6  # 12 DOFs: every mode in the engine, so that its model is the FE model itself
@@ -165,22 +166,13 @@ def test_a_rayleigh_damped_steady_response_is_the_direct_solve():
     assert abs(gap_per_newton * params.force_amplitude / direct - 1) <= 5e-12
 
 
-def textbook_modal_data(n: int, **keys) -> ModalStructure:
-    """Today's beam 1 (closed forms) as modal data: its first ``n`` modes."""
-    uniform = beam(STOP, 1)
-    modes = uniform.free_modes(n)
-    return ModalStructure(modes.frequencies, modes.shapes.tip(), uniform.tip_compliance,
-                          33.0 / 140.0 * STOP.rhoA1 * STOP.l1, STOP.l1,
-                          participation=uniform.participation(modes.shapes), **keys)
-
-
 def test_per_mode_ratios_give_the_modal_sum_steady_response():
     """Modal data with its own ratio per mode (30 % down to 1 %): the steady tip response is
     -F0 [c - sum Y_n^2 / omega_n^2 + sum Y_n^2 / (omega_n^2 - Omega^2 + 2 i zeta_n omega_n
     Omega)] (the residual flexibility quasi-static), within 1e-12 relative from the samples
     and the linear gap's phasor (measured 2.8e-16 and 4.4e-16: round-off)."""
     ratios = np.linspace(0.3, 0.01, 12)
-    structure = textbook_modal_data(12, damping_ratios=ratios)
+    structure = analytic_modal_data(12, damping_ratios=ratios)
     params = STOP.replace(structure1=structure, **NO_CONTACT)
     w, Y = structure.frequencies, structure.contact_values
     closed = -params.force_amplitude * (structure.tip_compliance - np.sum(Y**2 / w**2) + np.sum(
@@ -191,7 +183,7 @@ def test_per_mode_ratios_give_the_modal_sum_steady_response():
     gap_per_newton = LinearGap(params, 12).per_unit(OMEGA)[0]
     assert abs(gap_per_newton * params.force_amplitude / closed - 1) <= 1e-12
     # the last mode's ratio for all: not this response (the ratios are read per mode)
-    uniform = textbook_modal_data(12, damping_ratios=np.full(12, ratios[-1]))
+    uniform = analytic_modal_data(12, damping_ratios=np.full(12, ratios[-1]))
     assert abs(LinearGap(STOP.replace(structure1=uniform, **NO_CONTACT), 12).per_unit(OMEGA)[0]
                * params.force_amplitude / closed - 1) > 1e-3
 
@@ -210,7 +202,7 @@ def test_ratios_all_equal_to_damping_ratio_give_todays_runs_bit_for_bit():
     contacts of a run (the spring law's complex modes) and a first-impact map (the column
     kernel) bit for bit."""
     today = STOP.replace(damping_ratio=0.02)
-    own = STOP.replace(structure1=textbook_modal_data(20, damping_ratios=np.full(20, 0.02)))
+    own = STOP.replace(structure1=analytic_modal_data(20, damping_ratios=np.full(20, 0.02)))
     expected, got = (simulate(p, 0.05, n_modes=20) for p in (today, own))
     assert expected.impact.size >= 2
     for name in ("impact_onset_time", "impact_duration", "impact_peak_force", "impact_impulse",
@@ -218,7 +210,7 @@ def test_ratios_all_equal_to_damping_ratio_give_todays_runs_bit_for_bit():
         np.testing.assert_array_equal(got[name].values, expected[name].values, err_msg=name)
     fixed = {"counterpart": "stop", "contact_stiffness": 1e4}
     maps = [_first_impacts({**fixed, "damping_ratio": 0.02}), _first_impacts(
-        {**fixed, "structure1": textbook_modal_data(12, damping_ratios=np.full(12, 0.02))})]
+        {**fixed, "structure1": analytic_modal_data(12, damping_ratios=np.full(12, 0.02))})]
     assert np.isfinite(maps[0]).any()
     np.testing.assert_array_equal(maps[1], maps[0])
 
@@ -265,11 +257,11 @@ def _coupling():
     (lambda: MatrixStructure(M6, K6, contact_dof=TIP, length=0.1, damping=C6,
                              damping_ratios=[0.1]),
      "structure1.damping_ratios = 'given with damping' is not allowed: give either"),
-    (lambda: textbook_modal_data(3, damping_ratios=[0.1, 1.0, 0.2]),
+    (lambda: analytic_modal_data(3, damping_ratios=[0.1, 1.0, 0.2]),
      r"structure1.damping_ratios = 1.0 is not allowed: must satisfy 0 <= zeta_n < 1"),
-    (lambda: textbook_modal_data(3, damping_ratios=[0.1, -0.1, 0.2]),
+    (lambda: analytic_modal_data(3, damping_ratios=[0.1, -0.1, 0.2]),
      r"structure1.damping_ratios = -0.1 is not allowed: must satisfy 0 <= zeta_n < 1"),
-    (lambda: textbook_modal_data(3, damping_ratios=[0.1, 0.2]),
+    (lambda: analytic_modal_data(3, damping_ratios=[0.1, 0.2]),
      "structure1.damping_ratios = .* is not allowed: must be a real vector of 3 values"),
     (lambda: simulate(STOP.replace(structure1=MatrixStructure(
         M6, K6, contact_dof=TIP, length=0.1, damping_ratios=[0.1, 0.2])), 0.01, n_modes=3),
