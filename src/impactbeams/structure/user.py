@@ -105,7 +105,8 @@ class _UserStructure:
 
     Each kind sets ``point_positions`` (m, one per point: its contact DOFs, then its force DOF
     if it is none of them, at ``length``), ``tip_index`` (the force DOF's point) and
-    ``point_flexibility`` (m/N, the static flexibility between the points, symmetric).
+    ``point_flexibility`` (m/N, the static flexibility between the points, symmetric) and
+    ``ratios`` (its given modal damping ratios, or None); a matrix structure its ``damping``.
     """
 
     name: str
@@ -113,6 +114,8 @@ class _UserStructure:
     point_positions: tuple[float, ...]
     tip_index: int
     point_flexibility: np.ndarray
+    ratios: np.ndarray | None
+    damping: Any = None  # modal data has no damping matrix
 
     def require_support(self, base_amplitude: Any) -> None:
         """ParameterError if ``base_amplitude`` (m) > 0 anywhere and it has no influence vector."""
@@ -163,7 +166,7 @@ class _UserStructure:
     @property
     def has_damping(self) -> bool:
         """Whether it has damping of its own (a damping matrix or modal damping ratios)."""
-        return self.ratios is not None or getattr(self, "damping", None) is not None
+        return self.ratios is not None or self.damping is not None
 
     def _checked_count(self, n: int, available: int) -> int:
         require("n_modes", n, is_integer(n) and 1 <= n <= available,
