@@ -295,3 +295,17 @@ def test_bad_damping_is_refused_in_one_line(build, message):
     with pytest.raises(ParameterError, match=message) as error:
         build()
     assert "\n" not in str(error.value)
+
+
+def test_a_periodic_orbit_with_ratios_all_equal_to_damping_ratio_is_todays():
+    """The period map and its Floquet multipliers with each mode's own ratio 1 %: the orbit
+    of damping_ratio = 0.01, bit for bit."""
+    from impactbeams import periodic_orbit
+
+    today = STOP.replace(damping_ratio=0.01, omega=200.0, force_amplitude=3e-3)
+    own = today.replace(damping_ratio=0.0, structure1=analytic_modal_data(
+        12, damping_ratios=np.full(12, 0.01)))
+    orbits = [periodic_orbit(p, n_modes=12) for p in (today, own)]
+    assert orbits[0].contacts >= 1
+    np.testing.assert_array_equal(orbits[1].state, orbits[0].state)
+    np.testing.assert_array_equal(orbits[1].multipliers, orbits[0].multipliers)
