@@ -41,10 +41,10 @@ _SYMMETRY = 1e-12
 # a Cholesky pivot below this relative to the largest diagonal entry: K is singular
 _SINGULAR = 1e-15
 # |(Phi^T C Phi)_mn| allowed relative to sqrt(d_m d_n), d the diagonal: the engine damps each
-# mode on its own (diag(2 zeta_n omega_n)) and drops the rest. Rayleigh damping's projection
-# onto the computed modes is diagonal to 2e-12 on the tests' 60-element FE cantilever (K's
-# share on its 20 lowest modes); a coupling of 1e-6 of the modes' own damping changes their
-# damping forces by less than that, far below the truncation to a few modes
+# mode on its own (diag(2 zeta_n omega_n)) and drops the rest, which changes the modes'
+# damping forces by at most that fraction. Rayleigh damping's projection onto the computed
+# modes is diagonal to round-off: measured 8e-13 (the tests' 40-element FE cantilever, dense,
+# all 80 modes) and 2e-11 (200 elements, sparse shift-invert): five decades below
 _MODAL_COUPLING = 1e-6
 
 
