@@ -315,8 +315,8 @@ def _sparse_indefinite():
                                                              "num": 2}}}),
      "structure1 has no influence vector"),
     (lambda: read_npz({"stiffness": K40, "mass": M40, "contact_dof": TIP, "length": 0.1,
-                       "damping": K40}),
-     "structure1 array 'damping' = .* is not allowed: MatrixStructure files hold"),
+                       "gyroscopic": K40}),
+     "structure1 array 'gyroscopic' = .* is not allowed: MatrixStructure files hold"),
 ])
 def test_bad_structures_are_refused_in_one_line(build, message):
     with pytest.raises(ParameterError, match=message) as error:

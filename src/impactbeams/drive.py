@@ -40,9 +40,10 @@ def check_steady(params: Params, free: FreePhase) -> None:
 
     Its steady amplitude A / D has D = 0: there is no steady state to start on.
     """
-    if params.start != "steady" or params.damping_ratio > 0.0:
+    if params.start != "steady":
         return
-    resonant = free.frequencies == params.omega
+    resonant = (free.frequencies == params.omega) & (free.damping_ratios(params.damping_ratio)
+                                                     == 0.0)
     require("start", params.start, not np.any(resonant),
             f"omega = {params.omega!r} rad/s is a natural frequency and damping_ratio = 0: an "
             "undamped mode driven at resonance has no steady state (use start = 'rest' or "

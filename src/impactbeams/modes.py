@@ -196,7 +196,8 @@ class UniformBeam:
     Each beam of a run is one of these or an `AttachedBeam`; both give the engine the same
     data: ``free_modes(n)``, ``tip_compliance`` (m/N), ``participation(shapes)`` (Gamma_n),
     ``projection(shapes, field)`` (<w, Y_n> of a field w), ``unit_tip_shape(x)``,
-    ``static_mass_per_length`` (for <u, u> of that shape) and ``closed_form``,
+    ``static_mass_per_length`` (for <u, u> of that shape), ``own_damping_ratios(n)`` (its
+    modes' damping of their own, added to the run's ``damping_ratio``) and ``closed_form``,
     ``continuous`` (fields along x) and ``mode_limit`` (the most modes).
     """
 
@@ -211,6 +212,10 @@ class UniformBeam:
     def free_modes(self, n: int) -> FreeModes:
         """The first ``n`` cantilever modes, in closed form."""
         return free_modes(self.EI, self.rhoA, self.length, n)
+
+    def own_damping_ratios(self, n: int) -> np.ndarray:
+        """None of its own: the run's ``damping_ratio`` damps its ``n`` modes (zeros)."""
+        return np.zeros(n)
 
     @property
     def tip_compliance(self) -> float:
@@ -270,6 +275,10 @@ class AttachedBeam:
         """The first ``n`` modes, mass-normalised with the attachments."""
         modes = _structure_modes(self.structure, n)
         return FreeModes(modes.frequencies, modes)
+
+    def own_damping_ratios(self, n: int) -> np.ndarray:
+        """None of its own: the run's ``damping_ratio`` damps its ``n`` modes (zeros)."""
+        return np.zeros(n)
 
     @property
     def length(self) -> float:
@@ -331,6 +340,15 @@ class UserBeam(AttachedBeam):
     def mode_limit(self) -> int:  # type: ignore[override]
         """The modes it has (its DOFs, or the modal data given), at most ``MAX_MODES``."""
         return min(MAX_MODES, self.structure.mode_limit)
+
+    def own_damping_ratios(self, n: int) -> np.ndarray:
+        """Its ``n`` lowest modes' own damping ratios; zeros if it has none.
+
+        `Params` lets the run's ``damping_ratio`` damp modes without their own, else requires
+        it 0.
+        """
+        ratios = _structure_modes(self.structure, n).damping_ratios
+        return np.zeros(n) if ratios is None else ratios
 
 
 @functools.lru_cache(maxsize=16)

@@ -35,7 +35,9 @@ class Basis:
     tip1, tip2: tip displacement of each shape on beam 1 / beam 2; unit1, unit2: <u_i, mode>;
     drive: b with q'' + 2 zeta omega q' + omega^2 q = b (F'' + 2 zeta omega F'); event:
     event-function weights (free: the gap, contact: the contact force); base: Gamma_n of the
-    modes whose clamp the shaker moves (`impactbeams.drive`), 0 for the others.
+    modes whose clamp the shaker moves (`impactbeams.drive`), 0 for the others; own_damping:
+    each mode's damping ratio of its own (a user structure's), to which the kernels add the
+    cell's ``damping_ratio`` (`impactbeams.kernels.forcing.run_inputs`), 0 for the others.
     """
 
     frequencies: np.ndarray
@@ -46,6 +48,7 @@ class Basis:
     unit2: np.ndarray
     event: np.ndarray
     base: np.ndarray
+    own_damping: np.ndarray
 
 
 def free_basis(free: FreePhase, params: Params | None) -> Basis:
@@ -58,7 +61,7 @@ def free_basis(free: FreePhase, params: Params | None) -> Basis:
     base = (np.zeros(free.frequencies.size) if params is None
             else base_participation(params, free))
     return Basis(free.frequencies, free.drive, free.tip1, free.tip2, free.unit1, free.unit2,
-                 free.gap_weights, base)
+                 free.gap_weights, base, free.own_damping)
 
 
 def bases(model: ModalModel) -> tuple[Basis, Basis]:
@@ -68,12 +71,13 @@ def bases(model: ModalModel) -> tuple[Basis, Basis]:
     return (free_basis(model.free, model.params),
             Basis(model.contact.frequencies, model.contact_drive, model.contact_tip,
                   model.contact_tip, model.contact_unit1, model.contact_unit2,
-                  model.contact_shear2, contact_participation(model)))
+                  model.contact_shear2, contact_participation(model),
+                  np.zeros(model.contact.frequencies.size)))
 
 
 def phase_table(basis: Basis) -> np.ndarray:
-    """A phase's table, rows ``layout.TABLE_ROWS``, with zero damping ratios."""
-    rows = {"frequency": basis.frequencies, "zeta": 0.0 * basis.frequencies, "drive": basis.drive,
+    """A phase's table, rows ``layout.TABLE_ROWS``, with the modes' own damping ratios."""
+    rows = {"frequency": basis.frequencies, "zeta": basis.own_damping, "drive": basis.drive,
             "event": basis.event, "tip1": basis.tip1, "tip2": basis.tip2, "unit1": basis.unit1,
             "unit2": basis.unit2, "base": basis.base}
     return np.array([rows[name] for name in layout.TABLE_ROWS])
@@ -353,7 +357,8 @@ def reduced_model(params: Params, n_modes: int) -> ReducedModel:
     free = build_free_phase(params, n_modes)
     spring = spring_contact(free, free.point_compliance, params.damping_ratio,
                             params.contact_stiffness)
-    return ReducedModel(free.frequencies, 2.0 * params.damping_ratio * free.frequencies,
+    return ReducedModel(free.frequencies,
+                        2.0 * free.damping_ratios(params.damping_ratio) * free.frequencies,
                         free.tip1, free.tip2, spring.residual1, spring.residual2,
                         params.contact_stiffness, spring.effective_stiffness,
                         params.clearance, params.force_amplitude, params.omega)

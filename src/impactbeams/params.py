@@ -21,7 +21,8 @@ name               unit    meaning
 ``uplift1``,       m       initial tip uplifts delta_1, delta_2 (static tip-load shape)
 ``uplift2``
 ``damping_ratio``  1       modal damping ratio zeta, 0 <= zeta < 1: damps each cantilever
-                           mode's whole coordinate <y, Y_n> (``variables.DAMPING_LAW``)
+                           mode's whole coordinate <y, Y_n> (``variables.DAMPING_LAW``);
+                           must be 0 with a ``structure1`` that has damping of its own
 ``contact_law``    -       "spring" (compliant, default) or "tied" (the paper's law)
 ``contact_stiffness`` N/m  k of the spring law (default: Hertz, steel sphere of radius 1 mm
                            on steel, linearised at 1 mN: ``hertz_stiffness``)
@@ -595,6 +596,7 @@ class Params:
         require(USER_STRUCTURE, structure, self.law.tangent_flow,
                 f"contact_law = {self.contact_law!r} supports the paper's uniform beams only: "
                 "use contact_law = 'spring' with a user structure")
+        structure.require_run_damping(self.damping_ratio)
         EI = structure.length**3 / (3.0 * structure.tip_compliance)
         fundamental = float(structure.modes(1).frequencies[0])
         rhoA = EI * (FIRST_CANTILEVER_ROOT / structure.length) ** 4 / fundamental**2
@@ -821,6 +823,12 @@ class Params:
     def shaker_named(self) -> bool:
         """Whether ``shaker`` was given (not left to its default, "both")."""
         return getattr(self, "_shaker_named", True)
+
+    @property
+    def damped(self) -> bool:
+        """Whether any free mode is damped: ``damping_ratio`` > 0 or beam 1's own damping."""
+        return self.damping_ratio > 0.0 or (self.structure1 is not None
+                                            and self.structure1.has_damping)
 
     def moving_stop(self) -> str | None:
         """The line that says a shaker left at "both" moves the stop too (None if it does not).

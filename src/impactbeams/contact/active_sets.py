@@ -178,11 +178,12 @@ def active_set(contacts: tuple, members: tuple[int, ...],
     k_eff, c_eff = _static_correction(stiffness[index], damping[index],
                                       residual[np.ix_(index, index)])
     frequencies, vectors = _updated_modes(omega, weights, k_eff)
-    if damping_ratio == 0.0 and not np.any(damping[index]):
+    zeta = frees[0].damping_ratios(damping_ratio)
+    if not np.any(zeta) and not np.any(damping[index]):
         eigenvalues, right, left = real_modes(frequencies, vectors)
     else:
         damped = complex_modes(frequencies, vectors,
-                               np.diag(2.0 * damping_ratio * omega) + weights @ c_eff @ weights.T)
+                               np.diag(2.0 * zeta * omega) + weights @ c_eff @ weights.T)
         if damped is None:
             raise ParameterError(
                 f"contact_damping = {damping[index].tolist()!r} is not allowed with "

@@ -63,6 +63,8 @@ class FreePhase:
         tip_transfer: (G1(l1, x1), G2(l2, x2)) (m/N): each tip's deflection under a unit force
             at its beam's contact point.
         side: s, +1.0 (the counterpart below beam 1) or -1.0 (above).
+        own_damping: each coordinate's damping ratio of its own (a user structure's,
+            `impactbeams.modes.UserBeam`), zero for the beams': see ``damping_ratios``.
     """
 
     beam1: FreeModes
@@ -81,11 +83,20 @@ class FreePhase:
     point_compliance: tuple[float, float]
     tip_transfer: tuple[float, float]
     side: float
+    own_damping: np.ndarray
 
     @property
     def omega(self) -> np.ndarray:
         """Deprecated name of ``frequencies``."""
         return deprecated_omega(self)
+
+    def damping_ratios(self, damping_ratio: float) -> np.ndarray:
+        """Each coordinate's damping ratio zeta_n: its own plus the run's ``damping_ratio``.
+
+        `Params` allows a ``damping_ratio`` > 0 only on modes with none of their own, so each
+        is one or the other, exactly (0 + zeta is zeta: the beams' ratios bit for bit).
+        """
+        return self.own_damping + damping_ratio
 
     @property
     def modes_per_beam(self) -> tuple[int, int]:
@@ -122,7 +133,9 @@ def build_free_phase(params: Params, n_modes: int) -> FreePhase:
                      point1=point1, point2=point2, gap_weights=side * (point1 - point2),
                      gap_compliance=side * cantilever1.flexibility(x1, p.l1),
                      point_compliance=(cantilever1.flexibility(x1, x1), compliance2),
-                     tip_transfer=(cantilever1.flexibility(p.l1, x1), transfer2), side=side)
+                     tip_transfer=(cantilever1.flexibility(p.l1, x1), transfer2), side=side,
+                     own_damping=np.concatenate([cantilever1.own_damping_ratios(n),
+                                                 cantilever2.own_damping_ratios(n2)]))
 
 
 def _checked(params: Params, n_modes: int) -> int:

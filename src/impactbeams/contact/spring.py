@@ -283,20 +283,22 @@ def spring_contact(free: FreePhase, compliance: tuple[float, float], damping_rat
     """The contact phase of the spring law (k = ``stiffness`` N/m, c = ``damping`` N s/m).
 
     ``compliance``: each beam's static flexibility at its contact point (m/N),
-    ``free.point_compliance`` (the tip compliances for a contact at the tips).
+    ``free.point_compliance`` (the tip compliances for a contact at the tips); the free modes
+    damped by ``free.damping_ratios(damping_ratio)`` (their own, or the run's ratio).
     """
+    zeta = free.damping_ratios(damping_ratio)
     residual1, residual2 = residual_flexibilities(free, compliance)
     residual = residual1 + residual2
     k_e = stiffness / (1.0 + stiffness * residual)
     c_e = damping / (1.0 + stiffness * residual) ** 2
     w = free.gap_weights
-    if damping_ratio == 0.0 and damping == 0.0:
+    if not np.any(zeta) and damping == 0.0:
         eigenvalues, right, left = _undamped_modes(free.frequencies, k_e, w)
     else:
         def modes(contact_damping: float) -> tuple[np.ndarray, ...] | None:
             c_e = contact_damping / (1.0 + stiffness * residual) ** 2
             with np.errstate(over="ignore"):  # a dashpot beyond float range: overdamped
-                matrix = np.diag(2.0 * damping_ratio * free.frequencies) + c_e * np.outer(w, w)
+                matrix = np.diag(2.0 * zeta * free.frequencies) + c_e * np.outer(w, w)
             return _damped_modes(free.frequencies, k_e, w, matrix)
 
         damped = modes(damping)

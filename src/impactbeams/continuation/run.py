@@ -121,6 +121,8 @@ class Continuation:
             check_parameter(self.parameter, value)
         require("high", self.high, self.high > self.low,
                 f"the range [{self.low!r}, {self.high!r}] is empty: need high > low")
+        if self.parameter == "damping_ratio" and self.params.structure1 is not None:
+            self.params.structure1.require_run_damping(self.high)  # (its own damping: none)
         require("direction", self.direction, self.direction in DIRECTIONS,
                 f"must be one of {', '.join(map(repr, DIRECTIONS))}")
         if self.start is not None:
@@ -239,7 +241,7 @@ def continue_orbits(continuation: Continuation, progress: Progress | None = None
     require_type("output", output, output is None or is_path(output),
                  "None or the path of a netCDF file (str or pathlib.Path)")
     c = continuation
-    if c.params.damping_ratio == 0.0 and c.parameter != "damping_ratio":
+    if not c.params.damped and c.parameter != "damping_ratio":
         # the free modes' multipliers are then on the unit circle to round-off
         warnings.warn("damping_ratio = 0: the undamped modes' Floquet multipliers lie on the "
                       "unit circle, so stability and the Neimark-Sacker labels are decided by "

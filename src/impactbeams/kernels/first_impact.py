@@ -52,6 +52,7 @@ from impactbeams.kernels.layout import (
     ROW_FREQUENCY,
     ROW_UNIT1,
     ROW_UNIT2,
+    ROW_ZETA,
 )
 from impactbeams.kernels.propagation import advance_mode
 from impactbeams.kernels.records import EventFunction, Oscillators
@@ -69,6 +70,12 @@ TOUCH_TOLERANCE = 8.0
 
 
 @kernel
+def _mode_zeta(cell, table, j):
+    """Mode ``j``'s damping ratio: its own (a user structure's, else 0) plus the cell's."""
+    return table[ROW_ZETA, j] + cell[CELL_ZETA]
+
+
+@kernel
 def _load_moving_modes(cell, table, work, force, start=REST):
     """Copy the modes that move into the scratch rows; return how many.
 
@@ -78,17 +85,17 @@ def _load_moving_modes(cell, table, work, force, start=REST):
     active = 0
     last = table.shape[1] - 1
     for j in range(table.shape[1]):
+        zeta = _mode_zeta(cell, table, j)
         f = mode_drive(table[ROW_DRIVE, j], table[ROW_BASE, j], table[ROW_FREQUENCY, j],
-                       cell[CELL_ZETA], cell[CELL_F0], base_amplitude(cell),
-                       cell[CELL_FORCING_FREQUENCY])
+                       zeta, cell[CELL_F0], base_amplitude(cell), cell[CELL_FORCING_FREQUENCY])
         q0, v0 = rest_state(cell, start, table[ROW_UNIT1, j], table[ROW_UNIT2, j],
                             table[ROW_DRIVE, j], table[ROW_BASE, j], f, table[ROW_FREQUENCY, j],
-                            cell[CELL_ZETA])
+                            zeta)
         if q0 != 0.0 or v0 != 0.0 or f != 0 or (j == last and active == 0):
             work[_Q_S, active], work[_V_S, active], force[active] = q0, v0, f
             work[_FREQUENCY, active], work[_WEIGHTS, active] = table[ROW_FREQUENCY,
                                                                      j], table[ROW_EVENT, j]
-            work[_ZETA, active] = cell[CELL_ZETA]
+            work[_ZETA, active] = zeta
             active += 1
     return active
 
@@ -128,7 +135,7 @@ def _uplift_stays_below_clearance(cell, table):
     reach = 0.0
     for j in range(table.shape[1]):
         q0 = cell[CELL_UPLIFT1] * table[ROW_UNIT1, j] + cell[CELL_UPLIFT2] * table[ROW_UNIT2, j]
-        reach += abs(table[ROW_EVENT, j] * q0) / np.sqrt(1.0 - cell[CELL_ZETA]**2)
+        reach += abs(table[ROW_EVENT, j] * q0) / np.sqrt(1.0 - _mode_zeta(cell, table, j)**2)
     return cell[CELL_CLEARANCE] - reach > 0.0
 
 
@@ -187,12 +194,13 @@ def _load_column(source, key, table, geo, work, drives):
     for j in range(table.shape[1]):
         kept = False
         for row, cell, state in ((_A, a_cell, _Q_A0), (_B, b_cell, _Q_B0)):
+            zeta = _mode_zeta(cell, table, j)
             f = mode_drive(table[ROW_DRIVE, j], table[ROW_BASE, j], table[ROW_FREQUENCY, j],
-                           cell[CELL_ZETA], cell[CELL_F0], base_amplitude(cell),
+                           zeta, cell[CELL_F0], base_amplitude(cell),
                            cell[CELL_FORCING_FREQUENCY])
             q0, v0 = rest_state(cell, geo[GEO_START], table[ROW_UNIT1, j], table[ROW_UNIT2, j],
                                 table[ROW_DRIVE, j], table[ROW_BASE, j], f,
-                                table[ROW_FREQUENCY, j], cell[CELL_ZETA])
+                                table[ROW_FREQUENCY, j], zeta)
             if key == CELL_CLEARANCE and row == _B:
                 f, q0, v0 = 0j, 0.0, 0.0
             drives[row, active], work[state, active], work[state + 1, active] = f, q0, v0
@@ -200,7 +208,7 @@ def _load_column(source, key, table, geo, work, drives):
         if kept or (j == last and active == 0):
             work[_FREQUENCY, active], work[_WEIGHTS, active] = table[ROW_FREQUENCY,
                                                                      j], table[ROW_EVENT, j]
-            work[_ZETA, active] = source[CELL_ZETA]
+            work[_ZETA, active] = _mode_zeta(source, table, j)
             active += 1
     harmonics = (complex(gap_harmonic(a_cell, geo), 0.0),
                  0j if key == CELL_CLEARANCE else complex(gap_harmonic(b_cell, geo), 0.0))

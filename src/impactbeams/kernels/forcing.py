@@ -172,7 +172,8 @@ def spring_contact_inputs(cell, tables, geometry, switching, forces, scalars):
 def run_inputs(cell, tables, geometry, switching, t_max, search_span):
     """Everything the dynamics kernel needs for one run of ``cell`` in its geometry.
 
-    Returns (tables with the cell's damping ratios, complex drive amplitudes ``forces``,
+    Returns (tables with the cell's damping ratios added to the modes' own, complex drive
+    amplitudes ``forces``,
     phase scalars, settings, q0, q0', the run's switching record: the geometry's
     ``switching`` with the spring law's mode drives); ``tables`` of the geometry is left
     unchanged. In the spring law the contact oscillators' damping ratios come with the
@@ -185,7 +186,8 @@ def run_inputs(cell, tables, geometry, switching, t_max, search_span):
     for phase in range(tables.shape[0]):
         if phase == CONTACT and spring_law:
             continue
-        damped[phase, ROW_ZETA] = cell[CELL_ZETA]
+        # the modes' own damping ratios (a user structure's, else 0) plus the cell's
+        damped[phase, ROW_ZETA] = tables[phase, ROW_ZETA] + cell[CELL_ZETA]
         mode_drives(damped[phase, ROW_DRIVE], damped[phase, ROW_BASE],
                     damped[phase, ROW_FREQUENCY], damped[phase, ROW_ZETA], cell, forces[phase])
     if spring_law:

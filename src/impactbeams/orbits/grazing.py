@@ -119,6 +119,7 @@ class LinearGap:
         moves1, moves2 = params.mount.clamps
         self.params = params
         self.frequencies = free.frequencies
+        self.damping_ratios = free.damping_ratios(params.damping_ratio)  # zeta_n
         self.weights = free.gap_weights        # the gap's weight of each free coordinate
         self.force_drive = free.drive          # b_n: Y_1n(l1) / omega_n^2 (m kg^1/2 / N)
         self.base_drive = base_participation(params, free)  # Gamma_n (kg^1/2)
@@ -133,7 +134,7 @@ class LinearGap:
         (`impactbeams.kernels.drive.mode_drive`).
         """
         big = np.asarray(omega, dtype=float)[..., None]
-        wn, zeta = self.frequencies, self.params.damping_ratio
+        wn, zeta = self.frequencies, self.damping_ratios
         response = self.weights / (wn**2 - big**2 + 2j * zeta * wn * big)  # w_n / D_n
         force = big * self.force_drive * (-big + 2j * zeta * wn)
         base = self.base_drive * big**2
@@ -161,11 +162,11 @@ class LinearGap:
         bad = values[~(np.isfinite(values) & (values > 0.0))]
         require("omega", float(bad[0]) if bad.size else 0.0, bad.size == 0,
                 "must be finite and > 0: Omega = 0 drives nothing", "rad/s")
-        if self.params.damping_ratio == 0.0:
-            resonant = values[np.isin(values, self.frequencies)]
-            require("omega", float(resonant[0]) if resonant.size else 0.0, resonant.size == 0,
-                    "is a natural frequency and damping_ratio = 0: an undamped mode driven at "
-                    "resonance has no steady orbit", "rad/s")
+        undamped = self.frequencies[self.damping_ratios == 0.0]
+        resonant = values[np.isin(values, undamped)]
+        require("omega", float(resonant[0]) if resonant.size else 0.0, resonant.size == 0,
+                "is a natural frequency and damping_ratio = 0: an undamped mode driven at "
+                "resonance has no steady orbit", "rad/s")
         return values
 
 

@@ -801,6 +801,8 @@ def _check_grid(sweep: Sweep) -> None:
     if sweep.base.structure1 is not None and "1" in sweep.base.mount.shaken_beams(
             sweep.base.partner):
         sweep.base.structure1.require_support(values["base_amplitude"])
+    if sweep.base.structure1 is not None:
+        sweep.base.structure1.require_run_damping(values["damping_ratio"])
     check_run(values, sweep.t_max, sweep.n_modes, point, _grounded_springs(sweep),
               sweep.base.structure1, sweep.base.step_factors)
     _check_long_time(sweep, values, point, sweep.base.step_factors)

@@ -305,11 +305,11 @@ def check_contact_phases(sweep: Sweep) -> None:
         from impactbeams.contact.active_sets import several_contacts
 
         for params in _geometries(sweep):
-            if params.damping_ratio or any(run.contact_damping for run in params.each_contact()):
+            if params.damped or any(run.contact_damping for run in params.each_contact()):
                 several_contacts(params, sweep.n_modes)
         return
     for params in _geometries(sweep):
-        if params.law.compliant and (params.contact_damping or params.damping_ratio):
+        if params.law.compliant and (params.contact_damping or params.damped):
             _geometry_arrays(params, sweep, keep=True)
 
 
