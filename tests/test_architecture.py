@@ -470,3 +470,36 @@ def test_the_switching_check_sees_loose_arguments():
             "def tied(q, *, shifts):\n    pass\n"
             "def run(tables, forces, switching, settings):\n    pass\n")
     assert _loose_switching_kernels(ast.parse(code)) == ["run_events", "sample_states", "tied"]
+
+
+# The active sets' phases of several contacts (issue 33): one active sets record per run
+# (`records.ACTIVE_SETS`), which the kernels of several contacts take whole and read in place,
+# handing the single contact's kernels one set's arrays (``left``, ``right``); no kernel takes
+# a set's change of coordinates or the set index of a mask loose.
+ACTIVE_SETS_FIELDS = {"lefts", "rights", "set_of_mask"}
+
+
+def _loose_active_sets_kernels(tree: ast.AST) -> list[str]:
+    """Functions that take an active sets array (``lefts``, ``rights``, ``set_of_mask``) loose."""
+    return [node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)
+            and ACTIVE_SETS_FIELDS & {a.arg for a in node.args.args + node.args.kwonlyargs}]
+
+
+def test_kernels_take_one_active_sets_record():
+    """No kernel takes the active sets' arrays loose: the record's readers
+    (`kernels/several_contacts.py`, `kernels/contacts_tangent.py`) read its fields in place,
+    every other kernel takes one set's."""
+    loose = {path.name: names for path in sorted((PACKAGE / "kernels").glob("*.py"))
+             for names in [_loose_active_sets_kernels(ast.parse(path.read_text(), str(path)))]
+             if names}
+    assert not loose, ("kernels that take an active sets array as a parameter (take the run's "
+                       f"active sets record, records.ACTIVE_SETS, whole): {loose}")
+
+
+def test_the_active_sets_check_sees_loose_arguments():
+    code = ("def run_contacts(tables, forces, lefts, rights, set_of_mask, settings):\n"
+            "    pass\n"
+            "def event_at(sets, settings, a, f, *, lefts):\n    pass\n"
+            "def to_contact(q, v, t, left, modes, drives):\n    pass\n"
+            "def resume_contacts(sets, settings, early_release, q0, v0):\n    pass\n")
+    assert _loose_active_sets_kernels(ast.parse(code)) == ["run_contacts", "event_at"]
