@@ -31,7 +31,7 @@ import numpy as np
 
 from impactbeams.kernels.contact_spring import tangent_switch, to_contact
 from impactbeams.kernels.events import phase_event
-from impactbeams.kernels.jit import kernel
+from impactbeams.kernels.jit import borrowing_kernel, kernel
 from impactbeams.kernels.layout import CONTACT, FREE, ROW_EVENT, SPRING_DRIVE_ROWS
 from impactbeams.kernels.records import (
     CLOCK_RENORMALIZATIONS,
@@ -54,7 +54,7 @@ from impactbeams.kernels.tangent import (
 )
 
 
-@kernel
+@borrowing_kernel
 def event_at(sets, settings, a, f, q, v, t, y, y_rate):
     """Event function f of set a, and its rate, at the free state (q, q') at time t (s)."""
     to_contact(q, v, t, sets[SET_LEFTS][a], sets[SET_MODES][a, f], sets[SET_DRIVES][a, f],
@@ -63,7 +63,7 @@ def event_at(sets, settings, a, f, q, v, t, y, y_rate):
                        settings.forcing_frequency)
 
 
-@kernel
+@borrowing_kernel
 def force_jump(sets, settings, gap_weights, old_mask, new_mask, q, v, t, y, y_rate, jump):
     """Write into ``jump`` B_new R_new - B_old R_old: the modal forces' jump at a switch."""
     for j in range(jump.size):
