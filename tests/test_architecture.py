@@ -458,7 +458,7 @@ def _kernels_taking(tree: ast.AST, fields: set[str]) -> list[str]:
             and fields & {a.arg for a in node.args.args + node.args.kwonlyargs}]
 
 
-def _loose_kernels(fields: set[str], readers: set[str] = frozenset()) -> dict[str, list[str]]:
+def _loose_kernels(fields: set[str], readers: set[str] | tuple = ()) -> dict[str, list[str]]:
     """Each kernel module but the record's ``readers``: its kernels taking ``fields`` loose."""
     return {path.name: names for path in sorted((PACKAGE / "kernels").glob("*.py"))
             if path.name not in readers
