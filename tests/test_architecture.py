@@ -445,28 +445,54 @@ def test_the_loose_group_check_sees_loose_arguments():
 # the contact seam reads; every other kernel takes the record and passes it on whole.
 SWITCHING_SEAM = {"contact.py", "contact_tied.py", "contact_spring.py"}
 SWITCHING_FIELDS = {"overlap", "shifts", "spring"}
+# The active sets' phases of several contacts (issue 33): one active sets record per run
+# (`records.ACTIVE_SETS`), which the kernels of several contacts take whole and read in place,
+# handing the single contact's kernels one set's arrays (``left``, ``right``); no kernel takes
+# a set's change of coordinates or the set index of a mask loose.
+ACTIVE_SETS_FIELDS = {"lefts", "rights", "set_of_mask"}
 
 
-def _loose_switching_kernels(tree: ast.AST) -> list[str]:
-    """Functions that take a switching array (``overlap``, ``shifts``, ``spring``) loose."""
+def _kernels_taking(tree: ast.AST, fields: set[str]) -> list[str]:
+    """Functions that take one of a record's ``fields`` loose, as a parameter."""
     return [node.name for node in ast.walk(tree) if isinstance(node, ast.FunctionDef)
-            and SWITCHING_FIELDS & {a.arg for a in node.args.args + node.args.kwonlyargs}]
+            and fields & {a.arg for a in node.args.args + node.args.kwonlyargs}]
+
+
+def _loose_kernels(fields: set[str], readers: set[str] | tuple = ()) -> dict[str, list[str]]:
+    """Each kernel module but the record's ``readers``: its kernels taking ``fields`` loose."""
+    return {path.name: names for path in sorted((PACKAGE / "kernels").glob("*.py"))
+            if path.name not in readers
+            for names in [_kernels_taking(ast.parse(path.read_text(), str(path)), fields)]
+            if names}
 
 
 def test_kernels_take_one_switching_record():
     """Outside the contact seam no kernel takes the switching arrays loose."""
-    loose = {path.name: names for path in sorted((PACKAGE / "kernels").glob("*.py"))
-             if path.name not in SWITCHING_SEAM
-             for names in [_loose_switching_kernels(ast.parse(path.read_text(), str(path)))]
-             if names}
+    loose = _loose_kernels(SWITCHING_FIELDS, SWITCHING_SEAM)
     assert not loose, ("kernels that take a switching array as a parameter (take the run's "
                        f"switching record, records.SWITCHING, whole): {loose}")
 
 
-def test_the_switching_check_sees_loose_arguments():
+def test_kernels_take_one_active_sets_record():
+    """No kernel takes the active sets' arrays loose: the record's readers
+    (`kernels/several_contacts.py`, `kernels/contacts_tangent.py`) read its fields in place,
+    every other kernel takes one set's."""
+    loose = _loose_kernels(ACTIVE_SETS_FIELDS)
+    assert not loose, ("kernels that take an active sets array as a parameter (take the run's "
+                       f"active sets record, records.ACTIVE_SETS, whole): {loose}")
+
+
+def test_the_record_checks_see_loose_arguments():
     code = ("def run_events(tables, forces, overlap, shifts, spring, drives, settings):\n"
             "    pass\n"
             "def sample_states(tables, forces, spring, drives, settings):\n    pass\n"
             "def tied(q, *, shifts):\n    pass\n"
-            "def run(tables, forces, switching, settings):\n    pass\n")
-    assert _loose_switching_kernels(ast.parse(code)) == ["run_events", "sample_states", "tied"]
+            "def run(tables, forces, switching, settings):\n    pass\n"
+            "def run_contacts(tables, forces, lefts, rights, set_of_mask, settings):\n"
+            "    pass\n"
+            "def event_at(sets, settings, a, f, *, lefts):\n    pass\n"
+            "def to_contact(q, v, t, left, modes, drives):\n    pass\n"
+            "def resume_contacts(sets, settings, early_release, q0, v0):\n    pass\n")
+    tree = ast.parse(code)
+    assert _kernels_taking(tree, SWITCHING_FIELDS) == ["run_events", "sample_states", "tied"]
+    assert _kernels_taking(tree, ACTIVE_SETS_FIELDS) == ["run_contacts", "event_at"]

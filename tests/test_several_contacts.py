@@ -256,6 +256,33 @@ def test_a_mid_span_and_a_tip_stop_closed_together_against_dop853():
                                rtol=0, atol=1e-12)
 
 
+def test_the_active_sets_record_holds_each_sets_phase_c_contiguous():
+    """`pack_contacts`' active sets record: its fields in `records.ACTIVE_SETS`' order (each
+    set's 2 n event functions, its change of coordinates, the set of each mask: {}, {0}, {1},
+    {0, 1} for `TOGETHER`) and every array C-contiguous, so that the kernels compile one
+    signature for it whoever packed it."""
+    from impactbeams.active_phases import pack_contacts
+    from impactbeams.kernels.layout import PHASE_SCALARS, SPRING_DRIVE_ROWS, TABLE_ROWS
+    from impactbeams.kernels.records import ACTIVE_SETS
+
+    n_modes = 4
+    packed = pack_contacts(TOGETHER, n_modes, 0.03, 0.03)
+    sets, functions = len(packed.members), 2 * len(packed.runs)
+    shapes = {"tables": (sets, functions, len(TABLE_ROWS), n_modes),
+              "forces": (sets, functions, n_modes),
+              "scalars": (sets, functions, len(PHASE_SCALARS)),
+              "modes": (sets, functions, 2, n_modes),
+              "drives": (sets, functions, len(SPRING_DRIVE_ROWS), n_modes),
+              "lefts": (sets, 2 * n_modes, n_modes), "rights": (sets, n_modes, 2 * n_modes),
+              "set_of_mask": (4,)}
+    assert [field.shape for field in packed.active_sets] == [shapes[name]
+                                                             for name in ACTIVE_SETS]
+    assert all(field.flags.c_contiguous for field in packed.active_sets)
+    assert [packed.set_of_mask[sum(1 << f for f in members)]
+            for members in packed.members] == list(range(sets))
+    assert sorted(packed.members) == [(), (0,), (0, 1), (1,)]
+
+
 def _switches(run) -> list[tuple[int, float, int]]:
     """A kernel run's switches as `_dop853_together` gives them (contact, time, kind)."""
     n = run.impulses.shape[1]

@@ -13,6 +13,11 @@ the active forces are R_S = -K_eff g_S - C_eff g_S', that is const_S = -K_eff De
 harmonic H_S = -(K_eff + i Omega C_eff) S_S and modal weights ``force_weights``; the modes'
 drive is the free one plus B_S (H_S harmonic, const_S constant); an open contact i's physical
 gap is g_i + R_N[i, S] R_S.
+
+The phases travel to the kernels as one active sets record (`impactbeams.kernels.records.
+ACTIVE_SETS`: a plain tuple of the tables, forces, scalars, modes, drives, lefts, rights and
+``set_of_mask`` arrays, read by the indices ``SET_*``), built once per packed run
+(`PackedContacts.active_sets`), every array C-contiguous.
 """
 
 from __future__ import annotations
@@ -46,6 +51,15 @@ from impactbeams.kernels.layout import (
     TIP_Y1,
     TIP_Y2,
 )
+from impactbeams.kernels.records import (
+    ACTIVE_SETS,
+    SET_DRIVES,
+    SET_LEFTS,
+    SET_MODES,
+    SET_OF_MASK,
+    SET_SCALARS,
+    SET_TABLES,
+)
 from impactbeams.kernels.stroboscope import tip_motions as tip_motions_kernel
 from impactbeams.longtime import LongTime, response_period, steady_rate
 from impactbeams.packing import Packed, pack_run, section_gap
@@ -64,20 +78,15 @@ class PackedContacts:
 
     ``runs``: each contact's own packed run (the free phase, settings, start); ``contacts``:
     the active sets' phases; ``members``: each set's contacts, by the kernels' set index;
+    ``active_sets``: the same phases as the kernels take them, the active sets record
+    (`impactbeams.kernels.records.ACTIVE_SETS`, fields read by the indices ``SET_*``);
     ``early_release``: whether a contact can open with its gap still closed (a dashpot).
     """
 
     runs: tuple[Packed, ...]
     contacts: SeveralContacts
     members: tuple[tuple[int, ...], ...]
-    set_of_mask: np.ndarray
-    tables: np.ndarray
-    forces: np.ndarray
-    scalars: np.ndarray
-    modes: np.ndarray
-    drives: np.ndarray
-    lefts: np.ndarray
-    rights: np.ndarray
+    active_sets: tuple  # (tables, forces, scalars, modes, drives, lefts, rights, set_of_mask)
     early_release: bool
 
     @property
@@ -85,24 +94,27 @@ class PackedContacts:
         """The run's settings record (t_max, search span, forcing frequency)."""
         return self.runs[0].settings
 
-    def kernel_arrays(self) -> tuple:
-        """The phases' arrays as `run_contacts` and `sample_contacts` take them."""
-        return (self.tables, self.forces, self.scalars, self.modes, self.drives, self.lefts,
-                self.rights, self.set_of_mask, self.settings)
+    @property
+    def set_of_mask(self) -> np.ndarray:
+        """The set index of each bit mask of closed contacts, -1 where no set (int64, 2^n).
+
+        The active sets record's ``SET_OF_MASK`` field.
+        """
+        return self.active_sets[SET_OF_MASK]
 
     @property
     def gap_weights(self) -> np.ndarray:
         """Each contact's modal gap weights b_j (rows, m per unit coordinate): its own run's."""
         return np.array([run.tables[FREE, ROW_EVENT] for run in self.runs])
 
-    def tangent_arrays(self) -> tuple:
-        """The arrays `kernels.contacts_tangent` takes before a run's phases.
+    def tangent_arguments(self) -> tuple:
+        """The arguments `kernels.contacts_tangent` takes before a run's phases.
 
-        The phases', the settings, whether a dashpot releases early, the gap weights and the
-        free modes' frequencies (rad/s; the energy product a renormalisation uses).
+        The active sets record, the settings, whether a dashpot releases early, the gap
+        weights and the free modes' frequencies (rad/s; the energy product a renormalisation
+        uses).
         """
-        return (self.tables, self.scalars, self.modes, self.drives, self.lefts, self.rights,
-                self.set_of_mask, self.settings, self.early_release, self.gap_weights,
+        return (self.active_sets, self.settings, self.early_release, self.gap_weights,
                 self.runs[0].tables[FREE, ROW_FREQUENCY])
 
 
@@ -204,8 +216,10 @@ def pack_contacts(params, n_modes: int, t_max: float, search_span: float,
             tables[a, f, TABLE_ROWS.index("event")] = magnitude
             scalars[a, f] = (const[f] + magnitude @ drives[a, f, DRIVE_EQUILIBRIUM].real,
                              harmonic[f].real, harmonic[f].imag, 1.0)
-    return PackedContacts(runs, contacts, members, set_of_mask, tables, forces, scalars, modes,
-                          drives, lefts, rights, bool(np.any(contacts.damping > 0.0)))
+    fields = {"tables": tables, "forces": forces, "scalars": scalars, "modes": modes,
+              "drives": drives, "lefts": lefts, "rights": rights, "set_of_mask": set_of_mask}
+    return PackedContacts(runs, contacts, members, tuple(fields[name] for name in ACTIVE_SETS),
+                          bool(np.any(contacts.damping > 0.0)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -257,7 +271,7 @@ def run_contacts(packed: PackedContacts, max_phases: int,
         stop = min(first + window, max_phases)
         switched = recorded[2][first]
         count, status, t_end = kernel.resume_contacts(
-            *packed.kernel_arrays(), packed.early_release, q, v, t, mask, early,
+            packed.active_sets, packed.settings, packed.early_release, q, v, t, mask, early,
             tuple(array[first:stop] for array in recorded))
         if first:  # the resumed phase's own switch, as first recorded
             recorded[2][first] = switched
@@ -296,10 +310,8 @@ def sample(packed: PackedContacts, run: ContactRun, times: np.ndarray,
     """Free states (q, v) at ``times`` (s, ascending, <= the run's end) and each one's mask."""
     times = np.ascontiguousarray(times, dtype=float)
     q, v = np.empty((times.size, run.q.shape[1])), np.empty((times.size, run.q.shape[1]))
-    tables, forces, _, modes, drives, lefts, rights, set_of_mask, settings = (
-        packed.kernel_arrays())
-    kernel.sample_contacts(tables, forces, modes, drives, lefts, rights, set_of_mask, settings,
-                           run.time, run.mask, run.q, run.v, times, q, v)
+    kernel.sample_contacts(packed.active_sets, packed.settings, run.time, run.mask, run.q,
+                           run.v, times, q, v)
     phase = np.searchsorted(run.time, times, side="right") - 1
     return q, v, run.mask[phase]
 
@@ -332,13 +344,13 @@ def contacts_start(packed: PackedContacts, z: np.ndarray) -> tuple[np.ndarray, n
 def gap_rate(packed: PackedContacts, mask: int, contact: int, q: np.ndarray, v: np.ndarray,
              t: float) -> float:
     """The rate (m/s) of open ``contact``'s physical gap in the phase of ``mask`` at (q, v, t)."""
-    a = packed.set_of_mask[mask]
+    sets, a = packed.active_sets, packed.set_of_mask[mask]
     m = q.size
     y, y_rate = np.empty(m), np.empty(m)
-    to_contact(q, v, t, packed.lefts[a], packed.modes[a, contact], packed.drives[a, contact],
-               packed.settings["forcing_frequency"], y, y_rate)
-    _, rate = phase_event(packed.tables[a, contact], packed.scalars[a, contact], y, y_rate, t,
-                          packed.settings["forcing_frequency"])
+    to_contact(q, v, t, sets[SET_LEFTS][a], sets[SET_MODES][a, contact],
+               sets[SET_DRIVES][a, contact], packed.settings["forcing_frequency"], y, y_rate)
+    _, rate = phase_event(sets[SET_TABLES][a, contact], sets[SET_SCALARS][a, contact], y,
+                          y_rate, t, packed.settings["forcing_frequency"])
     return float(rate)
 
 
@@ -487,7 +499,7 @@ def largest_exponent(packed: PackedContacts, run: ContactRun, transient_periods:
     Averaged over the renormalisation intervals after ``transient_periods`` (as
     `impactbeams.simulate`'s ``lyapunov``, `kernels.contacts_tangent.contacts_lyapunov_sums`).
     """
-    sums, counts, interval = contacts_lyapunov_sums(*packed.tangent_arrays(), run.arrays(),
+    sums, counts, interval = contacts_lyapunov_sums(*packed.tangent_arguments(), run.arrays(),
                                                     run.t_end, 1, transient_periods, 1)
     periods = int(counts.sum())
     return float(sums[0, 0] / (periods * interval)) if periods else math.nan

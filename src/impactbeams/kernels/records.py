@@ -30,6 +30,7 @@ bound its four array fields, +26% with the per-step kernels binding theirs too).
 * `Rotor`: the arrays of an event function's rotor (`impactbeams.kernels.rotor`), and the
   work arrays of the search that uses it (the state and drives with the steady states split off).
 * the switching record: a plain tuple, not a namedtuple (see `SWITCHING`).
+* the active sets record: a run of several contacts' phases, a plain tuple (see `ACTIVE_SETS`).
 * `Tangent`: the tangent vectors of a run and Benettin's sums
   (`impactbeams.kernels.tangent.carry_tangents`); ``clock[CLOCK_TIME]`` is the time (s) the
   tangents are at, ``clock[CLOCK_RENORMALIZATIONS]`` the renormalisations done.
@@ -84,6 +85,26 @@ SWITCH_OVERLAP, SWITCH_SHIFTS, SWITCH_SPRING, SWITCH_DRIVES = range(len(SWITCHIN
 # lowering: "scalar type UniTuple(...) given for non scalar argument"). `geometry_switching`
 # takes one out.
 STACKED_SWITCHING = ("overlap", "shifts", "left", "right", "modes", "drives")
+
+# The active sets record: the contact phases of a run of several contacts, one per active set
+# (the contacts closed together), as the plain tuple (tables, forces, scalars, modes, drives,
+# lefts, rights, set_of_mask), its fields read by the indices ``SET_*`` as the switching
+# record's. Set a's event function f (contact f's force if closed, its physical gap if open;
+# n + f: the force open contact f would have with it added, negated) is the oscillators of
+# ``tables[a, f]`` (rows of `impactbeams.kernels.layout.TABLE_ROWS`), ``forces[a, f]`` (their
+# drive amplitudes A, complex), ``scalars[a, f]`` (`layout.PHASE_SCALARS`), ``modes[a, f]``
+# (eigenvalues and the function's phases rho) and ``drives[a, f]`` (the set's mode drives,
+# `layout.SPRING_DRIVE_ROWS`); ``lefts[a]``, ``rights[a]`` are the set's change of coordinates
+# between the free coordinates and its complex modes, and ``set_of_mask[mask]`` the set of a
+# bit mask of closed contacts (-1: one that cannot occur). Built once per packed run
+# (`impactbeams.active_phases.pack_contacts`), every array C-contiguous, so that each kernel
+# has one signature; every kernel of several contacts (`impactbeams.kernels.several_contacts`,
+# `impactbeams.kernels.contacts_tangent`) takes it as one argument, ``sets``, reads its fields
+# in place and hands the single contact's kernels one set's arrays.
+ACTIVE_SETS = ("tables", "forces", "scalars", "modes", "drives", "lefts", "rights",
+               "set_of_mask")
+(SET_TABLES, SET_FORCES, SET_SCALARS, SET_MODES, SET_DRIVES, SET_LEFTS, SET_RIGHTS,
+ SET_OF_MASK) = range(len(ACTIVE_SETS))
 
 Tangent = namedtuple("Tangent", ("q", "v", "clock", "sums", "counts"))
 CLOCK = ("time", "renormalizations")

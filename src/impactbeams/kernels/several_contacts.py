@@ -1,19 +1,21 @@
 """Several spring contacts closed at once: exact phases, the first event among all contacts.
 
-Plain arrays, packed by `impactbeams.trajectory.several` from
-`impactbeams.contact.active_sets`. A phase is one active set a (the contacts closed, a bit mask
-``mask`` read through ``set_of_mask``); its state is kept in the free coordinates (q, q')
-(every switch is the identity on them). Each contact f has one event function in each phase:
-its contact force R_f if it is closed, its physical gap (the modal gap plus what the active
-forces deflect it through the flexibility the modes miss) if it is open. Both are
+The kernels take the run's phases as one record, ``sets``, the active sets record
+(`impactbeams.kernels.records.ACTIVE_SETS`, a plain tuple read by the indices ``SET_*``),
+packed by `impactbeams.active_phases.pack_contacts` from `impactbeams.contact.active_sets`.
+A phase is one active set a (the contacts closed, a bit mask ``mask`` read through
+``sets[SET_OF_MASK]``); its state is kept in the free coordinates (q, q') (every switch is the
+identity on them). Each contact f has one event function in each phase: its contact force R_f
+if it is closed, its physical gap (the modal gap plus what the active forces deflect it
+through the flexibility the modes miss) if it is open. Both are
 
     e_f(t) = const + Im(H e^(i Omega t)) + sum_j 2 Re(c_j z_j(t))
 
 in the phase's complex modes z, which is `impactbeams.kernels.contact_spring`'s contact force
 with its own phases rho_j = c_j / |c_j|: oscillators y_j = 2 Re(rho_j z_j) - y_eq_j of one
-phase's table per function (``tables[a, f]``, ``forces[a, f]``, ``scalars[a, f]``,
-``modes[a, f]``, ``drives[a, f]`` in the layout of the single contact's contact phase;
-``lefts[a]``, ``rights[a]`` the set's change of coordinates in the kernels' layout). So each
+phase's table per function (the record's tables, forces, scalars, modes and drives at
+``[a, f]``, in the layout of the single contact's contact phase; its lefts and rights at
+``[a]``, the set's change of coordinates in the kernels' layout). So each
 function's next switch is the single contact's own certified search
 (`impactbeams.kernels.dynamics.find_switch`: a function that starts at 0 and rising, the
 contact that has just closed or opened, waits for its rise) and the phase ends at the earliest
@@ -51,6 +53,16 @@ from impactbeams.kernels.layout import (
     SCALAR_SINE,
 )
 from impactbeams.kernels.peaks import peak_force
+from impactbeams.kernels.records import (
+    SET_DRIVES,
+    SET_FORCES,
+    SET_LEFTS,
+    SET_MODES,
+    SET_OF_MASK,
+    SET_RIGHTS,
+    SET_SCALARS,
+    SET_TABLES,
+)
 from impactbeams.kernels.rotor import rotor_arrays
 
 # a run that reached an active set that cannot occur (both sides of a two-sided stop)
@@ -87,24 +99,23 @@ def impulse(table, force, scalars, forcing_frequency, y0, y_rate0, t0, y1, y_rat
 
 
 @kernel
-def run_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_mask, settings,
-                 early_release, q0, v0, t_start, mask_start, recorded):
+def run_contacts(sets, settings, early_release, q0, v0, t_start, mask_start, recorded):
     """Integrate from the free state (q0, v0) with contacts ``mask_start`` closed at t_start.
 
     No contact released early at the start: `resume_contacts` with ``early_start`` = 0.
     """
-    return resume_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_mask,
-                           settings, early_release, q0, v0, t_start, mask_start, 0, recorded)
+    return resume_contacts(sets, settings, early_release, q0, v0, t_start, mask_start, 0,
+                           recorded)
 
 
 @kernel
-def resume_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_of_mask,
-                    settings, early_release, q0, v0, t_start, mask_start, early_start,
+def resume_contacts(sets, settings, early_release, q0, v0, t_start, mask_start, early_start,
                     recorded):
     """Integrate from the free state (q0, v0) with contacts ``mask_start`` closed at t_start.
 
-    ``early_start``: the bit mask of the open contacts released early whose gaps have not
-    opened since (a run resumed at one of its recorded phases goes on as it went, bit for bit).
+    ``sets``: the run's active sets record (`records.ACTIVE_SETS`). ``early_start``: the bit
+    mask of the open contacts released early whose gaps have not opened since (a run resumed
+    at one of its recorded phases goes on as it went, bit for bit).
 
     ``recorded`` = (time, mask, switched, q, v, impulses, peaks): phase k starts at
     ``time[k]`` (s) with the contacts of bit mask ``mask[k]`` closed, in state (q[k], v[k]),
@@ -135,29 +146,31 @@ def resume_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_o
     t, mask, switched, zero_run = t_start, mask_start, -1, 0
     early = early_start  # the contacts released early whose gaps have not opened since
     for k in range(seg_time.size):
-        a = set_of_mask[mask]
+        a = sets[SET_OF_MASK][mask]
         seg_time[k], seg_mask[k], seg_switched[k] = t, mask, switched
         for n in range(m):
             seg_q[k, n], seg_v[k, n] = q[n], v[n]
         first, t_event, opening = -1, math.inf, False
         for f in range(n_contacts):
-            to_contact(q, v, t, lefts[a], modes[a, f], drives[a, f], forcing_frequency, y[f],
-                       y_rate[f])
-            if (early >> f) & 1 and phase_event(tables[a, f], scalars[a, f], y[f], y_rate[f], t,
-                                                forcing_frequency)[0] >= 0.0:
+            to_contact(q, v, t, sets[SET_LEFTS][a], sets[SET_MODES][a, f],
+                       sets[SET_DRIVES][a, f], forcing_frequency, y[f], y_rate[f])
+            if (early >> f) & 1 and phase_event(sets[SET_TABLES][a, f], sets[SET_SCALARS][a, f],
+                                                y[f], y_rate[f], t, forcing_frequency)[0] >= 0.0:
                 early ^= 1 << f  # its gap is open: a plain open contact from here
             opens = False
             if (early >> f) & 1:
                 g = n_contacts + f
-                to_contact(q, v, t, lefts[a], modes[a, g], drives[a, g], forcing_frequency,
-                           y_force, y_force_rate)
-                t_f, opens = reonset_or_opening(tables[a, g], forces[a, g], scalars[a, g],
-                                                y_force, y_force_rate, tables[a, f],
-                                                forces[a, f], scalars[a, f], y[f], y_rate[f],
-                                                t, settings, q_work, v_work, rotor)
+                to_contact(q, v, t, sets[SET_LEFTS][a], sets[SET_MODES][a, g],
+                           sets[SET_DRIVES][a, g], forcing_frequency, y_force, y_force_rate)
+                t_f, opens = reonset_or_opening(
+                    sets[SET_TABLES][a, g], sets[SET_FORCES][a, g], sets[SET_SCALARS][a, g],
+                    y_force, y_force_rate, sets[SET_TABLES][a, f], sets[SET_FORCES][a, f],
+                    sets[SET_SCALARS][a, f], y[f], y_rate[f], t, settings, q_work, v_work,
+                    rotor)
             else:
-                t_f = find_switch(tables[a, f], forces[a, f], scalars[a, f], y[f], y_rate[f],
-                                  t, True, False, settings, q_work, v_work, rotor)
+                t_f = find_switch(sets[SET_TABLES][a, f], sets[SET_FORCES][a, f],
+                                  sets[SET_SCALARS][a, f], y[f], y_rate[f], t, True, False,
+                                  settings, q_work, v_work, rotor)
             if t_f == GAVE_UP:
                 return k + 1, SEARCH_LIMIT, t
             if not math.isnan(t_f) and t_f < t_event:
@@ -167,18 +180,20 @@ def resume_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_o
             seg_impulse[k, f] = seg_peak[k, f] = 0.0
             if not (mask >> f) & 1:
                 continue
-            table, force, scalar = tables[a, f], forces[a, f], scalars[a, f]
-            propagate(table, force, y[f], y_rate[f], t, t_stop, settings, y_end, y_rate_end)
-            seg_impulse[k, f] = impulse(table, force, scalar, forcing_frequency, y[f],
+            propagate(sets[SET_TABLES][a, f], sets[SET_FORCES][a, f], y[f], y_rate[f], t,
+                      t_stop, settings, y_end, y_rate_end)
+            seg_impulse[k, f] = impulse(sets[SET_TABLES][a, f], sets[SET_FORCES][a, f],
+                                        sets[SET_SCALARS][a, f], forcing_frequency, y[f],
                                         y_rate[f], t, y_end, y_rate_end, t_stop)
-            seg_peak[k, f] = peak_force(table, force, scalar, settings, y[f], y_rate[f], t,
+            seg_peak[k, f] = peak_force(sets[SET_TABLES][a, f], sets[SET_FORCES][a, f],
+                                        sets[SET_SCALARS][a, f], settings, y[f], y_rate[f], t,
                                         t_stop)[0]
         # the new state from the oscillators of the function whose root ends the phase
         f = max(first, 0)
-        propagate(tables[a, f], forces[a, f], y[f], y_rate[f], t, t_stop, settings, y_end,
-                  y_rate_end)
-        to_free(y_end, y_rate_end, t_stop, rights[a], modes[a, f], drives[a, f],
-                forcing_frequency, q, v)
+        propagate(sets[SET_TABLES][a, f], sets[SET_FORCES][a, f], y[f], y_rate[f], t, t_stop,
+                  settings, y_end, y_rate_end)
+        to_free(y_end, y_rate_end, t_stop, sets[SET_RIGHTS][a], sets[SET_MODES][a, f],
+                sets[SET_DRIVES][a, f], forcing_frequency, q, v)
         if first < 0:
             return k + 1, COMPLETE, t_stop
         zero_run = zero_run + 1 if instantaneous(t, t_event) else 0
@@ -194,17 +209,17 @@ def resume_contacts(tables, forces, scalars, modes, drives, lefts, rights, set_o
         switched = first
         if early_release and not (mask >> first) & 1:
             early |= 1 << first
-        if set_of_mask[mask] < 0:
+        if sets[SET_OF_MASK][mask] < 0:
             return k + 1, IMPOSSIBLE_SET, t
     return seg_time.size, EVENT_LIMIT, t
 
 
 @kernel
-def sample_contacts(tables, forces, modes, drives, lefts, rights, set_of_mask, settings,
-                    seg_time, seg_mask, seg_q, seg_v, times, q_out, v_out):
+def sample_contacts(sets, settings, seg_time, seg_mask, seg_q, seg_v, times, q_out, v_out):
     """Free states (q, q') at the ascending ``times`` (s) of a recorded run, in closed form.
 
-    At an event time the state of the phase that starts there.
+    ``sets``: the run's active sets record. At an event time the state of the phase that
+    starts there.
     """
     m = seg_q.shape[1]
     y, y_rate = np.empty(m), np.empty(m)
@@ -213,10 +228,10 @@ def sample_contacts(tables, forces, modes, drives, lefts, rights, set_of_mask, s
     for i in range(times.size):
         while k + 1 < seg_time.size and seg_time[k + 1] <= times[i]:
             k += 1
-        a = set_of_mask[seg_mask[k]]
-        to_contact(seg_q[k], seg_v[k], seg_time[k], lefts[a], modes[a, 0], drives[a, 0],
-                   settings.forcing_frequency, y, y_rate)
-        propagate(tables[a, 0], forces[a, 0], y, y_rate, seg_time[k], times[i], settings,
-                  y_end, y_rate_end)
-        to_free(y_end, y_rate_end, times[i], rights[a], modes[a, 0], drives[a, 0],
-                settings.forcing_frequency, q_out[i], v_out[i])
+        a = sets[SET_OF_MASK][seg_mask[k]]
+        to_contact(seg_q[k], seg_v[k], seg_time[k], sets[SET_LEFTS][a], sets[SET_MODES][a, 0],
+                   sets[SET_DRIVES][a, 0], settings.forcing_frequency, y, y_rate)
+        propagate(sets[SET_TABLES][a, 0], sets[SET_FORCES][a, 0], y, y_rate, seg_time[k],
+                  times[i], settings, y_end, y_rate_end)
+        to_free(y_end, y_rate_end, times[i], sets[SET_RIGHTS][a], sets[SET_MODES][a, 0],
+                sets[SET_DRIVES][a, 0], settings.forcing_frequency, q_out[i], v_out[i])

@@ -78,7 +78,7 @@ class ContactCellRunner(CellRunner):
                     np.empty((size, n)), np.empty((size, n)))
         packed = self.packed_contacts
         count, status, t_end = kernel.resume_contacts(
-            *packed.kernel_arrays(), packed.early_release, q, v, 0.0, mask,
+            packed.active_sets, packed.settings, packed.early_release, q, v, 0.0, mask,
             self.map.early_released(mask, q, v), recorded)
         return ContactRun(*(array[:count] for array in recorded),
                           CONTACT_STATUS_NAMES[status], float(t_end))

@@ -360,7 +360,7 @@ class ContactsPeriodMap(SectionMap):
         start = self.early_released(int(run.mask[0]), run.q[0], run.v[0])
         tangent = Tangent(rows_q, rows_v, np.array([run.time[0], 0.0]),
                           np.zeros((1, rows_q.shape[0])), np.zeros(1, dtype=np.int64))
-        carry_contact_tangents(*self.contacts.tangent_arrays(), run.arrays(), run.t_end, start,
+        carry_contact_tangents(*self.contacts.tangent_arguments(), run.arrays(), run.t_end, start,
                                (math.inf, run.t_end, 0, 0), tangent)  # no renormalisation
         return np.hstack([rows_q, rows_v]).T
 
@@ -378,8 +378,8 @@ class ContactsPeriodMap(SectionMap):
                     np.empty((size, n)), np.empty((size, n)))
         mask = self.active_mask(z0)
         count, status, t_end = kernel.resume_contacts(
-            *self.contacts.kernel_arrays(), self.contacts.early_release, q0, v0, 0.0, mask,
-            self.early_released(mask, q0, v0), recorded)
+            self.contacts.active_sets, self.contacts.settings, self.contacts.early_release, q0,
+            v0, 0.0, mask, self.early_released(mask, q0, v0), recorded)
         return ContactRun(*(array[:count] for array in recorded),
                           CONTACT_STATUS_NAMES[status], float(t_end))
 
@@ -393,8 +393,7 @@ class ContactsPeriodMap(SectionMap):
         packed = self.contacts
         a = int(packed.set_of_mask[mask])
         y, y_rate = np.empty(q.size), np.empty(q.size)
-        return np.array([event_at(packed.tables, packed.scalars, packed.modes, packed.drives,
-                                  packed.lefts, packed.settings, a, f, q, v, t, y, y_rate)[0]
+        return np.array([event_at(packed.active_sets, packed.settings, a, f, q, v, t, y, y_rate)[0]
                          for f in (range(len(packed.runs)) if functions is None
                                    else functions)])
 

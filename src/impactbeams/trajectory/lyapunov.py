@@ -88,7 +88,7 @@ def contacts_exponents(packed: PackedContacts, run: ContactRun, count: int,
     Its tangents through every active set's phase and the saltation at every switch
     (`impactbeams.kernels.contacts_tangent`), renormalised as one contact's.
     """
-    return _exponents(*contacts_lyapunov_sums(*packed.tangent_arrays(), run.arrays(),
+    return _exponents(*contacts_lyapunov_sums(*packed.tangent_arguments(), run.arrays(),
                                               run.t_end, count, transient_periods, BATCHES))
 
 
