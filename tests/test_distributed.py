@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from fe_reference import beam_matrices, tip_dof
+from impactbeams import MatrixStructure, Params
 from impactbeams.cli import main
 from impactbeams.sweep import run_sweep, sweep_from_mapping
 from impactbeams.sweep.dask_runner import dask_client, dask_runner, default_threads_per_task
@@ -118,6 +120,35 @@ def test_a_map_over_a_contacts_field_on_the_cluster_is_the_local_map(client, tmp
     assert_same_map(remote, local)
     assert np.array_equal(remote.first_contact, local.first_contact)
     assert 0 < int(local.first_contact.sum()) < local.first_contact.size
+
+
+@pytest.mark.slow  # 36 s: the workers compile the full dynamics' cell kernels
+def test_maps_of_the_structures_people_test_on_the_cluster_are_the_local_maps(client,
+                                                                              tmp_path):
+    """A tip mass's mass as an axis, and the tests' FE model as a user structure (matrices,
+    pickled to the workers with the sweep): each map in chunks of 4 cells on the cluster has
+    the local bits, impact counts too (the full dynamics' cell kernels)."""
+    beam = Params()
+    K, M = beam_matrices(beam.EI1, beam.rhoA1, beam.l1, 10)  # 20 DOFs
+    structures = {
+        "attachments1": {"params": {"attachments1": [{"position": beam.l1}]},
+                         "axis": ("attachments1.0.mass", 0.0, 2e-3)},
+        "structure1": {"params": {"structure1": MatrixStructure(M, K, contact_dof=tip_dof(10),
+                                                                length=beam.l1)},
+                       "axis": ("clearance", 1e-5, 2e-5)}}
+    for name, case in structures.items():
+        axis, low, high = case["axis"]
+        sweep = sweep_from_mapping({
+            "t_max": 0.05, "n_modes": 12, "observables": ["first_impact_time", "impact_count"],
+            "params": {"counterpart": "stop", "contact_stiffness": 1e4, **case["params"]},
+            "axes": {"omega": {"min": 40.0, "max": 60.0, "num": 3},
+                     axis: {"min": low, "max": high, "num": 4}}}, source=name)
+        local = run_sweep(sweep, progress=False, parallel=False)
+        remote = run_sweep(sweep, output=tmp_path / f"{name}.nc", progress=False,
+                           chunk_cells=4, runner=dask_runner(client))
+        assert_same_map(remote, local)
+        assert np.array_equal(remote.impact_count, local.impact_count)
+        assert int(local.impact_count.sum()) > 0, name  # the maps see contacts
 
 
 def test_interrupted_client_resumes_from_saved_chunks(client, tmp_path):
