@@ -142,7 +142,10 @@ def main() -> None:
     parser.add_argument("--cap", type=float, default=900.0, help="seconds per run at most")
     parser.add_argument("--baseline", type=Path, help="an earlier version's source tree")
     args = parser.parse_args()
-    run(1e4, "up", 30.0)  # warm-up: compilation
+    # warm-ups, not timed: the compiles (from an empty cache they take longer than a run)
+    run(1e4, "up", args.cap)
+    if args.baseline:
+        baseline(args.baseline, 1e4, "up", args.cap)
     report = report_header(cap=args.cap, baseline=_commit(args.baseline) if args.baseline
                            else "", max_points=MAX_POINTS)
     for stiffness in STIFFNESSES:
