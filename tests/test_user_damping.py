@@ -20,7 +20,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
 from fe_reference import beam_matrices, tip_dof
-from impactbeams import Continuation, MatrixStructure, simulate
+from impactbeams import Continuation, MatrixStructure, ModalStructure, simulate, two_sided_stop
 from impactbeams.modes import beam
 from impactbeams.orbits.grazing import LinearGap
 from impactbeams.params import ParameterError, Params
@@ -255,6 +255,11 @@ def _coupling():
     return MatrixStructure(M6, K6, contact_dof=TIP, length=STOP.l1, damping=tip).modes(12)
 
 
+def _own_ratios(ratio: float) -> ModalStructure:
+    """Today's beam 1 as 12 modes' data, each mode damped by its own ``ratio``."""
+    return analytic_modal_data(12, damping_ratios=np.full(12, ratio))
+
+
 @pytest.mark.parametrize(("build", "message"), [
     (lambda: MatrixStructure(M6, K6, contact_dof=TIP, length=0.1, damping=C6 + np.triu(
         C6, 1) * 1e-6), r"structure1.damping = 'a matrix with max \|A - A\^T\| = .*' is not "
@@ -290,6 +295,11 @@ def _coupling():
      "damping_ratio = 0.1 is not allowed: structure1 has damping of its own"),
     (lambda: Continuation(STOP.replace(structure1=rayleigh()), "damping_ratio", 0.0, 0.1),
      "damping_ratio = 0.1 is not allowed: structure1 has damping of its own"),
+    (lambda: simulate(STOP.replace(structure1=_own_ratios(0.02), contact_damping=1e6), 0.01,
+                      n_modes=12),
+     r"contact_damping = 1000000.0 is not allowed: with contact_stiffness = 10000 N/m and "
+     r"structure1's own damping \(zeta_n up to 0.02; damping_ratio is 0 with it\), it "
+     "overdamps the contact phase"),
 ])
 def test_bad_damping_is_refused_in_one_line(build, message):
     with pytest.raises(ParameterError, match=message) as error:
@@ -328,3 +338,44 @@ def test_a_first_impact_map_with_per_mode_ratios_equals_single_runs():
             run = simulate(params.replace(omega=omega, clearance=clearance), 0.05,
                            n_modes=12, dt_output=0.05)
             assert first[i, j] == pytest.approx(float(run.impact_onset_time[0]), abs=1e-12)
+
+
+def _long_runs(**damping) -> list:
+    """Against the stop with ``damping``, 12 modes: an impact-count and peak-force map of the
+    full dynamics, simulate()'s Lyapunov exponent (40 periods after 20) and the contacts of
+    a two-sided stop at the tip (2 and 1 um: each side closes within 20 ms)."""
+    from impactbeams.sweep import run_sweep
+    fixed = {"counterpart": "stop", "contact_stiffness": 1e4, **damping}
+    maps = run_sweep(sweep_from_mapping({
+        "t_max": 0.05, "n_modes": 12, "observables": ["impact_count", "max_contact_force"],
+        "params": fixed, "axes": {"omega": {"min": 40.0, "max": 60.0, "num": 2}}},
+        source="user"), parallel=False)
+    params = Params(**fixed)
+    period = 2 * np.pi / params.omega
+    lyapunov = simulate(params, 60 * period, n_modes=12, dt_output=period, lyapunov=True,
+                        transient_periods=20)
+    backlash = simulate(params.replace(force_amplitude=1e-3, omega=400.0,
+                                       contacts=two_sided_stop(None, 2e-6, 1e-6)),
+                        0.02, n_modes=12)
+    return [maps.impact_count.values, maps.max_contact_force.values,
+            lyapunov.lyapunov_exponent.values, backlash.impact_contact.values,
+            backlash.impact_onset_time.values, backlash.impact_peak_force.values,
+            backlash.contact_forces.values]
+
+
+def test_ratios_all_equal_to_damping_ratio_give_todays_long_runs_bit_for_bit():
+    """Each mode's own ratio 5 % against damping_ratio = 0.05: a map of the full dynamics
+    (impact count, peak force), the Lyapunov exponent of simulate() and a run with two
+    contacts (a two-sided stop, both sides closing) bit for bit; own ratios of 3 % change
+    the peak forces, the exponent (-21 to -7 s^-1) and the contacts (the damping is read)."""
+    today, own, other = (_long_runs(**damping) for damping in (
+        {"damping_ratio": 0.05}, {"structure1": _own_ratios(0.05)},
+        {"structure1": _own_ratios(0.03)}))
+    assert np.all(today[0] > 0) and set(today[3]) == {0, 1}
+    for name, expected, got, changed in zip(
+            ("impact_count", "max_contact_force", "lyapunov_exponent", "impact_contact",
+             "impact_onset_time", "impact_peak_force", "contact_forces"), today, own, other,
+            strict=True):
+        np.testing.assert_array_equal(got, expected, err_msg=name)
+        if name not in ("impact_count", "impact_contact"):  # counts may coincide
+            assert changed.shape != expected.shape or np.any(changed != expected), name

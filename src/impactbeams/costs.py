@@ -197,6 +197,22 @@ def cycles(values: Mapping[str, Any], horizon: Any) -> np.ndarray:
                                             slowest) / (2 * np.pi)
 
 
+def run_values(params: Params, n_modes: int) -> dict[str, float]:
+    """``params.numeric()`` as the estimates read them, with ``n_modes`` modes per beam.
+
+    A structure's own damping counts as its ``damping_ratio`` (then 0): the smallest of its
+    lowest modes' own ratios, the slowest decay the estimates allow for.
+    """
+    from impactbeams.modes import beam
+
+    values = params.numeric()
+    if params.structure1 is not None and params.structure1.has_damping:
+        own = beam(params, 1)
+        values["damping_ratio"] = float(np.min(own.own_damping_ratios(
+            min(n_modes, own.mode_limit))))
+    return values
+
+
 def impacts(values: Mapping[str, Any], n_modes: int, horizon: Any) -> np.ndarray:
     """Whether the tips are expected to meet within ``horizon`` (s): a bool per point."""
     return impacting_fraction(values, n_modes, horizon) > 0.0

@@ -187,8 +187,8 @@ def active_set(contacts: tuple, members: tuple[int, ...],
         if damped is None:
             raise ParameterError(
                 f"contact_damping = {damping[index].tolist()!r} is not allowed with "
-                f"damping_ratio = {damping_ratio!r}: with contacts {members} closed together "
-                "the contact phase has overdamped modes (real eigenvalues): lower either")
+                f"{frees[0].damping_named(damping_ratio)}: with contacts {members} closed "
+                "together the contact phase has overdamped modes (real eigenvalues): lower either")
         eigenvalues, right, left = damped
     m = omega.size
     force_weights = -(k_eff @ weights.T @ right[:m] + c_eff @ weights.T @ right[m:])

@@ -98,6 +98,16 @@ class FreePhase:
         """
         return self.own_damping + damping_ratio
 
+    def damping_named(self, damping_ratio: float) -> str:
+        """The modes' damping as a refusal names it: structure1's own or ``damping_ratio``.
+
+        `Params` allows one or the other; the own damping by its largest ratio.
+        """
+        if np.any(self.own_damping):
+            return (f"structure1's own damping (zeta_n up to {np.max(self.own_damping):.3g}; "
+                    "damping_ratio is 0 with it)")
+        return f"damping_ratio = {damping_ratio!r}"
+
     @property
     def modes_per_beam(self) -> tuple[int, int]:
         """Coordinates on beam 1 and on beam 2 (0 against a stop)."""

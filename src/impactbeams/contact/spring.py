@@ -303,7 +303,7 @@ def spring_contact(free: FreePhase, compliance: tuple[float, float], damping_rat
 
         damped = modes(damping)
         if damped is None:
-            raise _overdamped(modes, damping, damping_ratio, stiffness)
+            raise _overdamped(modes, damping, free.damping_named(damping_ratio), stiffness)
         eigenvalues, right, left = damped
     m = w.size
     # R_modal = -k_e w.q - c_e w.q' = sum_j 2 Re(r_j z_j)
@@ -323,19 +323,20 @@ def polar(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return phase, magnitude
 
 
-def _overdamped(modes: Callable[[float], object], damping: float, damping_ratio: float,
+def _overdamped(modes: Callable[[float], object], damping: float, modal_damping: str,
                 stiffness: float) -> ParameterError:
     """The refusal of an overdamped contact phase, naming the largest contact damping allowed.
 
     ``modes(c)``: the contact modes with contact damping c, None if overdamped; the
     overdamped c form one range above a threshold (seen on every beam pair tried), found to
-    3 digits by decades, then bisection in log c.
+    3 digits by decades, then bisection in log c. ``modal_damping``: the free modes' damping
+    as the refusal names it (`FreePhase.damping_named`).
     """
-    law = f"with contact_stiffness = {stiffness:g} N/m and damping_ratio = {damping_ratio:g}"
+    law = f"with contact_stiffness = {stiffness:g} N/m and {modal_damping}"
     if modes(0.0) is None:
-        return ParameterError(f"damping_ratio = {damping_ratio!r} is not allowed: {law}, the "
-                              "contact phase has overdamped modes (real eigenvalues) even "
-                              "without contact damping: lower damping_ratio")
+        return ParameterError(f"{modal_damping} is not allowed: with contact_stiffness = "
+                              f"{stiffness:g} N/m, the contact phase has overdamped modes (real "
+                              "eigenvalues) even without contact damping: lower it")
     low = damping
     while low > 1e-300 and modes(low) is None:
         low /= 10.0

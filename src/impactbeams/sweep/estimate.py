@@ -89,8 +89,8 @@ def _run_seconds(sweep: Sweep, points: list[Params] | tuple[Params, ...]) -> np.
     seconds = np.zeros(len(points))
     for law in set(point.law for point in points):
         index = [k for k, point in enumerate(points) if point.law == law]
-        values = {name: np.array([points[k].numeric()[name] for k in index])
-                  for name in points[0].numeric()}
+        rows = [costs.run_values(points[k], sweep.n_modes) for k in index]
+        values = {name: np.array([row[name] for row in rows]) for name in rows[0]}
         if not sweep.needs_dynamics:
             seconds[index] += costs.cell_search_seconds(values, sweep.n_modes, sweep.t_max)
         elif any(name in (FIRST_IMPACT, *DYNAMICS_OBSERVABLES, *CONTACT_OBSERVABLES)

@@ -103,8 +103,8 @@ def simulation_cost(params: Params, t_max: float, n_modes: int, n_times: float, 
     series = 1 + SERIES + ENERGY_SERIES * energy_balance + 2 * n_points * fields
     sampling = SAMPLING_ARRAYS * 8 * min(n_times, SAMPLE_CHUNK) * coordinates
     segments = max_events * (4 * coordinates + 3) * 8
-    seconds = float(costs.dynamics_seconds(params.numeric(), params.law, n_modes, t_max,
-                                           "simulate", params.partner)
+    seconds = float(costs.dynamics_seconds(costs.run_values(params, n_modes), params.law,
+                                           n_modes, t_max, "simulate", params.partner)
                     ) + costs.SAMPLING * n_times * n_modes
     if energy_balance:
         fastest = float(highest_frequency(params.numeric(), n_modes, params.grounded_springs,
