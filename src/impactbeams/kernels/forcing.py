@@ -186,8 +186,10 @@ def run_inputs(cell, tables, geometry, switching, t_max, search_span):
     for phase in range(tables.shape[0]):
         if phase == CONTACT and spring_law:
             continue
-        # the modes' own damping ratios (a user structure's, else 0) plus the cell's
-        damped[phase, ROW_ZETA] = tables[phase, ROW_ZETA] + cell[CELL_ZETA]
+        # the modes' own damping ratios (a user structure's, else 0) plus the cell's, mode by
+        # mode: an array assigned to the row would compile Numba's string formatting
+        for j in range(tables.shape[2]):
+            damped[phase, ROW_ZETA, j] = tables[phase, ROW_ZETA, j] + cell[CELL_ZETA]
         mode_drives(damped[phase, ROW_DRIVE], damped[phase, ROW_BASE],
                     damped[phase, ROW_FREQUENCY], damped[phase, ROW_ZETA], cell, forces[phase])
     if spring_law:
