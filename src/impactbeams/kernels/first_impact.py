@@ -70,12 +70,6 @@ TOUCH_TOLERANCE = 8.0
 
 
 @kernel
-def _mode_zeta(cell, table, j):
-    """Mode ``j``'s damping ratio: its own (a user structure's, else 0) plus the cell's."""
-    return table[ROW_ZETA, j] + cell[CELL_ZETA]
-
-
-@kernel
 def _load_moving_modes(cell, table, work, force, start=REST):
     """Copy the modes that move into the scratch rows; return how many.
 
@@ -85,7 +79,9 @@ def _load_moving_modes(cell, table, work, force, start=REST):
     active = 0
     last = table.shape[1] - 1
     for j in range(table.shape[1]):
-        zeta = _mode_zeta(cell, table, j)
+        # its own ratio (a user structure's, else 0) and the cell's, written out at each use:
+        # a helper kernel was one more to compile in every cold first map
+        zeta = table[ROW_ZETA, j] + cell[CELL_ZETA]
         f = mode_drive(table[ROW_DRIVE, j], table[ROW_BASE, j], table[ROW_FREQUENCY, j],
                        zeta, cell[CELL_F0], base_amplitude(cell), cell[CELL_FORCING_FREQUENCY])
         q0, v0 = rest_state(cell, start, table[ROW_UNIT1, j], table[ROW_UNIT2, j],
@@ -135,7 +131,8 @@ def _uplift_stays_below_clearance(cell, table):
     reach = 0.0
     for j in range(table.shape[1]):
         q0 = cell[CELL_UPLIFT1] * table[ROW_UNIT1, j] + cell[CELL_UPLIFT2] * table[ROW_UNIT2, j]
-        reach += abs(table[ROW_EVENT, j] * q0) / np.sqrt(1.0 - _mode_zeta(cell, table, j)**2)
+        zeta = table[ROW_ZETA, j] + cell[CELL_ZETA]  # its own (a user structure's) and the cell's
+        reach += abs(table[ROW_EVENT, j] * q0) / np.sqrt(1.0 - zeta**2)
     return cell[CELL_CLEARANCE] - reach > 0.0
 
 
@@ -194,7 +191,7 @@ def _load_column(source, key, table, geo, work, drives):
     for j in range(table.shape[1]):
         kept = False
         for row, cell, state in ((_A, a_cell, _Q_A0), (_B, b_cell, _Q_B0)):
-            zeta = _mode_zeta(cell, table, j)
+            zeta = table[ROW_ZETA, j] + cell[CELL_ZETA]
             f = mode_drive(table[ROW_DRIVE, j], table[ROW_BASE, j], table[ROW_FREQUENCY, j],
                            zeta, cell[CELL_F0], base_amplitude(cell),
                            cell[CELL_FORCING_FREQUENCY])
@@ -208,7 +205,7 @@ def _load_column(source, key, table, geo, work, drives):
         if kept or (j == last and active == 0):
             work[_FREQUENCY, active], work[_WEIGHTS, active] = table[ROW_FREQUENCY,
                                                                      j], table[ROW_EVENT, j]
-            work[_ZETA, active] = _mode_zeta(source, table, j)
+            work[_ZETA, active] = table[ROW_ZETA, j] + source[CELL_ZETA]
             active += 1
     harmonics = (complex(gap_harmonic(a_cell, geo), 0.0),
                  0j if key == CELL_CLEARANCE else complex(gap_harmonic(b_cell, geo), 0.0))
